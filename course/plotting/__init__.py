@@ -1,0 +1,27 @@
+"""Plotting for the course notebooks.
+
+Library code never plots; every figure of the course is drawn by a function
+in this package.  Each function takes ``ax=None`` (a new figure is made when
+it is None) and returns the axes it drew on, so notebooks can compose and
+restyle figures.  One submodule per topic:
+
+- :mod:`course.plotting.lsq` – line fits, error bars, confidence bands,
+  sum-of-squares surfaces, chi-square histograms.
+
+Matplotlib is imported lazily inside the functions, so importing
+:mod:`course` never loads it.
+"""
+
+from __future__ import annotations
+
+__all__ = ["axes_or_new"]
+
+
+def axes_or_new(ax=None, **subplot_kw):
+    """Return ``ax``, or a fresh axes on a new figure when ``ax`` is None."""
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    _, ax = plt.subplots(subplot_kw=subplot_kw or None)
+    return ax
