@@ -32,6 +32,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
+import numpy as np
+
 __all__ = [
     "TestResult",
     "format_number",
@@ -48,13 +50,11 @@ def as_plain(value: Any) -> Any:
     Arrays are returned unchanged: only scalars are converted, so that a
     result prints ``6.0`` and never ``np.float64(6.0)``.
     """
-    if isinstance(value, (bool, int, float, str)) or value is None:
-        return value
+    # numpy scalars first: np.float64 subclasses float and would slip through.
+    if isinstance(value, np.generic) or (isinstance(value, np.ndarray) and value.ndim == 0):
+        return value.item()
     if isinstance(value, (tuple, list)):
         return type(value)(as_plain(v) for v in value)
-    item = getattr(value, "item", None)
-    if item is not None and getattr(value, "ndim", None) == 0:
-        return item()
     return value
 
 
@@ -156,7 +156,7 @@ class TestResult:
         set_(self, "pvalue", float(self.pvalue))
         set_(self, "reject", bool(self.reject))
         set_(self, "dof", as_plain(self.dof))
-        set_(self, "details", dict(self.details))
+        set_(self, "details", {key: as_plain(value) for key, value in self.details.items()})
 
     # -- presentation -----------------------------------------------------
     def _fields(self):
