@@ -1,0 +1,134 @@
+"""Checks of assignment 01_least_squares (INSTRUCTORS ONLY: never released).
+
+Each decorated function is the trusted reference the grader runs; cases with ``hidden=True``
+are sent to the student's function only at grading time.
+"""
+
+import numpy as np
+
+from course import lsq
+from course.exercises.spec import Checks, binomial_band
+
+from . import data
+
+# Chapter 10's line fit: t = 1..4 s, Qyy = I (days 1 and 2).
+T_LINE = np.arange(1.0, 5.0)
+A_LINE = np.column_stack([np.ones(4), T_LINE])
+Y_DAY1 = np.array([14.0, 20.0, 20.0, 24.0])
+Y_DAY2 = np.array([28.0, 20.0, 16.0, 36.0])
+I4 = np.eye(4)
+
+# Sea level 1998-2002 (t centred on 2000), and a quadratic model of day 2.
+A_SEA = np.column_stack([np.ones(5), np.arange(-2.0, 3.0)])
+Y_SEA = np.array([25.0, 24.0, 27.0, 26.0, 28.0])
+A_QUAD = np.column_stack([np.ones(4), T_LINE, 0.5 * T_LINE**2])
+
+
+def _correlated(m, rho, scale=1.0):
+    """An exponentially correlated covariance matrix (symmetric positive definite)."""
+    idx = np.arange(m)
+    return scale * rho ** np.abs(idx[:, None] - idx[None, :])
+
+
+_R6 = np.random.default_rng(20240601)
+A6 = np.column_stack([np.ones(6), np.linspace(0.0, 5.0, 6), np.linspace(0.0, 5.0, 6) ** 2])
+Q6 = _correlated(6, 0.4, 2.0) + np.diag(_R6.uniform(0.1, 0.5, 6))
+Y6 = A6 @ np.array([1.0, -2.0, 0.3]) + np.linalg.cholesky(Q6) @ _R6.standard_normal(6)
+Y6[2] += 9.0
+
+CHECKS = Checks(
+    "01_least_squares",
+    title="Assignment 1: least-squares validation",
+    data=data,
+    timeout=10,
+    preload=["course.lsq", "scipy.stats", "scipy.linalg"],
+)
+
+
+@CHECKS.value("q1", var="x_hat_day1", points=1, rtol=1e-8, atol=1e-8,
+              hint="Stack a column of ones and the times into A, then solve the least-squares problem "
+                   "(np.linalg.lstsq, or lsq.fit). The chapter's answer is a round pair.")
+def q1():
+    return lsq.fit(A_LINE, Y_DAY1).x_hat
+
+
+@CHECKS.value("q2", var="e_hat_day2", points=1, rtol=1e-8, atol=1e-8,
+              hint="Residuals are observations minus adjusted observations: e = y - A x_hat, "
+                   "in the order of the observations.")
+def q2():
+    return lsq.fit(A_LINE, Y_DAY2).e_hat
+
+
+@CHECKS.function("q3", func="overall_model_test_stat", points=3, rtol=1e-6, atol=1e-8,
+                 forbid=["course.lsq.overall_model_test", "course.lsq.fit", "course.lsq.data_snooping"],
+                 hint="T = e^T Qyy^{-1} e with the WEIGHTED residuals, m - n degrees of freedom, and the "
+                      "critical value scipy.stats.chi2.isf(alpha, m - n). Avoid inverting Qyy: whiten with "
+                      "its Cholesky factor. Return (T, critical_value, reject).")
+def q3(A, y, Qyy, alpha):
+    result = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)
+    return (result.statistic, result.critical_value, bool(result.reject))
+
+
+q3.case(A_LINE, Y_DAY1, I4, 0.01, label="day 1 of the line fit, alpha = 0.01")
+q3.case(A_LINE, Y_DAY2, I4, 0.01, label="day 2 of the line fit, alpha = 0.01")
+### BEGIN HIDDEN TESTS
+q3.case(A_SEA, Y_SEA, np.eye(5), 0.10, hidden=True)
+q3.case(A_QUAD, Y_DAY2, np.diag([1.0, 4.0, 4.0, 1.0]), 0.05, hidden=True)
+q3.case(A6, Y6, Q6, 0.05, hidden=True)
+### END HIDDEN TESTS
+
+
+@CHECKS.function("q4", func="w_statistics", points=3, rtol=1e-6, atol=1e-8,
+                 forbid=["course.lsq.w_tests", "course.lsq.fit", "course.lsq.data_snooping"],
+                 hint="Baarda: w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii) with "
+                      "Qee = Qyy - A Qxx A^T; for a diagonal Qyy this is e_i / sigma_ei. "
+                      "Return one w per observation.")
+def q4(A, y, Qyy):
+    return np.asarray(lsq.w_tests(lsq.fit(A, y, Qyy), 0.05).w)
+
+
+q4.case(A_LINE, Y_DAY2, I4, label="day 2 of the line fit")
+### BEGIN HIDDEN TESTS
+q4.case(A_SEA, Y_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), hidden=True)
+q4.case(A6, Y6, Q6, hidden=True)
+### END HIDDEN TESTS
+
+
+@CHECKS.value("q5", var="band_t2", points=1, rtol=1e-6, atol=1e-8,
+              hint="sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
+                   "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).")
+def q5():
+    f = lsq.fit(A_LINE, Y_DAY1)
+    _, half = lsq.confidence_band(f, np.array([[1.0, 2.0]]), level=0.95)
+    return (float(f.sigma_y_hat[1]), float(half[0]))
+
+
+@CHECKS.value("q6", var="T_mine", points=2, data="survey", properties="survey_T_properties",
+              rtol=1e-6, atol=1e-8,
+              hint="Fit mine['A'], mine['y'] with mine['Qyy'] (weighted!) and take the overall model "
+                   "test statistic of the full data set.")
+def q6(d):
+    return lsq.overall_model_test(lsq.fit(d["A"], d["y"], d["Qyy"]), d["alpha"]).statistic
+
+
+@CHECKS.value("q7", var="suspect_mine", points=1, data="survey", properties="survey_index_properties",
+              hint="Data snooping at mine['alpha'] removes the observation with the largest rejected |w| "
+                   "first; give its 0-based index as an int.")
+def q7(d):
+    return int(lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).removed[0])
+
+
+@CHECKS.function("q8", func="false_alarm_rate", points=2, timeout=30,
+                 hint="Simulate n_runs data sets y = A x + noise with noise ~ N(0, Qyy) (Cholesky factor "
+                      "times standard normals, rng = np.random.default_rng(seed)), apply the overall model "
+                      "test to each and return the fraction rejected. For a correct test it is close to alpha.")
+def q8(A, Qyy, alpha, n_runs, seed):
+    # Any correct simulation lands in this band except with probability 1e-4.
+    return binomial_band(n_runs, alpha, miss=1e-4)
+
+
+q8.case(A_LINE, I4, 0.05, 20000, 2024, label="line fit, Qyy = I, alpha = 0.05")
+### BEGIN HIDDEN TESTS
+q8.case(A_QUAD, _correlated(4, 0.6, 1.5), 0.01, 20000, 7, hidden=True)
+q8.case(A_SEA, np.diag([1.0, 2.0, 0.5, 1.0, 3.0]), 0.10, 20000, 11, hidden=True)
+### END HIDDEN TESTS
