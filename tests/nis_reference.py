@@ -1,0 +1,103 @@
+"""High-precision reference for the Wishart extreme-eigenvalue laws (mpmath).
+
+An independent implementation used to produce the reference values in
+``test_nis.py``: Chiani's Pfaffian in his own monomial basis
+``f_i(y) = y^(a-1+i) e^-y`` (``y = lambda/2``, ``a = (K - m + 1)/2``), whose
+entries follow from the closed-form recursion (integration by parts)::
+
+    J(p, q+1) = q J(p, q) - (hi^q e^-hi + lo^q e^-lo) gamma(p; lo, hi)
+                + 2^(1-p-q) gamma(p+q; 2 lo, 2 hi),     J(p, p) = 0,
+
+with ``gamma(p; lo, hi)`` the (unregularised) incomplete gamma integral.  In
+this basis double precision loses all digits at large K, so it runs with
+80 significant digits.  Run ``python tests/nis_reference.py`` (needs
+``mpmath``) to print the table pasted into the tests.
+"""
+
+from __future__ import annotations
+
+
+def _pfaffian(A):
+    import mpmath as mp
+
+    n = len(A)
+    if n == 0:
+        return mp.mpf(1)
+    total = mp.mpf(0)
+    for j in range(1, n):
+        rest = [k for k in range(n) if k not in (0, j)]
+        total += (-1) ** (j - 1) * A[0][j] * _pfaffian([[A[r][c] for c in rest] for r in rest])
+    return total
+
+
+def _skew(m, a, lo, hi):
+    import mpmath as mp
+
+    def edge(q):
+        value = mp.mpf(0)
+        if hi != mp.inf:
+            value += hi**q * mp.exp(-hi)
+        if lo > 0:
+            value += lo**q * mp.exp(-lo)
+        return value
+
+    A = [[mp.mpf(0)] * m for _ in range(m)]
+    for i in range(m):
+        p = a + i
+        gp = mp.gammainc(p, lo, hi)
+        J = mp.mpf(0)
+        for j in range(i + 1, m):
+            q = a + j - 1
+            J = q * J - edge(q) * gp + mp.mpf(2) ** (1 - p - q) * mp.gammainc(p + q, 2 * lo, 2 * hi)
+            A[i][j], A[j][i] = J, -J
+    if m % 2:
+        g = [mp.gammainc(a + i, lo, hi) for i in range(m)]
+        for i in range(m):
+            A[i].append(g[i])
+        A.append([-gi for gi in g] + [mp.mpf(0)])
+    return A
+
+
+def prob_within(m, K, lower, upper, dps=80):
+    """P(lower <= every eigenvalue of W/K <= upper), W ~ W_m(K, I), as an mpf."""
+    import mpmath as mp
+
+    with mp.workdps(dps):
+        a = mp.mpf(K - m + 1) / 2
+        lo = mp.mpf(K) * mp.mpf(lower) / 2
+        hi = mp.inf if upper == float("inf") else mp.mpf(K) * mp.mpf(upper) / 2
+        return _pfaffian(_skew(m, a, lo, hi)) / _pfaffian(_skew(m, a, mp.mpf(0), mp.inf))
+
+
+#: (m, K, x) points of the table: around the bulk and in the tails.
+POINTS = [
+    (2, 50, 1.9), (4, 200, 1.45), (6, 1000, 1.22), (6, 1000, 0.8), (3, 60, 0.3), (6, 8, 0.02),
+    (6, 1000, 1.4), (6, 1000, 0.7), (3, 5, 0.001), (2, 20, 4.0),
+    (1, 1, 0.3), (1, 7, 1.6), (1, 1000, 1.1),
+    (2, 2, 0.05), (2, 2, 2.5), (2, 3, 1.0), (2, 10, 1.5), (2, 100, 1.25), (2, 1000, 0.93),
+    (3, 3, 0.02), (3, 3, 4.0), (3, 4, 1.2), (3, 10, 0.4), (3, 100, 1.4), (3, 1000, 1.12),
+    (4, 4, 0.01), (4, 4, 5.0), (4, 5, 2.0), (4, 20, 0.5), (4, 100, 1.3), (4, 1000, 0.9),
+    (5, 5, 0.005), (5, 5, 6.0), (5, 6, 3.0), (5, 30, 1.8), (5, 300, 0.8), (5, 1000, 1.15),
+    (6, 6, 0.003), (6, 6, 7.0), (6, 7, 3.5), (6, 40, 0.45), (6, 100, 1.6), (6, 1000, 1.1),
+    (6, 1000, 0.87), (6, 1000, 1.25),
+]
+
+#: (m, K, lower, upper) for P(all eigenvalues in [lower, upper]).
+BANDS = [(2, 10, 0.3, 2.0), (3, 3, 0.01, 3.0), (5, 40, 0.4, 1.9), (6, 1000, 0.85, 1.2)]
+
+
+if __name__ == "__main__":  # pragma: no cover - generator of the test table
+    import mpmath as mp
+
+    print("EXTREMES = [  # (m, K, x, P(lmax <= x), P(lmax > x), P(lmin <= x), P(lmin > x))")
+    for m, K, x in POINTS:
+        with mp.workdps(80):
+            cdf_max = prob_within(m, K, 0, x)
+            sf_min = prob_within(m, K, x, float("inf"))
+            row = [cdf_max, 1 - cdf_max, 1 - sf_min, sf_min]
+        print(f"    ({m}, {K}, {x!r}, " + ", ".join(mp.nstr(v, 17) for v in row) + "),")
+    print("]")
+    print("BAND = [  # (m, K, lower, upper, P(all in [lower, upper]))")
+    for m, K, lo, hi in BANDS:
+        print(f"    ({m}, {K}, {lo!r}, {hi!r}, {mp.nstr(prob_within(m, K, lo, hi), 17)}),")
+    print("]")

@@ -1,0 +1,528 @@
+"""Tests of course.nis: the NIS, the NIS matrix and the exact Wishart extreme-eigenvalue laws.
+
+Reference values come from an independent 80-digit mpmath implementation of
+Chiani's Pfaffian in his own monomial basis (tests/nis_reference.py); Monte
+Carlo checks use seeded generators and statistical bands (DKW, binomial,
+Kolmogorov-Smirnov) at a 1e-4 miss level.
+"""
+
+import numpy as np
+import pytest
+from numpy.linalg import LinAlgError
+from scipy import integrate, stats
+
+from course import nis
+from course.results import TestResult
+
+# (m, K, x, P(lmax <= x), P(lmax > x), P(lmin <= x), P(lmin > x)), 80-digit mpmath
+EXTREMES = [
+    (2, 50, 1.9, 0.999194851016027, 0.0008051489839730335, 0.9999999973347343, 2.665265617239954e-09),
+    (4, 200, 1.45, 0.9965629059756311, 0.0034370940243688987, 1.0, 5.0459810145184544e-23),
+    (6, 1000, 1.22, 0.9967860160581334, 0.003213983941866535, 1.0, 1.4952952518630224e-45),
+    (6, 1000, 0.8, 4.882591379475834e-47, 1.0, 0.0021311679988085266, 0.9978688320011915),
+    (3, 60, 0.3, 2.7283689859787244e-25, 1.0, 2.7230805738837285e-06, 0.9999972769194261),
+    (6, 8, 0.02, 4.8976821642367245e-40, 1.0, 0.14253081874150914, 0.8574691812584909),
+    (6, 1000, 1.4, 0.9999999999842311, 1.576892894340368e-11, 1.0, 1.7257077840304796e-105),
+    (6, 1000, 0.7, 7.111053038882098e-94, 1.0, 8.203909911433553e-10, 0.999999999179609),
+    (3, 5, 0.001, 1.1612182987189923e-22, 1.0, 0.00037481215320054175, 0.9996251878467994),
+    (2, 20, 4.0, 0.9999999655965065, 3.4403493481181413e-08, 1.0, 1.2555372544672079e-18),
+    (1, 1, 0.3, 0.4161175792296348, 0.5838824207703652, 0.4161175792296348, 0.5838824207703652),
+    (1, 7, 1.6, 0.8698700827159644, 0.13012991728403556, 0.8698700827159644, 0.13012991728403556),
+    (1, 1000, 1.1, 0.9853855918737049, 0.014614408126295124, 0.9853855918737049, 0.014614408126295124),
+    (2, 2, 0.05, 0.0016015215264816181, 0.9983984784735184, 0.37860487596745523, 0.6213951240325448),
+    (2, 2, 2.5, 0.7690501742397604, 0.23094982576023962, 0.9990930223822547, 0.0009069776177452231),
+    (2, 3, 1.0, 0.28082245118684657, 0.7191775488131534, 0.950212931632136, 0.049787068367863944),
+    (2, 10, 1.5, 0.6407985569880407, 0.3592014430119594, 0.9947394690062499, 0.005260530993750112),
+    (2, 100, 1.25, 0.8344866540739678, 0.1655133459260322, 0.9993506446283794, 0.0006493553716205494),
+    (2, 1000, 0.93, 0.0011427798702911102, 0.9988572201297089, 0.20388877723185175, 0.7961112227681483),
+    (3, 3, 0.02, 1.3539982214222742e-08, 0.9999999864600178, 0.37351859948751975, 0.6264814005124802),
+    (3, 3, 4.0, 0.9240254151307029, 0.07597458486929706, 0.9999999996011388, 3.988611703762481e-10),
+    (3, 4, 1.2, 0.15786476752508524, 0.8421352324749147, 0.9992534141916233, 0.0007465858083766795),
+    (3, 10, 0.4, 1.838836068033622e-05, 0.9999816116393196, 0.525115674259724, 0.474884325740276),
+    (3, 100, 1.4, 0.9259035434710153, 0.07409645652898462, 0.9999999980385861, 1.961413897308461e-09),
+    (3, 1000, 1.12, 0.9266062991979993, 0.07339370080200072, 0.9999999980250313, 1.9749686891180083e-09),
+    (4, 4, 0.01, 6.27462195968986e-17, 0.9999999999999999, 0.3603608404991277, 0.6396391595008722),
+    (4, 4, 5.0, 0.9792566054266713, 0.020743394573328782, 1.0, 2.1258557806348856e-20),
+    (4, 5, 2.0, 0.37366821983444615, 0.6263317801655538, 0.9999999979388464, 2.061153622438558e-09),
+    (4, 20, 0.5, 9.060198231643733e-09, 0.9999999909398017, 0.6396083230190587, 0.36039167698094127),
+    (4, 100, 1.3, 0.5803074102369111, 0.4196925897630889, 0.9999999997976657, 2.023342263667725e-10),
+    (4, 1000, 0.9, 1.5914336920858386e-11, 0.9999999999840856, 0.3059169972559735, 0.6940830027440266),
+    (5, 5, 0.005, 1.278829217240826e-29, 1.0, 0.32502644474271086, 0.6749735552572892),
+    (5, 5, 6.0, 0.9970744196435574, 0.0029255803564425904, 1.0, 2.2792942044222112e-36),
+    (5, 6, 3.0, 0.7415933635456933, 0.2584066364543067, 1.0, 2.8625185805493937e-20),
+    (5, 30, 1.8, 0.7380701482481218, 0.2619298517518782, 1.0, 5.994567486155519e-19),
+    (5, 300, 0.8, 2.890841602917673e-17, 1.0, 0.35618006613685027, 0.6438199338631497),
+    (5, 1000, 1.15, 0.9047103655561324, 0.09528963444386762, 1.0, 1.0965831858738024e-22),
+    (6, 6, 0.003, 3.785004376876829e-46, 1.0, 0.30581993631932836, 0.6941800636806716),
+    (6, 6, 7.0, 0.9998003256686309, 0.00019967433136915293, 1.0, 2.501004722245605e-59),
+    (6, 7, 3.5, 0.8609384611271964, 0.13906153887280362, 1.0, 1.2004817995138824e-32),
+    (6, 40, 0.45, 5.024854371001181e-25, 1.0, 0.3863963259181329, 0.6136036740818671),
+    (6, 100, 1.6, 0.9419854950014482, 0.05801450499855173, 1.0, 2.21374831886775e-34),
+    (6, 1000, 1.1, 0.26622936299433975, 0.7337706370056603, 1.0, 4.184682239235762e-19),
+    (6, 1000, 0.87, 4.7145735701163305e-26, 1.0, 0.3000559888252855, 0.6999440111747145),
+    (6, 1000, 1.25, 0.9997082738288043, 0.00029172617119568503, 1.0, 6.051127737802388e-54),
+]
+# (m, K, lower, upper, P(all eigenvalues of Pi in [lower, upper]))
+BAND = [
+    (2, 10, 0.3, 2.0, 0.7970731241638408),
+    (3, 3, 0.01, 3.0, 0.5645860720344469),
+    (5, 40, 0.4, 1.9, 0.850751511529147),
+    (6, 1000, 0.85, 1.2, 0.8756296576449147),
+]
+
+MISS = 1e-4  # probability that a seeded statistical check fails by chance
+
+
+def dkw_halfwidth(n, miss=MISS):
+    """Dvoretzky-Kiefer-Wolfowitz: P(sup|F_n - F| > eps) <= 2 exp(-2 n eps^2)."""
+    return np.sqrt(np.log(2 / miss) / (2 * n))
+
+
+def binomial_band(n, p, miss=MISS):
+    lo, hi = stats.binom.interval(1 - miss, n, p)
+    return lo / n, hi / n
+
+
+def random_covariances(rng, count, m):
+    A = rng.standard_normal((count, m, m))
+    return A @ np.swapaxes(A, -1, -2) + 0.5 * np.eye(m)
+
+
+def innovations_with(rng, runs, S_true):
+    """Innovations N(0, S_true[k]) for every run: (runs, K, m)."""
+    L = np.linalg.cholesky(S_true)
+    w = rng.standard_normal((runs,) + S_true.shape[:-1])
+    return np.einsum("...ij,...j->...i", L, w)
+
+
+# ---------------------------------------------------------------------------
+# exact laws against the high-precision reference
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("row", EXTREMES, ids=lambda r: f"m{r[0]}-K{r[1]}-x{r[2]}")
+def test_extreme_laws_match_mpmath_reference(row):
+    m, K, x, cdf_max, sf_max, cdf_min, sf_min = row
+    law_max, law_min = nis.extreme_eigenvalue(m, K, "max"), nis.extreme_eigenvalue(m, K, "min")
+    got = [law_max.cdf(x), law_max.sf(x), law_min.cdf(x), law_min.sf(x)]
+    ref = [cdf_max, sf_max, cdf_min, sf_min]
+    for value, expected in zip(got, ref):
+        assert abs(float(value) - expected) < 1e-12
+    # The tails the tests use (upper of lambda_max, lower of lambda_min) keep
+    # their relative accuracy however small they are.
+    for value, expected in ((got[1], sf_max), (got[2], cdf_min)):
+        if expected > 0:
+            assert float(value) == pytest.approx(expected, rel=1e-11)
+
+
+@pytest.mark.parametrize("m, K, lower, upper, expected", BAND)
+def test_probability_all_eigenvalues_within_band(m, K, lower, upper, expected):
+    assert nis.prob_eigenvalues_within(m, K, lower, upper) == pytest.approx(expected, abs=1e-12)
+
+
+def test_band_reduces_to_the_extreme_laws():
+    m, K = 3, 12
+    assert nis.prob_eigenvalues_within(m, K, 0, 1.7) == pytest.approx(
+        float(nis.extreme_eigenvalue(m, K, "max").cdf(1.7)), abs=1e-14
+    )
+    assert nis.prob_eigenvalues_within(m, K, 0.4, np.inf) == pytest.approx(
+        float(nis.extreme_eigenvalue(m, K, "min").sf(0.4)), abs=1e-14
+    )
+
+
+@pytest.mark.parametrize("K", [1, 2, 7, 100, 1000])
+@pytest.mark.parametrize("which", ["max", "min"])
+def test_one_dimension_is_chi_square_over_K(K, which):
+    law, ref = nis.extreme_eigenvalue(1, K, which), stats.chi2(K, scale=1.0 / K)
+    x = ref.ppf([1e-6, 0.01, 0.3, 0.5, 0.9, 0.999])
+    np.testing.assert_allclose(law.cdf(x), ref.cdf(x), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(law.sf(x), ref.sf(x), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(law.pdf(x), ref.pdf(x), rtol=1e-10)
+    q = np.array([1e-9, 0.025, 0.5, 0.975])
+    np.testing.assert_allclose(law.ppf(q), ref.ppf(q), rtol=1e-10)
+    np.testing.assert_allclose(law.isf(q), ref.isf(q), rtol=1e-10)
+    assert law.mean() == pytest.approx(1.0, rel=1e-10)
+    assert law.var() == pytest.approx(2.0 / K, rel=1e-8)
+
+
+@pytest.mark.parametrize("m, K", [(2, 2), (3, 9), (5, 60), (6, 1000)])
+@pytest.mark.parametrize("which", ["max", "min"])
+def test_pdf_is_the_derivative_of_the_cdf(m, K, which):
+    law = nis.extreme_eigenvalue(m, K, which)
+    x = law.ppf([0.05, 0.3, 0.6, 0.95])
+    h = 1e-5 * x
+    slope = (law.cdf(x + h) - law.cdf(x - h)) / (2 * h)
+    np.testing.assert_allclose(law.pdf(x), slope, rtol=1e-5)
+
+
+@pytest.mark.parametrize("m, K, which", [(2, 2, "min"), (3, 3, "max"), (4, 25, "min"), (6, 1000, "max")])
+def test_mean_and_variance_against_numerical_integration(m, K, which):
+    law = nis.extreme_eigenvalue(m, K, which)
+    lo, hi = float(law.ppf(1e-13)), float(law.isf(1e-13))
+    # Independent route: integrate x pdf(x) and x^2 pdf(x) with adaptive quadrature.
+    first = integrate.quad(lambda v: v * float(law.pdf(v)), lo, hi, limit=400, epsabs=1e-13)[0]
+    second = integrate.quad(lambda v: v * v * float(law.pdf(v)), lo, hi, limit=400, epsabs=1e-13)[0]
+    assert law.mean() == pytest.approx(first, rel=1e-7)
+    assert law.var() == pytest.approx(second - first**2, rel=1e-5)
+
+
+def test_quantiles_invert_the_cdf():
+    for which in ("max", "min"):
+        law = nis.extreme_eigenvalue(4, 30, which)
+        q = np.array([1e-8, 0.001, 0.025, 0.5, 0.975, 0.999])
+        np.testing.assert_allclose(law.cdf(law.ppf(q)), q, rtol=1e-9)
+        np.testing.assert_allclose(law.sf(law.isf(q)), q, rtol=1e-9)
+        lo, hi = law.interval(0.95)
+        assert float(law.cdf(hi) - law.cdf(lo)) == pytest.approx(0.95, abs=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# large K: naive double precision fails here, the standardised basis does not
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("which", ["max", "min"])
+def test_large_K_is_monotone_bounded_and_sensible(which):
+    m, K = 6, 1000
+    law = nis.extreme_eigenvalue(m, K, which)
+    x = np.linspace(0.0, 2.0, 2001)
+    F = law.cdf(x)
+    assert np.all((F >= 0) & (F <= 1))
+    assert np.all(np.diff(F) >= -1e-15)
+    assert F[0] == 0.0 and F[-1] == 1.0
+    np.testing.assert_allclose(F + law.sf(x), 1.0, atol=1e-14)
+    q = law.ppf([0.001, 0.025, 0.5, 0.975, 0.999])
+    assert np.all(np.diff(q) > 0)
+    # Marchenko-Pastur edges of W/K: (1 +- sqrt(m/K))^2 = 1.16 and 0.85;
+    # the extremes fluctuate around them on the scale K^(-2/3).
+    edge = (1 + np.sqrt(m / K)) ** 2 if which == "max" else (1 - np.sqrt(m / K)) ** 2
+    assert abs(float(q[2]) - edge) < 0.05
+    assert np.all(np.isfinite(law.pdf(x))) and np.all(law.pdf(x) >= 0)
+
+
+def test_very_large_K_still_matches_the_trace_bound():
+    # P(lmax > x) <= P(tr W > K x) and P(lmin > x) <= P(tr W > m K x), any K.
+    m, K = 5, 20000
+    law_max, law_min = nis.extreme_eigenvalue(m, K, "max"), nis.extreme_eigenvalue(m, K, "min")
+    trace = stats.chi2(m * K)
+    x = np.linspace(0.95, 1.08, 27)
+    assert np.all(law_max.sf(x) <= trace.sf(K * x) + 1e-15)
+    assert np.all(law_min.sf(x) <= trace.sf(m * K * x) + 1e-15)
+    assert 0.97 < float(law_min.ppf(0.5)) < 1.0 < float(law_max.ppf(0.5)) < 1.04
+
+
+# ---------------------------------------------------------------------------
+# Monte Carlo: CDFs, quantiles and the sampler
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("m, K", [(2, 5), (3, 3), (4, 40), (6, 1000)])
+def test_cdf_and_quantiles_against_monte_carlo(m, K):
+    rng = np.random.default_rng(20240 + 7 * m + K)
+    n = 100_000
+    lmin, lmax = nis.simulate_extreme_eigenvalues(m, K, n, rng)
+    eps = dkw_halfwidth(n)
+    for which, sample in (("max", np.sort(lmax)), ("min", np.sort(lmin))):
+        law = nis.extreme_eigenvalue(m, K, which)
+        grid = np.quantile(sample, np.linspace(0.002, 0.998, 300))
+        ecdf = np.searchsorted(sample, grid, side="right") / n
+        assert np.max(np.abs(ecdf - law.cdf(grid))) < eps
+        for q in (0.025, 0.5, 0.975):
+            share = np.mean(sample <= law.ppf(q))
+            lo, hi = binomial_band(n, q)
+            assert lo <= share <= hi
+
+
+def test_sampler_matches_direct_wishart_sampling():
+    m, K, n = 3, 8, 40_000
+    rng = np.random.default_rng(5)
+    lmin, lmax = nis.simulate_extreme_eigenvalues(m, K, n, rng)
+    X = rng.standard_normal((n, K, m))
+    direct = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", X, X) / K)
+    assert stats.ks_2samp(lmax, direct[:, -1]).pvalue > MISS
+    assert stats.ks_2samp(lmin, direct[:, 0]).pvalue > MISS
+
+
+def test_rvs_is_seeded_and_shaped():
+    law = nis.extreme_eigenvalue(3, 10, "min")
+    a = law.rvs(size=(4, 5), random_state=np.random.default_rng(3))
+    b = law.rvs(size=(4, 5), random_state=np.random.default_rng(3))
+    assert a.shape == (4, 5) and np.array_equal(a, b) and np.all(a > 0)
+    with pytest.raises(TypeError, match="Generator"):
+        law.rvs(size=3, random_state=np.random.RandomState(0))
+
+
+def test_monte_carlo_mean_agrees_with_exact_mean():
+    law = nis.extreme_eigenvalue(2, 6, "max")
+    sample = law.rvs(size=200_000, random_state=np.random.default_rng(11))
+    se = sample.std() / np.sqrt(sample.size)
+    assert abs(sample.mean() - law.mean()) < stats.norm.isf(MISS / 2) * se
+
+
+# ---------------------------------------------------------------------------
+# the fast approximation
+# ---------------------------------------------------------------------------
+def test_tracy_widom_approximation_is_close_only_for_large_sizes():
+    exact = nis.extreme_eigenvalue(6, 1000, "max")
+    approx = nis.extreme_eigenvalue(6, 1000, "max", method="tracy-widom")
+    x = exact.ppf([0.025, 0.5, 0.975])
+    assert np.max(np.abs(approx.cdf(x) - exact.cdf(x))) < 0.03
+    # ... but at m = 2, K = 10 it is far off (an honest comparison).
+    exact = nis.extreme_eigenvalue(2, 10, "max")
+    approx = nis.extreme_eigenvalue(2, 10, "max", method="tracy-widom")
+    assert abs(float(approx.cdf(exact.ppf(0.025))) - 0.025) > 0.05
+
+
+def test_tracy_widom_approximation_is_a_consistent_distribution():
+    for which in ("max", "min"):
+        approx = nis.extreme_eigenvalue(4, 200, which, method="tracy-widom")
+        q = np.array([0.01, 0.5, 0.99])
+        np.testing.assert_allclose(approx.cdf(approx.ppf(q)), q, rtol=1e-10)
+        np.testing.assert_allclose(approx.sf(approx.isf(q)), q, rtol=1e-10)
+        sample = approx.rvs(size=50_000, random_state=np.random.default_rng(2))
+        assert stats.kstest(sample, approx.cdf).pvalue > MISS
+        assert approx.mean() == pytest.approx(sample.mean(), abs=5 * sample.std() / np.sqrt(sample.size))
+    # Chiani's shifted gamma has the TW1 mean -1.2065 and variance 1.6078.
+    g = nis.TW1_GAMMA
+    assert g["k"] * g["theta"] - g["alpha"] == pytest.approx(-1.2065, abs=1e-4)
+    assert g["k"] * g["theta"] ** 2 == pytest.approx(1.6078, abs=1e-4)
+    with pytest.raises(ValueError, match="K > m"):
+        nis.extreme_eigenvalue(3, 3, "min", method="tracy-widom")
+
+
+# ---------------------------------------------------------------------------
+# the Pfaffian
+# ---------------------------------------------------------------------------
+def test_pfaffian_matches_formula_and_determinant():
+    rng = np.random.default_rng(0)
+    A = rng.standard_normal((4, 4))
+    A = A - A.T
+    explicit = A[0, 1] * A[2, 3] - A[0, 2] * A[1, 3] + A[0, 3] * A[1, 2]
+    assert nis._pfaffian(A) == pytest.approx(explicit, rel=1e-13)
+    B = rng.standard_normal((50, 8, 8))
+    B = B - np.swapaxes(B, -1, -2)
+    np.testing.assert_allclose(nis._pfaffian(B) ** 2, np.linalg.det(B), rtol=1e-10)
+    assert nis._pfaffian(np.zeros((3, 3))) == 0.0
+
+
+# ---------------------------------------------------------------------------
+# NIS, NEES and the NIS matrix
+# ---------------------------------------------------------------------------
+def test_nis_and_nis_matrix_against_dense_computation():
+    rng = np.random.default_rng(1)
+    K, m = 12, 3
+    S = random_covariances(rng, K, m)
+    eps = rng.standard_normal((K, m))
+    dense = np.array([e @ np.linalg.solve(s, e) for e, s in zip(eps, S)])
+    np.testing.assert_allclose(nis.nis(eps, S), dense, rtol=1e-12)
+    outer = []
+    for e, s in zip(eps, S):
+        B = np.linalg.cholesky(s)
+        z = np.linalg.solve(B, e)
+        outer.append(np.outer(z, z))
+    Pi = nis.nis_matrix(eps, S)
+    np.testing.assert_allclose(Pi, np.mean(outer, axis=0), rtol=1e-12)
+    assert np.trace(Pi) == pytest.approx(dense.mean(), rel=1e-12)  # [F] eq. (4)
+    windows = nis.nis_matrix(eps, S, window=5)
+    assert windows.shape == (K - 4, m, m)
+    for k in range(K - 4):
+        np.testing.assert_allclose(windows[k], np.mean(outer[k:k + 5], axis=0), rtol=1e-12)
+    lmin, lmax = nis.nis_matrix_eigenvalues(eps, S)
+    np.testing.assert_allclose([lmin, lmax], np.linalg.eigvalsh(Pi)[[0, -1]], rtol=1e-12)
+
+
+def test_nis_broadcasts_over_runs_and_a_constant_S():
+    rng = np.random.default_rng(2)
+    eps = rng.standard_normal((7, 20, 2))
+    S = np.array([[2.0, 0.3], [0.3, 1.0]])
+    values = nis.nis(eps, S)
+    assert values.shape == (7, 20)
+    np.testing.assert_allclose(values[3], nis.nis(eps[3], np.broadcast_to(S, (20, 2, 2))))
+    assert nis.nis_matrix(eps, S).shape == (7, 2, 2)
+    np.testing.assert_allclose(nis.nees(eps, S), values)
+
+
+def test_nis_does_not_modify_its_input():
+    eps = np.ones((4, 2))
+    S = np.eye(2) * 2
+    before = (eps.copy(), S.copy())
+    nis.nis_matrix(eps, S, window=2)
+    assert np.array_equal(eps, before[0]) and np.array_equal(S, before[1])
+
+
+# ---------------------------------------------------------------------------
+# corrections to the poster (item 2): K eps ~ chi2(mK), K Pi ~ W_m(K, I)
+# ---------------------------------------------------------------------------
+def test_corrected_laws_of_the_poster_statistics_by_monte_carlo():
+    rng = np.random.default_rng(2024)
+    runs, K, m = 20_000, 10, 3
+    S = random_covariances(rng, K, m)
+    eps = innovations_with(rng, runs, S)
+    eps_bar = nis.nis(eps, S).mean(axis=-1)      # the poster's eq. (4), with 1/K
+    Pi = nis.nis_matrix(eps, S)                  # the poster's eq. (3), with 1/K
+    # K eps_bar ~ chi2(mK) ...
+    assert stats.kstest(K * eps_bar, stats.chi2(m * K).cdf).pvalue > MISS
+    # ... while the poster's literal "eps ~ chi2(mK)" is far off (mean m, not mK).
+    assert stats.kstest(eps_bar, stats.chi2(m * K).cdf).pvalue < 1e-12
+    # K Pi ~ W_m(K, I): mean K I, Var of diagonal entries 2K, off-diagonal K.
+    W = K * Pi
+    z = stats.norm.isf(MISS / 2)
+    mean_se = np.sqrt(np.where(np.eye(m, dtype=bool), 2 * K, K) / runs)
+    assert np.all(np.abs(W.mean(axis=0) - K * np.eye(m)) < z * mean_se)
+    diag_var = W[:, np.arange(m), np.arange(m)].var(axis=0)
+    np.testing.assert_allclose(diag_var, 2 * K, rtol=0.06)
+    assert W[:, 0, 1].var() == pytest.approx(K, rel=0.06)
+    # The poster's literal "Pi ~ W_m(K, I)" would put the mean of Pi at K I.
+    assert np.all(np.abs(Pi.mean(axis=0).diagonal() - 1.0) < 0.05)
+    # And the extreme eigenvalues of Pi follow the exact laws.
+    lmin, lmax = np.linalg.eigvalsh(Pi)[:, 0], np.linalg.eigvalsh(Pi)[:, -1]
+    assert stats.kstest(lmax, nis.extreme_eigenvalue(m, K, "max").cdf).pvalue > MISS
+    assert stats.kstest(lmin, nis.extreme_eigenvalue(m, K, "min").cdf).pvalue > MISS
+
+
+# ---------------------------------------------------------------------------
+# the tests: results, false-alarm rates and power
+# ---------------------------------------------------------------------------
+def test_nis_test_result_fields():
+    rng = np.random.default_rng(3)
+    eps = rng.standard_normal((40, 2))
+    S = np.eye(2)
+    result = nis.nis_test(eps, S, alpha=0.05)
+    assert isinstance(result, TestResult)
+    assert result.statistic == pytest.approx(float(np.sum(eps**2)))
+    assert result.critical_value == pytest.approx(
+        (stats.chi2(80).ppf(0.025), stats.chi2(80).isf(0.025))
+    )
+    assert result.dof == 80 and result.alternative == "two-sided"
+    assert result.reject == (result.pvalue <= 0.05)
+    assert "chi2(80)" in repr(result)
+    # A pessimistic filter (S four times too large) is rejected from below.
+    low = nis.nis_test(eps, 4 * S)
+    assert low.reject and low.statistic < low.critical_value[0]
+
+
+def test_nis_matrix_test_result_fields():
+    rng = np.random.default_rng(4)
+    eps = rng.standard_normal((30, 3))
+    result = nis.nis_matrix_test(eps, np.eye(3), alpha=0.1)
+    lmin, lmax = np.linalg.eigvalsh(eps.T @ eps / 30)[[0, -1]]
+    assert result.statistic == pytest.approx((lmin, lmax))
+    lower = float(nis.extreme_eigenvalue(3, 30, "min").ppf(0.05))
+    upper = float(nis.extreme_eigenvalue(3, 30, "max").isf(0.05))
+    assert result.critical_value == pytest.approx((lower, upper))
+    assert result.reject == (result.pvalue <= 0.1)
+    assert 0.09 < result.details["exact false-alarm rate"] <= 0.1
+    assert repr(result) == repr(nis.nis_matrix_test(eps, np.eye(3), alpha=0.1))
+    # One direction too small in S: the largest eigenvalue sees it.
+    S = np.diag([1.0, 1.0, 0.2])
+    assert nis.nis_matrix_test(eps, S).reject
+
+
+def test_false_alarm_rates_under_H0():
+    rng = np.random.default_rng(6)
+    runs, K, m, alpha = 20_000, 25, 2, 0.05
+    S = random_covariances(rng, K, m)
+    eps = innovations_with(rng, runs, S)
+    total = nis.nis(eps, S).sum(axis=-1)
+    lo, hi = nis.nis_critical_values(m, K, alpha)
+    rate = np.mean((total < lo) | (total > hi))
+    band = binomial_band(runs, alpha)
+    assert band[0] <= rate <= band[1]
+    lmin, lmax = nis.nis_matrix_eigenvalues(eps, S)
+    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
+    size = 1 - nis.prob_eigenvalues_within(m, K, lower, upper)
+    assert 0.045 < size <= alpha
+    rate = np.mean((lmin < lower) | (lmax > upper))
+    band = binomial_band(runs, size)
+    assert band[0] <= rate <= band[1]
+    # The single-record test agrees with the vectorised decision.
+    for r in range(40):
+        assert nis.nis_matrix_test(eps[r], S, alpha).reject == bool(lmin[r] < lower or lmax[r] > upper)
+        assert nis.nis_test(eps[r], S, alpha).reject == bool(total[r] < lo or total[r] > hi)
+
+
+def power(rng, S_true, S_filter, K, runs=4000, alpha=0.05):
+    m = S_true.shape[-1]
+    eps = innovations_with(rng, runs, np.broadcast_to(S_true, (K, m, m)))
+    total = nis.nis(eps, S_filter).sum(axis=-1)
+    lo, hi = nis.nis_critical_values(m, K, alpha)
+    lmin, lmax = nis.nis_matrix_eigenvalues(eps, S_filter)
+    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
+    return np.mean((total < lo) | (total > hi)), np.mean((lmin < lower) | (lmax > upper))
+
+
+def test_matrix_test_wins_when_the_error_is_directional():
+    # Too large in one direction, too small in the other: the trace (NIS)
+    # hardly moves, the eigenvalues do.
+    rng = np.random.default_rng(7)
+    p_nis, p_matrix = power(rng, np.diag([1.8, 0.3]), np.eye(2), K=30)
+    assert p_nis < 0.2 and p_matrix > 0.8
+
+
+def test_scalar_nis_wins_when_the_error_scales_S_uniformly():
+    rng = np.random.default_rng(8)
+    p_nis, p_matrix = power(rng, 1.4 * np.eye(4), np.eye(4), K=30)
+    se = np.sqrt(0.25 / 4000)
+    assert p_nis - p_matrix > 6 * se
+
+
+def test_consistency_interval_is_chi_square_over_count():
+    lo, hi = nis.consistency_interval(2, 50, alpha=0.05)
+    assert lo == pytest.approx(stats.chi2(100).ppf(0.025) / 50)
+    assert hi == pytest.approx(stats.chi2(100).isf(0.025) / 50)
+    # Run-averaged NIS at one time step over N runs stays inside at rate 1 - alpha.
+    rng = np.random.default_rng(9)
+    N, steps = 50, 4000
+    averages = rng.chisquare(2, size=(steps, N)).mean(axis=1)
+    inside = np.mean((averages >= lo) & (averages <= hi))
+    band = binomial_band(steps, 0.95)
+    assert band[0] <= inside <= band[1]
+
+
+# ---------------------------------------------------------------------------
+# error messages
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        ((0, 5), "m .* at least 1"),
+        ((3, 2), "K = 2 < m = 3"),
+        ((2.5, 5), "m .* integer"),
+        ((2, 5, "median"), 'which must be "max" or "min"'),
+    ],
+)
+def test_law_arguments_are_checked(args, message):
+    with pytest.raises(ValueError, match=message):
+        nis.extreme_eigenvalue(*args)
+
+
+def test_value_errors_of_the_law_methods():
+    law = nis.extreme_eigenvalue(2, 5)
+    with pytest.raises(ValueError, match="x must be >= 0"):
+        law.cdf(-0.1)
+    with pytest.raises(ValueError, match="x must be >= 0"):
+        law.sf([0.5, -1.0])
+    with pytest.raises(ValueError, match="NaN"):
+        law.cdf(np.nan)
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        law.ppf(1.5)
+    with pytest.raises(ValueError, match="method"):
+        nis.extreme_eigenvalue(2, 5, method="saddlepoint")
+    with pytest.raises(ValueError, match="lower < upper"):
+        nis.prob_eigenvalues_within(2, 5, 1.0, 0.5)
+
+
+def test_statistic_inputs_are_checked():
+    eps = np.ones((5, 2))
+    with pytest.raises(ValueError, match=r"\(K, m\)"):
+        nis.nis(np.ones(5), np.eye(1))
+    with pytest.raises(ValueError, match="shape"):
+        nis.nis(eps, np.eye(3))
+    with pytest.raises(ValueError, match="not symmetric"):
+        nis.nis(eps, np.array([[1.0, 0.5], [0.0, 1.0]]))
+    with pytest.raises(LinAlgError, match="not positive definite"):
+        nis.nis(eps, np.array([[1.0, 2.0], [2.0, 1.0]]))
+    with pytest.raises(ValueError, match="NaN"):
+        nis.nis(np.array([[np.nan, 0.0]]), np.eye(2))
+    with pytest.raises(ValueError, match="window"):
+        nis.nis_matrix(eps, np.eye(2), window=6)
+    with pytest.raises(ValueError, match="one record"):
+        nis.nis_test(np.ones((3, 5, 2)), np.eye(2))
+    with pytest.raises(ValueError, match="K = 2 < m = 3"):
+        nis.nis_matrix_test(np.ones((2, 3)), np.eye(3))
+    with pytest.raises(ValueError, match="alpha"):
+        nis.nis_test(eps, np.eye(2), alpha=1.5)
