@@ -18,13 +18,15 @@ Decision structures
 Prediction errors
     :func:`least_squares_residual` (rank-revealing, the residual is unique
     even when the parameters are not), :func:`prediction_error`,
-    :func:`prediction_error_test`, :func:`nonlinear_prediction_error`,
-    :func:`recursive_least_squares` (a Kalman filter on random-walk
-    parameters; RLS when the walk has no steps) and
-    :func:`moving_sum_of_squares`.
+    :func:`prediction_error_test` and :func:`nonlinear_prediction_error`.
+    The recursive route (a Kalman filter on random-walk parameters; RLS when
+    the walk has no steps) is :func:`course.filters.recursive_least_squares`,
+    its windowed test quantity :func:`course.filters.windowed_nis` with the
+    threshold :func:`course.filters.windowed_nis_threshold`.
 Thresholds and power
-    :func:`chi2_threshold`, :func:`noncentrality`,
-    :func:`prediction_error_power`.
+    :func:`residual_threshold` (threshold on ``||residual||^2`` with known
+    noise level), :func:`fault_noncentrality` (non-centrality a fault gives a
+    test), :func:`prediction_error_power`.
 Parameter estimates
     :func:`estimate_parameters`, :func:`parameter_estimate_test`,
     :func:`regression_parameter_test`, :func:`parameter_estimate_power`.
@@ -87,11 +89,8 @@ __all__ = [
     "prediction_error_test",
     "NonlinearFit",
     "nonlinear_prediction_error",
-    "RecursiveEstimate",
-    "recursive_least_squares",
-    "moving_sum_of_squares",
-    "chi2_threshold",
-    "noncentrality",
+    "residual_threshold",
+    "fault_noncentrality",
     "prediction_error_power",
     "ParameterEstimate",
     "estimate_parameters",
@@ -825,7 +824,7 @@ def _scaled_chi2(dof, sigma):
     return stats.chi2(dof) if sigma == 1.0 else stats.chi2(dof, scale=sigma**2)
 
 
-def chi2_threshold(alpha: float, dof: int, sigma: float = 1.0) -> float:
+def residual_threshold(alpha: float, dof: int, sigma: float = 1.0) -> float:
     """Threshold ``J`` on ``T = ||residual||^2`` with false-alarm rate ``alpha``.
 
     Parameters
@@ -847,7 +846,10 @@ def chi2_threshold(alpha: float, dof: int, sigma: float = 1.0) -> float:
     Under H0 the residual is ``(I - P) v`` with ``v ~ N(0, sigma^2 I)`` and
     ``I - P`` an orthogonal projection of rank ``N - rank(Phi)``, so
     ``T / sigma^2 ~ chi2(N - rank)`` (Cochran's theorem).  The lecture
-    leaves threshold selection to the next lecture (last slide).
+    leaves threshold selection to the next lecture (last slide).  The
+    argument order follows ``scipy.stats.chi2.isf(alpha, dof)``; for a
+    windowed sum of normalised innovations use
+    :func:`course.filters.windowed_nis_threshold`.
     """
     alpha = check_alpha(alpha)
     dof = _check_dof(dof)
@@ -902,7 +904,7 @@ def prediction_error_test(y, U, nominal, free: Sequence[int] = (), *, sigma: flo
 
     Notes
     -----
-    See :func:`chi2_threshold` for the null law and :func:`prediction_error`
+    See :func:`residual_threshold` for the null law and :func:`prediction_error`
     for ``T``.
     """
     alpha = check_alpha(alpha)
@@ -922,8 +924,8 @@ def prediction_error_test(y, U, nominal, free: Sequence[int] = (), *, sigma: flo
     )
 
 
-def noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1.0) -> Any:
-    """Non-centrality of ``T / sigma^2`` when the data come from ``theta``.
+def fault_noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1.0) -> Any:
+    """Non-centrality of a test's ``T / sigma^2`` when the data come from ``theta``.
 
     Parameters
     ----------
@@ -945,7 +947,9 @@ def noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1.0) ->
     ``(I - P)(U (theta - nominal)) + (I - P) v``: the fault part is a fixed
     vector, so ``T / sigma^2`` is non-central chi-square with this
     non-centrality.  The free parameters' deviations are annihilated by
-    ``I - P``: the test is blind to them, which is the decoupling.
+    ``I - P``: the test is blind to them, which is the decoupling.  (Not to
+    be confused with :func:`course.lsq.noncentrality`, the non-centrality a
+    test *needs* for a given power.)
     """
     U, nominal = _model(U, nominal)
     sigma = _check_sigma(sigma)
@@ -978,20 +982,20 @@ def prediction_error_power(U, nominal, free: Sequence[int], theta, *, sigma: flo
     Returns
     -------
     float or numpy.ndarray
-        ``P(T > J)`` with ``J`` the threshold of :func:`chi2_threshold`;
+        ``P(T > J)`` with ``J`` the threshold of :func:`residual_threshold`;
         equal to ``alpha`` when the fault is invisible to the test.
 
     Notes
     -----
     ``T / sigma^2 ~ chi2'(N - rank, lambda)`` (non-central chi-square, see
-    :func:`noncentrality`), so the power is
+    :func:`fault_noncentrality`), so the power is
     ``ncx2.sf(chi2.isf(alpha, dof), dof, lambda)``: the answer to the
     lecture's closing question "how good is a test?".
     """
     alpha = check_alpha(alpha)
     U, nominal = _model(U, nominal)
     free = _indices(free, U.shape[1])
-    lam = np.asarray(noncentrality(U, nominal, free, theta, sigma))
+    lam = np.asarray(fault_noncentrality(U, nominal, free, theta, sigma))
     dof = U.shape[0] - _range_basis(U[:, free]).shape[1]
     if dof < 1:
         raise ValueError(_void_test_message(f"N - rank = {dof}"))
@@ -1102,149 +1106,6 @@ def nonlinear_prediction_error(y, predict: Callable, nominal, free: Sequence[int
     r = residual(sol.x)
     return NonlinearFit(theta=full(sol.x), residual=r, statistic=float(r @ r),
                         success=bool(sol.success), message=str(sol.message), jacobian=-sol.jac)
-
-
-# ---------------------------------------------------------------------------
-# recursive estimation
-# ---------------------------------------------------------------------------
-@dataclass(frozen=True, repr=False, eq=False)
-class RecursiveEstimate:
-    """Output of :func:`recursive_least_squares`.
-
-    Attributes
-    ----------
-    theta : numpy.ndarray
-        Filtered estimates ``theta_hat(t|t)``: ``(N, p)`` or ``(N, p, M)``.
-    P : numpy.ndarray
-        Their covariances ``(N, p, p)`` (the same for every record).
-    innovations : numpy.ndarray
-        One-step prediction errors ``y_t - phi_t^T theta_hat(t|t-1)``,
-        shaped like ``y``.
-    S : numpy.ndarray
-        Innovation variances ``(N,)``.
-    """
-
-    theta: np.ndarray
-    P: np.ndarray
-    innovations: np.ndarray
-    S: np.ndarray
-
-    @property
-    def normalized_innovations(self) -> np.ndarray:
-        """``eps_t / sqrt(S_t)``: independent N(0, 1) over time under H0."""
-        scale = np.sqrt(self.S)
-        return self.innovations / (scale[:, None] if self.innovations.ndim == 2 else scale)
-
-    def __repr__(self) -> str:
-        records = 1 if self.innovations.ndim == 1 else self.innovations.shape[1]
-        return (
-            f"RecursiveEstimate(n_steps={self.S.size}, n_parameters={self.P.shape[-1]}, "
-            f"records={records})"
-        )
-
-
-def recursive_least_squares(y, Phi, theta0, P0, noise_var: float, drift_cov=None,
-                            offset=None) -> RecursiveEstimate:
-    """Track ``theta`` in ``y_t = phi_t^T theta_t + e_t`` with a Kalman filter.
-
-    Parameters
-    ----------
-    y : array_like, shape (N,) or (N, M)
-        Measurements, one record or ``M`` records as columns.
-    Phi : array_like, shape (N, p)
-        Regressor rows ``phi_t^T``.
-    theta0 : array_like, shape (p,)
-        Prior mean of the parameters.
-    P0 : array_like, shape (p, p)
-        Prior covariance (positive definite).
-    noise_var : float
-        Variance of ``e_t``.
-    drift_cov : array_like, shape (p, p), optional
-        Covariance of the random-walk steps ``theta_{t+1} = theta_t + w_t``.
-        Zero (the default) gives recursive least squares: the estimate
-        after the last sample equals the batch estimate with the prior.
-    offset : array_like, shape (N,), optional
-        Known part of the prediction, subtracted from ``y`` (e.g. the fixed
-        parameters' contribution under H0).
-
-    Returns
-    -------
-    RecursiveEstimate
-
-    Notes
-    -----
-    The lecture's recursive route (slide "Linjär regression – rekursiv
-    lösare"): model the parameter as a random walk and run a standard
-    Kalman filter, state ``theta_t``, ``F = I``, ``H_t = phi_t^T``.  RLS is
-    the special case without drift.  The steps are
-    :func:`course.filters.kf_update` and :func:`course.filters.kf_predict`;
-    the covariances do not depend on the data, so all records share them.
-    """
-    from . import filters  # the course's one Kalman filter implementation
-
-    Phi = as_matrix(Phi, "Phi")
-    N, p = Phi.shape
-    Y = _data(y, N)
-    theta0 = as_vector(theta0, "theta0", p)
-    P0 = as_covariance(P0, "P0", p)
-    if np.ndim(noise_var) != 0 or not np.isfinite(noise_var) or noise_var <= 0:
-        raise ValueError(f"noise_var must be a positive scalar (the variance of e_t), got {noise_var!r}")
-    noise_var = float(noise_var)
-    GQG = np.zeros((p, p)) if drift_cov is None else as_covariance(drift_cov, "drift_cov", p, allow_singular=True)
-    if offset is not None:
-        offset = as_vector(offset, "offset", N)
-        Y = Y - (offset[:, None] if Y.ndim == 2 else offset)
-    batch = Y.T if Y.ndim == 2 else Y[None, :]  # (M, N)
-    M = batch.shape[0]
-    x = np.broadcast_to(theta0, (M, p))
-    P = P0
-    R = np.array([[noise_var]])
-    F = np.eye(p)
-    theta = np.empty((M, N, p))
-    covs = np.empty((N, p, p))
-    eps = np.empty((M, N))
-    S_all = np.empty(N)
-    for t in range(N):
-        H = Phi[t][None, :]
-        x_f, P_f, e, S, _ = filters.kf_update(x, P, batch[:, t, None], H, R)
-        theta[:, t], covs[t], eps[:, t], S_all[t] = x_f, P_f, e[:, 0], S[0, 0]
-        x, P = filters.kf_predict(x_f, P_f, F, GQG)
-    if Y.ndim == 1:
-        return RecursiveEstimate(theta=theta[0], P=covs, innovations=eps[0], S=S_all)
-    return RecursiveEstimate(theta=np.moveaxis(theta, 0, -1), P=covs, innovations=eps.T, S=S_all)
-
-
-def moving_sum_of_squares(values, window: int) -> np.ndarray:
-    """Sliding-window sum of squares along the first axis (time).
-
-    Parameters
-    ----------
-    values : array_like, shape (N,) or (N, M)
-        E.g. normalised innovations.
-    window : int
-        Window length ``L``.
-
-    Returns
-    -------
-    numpy.ndarray, shape (N - L + 1,) or (N - L + 1, M)
-        ``sum_{s=t-L+1}^{t} values_s^2`` for ``t = L-1, ..., N-1``.
-
-    Notes
-    -----
-    The discrete form of the lecture's windowed test quantity
-    ``T(t) = int_{t-L}^{t} (y - h(x_hat))^2 dtau``; for independent
-    ``N(0, 1)`` values it is ``chi2(L)`` at every ``t`` (so the threshold is
-    :func:`chi2_threshold` with ``dof = L``).
-    """
-    values = as_float_array(values, "values")
-    if values.ndim not in (1, 2):
-        raise ValueError(f"values must be (N,) or (N, M), got shape {values.shape}")
-    window = int(window)
-    if not 1 <= window <= values.shape[0]:
-        raise ValueError(f"window must be between 1 and N = {values.shape[0]}, got {window}")
-    squares = values**2
-    csum = np.concatenate([np.zeros((1,) + squares.shape[1:]), np.cumsum(squares, axis=0)])
-    return csum[window:] - csum[:-window]
 
 
 # ---------------------------------------------------------------------------

@@ -56,11 +56,14 @@ Results
 Recursive least squares
     ``recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None)
     -> RLSResult(theta, P, eps, S, first)``: the Kalman filter of a
-    random-walk parameter; ``q = 0`` with the diffuse start is batch least
-    squares after every sample.
+    random-walk parameter (the course's only RLS); ``q = 0`` with the diffuse
+    start is batch least squares after every sample, with a prior ``(theta0,
+    P0)`` the regularised estimate.  ``RLSResult`` has the alias
+    ``innovations`` and the methods ``normalized_innovations()`` and ``nis()``
+    of ``FilterResult``, so ``windowed_nis`` accepts it too.
 Residual evaluation
     ``windowed_sum(values, window)`` (NaN until the window is full),
-    ``windowed_nis(result, window)``, ``chi2_threshold(window, alpha,
+    ``windowed_nis(result, window)``, ``windowed_nis_threshold(alpha, window,
     n_outputs=1)``, ``windowed_chi2_test(result_or_nis, window, alpha=0.05,
     t=-1, n_outputs=None) -> TestResult``, ``empirical_threshold(null_statistic,
     alpha)``, ``alarm_statistics(statistic, threshold, fault_time=None) ->
@@ -120,7 +123,7 @@ __all__ = [
     "recursive_least_squares",
     "windowed_sum",
     "windowed_nis",
-    "chi2_threshold",
+    "windowed_nis_threshold",
     "windowed_chi2_test",
     "empirical_threshold",
     "AlarmStatistics",
@@ -1135,9 +1138,29 @@ class RLSResult:
             f"first={self.first})"
         )
 
+    @property
+    def innovations(self) -> np.ndarray:
+        """Alias of ``eps`` (as in :class:`FilterResult`)."""
+        return self.eps
+
     def normalized_innovations(self) -> np.ndarray:
-        """``eps_t / sqrt(S_t)``: independent N(0, 1) under the model (NaN where undefined)."""
+        """``eps_t / sqrt(S_t)``, ``(*batch, N)``: independent N(0, 1) under the model.
+
+        NaN where ``eps`` is (the diffuse start).  The scalar-output case of
+        :meth:`FilterResult.normalized_innovations` (without its trailing
+        output axis: RLS has one output).
+        """
         return self.eps / np.sqrt(self.S)
+
+    def nis(self) -> np.ndarray:
+        """Normalised innovations squared ``eps_t^2 / S_t``, ``(*batch, N)``.
+
+        Independent ``chi2(1)`` over time under the model, so
+        :func:`windowed_nis` of an ``RLSResult`` is ``chi2(L)`` with a full
+        window (threshold :func:`windowed_nis_threshold` with ``n_outputs=1``).
+        """
+        z = self.normalized_innovations()
+        return z * z
 
 
 def _first_full_rank(Phi: np.ndarray) -> int:
@@ -1170,7 +1193,11 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
     Phi : (N, k) array_like
         Regressors, one row ``phi_t^T`` per sample.
     y : array_like
-        ``(N,)`` or ``(*batch, N)`` outputs (a batch shares ``Phi``).
+        ``(N,)`` or ``(*batch, N)`` outputs (a batch shares ``Phi``).  Records
+        stored as the columns of an ``(N, M)`` array (``course.diagnosis``'s
+        layout) go in as ``Y.T``.  A known part of the prediction, e.g. the
+        fixed parameters' contribution under H0, is subtracted beforehand:
+        ``y - offset``.
     r : float
         Measurement-noise variance (> 0).
     q : float or (k, k) array_like, optional
@@ -1198,6 +1225,10 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
     ``0..t`` and ``P(t|t) = r (Phi_t^T Phi_t)^{-1}``, exactly in exact
     arithmetic; with a prior it equals the regularised estimate minimising
     ``||y - Phi theta||^2 / r + (theta - theta0)^T P0^{-1} (theta - theta0)``.
+    The covariances do not depend on the data, so a batch shares them.  The
+    normalised innovations are independent ``N(0, 1)`` while the model holds,
+    which makes :func:`windowed_nis` of the result a recursive test quantity
+    (chapter 2, "recursive computation").
     """
     Phi = as_matrix(Phi, "Phi")
     N, k = Phi.shape
@@ -1287,19 +1318,48 @@ def windowed_nis(result, window) -> np.ndarray:
     ``T_t = sum_{k=t-L+1}^{t} eps_k^T S_k^{-1} eps_k``; under H0 (the
     filter's model is true, linear Gaussian case) ``T_t ~ chi2(L p)``, as
     the normalised innovations are independent ``N(0, I_p)``.  For the EKF
-    this holds approximately.  NaN for ``t < L - 1``.
+    this holds approximately.  NaN for ``t < L - 1``.  ``result`` is a
+    :class:`FilterResult` or an :class:`RLSResult` (``p = 1``); the
+    threshold is :func:`windowed_nis_threshold`.
     """
     return windowed_sum(result.nis(), window)
 
 
-def chi2_threshold(window, alpha, n_outputs=1) -> float:
+def _positive_int(value, name: str, meaning: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name} ({meaning}) must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def windowed_nis_threshold(alpha, window, n_outputs=1) -> float:
     """Threshold of the windowed NIS for a per-sample false-alarm probability ``alpha``.
 
-    ``chi2.isf(alpha, L p)``: under H0, ``P(T_t > threshold) = alpha`` at
-    every ``t`` with a full window.
+    Parameters
+    ----------
+    alpha : float
+        False-alarm probability ``P(T_t > threshold | H0)`` at each ``t``
+        with a full window.
+    window : int
+        Window length ``L`` of :func:`windowed_nis`.
+    n_outputs : int, default 1
+        Number of outputs ``p`` per sample (1 for :class:`RLSResult`).
+
+    Returns
+    -------
+    float
+        ``chi2.isf(alpha, L p)``.
+
+    Notes
+    -----
+    Under H0 the normalised innovations of the correct (linear Gaussian)
+    filter are independent ``N(0, I_p)``, so the window sum of ``L``
+    NIS values is ``chi2(L p)`` (see :func:`windowed_chi2_test`).  The
+    argument order follows ``scipy.stats.chi2.isf(alpha, dof)``.
     """
     alpha = check_alpha(alpha)
-    return float(stats.chi2.isf(alpha, int(window) * int(n_outputs)))
+    window = _positive_int(window, "window", "the number of samples L in the window")
+    n_outputs = _positive_int(n_outputs, "n_outputs", "the number of outputs p per sample")
+    return float(stats.chi2.isf(alpha, window * n_outputs))
 
 
 def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
@@ -1336,7 +1396,7 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
         if result.batch_shape:
             raise ValueError(
                 "windowed_chi2_test takes one record; for a batch use windowed_nis and "
-                "chi2_threshold"
+                "windowed_nis_threshold"
             )
         nis = result.nis()
         p = result.eps.shape[-1]

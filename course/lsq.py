@@ -774,7 +774,8 @@ def noncentrality(alpha: float, power: float, dof: int = 1) -> float:
     gives the familiar approximation ``√λ0 ≈ z_{α/2} + z_{1-γ}`` with
     ``z_{1-γ} = Φ^{-1}(γ)`` (e.g. 17.07 for α = 0.001, γ = 0.80), which
     slightly overstates the exact λ0. Reference: Baarda (1968); Teunissen,
-    *Testing theory* (2000), ch. 4.
+    *Testing theory* (2000), ch. 4. (The non-centrality a given fault
+    *produces* in a test is :func:`course.diagnosis.fault_noncentrality`.)
     """
     alpha = check_alpha(alpha)
     power = check_alpha(power, "power")

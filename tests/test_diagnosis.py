@@ -297,10 +297,10 @@ def test_rank_deficient_threshold_uses_N_minus_rank():
     Y = dg.simulate_linear_regression(U, [1.0, 1.0, 1.0], sigma=sigma, n_records=M, rng=rng)
     fit = dg.prediction_error(Y, U, NOMINAL, free=[0, 1])
     assert fit.dof == N - 1
-    J = dg.chi2_threshold(alpha, fit.dof, sigma)
+    J = dg.residual_threshold(alpha, fit.dof, sigma)
     assert_rate(np.mean(fit.statistic > J), alpha, M)
     # the wrong dof (N - number of free parameters) would give a visibly wrong rate
-    wrong = dg.chi2_threshold(alpha, N - 2, sigma)
+    wrong = dg.residual_threshold(alpha, N - 2, sigma)
     assert np.mean(fit.statistic > wrong) > binomial_band(alpha, M)[1]
 
 
@@ -318,7 +318,7 @@ def test_prediction_error_test_result_and_calibration(signals):
     for mode, theta in (("NF", NOMINAL), ("F1", [2.5, 1, 1])):
         Y = dg.simulate_linear_regression(signals, theta, sigma=sigma, n_records=M, rng=rng)
         stat = dg.linear_test_statistics(Y, signals, NOMINAL, TESTS)
-        J = dg.chi2_threshold(alpha, N - 1, sigma)
+        J = dg.residual_threshold(alpha, N - 1, sigma)
         assert_rate(np.mean(stat[:, 0] > J), alpha, M)
         if mode == "NF":
             for k in (1, 2):
@@ -334,7 +334,7 @@ def test_power_against_fault_size_matches_monte_carlo(signals):
         p_theory = dg.prediction_error_power(signals, NOMINAL, [0], theta, sigma=sigma, alpha=alpha)
         Y = dg.simulate_linear_regression(signals, theta, sigma=sigma, n_records=M, rng=rng)
         T = dg.prediction_error(Y, signals, NOMINAL, [0]).statistic
-        assert_rate(np.mean(T > dg.chi2_threshold(alpha, N - 1, sigma)), p_theory, M)
+        assert_rate(np.mean(T > dg.residual_threshold(alpha, N - 1, sigma)), p_theory, M)
     assert dg.prediction_error_power(signals, NOMINAL, [0], [1, 1, 1], sigma=sigma, alpha=alpha) == alpha
     # a fault in the decoupled parameter is invisible: power alpha at any size
     assert dg.prediction_error_power(signals, NOMINAL, [0], [9, 1, 1], sigma=sigma, alpha=alpha) == pytest.approx(alpha)
@@ -344,13 +344,13 @@ def test_power_against_fault_size_matches_monte_carlo(signals):
     assert curve.shape == (6,) and np.all(np.diff(curve) > 0)
 
 
-def test_noncentrality_is_squared_distance():
+def test_fault_noncentrality_is_squared_distance():
     U = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
     # residual of (0, 1, 1) * 2 off span{(1, 0, 1)}: (-1, 2, 1)... computed densely
     d = 2.0 * U[:, 1]
     P = np.outer(U[:, 0], U[:, 0]) / (U[:, 0] @ U[:, 0])
     expected = np.sum(((np.eye(3) - P) @ d) ** 2) / 0.25
-    assert dg.noncentrality(U, [1, 1], [0], [1, 3], sigma=0.5) == pytest.approx(expected)
+    assert dg.fault_noncentrality(U, [1, 1], [0], [1, 3], sigma=0.5) == pytest.approx(expected)
 
 
 def test_nonlinear_prediction_error_matches_linear_and_grid(signals):
@@ -390,55 +390,7 @@ def test_bad_input_is_refused(signals):
     with pytest.raises(ValueError, match="no redundancy"):
         dg.prediction_error_test(y[:3], signals[:3], NOMINAL, [0, 1, 2], sigma=1.0)
     with pytest.raises(ValueError, match="void"):
-        dg.chi2_threshold(0.05, 0)
-
-
-# ---------------------------------------------------------------------------
-# recursive estimation
-# ---------------------------------------------------------------------------
-def test_rls_equals_batch_estimate_with_prior(signals):
-    rng = np.random.default_rng(13)
-    sigma2 = 0.04
-    y = signals @ [1.2, 0.8, 1.0] + np.sqrt(sigma2) * rng.standard_normal(signals.shape[0])
-    theta0, P0 = np.zeros(3), 10.0 * np.eye(3)
-    rec = dg.recursive_least_squares(y, signals, theta0, P0, sigma2)
-    # batch: minimise ||y - Phi th||^2 / s2 + (th - th0)^T P0^{-1} (th - th0)
-    A = signals.T @ signals / sigma2 + np.eye(3) / 10.0
-    b = signals.T @ y / sigma2 + theta0 / 10.0
-    np.testing.assert_allclose(rec.theta[-1], np.linalg.solve(A, b), rtol=1e-9)
-    np.testing.assert_allclose(rec.P[-1], np.linalg.solve(A, np.eye(3)), rtol=1e-8, atol=1e-14)
-    # the innovation equals y_t minus the prediction from the estimate before it
-    pred = np.concatenate([[signals[0] @ theta0], np.sum(signals[1:] * rec.theta[:-1], axis=1)])
-    np.testing.assert_allclose(rec.innovations, y - pred, atol=1e-12)
-
-
-def test_rls_innovations_are_white_under_H0(signals):
-    rng = np.random.default_rng(14)
-    sigma2, M, alpha = 0.09, 5000, 0.05
-    N = signals.shape[0]
-    theta0, P0 = NOMINAL, 0.25 * np.eye(3)
-    theta = theta0[:, None] + 0.5 * rng.standard_normal((3, M))  # draw theta from the prior
-    Y = signals @ theta + np.sqrt(sigma2) * rng.standard_normal((N, M))
-    rec = dg.recursive_least_squares(Y, signals, theta0, P0, sigma2)
-    assert rec.theta.shape == (N, 3, M) and rec.innovations.shape == (N, M)
-    T = np.sum(rec.normalized_innovations**2, axis=0)
-    assert_rate(np.mean(T > stats.chi2.isf(alpha, N)), alpha, M)
-    W = dg.moving_sum_of_squares(rec.normalized_innovations, 10)
-    np.testing.assert_allclose(W[0], np.sum(rec.normalized_innovations[:10] ** 2, axis=0))
-    assert W.shape == (N - 9, M)
-    assert_rate(np.mean(W[-1] > stats.chi2.isf(alpha, 10)), alpha, M)
-
-
-def test_drifting_parameter_is_tracked_by_the_random_walk_filter():
-    rng = np.random.default_rng(15)
-    N = 400
-    phi = np.column_stack([np.ones(N)])
-    theta_true = np.where(np.arange(N) < 200, 1.0, 2.0)
-    y = theta_true + 0.1 * rng.standard_normal(N)
-    rls = dg.recursive_least_squares(y, phi, [1.0], [[1.0]], 0.01)
-    kf = dg.recursive_least_squares(y, phi, [1.0], [[1.0]], 0.01, drift_cov=[[1e-3]])
-    assert abs(rls.theta[-1, 0] - 1.5) < 0.05  # RLS averages the whole record
-    assert abs(kf.theta[-1, 0] - 2.0) < 0.1  # the random walk forgets
+        dg.residual_threshold(0.05, 0)
 
 
 # ---------------------------------------------------------------------------
@@ -669,7 +621,7 @@ def test_isolation_monte_carlo(structure, signals):
     def simulate(mode, n, g):
         return dg.simulate_linear_regression(signals, thetas[mode], sigma=sigma, n_records=n, rng=g)
 
-    J = np.full(3, dg.chi2_threshold(alpha, N - 1, sigma))
+    J = np.full(3, dg.residual_threshold(alpha, N - 1, sigma))
     res = dg.isolation_monte_carlo(structure, simulate,
                                    lambda Y: dg.linear_test_statistics(Y, signals, NOMINAL, TESTS), J,
                                    n_records=M, rng=rng)

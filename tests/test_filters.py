@@ -411,9 +411,17 @@ def test_windowed_sum_against_naive():
         kf.windowed_sum(v, 0)
 
 
-def test_chi2_threshold_and_windowed_test():
-    assert kf.chi2_threshold(10, 0.01) == pytest.approx(23.209251, abs=1e-6)
-    assert kf.chi2_threshold(5, 0.05, n_outputs=2) == pytest.approx(18.307038, abs=1e-6)
+def test_windowed_nis_threshold_and_windowed_test():
+    assert kf.windowed_nis_threshold(0.01, 10) == pytest.approx(23.209251, abs=1e-6)
+    assert kf.windowed_nis_threshold(0.05, 5, n_outputs=2) == pytest.approx(18.307038, abs=1e-6)
+    with pytest.raises(ValueError, match="window .*positive integer"):
+        kf.windowed_nis_threshold(0.05, 0)
+    with pytest.raises(ValueError, match="window .*positive integer"):
+        kf.windowed_nis_threshold(0.05, 2.5)
+    with pytest.raises(ValueError, match="n_outputs .*positive integer"):
+        kf.windowed_nis_threshold(0.05, 10, n_outputs=0)
+    with pytest.raises(ValueError, match="alpha"):
+        kf.windowed_nis_threshold(10, 0.05)  # the old (window, alpha) order is refused
     nis = np.arange(1.0, 11.0)  # windowed sum over the last 4: 7+8+9+10 = 34
     res = kf.windowed_chi2_test(nis, window=4, alpha=0.05)
     assert isinstance(res, TestResult)
@@ -436,7 +444,7 @@ def test_windowed_test_on_filter_result_and_false_alarm_rate():
     _, y = m.simulate(N, np.random.default_rng(14), batch=runs, u=u)
     res = kf.kalman_filter(m, y, u=u)
     T = kf.windowed_nis(res, L)
-    thr = kf.chi2_threshold(L, alpha)
+    thr = kf.windowed_nis_threshold(alpha, L)
     # one sample per run: independent Bernoulli(alpha) trials
     alarms = int(np.sum(T[:, -1] > thr))
     lo, hi = stats.binom.interval(1 - MISS, runs, alpha)
@@ -490,7 +498,7 @@ def test_drifting_beta_false_alarms_only_without_random_walk():
     u, beta = lecture_signals(N)
     _, y = kf.simulate_beta_system(beta, u, np.random.default_rng(15), Ts=0.1, q_x=1e-4,
                                    r=2.5e-3, x0=0.5, batch=runs)
-    thr = kf.chi2_threshold(L, alpha)
+    thr = kf.windowed_nis_threshold(alpha, L)
     rates = {}
     for q_beta in (1e-4, 0.0):
         model = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
@@ -508,7 +516,7 @@ def test_sensor_fault_is_detected():
                                    r=2.5e-3, x0=0.5, fault=fault, batch=runs)
     model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
     res = kf.extended_kalman_filter(model, y, u, store_covariances=False)
-    a = kf.alarm_statistics(kf.windowed_nis(res, L), kf.chi2_threshold(L, alpha), fault_time=tf)
+    a = kf.alarm_statistics(kf.windowed_nis(res, L), kf.windowed_nis_threshold(alpha, L), fault_time=tf)
     assert a.detection_probability > 0.99
     assert a.median_delay <= 3
 
@@ -607,6 +615,65 @@ def test_rls_random_walk_equals_kalman_filter():
     ref = kf.kalman_filter(m, y)
     np.testing.assert_allclose(res.theta, ref.x_filt, atol=1e-12)
     np.testing.assert_allclose(res.eps, ref.eps[:, 0], atol=1e-12)
+
+
+def regressors_ch2():
+    """Three regressors of chapter 2's lecture example (N = 30), as in tests/test_diagnosis.py."""
+    rng = np.random.default_rng(20240501)
+    t = np.arange(30)
+    return np.column_stack([np.sin(0.3 * t) + 1.5, np.cos(0.17 * t), rng.standard_normal(30)])
+
+
+def test_rls_with_prior_equals_regularised_batch_estimate():
+    signals = regressors_ch2()
+    rng = np.random.default_rng(13)
+    sigma2 = 0.04
+    y = signals @ [1.2, 0.8, 1.0] + np.sqrt(sigma2) * rng.standard_normal(signals.shape[0])
+    theta0, P0 = np.zeros(3), 10.0 * np.eye(3)
+    rec = kf.recursive_least_squares(signals, y, r=sigma2, theta0=theta0, P0=P0)
+    # batch: minimise ||y - Phi th||^2 / s2 + (th - th0)^T P0^{-1} (th - th0)
+    A = signals.T @ signals / sigma2 + np.eye(3) / 10.0
+    b = signals.T @ y / sigma2 + theta0 / 10.0
+    np.testing.assert_allclose(rec.theta[-1], np.linalg.solve(A, b), rtol=1e-9)
+    np.testing.assert_allclose(rec.P[-1], np.linalg.solve(A, np.eye(3)), rtol=1e-8, atol=1e-14)
+    # the innovation equals y_t minus the prediction from the estimate before it
+    pred = np.concatenate([[signals[0] @ theta0], np.sum(signals[1:] * rec.theta[:-1], axis=1)])
+    np.testing.assert_allclose(rec.innovations, y - pred, atol=1e-12)
+    assert rec.innovations is rec.eps
+
+
+def test_rls_innovations_are_white_under_H0():
+    """Chapter 2's recursive test quantity: whole-record and windowed sums are chi2 under H0."""
+    signals = regressors_ch2()
+    rng = np.random.default_rng(14)
+    sigma2, M, alpha = 0.09, 5000, 0.05
+    N = signals.shape[0]
+    theta0, P0 = np.ones(3), 0.25 * np.eye(3)
+    theta = theta0[:, None] + 0.5 * rng.standard_normal((3, M))  # draw theta from the prior
+    Y = signals @ theta + np.sqrt(sigma2) * rng.standard_normal((N, M))  # records as columns
+    rec = kf.recursive_least_squares(signals, Y.T, r=sigma2, theta0=theta0, P0=P0)
+    assert rec.theta.shape == (M, N, 3) and rec.innovations.shape == (M, N)
+    z = rec.normalized_innovations()
+    np.testing.assert_allclose(rec.nis(), z**2, rtol=1e-15)
+    lo, hi = stats.binom.interval(1 - MISS, M, alpha)
+    T = np.sum(z**2, axis=-1)
+    assert lo <= np.sum(T > stats.chi2.isf(alpha, N)) <= hi
+    W = kf.windowed_nis(rec, 10)
+    assert W.shape == (M, N) and np.all(np.isnan(W[:, :9]))
+    np.testing.assert_allclose(W[:, 9], np.sum(z[:, :10] ** 2, axis=-1))
+    assert lo <= np.sum(W[:, -1] > stats.chi2.isf(alpha, 10)) <= hi
+
+
+def test_drifting_parameter_is_tracked_by_the_random_walk_filter():
+    rng = np.random.default_rng(15)
+    N = 400
+    phi = np.ones((N, 1))
+    theta_true = np.where(np.arange(N) < 200, 1.0, 2.0)
+    y = theta_true + 0.1 * rng.standard_normal(N)
+    rls = kf.recursive_least_squares(phi, y, r=0.01, theta0=[1.0], P0=[[1.0]])
+    walk = kf.recursive_least_squares(phi, y, r=0.01, q=1e-3, theta0=[1.0], P0=[[1.0]])
+    assert abs(rls.theta[-1, 0] - 1.5) < 0.05  # RLS averages the whole record
+    assert abs(walk.theta[-1, 0] - 2.0) < 0.1  # the random walk forgets
 
 
 def test_rls_errors():

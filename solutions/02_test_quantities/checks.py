@@ -115,7 +115,7 @@ def q5():
                    "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
                    "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).")
 def q6():
-    J = dg.chi2_threshold(0.01, N - 1, SIGMA)
+    J = dg.residual_threshold(0.01, N - 1, SIGMA)
     power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
     return (J, power)
 
@@ -137,7 +137,7 @@ def q7(d):
                    "mine['alpha']; then apply your single_fault_diagnoses to the lecture structure.")
 def q8(d):
     N_d = d["y"].size
-    alarms = _three_statistics(d) > dg.chi2_threshold(d["alpha"], N_d - 1, d["sigma"])
+    alarms = _three_statistics(d) > dg.residual_threshold(d["alpha"], N_d - 1, d["sigma"])
     return list(dg.diagnoses(dg.DecisionStructure(LECTURE, modes=MODES), alarms))
 
 

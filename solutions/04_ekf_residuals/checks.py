@@ -118,7 +118,7 @@ def q5(d):
     res = kf.extended_kalman_filter(model, d["y"], d["u"])
     T = kf.windowed_nis(res, d["window"])
     with np.errstate(invalid="ignore"):
-        alarms = np.flatnonzero(T > kf.chi2_threshold(d["window"], d["alpha"]))
+        alarms = np.flatnonzero(T > kf.windowed_nis_threshold(d["alpha"], d["window"]))
     return int(alarms[0]) if alarms.size else -1
 
 
@@ -142,10 +142,10 @@ q6.case(1.0, 0.01, 0.5, 30, 5, 0.01, 20000, 7, hidden=True)
 @CHECKS.value("q7", var="false_alarms", points=2, rtol=0, atol=0, public=False,
               hint="Run kf.extended_kalman_filter with kf.beta_drift_model(..., q_beta=0.0, ...) and "
                    "with q_beta=1e-4 on the same (y7, u7); count the samples t < t_fault7 where "
-                   "kf.windowed_nis(result, 10) exceeds kf.chi2_threshold(10, 0.001). "
+                   "kf.windowed_nis(result, 10) exceeds kf.windowed_nis_threshold(0.001, 10). "
                    "Return (count_constant, count_random_walk) as ints.")
 def q7():
-    thr = kf.chi2_threshold(10, 0.001)
+    thr = kf.windowed_nis_threshold(0.001, 10)
     counts = []
     for q_beta in (0.0, 1e-4):
         model = kf.beta_drift_model(Ts=TS, q_beta=q_beta, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))
