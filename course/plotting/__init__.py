@@ -6,7 +6,15 @@ it is None) and returns the axes it drew on, so notebooks can compose and
 restyle figures.  One submodule per topic:
 
 - :mod:`course.plotting.lsq` – line fits, error bars, confidence bands,
-  sum-of-squares surfaces, chi-square histograms.
+  sum-of-squares surfaces, chi-square histograms, w-tests.
+- :mod:`course.plotting.diagnosis` – decision structures, residual geometry,
+  likelihoods, confusion matrices and detection probabilities.
+- :mod:`course.plotting.filters` – signals, innovations with their bands,
+  parameter tracks, false-alarm and detection-delay studies.
+- :mod:`course.plotting.nis` – eigenvalue laws against Monte Carlo, detection
+  probability against the number of samples.
+- :mod:`course.plotting.mismatched` – residual moments over many records,
+  quadratic-form laws, critical regions and power.
 
 Matplotlib is imported lazily inside the functions, so importing
 :mod:`course` never loads it.
