@@ -1,0 +1,812 @@
+"""Validating a model with the residuals of a mismatched Kalman filter over many records.
+
+The filter is often deliberately simpler than the model it is meant to
+validate (fewer states, other noise levels).  Its residuals are then
+correlated, non-zero mean and non-stationary *even when the model is right*,
+so whiteness and chi-square tests do not apply.  Baram (1980,
+``seeds/mismatched_filters_baram.txt``) uses many independent data records
+instead: at a fixed time ``j`` the residuals of different records (a
+*cross-record section*) are independent and identically distributed, and the
+mean, covariance and correlation statistics of a section are quadratic forms
+in normal variables whose laws Imhof's method computes
+(:mod:`course.quadform`).
+
+Notation: ``M^0`` is the model under test (``true_model`` when it holds),
+``M^1`` the model inside the filter (``filter_model``), ``M^2`` an
+alternative for the power.  Times are ``t = 0, ..., N-1`` as in
+:mod:`course.filters` (the paper's ``j = 1, ..., N``).
+
+Public API
+----------
+residual_moments(true_model, filter_model, N) -> ResidualMoments
+    Means ``m_t``, covariances ``P_t`` and cross-covariances ``C(j, k)`` of the
+    residuals, by the augmented-system recursion of the paper's appendix with
+    its misprints corrected (see :data:`APPENDIX_MISPRINTS`).
+residual_moments_as_printed(true_model, filter_model, N, misprint)
+    The same recursion with one misprint of the appendix put back, to
+    measure its effect against Monte Carlo (teaching only).
+simulate_records(true_model, filter_model, M, N, rng) -> (M, N, p)
+    Residuals of the filter on M independent records of the true model.
+moment_zscores(residuals, moments)
+    Standardised differences between sample and predicted moments (the
+    Monte Carlo check of a moment computation).
+principal_directions, mean_statistic, covariance_statistic, correlation_statistic
+    The statistics of a cross-record section (Baram (2.5)-(2.17), corrected).
+mean_matrix, covariance_matrix, correlation_matrix, section_moments, pair_moments
+    The same statistics as quadratic forms ``phi^T A phi`` (Baram section 3).
+statistic_law
+    The law of a statistic under a model pair (exact, via Imhof's method).
+mean_test, covariance_test, correlation_test, power
+    Tests with critical regions from the law under ``(M^0, M^1)`` and power
+    against ``(M^2, M^1)``; each test returns a :class:`~course.results.TestResult`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .filters import LinearModel, kalman_filter, riccati_gains
+from .linalg import as_float_array, check_alpha, symmetrize
+from .quadform import QuadraticForm, WeightedChiSquare
+from .results import TestResult
+
+__all__ = [
+    "ResidualMoments",
+    "APPENDIX_MISPRINTS",
+    "residual_moments",
+    "residual_moments_as_printed",
+    "simulate_records",
+    "moment_zscores",
+    "principal_directions",
+    "mean_statistic",
+    "covariance_statistic",
+    "correlation_statistic",
+    "mean_matrix",
+    "covariance_matrix",
+    "correlation_matrix",
+    "section_moments",
+    "pair_moments",
+    "statistic_law",
+    "mean_test",
+    "covariance_test",
+    "correlation_test",
+    "power",
+]
+
+#: The misprints of Baram's appendix that :func:`residual_moments_as_printed`
+#: can put back: name -> (equation, as printed, as corrected).
+APPENDIX_MISPRINTS = {
+    "gain_of_tested_model": (
+        "(A17)-(A18)",
+        "K^0 from a Riccati recursion of M^0 (mixing H^0 and H^1)",
+        "K^1 from the Riccati recursion of the filter's own model M^1",
+    ),
+    "H_tilde_sign": (
+        "(A15)",
+        "H~ = [H^0  H^1] (the minus sign lost in '[H^0 - H^1]')",
+        "H~ = [H^0, -H^1]: r = H^0 x - H^1 xhat + v",
+    ),
+    "Q1_block": (
+        "(A14), (A20)",
+        "a random w^1 with covariance Q^1 drives the estimate",
+        "the estimate is driven by the mean of w^1 only: no Q^1 block",
+    ),
+    "initial_estimate_random": (
+        "(A26)",
+        "Psi~_0 with the filter's prior covariance in the estimate block",
+        "Psi~_0 = blockdiag(Psi^0_0, 0): xhat(0|-1) is a known vector",
+    ),
+    "mean_without_noise_mean": (
+        "(A23)",
+        "m_j = H~ E[x~_j] (no measurement-noise mean)",
+        "m_j = H~ E[x~_j] + m_v^0 - m_v^1",
+    ),
+    "cross_covariance_without_v": (
+        "(A27)",
+        "C(k, j) = H~ Theta(k, j) Psi~_j H~^T for j < k",
+        "plus H~ Theta(k, j+1) [0; F^1 K_j R^0]: v_j enters xhat through the gain",
+    ),
+    "C_is_P_k": (
+        "(2.4)",
+        "C(j, k) = E{(r_k - m_k)(r_k - m_k)^T} (= P_k)",
+        "C(j, k) = E{(r_j - m_j)(r_k - m_k)^T}",
+    ),
+}
+
+
+# ---------------------------------------------------------------------------
+# moments of the residuals
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True, repr=False, eq=False)
+class ResidualMoments:
+    """First and second moments of mismatched-filter residuals.
+
+    Attributes
+    ----------
+    mean : (N, p) ndarray
+        ``m_t = E r_t``.
+    cov : (N, p, p) ndarray
+        ``P_t = E (r_t - m_t)(r_t - m_t)^T``.
+    cross_cov : (N, N, p, p) ndarray
+        ``cross_cov[j, k] = C(j, k) = E (r_j - m_j)(r_k - m_k)^T``;
+        ``cross_cov[j, j] = P_j`` and ``cross_cov[k, j] = C(j, k)^T``.
+    """
+
+    mean: np.ndarray
+    cov: np.ndarray
+    cross_cov: np.ndarray
+
+    @property
+    def n_steps(self) -> int:
+        return self.mean.shape[0]
+
+    @property
+    def n_outputs(self) -> int:
+        return self.mean.shape[1]
+
+    def C(self, j: int, k: int) -> np.ndarray:
+        """``C(j, k) = E (r_j - m_j)(r_k - m_k)^T``."""
+        return self.cross_cov[_index(j, self.n_steps, "j"), _index(k, self.n_steps, "k")]
+
+    def stacked_cov(self) -> np.ndarray:
+        """Covariance of ``(r_0, ..., r_{N-1})`` stacked, ``(N p, N p)``."""
+        N, p = self.mean.shape
+        return self.cross_cov.transpose(0, 2, 1, 3).reshape(N * p, N * p)
+
+    def __repr__(self) -> str:
+        return f"ResidualMoments(n_steps={self.n_steps}, n_outputs={self.n_outputs})"
+
+
+def _check_models(true_model, filter_model):
+    for name, model in (("true_model", true_model), ("filter_model", filter_model)):
+        if not isinstance(model, LinearModel):
+            raise TypeError(f"{name} must be a course.filters.LinearModel, got {type(model).__name__}")
+        if model.n_inputs:
+            raise ValueError(
+                f"{name} has an input (B); the mismatched-filter analysis here has none: "
+                "fold a known constant input into w_mean"
+            )
+    if true_model.n_outputs != filter_model.n_outputs:
+        raise ValueError(
+            f"the models must have the same number of outputs: the true model has "
+            f"{true_model.n_outputs}, the filter's {filter_model.n_outputs}"
+        )
+
+
+def _check_steps(N) -> int:
+    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+        raise ValueError(f"N (the number of samples per record) must be a positive integer, got {N!r}")
+    return int(N)
+
+
+def residual_moments(true_model, filter_model, N) -> ResidualMoments:
+    """Moments of the residuals of ``filter_model``'s Kalman filter on data of ``true_model``.
+
+    Parameters
+    ----------
+    true_model : course.filters.LinearModel
+        ``M^0`` (or ``M^2``), the model that generates the data.
+    filter_model : course.filters.LinearModel
+        ``M^1``, the model inside the filter (it may have fewer states).
+    N : int
+        Number of samples per record.
+
+    Returns
+    -------
+    ResidualMoments
+        ``mean (N, p)``, ``cov (N, p, p)``, ``cross_cov (N, N, p, p)``.
+
+    Notes
+    -----
+    The residual ``r_t = y_t - H^1 xhat(t|t-1) - m_v^1`` of the filter of
+    :func:`course.filters.kalman_filter` is the output of the augmented system
+    (Baram 1980, appendix, (A9)-(A15), corrected)::
+
+        x~_t = [x_t; xhat(t|t-1)],   x~_{t+1} = F~_t x~_t + G~_t [w_t; v_t] + u~_t,
+        F~_t = [[F^0, 0], [F^1 K_t H^0, F^1 (I - K_t H^1)]],     (A13)
+        G~_t = [[G^0, 0], [0, F^1 K_t]],                         (A14), no G^1 w^1 block
+        u~_t = [G^0 m_w^0; F^1 K_t (m_v^0 - m_v^1) + G^1 m_w^1],
+        r_t  = H~ x~_t + v_t - m_v^1,  H~ = [H^0, -H^1],        (A15)
+
+    with ``K_t`` the filter's own gains (Riccati recursion of ``M^1``,
+    (A17)-(A18) corrected), ``E x~_0 = [m^0_0; m^1_0]`` (A21) and
+    ``Psi~_0 = blockdiag(Psi^0_0, 0)`` (A26).  Then
+
+    - ``E x~_{t+1} = F~_t E x~_t + u~_t``; ``m_t = H~ E x~_t + m_v^0 - m_v^1`` (A23);
+    - ``Psi~_{t+1} = F~_t Psi~_t F~_t^T + G~_t Q~ G~_t^T``,
+      ``Q~ = blockdiag(Q^0, R^0)`` (A20), (A25);
+    - ``P_t = H~ Psi~_t H~^T + R^0`` (A28);
+    - for ``j < k``: ``C(k, j) = H~ Z_{k,j}`` with ``Z_{j+1,j} = F~_j Psi~_j H~^T
+      + [0; F^1 K_j R^0]`` and ``Z_{t+1,j} = F~_t Z_{t,j}`` (A27 corrected: the
+      transition from j to k, and ``v_j`` enters the estimate through the gain).
+    """
+    return _moments(true_model, filter_model, N, misprint=None)
+
+
+def residual_moments_as_printed(true_model, filter_model, N, misprint) -> ResidualMoments:
+    """:func:`residual_moments` with one misprint of Baram's appendix put back.
+
+    For teaching: comparing these moments with Monte Carlo shows that the
+    printed formula is wrong and the corrected one right.
+
+    Parameters
+    ----------
+    misprint : str
+        A key of :data:`APPENDIX_MISPRINTS`.
+
+    Raises
+    ------
+    ValueError
+        Unknown misprint, or ``"gain_of_tested_model"`` with models of
+        different state dimensions (the printed gain is then not even
+        conformable with ``F^1``).
+    """
+    if misprint not in APPENDIX_MISPRINTS:
+        raise ValueError(f"misprint must be one of {sorted(APPENDIX_MISPRINTS)}, got {misprint!r}")
+    return _moments(true_model, filter_model, N, misprint=misprint)
+
+
+def _moments(m0, m1, N, misprint):
+    _check_models(m0, m1)
+    N = _check_steps(N)
+    n0, n1, p = m0.n_states, m1.n_states, m0.n_outputs
+    if misprint == "gain_of_tested_model":
+        if n0 != n1:
+            raise ValueError(
+                "the printed gain K^0 (from M^0) is n0 x p and cannot multiply F^1 (n1 x n1) "
+                f"when the filter has fewer states ({n1} vs {n0}): the printed formula has no meaning here"
+            )
+        K = riccati_gains(m0, N)
+    else:
+        K = riccati_gains(m1, N)
+    na = n0 + n1
+    Ht = np.hstack([m0.H, (1.0 if misprint == "H_tilde_sign" else -1.0) * m1.H])
+    x_mean = np.concatenate([m0.x0_mean, m1.x0_mean])
+    Psi = np.zeros((na, na))
+    Psi[:n0, :n0] = m0.x0_cov
+    if misprint == "initial_estimate_random":
+        Psi[n0:, n0:] = m1.x0_cov
+    dv = m0.v_mean - m1.v_mean
+    R0 = m0.R
+    mean = np.empty((N, p))
+    cov = np.empty((N, p, p))
+    cross = np.empty((N, N, p, p))
+    F_all = np.empty((N, na, na))
+    Z_first = np.empty((N, na, p))  # Cov(x~_{j+1}, r_j)
+    for t in range(N):
+        mean[t] = Ht @ x_mean + (dv if misprint != "mean_without_noise_mean" else 0.0)
+        cov[t] = symmetrize(Ht @ Psi @ Ht.T + R0)
+        FK = m1.F @ K[t]
+        Ft = np.zeros((na, na))
+        Ft[:n0, :n0] = m0.F
+        Ft[n0:, :n0] = FK @ m0.H
+        Ft[n0:, n0:] = m1.F - FK @ m1.H
+        F_all[t] = Ft
+        Z = Ft @ Psi @ Ht.T
+        if misprint != "cross_covariance_without_v":
+            Z[n0:] += FK @ R0
+        Z_first[t] = Z
+        # noise: [w^0; v^0] through G~ = [[G^0, 0], [0, F^1 K]]
+        noise = np.zeros((na, na))
+        noise[:n0, :n0] = m0.GQG
+        noise[n0:, n0:] = FK @ R0 @ FK.T
+        if misprint == "Q1_block":
+            noise[n0:, n0:] += m1.GQG
+        x_mean = Ft @ x_mean + np.concatenate([m0.G @ m0.w_mean, FK @ dv + m1.G @ m1.w_mean])
+        Psi = symmetrize(Ft @ Psi @ Ft.T + noise)
+    for j in range(N):
+        cross[j, j] = cov[j]
+        Z = Z_first[j]
+        for k in range(j + 1, N):
+            Ckj = Ht @ Z  # C(k, j) = E (r_k - m_k)(r_j - m_j)^T
+            cross[k, j] = Ckj
+            cross[j, k] = Ckj.T
+            Z = F_all[k] @ Z
+    if misprint == "C_is_P_k":
+        for j in range(N):
+            for k in range(N):
+                cross[j, k] = cov[k]
+    return ResidualMoments(_readonly(mean), _readonly(cov), _readonly(cross))
+
+
+def simulate_records(true_model, filter_model, M, N, rng) -> np.ndarray:
+    """Residuals of ``filter_model``'s Kalman filter on M records of ``true_model``.
+
+    Parameters
+    ----------
+    true_model, filter_model : course.filters.LinearModel
+    M : int
+        Number of independent records (experiments).
+    N : int
+        Samples per record.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray, shape (M, N, p)
+        ``residuals[i, t]`` is ``r_{i,t}`` of the paper (record i, time t).
+    """
+    _check_models(true_model, filter_model)
+    N = _check_steps(N)
+    if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 1:
+        raise ValueError(f"M (the number of records) must be a positive integer, got {M!r}")
+    _, y = true_model.simulate(N, rng, batch=int(M))
+    return np.array(kalman_filter(filter_model, y).eps)
+
+
+def moment_zscores(residuals, moments: ResidualMoments):
+    """Standardised differences between sample moments and ``moments``.
+
+    Parameters
+    ----------
+    residuals : (M, N, p) array_like
+        Residuals of many independent records.
+    moments : ResidualMoments
+        Predicted moments.
+
+    Returns
+    -------
+    z_mean : (N, p) ndarray
+        ``(rbar_t - m_t) / sqrt(P_t,aa / M)``.
+    z_cov : (N, N, p, p) ndarray
+        ``(S(j, k)_ab - C(j, k)_ab) / se`` with the unbiased sample
+        cross-covariance ``S`` (divisor ``M - 1``) and the normal-theory
+        standard error ``se^2 = (P_j,aa P_k,bb + C(j, k)_ab^2) / M``.
+
+    Notes
+    -----
+    If the moments are right, every entry is approximately ``N(0, 1)``;
+    a wrong formula shows up as entries of tens or hundreds.
+    """
+    r = _as_records(residuals)
+    M = r.shape[0]
+    if r.shape[1:] != moments.mean.shape:
+        raise ValueError(
+            f"residuals have (N, p) = {r.shape[1:]} but the moments are for {moments.mean.shape}"
+        )
+    rbar = r.mean(axis=0)
+    variances = np.diagonal(moments.cov, axis1=1, axis2=2)
+    z_mean = (rbar - moments.mean) / np.sqrt(variances / M)
+    dev = r - rbar
+    sample = np.einsum("ija,ikb->jkab", dev, dev) / (M - 1)
+    se = np.sqrt((variances[:, None, :, None] * variances[None, :, None, :] + moments.cross_cov**2) / M)
+    return z_mean, (sample - moments.cross_cov) / se
+
+
+# ---------------------------------------------------------------------------
+# statistics of a cross-record section
+# ---------------------------------------------------------------------------
+def _as_records(residuals) -> np.ndarray:
+    r = as_float_array(residuals, "residuals")
+    if r.ndim == 2:
+        r = r[..., None]
+    if r.ndim != 3:
+        raise ValueError(
+            f"residuals must have shape (M, N, p) (records, times, outputs) or (M, N), got {r.shape}"
+        )
+    if r.shape[0] < 2:
+        raise ValueError("at least two records are needed for cross-record statistics")
+    return r
+
+
+def _index(j, N, name) -> int:
+    if isinstance(j, bool) or not isinstance(j, (int, np.integer)) or not 0 <= j < N:
+        raise ValueError(f"{name} must be an integer time index in 0..{N - 1}, got {j!r}")
+    return int(j)
+
+
+def _unit(v, p, name) -> np.ndarray:
+    v = as_float_array(v, name)
+    if v.shape != (p,):
+        raise ValueError(f"{name} must be a vector of length p = {p}, got shape {v.shape}")
+    norm = np.linalg.norm(v)
+    if not np.isclose(norm, 1.0, rtol=1e-8):
+        raise ValueError(f"{name} must be a unit vector (norm 1), got norm {norm:.6g}")
+    return v
+
+
+def principal_directions(moments: ResidualMoments, j: int, k: int | None = None):
+    """Principal directions of ``P_j`` or of ``C(j, k)`` under the null pair.
+
+    Returns
+    -------
+    For ``k is None``: ``(lam, V)`` with the eigenvalues of ``P_j`` in
+    decreasing order and the eigenvectors as columns (Baram (2.13)-(2.15)).
+    Otherwise ``(s, U, W)``: the singular value decomposition
+    ``C(j, k) = U diag(s) W^T``; ``U[:, g]`` projects ``r_j`` and ``W[:, g]``
+    projects ``r_k`` (corrected (2.7): a non-symmetric ``C`` has different
+    left and right principal directions).
+    """
+    N = moments.n_steps
+    j = _index(j, N, "j")
+    if k is None:
+        lam, V = np.linalg.eigh(moments.cov[j])
+        return lam[::-1], V[:, ::-1]
+    k = _index(k, N, "k")
+    U, s, Wt = np.linalg.svd(moments.C(j, k))
+    return s, U, Wt.T
+
+
+def mean_statistic(residuals, j: int) -> float:
+    """``||rbar_j||^2 = rbar_j^T rbar_j`` (Baram (2.5)-(2.6), the *squared* norm)."""
+    r = _as_records(residuals)
+    j = _index(j, r.shape[1], "j")
+    rbar = r[:, j].mean(axis=0)
+    return float(rbar @ rbar)
+
+
+def covariance_statistic(residuals, j: int, direction=None) -> float:
+    """Sample covariance statistic of section ``j``.
+
+    Without ``direction``: ``c_j = tr Pbar_j = (1/M) sum_i |r_ij - rbar_j|^2``
+    (2.16)-(2.17).  With a unit ``direction`` v (a principal direction of
+    ``P_j``): ``c_j^(g) = (1/M) sum_i (v^T (r_ij - rbar_j))^2`` -- the average of
+    the *squared* projections ((2.13)-(2.14) corrected; averaging the
+    projections themselves gives zero identically).  Its expectation is
+    ``(M - 1)/M v^T P_j v``.
+    """
+    r = _as_records(residuals)
+    j = _index(j, r.shape[1], "j")
+    dev = r[:, j] - r[:, j].mean(axis=0)
+    if direction is None:
+        return float(np.mean(np.sum(dev * dev, axis=1)))
+    v = _unit(direction, r.shape[2], "direction")
+    return float(np.mean((dev @ v) ** 2))
+
+
+def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
+    """Sample correlation statistic of sections ``j`` and ``k``.
+
+    Without ``directions``: ``c(j, k) = tr Cbar(j, k) = (1/M) sum_i (r_ij -
+    rbar_j)^T (r_ik - rbar_k)`` (2.12).  With ``directions = (u, w)`` (left
+    and right singular vectors of ``C(j, k)``): ``c^(g)(j, k) = (1/M) sum_i
+    (u^T (r_ij - rbar_j)) (w^T (r_ik - rbar_k))`` ((2.7)-(2.9) with an SVD);
+    its expectation is ``(M - 1)/M u^T C(j, k) w``.
+    """
+    r = _as_records(residuals)
+    N, p = r.shape[1], r.shape[2]
+    j, k = _index(j, N, "j"), _index(k, N, "k")
+    dj = r[:, j] - r[:, j].mean(axis=0)
+    dk = r[:, k] - r[:, k].mean(axis=0)
+    if directions is None:
+        return float(np.mean(np.sum(dj * dk, axis=1)))
+    u, w = _pair(directions, p)
+    return float(np.mean((dj @ u) * (dk @ w)))
+
+
+def _pair(directions, p):
+    try:
+        u, w = directions
+    except (TypeError, ValueError):
+        raise ValueError("directions must be a pair (u, w) of unit vectors") from None
+    return _unit(u, p, "u"), _unit(w, p, "w")
+
+
+# ---------------------------------------------------------------------------
+# the statistics as quadratic forms (Baram section 3)
+# ---------------------------------------------------------------------------
+def _centering(M) -> np.ndarray:
+    return np.eye(M) - np.full((M, M), 1.0 / M)
+
+
+def _check_M(M) -> int:
+    if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 2:
+        raise ValueError(f"M (the number of records) must be an integer >= 2, got {M!r}")
+    return int(M)
+
+
+def mean_matrix(M: int, p: int) -> np.ndarray:
+    """``A = (1/M^2) 1 1^T kron I_p`` with ``||rbar_j||^2 = phi_j^T A phi_j`` (3.2)-(3.3).
+
+    The paper writes ``I_n``; the blocks act on residuals, so they are ``I_p``.
+    """
+    M = _check_M(M)
+    return np.kron(np.full((M, M), 1.0 / M**2), np.eye(int(p)))
+
+
+def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
+    """``G`` with ``c_j = phi_j^T G phi_j``: ``(1/M) J kron I_p`` (3.12), (3.15),
+    or ``D (J/M) D^T`` with ``D = I_M kron v`` for a direction v (3.11), (3.13)-(3.14).
+
+    ``J = I_M - 1 1^T / M`` removes the sample mean.
+    """
+    M = _check_M(M)
+    J = _centering(M) / M
+    if direction is None:
+        return np.kron(J, np.eye(int(p)))
+    v = _unit(direction, int(p), "direction")[:, None]
+    D = np.kron(np.eye(M), v)
+    return D @ J @ D.T
+
+
+def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
+    """``B`` with ``c(j, k) = phi(j, k)^T B phi(j, k)``, ``phi(j, k) = (phi_j, phi_k)``.
+
+    ``B = (1/2M) [[0, J kron I_p], [J kron I_p, 0]]`` (3.6), (3.9) (the paper's
+    ``J`` needs ``kron I_p`` for vector residuals); with directions ``(u, w)``:
+    ``D B_M D^T``, ``D = blockdiag(I_M kron u, I_M kron w)`` ((3.5), (3.7)-(3.8)
+    with the left and right singular vectors of ``C(j, k)``).
+    """
+    M = _check_M(M)
+    p = int(p)
+    J = _centering(M)
+    zero = np.zeros((M, M))
+    B_M = np.block([[zero, J], [J, zero]]) / (2 * M)
+    if directions is None:
+        return np.kron(B_M, np.eye(p))
+    u, w = _pair(directions, p)
+    D = np.zeros((2 * M * p, 2 * M))
+    D[: M * p, :M] = np.kron(np.eye(M), u[:, None])
+    D[M * p:, M:] = np.kron(np.eye(M), w[:, None])
+    return D @ B_M @ D.T
+
+
+def section_moments(moments: ResidualMoments, j: int, M: int):
+    """Mean and covariance of ``phi_j = (r_1j, ..., r_Mj)`` (3.18), (3.20)."""
+    M = _check_M(M)
+    j = _index(j, moments.n_steps, "j")
+    return np.tile(moments.mean[j], M), np.kron(np.eye(M), moments.cov[j])
+
+
+def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
+    """Mean and covariance of ``phi(j, k) = (phi_j, phi_k)`` (3.19), (3.21)-(3.23)."""
+    M = _check_M(M)
+    N = moments.n_steps
+    j, k = _index(j, N, "j"), _index(k, N, "k")
+    mean = np.concatenate([np.tile(moments.mean[j], M), np.tile(moments.mean[k], M)])
+    I = np.eye(M)
+    Cjk = moments.C(j, k)
+    cov = np.block([[np.kron(I, moments.cov[j]), np.kron(I, Cjk)],
+                    [np.kron(I, Cjk.T), np.kron(I, moments.cov[k])]])
+    return mean, symmetrize(cov)
+
+
+_KINDS = ("mean", "covariance", "correlation")
+
+
+def statistic_law(moments: ResidualMoments, kind: str, j: int, M: int, k: int | None = None,
+                  direction=None, full: bool = False):
+    """Exact law of a section statistic when the residuals have ``moments``.
+
+    Parameters
+    ----------
+    moments : ResidualMoments
+        From :func:`residual_moments` of the pair that generates the data:
+        ``(M^0, M^1)`` for critical regions, ``(M^2, M^1)`` for the power.
+    kind : {"mean", "covariance", "correlation"}
+    j : int
+        Section (time index).
+    M : int
+        Number of records.
+    k : int, optional
+        Second section, for the correlation statistic.
+    direction : array_like or (u, w), optional
+        A unit vector for the projected covariance statistic, a pair of unit
+        vectors for the projected correlation statistic; ``None`` for the
+        trace statistics.
+    full : bool
+        Build the paper's ``M p`` (or ``2 M p``) dimensional quadratic form
+        ``phi^T A phi`` of section 3 (slow, for checking); by default the
+        equivalent reduced form below is used.
+
+    Returns
+    -------
+    WeightedChiSquare or QuadraticForm
+        With ``cdf``, ``sf``, ``ppf``, ``isf``, ``mean``, ``var``, ``rvs``.
+
+    Notes
+    -----
+    Records are independent, so the Helmert transform turns the centred
+    section into ``M - 1`` independent copies of the centred residual:
+
+    - mean: ``rbar_j ~ N(m_j, P_j / M)``, so ``||rbar_j||^2`` is
+      ``QuadraticForm(I_p, m_j, P_j/M)``;
+    - covariance: ``c_j = (1/M) sum_{l<M} |z_l|^2``, ``z_l ~ N(0, P_j)``:
+      weights ``eig(P_j)/M``, each with ``M - 1`` degrees of freedom (hence
+      ``E c_j = (M - 1)/M tr P_j``); projected: ``(v^T P_j v / M) chi2(M - 1)``;
+    - correlation: ``c(j, k) = (1/M) sum_{l<M} z_l^T y_l`` with ``(z, y)``
+      jointly normal, covariance ``S = [[P_j, C], [C^T, P_k]]``: weights the
+      eigenvalues of ``S^{1/2} E S^{1/2} / (2M)``, ``E = [[0, I], [I, 0]]``,
+      each with ``M - 1`` degrees of freedom.
+    """
+    if kind not in _KINDS:
+        raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
+    M = _check_M(M)
+    N, p = moments.n_steps, moments.n_outputs
+    j = _index(j, N, "j")
+    if kind == "correlation":
+        if k is None:
+            raise ValueError("the correlation statistic needs a second section k")
+        k = _index(k, N, "k")
+    if full:
+        if kind == "mean":
+            mean, cov = section_moments(moments, j, M)
+            return QuadraticForm(mean_matrix(M, p), mean, cov)
+        if kind == "covariance":
+            mean, cov = section_moments(moments, j, M)
+            return QuadraticForm(covariance_matrix(M, p, direction), mean, cov)
+        mean, cov = pair_moments(moments, j, k, M)
+        return QuadraticForm(correlation_matrix(M, p, direction), mean, cov)
+    if kind == "mean":
+        return QuadraticForm(np.eye(p), moments.mean[j], moments.cov[j] / M)
+    if kind == "covariance":
+        P = moments.cov[j]
+        if direction is None:
+            weights = np.linalg.eigvalsh(P) / M
+        else:
+            v = _unit(direction, p, "direction")
+            weights = np.array([v @ P @ v / M])
+        return WeightedChiSquare(weights, np.full(weights.size, M - 1.0))
+    S = np.block([[moments.cov[j], moments.C(j, k)], [moments.C(j, k).T, moments.cov[k]]])
+    if direction is None:
+        E = np.block([[np.zeros((p, p)), np.eye(p)], [np.eye(p), np.zeros((p, p))]])
+        shape = QuadraticForm(E / (2 * M), cov=symmetrize(S))
+    else:
+        u, w = _pair(direction, p)
+        T = np.zeros((2, 2 * p))
+        T[0, :p], T[1, p:] = u, w
+        shape = QuadraticForm(np.array([[0.0, 1.0], [1.0, 0.0]]) / (2 * M), cov=symmetrize(T @ S @ T.T))
+    return WeightedChiSquare(shape.weights, shape.dof * (M - 1.0))
+
+
+# ---------------------------------------------------------------------------
+# tests
+# ---------------------------------------------------------------------------
+def _critical(law, alpha, alternative):
+    if alternative == "greater":
+        return float(law.isf(alpha))
+    if alternative == "less":
+        return float(law.ppf(alpha))
+    if alternative == "two-sided":
+        return (float(law.ppf(alpha / 2)), float(law.isf(alpha / 2)))
+    raise ValueError(f"alternative must be 'greater', 'less' or 'two-sided', got {alternative!r}")
+
+
+def _rejection_probability(law, critical, alternative) -> float:
+    if alternative == "greater":
+        return float(law.sf(critical))
+    if alternative == "less":
+        return float(law.cdf(critical))
+    return float(law.cdf(critical[0]) + law.sf(critical[1]))
+
+
+def _pvalue(law, statistic, alternative) -> float:
+    if alternative == "greater":
+        return float(law.sf(statistic))
+    if alternative == "less":
+        return float(law.cdf(statistic))
+    return float(min(1.0, 2.0 * min(law.cdf(statistic), law.sf(statistic))))
+
+
+def _direction_for(null, kind, j, k, gamma):
+    """The gamma-th principal direction (0-based) of the null pair, or None."""
+    if gamma is None:
+        return None
+    p = null.n_outputs
+    if isinstance(gamma, bool) or not isinstance(gamma, (int, np.integer)) or not 0 <= gamma < p:
+        raise ValueError(f"gamma must be a direction index in 0..{p - 1}, got {gamma!r}")
+    if kind == "covariance":
+        _, V = principal_directions(null, j)
+        return V[:, gamma]
+    _, U, W = principal_directions(null, j, k)
+    return U[:, gamma], W[:, gamma]
+
+
+def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, power_against):
+    if not isinstance(null, ResidualMoments):
+        raise TypeError("null must be the ResidualMoments of the pair (M0, M1) from residual_moments")
+    r = _as_records(residuals)
+    M, N, p = r.shape
+    if (N, p) != null.mean.shape:
+        raise ValueError(
+            f"residuals have N = {N} samples of p = {p} outputs but the null moments are for "
+            f"N = {null.n_steps}, p = {null.n_outputs}"
+        )
+    alpha = check_alpha(alpha)
+    direction = _direction_for(null, kind, j, k, gamma)
+    if kind == "mean":
+        statistic = mean_statistic(r, j)
+    elif kind == "covariance":
+        statistic = covariance_statistic(r, j, direction)
+    else:
+        statistic = correlation_statistic(r, j, k, direction)
+    law = statistic_law(null, kind, j, M, k=k, direction=direction)
+    critical = _critical(law, alpha, alternative)
+    if alternative == "greater":
+        reject = statistic > critical
+    elif alternative == "less":
+        reject = statistic < critical
+    else:
+        reject = statistic < critical[0] or statistic > critical[1]
+    details = {"M": M, "j": j}
+    if k is not None:
+        details["k"] = k
+    if gamma is not None:
+        details["direction"] = gamma
+    if power_against is not None:
+        alt_law = statistic_law(power_against, kind, j, M, k=k, direction=direction)
+        details["power"] = _rejection_probability(alt_law, critical, alternative)
+    label = f"{name} (j={j}" + (f", k={k}" if k is not None else "") + \
+        (f", direction {gamma}" if gamma is not None else "") + f", M={M})"
+    return TestResult(label, statistic, alpha, critical, _pvalue(law, statistic, alternative),
+                      bool(reject), law, alternative=alternative, details=details)
+
+
+def mean_test(residuals, j, null, alpha=0.05, alternative="two-sided", power_against=None) -> TestResult:
+    """Mean test of section ``j`` on ``||rbar_j||^2``.
+
+    Parameters
+    ----------
+    residuals : (M, N, p) array_like
+        Filter residuals of M records.
+    j : int
+        Section (time index).
+    null : ResidualMoments
+        Moments under ``(M^0, M^1)``: the critical value is the ``1 - alpha``
+        quantile of the law of :func:`statistic_law` under them.
+    alpha : float
+        Level.
+    alternative : {"two-sided", "greater", "less"}
+        Critical region.  Under a mismatched null the residual mean ``m_j``
+        is not zero, and a wrong model can move ``||rbar_j||^2`` down as well
+        as up, hence two-sided by default; "greater" suits a zero-mean null.
+    power_against : ResidualMoments, optional
+        Moments under an alternative ``(M^2, M^1)``; the power
+        ``P(reject | M^2)`` is reported in ``details["power"]``.
+
+    Returns
+    -------
+    TestResult
+    """
+    return _run_test("mean test", "mean", residuals, j, None, null, alpha, None, alternative,
+                     power_against)
+
+
+def covariance_test(residuals, j, null, alpha=0.05, gamma=None, alternative="two-sided",
+                    power_against=None) -> TestResult:
+    """Covariance test of section ``j`` (trace, or the gamma-th principal direction).
+
+    ``gamma`` (0-based) selects the principal direction of the null ``P_j``
+    in decreasing order of eigenvalue; ``None`` uses ``tr Pbar_j``.  Two-sided
+    by default: a wrong model can make the residuals too small as well as
+    too large.  See :func:`mean_test` for the other parameters.
+    """
+    return _run_test("covariance test", "covariance", residuals, j, None, null, alpha, gamma,
+                     alternative, power_against)
+
+
+def correlation_test(residuals, j, k, null, alpha=0.05, gamma=None, alternative="two-sided",
+                     power_against=None) -> TestResult:
+    """Correlation test of sections ``j`` and ``k`` (trace, or a singular pair).
+
+    ``gamma`` (0-based) selects the singular-vector pair of the null
+    ``C(j, k)`` in decreasing order of singular value; ``None`` uses
+    ``tr Cbar(j, k)``.  See :func:`mean_test` for the other parameters.
+    """
+    return _run_test("correlation test", "correlation", residuals, j, k, null, alpha, gamma,
+                     alternative, power_against)
+
+
+def power(null, alternative_moments, kind, j, M, alpha=0.05, k=None, gamma=None,
+          alternative="two-sided") -> float:
+    """Probability that a test of level ``alpha`` rejects under ``alternative_moments``.
+
+    The critical region comes from the law under ``null`` (``(M^0, M^1)``),
+    the probability from the law under ``alternative_moments``
+    (``(M^2, M^1)``).  ``alternative`` is the critical region, two-sided
+    by default as in the test functions.
+    """
+    if kind not in _KINDS:
+        raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
+    alpha = check_alpha(alpha)
+    direction = _direction_for(null, kind, j, k, gamma)
+    law0 = statistic_law(null, kind, j, M, k=k, direction=direction)
+    law2 = statistic_law(alternative_moments, kind, j, M, k=k, direction=direction)
+    return _rejection_probability(law2, _critical(law0, alpha, alternative), alternative)
+
+
+def _readonly(a):
+    a.setflags(write=False)
+    return a

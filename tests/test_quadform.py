@@ -1,0 +1,361 @@
+"""Tests of course.quadform: Imhof's method, the LTZ approximation, QuadraticForm.
+
+Reference values
+----------------
+The parameter sets are the test cases of Davies' algorithm AS 155 (Davies
+1980, Applied Statistics 29, Table 3, as listed in the documentation of the
+R package CompQuadForm); cases 1, 2 and 5 are Imhof's (1961, Biometrika 48,
+Table 1) forms Q1, Q2 and Q6 with every weight multiplied by 10.  The values
+below were computed to 20 digits with mpmath (``mp.dps = 30``) by Imhof's
+original real-axis integral, ``P(Q > x) = 1/2 + (1/pi) int_0^inf
+sin(theta(u)) / (u rho(u)) du`` evaluated with ``mpmath.quadosc`` -- an
+independent method, not the library's contour integral (the published
+tables give four decimals only).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.linalg import LinAlgError
+from scipy import stats
+
+from course.quadform import (
+    QuadraticForm,
+    WeightedChiSquare,
+    imhof_cdf,
+    imhof_sf,
+    liu_tang_zhang_cdf,
+    liu_tang_zhang_sf,
+)
+
+# (weights, dof, noncentrality): [(c, P(Q <= c)), ...]
+DAVIES_CASES = {
+    ((6, 3, 1), (1, 1, 1), (0, 0, 0)): [
+        (1, 0.054213846067046460), (7, 0.49356176653018679), (20, 0.87604092583767370)],
+    ((6, 3, 1), (2, 2, 2), (0, 0, 0)): [
+        (2, 0.0064528820060658658), (20, 0.60020500321775394), (60, 0.98389702709682925)],
+    ((6, 3, 1), (6, 4, 2), (0, 0, 0)): [
+        (10, 0.0026807261082040692), (50, 0.56474937337131580), (120, 0.99123099469737302)],
+    ((7, 3), (6, 2), (6, 2)): [
+        (20, 0.0061179733935401350), (100, 0.59134212407684636), (200, 0.97791835334735092)],
+    ((7, 3), (1, 1), (6, 2)): [
+        (10, 0.045127189897612644), (60, 0.59243456759899573), (150, 0.97765687119972092)],
+    ((7, 3, 7, 3), (6, 2, 1, 1), (6, 2, 6, 2)): [
+        (70, 0.043681594919168564), (160, 0.58476101610198757), (260, 0.95376914134198905)],
+    ((7, 3, -7, -3), (6, 2, 1, 1), (6, 2, 6, 2)): [
+        (-40, 0.078207950958857634), (40, 0.52210669202665986), (140, 0.96036808321521233)],
+}
+
+
+def binomial_band(p, n, miss=1e-6):
+    """Interval holding the empirical frequency of an event of probability p."""
+    lo, hi = stats.binom.interval(1 - miss, n, p)
+    return lo / n, hi / n
+
+
+# ---------------------------------------------------------------------------
+# published test cases
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("case", list(DAVIES_CASES))
+def test_davies_and_imhof_test_cases_to_1e9(case):
+    weights, dof, nc = case
+    c = np.array([v[0] for v in DAVIES_CASES[case]], float)
+    ref = np.array([v[1] for v in DAVIES_CASES[case]])
+    cdf, err = imhof_cdf(c, weights, dof, nc, full_output=True)
+    assert np.max(np.abs(cdf - ref)) < 1e-9
+    assert np.all(err < 1e-9)
+    # the survival function is computed separately and must agree
+    assert np.max(np.abs(imhof_sf(c, weights, dof, nc) - (1 - ref))) < 1e-9
+    # one point at a time gives the same numbers as the vectorised call
+    for ci, ri in zip(c, ref):
+        assert abs(imhof_cdf(ci, weights, dof, nc) - ri) < 1e-9
+
+
+def test_imhof_table_forms_are_davies_cases_scaled():
+    # Imhof's Q1 = 0.6 chi2(1) + 0.3 chi2(1) + 0.1 chi2(1), P(Q1 > 0.1), P(Q1 > 2)
+    sf = imhof_sf([0.1, 0.7, 2.0], [0.6, 0.3, 0.1])
+    ref = 1 - np.array([v[1] for v in DAVIES_CASES[((6, 3, 1), (1, 1, 1), (0, 0, 0))]])
+    assert np.max(np.abs(sf - ref)) < 1e-9
+    # Imhof's Q6 = 0.7 chi2(1, 6) + 0.3 chi2(1, 2)
+    sf = imhof_sf([1.0, 6.0, 15.0], [0.7, 0.3], [1, 1], [6, 2])
+    ref = 1 - np.array([v[1] for v in DAVIES_CASES[((7, 3), (1, 1), (6, 2))]])
+    assert np.max(np.abs(sf - ref)) < 1e-9
+
+
+def test_real_axis_imhof_agrees_with_contour():
+    # Imhof's own integral is practical when k = sum(dof)/2 is not small
+    weights, dof, nc = (7, 3, -7, -3), (6, 2, 1, 1), (6, 2, 6, 2)
+    c = np.array([-40.0, 40.0, 140.0])
+    slow = imhof_cdf(c, weights, dof, nc, method="imhof", atol=1e-11)
+    assert np.max(np.abs(slow - imhof_cdf(c, weights, dof, nc))) < 1e-9
+
+
+def test_real_axis_imhof_refuses_hopeless_truncation():
+    # one degree of freedom: Imhof's bound needs U ~ 1/atol^2
+    with pytest.raises(ValueError, match="truncation point"):
+        imhof_cdf(1.0, [1.0], method="imhof", atol=1e-10)
+
+
+# ---------------------------------------------------------------------------
+# closed forms
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 7, 10, 30])
+def test_single_chi_square(k):
+    x = np.linspace(0.01, 4 * k + 20, 40)
+    assert np.max(np.abs(imhof_cdf(x, [1.0], [k]) - stats.chi2.cdf(x, k))) < 1e-12
+    assert np.max(np.abs(imhof_sf(x, [1.0], [k]) - stats.chi2.sf(x, k))) < 1e-12
+
+
+@pytest.mark.parametrize("k, nc", [(1, 0.5), (3, 2.5), (2, 40.0), (1, 1000.0)])
+def test_single_noncentral_chi_square(k, nc):
+    mean, sd = k + nc, math.sqrt(2 * (k + 2 * nc))
+    x = np.linspace(max(mean - 4 * sd, 0.01), mean + 6 * sd, 25)
+    assert np.max(np.abs(imhof_cdf(x, [1.0], [k], [nc]) - stats.ncx2.cdf(x, k, nc))) < 1e-10
+
+
+def test_equal_weights_sum_to_one_chi_square():
+    # 2 chi2(1) + 2 chi2(2) + 2 chi2(3, 1.5) = 2 chi2(6, 1.5)
+    x = np.linspace(0.1, 60, 30)
+    got = imhof_cdf(x, [2.0, 2.0, 2.0], [1, 2, 3], [0, 0, 1.5])
+    assert np.max(np.abs(got - stats.ncx2.cdf(x / 2, 6, 1.5))) < 1e-11
+    law = WeightedChiSquare([2.0, 2.0, 2.0], [1, 2, 3], [0, 0, 1.5])
+    assert law.weights.tolist() == [2.0] and law.dof.tolist() == [6.0]
+
+
+def test_two_exponentials_closed_form():
+    # chi2(2) = 2 Exp(1): Q = a chi2(2) + b chi2(2) has
+    # P(Q > x) = (a e^{-x/2a} - b e^{-x/2b}) / (a - b)
+    a, b = 3.0, 0.5
+    x = np.linspace(0.01, 60, 30)
+    exact = (a * np.exp(-x / (2 * a)) - b * np.exp(-x / (2 * b))) / (a - b)
+    assert np.max(np.abs(imhof_sf(x, [a, b], [2, 2]) - exact)) < 1e-12
+    # relative accuracy far in the upper tail
+    far = np.array([200.0, 400.0])
+    exact_far = (a * np.exp(-far / (2 * a)) - b * np.exp(-far / (2 * b))) / (a - b)
+    assert np.max(np.abs(imhof_sf(far, [a, b], [2, 2]) / exact_far - 1)) < 1e-8
+
+
+def test_negative_weight_closed_form():
+    # Q = a chi2(2) - b chi2(2): P(Q > x) = a/(a+b) e^{-x/2a} (x >= 0),
+    # P(Q <= x) = b/(a+b) e^{x/2b} (x <= 0)
+    a, b = 2.0, 0.7
+    xp = np.linspace(0.0, 30, 16)
+    xn = -np.linspace(0.01, 12, 16)
+    assert np.max(np.abs(imhof_sf(xp, [a, -b], [2, 2]) - a / (a + b) * np.exp(-xp / (2 * a)))) < 1e-12
+    assert np.max(np.abs(imhof_cdf(xn, [a, -b], [2, 2]) - b / (a + b) * np.exp(xn / (2 * b)))) < 1e-12
+    # the lower tail keeps its relative accuracy: computed on -Q
+    far = -40.0
+    assert abs(imhof_cdf(far, [a, -b], [2, 2]) / (b / (a + b) * math.exp(far / (2 * b))) - 1) < 1e-8
+
+
+def test_symmetric_difference_is_half_at_zero():
+    assert abs(imhof_cdf(0.0, [1.0, -1.0]) - 0.5) < 1e-12
+    assert abs(imhof_cdf(0.0, [1.5, -1.5], [3, 3], [2, 2]) - 0.5) < 1e-12
+
+
+def test_normal_term_alone_and_with_chi_square():
+    assert abs(imhof_cdf(0.7, [0.0], sigma=2.0) - stats.norm.cdf(0.35)) < 1e-12
+    # chi2(2) + N(0, s^2): P(Q <= x) = Phi(x/s) - exp(-x/2 + s^2/8) Phi(x/s - s/2)
+    s = 1.3
+    x = np.linspace(-4, 12, 17)
+    exact = stats.norm.cdf(x / s) - np.exp(-x / 2 + s**2 / 8) * stats.norm.cdf(x / s - s / 2)
+    assert np.max(np.abs(imhof_cdf(x, [1.0], [2], sigma=s) - exact)) < 1e-11
+
+
+def test_extreme_tails_relative_accuracy():
+    assert abs(imhof_sf(200.0, [1.0]) / stats.chi2.sf(200.0, 1) - 1) < 1e-8
+    assert abs(imhof_cdf(1e-8, [1.0]) / stats.chi2.cdf(1e-8, 1) - 1) < 1e-8
+    assert abs(imhof_cdf(0.01, [1.0], [6]) / stats.chi2.cdf(0.01, 6) - 1) < 1e-8
+
+
+def test_support_ends_and_shapes():
+    assert imhof_cdf(-1.0, [1.0, 2.0]) == 0.0
+    assert imhof_sf(-1.0, [1.0, 2.0]) == 1.0
+    assert imhof_cdf(1.0, [-1.0, -2.0]) == 1.0
+    c = np.array([[1.0, 2.0], [3.0, 4.0]])
+    assert imhof_cdf(c, [1.0]).shape == (2, 2)
+    assert isinstance(imhof_cdf(1.0, [1.0]), float)
+
+
+# ---------------------------------------------------------------------------
+# Monte Carlo
+# ---------------------------------------------------------------------------
+def test_mixed_form_against_monte_carlo():
+    rng = np.random.default_rng(20240607)
+    weights = np.array([2.5, 1.0, -0.8, -3.0, 0.4])
+    dof = np.array([1, 3, 2, 1, 5])
+    nc = np.array([0.0, 2.0, 0.0, 4.0, 1.0])
+    law = WeightedChiSquare(weights, dof, nc, sigma=0.6)
+    n = 200_000
+    draws = law.rvs(n, random_state=rng)
+    points = np.quantile(draws, [0.001, 0.02, 0.3, 0.5, 0.8, 0.99, 0.9995])
+    cdf = law.cdf(points)
+    empirical = (draws[:, None] <= points).mean(axis=0)
+    for p, f in zip(cdf, empirical):
+        lo, hi = binomial_band(p, n, miss=1e-4 / len(points))
+        assert lo <= f <= hi
+
+
+def test_quadratic_form_against_direct_simulation():
+    # x ~ N(mu, S) drawn directly, Q = x^T A x: checks the eigen-reduction
+    rng = np.random.default_rng(7)
+    n = 6
+    A = rng.normal(size=(n, n))
+    A = A + A.T
+    L = rng.normal(size=(n, n))
+    S = L @ L.T / n + 0.1 * np.eye(n)
+    mu = rng.normal(size=n)
+    form = QuadraticForm(A, mu, S)
+    draws = form.rvs_direct(100_000, random_state=rng)
+    points = np.quantile(draws, [0.005, 0.1, 0.5, 0.9, 0.995])
+    cdf = form.cdf(points)
+    empirical = (draws[:, None] <= points).mean(axis=0)
+    for p, f in zip(cdf, empirical):
+        lo, hi = binomial_band(p, draws.size, miss=1e-4 / len(points))
+        assert lo <= f <= hi
+
+
+def test_quadratic_form_singular_covariance_against_simulation():
+    # rank-2 covariance in 4 dimensions, mean partly outside its range
+    rng = np.random.default_rng(11)
+    B = rng.normal(size=(4, 2))
+    S = B @ B.T
+    A = np.diag([1.0, -2.0, 0.5, 1.5]) + 0.3
+    mu = np.array([1.0, -0.5, 2.0, 0.3])
+    form = QuadraticForm(A, mu, S)
+    assert form.rank == 2
+    draws = form.rvs_direct(100_000, random_state=rng)
+    assert abs(draws.mean() - form.mean()) < 5 * math.sqrt(form.var() / draws.size)
+    points = np.quantile(draws, [0.01, 0.3, 0.7, 0.99])
+    for p, f in zip(form.cdf(points), (draws[:, None] <= points).mean(axis=0)):
+        lo, hi = binomial_band(p, draws.size, miss=1e-4 / len(points))
+        assert lo <= f <= hi
+
+
+def test_singular_covariance_gives_a_normal_term():
+    # x = (mu1 + z, mu2): x^T A x = 2 x1 x2 = 2 mu2 (mu1 + z), a normal law
+    A = np.array([[0.0, 1.0], [1.0, 0.0]])
+    form = QuadraticForm(A, mean=[0.5, 1.5], cov=np.diag([1.0, 0.0]))
+    assert form.weights.size == 0
+    assert form.sigma == pytest.approx(3.0)
+    assert form.offset == pytest.approx(1.5)
+    x = np.linspace(-5, 8, 9)
+    assert np.max(np.abs(form.cdf(x) - stats.norm.cdf(x, 1.5, 3.0))) < 1e-11
+
+
+# ---------------------------------------------------------------------------
+# QuadraticForm reduction and moments
+# ---------------------------------------------------------------------------
+def test_reduction_matches_baram_3_17_for_nonsingular_cov():
+    # weights: eigenvalues of S^1/2 A S^1/2; delta_k = p_k^T S^{-1/2} m
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(4, 4))
+    A = A + A.T
+    B = rng.normal(size=(4, 4))
+    S = B @ B.T + np.eye(4)
+    m = rng.normal(size=4)
+    e, V = np.linalg.eigh(S)
+    root = (V * np.sqrt(e)) @ V.T
+    lam, P = np.linalg.eigh(root @ A @ root)
+    delta = P.T @ np.linalg.solve(root, m)
+    form = QuadraticForm(A, m, S)
+    order = np.argsort(lam)
+    assert np.allclose(form.weights, lam[order])
+    assert np.allclose(form.noncentrality, delta[order] ** 2)
+    assert form.sigma == 0.0 and abs(form.offset) < 1e-12
+
+
+def test_mean_and_variance_closed_forms_agree_with_cumulants():
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(5, 5))
+    A = A + A.T
+    B = rng.normal(size=(5, 3))
+    S = B @ B.T
+    m = rng.normal(size=5)
+    form = QuadraticForm(A, m, S)
+    assert form.mean() == pytest.approx(WeightedChiSquare.mean(form), rel=1e-10, abs=1e-10)
+    assert form.var() == pytest.approx(WeightedChiSquare.var(form), rel=1e-10)
+    assert form.mean() == pytest.approx(np.trace(A @ S) + m @ A @ m)
+
+
+def test_pdf_against_chi2_and_derivative_of_cdf():
+    x = np.linspace(0.05, 15, 20)
+    for k in (1, 2, 5):
+        assert np.max(np.abs(WeightedChiSquare([1.0], [k]).pdf(x) - stats.chi2.pdf(x, k))) < 1e-11
+    law = WeightedChiSquare([2.0, -1.0, 0.5], [1, 2, 3], [0.5, 0, 2], sigma=0.3)
+    xx = np.linspace(-8, 15, 9)
+    numeric = (law.cdf(xx + 1e-4) - law.cdf(xx - 1e-4)) / 2e-4
+    assert np.max(np.abs(law.pdf(xx) - numeric)) < 1e-7
+
+
+def test_quantiles_invert_the_distribution_function():
+    law = WeightedChiSquare([2.0, -1.0, 0.5], [1, 2, 3], [0.5, 0, 2], sigma=0.3)
+    q = np.array([1e-6, 0.01, 0.5, 0.99])
+    assert np.allclose(law.cdf(law.ppf(q)), q, rtol=1e-8, atol=1e-12)
+    assert np.allclose(law.sf(law.isf(q)), q, rtol=1e-8, atol=1e-12)
+    chi = WeightedChiSquare([1.0], [3])
+    assert chi.isf(0.05) == pytest.approx(stats.chi2.isf(0.05, 3), rel=1e-10)
+    assert chi.ppf(0.01) == pytest.approx(stats.chi2.ppf(0.01, 3), rel=1e-9)
+
+
+def test_rvs_is_reproducible_and_has_the_right_moments():
+    law = WeightedChiSquare([1.0, -0.5], [2, 3], [1.0, 0.0], sigma=0.2, offset=1.0)
+    a = law.rvs(1000, random_state=np.random.default_rng(1))
+    b = law.rvs(1000, random_state=np.random.default_rng(1))
+    assert np.array_equal(a, b)
+    big = law.rvs(200_000, random_state=np.random.default_rng(2))
+    assert abs(big.mean() - law.mean()) < 5 * law.std() / math.sqrt(big.size)
+
+
+# ---------------------------------------------------------------------------
+# the Liu-Tang-Zhang approximation
+# ---------------------------------------------------------------------------
+def test_ltz_is_exact_for_one_scaled_chi_square():
+    x = np.linspace(0.1, 30, 10)
+    assert np.allclose(liu_tang_zhang_cdf(x, [2.0], [4]), stats.chi2.cdf(x / 2, 4), atol=1e-14)
+    assert np.allclose(liu_tang_zhang_sf(x, [2.0], [4]), stats.chi2.sf(x / 2, 4), atol=1e-14)
+
+
+def test_ltz_is_close_in_the_body_but_fails_in_the_lower_tail():
+    # an honest measure on Davies' cases: the middle points (c near the
+    # median) are within 0.02 absolute, but the lower-tail points of the
+    # low-dof forms are wrong by up to 100 % relative (LTZ puts no mass there)
+    middle, lower = [], []
+    for (weights, dof, nc), values in DAVIES_CASES.items():
+        c = np.array([v[0] for v in values], float)
+        ref = np.array([v[1] for v in values])
+        approx = liu_tang_zhang_cdf(c, weights, dof, nc)
+        middle.append(abs(approx[1] - ref[1]))
+        lower.append(abs(approx[0] / ref[0] - 1))
+    assert max(middle) < 0.02
+    assert max(lower) > 0.5  # e.g. 0.0542 for case 1 where LTZ gives 0
+    assert max(middle) > 1e-3  # and far from Imhof's 1e-9 in the body too
+
+
+# ---------------------------------------------------------------------------
+# bad input
+# ---------------------------------------------------------------------------
+def test_errors_for_bad_input():
+    with pytest.raises(ValueError, match="not symmetric"):
+        QuadraticForm([[1.0, 2.0], [0.0, 1.0]])
+    with pytest.raises(LinAlgError, match="positive semi-definite"):
+        QuadraticForm(np.eye(2), cov=[[1.0, 2.0], [2.0, 1.0]])
+    with pytest.raises(ValueError, match="square"):
+        QuadraticForm(np.ones((2, 3)))
+    with pytest.raises(ValueError, match="length 2"):
+        QuadraticForm(np.eye(2), mean=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="shape"):
+        QuadraticForm(np.eye(2), cov=np.eye(3))
+    with pytest.raises(ValueError, match="NaN"):
+        QuadraticForm(np.eye(2), mean=[np.nan, 0.0])
+    with pytest.raises(ValueError, match="constant"):
+        QuadraticForm(np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="same length"):
+        imhof_cdf(1.0, [1.0, 2.0], [1, 1, 1])
+    with pytest.raises(ValueError, match="positive"):
+        imhof_cdf(1.0, [1.0], [0])
+    with pytest.raises(ValueError, match="non-negative"):
+        imhof_cdf(1.0, [1.0], [1], [-1.0])
+    with pytest.raises(ValueError, match="method"):
+        imhof_cdf(1.0, [1.0], method="davies")
