@@ -171,6 +171,16 @@ class DecisionStructure:
     sensitivity : numpy.ndarray of bool
         Read-only ``(n_tests, n_modes)`` array, ``True`` for X.
 
+    Notes
+    -----
+    The decision structure of the lecture (test_quantities_lecture_sv.txt,
+    "Teststorheten är ett modellvalideringsmått"): the row
+    ``(0, 0, X, X)`` of a test over ``(NF, F1, F2, F3)`` means
+    ``H0: Fp in {NF, F1}`` against ``H1: Fp in {F2, F3}``, and the model
+    under H0 leaves ``theta_1`` free.  Mode ``i`` is isolable from mode ``j``
+    when some row has an X under ``i`` and a 0 under ``j``
+    (:meth:`isolability`).
+
     Examples
     --------
     The three tests of the lecture, each decoupling one parameter fault:
@@ -246,7 +256,7 @@ class DecisionStructure:
     def shape(self) -> tuple:
         return self._sensitivity.shape
 
-    def test_index(self, test) -> int:
+    def row_index(self, test) -> int:
         """Row index of ``test`` (a name or an index)."""
         return _lookup(test, self._tests, "test")
 
@@ -256,12 +266,12 @@ class DecisionStructure:
 
     def row(self, test) -> dict:
         """``{mode: "0" or "X"}`` for one test."""
-        k = self.test_index(test)
+        k = self.row_index(test)
         return {m: ("X" if s else "0") for m, s in zip(self._modes, self._sensitivity[k])}
 
     def hypotheses(self, test) -> Hypotheses:
         """The hypotheses test ``test`` decides (0-modes against X-modes)."""
-        k = self.test_index(test)
+        k = self.row_index(test)
         row = self._sensitivity[k]
         return Hypotheses(
             test=self._tests[k],
@@ -323,7 +333,13 @@ class DecisionStructure:
 def _parse_sensitivity(value) -> np.ndarray:
     if isinstance(value, DecisionStructure):
         return value.sensitivity.copy()
-    rows = [list(row) for row in (value.tolist() if isinstance(value, np.ndarray) else value)]
+    try:
+        rows = [list(row) for row in (value.tolist() if isinstance(value, np.ndarray) else value)]
+    except TypeError:
+        raise ValueError(
+            "a decision structure is a 2-D table, one row per test and one entry per fault mode, "
+            f"e.g. [[0, 0, 1], [0, 1, 0]]; got {value!r}"
+        ) from None
     if not rows or not rows[0]:
         raise ValueError("a decision structure needs at least one test and one mode")
     width = len(rows[0])
@@ -380,7 +396,7 @@ def _alarm_vector(structure: DecisionStructure, alarms) -> np.ndarray:
     if isinstance(alarms, Mapping):
         vector = np.zeros(n_tests, dtype=bool)
         for key, value in alarms.items():
-            vector[structure.test_index(key)] = _as_alarm(value)
+            vector[structure.row_index(key)] = _as_alarm(value)
         return vector
     if isinstance(alarms, (str, bytes)):
         alarms = [alarms]
@@ -390,7 +406,7 @@ def _alarm_vector(structure: DecisionStructure, alarms) -> np.ndarray:
     if all(isinstance(a, str) for a in items):
         vector = np.zeros(n_tests, dtype=bool)
         for name in items:
-            vector[structure.test_index(name)] = True
+            vector[structure.row_index(name)] = True
         return vector
     if len(items) != n_tests:
         raise ValueError(
@@ -810,6 +826,12 @@ def prediction_error(y, U, nominal, free: Sequence[int] = (), rcond: float | Non
                          rank=fit.rank, dof=fit.dof, n_parameters=len(free))
 
 
+def _count(value, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
 def _check_sigma(sigma) -> float:
     try:
         value = float(sigma)
@@ -857,7 +879,8 @@ def residual_threshold(alpha: float, dof: int, sigma: float = 1.0) -> float:
 
 
 def _check_dof(dof) -> int:
-    if isinstance(dof, bool) or int(dof) != dof or dof < 1:
+    if isinstance(dof, bool) or not isinstance(dof, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(dof) or int(dof) != dof or dof < 1:
         raise ValueError(
             f"dof must be a positive integer, got {dof!r}; with no residual degrees of freedom "
             "the model under H0 fits any data exactly and the test is void"
@@ -1387,7 +1410,26 @@ def normal_log_likelihood(theta, z, sigma: float = 1.0) -> Any:
 def normal_likelihood(theta, z, sigma: float = 1.0) -> Any:
     """``L(theta | z) = f(z | theta)`` for independent ``z_i ~ N(theta, sigma^2)``.
 
-    See :func:`normal_log_likelihood`; this is its exponential.
+    Parameters
+    ----------
+    theta : float or array_like
+        Parameter value(s); an array gives the likelihood on a grid.
+    z : float or array_like
+        The observations.
+    sigma : float, default 1
+
+    Returns
+    -------
+    float or numpy.ndarray, shaped like ``theta``
+
+    Notes
+    -----
+    ``L(theta | z) = prod_i (2 pi sigma^2)^{-1/2} exp(-(z_i - theta)^2 /
+    (2 sigma^2))`` (lecture, slides "Likelihood-funktionen,
+    normalfördelning"), computed as the exponential of
+    :func:`normal_log_likelihood`.  For ``z = (3, 5)`` and ``sigma = 1`` the
+    maximum is ``L(4) = e^{-1} / (2 pi)``.  Underflows to 0 for long records:
+    use the log-likelihood there.
     """
     value = np.exp(normal_log_likelihood(theta, z, sigma))
     return float(value) if np.ndim(value) == 0 else value
@@ -1823,6 +1865,7 @@ class FaultRanking:
         return dict(zip(self.modes, self.posterior))
 
     def to_text(self, digits: int = 4) -> str:
+        """The ranking as aligned plain text, numbers rounded to ``digits`` significant digits."""
         width = max(len(m) for m in self.modes)
         lines = [f"{'mode'.ljust(width)}  {'prior':>8}  {'posterior':>10}"]
         for m, pr, po in zip(self.modes, self.prior, self.posterior):
@@ -1879,6 +1922,11 @@ def bayes_ranking(log_likelihoods: Mapping[str, float], priors: Mapping[str, flo
         raise ValueError("priors must be positive probabilities")
     if abs(prior.sum() - 1.0) > 1e-9:
         raise ValueError(f"priors must sum to 1, they sum to {prior.sum():.6g}; normalise them first")
+    if np.all(logl == -np.inf):
+        raise ValueError(
+            "every mode has likelihood 0 (log-likelihood -inf): the data are impossible under all "
+            "modes, so Bayes' rule cannot rank them; check the model or the noise level"
+        )
     log_post = logl + np.log(prior)
     log_post = log_post - special.logsumexp(log_post)
     post = np.exp(log_post)
@@ -1908,14 +1956,19 @@ def simulate_linear_regression(U, theta, *, sigma: float, n_records: int, rng) -
     Returns
     -------
     numpy.ndarray, shape (N, n_records)
+
+    Notes
+    -----
+    The lecture's static fault model ``y(t) = theta_1 u1(t) + theta_2 u2(t)
+    + theta_3 u3(t) + v(t)`` (test_quantities_lecture_sv.txt, "Teststorheten
+    är ett modellvalideringsmått") with white Gaussian noise; records as
+    columns so every test quantity is one matrix operation for all of them.
     """
     U = as_matrix(U, "U")
     theta = as_vector(theta, "theta", U.shape[1])
     sigma = _check_sigma(sigma)
     rng = as_generator(rng)
-    n_records = int(n_records)
-    if n_records < 1:
-        raise ValueError("n_records must be at least 1")
+    n_records = _count(n_records, "n_records")
     return (U @ theta)[:, None] + sigma * rng.standard_normal((U.shape[0], n_records))
 
 
@@ -1929,6 +1982,17 @@ def linear_test_statistics(Y, U, nominal, tests: Sequence[Sequence[int]]) -> np.
         As in :func:`prediction_error`.
     tests : sequence of sequences of int
         The free parameters of each test.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M, n_tests)
+        ``T_k`` of every record, one column per test.
+
+    Notes
+    -----
+    Column ``k`` is ``min over Theta_0^k of ||y - U theta||^2``
+    (:func:`prediction_error`), computed for all ``M`` records with one
+    SVD of the free regressors per test.
     """
     Y = _data(Y, None, "Y")
     Y = Y[:, None] if Y.ndim == 1 else Y
@@ -1962,6 +2026,7 @@ class IsolationResult:
     n_records: int
 
     def to_text(self, digits: int = 3) -> str:
+        """The membership table (and "exact") as aligned plain text with ``digits`` decimals."""
         modes = self.structure.modes
         width = max(max(len(m) for m in self.simulated), len("true"))
         col = max(max(len(m) for m in modes), digits + 3)
@@ -2016,6 +2081,15 @@ def isolation_monte_carlo(structure: DecisionStructure, simulate: Callable, stat
     Returns
     -------
     IsolationResult
+
+    Notes
+    -----
+    For each simulated mode ``F``: the alarm rate of test ``k`` estimates
+    ``P(T_k > J_k | F)`` (``alpha`` where the structure has a 0, the power
+    where it has an X); the membership ``P(F' in D | F)`` with ``D`` the
+    single-fault diagnoses of :func:`diagnosis_matrix`; and "exact" is
+    ``P(D = {F} | F)``.  Each is a binomial proportion over ``n_records``
+    records, with standard error at most ``0.5 / sqrt(n_records)``.
     """
     if not isinstance(structure, DecisionStructure):
         raise ValueError("structure must be a DecisionStructure")
@@ -2023,9 +2097,7 @@ def isolation_monte_carlo(structure: DecisionStructure, simulate: Callable, stat
     n_tests = len(structure.tests)
     thresholds = as_vector(thresholds, "thresholds", n_tests)
     modes = structure.modes if modes is None else tuple(structure.modes[structure.mode_index(m)] for m in modes)
-    n_records = int(n_records)
-    if n_records < 1:
-        raise ValueError("n_records must be at least 1")
+    n_records = _count(n_records, "n_records")
     alarm_rate = np.empty((len(modes), n_tests))
     membership = np.empty((len(modes), len(structure.modes)))
     exact = np.empty(len(modes))

@@ -283,6 +283,17 @@ class LinearModel:
     numpy.linalg.LinAlgError
         ``R`` not positive definite, ``Q`` or ``x0_cov`` not positive
         semi-definite.
+
+    Notes
+    -----
+    The linear special case of the lecture's state-space model
+    ``x(t+1) = g(x(t), u(t)) + G w(t)``, ``y(t) = h(x(t)) + v(t)``
+    (test_quantities_lecture_sv.txt, slide "Extended Kalman Filter") with
+    ``g = F x + B u``, ``h = H x``; the noise means ``w_mean``, ``v_mean``
+    are those of Baram (1980), eqs. (2.1)-(2.2)
+    (mismatched_filters_baram.txt), where a filter may be driven by a model
+    other than the one that made the data.  ``R`` must be positive definite
+    so that every innovation covariance ``S = H P H^T + R`` is.
     """
 
     def __init__(self, F, H, Q, R, G=None, x0_mean=None, x0_cov=None, w_mean=None,
@@ -423,10 +434,43 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     (test_quantities_lecture_sv.txt, "Extended Kalman Filter").  Inputs are
     never modified; broadcasting lets ``P`` be shared by a batch of ``x``.
     """
+    x_pred, P_pred, y, H, R = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y, H, R))
+    _check_update_shapes(x_pred, P_pred, y, H, R)
     y_hat = _mv(H, x_pred)
     if v_mean is not None:
         y_hat = y_hat + v_mean
     return _update_core(x_pred, P_pred, y - y_hat, H, R)
+
+
+def _check_update_shapes(x_pred, P_pred, y, H, R) -> None:
+    """Shape check of one measurement update; names the offending argument."""
+    n = x_pred.shape[-1] if x_pred.ndim else 0
+    p = y.shape[-1] if y.ndim else 0
+    problems = []
+    if x_pred.ndim < 1:
+        problems.append(f"x_pred must be (..., n), got shape {x_pred.shape}")
+    if P_pred.ndim < 2 or P_pred.shape[-2:] != (n, n):
+        problems.append(f"P_pred must be (..., {n}, {n}) for n = {n} states, got {P_pred.shape}")
+    if y.ndim < 1:
+        problems.append(f"y must be (..., p), got shape {y.shape}")
+    if H.ndim < 2 or H.shape[-2:] != (p, n):
+        problems.append(f"H must be (..., p, n) = (..., {p}, {n}), got {H.shape}")
+    if R.ndim < 2 or R.shape[-2:] != (p, p):
+        problems.append(f"R must be (..., {p}, {p}) for p = {p} outputs, got {R.shape}")
+    if problems:
+        raise ValueError("measurement update: " + "; ".join(problems))
+
+
+def _check_predict_shapes(x_filt, P_filt, F, GQG) -> None:
+    n = x_filt.shape[-1] if x_filt.ndim else 0
+    problems = []
+    if x_filt.ndim < 1:
+        problems.append(f"x_filt must be (..., n), got shape {x_filt.shape}")
+    for name, a in (("P_filt", P_filt), ("F", F), ("GQG", GQG)):
+        if a.ndim < 2 or a.shape[-2:] != (n, n):
+            problems.append(f"{name} must be (..., {n}, {n}) for n = {n} states, got {a.shape}")
+    if problems:
+        raise ValueError("time update: " + "; ".join(problems))
 
 
 def _update_core(x_pred, P_pred, eps, H, R):
@@ -440,13 +484,16 @@ def _update_core(x_pred, P_pred, eps, H, R):
                               "R must be positive definite")
         K = PHt / S
     else:
+        # the Cholesky factorisation is the positive-definiteness check a plain
+        # solve would skip (an indefinite S solves without complaint)
         try:
-            K = _T(np.linalg.solve(S, _T(PHt)))
+            np.linalg.cholesky(S)
         except LinAlgError:
             raise LinAlgError(
-                "the innovation covariance S = H P H^T + R is singular; "
-                "R must be positive definite"
+                "the innovation covariance S = H P H^T + R is not positive definite; "
+                "R must be positive definite and P positive semi-definite"
             ) from None
+        K = _T(np.linalg.solve(S, _T(PHt)))
     x_filt = x_pred + _mv(K, eps)
     I_KH = np.eye(P_pred.shape[-1]) - _mm(K, H)
     P_filt = symmetrize(_mm(_mm(I_KH, P_pred), _T(I_KH)) + _mm(_mm(K, R), _T(K)))
@@ -480,6 +527,8 @@ def kf_predict(x_filt, P_filt, F, GQG, offset=None):
     The time update of the lecture's EKF slide with constant ``G``
     (test_quantities_lecture_sv.txt, "Extended Kalman Filter").
     """
+    x_filt, P_filt, F, GQG = (np.asarray(a, dtype=float) for a in (x_filt, P_filt, F, GQG))
+    _check_predict_shapes(x_filt, P_filt, F, GQG)
     x_pred = _mv(F, x_filt)
     if offset is not None:
         x_pred = x_pred + offset
@@ -661,15 +710,36 @@ def riccati(model, N, x0_cov=None) -> RiccatiResult:
 
 
 def riccati_gains(model, N, x0_cov=None) -> np.ndarray:
-    """The gains ``K_t`` (shape ``(N, n, p)``) of the model's own Riccati recursion.
+    """The gains ``K_t`` of the model's own Riccati recursion.
 
-    See :func:`riccati`.
+    Parameters
+    ----------
+    model : LinearModel
+    N : int
+        Number of steps.
+    x0_cov : (n, n) array_like, optional
+        Prior covariance; the model's ``x0_cov`` by default.
+
+    Returns
+    -------
+    (N, n, p) ndarray
+        Measurement-update gains ``K_t = P(t|t-1) H^T S_t^{-1}``.
+
+    Notes
+    -----
+    See :func:`riccati` (Baram 1980, (A17)-(A18): the filter's gain comes
+    from the Riccati recursion of its own model).
     """
     return riccati(model, N, x0_cov).K
 
 
 def steady_state(model) -> RiccatiResult:
     """Stationary Kalman filter from the discrete algebraic Riccati equation.
+
+    Parameters
+    ----------
+    model : LinearModel
+        Time-invariant model with ``(F, H)`` detectable.
 
     Returns
     -------
@@ -851,7 +921,17 @@ class NonlinearModel:
     ------
     ValueError
         When shapes disagree; ``g``, ``h`` and the Jacobians are called once
-        at ``x0_mean`` to check the shapes they return.
+        at ``x0_mean`` to check the shapes they return (and a function that
+        fails there is reported with the shape it was called with).
+
+    Notes
+    -----
+    The model of the lecture's EKF slide (test_quantities_lecture_sv.txt,
+    "Extended Kalman Filter"), ``x(t+1) = g(x(t), u(t), w(t))``,
+    ``y(t) = h(x(t)) + e(t)``, restricted to additive process noise, so that
+    ``G_t = dg/dw = G`` is constant.  The Jacobians ``F_t = dg/dx`` and
+    ``H_t = dh/dx`` are the user's or central differences
+    (:func:`numerical_jacobian`).
     """
 
     def __init__(self, g, h, Q, R, x0_mean, x0_cov=None, G=None, jac_g=None, jac_h=None,
@@ -899,7 +979,13 @@ class NonlinearModel:
             ("jacobian_g(x0_mean, u)", lambda: self.jacobian_g(self.x0_mean, u0), (n, n)),
             ("jacobian_h(x0_mean)", lambda: self.jacobian_h(self.x0_mean), (p, n)),
         ):
-            got = np.shape(value())
+            try:
+                got = np.shape(value())
+            except Exception as exc:
+                raise ValueError(
+                    f"{name} raised {type(exc).__name__}: {exc}. The functions are called with "
+                    f"x of shape (..., {n}) (a batch of states) and must index it as x[..., i]"
+                ) from exc
             if got != shape:
                 raise ValueError(
                     f"{name} returned shape {got}, expected {shape} "
@@ -991,6 +1077,17 @@ class NonlinearModel:
 def ekf_update(model, x_pred, P_pred, y):
     """Measurement update of the extended Kalman filter (one step, any batch shape).
 
+    Parameters
+    ----------
+    model : NonlinearModel
+        Supplies ``h``, its Jacobian, ``R`` and ``v_mean``.
+    x_pred : (..., n) ndarray
+        Predicted state ``xhat(t|t-1)``.
+    P_pred : (..., n, n) ndarray
+        Its covariance ``P(t|t-1)``.
+    y : (..., p) ndarray
+        Measurement ``y_t``.
+
     Returns
     -------
     x_filt, P_filt, eps, S, K : ndarray
@@ -1006,7 +1103,9 @@ def ekf_update(model, x_pred, P_pred, y):
     ``P(t|t) = P(t|t-1) - K_t H_t P(t|t-1)`` is replaced by the equivalent
     Joseph form (see :func:`kf_update`).
     """
+    x_pred, P_pred, y = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y))
     H = model.jacobian_h(x_pred)
+    _check_update_shapes(x_pred, P_pred, y, H, model.R)
     eps = y - model.h(x_pred) - model.v_mean
     return _update_core(x_pred, P_pred, eps, H, model.R)
 
@@ -1014,15 +1113,33 @@ def ekf_update(model, x_pred, P_pred, y):
 def ekf_predict(model, x_filt, P_filt, u=None):
     """Time update of the extended Kalman filter (one step, any batch shape).
 
+    Parameters
+    ----------
+    model : NonlinearModel
+        Supplies ``g``, its Jacobian, ``G Q G^T`` and ``G w_mean``.
+    x_filt : (..., n) ndarray
+        Filtered state ``xhat(t|t)``.
+    P_filt : (..., n, n) ndarray
+        Its covariance ``P(t|t)``.
+    u : (..., m) ndarray, optional
+        Input ``u_t`` (required when the model has inputs).
+
     Returns
     -------
     x_pred, P_pred : ndarray
-        ``xhat(t+1|t) = g(xhat(t|t), u_t) + G w_mean`` and
-        ``P(t+1|t) = F_t P(t|t) F_t^T + G Q G^T`` with ``F_t = dg/dx`` at
-        ``xhat(t|t)`` (lecture, "Extended Kalman Filter"; ``G_t = dg/dw = G``
-        for additive noise).
+        ``xhat(t+1|t)`` and ``P(t+1|t)``.
+
+    Notes
+    -----
+    ``xhat(t+1|t) = g(xhat(t|t), u_t) + G w_mean`` and
+    ``P(t+1|t) = F_t P(t|t) F_t^T + G Q G^T`` with ``F_t = dg/dx`` at
+    ``xhat(t|t)`` (test_quantities_lecture_sv.txt, slide "Extended Kalman
+    Filter", time update; its ``G_t = dg/dw`` is the constant ``G`` here
+    because the noise enters additively).
     """
+    x_filt, P_filt = np.asarray(x_filt, dtype=float), np.asarray(P_filt, dtype=float)
     F = model.jacobian_g(x_filt, u)
+    _check_predict_shapes(x_filt, P_filt, F, model.GQG)
     x_pred = model.g(x_filt, u) + model.Gw
     return x_pred, symmetrize(_mm(_mm(F, P_filt), _T(F)) + model.GQG)
 
@@ -1237,15 +1354,11 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
         raise ValueError(
             f"y must have shape (N,) or (batch, N) with N = {N} (the rows of Phi), got {y.shape}"
         )
-    r = float(r)
-    if not np.isfinite(r) or r <= 0:
-        raise ValueError(f"r (the measurement-noise variance) must be positive, got {r!r}")
+    r = _variance(r, "r (the measurement-noise variance)", positive=True)
     if q is None:
         Qw = np.zeros((k, k))
     elif np.ndim(q) == 0:
-        if not np.isfinite(q) or q < 0:
-            raise ValueError(f"q must be a non-negative variance, got {q!r}")
-        Qw = float(q) * np.eye(k)
+        Qw = _variance(q, "q") * np.eye(k)
     else:
         Qw = as_covariance(q, "q", k, allow_singular=True)
     batch = y.shape[:-1]
@@ -1289,40 +1402,104 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
 def windowed_sum(values, window) -> np.ndarray:
     """Moving sum over the last axis: ``out[..., t] = sum(values[..., t-L+1 : t+1])``.
 
-    The first ``L - 1`` entries, where the window is not yet full, are NaN
-    (so they never raise an alarm and are easy to mask).
-
     Parameters
     ----------
     values : (..., N) array_like
-        E.g. squared normalised innovations.
+        E.g. squared normalised innovations.  NaN marks an undefined sample
+        (e.g. the diffuse start of :func:`recursive_least_squares`).
     window : int
         ``L``, between 1 and N.
+
+    Returns
+    -------
+    (..., N) ndarray
+        The window sums.  NaN where the window is not yet full (the first
+        ``L - 1`` entries) and where it contains an undefined (NaN) sample,
+        so those samples never raise an alarm and are easy to mask; a NaN
+        does not spoil the windows that do not contain it.
+
+    Notes
+    -----
+    Computed from cumulative sums, ``C_t = sum_{k<=t} values_k`` and
+    ``out_t = C_t - C_{t-L}``, in ``O(N)`` for any ``L``; NaN samples enter
+    the cumulative sum as 0 and are tracked by a cumulative count.  This is
+    the discrete form of the lecture's windowed test quantity
+    ``T(t) = int_{t-L}^{t} r(tau)^2 dtau`` (test_quantities_lecture_sv.txt,
+    "Mer generella dynamiska fall").
     """
-    values = np.asarray(values, dtype=float)
+    try:
+        values = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("values must be a numeric array of shape (..., N)") from None
+    if values.ndim < 1:
+        raise ValueError("values must have at least one axis (the time axis, last)")
     if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
         raise ValueError(f"window must be a positive integer, got {window!r}")
     N = values.shape[-1]
     if window > N:
         raise ValueError(f"window = {window} is longer than the record (N = {N})")
-    cs = np.cumsum(values, axis=-1)
+    undefined = np.isnan(values)
+    zero = np.zeros(values.shape[:-1] + (1,))
+    cs = np.concatenate([zero, np.cumsum(np.where(undefined, 0.0, values), axis=-1)], axis=-1)
     out = np.full(values.shape, np.nan)
-    out[..., window - 1] = cs[..., window - 1]
-    out[..., window:] = cs[..., window:] - cs[..., :-window]
+    out[..., window - 1:] = cs[..., window:] - cs[..., :-window]
+    if undefined.any():
+        cn = np.concatenate([zero, np.cumsum(undefined, axis=-1)], axis=-1)
+        holes = (cn[..., window:] - cn[..., :-window]) > 0
+        out[..., window - 1:][holes] = np.nan
     return out
 
 
 def windowed_nis(result, window) -> np.ndarray:
-    """Windowed sum of the normalised innovations squared, ``(*batch, N)``.
+    """Windowed sum of the normalised innovations squared.
 
-    ``T_t = sum_{k=t-L+1}^{t} eps_k^T S_k^{-1} eps_k``; under H0 (the
-    filter's model is true, linear Gaussian case) ``T_t ~ chi2(L p)``, as
-    the normalised innovations are independent ``N(0, I_p)``.  For the EKF
-    this holds approximately.  NaN for ``t < L - 1``.  ``result`` is a
-    :class:`FilterResult` or an :class:`RLSResult` (``p = 1``); the
-    threshold is :func:`windowed_nis_threshold`.
+    Parameters
+    ----------
+    result : FilterResult or RLSResult
+        Output of a filter driver (any batch shape).
+    window : int
+        ``L``, the number of samples summed.
+
+    Returns
+    -------
+    (*batch, N) ndarray
+        ``T_t``; NaN for ``t < L - 1`` and for windows that contain an
+        undefined innovation (the diffuse start of RLS).
+
+    Notes
+    -----
+    ``T_t = sum_{k=t-L+1}^{t} eps_k^T S_k^{-1} eps_k``.  Under H0 (the
+    filter's model is true, linear Gaussian case) the normalised innovations
+    are independent ``N(0, I_p)``, so ``T_t ~ chi2(L p)`` (``p = 1`` for an
+    :class:`RLSResult`); for the EKF this holds approximately.  The
+    threshold is :func:`windowed_nis_threshold`.  It is the normalised,
+    discrete form of the lecture's ``T = int (y - h(xhat))^2`` over a window
+    (test_quantities_lecture_sv.txt, "Mer generella dynamiska fall").
     """
+    if not isinstance(result, (FilterResult, RLSResult)):
+        raise TypeError(
+            f"result must be a FilterResult or an RLSResult, got {type(result).__name__}; "
+            "for an array of NIS values use windowed_sum"
+        )
     return windowed_sum(result.nis(), window)
+
+
+def _finite_float(value, name: str) -> float:
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(out):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return out
+
+
+def _variance(value, name: str, positive: bool = False) -> float:
+    out = _finite_float(value, name)
+    if out < 0 or (positive and out == 0):
+        kind = "positive" if positive else "non-negative"
+        raise ValueError(f"{name} must be {kind} (it is a variance), got {value!r}")
+    return out
 
 
 def _positive_int(value, name: str, meaning: str) -> int:
@@ -1367,15 +1544,18 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
 
     Parameters
     ----------
-    result : FilterResult or (N,) array_like
+    result : FilterResult, RLSResult or (N,) array_like
         A single-record filter result, or its normalised innovations squared
-        (then give ``n_outputs``, default 1).
+        (then give ``n_outputs``, default 1; NaN marks undefined samples).
     window : int
         ``L``.
     alpha : float
         Level of significance.
     t : int
-        Last sample of the window (default: the last sample).
+        Last sample of the window (default: the last sample); it must end a
+        full window without undefined samples.
+    n_outputs : int, optional
+        ``p``, only with an array of NIS values.
 
     Returns
     -------
@@ -1392,23 +1572,45 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
     residual summed (integrated) over a window.
     """
     alpha = check_alpha(alpha)
-    if isinstance(result, (FilterResult,)):
-        if result.batch_shape:
+    window = _positive_int(window, "window", "the number of samples L in the window")
+    if isinstance(result, (FilterResult, RLSResult)):
+        batch = result.batch_shape if isinstance(result, FilterResult) else result.eps.shape[:-1]
+        if batch:
             raise ValueError(
                 "windowed_chi2_test takes one record; for a batch use windowed_nis and "
                 "windowed_nis_threshold"
             )
+        if n_outputs is not None:
+            raise ValueError("n_outputs is read from the filter result; give it only with NIS values")
         nis = result.nis()
-        p = result.eps.shape[-1]
+        p = result.eps.shape[-1] if isinstance(result, FilterResult) else 1
     else:
-        nis = as_vector(result, "nis")
-        p = 1 if n_outputs is None else int(n_outputs)
+        try:
+            nis = np.asarray(result, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(
+                "result must be a FilterResult, an RLSResult or a 1-D array of NIS values"
+            ) from None
+        if nis.ndim != 1:
+            raise ValueError(f"nis must be a 1-D vector (one record), got shape {nis.shape}")
+        # NaN marks undefined samples (allowed); inf or negative values are not NIS values
+        if np.isinf(nis).any() or (nis < 0).any():
+            raise ValueError("NIS values must be finite and non-negative (NaN marks undefined samples)")
+        p = 1 if n_outputs is None else _positive_int(
+            n_outputs, "n_outputs", "the number of outputs p per sample")
     T = windowed_sum(nis, window)
     N = nis.shape[-1]
+    if isinstance(t, bool) or not isinstance(t, (int, np.integer)):
+        raise ValueError(f"t must be an integer sample index, got {t!r}")
     t_index = int(t) + N if int(t) < 0 else int(t)
     if not window - 1 <= t_index < N:
         raise ValueError(
             f"t = {t} does not end a full window: it must lie in [{window - 1}, {N - 1}]"
+        )
+    if np.isnan(T[t_index]):
+        raise ValueError(
+            f"the window ending at t = {t_index} contains undefined (NaN) samples, e.g. the "
+            "diffuse start of recursive least squares; test a later window"
         )
     dof = int(window) * p
     statistic = float(T[t_index])
@@ -1425,12 +1627,32 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
 def empirical_threshold(null_statistic, alpha) -> float:
     """Threshold with a per-sample false-alarm rate ``alpha`` from fault-free runs.
 
-    The ``1 - alpha`` quantile of all finite values of ``null_statistic``
-    (for instance a batch of windowed statistics simulated under H0), for
-    test quantities whose law is not known in closed form.
+    Parameters
+    ----------
+    null_statistic : array_like
+        Test quantities simulated under H0, any shape (for instance a batch
+        of windowed statistics); NaN entries (undefined samples) are ignored.
+    alpha : float
+        Designed false-alarm probability.
+
+    Returns
+    -------
+    float
+        The empirical ``1 - alpha`` quantile of the finite values.
+
+    Notes
+    -----
+    For test quantities whose law under H0 is not known in closed form
+    (the observer's windowed energy), ``J = F_hat^{-1}(1 - alpha)`` with
+    ``F_hat`` the empirical distribution function of the simulated values
+    (numpy's linear-interpolation quantile).  Its accuracy is that of a
+    Monte Carlo quantile: simulate many more than ``1 / alpha`` values.
     """
     alpha = check_alpha(alpha)
-    values = np.asarray(null_statistic, dtype=float)
+    try:
+        values = np.asarray(null_statistic, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("null_statistic must be a numeric array") from None
     values = values[np.isfinite(values)]
     if values.size == 0:
         raise ValueError("null_statistic has no finite values")
@@ -1505,6 +1727,24 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
         Alarm when ``statistic > threshold``.
     fault_time : int, optional
         First faulty sample; without it every sample counts for false alarms.
+
+    Returns
+    -------
+    AlarmStatistics
+
+    Notes
+    -----
+    With alarms ``a_{i,t} = [T_{i,t} > threshold]`` (NaN never alarms):
+    the false-alarm rate is ``sum a_{i,t} / #{(i, t) : t < fault_time,
+    T_{i,t} defined}``, an estimate of the per-sample ``alpha`` of
+    :func:`windowed_nis_threshold`; the run false-alarm probability is the
+    fraction of runs with ``max_{t < fault_time} a_{i,t} = 1``, the
+    quantity that grows with the record length (multiple testing); the
+    delay of run ``i`` is ``min{t >= fault_time : a_{i,t}} - fault_time``.
+    The lecture leaves the choice of threshold and the quality of a test
+    (false alarms, detection) to the next lecture
+    (test_quantities_lecture_sv.txt, last slide); these are its Monte Carlo
+    estimates.
     """
     try:
         T = np.array(statistic, dtype=float)
@@ -1518,8 +1758,10 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     if np.isinf(T).any():
         raise ValueError("statistic contains inf; only NaN (undefined samples) is allowed")
     n_runs, N = T.shape
-    threshold = float(threshold)
+    threshold = _finite_float(threshold, "threshold")
     if fault_time is not None:
+        if isinstance(fault_time, bool) or not isinstance(fault_time, (int, np.integer)):
+            raise ValueError(f"fault_time must be an integer sample index, got {fault_time!r}")
         fault_time = int(fault_time)
         if not 0 <= fault_time < N:
             raise ValueError(f"fault_time must lie in [0, {N - 1}], got {fault_time}")
@@ -1577,12 +1819,11 @@ def beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=1e-2, x0_mean=(1.0, 0.0),
     to detect a sensor fault ``f`` in ``y = x + f`` while ``beta`` varies
     slowly, augment the state with ``beta`` modelled as a random walk.
     """
-    Ts = float(Ts)
-    if not np.isfinite(Ts) or Ts <= 0:
+    Ts = _finite_float(Ts, "Ts")
+    if Ts <= 0:
         raise ValueError(f"Ts must be a positive sampling interval, got {Ts!r}")
-    for name, value in (("q_beta", q_beta), ("q_x", q_x)):
-        if not np.isfinite(value) or value < 0:
-            raise ValueError(f"{name} must be a non-negative variance, got {value!r}")
+    q_beta, q_x = _variance(q_beta, "q_beta"), _variance(q_x, "q_x")
+    r = _variance(r, "r", positive=True)
 
     def g(z, u):
         beta, x = z[..., 0], z[..., 1]
@@ -1638,6 +1879,15 @@ def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=N
         ``(beta_t, x_t)``, the layout of :func:`beta_drift_model`.
     outputs : (*batch, N, 1) ndarray
         ``y_t``.
+
+    Notes
+    -----
+    The lecture's example (test_quantities_lecture_sv.txt, "Exempel på EKF
+    som residualgenerator"): ``x(t+1) = x(t) - Ts beta(t) x(t) + Ts u(t)``,
+    ``y(t) = x(t) + f(t)``, the forward-Euler discretisation of
+    ``dx/dt = -beta x + u``, here with process noise ``w ~ N(0, q_x)`` and
+    measurement noise ``e ~ N(0, r)``.  Unlike :func:`beta_drift_model`,
+    ``beta`` is a given trajectory (a ramp, a sine, ...), not a random walk.
     """
     rng = as_generator(rng)
     beta = as_float_array(beta, "beta")
@@ -1649,8 +1899,8 @@ def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=N
     if f.shape[-1] != N:
         raise ValueError(f"fault must have N = {N} samples, got shape {f.shape}")
     shape = np.broadcast_shapes(_batch_shape(batch), beta.shape[:-1], u.shape[:-1], f.shape[:-1])
-    if q_x < 0 or r < 0:
-        raise ValueError("q_x and r must be non-negative variances")
+    Ts, x0 = _finite_float(Ts, "Ts"), _finite_float(x0, "x0")
+    q_x, r = _variance(q_x, "q_x"), _variance(r, "r")
     # time-major (N, *batch) so that every step touches contiguous memory
     w = np.sqrt(q_x) * rng.standard_normal((N,) + shape)
     e = np.sqrt(r) * rng.standard_normal((N,) + shape)

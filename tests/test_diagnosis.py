@@ -92,6 +92,9 @@ def test_structure_rejects_bad_input():
         dg.DecisionStructure.from_text("NF F1\nT1 0")
     with pytest.raises(ValueError, match="unknown test"):
         dg.DecisionStructure([[0, 1]]).hypotheses("T9")
+    with pytest.raises(ValueError, match="2-D table"):
+        dg.DecisionStructure([0, 1])
+    assert dg.DecisionStructure([[0, 1], [1, 0]]).row_index("T2") == 1
 
 
 def test_isolability_of_lecture_structure(structure):
@@ -391,6 +394,11 @@ def test_bad_input_is_refused(signals):
         dg.prediction_error_test(y[:3], signals[:3], NOMINAL, [0, 1, 2], sigma=1.0)
     with pytest.raises(ValueError, match="void"):
         dg.residual_threshold(0.05, 0)
+    for bad in ("a", None, 2.5, np.inf):
+        with pytest.raises(ValueError, match="dof must be a positive integer"):
+            dg.residual_threshold(0.05, bad)
+    with pytest.raises(ValueError, match="n_records must be a positive integer"):
+        dg.simulate_linear_regression(signals, NOMINAL, sigma=1.0, n_records=2.5, rng=np.random.default_rng(0))
 
 
 # ---------------------------------------------------------------------------
@@ -606,6 +614,10 @@ def test_mode_log_likelihoods_and_bayes_ranking(signals):
         dg.bayes_ranking(ll, {"NF": 0.5, "F1": 0.1, "F2": 0.1, "F3": 0.1})
     with pytest.raises(ValueError, match="same modes"):
         dg.bayes_ranking(ll, {"NF": 1.0})
+    with pytest.raises(ValueError, match="likelihood 0"):
+        dg.bayes_ranking({"NF": -np.inf, "F1": -np.inf}, {"NF": 0.5, "F1": 0.5})
+    # one impossible mode is fine: it gets posterior 0
+    assert dg.bayes_ranking({"NF": -np.inf, "F1": -3.0}, {"NF": 0.5, "F1": 0.5}).as_dict() == {"F1": 1.0, "NF": 0.0}
 
 
 # ---------------------------------------------------------------------------

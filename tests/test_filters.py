@@ -475,6 +475,98 @@ def test_alarm_statistics_exact_small_case():
         kf.alarm_statistics(T, 1.0, fault_time=8)
 
 
+def test_windowed_sum_skips_only_windows_with_undefined_samples():
+    v = np.arange(1.0, 11.0)
+    v[[0, 6]] = np.nan  # undefined samples, e.g. the diffuse start of RLS
+    out = kf.windowed_sum(v, 3)
+    expected = np.full(10, np.nan)
+    for t in range(2, 10):
+        window = v[t - 2:t + 1]
+        if not np.isnan(window).any():
+            expected[t] = window.sum()
+    np.testing.assert_array_equal(np.isnan(out), np.isnan(expected))
+    np.testing.assert_allclose(out[~np.isnan(out)], expected[~np.isnan(expected)], rtol=1e-12)
+    assert out[5] == 4.0 + 5.0 + 6.0 and out[9] == 8.0 + 9.0 + 10.0
+
+
+def test_step_functions_check_shapes_and_positive_definiteness():
+    x, P = np.zeros(2), np.eye(2)
+    with pytest.raises(ValueError, match=r"H must be \(\.\.\., p, n\) = \(\.\.\., 1, 2\)"):
+        kf.kf_update(x, P, np.zeros(1), np.eye(3)[:1], np.eye(1))
+    with pytest.raises(ValueError, match=r"R must be \(\.\.\., 2, 2\)"):
+        kf.kf_update(x, P, np.zeros(2), np.eye(2), np.eye(1))
+    with pytest.raises(ValueError, match="P_pred must be"):
+        kf.kf_update(x, np.eye(3), np.zeros(1), [[1.0, 0.0]], [[1.0]])
+    with pytest.raises(ValueError, match="F must be"):
+        kf.kf_predict(x, P, np.eye(3), np.eye(2))
+    # an indefinite S (here R = -3 I) must not pass silently with two outputs either
+    with pytest.raises(LinAlgError, match="not positive definite"):
+        kf.kf_update(x, P, np.zeros(2), np.eye(2), -3.0 * np.eye(2))
+    with pytest.raises(LinAlgError, match="not positive"):
+        kf.kf_update(x, P, np.zeros(1), [[1.0, 0.0]], [[-3.0]])
+    model = kf.beta_drift_model()
+    with pytest.raises(ValueError, match="P_pred must be"):
+        kf.ekf_update(model, np.zeros(2), np.eye(3), np.zeros(1))
+    with pytest.raises(ValueError, match="P_filt must be"):
+        kf.ekf_predict(model, np.zeros(2), np.eye(3), np.zeros(1))
+
+
+def test_diffuse_rls_windowed_nis_is_chi2_after_the_start():
+    """Recursive residuals after the diffuse start are i.i.d. N(0, 1): windows are chi2(L)."""
+    rng = np.random.default_rng(31)
+    N, k, M, L, alpha = 25, 3, 20000, 5, 0.05
+    Phi = rng.standard_normal((N, k))
+    Y = Phi @ [1.0, -2.0, 0.5] + 0.3 * rng.standard_normal((M, N))
+    rec = kf.recursive_least_squares(Phi, Y, r=0.09)
+    W = kf.windowed_nis(rec, L)
+    start = rec.first + 1  # first sample with an innovation
+    assert np.all(np.isnan(W[:, :start + L - 1])) and np.all(np.isfinite(W[:, start + L - 1:]))
+    lo, hi = stats.binom.interval(1 - MISS, M, alpha)
+    thr = kf.windowed_nis_threshold(alpha, L)
+    for t in (start + L - 1, N - 1):
+        assert lo <= np.sum(W[:, t] > thr) <= hi
+    one = kf.recursive_least_squares(Phi, Y[0], r=0.09)
+    res = kf.windowed_chi2_test(one, L, alpha)
+    assert res.statistic == pytest.approx(W[0, -1]) and res.dof == L
+    with pytest.raises(ValueError, match="undefined"):
+        kf.windowed_chi2_test(one, L, alpha, t=start + L - 2)
+
+
+def test_residual_evaluation_input_errors():
+    nis = np.ones(10)
+    with pytest.raises(ValueError, match="n_outputs .*positive integer"):
+        kf.windowed_chi2_test(nis, 3, n_outputs=0)
+    with pytest.raises(ValueError, match="non-negative"):
+        kf.windowed_chi2_test(-nis, 3)
+    with pytest.raises(ValueError, match="one record"):
+        kf.windowed_chi2_test(np.ones((2, 10)), 3)
+    with pytest.raises(ValueError, match="integer sample index"):
+        kf.windowed_chi2_test(nis, 3, t=4.5)
+    with pytest.raises(TypeError, match="FilterResult or an RLSResult"):
+        kf.windowed_nis(nis, 3)
+    with pytest.raises(ValueError, match="threshold must be finite"):
+        kf.alarm_statistics(np.ones((2, 3)), np.nan)
+    with pytest.raises(ValueError, match="threshold must be a real number"):
+        kf.alarm_statistics(np.ones((2, 3)), "high")
+    with pytest.raises(ValueError, match="fault_time must be an integer"):
+        kf.alarm_statistics(np.ones((2, 3)), 1.0, fault_time=1.5)
+
+
+def test_lecture_model_input_errors():
+    with pytest.raises(ValueError, match="q_beta must be a real number"):
+        kf.beta_drift_model(q_beta="slow")
+    with pytest.raises(ValueError, match="r must be positive"):
+        kf.beta_drift_model(r=0.0)
+    with pytest.raises(ValueError, match="Ts must be a positive"):
+        kf.beta_drift_model(Ts=0.0)
+    with pytest.raises(ValueError, match="q_x must be non-negative"):
+        kf.simulate_beta_system(np.ones(5), np.ones(5), np.random.default_rng(0), q_x=-1.0)
+    # a g written for one state (x[1]) instead of a batch (x[..., 1]) is reported clearly
+    with pytest.raises(ValueError, match=r"g\(x0_mean, u\) raised IndexError.*x\[\.\.\., i\]"):
+        kf.NonlinearModel(lambda x, u: np.array([x[0], x[5]]), lambda x: x[..., :1], np.eye(2),
+                          [[1.0]], [0.0, 0.0])
+
+
 def test_empirical_threshold():
     x = np.arange(1, 1001, dtype=float)
     assert kf.empirical_threshold(x, 0.1) == pytest.approx(np.quantile(x, 0.9))

@@ -45,7 +45,12 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     through ``U1``; the best it can do is the orthogonal projection of
     ``f U2``, and ``sqrt(T)`` is the length of the perpendicular.  When
     ``U2`` is parallel to ``U1`` the perpendicular vanishes: the fault is
-    invisible.
+    invisible (test_quantities_lecture_sv.txt, the geometric slide of
+    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
     """
     ax = axes_or_new(ax)
     u1 = np.asarray(U1, dtype=float).ravel()
@@ -86,6 +91,20 @@ def plot_density(theta: float, sigma: float = 1.0, z_observed=None, ax=None, z=N
     """The density ``f(z | theta)`` of ``N(theta, sigma^2)`` as a function of ``z``.
 
     An observed value is marked on the curve.
+
+    Parameters
+    ----------
+    theta, sigma : float
+        Mean and standard deviation.
+    z_observed : float or array_like, optional
+        Observations to mark.
+    ax : matplotlib.axes.Axes, optional
+    z : array_like, optional
+        Grid of ``z`` values (``theta ± 4 sigma`` by default).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
     """
     ax = axes_or_new(ax)
     if z is None:
@@ -107,6 +126,26 @@ def plot_likelihood(z, sigma: float = 1.0, theta=None, ax=None, show_factors: bo
 
     With several observations and ``show_factors``, each factor
     ``f(z_i | theta)`` is drawn dashed; the maximum is marked.
+
+    Parameters
+    ----------
+    z : float or array_like
+        Observations.
+    sigma : float
+    theta : array_like, optional
+        Grid of parameter values.
+    ax : matplotlib.axes.Axes, optional
+    show_factors : bool
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+
+    Notes
+    -----
+    ``L(theta | z) = prod_i f(z_i | theta)``, maximal at the sample mean
+    (lecture slides "Likelihood-funktionen, normalfördelning": ``z = 2`` and
+    ``z = (3, 5)`` with the maximum at ``theta = 4``).
     """
     ax = axes_or_new(ax)
     z = np.atleast_1d(np.asarray(z, dtype=float))
@@ -132,7 +171,21 @@ def plot_likelihood(z, sigma: float = 1.0, theta=None, ax=None, show_factors: bo
 
 
 def plot_criterion(theta, values, ax=None, minimiser=None, label: str = r"$V(\theta_1)$"):
-    """A 1-D criterion such as ``V(theta1) = sum (y - theta1 u1 - u2 - u3)^2``."""
+    """A 1-D criterion such as ``V(theta1) = sum (y - theta1 u1 - u2 - u3)^2``.
+
+    Parameters
+    ----------
+    theta, values : array_like
+        Grid and criterion values.
+    ax : matplotlib.axes.Axes, optional
+    minimiser : float, optional
+        Marked with a vertical line.
+    label : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
     ax = axes_or_new(ax)
     ax.plot(theta, values, color="C0", label=label)
     if minimiser is not None:
@@ -145,7 +198,24 @@ def plot_criterion(theta, values, ax=None, minimiser=None, label: str = r"$V(\th
 
 def plot_null_histogram(samples, null, critical_value: float, ax=None, bins: int = 50,
                         label: str = "simulated under H0"):
-    """Histogram of a simulated test quantity with its null density and threshold."""
+    """Histogram of a simulated test quantity with its null density and threshold.
+
+    Parameters
+    ----------
+    samples : array_like
+        Simulated test quantities.
+    null : frozen distribution
+        Anything with a ``pdf`` method (the ``null`` of a ``TestResult``).
+    critical_value : float
+        The threshold; the tail beyond it is shaded.
+    ax : matplotlib.axes.Axes, optional
+    bins : int
+    label : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
     ax = axes_or_new(ax)
     samples = np.asarray(samples, dtype=float).ravel()
     hi = max(np.quantile(samples, 0.999), critical_value * 1.1)
@@ -164,7 +234,25 @@ def plot_null_histogram(samples, null, critical_value: float, ax=None, bins: int
 
 def plot_power_curves(sizes, theory: Mapping[str, Sequence[float]], simulated: Mapping[str, Sequence[float]] | None = None,
                       alpha: float | None = None, ax=None, xlabel: str = "fault size"):
-    """Alarm probability against fault size: theory as lines, Monte Carlo as markers."""
+    """Alarm probability against fault size: theory as lines, Monte Carlo as markers.
+
+    Parameters
+    ----------
+    sizes : array_like
+        Fault sizes.
+    theory : mapping of str to sequence of float
+        Power curves, one per label.
+    simulated : mapping of str to sequence of float, optional
+        Monte Carlo rates, matched to ``theory`` by label.
+    alpha : float, optional
+        Drawn as a horizontal line.
+    ax : matplotlib.axes.Axes, optional
+    xlabel : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
     ax = axes_or_new(ax)
     sizes = np.asarray(sizes, dtype=float)
     for i, (label, values) in enumerate(theory.items()):
@@ -184,7 +272,18 @@ def plot_power_curves(sizes, theory: Mapping[str, Sequence[float]], simulated: M
 
 
 def plot_isolation(result, ax=None, cmap: str = "Blues"):
-    """Heat map of ``P(mode in diagnoses | true mode)`` from an IsolationResult."""
+    """Heat map of ``P(mode in diagnoses | true mode)`` from an IsolationResult.
+
+    Parameters
+    ----------
+    result : course.diagnosis.IsolationResult
+    ax : matplotlib.axes.Axes, optional
+    cmap : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
     ax = axes_or_new(ax)
     M = np.asarray(result.membership)
     ax.imshow(M, vmin=0, vmax=1, cmap=cmap)
@@ -202,7 +301,24 @@ def plot_isolation(result, ax=None, cmap: str = "Blues"):
 
 
 def plot_recursive_estimates(t, theta, nominal=None, labels: Sequence[str] | None = None, ax=None, band=None):
-    """Recursive parameter estimates over time, with optional ±band and nominal lines."""
+    """Recursive parameter estimates over time, with optional ±band and nominal lines.
+
+    Parameters
+    ----------
+    t : (N,) array_like
+    theta : (N,) or (N, k) array_like
+        Estimates.
+    nominal : float or array_like, optional
+        Nominal values, drawn dotted.
+    labels : sequence of str, optional
+    ax : matplotlib.axes.Axes, optional
+    band : (N,) or (N, k) array_like, optional
+        Half width of a band around each estimate.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
     ax = axes_or_new(ax)
     theta = np.asarray(theta, dtype=float)
     theta = theta[:, None] if theta.ndim == 1 else theta
@@ -222,7 +338,19 @@ def plot_recursive_estimates(t, theta, nominal=None, labels: Sequence[str] | Non
 
 
 def plot_windowed_statistic(t, statistic, threshold: float, ax=None, label: str = "windowed test quantity"):
-    """A test quantity over time with its threshold; alarms are marked."""
+    """A test quantity over time with its threshold; alarms are marked.
+
+    Parameters
+    ----------
+    t, statistic : (N,) array_like
+    threshold : float
+    ax : matplotlib.axes.Axes, optional
+    label : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
     ax = axes_or_new(ax)
     statistic = np.asarray(statistic, dtype=float)
     ax.plot(t, statistic, color="C0", label=label)

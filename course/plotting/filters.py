@@ -27,7 +27,27 @@ def _mark_fault(ax, fault_time, label="fault appears"):
 
 
 def plot_signals(t, y, u=None, ax=None, fault_time=None, y_label="y", u_label="u"):
-    """Measured output ``y`` (and input ``u``) against time, the fault onset dotted."""
+    """Measured output ``y`` (and input ``u``) against time, the fault onset dotted.
+
+    Parameters
+    ----------
+    t : (N,) array_like
+        Time axis.
+    y : (N,) or (N, p) array_like
+        Output; the first channel is drawn.
+    u : (N,) or (N, m) array_like, optional
+        Input, drawn as a staircase (first channel).
+    ax : matplotlib.axes.Axes, optional
+    fault_time : float, optional
+        Fault onset, drawn as a dotted vertical line.
+    y_label, u_label : str
+        Legend labels.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = axes_or_new(ax)
     ax.plot(t, np.asarray(y).reshape(len(t), -1)[:, 0], color="C0", lw=1, label=y_label)
     if u is not None:
@@ -51,6 +71,16 @@ def plot_estimate(t, estimate, std, truth=None, ax=None, nsigma=2.0, label="esti
     truth : (N,) array_like, optional
     nsigma : float
         Half width of the band in standard deviations.
+    ax : matplotlib.axes.Axes, optional
+    label, truth_label : str
+        Legend labels.
+    fault_time : float, optional
+        Fault onset, drawn dotted.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = axes_or_new(ax)
     estimate, std = np.asarray(estimate, float), np.asarray(std, float)
@@ -67,7 +97,27 @@ def plot_estimate(t, estimate, std, truth=None, ax=None, nsigma=2.0, label="esti
 
 def plot_residual(t, residual, std=None, ax=None, nsigma=2.0, label="residual", fault_time=None,
                   color="C3"):
-    """A residual (innovation) with an optional ``± nsigma sqrt(S_t)`` band around zero."""
+    """A residual (innovation) with an optional ``± nsigma sqrt(S_t)`` band around zero.
+
+    Parameters
+    ----------
+    t : (N,) array_like
+    residual : (N,) or (N, p) array_like
+        The residual; the first channel is drawn.
+    std : (N,) or (N, 1) array_like, optional
+        Its standard deviation ``sqrt(S_t)`` (one output).
+    ax : matplotlib.axes.Axes, optional
+    nsigma : float
+        Half width of the band.
+    label : str
+    fault_time : float, optional
+    color : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = axes_or_new(ax)
     residual = np.asarray(residual, float).reshape(len(t), -1)[:, 0]
     if std is not None:
@@ -84,7 +134,26 @@ def plot_residual(t, residual, std=None, ax=None, nsigma=2.0, label="residual", 
 
 def plot_test_statistic(t, statistic, threshold, ax=None, label="test quantity", fault_time=None,
                         color="C2", log=False):
-    """A thresholded test quantity; samples above the threshold are marked as alarms."""
+    """A thresholded test quantity; samples above the threshold are marked as alarms.
+
+    Parameters
+    ----------
+    t : (N,) array_like
+    statistic : (N,) array_like
+        Test quantity (NaN where undefined).
+    threshold : float
+    ax : matplotlib.axes.Axes, optional
+    label : str
+    fault_time : float, optional
+    color : str
+    log : bool
+        Logarithmic vertical axis.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = axes_or_new(ax)
     statistic = np.asarray(statistic, float)
     ax.plot(t, statistic, color=color, lw=1, label=label)
@@ -109,6 +178,16 @@ def plot_alarm_rate(t, statistic, threshold, ax=None, alpha=None, fault_time=Non
     statistic : (n_runs, N) array_like
     alpha : float, optional
         The designed per-sample false-alarm probability, drawn as a line.
+    t : (N,) array_like
+    threshold : float
+    ax : matplotlib.axes.Axes, optional
+    fault_time : float, optional
+    label : str, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = axes_or_new(ax)
     statistic = np.asarray(statistic, float)
@@ -126,7 +205,22 @@ def plot_alarm_rate(t, statistic, threshold, ax=None, alpha=None, fault_time=Non
 
 
 def plot_delay_histogram(delays, ax=None, label=None, max_delay=None):
-    """Histogram of detection delays (runs that never detect are counted in the title)."""
+    """Histogram of detection delays (runs that never detect are counted in the title).
+
+    Parameters
+    ----------
+    delays : (n_runs,) array_like
+        Delays in samples, NaN for missed detections (``AlarmStatistics.delays``).
+    ax : matplotlib.axes.Axes, optional
+    label : str, optional
+    max_delay : int, optional
+        Delays above it are collected in the last bin.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = axes_or_new(ax)
     delays = np.asarray(delays, float)
     hit = delays[np.isfinite(delays)]
@@ -143,7 +237,21 @@ def plot_delay_histogram(delays, ax=None, label=None, max_delay=None):
 
 
 def plot_normalized_histogram(z, ax=None, bins=60, label="normalised innovations"):
-    """Histogram of normalised innovations against the N(0, 1) density."""
+    """Histogram of normalised innovations against the N(0, 1) density.
+
+    Parameters
+    ----------
+    z : array_like
+        Normalised innovations (any shape; NaN ignored).
+    ax : matplotlib.axes.Axes, optional
+    bins : int
+    label : str
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     from scipy import stats
 
     ax = axes_or_new(ax)
