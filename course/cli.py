@@ -1,16 +1,16 @@
-"""The ``course`` command.
+"""The ``course`` command: open the course notebooks, release and grade assignments.
 
 ``course open``
     start Jupyter on the course notebooks (the course's main entry point).
 ``course release`` and ``course grade``
     the instructors' exercise commands (see :mod:`course.exercises`).
+
+``python -m course`` is the same command.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -18,30 +18,62 @@ from pathlib import Path
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
+def _default_notebooks() -> Path:
+    # A clone's notebooks/ next to the working directory wins, so `course open` also works
+    # from a clone when the package was installed without -e (then REPO_ROOT is site-packages).
+    for folder in (Path.cwd(), *Path.cwd().parents):
+        if (folder / "notebooks").is_dir() and (folder / "course").is_dir():
+            return folder / "notebooks"
+    return REPO_ROOT / "notebooks"
+
+
+def _jupyter_command(app: str):
+    """The Jupyter front end of THIS interpreter (not whatever ``jupyter`` is first on PATH)."""
+    from importlib.util import find_spec
+
+    module = "jupyterlab" if app == "lab" else "notebook"
+    if find_spec(module) is None:
+        return None
+    return [sys.executable, "-m", module]
+
+
 def _open(args) -> int:
-    target = Path(args.path) if args.path else REPO_ROOT / "notebooks"
+    target = Path(args.path).resolve() if args.path else _default_notebooks()
     if not target.exists():
-        print(f"course open: {target} does not exist; run it from a clone of the course", file=sys.stderr)
+        print(f"course open: {target} does not exist; run it from a clone of the course "
+              "(or pass the folder of the notebooks)", file=sys.stderr)
         return 2
-    jupyter = shutil.which("jupyter")
-    if jupyter is None:
+    command = _jupyter_command(args.app)
+    if command is None:
         print(
-            "course open: Jupyter is not installed; install the course with "
-            "`python -m pip install -e \".[all]\"`",
+            f"course open: Jupyter {'Lab' if args.app == 'lab' else 'Notebook'} is not installed for "
+            f"{sys.executable}; install the course with `python -m pip install -e \".[all]\"`",
             file=sys.stderr,
         )
         return 2
-    command = [jupyter, args.app, *( ["--no-browser"] if args.no_browser else [])]
+    folder = target if target.is_dir() else target.parent
+    command += ["--no-browser"] if args.no_browser else []
+    command += list(getattr(args, "jupyter_args", []))
+    if target.is_file():
+        command.append(target.name)  # open that notebook, rooted at its folder
     print(f"Opening the course in Jupyter {args.app} at {target} (Ctrl-C to stop)")
-    return subprocess.call(command, cwd=target if target.is_dir() else target.parent)
+    return subprocess.call(command, cwd=folder)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="course", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="course", description=__doc__.split("\n\n")[0].replace("``", ""),
+        epilog="examples: course open | course release 01_least_squares | "
+               "course grade 01_least_squares submissions/ --out grading-output/")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p_open = sub.add_parser("open", help="open the course notebooks in Jupyter")
-    p_open.add_argument("path", nargs="?", help="folder to open (default: the course's notebooks/)")
+    p_open = sub.add_parser(
+        "open", help="open the course notebooks in Jupyter",
+        description="Start JupyterLab (or the classic Notebook) on the course's notebooks/ folder; "
+                    "begin with 01_least_squares_validation.ipynb. Stop it with Ctrl-C. Options that "
+                    "course does not know (e.g. --port=8890) are passed on to Jupyter.")
+    p_open.add_argument("path", nargs="?",
+                        help="folder or notebook to open (default: notebooks/ of the course clone)")
     p_open.add_argument("--app", default="lab", choices=["lab", "notebook"], help="Jupyter front end")
     p_open.add_argument("--no-browser", action="store_true", help="do not launch a browser")
     p_open.set_defaults(func=_open)
@@ -57,7 +89,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        if args.command != "open":
+            parser.error(f"unrecognized arguments: {' '.join(extra)}")
+        args.jupyter_args = extra
     return int(args.func(args) or 0)
 
 

@@ -114,6 +114,18 @@ class FrozenDistribution:
         """Random draws; ``random_state`` is a Generator (or a seed for one)."""
         return self._rvs(size, as_generator(random_state))
 
+    def __repr__(self) -> str:
+        # Deterministic by default (no memory address): the class and its numeric parameters.
+        from .results import format_number
+
+        params = [
+            f"{key}={format_number(value)}"
+            for key, value in vars(self).items()
+            if not key.startswith("_") and not isinstance(value, bool)
+            and isinstance(value, (int, float, np.integer, np.floating))
+        ]
+        return f"{type(self).__name__}({', '.join(params)})"
+
     # -- helpers --------------------------------------------------------------
     def _apply(self, func, x, below, above):
         x = np.asarray(x, dtype=float)

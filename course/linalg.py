@@ -47,9 +47,15 @@ def as_float_array(value, name: str, ndim: int | None = None) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the value is not numeric, has the wrong number of dimensions, or
-        contains NaN or inf.
+        If the value is None, complex or not numeric, has the wrong number of
+        dimensions, or contains NaN or inf.
     """
+    if value is None:
+        raise ValueError(f"{name} is None; pass an array of numbers")
+    if _is_complex(value):
+        # float() would drop the imaginary part with only a warning: refuse instead.
+        raise ValueError(f"{name} is complex; pass real numbers (e.g. np.real(...) if the "
+                         "imaginary parts are rounding noise)")
     try:
         array = np.array(value, dtype=float)  # a copy: callers may not mutate input
     except (TypeError, ValueError) as exc:
@@ -67,6 +73,13 @@ def as_float_array(value, name: str, ndim: int | None = None) -> np.ndarray:
             "remove or replace those values before fitting"
         )
     return array
+
+
+def _is_complex(value) -> bool:
+    try:
+        return bool(np.iscomplexobj(value))
+    except (TypeError, ValueError):  # ragged or non-numeric: reported by the caller
+        return False
 
 
 def as_vector(value, name: str, size: int | None = None) -> np.ndarray:

@@ -296,6 +296,11 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
                 f"Qyy must be an (m, m) = ({m}, {m}) covariance matrix, got a 1-D array; "
                 "for uncorrelated observations with variances v pass np.diag(v)"
             )
+        if np.ndim(Qyy) == 0:
+            raise ValueError(
+                f"Qyy must be an (m, m) = ({m}, {m}) covariance matrix, got a scalar; "
+                f"for equal variances s2 pass s2 * np.eye({m})"
+            )
         Qyy = as_covariance(Qyy, "Qyy", m)
     L = cholesky_lower(Qyy, "Qyy")
 
@@ -335,6 +340,15 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
         n=int(n),
         _factors=factors,
     )
+
+
+def _whole_number(value, name: str, minimum: int, or_none: bool = False) -> int:
+    """``value`` as an int, refusing bools, fractions and non-numbers with a clear message."""
+    ok = not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
+    if not ok or not float(value).is_integer() or value < minimum:
+        kind = "a positive" if minimum == 1 else "a non-negative"
+        raise ValueError(f"{name} must be {kind} integer{' or None' if or_none else ''}, got {value!r}")
+    return int(value)
 
 
 def _check_fit(value) -> LeastSquaresFit:
@@ -708,8 +722,8 @@ def data_snooping(A, y, Qyy=None, alpha: float = 0.01, max_removals: int | None 
     (the first largest), which is why practitioners want redundancy to spare.
     """
     alpha = check_alpha(alpha)
-    if max_removals is not None and (int(max_removals) != max_removals or max_removals < 0):
-        raise ValueError(f"max_removals must be a non-negative integer or None, got {max_removals!r}")
+    if max_removals is not None:
+        max_removals = _whole_number(max_removals, "max_removals", minimum=0, or_none=True)
     current = fit(A, y, Qyy)
     A_all, y_all, Q_all = current.A, current.y, current.Qyy
     kept = list(range(current.m))
@@ -779,14 +793,12 @@ def noncentrality(alpha: float, power: float, dof: int = 1) -> float:
     """
     alpha = check_alpha(alpha)
     power = check_alpha(power, "power")
-    if int(dof) != dof or dof < 1:
-        raise ValueError(f"dof must be a positive integer, got {dof!r}")
+    dof = _whole_number(dof, "dof", minimum=1)
     if power <= alpha:
         raise ValueError(
             f"power ({power!r}) must exceed alpha ({alpha!r}): even without a bias the test "
             "rejects with probability alpha"
         )
-    dof = int(dof)
     critical = stats.chi2.isf(alpha, dof)
 
     def gap(lam):
@@ -909,9 +921,9 @@ def load_sea_level(case: int):
     Data: TU Delft MUDE open course book, "overall model test" notebook,
     CC BY 4.0 (see ``course/data/sea_level_mude/README.md``).
     """
-    if case not in (0, 1, 2, 3) or isinstance(case, bool):
+    if isinstance(case, bool) or not isinstance(case, (int, np.integer)) or case not in (0, 1, 2, 3):
         raise ValueError(f"case must be 0, 1, 2 or 3, got {case!r}")
-    source = resources.files("course").joinpath("data", "sea_level_mude", f"Dataset_{case}.txt")
+    source = resources.files("course").joinpath("data", "sea_level_mude", f"Dataset_{int(case)}.txt")
     y = np.loadtxt(io.StringIO(source.read_text(encoding="utf-8")))
     return np.arange(1.0, y.size + 1.0), y
 

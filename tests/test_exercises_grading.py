@@ -153,6 +153,10 @@ def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
         "    f = getattr(lsq, 'f' + 'it')\n"
         "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).w"))
     subs["copied_numbers"] = _with_answer("q6", "T_mine = 76.50528606174367  # the demo student's value")
+    # a Monte Carlo answer that does not simulate: right under H0, wrong for every biased case
+    subs["constant_rate"] = _with_answer("q8", (
+        "def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n"
+        "    return alpha"))
     subs["empty"] = {"cells": [], "metadata": {}, "nbformat": 4, "nbformat_minor": 5}
     subs["not_json"] = "{ this is not json"
     subs["not_a_notebook"] = json.dumps({"hello": "world"})
@@ -312,6 +316,16 @@ def test_forbidden_calls(graded):
 
 def test_copied_numbers_fail_per_student_question(graded):
     _expect(graded["rows"]["copied_numbers"], {"q6": "fail"})
+
+
+def test_monte_carlo_band_is_not_fooled_by_returning_alpha(graded):
+    row = graded["rows"]["constant_rate"]
+    assert all(row["questions"][q]["points"] == pts for q, pts in POINTS.items() if q != "q8")
+    q8 = row["questions"]["q8"]
+    passed = [c["ok"] for c in q8["cases"]]
+    assert len(passed) == 6 and sum(passed) == 3  # the three cases without a bias
+    assert q8["status"] == "partial" and q8["points"] == pytest.approx(1.0)
+    assert not q8["cases"][1]["ok"] and "outside the accepted" in q8["cases"][1]["message"]
 
 
 def test_broken_files(graded):

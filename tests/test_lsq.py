@@ -289,6 +289,10 @@ def test_rank_deficient_A_names_the_column():
         (A_LINE, DAY1, np.diag([1.0, 1.0, -1.0, 1.0]), LinAlgError, "Qyy is not positive definite"),
         (A_LINE, DAY1, np.ones((4, 4)), LinAlgError, "Qyy is not positive definite"),
         (A_LINE, DAY1, np.diag([1.0, np.nan, 1.0, 1.0]), ValueError, "Qyy contains NaN or inf"),
+        (A_LINE, DAY1, 2.0, ValueError, r"got a scalar; for equal variances s2 pass s2 \* np.eye\(4\)"),
+        (A_LINE, None, None, ValueError, "y is None"),
+        (A_LINE + 1j, DAY1, None, ValueError, "A is complex; pass real numbers"),
+        (A_LINE, DAY1 + 0j, None, ValueError, "y is complex"),
     ],
 )
 def test_bad_input_errors(A, y, Qyy, error, match):
@@ -371,8 +375,9 @@ def test_data_snooping_stops_when_no_redundancy_left_and_at_max_removals():
     res = lsq.data_snooping(A, y, alpha=0.01, max_removals=1)
     assert res.removed == (7,) and res.stop_reason == "max_removals reached"
     assert "removed [7]" in res.summary() and "np." not in repr(res) + res._repr_html_()
-    with pytest.raises(ValueError, match="max_removals"):
-        lsq.data_snooping(A, y, max_removals=-1)
+    for bad in (-1, 1.5, "a", True):
+        with pytest.raises(ValueError, match="max_removals must be a non-negative integer or None"):
+            lsq.data_snooping(A, y, max_removals=bad)
 
 
 def test_sea_level_data_cases():
@@ -392,8 +397,10 @@ def test_sea_level_data_cases():
     _, y3 = lsq.load_sea_level(3)
     assert lsq.overall_model_test(lsq.fit(A, y3, Q), 0.05).reject
     assert not lsq.overall_model_test(lsq.fit(A, y3, 2 * Q), 0.05).reject
-    with pytest.raises(ValueError, match="case must be 0, 1, 2 or 3"):
-        lsq.load_sea_level(4)
+    for bad in (4, 1.0, "1", True):
+        with pytest.raises(ValueError, match="case must be 0, 1, 2 or 3"):
+            lsq.load_sea_level(bad)
+    np.testing.assert_array_equal(lsq.load_sea_level(np.int64(1))[1], y1)
 
 
 # ---------------------------------------------------------------------------
@@ -424,8 +431,10 @@ def test_noncentrality_known_value_and_monotonicity():
     assert lsq.noncentrality(0.001, 0.8, 2) > lsq.noncentrality(0.001, 0.8, 1)
     with pytest.raises(ValueError, match="power .* must exceed alpha"):
         lsq.noncentrality(0.1, 0.05)
-    with pytest.raises(ValueError, match="dof must be a positive integer"):
-        lsq.noncentrality(0.05, 0.8, 0)
+    for bad in (0, 1.5, "a", True, np.inf):
+        with pytest.raises(ValueError, match="dof must be a positive integer, got"):
+            lsq.noncentrality(0.05, 0.8, bad)
+    assert lsq.noncentrality(0.05, 0.8, np.int64(2)) == lsq.noncentrality(0.05, 0.8, 2.0)
     with pytest.raises(ValueError, match="power must lie strictly between 0 and 1"):
         lsq.noncentrality(0.05, 1.0)
 

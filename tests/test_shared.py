@@ -131,6 +131,12 @@ def test_as_float_array_errors_and_copy():
         cl.as_float_array(["a", "b"], "y")
     with pytest.raises(ValueError, match=r"A must be 2-dimensional, got shape \(3,\) \(pass a column"):
         cl.as_float_array([1, 2, 3], "A", ndim=2)
+    with pytest.raises(ValueError, match="y is None"):
+        cl.as_float_array(None, "y")
+    with pytest.raises(ValueError, match="y is complex; pass real numbers"):
+        cl.as_float_array(np.array([1.0, 2.0 + 1e-20j]), "y")  # never drops imaginary parts silently
+    with pytest.raises(ValueError, match="y must be numeric"):
+        cl.as_float_array([[1.0, 2.0], [3.0]], "y")
     src = np.arange(3.0)
     out = cl.as_float_array(src, "y")
     out[0] = 99
@@ -261,6 +267,9 @@ def test_frozen_distribution_input_checks_and_rvs():
     assert isinstance(as_generator(7), np.random.Generator)
     with pytest.raises(TypeError, match="not a legacy RandomState"):
         as_generator(np.random.RandomState(0))
+    # the default repr is deterministic (no memory address), so results print the same every run
+    assert repr(Chi2Wrapper(np.int64(3))) == "Chi2Wrapper(dof=3)"
+    assert describe_distribution(Chi2Wrapper(2.5)) == "Chi2Wrapper(dof=2.5)"
 
 
 # ---------------------------------------------------------------------------
@@ -289,3 +298,38 @@ def test_library_modules_do_not_import_matplotlib():
         "print('matplotlib' in sys.modules)\n"
     )
     assert run_python(code) == "False"
+
+
+# ---------------------------------------------------------------------------
+# the course command
+# ---------------------------------------------------------------------------
+def test_python_m_course_is_the_course_command():
+    out = subprocess.run([sys.executable, "-m", "course", "--help"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and "open" in out.stdout and "release" in out.stdout and "grade" in out.stdout
+    out = subprocess.run([sys.executable, "-m", "course", "open", "--help"], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0 and "JupyterLab" in out.stdout and "--no-browser" in out.stdout
+    out = subprocess.run([sys.executable, "-m", "course", "release", "x", "--bogus"], capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 2 and "unrecognized arguments: --bogus" in out.stderr
+
+
+def test_course_open_uses_this_interpreters_jupyter(monkeypatch, tmp_path, capsys):
+    from course import cli
+
+    calls = []
+    monkeypatch.setattr(cli.subprocess, "call", lambda command, cwd: calls.append((command, cwd)) or 0)
+    monkeypatch.setenv("PATH", "/nonexistent")  # no `jupyter` on PATH: found through sys.executable
+    assert cli.main(["open", "--no-browser", "--port=8890"]) == 0
+    (command, cwd), = calls
+    assert command[:3] == [sys.executable, "-m", "jupyterlab"] and command[3:] == ["--no-browser", "--port=8890"]
+    assert cwd.name == "notebooks" and (cwd / "01_least_squares_validation.ipynb").is_file()
+    notebook = tmp_path / "x.ipynb"
+    notebook.write_text("{}")
+    assert cli.main(["open", str(notebook), "--app", "notebook"]) == 0
+    assert calls[-1] == ([sys.executable, "-m", "notebook", "x.ipynb"], tmp_path)
+    assert cli.main(["open", str(tmp_path / "missing")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    monkeypatch.setattr(cli, "_jupyter_command", lambda app: None)
+    assert cli.main(["open"]) == 2
+    assert "is not installed" in capsys.readouterr().err

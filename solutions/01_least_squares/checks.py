@@ -5,6 +5,7 @@ are sent to the student's function only at grading time.
 """
 
 import numpy as np
+from scipy import stats
 
 from course import lsq
 from course.exercises.spec import Checks, binomial_band
@@ -118,17 +119,28 @@ def q7(d):
     return int(lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).removed[0])
 
 
-@CHECKS.function("q8", func="false_alarm_rate", points=2, timeout=30,
-                 hint="Simulate n_runs data sets y = A x + noise with noise ~ N(0, Qyy) (Cholesky factor "
-                      "times standard normals, rng = np.random.default_rng(seed)), apply the overall model "
-                      "test to each and return the fraction rejected. For a correct test it is close to alpha.")
-def q8(A, Qyy, alpha, n_runs, seed):
-    # Any correct simulation lands in this band except with probability 1e-4.
-    return binomial_band(n_runs, alpha, miss=1e-4)
+@CHECKS.function("q8", func="rejection_rate", points=2, timeout=30,
+                 hint="Simulate n_runs data sets y = A x + bias + noise with noise ~ N(0, Qyy) (Cholesky factor "
+                      "times standard normals, rng = np.random.default_rng(seed)), apply the overall model test to "
+                      "each and return the fraction rejected. Without a bias it is close to alpha; with a bias it "
+                      "estimates the power of the test.")
+def q8(A, Qyy, alpha, n_runs, seed, bias):
+    # Under a bias b, T ~ chi2(m - n, lambda) with lambda = ||Q2^T L^{-1} b||^2, the weighted squared norm
+    # of the residuals of fitting b itself; lambda = 0 gives the false-alarm rate alpha. Any correct
+    # simulation lands in the binomial band around that rejection probability except with probability 1e-4,
+    # while "return alpha" fails every biased case.
+    m, n = np.shape(A)
+    lam = lsq.fit(A, bias, Qyy).squared_norm
+    p = alpha if lam < 1e-12 else float(stats.ncx2.sf(stats.chi2.isf(alpha, m - n), m - n, lam))
+    return binomial_band(n_runs, p, miss=1e-4)
 
 
-q8.case(A_LINE, I4, 0.05, 20000, 2024, label="line fit, Qyy = I, alpha = 0.05")
+q8.case(A_LINE, I4, 0.05, 20000, 2024, np.zeros(4), label="line fit, Qyy = I, alpha = 0.05, no bias")
+q8.case(A_LINE, I4, 0.05, 20000, 2025, np.array([0.0, 0.0, 3.0, 0.0]),
+        label="line fit, Qyy = I, alpha = 0.05, bias 3 in observation 2")
 ### BEGIN HIDDEN TESTS
-q8.case(A_QUAD, _correlated(4, 0.6, 1.5), 0.01, 20000, 7, hidden=True)
-q8.case(A_SEA, np.diag([1.0, 2.0, 0.5, 1.0, 3.0]), 0.10, 20000, 11, hidden=True)
+q8.case(A_QUAD, _correlated(4, 0.6, 1.5), 0.01, 20000, 7, np.zeros(4), hidden=True)
+q8.case(A_SEA, np.diag([1.0, 2.0, 0.5, 1.0, 3.0]), 0.10, 20000, 11, np.zeros(5), hidden=True)
+q8.case(A_SEA, np.diag([1.0, 2.0, 0.5, 1.0, 3.0]), 0.05, 20000, 13, np.array([0.0, 0.0, 0.0, 3.0, 0.0]), hidden=True)
+q8.case(A6, Q6, 0.05, 20000, 17, np.array([0.0, 0.0, 4.0, 0.0, 0.0, 0.0]), hidden=True)
 ### END HIDDEN TESTS
