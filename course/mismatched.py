@@ -132,11 +132,39 @@ class ResidualMoments:
     cross_cov : (N, N, p, p) ndarray
         ``cross_cov[j, k] = C(j, k) = E (r_j - m_j)(r_k - m_k)^T``;
         ``cross_cov[j, j] = P_j`` and ``cross_cov[k, j] = C(j, k)^T``.
+
+    Raises
+    ------
+    ValueError
+        Shapes that do not agree, NaN or inf (when built by hand).
+
+    Notes
+    -----
+    Normally built by :func:`residual_moments` (Baram 1980, appendix,
+    corrected); the arrays are read-only copies.
     """
 
     mean: np.ndarray
     cov: np.ndarray
     cross_cov: np.ndarray
+
+    def __post_init__(self):
+        # Built by hand too (e.g. from stored moments): check the shapes agree;
+        # as_float_array copies, so the read-only arrays never alias the caller's.
+        mean = as_float_array(self.mean, "mean")
+        if mean.ndim != 2:
+            raise ValueError(f"mean must have shape (N, p), got {mean.shape}")
+        N, p = mean.shape
+        cov = as_float_array(self.cov, "cov")
+        if cov.shape != (N, p, p):
+            raise ValueError(f"cov must have shape (N, p, p) = {(N, p, p)} to match mean, got {cov.shape}")
+        cross = as_float_array(self.cross_cov, "cross_cov")
+        if cross.shape != (N, N, p, p):
+            raise ValueError(
+                f"cross_cov must have shape (N, N, p, p) = {(N, N, p, p)} to match mean, got {cross.shape}"
+            )
+        for name, value in (("mean", mean), ("cov", cov), ("cross_cov", cross)):
+            object.__setattr__(self, name, _readonly(value))
 
     @property
     def n_steps(self) -> int:
@@ -236,12 +264,22 @@ def residual_moments_as_printed(true_model, filter_model, N, misprint) -> Residu
     misprint : str
         A key of :data:`APPENDIX_MISPRINTS`.
 
+    Returns
+    -------
+    ResidualMoments
+        The moments the printed formula would give.
+
     Raises
     ------
     ValueError
         Unknown misprint, or ``"gain_of_tested_model"`` with models of
         different state dimensions (the printed gain is then not even
         conformable with ``F^1``).
+
+    Notes
+    -----
+    :data:`APPENDIX_MISPRINTS` lists each printed formula (Baram 1980,
+    appendix and (2.4)) next to its correction.
     """
     if misprint not in APPENDIX_MISPRINTS:
         raise ValueError(f"misprint must be one of {sorted(APPENDIX_MISPRINTS)}, got {misprint!r}")
@@ -327,6 +365,13 @@ def simulate_records(true_model, filter_model, M, N, rng) -> np.ndarray:
     -------
     ndarray, shape (M, N, p)
         ``residuals[i, t]`` is ``r_{i,t}`` of the paper (record i, time t).
+
+    Notes
+    -----
+    The records are independent runs of ``true_model`` (Baram 1980,
+    section 1: independent noise sequences across experiments), filtered
+    by :func:`course.filters.kalman_filter` with ``filter_model``; the
+    residual is that filter's innovation, (2.1).
     """
     _check_models(true_model, filter_model)
     N = _check_steps(N)
@@ -410,14 +455,30 @@ def _unit(v, p, name) -> np.ndarray:
 def principal_directions(moments: ResidualMoments, j: int, k: int | None = None):
     """Principal directions of ``P_j`` or of ``C(j, k)`` under the null pair.
 
+    Parameters
+    ----------
+    moments : ResidualMoments
+        Moments under the null pair ``(M^0, M^1)``.
+    j : int
+        Section (time index).
+    k : int, optional
+        Second section: directions of ``C(j, k)`` instead of ``P_j``.
+
     Returns
     -------
-    For ``k is None``: ``(lam, V)`` with the eigenvalues of ``P_j`` in
-    decreasing order and the eigenvectors as columns (Baram (2.13)-(2.15)).
-    Otherwise ``(s, U, W)``: the singular value decomposition
-    ``C(j, k) = U diag(s) W^T``; ``U[:, g]`` projects ``r_j`` and ``W[:, g]``
-    projects ``r_k`` (corrected (2.7): a non-symmetric ``C`` has different
-    left and right principal directions).
+    (lam, V) or (s, U, W)
+        For ``k is None``: the eigenvalues of ``P_j`` in decreasing order
+        and the eigenvectors as the *columns* of ``V``.  Otherwise the
+        singular value decomposition ``C(j, k) = U diag(s) W^T``;
+        ``U[:, g]`` projects ``r_j`` and ``W[:, g]`` projects ``r_k``.
+
+    Notes
+    -----
+    Baram (1980), (2.7) and (2.13)-(2.15), corrected: a residual is
+    projected on a principal direction by ``v_g^T r = (V^T r)_g`` (the paper
+    prints ``a^(g) V_j r``, a row of ``V_j``); and ``C(j, k)`` is not
+    symmetric, so its left and right principal directions differ and come
+    from an SVD, with ``E c^(g)(j, k) = (M - 1)/M s_g``.
     """
     N = moments.n_steps
     j = _index(j, N, "j")
@@ -430,7 +491,26 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
 
 
 def mean_statistic(residuals, j: int) -> float:
-    """``||rbar_j||^2 = rbar_j^T rbar_j`` (Baram (2.5)-(2.6), the *squared* norm)."""
+    """Mean statistic of section ``j``: the squared norm of the cross-record mean.
+
+    Parameters
+    ----------
+    residuals : (M, N, p) or (M, N) array_like
+        Residuals of ``M >= 2`` records.
+    j : int
+        Section (time index).
+
+    Returns
+    -------
+    float
+        ``||rbar_j||^2 = rbar_j^T rbar_j`` with ``rbar_j = (1/M) sum_i r_ij``.
+
+    Notes
+    -----
+    Baram (1980), (2.5)-(2.6): the paper writes ``||rbar_j|| = rbar_j^T
+    rbar_j``; the statistic is the *squared* norm, the quadratic form
+    ``phi_j^T A phi_j`` of (3.2)-(3.3) (see :func:`mean_matrix`).
+    """
     r = _as_records(residuals)
     j = _index(j, r.shape[1], "j")
     rbar = r[:, j].mean(axis=0)
@@ -440,12 +520,29 @@ def mean_statistic(residuals, j: int) -> float:
 def covariance_statistic(residuals, j: int, direction=None) -> float:
     """Sample covariance statistic of section ``j``.
 
-    Without ``direction``: ``c_j = tr Pbar_j = (1/M) sum_i |r_ij - rbar_j|^2``
-    (2.16)-(2.17).  With a unit ``direction`` v (a principal direction of
-    ``P_j``): ``c_j^(g) = (1/M) sum_i (v^T (r_ij - rbar_j))^2`` -- the average of
-    the *squared* projections ((2.13)-(2.14) corrected; averaging the
-    projections themselves gives zero identically).  Its expectation is
-    ``(M - 1)/M v^T P_j v``.
+    Parameters
+    ----------
+    residuals : (M, N, p) or (M, N) array_like
+        Residuals of ``M >= 2`` records.
+    j : int
+        Section (time index).
+    direction : (p,) array_like, optional
+        A unit vector ``v`` (normally a principal direction of the null
+        ``P_j``, see :func:`principal_directions`).
+
+    Returns
+    -------
+    float
+        ``c_j = tr Pbar_j = (1/M) sum_i |r_ij - rbar_j|^2``, or with a
+        direction ``c_j^(g) = (1/M) sum_i (v^T (r_ij - rbar_j))^2``.
+
+    Notes
+    -----
+    Baram (1980), (2.16)-(2.17) and (2.13)-(2.14) corrected: the projected
+    statistic averages the *squared* projections (averaging the projections
+    themselves gives zero identically) and projects with ``V_j^T``.  With
+    the divisor ``M`` and the sample mean removed,
+    ``E c_j = (M - 1)/M tr P_j`` and ``E c_j^(g) = (M - 1)/M v^T P_j v``.
     """
     r = _as_records(residuals)
     j = _index(j, r.shape[1], "j")
@@ -459,11 +556,30 @@ def covariance_statistic(residuals, j: int, direction=None) -> float:
 def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
     """Sample correlation statistic of sections ``j`` and ``k``.
 
-    Without ``directions``: ``c(j, k) = tr Cbar(j, k) = (1/M) sum_i (r_ij -
-    rbar_j)^T (r_ik - rbar_k)`` (2.12).  With ``directions = (u, w)`` (left
-    and right singular vectors of ``C(j, k)``): ``c^(g)(j, k) = (1/M) sum_i
-    (u^T (r_ij - rbar_j)) (w^T (r_ik - rbar_k))`` ((2.7)-(2.9) with an SVD);
-    its expectation is ``(M - 1)/M u^T C(j, k) w``.
+    Parameters
+    ----------
+    residuals : (M, N, p) or (M, N) array_like
+        Residuals of ``M >= 2`` records.
+    j, k : int
+        The two sections (time indices).
+    directions : pair of (p,) array_like, optional
+        Unit vectors ``(u, w)``, normally the left and right singular
+        vectors of the null ``C(j, k)`` (:func:`principal_directions`).
+
+    Returns
+    -------
+    float
+        ``c(j, k) = tr Cbar(j, k) = (1/M) sum_i (r_ij - rbar_j)^T (r_ik -
+        rbar_k)``, or with directions ``c^(g)(j, k) = (1/M) sum_i (u^T (r_ij
+        - rbar_j)) (w^T (r_ik - rbar_k))``.
+
+    Notes
+    -----
+    Baram (1980), (2.12), and (2.7)-(2.9) with an SVD in place of the
+    principal directions of the non-symmetric ``C(j, k)``;
+    ``E c^(g)(j, k) = (M - 1)/M u^T C(j, k) w``.  With an SVD the projected
+    statistics no longer add up to the trace as (2.11)-(2.12) state (that
+    needs one orthonormal basis on both sides).
     """
     r = _as_records(residuals)
     N, p = r.shape[1], r.shape[2]
@@ -498,19 +614,50 @@ def _check_M(M) -> int:
 
 
 def mean_matrix(M: int, p: int) -> np.ndarray:
-    """``A = (1/M^2) 1 1^T kron I_p`` with ``||rbar_j||^2 = phi_j^T A phi_j`` (3.2)-(3.3).
+    """Matrix ``A`` of the mean statistic as a quadratic form, ``||rbar_j||^2 = phi_j^T A phi_j``.
 
-    The paper writes ``I_n``; the blocks act on residuals, so they are ``I_p``.
+    Parameters
+    ----------
+    M : int
+        Number of records, ``M >= 2``.
+    p : int
+        Residual dimension.
+
+    Returns
+    -------
+    ndarray, shape (M p, M p)
+        ``A = (1/M^2) 1 1^T kron I_p``, for ``phi_j = (r_1j, ..., r_Mj)``.
+
+    Notes
+    -----
+    Baram (1980), (3.1)-(3.3).  The paper writes ``I_n``; the blocks act on
+    ``p``-dimensional residuals, so they are ``I_p``.
     """
     M = _check_M(M)
     return np.kron(np.full((M, M), 1.0 / M**2), np.eye(int(p)))
 
 
 def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
-    """``G`` with ``c_j = phi_j^T G phi_j``: ``(1/M) J kron I_p`` (3.12), (3.15),
-    or ``D (J/M) D^T`` with ``D = I_M kron v`` for a direction v (3.11), (3.13)-(3.14).
+    """Matrix ``G`` of the covariance statistic as a quadratic form, ``c_j = phi_j^T G phi_j``.
 
-    ``J = I_M - 1 1^T / M`` removes the sample mean.
+    Parameters
+    ----------
+    M : int
+        Number of records, ``M >= 2``.
+    p : int
+        Residual dimension.
+    direction : (p,) array_like, optional
+        Unit vector ``v`` of the projected statistic.
+
+    Returns
+    -------
+    ndarray, shape (M p, M p)
+        ``G = (1/M) J kron I_p``, or ``D (J/M) D^T`` with ``D = I_M kron v``.
+
+    Notes
+    -----
+    Baram (1980), (3.11)-(3.15); ``J = I_M - 1 1^T / M`` removes the sample
+    mean (3.10), and needs ``kron I_p`` for vector residuals.
     """
     M = _check_M(M)
     J = _centering(M) / M
@@ -522,12 +669,29 @@ def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
 
 
 def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
-    """``B`` with ``c(j, k) = phi(j, k)^T B phi(j, k)``, ``phi(j, k) = (phi_j, phi_k)``.
+    """Matrix ``B`` of the correlation statistic, ``c(j, k) = phi(j, k)^T B phi(j, k)``.
 
-    ``B = (1/2M) [[0, J kron I_p], [J kron I_p, 0]]`` (3.6), (3.9) (the paper's
-    ``J`` needs ``kron I_p`` for vector residuals); with directions ``(u, w)``:
-    ``D B_M D^T``, ``D = blockdiag(I_M kron u, I_M kron w)`` ((3.5), (3.7)-(3.8)
-    with the left and right singular vectors of ``C(j, k)``).
+    Parameters
+    ----------
+    M : int
+        Number of records, ``M >= 2``.
+    p : int
+        Residual dimension.
+    directions : pair of (p,) array_like, optional
+        Unit vectors ``(u, w)`` of the projected statistic.
+
+    Returns
+    -------
+    ndarray, shape (2 M p, 2 M p)
+        For ``phi(j, k) = (phi_j, phi_k)``:
+        ``B = (1/2M) [[0, J kron I_p], [J kron I_p, 0]]``, or with directions
+        ``D B_M D^T``, ``D = blockdiag(I_M kron u, I_M kron w)``.
+
+    Notes
+    -----
+    Baram (1980), (3.4)-(3.10), with ``J kron I_p`` for vector residuals
+    and, in (3.7)-(3.8), the left and right singular vectors of ``C(j, k)``
+    in place of one set of principal directions.
     """
     M = _check_M(M)
     p = int(p)
@@ -544,14 +708,54 @@ def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
 
 
 def section_moments(moments: ResidualMoments, j: int, M: int):
-    """Mean and covariance of ``phi_j = (r_1j, ..., r_Mj)`` (3.18), (3.20)."""
+    """Mean and covariance of the stacked section ``phi_j = (r_1j, ..., r_Mj)``.
+
+    Parameters
+    ----------
+    moments : ResidualMoments
+    j : int
+        Section (time index).
+    M : int
+        Number of records.
+
+    Returns
+    -------
+    mean : ndarray, shape (M p,)
+        ``1 kron m_j``.
+    cov : ndarray, shape (M p, M p)
+        ``I_M kron P_j`` (records are independent).
+
+    Notes
+    -----
+    Baram (1980), (3.18) and (3.20).
+    """
     M = _check_M(M)
     j = _index(j, moments.n_steps, "j")
     return np.tile(moments.mean[j], M), np.kron(np.eye(M), moments.cov[j])
 
 
 def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
-    """Mean and covariance of ``phi(j, k) = (phi_j, phi_k)`` (3.19), (3.21)-(3.23)."""
+    """Mean and covariance of the stacked pair of sections ``phi(j, k) = (phi_j, phi_k)``.
+
+    Parameters
+    ----------
+    moments : ResidualMoments
+    j, k : int
+        The two sections.
+    M : int
+        Number of records.
+
+    Returns
+    -------
+    mean : ndarray, shape (2 M p,)
+    cov : ndarray, shape (2 M p, 2 M p)
+        ``[[I_M kron P_j, I_M kron C(j, k)], [I_M kron C(j, k)^T, I_M kron P_k]]``.
+
+    Notes
+    -----
+    Baram (1980), (3.19) and (3.21)-(3.23), with ``C(j, k) = E (r_j -
+    m_j)(r_k - m_k)^T`` ((2.4) corrected).
+    """
     M = _check_M(M)
     N = moments.n_steps
     j, k = _index(j, N, "j"), _index(k, N, "k")
@@ -744,8 +948,9 @@ def mean_test(residuals, j, null, alpha=0.05, alternative="two-sided", power_aga
     j : int
         Section (time index).
     null : ResidualMoments
-        Moments under ``(M^0, M^1)``: the critical value is the ``1 - alpha``
-        quantile of the law of :func:`statistic_law` under them.
+        Moments under ``(M^0, M^1)``: the critical values are quantiles
+        (``ppf``/``isf`` at ``alpha/2``, or ``alpha`` one-sided) of the law of
+        :func:`statistic_law` under them.
     alpha : float
         Level.
     alternative : {"two-sided", "greater", "less"}
@@ -759,6 +964,14 @@ def mean_test(residuals, j, null, alpha=0.05, alternative="two-sided", power_aga
     Returns
     -------
     TestResult
+        ``statistic`` from :func:`mean_statistic`, ``null`` its exact law,
+        ``critical_value`` one number or a ``(lower, upper)`` pair.
+
+    Notes
+    -----
+    Baram (1980), (2.5)-(2.6) (squared norm) and (3.2)-(3.3): under the
+    null pair ``rbar_j ~ N(m_j, P_j / M)``, so the statistic is a
+    noncentral quadratic form (:class:`course.quadform.QuadraticForm`).
     """
     return _run_test("mean test", "mean", residuals, j, None, null, alpha, None, alternative,
                      power_against)
@@ -768,10 +981,27 @@ def covariance_test(residuals, j, null, alpha=0.05, gamma=None, alternative="two
                     power_against=None) -> TestResult:
     """Covariance test of section ``j`` (trace, or the gamma-th principal direction).
 
-    ``gamma`` (0-based) selects the principal direction of the null ``P_j``
-    in decreasing order of eigenvalue; ``None`` uses ``tr Pbar_j``.  Two-sided
-    by default: a wrong model can make the residuals too small as well as
-    too large.  See :func:`mean_test` for the other parameters.
+    Parameters
+    ----------
+    residuals, j, null, alpha, power_against
+        As in :func:`mean_test`.
+    gamma : int, optional
+        0-based index of the principal direction of the null ``P_j`` in
+        decreasing order of eigenvalue; ``None`` uses ``tr Pbar_j``.
+    alternative : {"two-sided", "greater", "less"}
+        Critical region; two-sided by default, since a wrong model can make
+        the residuals too small as well as too large.
+
+    Returns
+    -------
+    TestResult
+        ``statistic`` from :func:`covariance_statistic`, ``null`` its law
+        (:func:`statistic_law`), ``details["power"]`` with ``power_against``.
+
+    Notes
+    -----
+    Baram (1980), (2.13)-(2.17) corrected, with the weighted chi-square law
+    of :func:`statistic_law` (Imhof's method) for the critical region.
     """
     return _run_test("covariance test", "covariance", residuals, j, None, null, alpha, gamma,
                      alternative, power_against)
@@ -781,9 +1011,27 @@ def correlation_test(residuals, j, k, null, alpha=0.05, gamma=None, alternative=
                      power_against=None) -> TestResult:
     """Correlation test of sections ``j`` and ``k`` (trace, or a singular pair).
 
-    ``gamma`` (0-based) selects the singular-vector pair of the null
-    ``C(j, k)`` in decreasing order of singular value; ``None`` uses
-    ``tr Cbar(j, k)``.  See :func:`mean_test` for the other parameters.
+    Parameters
+    ----------
+    residuals, j, null, alpha, alternative, power_against
+        As in :func:`mean_test`.
+    k : int
+        Second section.
+    gamma : int, optional
+        0-based index of the singular-vector pair of the null ``C(j, k)`` in
+        decreasing order of singular value; ``None`` uses ``tr Cbar(j, k)``.
+
+    Returns
+    -------
+    TestResult
+        ``statistic`` from :func:`correlation_statistic`, ``null`` its law.
+
+    Notes
+    -----
+    Baram (1980), (2.7)-(2.12) with an SVD for the non-symmetric ``C(j, k)``;
+    the law has weights of both signs (the eigenvalues of
+    ``S^(1/2) [[0, I], [I, 0]] S^(1/2) / (2M)``), so Imhof's method handles
+    what a chi-square table cannot.
     """
     return _run_test("correlation test", "correlation", residuals, j, k, null, alpha, gamma,
                      alternative, power_against)
@@ -793,10 +1041,35 @@ def power(null, alternative_moments, kind, j, M, alpha=0.05, k=None, gamma=None,
           alternative="two-sided") -> float:
     """Probability that a test of level ``alpha`` rejects under ``alternative_moments``.
 
-    The critical region comes from the law under ``null`` (``(M^0, M^1)``),
-    the probability from the law under ``alternative_moments``
-    (``(M^2, M^1)``).  ``alternative`` is the critical region, two-sided
-    by default as in the test functions.
+    Parameters
+    ----------
+    null : ResidualMoments
+        Moments under ``(M^0, M^1)``: they fix the critical region.
+    alternative_moments : ResidualMoments
+        Moments under ``(M^2, M^1)``.
+    kind : {"mean", "covariance", "correlation"}
+    j : int
+        Section.
+    M : int
+        Number of records.
+    alpha : float
+        Level.
+    k : int, optional
+        Second section (correlation statistic).
+    gamma : int, optional
+        Principal direction, as in :func:`covariance_test`.
+    alternative : {"two-sided", "greater", "less"}
+        The critical region, two-sided by default as in the tests.
+
+    Returns
+    -------
+    float
+        ``P(statistic in critical region | alternative_moments)``.
+
+    Notes
+    -----
+    Baram (1980), section 3: both laws are quadratic forms in the normal
+    section vectors, evaluated exactly by Imhof's method.
     """
     if kind not in _KINDS:
         raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")

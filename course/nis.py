@@ -88,7 +88,9 @@ _HALF_LOG_2PI = 0.5 * np.log(2 * np.pi)
 # input checks
 # ---------------------------------------------------------------------------
 def _check_int(value, name: str, minimum: int, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} ({what}) must be an integer, got {value!r}")
+    if not isinstance(value, numbers.Integral):
         if isinstance(value, numbers.Real) and float(value).is_integer():
             value = int(value)
         else:
@@ -222,6 +224,11 @@ def nees(errors, P) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (..., K)
+
+    Notes
+    -----
+    ``e_k^T P_k^{-1} e_k = |B_k^{-1} e_k|^2`` with ``P_k = B_k B_k^T``
+    (Cholesky, forward substitution; no inverse is formed).
     """
     eps, L = _innovations_and_factor(errors, P, "errors", "P")
     z = _whiten(L, eps)
@@ -273,9 +280,20 @@ def nis_matrix_eigenvalues(innovations, S) -> tuple[np.ndarray, np.ndarray]:
     Works on stacks (a leading batch of Monte Carlo runs), so a detection
     study needs no Python loop over runs.
 
+    Parameters
+    ----------
+    innovations : array_like, shape (K, m) or (..., K, m)
+    S : array_like, shape (m, m) or (..., K, m, m)
+        As in :func:`nis_matrix`.
+
     Returns
     -------
     lmin, lmax : numpy.ndarray, shape (...)
+
+    Notes
+    -----
+    Under H0 they follow :func:`extreme_eigenvalue` ``(m, K, "min")`` and
+    ``(m, K, "max")``: ``K Pi ~ W_m(K, I)`` ([F], eq. 3, ``1/K`` restored).
     """
     values = np.linalg.eigvalsh(nis_matrix(innovations, S))
     return values[..., 0], values[..., -1]
@@ -859,6 +877,13 @@ def extreme_eigenvalue(m, K, which="max", method="exact"):
     ValueError
         ``m < 1``, ``K < m``, non-integers, unknown ``which`` or ``method``.
 
+    Notes
+    -----
+    The exact law is Chiani's Pfaffian ([C14], Theorem 1; [C17], Theorem 1)
+    evaluated in a standardised basis, see :class:`ExtremeEigenvalue`; the
+    approximation is Johnstone's Tracy-Widom limit ([J]) with Chiani's
+    shifted gamma for TW1, see :class:`TracyWidomApproximation`.
+
     Examples
     --------
     >>> law = extreme_eigenvalue(2, 50, "max")
@@ -885,6 +910,11 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
         Dimension and degrees of freedom, ``K >= m``.
     lower, upper : float
         ``0 <= lower < upper`` (``upper`` may be ``inf``).
+
+    Returns
+    -------
+    float
+        The probability, in ``[0, 1]``.
 
     Notes
     -----
@@ -920,10 +950,19 @@ def simulate_extreme_eigenvalues(m, K, size=None, random_state=None, chunk: int 
     Returns
     -------
     lmin, lmax : numpy.ndarray
+        Floats when ``size`` is None.
+
+    Notes
+    -----
+    Bartlett's decomposition of ``W ~ W_m(K, I)``: the squared diagonal of
+    its lower Cholesky factor is independent ``chi2(K - i)`` and the
+    entries below the diagonal are independent ``N(0, 1)``.
     """
     m, K = _check_dims(m, K)
     rng = as_generator(random_state)
-    shape = () if size is None else tuple(np.atleast_1d(size).astype(int))
+    shape = () if size is None else tuple(int(n) for n in np.atleast_1d(size))
+    if any(n < 0 for n in shape):
+        raise ValueError(f"size must contain non-negative integers, got {size!r}")
     total = int(np.prod(shape)) if shape else 1
     lmin, lmax = np.empty(total), np.empty(total)
     below = np.tril_indices(m, -1)
@@ -946,8 +985,23 @@ def simulate_extreme_eigenvalues(m, K, size=None, random_state=None, chunk: int 
 def nis_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
     """Two-sided thresholds for the NIS sum ``K * eps_bar ~ chi2(m K)``.
 
-    Returns ``(chi2_{mK}.ppf(alpha/2), chi2_{mK}.isf(alpha/2))``; divide by
-    ``K`` for thresholds on the average ``eps_bar``.
+    Parameters
+    ----------
+    m, K : int
+        Innovation dimension and number of steps.
+    alpha : float
+        Level, split equally between the two tails.
+
+    Returns
+    -------
+    (lower, upper) : tuple of float
+        ``chi2_{mK}.ppf(alpha/2)`` and ``chi2_{mK}.isf(alpha/2)``; divide by
+        ``K`` for thresholds on the average ``eps_bar``.
+
+    Notes
+    -----
+    [F], eq. (4), with the ``1/K`` of the definition restored:
+    ``K eps_bar ~ chi2(mK)``.
     """
     m, K = _check_int(m, "m", 1, "the innovation dimension"), _check_int(K, "K", 1, "the number of time steps")
     alpha = check_alpha(alpha)
@@ -965,10 +1019,25 @@ def _matrix_thresholds(m: int, K: int, alpha: float) -> tuple[float, float]:
 def nis_matrix_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
     """Thresholds of the NIS-matrix test: ``(lower for lambda_min, upper for lambda_max)``.
 
-    The level is split equally: ``P(lambda_min < lower) = alpha/2`` and
-    ``P(lambda_max > upper) = alpha/2`` under H0 (exact laws), so the
-    false-alarm rate of "reject when either is outside" is at most ``alpha``
-    (Bonferroni; both happening together is very rare).
+    Parameters
+    ----------
+    m, K : int
+        Innovation dimension and number of steps, ``K >= m``.
+    alpha : float
+        Level, split equally between the two eigenvalues.
+
+    Returns
+    -------
+    (lower, upper) : tuple of float
+        ``P(lambda_min < lower) = alpha/2`` and ``P(lambda_max > upper) =
+        alpha/2`` under H0.
+
+    Notes
+    -----
+    Quantiles (``ppf``/``isf``) of the exact laws of :func:`extreme_eigenvalue`
+    ([C14]).  The false-alarm rate of "reject when either is outside" is at
+    most ``alpha`` (Bonferroni; both together are rare); its exact value is
+    ``1 - prob_eigenvalues_within(m, K, lower, upper)`` ([C17]).
     """
     m, K = _check_dims(m, K)
     alpha = check_alpha(alpha)
@@ -1108,11 +1177,25 @@ def consistency_interval(dof, count, alpha=0.05) -> tuple[float, float]:
     Monte Carlo runs (``count = N``) both satisfy
     ``count * average ~ chi2(dof * count)``.
 
+    Parameters
+    ----------
+    dof : int
+        Degrees of freedom of each value (``m`` for the NIS, ``n`` for the NEES).
+    count : int
+        Number of values averaged (``K`` steps or ``N`` runs).
+    alpha : float
+        Level, split equally between the two tails.
+
     Returns
     -------
     (lower, upper) : tuple of float
         ``chi2_{dof*count}.ppf(alpha/2) / count`` and
         ``chi2_{dof*count}.isf(alpha/2) / count``.
+
+    Notes
+    -----
+    [BS], Sec. 5.4.2: a sum of ``count`` independent ``chi2(dof)`` values is
+    ``chi2(dof * count)``.
     """
     dof = _check_int(dof, "dof", 1, "degrees of freedom of each value")
     count = _check_int(count, "count", 1, "the number of values averaged")

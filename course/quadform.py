@@ -539,7 +539,23 @@ def imhof_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, 
              method="contour", full_output=False):
     """``P(Q > c)``, computed directly (not as ``1 - cdf``) in the upper tail.
 
-    Same parameters as :func:`imhof_cdf`.
+    Parameters
+    ----------
+    c, weights, dof, noncentrality, sigma, atol, rtol, method, full_output
+        As in :func:`imhof_cdf`.
+
+    Returns
+    -------
+    p : float or ndarray
+        ``P(Q > c)``.
+    error : float or ndarray
+        Only with ``full_output``: estimated absolute error.
+
+    Notes
+    -----
+    Imhof (1961), section 3, on the deformed contour of :func:`imhof_cdf`;
+    whichever tail is smaller at ``c`` is the one integrated, so small
+    upper-tail probabilities keep their relative accuracy.
     """
     sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
     sf = sf[()] if sf.ndim == 0 else sf
@@ -551,7 +567,16 @@ def imhof_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, 
 def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     """Imhof's real-axis integrand and the deformed-contour integrand at ``u``.
 
-    For teaching figures.  ``c`` must be positive and some weight positive.
+    For teaching figures.
+
+    Parameters
+    ----------
+    c : float
+        The point, ``c > 0``.
+    weights, dof, noncentrality
+        As in :func:`imhof_cdf`; at least one weight positive.
+    u : array_like, optional
+        Abscissae (``linspace(0, 10, 401)`` by default).
 
     Returns
     -------
@@ -564,6 +589,12 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
         ``-P(Q <= c)`` when ``tail == "lower"``.
     tail : str
         Which tail the contour computes (the smaller one).
+
+    Notes
+    -----
+    The real-axis integrand is Imhof's (1961), eq. (3.2); the contour one is
+    ``Im[M(s) e^{-sc} s'(u) / s]`` on the saddle-point hyperbola of
+    :func:`imhof_cdf`.
     """
     w, h, d, _ = _terms(weights, dof, noncentrality)
     c = float(c)
@@ -677,6 +708,16 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     :func:`imhof_sf`.  Forms with negative skewness are approximated through
     ``-Q``.
 
+    Parameters
+    ----------
+    c, weights, dof, noncentrality, sigma
+        As in :func:`imhof_cdf`.
+
+    Returns
+    -------
+    float or ndarray
+        Approximate ``P(Q > c)``.
+
     Notes
     -----
     Liu, H., Tang, Y. and Zhang, H. H. (2009), "A new chi-square
@@ -692,7 +733,23 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
 
 
 def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
-    """Fast approximation of ``P(Q <= c)``; see :func:`liu_tang_zhang_sf`."""
+    """Fast approximation of ``P(Q <= c)`` (Liu, Tang & Zhang 2009).
+
+    Parameters
+    ----------
+    c, weights, dof, noncentrality, sigma
+        As in :func:`imhof_cdf`.
+
+    Returns
+    -------
+    float or ndarray
+        Approximate ``P(Q <= c)``.
+
+    Notes
+    -----
+    ``1 - `` :func:`liu_tang_zhang_sf`, computed from the complementary
+    noncentral chi-square function; Liu, Tang & Zhang (2009), (3)-(8).
+    """
     w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
     c = as_float_array(c, "c")
     _, cdf = _ltz(np.ravel(c), w, h, d, sigma, 0.0)

@@ -265,6 +265,25 @@ def test_projected_statistics_need_squares_and_an_svd():
     # ... while one set of directions on both sides does not reach s_g
     same = np.array([correlation_statistic(x, j, k, (U[:, 0], U[:, 0])) for x in r])
     assert abs(same.mean() - (M - 1) / M * s[0]) > 10 * same.std() / np.sqrt(reps)
+    # (2.13) as printed projects with V_j, i.e. on the ROWS of V_j: for a
+    # non-symmetric V_j (here a rotation) that is not a principal direction
+    assert np.max(np.abs(V - V.T)) > 0.5
+    rows = np.array([covariance_statistic(x, j, V[0]) for x in r])
+    assert abs(rows.mean() - (M - 1) / M * lam[0]) > 10 * rows.std() / np.sqrt(reps)
+    assert abs(rows.mean() - (M - 1) / M * V[0] @ moments.cov[j] @ V[0]) < 4.5 * rows.std() / np.sqrt(reps)
+
+
+def test_mean_statistic_is_the_squared_norm():
+    # (2.6) calls ||rbar_j|| a norm but means rbar_j^T rbar_j: only the
+    # square has the quadratic-form law of statistic_law
+    m0, m1 = two_state_system(), reduced_filter()
+    N, M, reps, j = 6, 10, 3_000, 4
+    moments = residual_moments(m0, m1, N)
+    r = simulate_records(m0, m1, M * reps, N, np.random.default_rng(41)).reshape(reps, M, N, 1)
+    squared = np.array([mean_statistic(x, j) for x in r])
+    law = statistic_law(moments, "mean", j, M)
+    assert stats.kstest(squared, law.cdf).pvalue > 1e-4
+    assert stats.kstest(np.sqrt(squared), law.cdf).pvalue < 1e-12
 
 
 # ---------------------------------------------------------------------------
@@ -372,3 +391,9 @@ def test_errors_for_bad_input():
     with pytest.raises(TypeError, match="ResidualMoments"):
         mean_test(r, 1, null=np.zeros(3))
     assert isinstance(null, ResidualMoments)
+    with pytest.raises(ValueError, match=r"cov must have shape \(N, p, p\)"):
+        ResidualMoments(null.mean, null.cov[:3], null.cross_cov)
+    with pytest.raises(ValueError, match=r"cross_cov must have shape"):
+        ResidualMoments(null.mean, null.cov, null.cross_cov[0])
+    with pytest.raises(ValueError, match=r"mean must have shape \(N, p\)"):
+        ResidualMoments(null.mean.ravel(), null.cov, null.cross_cov)

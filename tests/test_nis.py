@@ -482,6 +482,7 @@ def test_consistency_interval_is_chi_square_over_count():
         ((0, 5), "m .* at least 1"),
         ((3, 2), "K = 2 < m = 3"),
         ((2.5, 5), "m .* integer"),
+        ((True, 5), "m .* integer"),
         ((2, 5, "median"), 'which must be "max" or "min"'),
     ],
 )
@@ -504,6 +505,8 @@ def test_value_errors_of_the_law_methods():
         nis.extreme_eigenvalue(2, 5, method="saddlepoint")
     with pytest.raises(ValueError, match="lower < upper"):
         nis.prob_eigenvalues_within(2, 5, 1.0, 0.5)
+    with pytest.raises(ValueError, match="size must contain non-negative"):
+        law.rvs(size=-3, random_state=np.random.default_rng(0))
 
 
 def test_statistic_inputs_are_checked():
