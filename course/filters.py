@@ -231,6 +231,79 @@ def _noise(rng, sqrt_cov: np.ndarray, mean: np.ndarray, shape: tuple) -> np.ndar
     return mean + z @ sqrt_cov.T
 
 
+def _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean):
+    """Checked ``Q``, ``G`` (identity by default), ``x0_cov``, ``w_mean``, ``v_mean`` of a model
+    with ``n`` states and ``p`` outputs (defaults: ``x0_cov = I``, zero means)."""
+    Q = as_matrix(Q, "Q")
+    q = Q.shape[0]
+    if G is None:
+        if Q.shape != (n, n):
+            raise ValueError(
+                f"Q has shape {Q.shape} but without G it must be n x n = ({n}, {n}); "
+                "pass G (n x q) to say how a q-dimensional noise enters the state"
+            )
+        G = np.eye(n)
+    else:
+        G = as_matrix(G, "G", shape=(n, None))
+        if G.shape[1] != q:
+            raise ValueError(
+                f"G has {G.shape[1]} columns but Q is {Q.shape[0]} x {Q.shape[1]}; "
+                "G must be n x q where Q is q x q"
+            )
+    Q = as_covariance(Q, "Q", q, allow_singular=True)
+    x0_cov = np.eye(n) if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
+    w_mean = np.zeros(q) if w_mean is None else as_vector(w_mean, "w_mean", q)
+    v_mean = np.zeros(p) if v_mean is None else as_vector(v_mean, "v_mean", p)
+    return Q, G, x0_cov, w_mean, v_mean
+
+
+def _model_inputs(model, u, N: int):
+    """``u`` checked against a Linear/NonlinearModel: None or ``(*batch, N, m)``."""
+    if model.n_inputs == 0:
+        if u is not None:
+            raise ValueError(f"this model has no input ({model._no_input}) but u was passed")
+        return None
+    if u is None:
+        raise ValueError(f"this model has {model.n_inputs} input(s): pass u of shape (N, m)")
+    return _as_signal(u, "u", model.n_inputs, N)
+
+
+def _model_records(model, y, u):
+    """Measurements and inputs checked against ``model``, and their common batch shape.
+
+    ``y`` is broadcast to that batch shape; ``u`` is returned as given.
+    """
+    y = _as_signal(y, "y", model.n_outputs)
+    N = y.shape[-2]
+    batch = y.shape[:-2]
+    u = _model_inputs(model, u, N)
+    if u is not None:
+        batch = np.broadcast_shapes(batch, u.shape[:-2])
+        y = np.broadcast_to(y, batch + y.shape[-2:])
+    return y, u, N, batch
+
+
+def _simulation_draws(model, N, rng, batch, u):
+    """Inputs and random draws of a Linear/NonlinearModel's ``simulate``.
+
+    Returns ``N``, the batch shape, the inputs (time-major, broadcast to the
+    batch; None without inputs), the first states ``(*batch, n)`` and the
+    process noise as it enters the state ``G w_t`` and measurement noise,
+    time-major ``(N, *batch, d)`` (contiguous per step).
+    """
+    N = _check_steps(N)
+    rng = as_generator(rng)
+    shape = _batch_shape(batch)
+    u = _model_inputs(model, u, N)
+    if u is not None:
+        shape = np.broadcast_shapes(shape, u.shape[:-2])
+        u = _time_major(np.broadcast_to(u, shape + u.shape[-2:]))
+    x0 = _noise(rng, psd_sqrt(model.x0_cov), model.x0_mean, shape)
+    Gw = _noise(rng, psd_sqrt(model.Q), model.w_mean, (N,) + shape) @ model.G.T
+    v = _noise(rng, psd_sqrt(model.R), model.v_mean, (N,) + shape)
+    return N, shape, u, x0, Gw, v
+
+
 # ---------------------------------------------------------------------------
 # the linear model
 # ---------------------------------------------------------------------------
@@ -296,6 +369,8 @@ class LinearModel:
     so that every innovation covariance ``S = H P H^T + R`` is.
     """
 
+    _no_input = "B was not given"  # completes "this model has no input (...)"
+
     def __init__(self, F, H, Q, R, G=None, x0_mean=None, x0_cov=None, w_mean=None,
                  v_mean=None, B=None):
         F = as_matrix(F, "F")
@@ -306,28 +381,10 @@ class LinearModel:
         p = H.shape[0]
         if p < 1:
             raise ValueError("H must have at least one row (one output)")
-        Q = as_matrix(Q, "Q")
+        Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
         q = Q.shape[0]
-        if G is None:
-            if Q.shape != (n, n):
-                raise ValueError(
-                    f"Q has shape {Q.shape} but without G it must be n x n = ({n}, {n}); "
-                    "pass G (n x q) to say how a q-dimensional noise enters the state"
-                )
-            G = np.eye(n)
-        else:
-            G = as_matrix(G, "G", shape=(n, None))
-            if G.shape[1] != q:
-                raise ValueError(
-                    f"G has {G.shape[1]} columns but Q is {Q.shape[0]} x {Q.shape[1]}; "
-                    "G must be n x q where Q is q x q"
-                )
-        Q = as_covariance(Q, "Q", q, allow_singular=True)
         R = as_covariance(R, "R", p)
         x0_mean = np.zeros(n) if x0_mean is None else as_vector(x0_mean, "x0_mean", n)
-        x0_cov = np.eye(n) if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
-        w_mean = np.zeros(q) if w_mean is None else as_vector(w_mean, "w_mean", q)
-        v_mean = np.zeros(p) if v_mean is None else as_vector(v_mean, "v_mean", p)
         B = np.zeros((n, 0)) if B is None else as_matrix(B, "B", shape=(n, None))
 
         self.F, self.H, self.Q, self.R, self.G, self.B = (
@@ -343,15 +400,6 @@ class LinearModel:
             f"LinearModel(n_states={self.n_states}, n_outputs={self.n_outputs}, "
             f"n_noise={self.n_noise}, n_inputs={self.n_inputs})"
         )
-
-    def _inputs(self, u, N: int):
-        if self.n_inputs == 0:
-            if u is not None:
-                raise ValueError("this model has no input (B was not given) but u was passed")
-            return None
-        if u is None:
-            raise ValueError(f"this model has {self.n_inputs} input(s): pass u of shape (N, m)")
-        return _as_signal(u, "u", self.n_inputs, N)
 
     def simulate(self, N, rng, batch=None, u=None):
         """Draw state and output sequences from the model.
@@ -375,19 +423,9 @@ class LinearModel:
         outputs : numpy.ndarray
             ``(*batch, N, p)``.
         """
-        N = _check_steps(N)
-        rng = as_generator(rng)
-        shape = _batch_shape(batch)
-        u = self._inputs(u, N)
+        N, shape, u, x, drive, v = _simulation_draws(self, N, rng, batch, u)
         if u is not None:
-            shape = np.broadcast_shapes(shape, u.shape[:-2])
-        # time-major draws (N, *batch, d): contiguous per step
-        x = _noise(rng, psd_sqrt(self.x0_cov), self.x0_mean, shape)
-        w = _noise(rng, psd_sqrt(self.Q), self.w_mean, (N,) + shape)
-        v = _noise(rng, psd_sqrt(self.R), self.v_mean, (N,) + shape)
-        drive = w @ self.G.T
-        if u is not None:
-            drive = drive + _time_major(np.broadcast_to(u, shape + u.shape[-2:])) @ self.B.T
+            drive = drive + u @ self.B.T
         states = np.empty((N,) + shape + (self.n_states,))
         for t in range(N):
             states[t] = x
@@ -799,13 +837,7 @@ def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
     every run of the batch, so a batch costs little more than one run.
     """
     _check_model(model)
-    y = _as_signal(y, "y", model.n_outputs)
-    N = y.shape[-2]
-    batch = y.shape[:-2]
-    u = model._inputs(u, N)
-    if u is not None:
-        batch = np.broadcast_shapes(batch, u.shape[:-2])
-        y = np.broadcast_to(y, batch + y.shape[-2:])
+    y, u, N, batch = _model_records(model, y, u)
     x, P = _prior(model, x0_mean, x0_cov)
     x = np.broadcast_to(x, batch + x.shape)
     n, p = model.n_states, model.n_outputs
@@ -934,6 +966,8 @@ class NonlinearModel:
     (:func:`numerical_jacobian`).
     """
 
+    _no_input = "n_inputs = 0"
+
     def __init__(self, g, h, Q, R, x0_mean, x0_cov=None, G=None, jac_g=None, jac_h=None,
                  w_mean=None, v_mean=None, n_inputs=0):
         for name, fun in (("g", g), ("h", h), ("jac_g", jac_g), ("jac_h", jac_h)):
@@ -944,20 +978,8 @@ class NonlinearModel:
         R = as_matrix(R, "R")
         p = R.shape[0]
         R = as_covariance(R, "R", p)
-        Q = as_matrix(Q, "Q")
+        Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
         q = Q.shape[0]
-        if G is None:
-            if Q.shape != (n, n):
-                raise ValueError(
-                    f"Q has shape {Q.shape} but without G it must be n x n = ({n}, {n})"
-                )
-            G = np.eye(n)
-        else:
-            G = as_matrix(G, "G", shape=(n, q))
-        Q = as_covariance(Q, "Q", q, allow_singular=True)
-        x0_cov = np.eye(n) if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
-        w_mean = np.zeros(q) if w_mean is None else as_vector(w_mean, "w_mean", q)
-        v_mean = np.zeros(p) if v_mean is None else as_vector(v_mean, "v_mean", p)
         if isinstance(n_inputs, bool) or not isinstance(n_inputs, (int, np.integer)) or n_inputs < 0:
             raise ValueError(f"n_inputs must be a non-negative integer, got {n_inputs!r}")
 
@@ -1043,28 +1065,10 @@ class NonlinearModel:
             return np.asarray(self.jac_h(x), dtype=float)
         return numerical_jacobian(self.h, x)
 
-    def _inputs(self, u, N: int):
-        if self.n_inputs == 0:
-            if u is not None:
-                raise ValueError("this model has no input (n_inputs = 0) but u was passed")
-            return None
-        if u is None:
-            raise ValueError(f"this model has {self.n_inputs} input(s): pass u of shape (N, m)")
-        return _as_signal(u, "u", self.n_inputs, N)
-
     def simulate(self, N, rng, batch=None, u=None):
         """Draw state and output sequences; see :meth:`LinearModel.simulate`."""
-        N = _check_steps(N)
-        rng = as_generator(rng)
-        shape = _batch_shape(batch)
-        u = self._inputs(u, N)
-        if u is not None:
-            # g always sees u with the same batch shape as x
-            shape = np.broadcast_shapes(shape, u.shape[:-2])
-            u = _time_major(np.broadcast_to(u, shape + u.shape[-2:]))
-        x = _noise(rng, psd_sqrt(self.x0_cov), self.x0_mean, shape)
-        w = _noise(rng, psd_sqrt(self.Q), self.w_mean, (N,) + shape) @ self.G.T
-        v = _noise(rng, psd_sqrt(self.R), self.v_mean, (N,) + shape)
+        # g always sees u with the same batch shape as x
+        N, shape, u, x, w, v = _simulation_draws(self, N, rng, batch, u)
         states = np.empty((N,) + shape + (self.n_states,))
         for t in range(N):
             states[t] = x
@@ -1179,17 +1183,11 @@ def extended_kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None,
         model = NonlinearModel.from_linear(model)
     if not isinstance(model, NonlinearModel):
         raise TypeError(f"model must be a NonlinearModel, got {type(model).__name__}")
-    y = _as_signal(y, "y", model.n_outputs)
-    N = y.shape[-2]
-    batch = y.shape[:-2]
-    u = model._inputs(u, N)
+    y, u, N, batch = _model_records(model, y, u)
     if u is not None:
-        batch = np.broadcast_shapes(batch, u.shape[:-2])
-        y = np.broadcast_to(y, batch + y.shape[-2:])
         u = np.broadcast_to(u, batch + u.shape[-2:])
     n, p = model.n_states, model.n_outputs
-    x0 = model.x0_mean if x0_mean is None else as_vector(x0_mean, "x0_mean", n)
-    P = model.x0_cov if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
+    x0, P = _prior(model, x0_mean, x0_cov)
     x = np.broadcast_to(x0, batch + (n,))
     P = np.broadcast_to(P, batch + (n, n))
     # time-major work arrays: each step then reads and writes contiguous blocks

@@ -529,10 +529,7 @@ def imhof_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL,
     accuracy.  See the module docstring for the error control.
     """
     sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
-    cdf = cdf[()] if cdf.ndim == 0 else cdf
-    if full_output:
-        return cdf, (err[()] if err.ndim == 0 else err)
-    return cdf
+    return (_squeeze(cdf), _squeeze(err)) if full_output else _squeeze(cdf)
 
 
 def imhof_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, rtol=RTOL,
@@ -558,10 +555,7 @@ def imhof_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, 
     upper-tail probabilities keep their relative accuracy.
     """
     sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
-    sf = sf[()] if sf.ndim == 0 else sf
-    if full_output:
-        return sf, (err[()] if err.ndim == 0 else err)
-    return sf
+    return (_squeeze(sf), _squeeze(err)) if full_output else _squeeze(sf)
 
 
 def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
@@ -698,6 +692,13 @@ def _ltz(x, w, h, d, sigma, offset):
     return np.asarray(sf, dtype=float), np.asarray(cdf, dtype=float)
 
 
+def _ltz_at(x, name, w, h, d, sigma, offset):
+    """:func:`_ltz` at the points ``x`` (array_like), each result shaped like ``x``."""
+    x = as_float_array(x, name)
+    sf, cdf = _ltz(np.ravel(x), w, h, d, sigma, offset)
+    return _squeeze(sf.reshape(x.shape)), _squeeze(cdf.reshape(x.shape))
+
+
 def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     """Fast approximation of ``P(Q > c)`` (Liu, Tang & Zhang 2009).
 
@@ -726,10 +727,8 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     Analysis 53, 853-856, equations (3)-(8).
     """
     w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
-    c = as_float_array(c, "c")
-    sf, _ = _ltz(np.ravel(c), w, h, d, sigma, 0.0)
-    sf = sf.reshape(c.shape)
-    return sf[()] if sf.ndim == 0 else sf
+    sf, _ = _ltz_at(c, "c", w, h, d, sigma, 0.0)
+    return sf
 
 
 def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
@@ -751,10 +750,8 @@ def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     noncentral chi-square function; Liu, Tang & Zhang (2009), (3)-(8).
     """
     w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
-    c = as_float_array(c, "c")
-    _, cdf = _ltz(np.ravel(c), w, h, d, sigma, 0.0)
-    cdf = cdf.reshape(c.shape)
-    return cdf[()] if cdf.ndim == 0 else cdf
+    _, cdf = _ltz_at(c, "c", w, h, d, sigma, 0.0)
+    return cdf
 
 
 # ---------------------------------------------------------------------------
@@ -863,17 +860,13 @@ class WeightedChiSquare(FrozenDistribution):
 
     def approx_sf(self, x):
         """``P(Q > x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
-        x = as_float_array(x, "x")
-        sf, _ = _ltz(np.ravel(x), self.weights, self.dof, self.noncentrality, self.sigma, self.offset)
-        sf = sf.reshape(x.shape)
-        return sf[()] if sf.ndim == 0 else sf
+        sf, _ = _ltz_at(x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset)
+        return sf
 
     def approx_cdf(self, x):
         """``P(Q <= x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
-        x = as_float_array(x, "x")
-        _, cdf = _ltz(np.ravel(x), self.weights, self.dof, self.noncentrality, self.sigma, self.offset)
-        cdf = cdf.reshape(x.shape)
-        return cdf[()] if cdf.ndim == 0 else cdf
+        _, cdf = _ltz_at(x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset)
+        return cdf
 
     def _rvs(self, size, rng):
         shape = () if size is None else ((int(size),) if np.isscalar(size) else tuple(size))
@@ -883,7 +876,7 @@ class WeightedChiSquare(FrozenDistribution):
             out = out + w * draw
         if self.sigma:
             out = out + self.sigma * rng.standard_normal(shape)
-        return out[()] if out.ndim == 0 else out
+        return _squeeze(out)
 
     def _root(self, func, target, increasing):
         # bracket from the approximate quantile outward in steps of the std
@@ -1058,6 +1051,11 @@ def _warn_unconverged(conv, err):
             f"(largest error estimate {float(np.max(err[~conv])):.2g})",
             RuntimeWarning, stacklevel=4,
         )
+
+
+def _squeeze(a):
+    """A 0-d result as a scalar, others unchanged."""
+    return a[()] if a.ndim == 0 else a
 
 
 def _readonly(a):

@@ -31,6 +31,7 @@ from builtins import (  # bound now, so a student patching builtins cannot break
 )
 
 from course.exercises import codec
+from course.exercises.tripwire import wrap_forbidden
 
 _dumps = json.dumps
 _loads = json.loads
@@ -290,29 +291,14 @@ def make_audit_hook(tmpdir: str, deny_read=()):
 def install_tripwires(forbid: dict, user_ns: dict) -> None:
     """Wrap each forbidden function once, for the whole run: a call made from notebook code
     while a question that forbids it is running is recorded against that question."""
-    import importlib
 
-    names = sorted({name for names in forbid.values() for name in names})
-    for dotted in names:
-        module_name, _, attr = dotted.rpartition(".")
-        try:
-            module = importlib.import_module(module_name)
-            original = getattr(module, attr)
-        except (ImportError, AttributeError):
-            continue
+    def record(name):
+        q = _STATE.question
+        if q is not None and name in _STATE.forbid.get(q, ()):
+            _STATE.hits.setdefault(q, set()).add(name)
 
-        def wrapper(*args, __original=original, __name=dotted, **kwargs):
-            q = _STATE.question
-            if q is not None and __name in _STATE.forbid.get(q, ()):
-                caller = sys._getframe(1).f_globals
-                # calls from inside the library (e.g. data_snooping -> w_tests) are allowed
-                if caller is user_ns or not str(caller.get("__name__", "")).startswith("course."):
-                    _STATE.hits.setdefault(q, set()).add(__name)
-            return __original(*args, **kwargs)
-
-        wrapper.__name__ = getattr(original, "__name__", attr)
-        wrapper.__doc__ = getattr(original, "__doc__", None)
-        setattr(module, attr, wrapper)
+    for dotted in sorted({name for names in forbid.values() for name in names}):
+        wrap_forbidden(dotted, record, user_ns)
 
 
 def make_shell():

@@ -13,7 +13,6 @@ student's process); see :mod:`course.exercises.runner`.
 from __future__ import annotations
 
 import contextlib
-import importlib
 import json
 import os
 import sys
@@ -22,6 +21,7 @@ from typing import Any
 
 from course.exercises.codec import decode, encode
 from course.exercises.compare import check_signature, compare, describe
+from course.exercises.tripwire import wrap_forbidden
 
 __all__ = ["Assignment", "PLACEHOLDER_ID"]
 
@@ -277,21 +277,9 @@ def _tripwires(forbid, hits: set):
     restore = []
     try:
         for dotted in forbid:
-            module_name, _, attr = dotted.rpartition(".")
-            try:
-                module = importlib.import_module(module_name)
-                original = getattr(module, attr)
-            except (ImportError, AttributeError):
-                continue
-
-            def wrapper(*args, __original=original, __name=dotted, **kwargs):
-                caller = sys._getframe(1).f_globals.get("__name__", "")
-                if not caller.startswith("course."):
-                    hits.add(__name)
-                return __original(*args, **kwargs)
-
-            setattr(module, attr, wrapper)
-            restore.append((module, attr, original))
+            wrapped = wrap_forbidden(dotted, hits.add)
+            if wrapped is not None:
+                restore.append(wrapped)
         yield
     finally:
         for module, attr, original in reversed(restore):

@@ -22,6 +22,8 @@ Matplotlib is imported lazily inside the functions, so importing
 
 from __future__ import annotations
 
+import numpy as np
+
 __all__ = ["axes_or_new"]
 
 
@@ -33,3 +35,11 @@ def axes_or_new(ax=None, **subplot_kw):
 
     _, ax = plt.subplots(subplot_kw=subplot_kw or None)
     return ax
+
+
+def _mark_alarms(ax, t, statistic, threshold, marker, **style):
+    """Mark the samples of ``statistic`` (an ndarray) above ``threshold``; NaN never alarms."""
+    with np.errstate(invalid="ignore"):
+        alarm = statistic > threshold
+    if np.any(alarm):
+        ax.plot(np.asarray(t)[alarm], statistic[alarm], marker, label="alarm", **style)

@@ -11,7 +11,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy import stats
 
-from . import axes_or_new
+from . import _mark_alarms, axes_or_new
 
 __all__ = [
     "plot_residual_geometry",
@@ -355,9 +355,7 @@ def plot_windowed_statistic(t, statistic, threshold: float, ax=None, label: str 
     statistic = np.asarray(statistic, dtype=float)
     ax.plot(t, statistic, color="C0", label=label)
     ax.axhline(threshold, color="C3", ls="--", label=f"threshold {threshold:.4g}")
-    alarm = statistic > threshold
-    if alarm.any():
-        ax.plot(np.asarray(t)[alarm], statistic[alarm], ".", color="C3", label="alarm")
+    _mark_alarms(ax, t, statistic, threshold, ".", color="C3")
     ax.set_xlabel("t")
     ax.set_ylabel("test quantity")
     ax.legend(fontsize="small")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import axes_or_new
+from . import _mark_alarms, axes_or_new
 
 __all__ = [
     "plot_signals",
@@ -158,10 +158,7 @@ def plot_test_statistic(t, statistic, threshold, ax=None, label="test quantity",
     statistic = np.asarray(statistic, float)
     ax.plot(t, statistic, color=color, lw=1, label=label)
     ax.axhline(threshold, color="k", ls="--", lw=1, label="threshold")
-    with np.errstate(invalid="ignore"):
-        alarm = statistic > threshold
-    if np.any(alarm):
-        ax.plot(np.asarray(t)[alarm], statistic[alarm], "x", color="C3", ms=4, label="alarm")
+    _mark_alarms(ax, t, statistic, threshold, "x", color="C3", ms=4)
     _mark_fault(ax, fault_time)
     if log:
         ax.set_yscale("log")
