@@ -40,14 +40,17 @@ def _jupyter_command(app: str):
 def _open(args) -> int:
     target = Path(args.path).resolve() if args.path else _default_notebooks()
     if not target.exists():
-        print(f"course open: {target} does not exist; run it from a clone of the course "
-              "(or pass the folder of the notebooks)", file=sys.stderr)
+        print(
+            f"course open: {target} does not exist; run it from a clone of the course "
+            "(or pass the folder of the notebooks)",
+            file=sys.stderr,
+        )
         return 2
     command = _jupyter_command(args.app)
     if command is None:
         print(
             f"course open: Jupyter {'Lab' if args.app == 'lab' else 'Notebook'} is not installed for "
-            f"{sys.executable}; install the course with `python -m pip install -e \".[all]\"`",
+            f'{sys.executable}; install the course with `python -m pip install -e ".[all]"`',
             file=sys.stderr,
         )
         return 2
@@ -62,19 +65,28 @@ def _open(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="course", description=__doc__.split("\n\n")[0].replace("``", ""),
+        prog="course",
+        description=__doc__.split("\n\n")[0].replace("``", ""),
         epilog="examples: course open | course release 01_least_squares | "
-               "course grade 01_least_squares submissions/ --out grading-output/")
+        "course grade 01_least_squares submissions/ --out grading-output/",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
     p_open = sub.add_parser(
-        "open", help="open the course notebooks in Jupyter",
+        "open",
+        help="open the course notebooks in Jupyter",
         description="Start JupyterLab (or the classic Notebook) on the course's notebooks/ folder; "
-                    "begin with 01_least_squares_validation.ipynb. Stop it with Ctrl-C. Options that "
-                    "course does not know (e.g. --port=8890) are passed on to Jupyter.")
-    p_open.add_argument("path", nargs="?",
-                        help="folder or notebook to open (default: notebooks/ of the course clone)")
-    p_open.add_argument("--app", default="lab", choices=["lab", "notebook"], help="Jupyter front end")
+        "begin with 01_least_squares_validation.ipynb. Stop it with Ctrl-C. Options that "
+        "course does not know (e.g. --port=8890) are passed on to Jupyter.",
+    )
+    p_open.add_argument(
+        "path",
+        nargs="?",
+        help="folder or notebook to open (default: notebooks/ of the course clone)",
+    )
+    p_open.add_argument(
+        "--app", default="lab", choices=["lab", "notebook"], help="Jupyter front end"
+    )
     p_open.add_argument("--no-browser", action="store_true", help="do not launch a browser")
     p_open.set_defaults(func=_open)
 

@@ -55,8 +55,9 @@ from __future__ import annotations
 
 import html
 import itertools
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from scipy import linalg as sla
@@ -78,40 +79,40 @@ from .results import TestResult, format_number
 
 __all__ = [
     "DecisionStructure",
+    "FaultRanking",
     "Hypotheses",
+    "IsolationResult",
+    "MLResult",
+    "NonlinearFit",
+    "ParameterEstimate",
+    "RegressionFit",
+    "bayes_ranking",
     "diagnoses",
     "diagnosis_matrix",
-    "multiple_fault_diagnoses",
-    "linear_decision_structure",
-    "RegressionFit",
-    "least_squares_residual",
-    "prediction_error",
-    "prediction_error_test",
-    "NonlinearFit",
-    "nonlinear_prediction_error",
-    "residual_threshold",
-    "fault_noncentrality",
-    "prediction_error_power",
-    "ParameterEstimate",
     "estimate_parameters",
-    "parameter_estimate_test",
-    "regression_parameter_test",
-    "parameter_estimate_power",
-    "normal_log_likelihood",
-    "normal_likelihood",
-    "MLResult",
-    "maximum_likelihood",
-    "likelihood_test",
+    "fault_noncentrality",
     "glr_test",
-    "linear_glr_test",
-    "neyman_pearson_test",
-    "mode_log_likelihoods",
-    "FaultRanking",
-    "bayes_ranking",
-    "simulate_linear_regression",
-    "linear_test_statistics",
-    "IsolationResult",
     "isolation_monte_carlo",
+    "least_squares_residual",
+    "likelihood_test",
+    "linear_decision_structure",
+    "linear_glr_test",
+    "linear_test_statistics",
+    "maximum_likelihood",
+    "mode_log_likelihoods",
+    "multiple_fault_diagnoses",
+    "neyman_pearson_test",
+    "nonlinear_prediction_error",
+    "normal_likelihood",
+    "normal_log_likelihood",
+    "parameter_estimate_power",
+    "parameter_estimate_test",
+    "prediction_error",
+    "prediction_error_power",
+    "prediction_error_test",
+    "regression_parameter_test",
+    "residual_threshold",
+    "simulate_linear_regression",
 ]
 
 _ZERO_MARKS = {"0", "o", "O", "-", ""}
@@ -196,8 +197,9 @@ class DecisionStructure:
     ('F1',)
     """
 
-    def __init__(self, sensitivity, tests: Sequence[str] | None = None,
-                 modes: Sequence[str] | None = None):
+    def __init__(
+        self, sensitivity, tests: Sequence[str] | None = None, modes: Sequence[str] | None = None
+    ):
         matrix = _parse_sensitivity(sensitivity)
         n_tests, n_modes = matrix.shape
         if tests is None:
@@ -214,7 +216,7 @@ class DecisionStructure:
         self._modes = modes
 
     @classmethod
-    def from_text(cls, text: str) -> "DecisionStructure":
+    def from_text(cls, text: str) -> DecisionStructure:
         """Parse a table: a header line of mode names, then one line per test.
 
         Each test line is the test name followed by one ``0`` or ``X`` per
@@ -293,8 +295,11 @@ class DecisionStructure:
     def __eq__(self, other) -> bool:
         if not isinstance(other, DecisionStructure):
             return NotImplemented
-        return (self._tests == other._tests and self._modes == other._modes
-                and np.array_equal(self._sensitivity, other._sensitivity))
+        return (
+            self._tests == other._tests
+            and self._modes == other._modes
+            and np.array_equal(self._sensitivity, other._sensitivity)
+        )
 
     def __hash__(self):
         return hash((self._tests, self._modes, self._sensitivity.tobytes()))
@@ -320,9 +325,7 @@ class DecisionStructure:
         head = "".join(f"<th style='text-align:center'>{html.escape(m)}</th>" for m in self._modes)
         body = []
         for name, row in zip(self._tests, self._sensitivity):
-            cells = "".join(
-                f"<td style='text-align:center'>{'X' if s else '0'}</td>" for s in row
-            )
+            cells = "".join(f"<td style='text-align:center'>{'X' if s else '0'}</td>" for s in row)
             body.append(f"<tr><th style='text-align:left'>{html.escape(name)}</th>{cells}</tr>")
         return (
             "<table><caption>decision structure</caption>"
@@ -361,9 +364,9 @@ def _mark(entry, k, j) -> bool:
             return True
         if entry.strip() in _ZERO_MARKS:
             return False
-    elif isinstance(entry, (bool, np.bool_)):
-        return bool(entry)
-    elif isinstance(entry, (int, float, np.integer, np.floating)) and entry in (0, 1):
+    elif isinstance(entry, (bool, np.bool_)) or (
+        isinstance(entry, (int, float, np.integer, np.floating)) and entry in (0, 1)
+    ):
         return bool(entry)
     raise ValueError(
         f"entry ({k}, {j}) of the decision structure is {entry!r}; use 0 (not sensitive) "
@@ -469,13 +472,17 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
     members can.  See :func:`multiple_fault_diagnoses`.
     """
     if not isinstance(structure, DecisionStructure):
-        raise ValueError("structure must be a DecisionStructure (build one with DecisionStructure(...))")
+        raise ValueError(
+            "structure must be a DecisionStructure (build one with DecisionStructure(...))"
+        )
     alarm = _alarm_vector(structure, alarms)
     consistent = diagnosis_matrix(structure, alarm[None, :], exoneration=exoneration)[0]
     return tuple(m for m, ok in zip(structure.modes, consistent) if ok)
 
 
-def diagnosis_matrix(structure: DecisionStructure, alarms, *, exoneration: bool = False) -> np.ndarray:
+def diagnosis_matrix(
+    structure: DecisionStructure, alarms, *, exoneration: bool = False
+) -> np.ndarray:
     """Single-fault diagnoses of many alarm patterns at once.
 
     Parameters
@@ -514,8 +521,13 @@ def diagnosis_matrix(structure: DecisionStructure, alarms, *, exoneration: bool 
     return ~ruled_out
 
 
-def multiple_fault_diagnoses(structure: DecisionStructure, alarms, *, no_fault: str | None = "NF",
-                             max_size: int | None = None) -> list:
+def multiple_fault_diagnoses(
+    structure: DecisionStructure,
+    alarms,
+    *,
+    no_fault: str | None = "NF",
+    max_size: int | None = None,
+) -> list:
     """Minimal multiple-fault diagnoses: the minimal hitting sets of the conflicts.
 
     Parameters
@@ -550,7 +562,7 @@ def multiple_fault_diagnoses(structure: DecisionStructure, alarms, *, no_fault: 
         return []
     limit = len(faults) if max_size is None else int(max_size)
     found: list[frozenset] = []
-    for size in range(0, limit + 1):
+    for size in range(limit + 1):
         for candidate in itertools.combinations(faults, size):
             cand = frozenset(candidate)
             if any(f <= cand for f in found):
@@ -560,8 +572,9 @@ def multiple_fault_diagnoses(structure: DecisionStructure, alarms, *, no_fault: 
     return [tuple(structure.modes[j] for j in sorted(f)) for f in found]
 
 
-def linear_decision_structure(U, modes: Mapping[str, Sequence[int]], tests: Mapping[str, Sequence[int]],
-                              rtol: float = 1e-9) -> DecisionStructure:
+def linear_decision_structure(
+    U, modes: Mapping[str, Sequence[int]], tests: Mapping[str, Sequence[int]], rtol: float = 1e-9
+) -> DecisionStructure:
     """The decision structure that prediction-error tests really have for given signals.
 
     Parameters
@@ -738,8 +751,14 @@ def least_squares_residual(y, Phi, rcond: float | None = None) -> RegressionFit:
 def _fit_result(theta, residual, rank, N, p) -> RegressionFit:
     stat = np.sum(residual**2, axis=0)
     stat = float(stat) if residual.ndim == 1 else stat
-    return RegressionFit(theta=theta, residual=residual, statistic=stat, rank=int(rank),
-                         dof=int(N - rank), n_parameters=int(p))
+    return RegressionFit(
+        theta=theta,
+        residual=residual,
+        statistic=stat,
+        rank=int(rank),
+        dof=int(N - rank),
+        n_parameters=int(p),
+    )
 
 
 def _indices(free, p: int, what: str = "free") -> list:
@@ -772,7 +791,9 @@ def _split(U, nominal, free):
     return U[:, free], U[:, fixed] @ nominal[fixed]
 
 
-def prediction_error(y, U, nominal, free: Sequence[int] = (), rcond: float | None = None) -> RegressionFit:
+def prediction_error(
+    y, U, nominal, free: Sequence[int] = (), rcond: float | None = None
+) -> RegressionFit:
     """Prediction-error test quantity ``T = min over theta in Theta_0 of ||y - U theta||^2``.
 
     Parameters
@@ -822,8 +843,14 @@ def prediction_error(y, U, nominal, free: Sequence[int] = (), rcond: float | Non
     fit = least_squares_residual(target, Phi, rcond=rcond)
     theta = np.repeat(nominal[:, None], Y.shape[1], axis=1) if Y.ndim == 2 else nominal.copy()
     theta[free] = fit.theta
-    return RegressionFit(theta=theta, residual=fit.residual, statistic=fit.statistic,
-                         rank=fit.rank, dof=fit.dof, n_parameters=len(free))
+    return RegressionFit(
+        theta=theta,
+        residual=fit.residual,
+        statistic=fit.statistic,
+        rank=fit.rank,
+        dof=fit.dof,
+        n_parameters=len(free),
+    )
 
 
 def _count(value, name: str) -> int:
@@ -836,9 +863,13 @@ def _check_sigma(sigma) -> float:
     try:
         value = float(sigma)
     except (TypeError, ValueError):
-        raise ValueError(f"sigma must be a positive number (the noise standard deviation), got {sigma!r}") from None
+        raise ValueError(
+            f"sigma must be a positive number (the noise standard deviation), got {sigma!r}"
+        ) from None
     if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"sigma must be a positive, finite noise standard deviation, got {sigma!r}")
+        raise ValueError(
+            f"sigma must be a positive, finite noise standard deviation, got {sigma!r}"
+        )
     return value
 
 
@@ -879,8 +910,13 @@ def residual_threshold(alpha: float, dof: int, sigma: float = 1.0) -> float:
 
 
 def _check_dof(dof) -> int:
-    if isinstance(dof, bool) or not isinstance(dof, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(dof) or int(dof) != dof or dof < 1:
+    if (
+        isinstance(dof, bool)
+        or not isinstance(dof, (int, float, np.integer, np.floating))
+        or not np.isfinite(dof)
+        or int(dof) != dof
+        or dof < 1
+    ):
         raise ValueError(
             f"dof must be a positive integer, got {dof!r}; with no residual degrees of freedom "
             "the model under H0 fits any data exactly and the test is void"
@@ -895,9 +931,17 @@ def _void_test_message(dof_what: str) -> str:
     )
 
 
-def prediction_error_test(y, U, nominal, free: Sequence[int] = (), *, sigma: float,
-                          alpha: float = 0.05, name: str = "prediction-error test",
-                          rcond: float | None = None) -> TestResult:
+def prediction_error_test(
+    y,
+    U,
+    nominal,
+    free: Sequence[int] = (),
+    *,
+    sigma: float,
+    alpha: float = 0.05,
+    name: str = "prediction-error test",
+    rcond: float | None = None,
+) -> TestResult:
     """Chi-square test of the prediction error ``T = min over Theta_0 ||y - U theta||^2``.
 
     Parameters
@@ -940,9 +984,15 @@ def prediction_error_test(y, U, nominal, free: Sequence[int] = (), *, sigma: flo
     crit = sigma**2 * stats.chi2.isf(alpha, fit.dof)
     stat = fit.statistic
     return TestResult(
-        name=name, statistic=stat, alpha=alpha, critical_value=crit,
-        pvalue=stats.chi2.sf(stat / sigma**2, fit.dof), reject=stat > crit, null=null,
-        dof=fit.dof, alternative="greater",
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=stats.chi2.sf(stat / sigma**2, fit.dof),
+        reject=stat > crit,
+        null=null,
+        dof=fit.dof,
+        alternative="greater",
         details={"T/sigma^2": stat / sigma**2, "rank": fit.rank},
     )
 
@@ -979,7 +1029,9 @@ def fault_noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1
     free = _indices(free, U.shape[1])
     theta = as_float_array(theta, "theta")
     if theta.ndim not in (1, 2) or theta.shape[0] != U.shape[1]:
-        raise ValueError(f"theta must have shape ({U.shape[1]},) or ({U.shape[1]}, K), got {theta.shape}")
+        raise ValueError(
+            f"theta must have shape ({U.shape[1]},) or ({U.shape[1]}, K), got {theta.shape}"
+        )
     shift = U @ (theta - (nominal[:, None] if theta.ndim == 2 else nominal))
     basis = _range_basis(U[:, free])
     leftover = shift - basis @ (basis.T @ shift)
@@ -987,8 +1039,9 @@ def fault_noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1
     return float(lam) if theta.ndim == 1 else lam
 
 
-def prediction_error_power(U, nominal, free: Sequence[int], theta, *, sigma: float,
-                           alpha: float = 0.05) -> Any:
+def prediction_error_power(
+    U, nominal, free: Sequence[int], theta, *, sigma: float, alpha: float = 0.05
+) -> Any:
     """Probability that the prediction-error test alarms when the truth is ``theta``.
 
     Parameters
@@ -1064,8 +1117,16 @@ class NonlinearFit:
         )
 
 
-def nonlinear_prediction_error(y, predict: Callable, nominal, free: Sequence[int] = (), *,
-                               theta_init=None, bounds=None, **options) -> NonlinearFit:
+def nonlinear_prediction_error(
+    y,
+    predict: Callable,
+    nominal,
+    free: Sequence[int] = (),
+    *,
+    theta_init=None,
+    bounds=None,
+    **options,
+) -> NonlinearFit:
     """``T = min over theta in Theta_0 of sum_t ||y(t) - yhat(t|theta)||^2`` for any model.
 
     Parameters
@@ -1116,8 +1177,14 @@ def nonlinear_prediction_error(y, predict: Callable, nominal, free: Sequence[int
 
     if not free:
         r = residual(np.zeros(0))
-        return NonlinearFit(theta=nominal.copy(), residual=r, statistic=float(r @ r),
-                            success=True, message="no free parameters", jacobian=np.zeros((r.size, 0)))
+        return NonlinearFit(
+            theta=nominal.copy(),
+            residual=r,
+            statistic=float(r @ r),
+            success=True,
+            message="no free parameters",
+            jacobian=np.zeros((r.size, 0)),
+        )
     start = nominal[free] if theta_init is None else as_vector(theta_init, "theta_init", len(free))
     kwargs = dict(options)
     if bounds is not None:
@@ -1127,8 +1194,14 @@ def nonlinear_prediction_error(y, predict: Callable, nominal, free: Sequence[int
     kwargs.setdefault("gtol", 1e-12)
     sol = optimize.least_squares(residual, start, **kwargs)
     r = residual(sol.x)
-    return NonlinearFit(theta=full(sol.x), residual=r, statistic=float(r @ r),
-                        success=bool(sol.success), message=str(sol.message), jacobian=-sol.jac)
+    return NonlinearFit(
+        theta=full(sol.x),
+        residual=r,
+        statistic=float(r @ r),
+        success=bool(sol.success),
+        message=str(sol.message),
+        jacobian=-sol.jac,
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -1166,7 +1239,9 @@ class ParameterEstimate:
         return f"ParameterEstimate(indices={self.indices}, records={self.theta.shape[1]})"
 
 
-def estimate_parameters(y, U, nominal, estimate: Sequence[int], *, sigma: float) -> ParameterEstimate:
+def estimate_parameters(
+    y, U, nominal, estimate: Sequence[int], *, sigma: float
+) -> ParameterEstimate:
     """Estimate the parameters ``estimate`` by least squares, the rest at nominal.
 
     Parameters
@@ -1215,8 +1290,9 @@ def estimate_parameters(y, U, nominal, estimate: Sequence[int], *, sigma: float)
     return ParameterEstimate(theta=theta, indices=tuple(est), covariance=cov)
 
 
-def parameter_estimate_test(estimate, covariance, nominal, alpha: float = 0.05,
-                            name: str = "parameter-estimate test") -> TestResult:
+def parameter_estimate_test(
+    estimate, covariance, nominal, alpha: float = 0.05, name: str = "parameter-estimate test"
+) -> TestResult:
     """Test ``H0: theta = nominal`` from an estimate and its covariance.
 
     Parameters
@@ -1251,7 +1327,9 @@ def parameter_estimate_test(estimate, covariance, nominal, alpha: float = 0.05,
     alpha = check_alpha(alpha)
     est = np.atleast_1d(as_float_array(estimate, "estimate"))
     if est.ndim != 1:
-        raise ValueError(f"estimate must be a number or a 1-D vector, got shape {np.shape(estimate)}")
+        raise ValueError(
+            f"estimate must be a number or a 1-D vector, got shape {np.shape(estimate)}"
+        )
     k = est.size
     nom = np.atleast_1d(as_float_array(nominal, "nominal"))
     if nom.shape != (k,):
@@ -1264,19 +1342,43 @@ def parameter_estimate_test(estimate, covariance, nominal, alpha: float = 0.05,
         null = stats.halfnorm(scale=std)
         stat = abs(float(diff[0]))
         crit = std * stats.norm.isf(alpha / 2)
-        return TestResult(name=name, statistic=stat, alpha=alpha, critical_value=crit,
-                          pvalue=stats.halfnorm.sf(stat / std), reject=stat > crit, null=null,
-                          alternative="greater",
-                          details={"estimate": float(est[0]), "std": std, "z": stat / std})
+        return TestResult(
+            name=name,
+            statistic=stat,
+            alpha=alpha,
+            critical_value=crit,
+            pvalue=stats.halfnorm.sf(stat / std),
+            reject=stat > crit,
+            null=null,
+            alternative="greater",
+            details={"estimate": float(est[0]), "std": std, "z": stat / std},
+        )
     wald = float(diff @ solve_spd(cov, diff, "covariance"))
     crit = stats.chi2.isf(alpha, k)
-    return TestResult(name=name, statistic=wald, alpha=alpha, critical_value=crit,
-                      pvalue=stats.chi2.sf(wald, k), reject=wald > crit, null=stats.chi2(k),
-                      dof=k, alternative="greater")
+    return TestResult(
+        name=name,
+        statistic=wald,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=stats.chi2.sf(wald, k),
+        reject=wald > crit,
+        null=stats.chi2(k),
+        dof=k,
+        alternative="greater",
+    )
 
 
-def regression_parameter_test(y, U, nominal, estimate: Sequence[int], test, *, sigma: float,
-                              alpha: float = 0.05, name: str | None = None) -> TestResult:
+def regression_parameter_test(
+    y,
+    U,
+    nominal,
+    estimate: Sequence[int],
+    test,
+    *,
+    sigma: float,
+    alpha: float = 0.05,
+    name: str | None = None,
+) -> TestResult:
     """Estimate parameters ``estimate`` and test ``theta_test = nominal_test``.
 
     Parameters
@@ -1313,12 +1415,14 @@ def regression_parameter_test(y, U, nominal, estimate: Sequence[int], test, *, s
     pos = [est.index(j) for j in tested]
     if name is None:
         name = "parameter-estimate test of theta_" + ",".join(str(j + 1) for j in tested)
-    return parameter_estimate_test(fit.theta[tested], fit.covariance[np.ix_(pos, pos)],
-                                   nominal[tested], alpha=alpha, name=name)
+    return parameter_estimate_test(
+        fit.theta[tested], fit.covariance[np.ix_(pos, pos)], nominal[tested], alpha=alpha, name=name
+    )
 
 
-def parameter_estimate_power(U, nominal, estimate: Sequence[int], test, theta, *, sigma: float,
-                             alpha: float = 0.05) -> Any:
+def parameter_estimate_power(
+    U, nominal, estimate: Sequence[int], test, theta, *, sigma: float, alpha: float = 0.05
+) -> Any:
     """Alarm probability of :func:`regression_parameter_test` when the truth is ``theta``.
 
     Parameters
@@ -1368,7 +1472,9 @@ def parameter_estimate_power(U, nominal, estimate: Sequence[int], test, theta, *
         L = cholesky_lower(cov, "covariance")
         lam = np.sum(sla.solve_triangular(L, shift, lower=True) ** 2, axis=0)
         k = len(tested)
-        power = np.where(lam > 0, stats.ncx2.sf(stats.chi2.isf(alpha, k), k, np.maximum(lam, 1e-300)), alpha)
+        power = np.where(
+            lam > 0, stats.ncx2.sf(stats.chi2.isf(alpha, k), k, np.maximum(lam, 1e-300)), alpha
+        )
     power = np.asarray(power)
     return float(power) if power.ndim == 0 else power
 
@@ -1402,7 +1508,11 @@ def normal_log_likelihood(theta, z, sigma: float = 1.0) -> Any:
     sigma = _check_sigma(sigma)
     z = np.atleast_1d(as_float_array(z, "z")).ravel()
     theta = as_float_array(theta, "theta")
-    sq = np.sum((z[..., :] - theta[..., None]) ** 2, axis=-1) if theta.ndim else np.sum((z - theta) ** 2)
+    sq = (
+        np.sum((z[..., :] - theta[..., None]) ** 2, axis=-1)
+        if theta.ndim
+        else np.sum((z - theta) ** 2)
+    )
     value = -0.5 * z.size * np.log(2 * np.pi * sigma**2) - sq / (2 * sigma**2)
     return float(value) if np.ndim(value) == 0 else value
 
@@ -1461,8 +1571,15 @@ class MLResult:
         )
 
 
-def maximum_likelihood(log_likelihood: Callable, nominal, free: Sequence[int] | None = None, *,
-                       theta_init=None, bounds=None, method: str | None = None) -> MLResult:
+def maximum_likelihood(
+    log_likelihood: Callable,
+    nominal,
+    free: Sequence[int] | None = None,
+    *,
+    theta_init=None,
+    bounds=None,
+    method: str | None = None,
+) -> MLResult:
     """Maximise ``log L(theta | z)`` over ``Theta_0`` numerically.
 
     Parameters
@@ -1503,22 +1620,37 @@ def maximum_likelihood(log_likelihood: Callable, nominal, free: Sequence[int] | 
 
     if not free:
         value = float(log_likelihood(nominal.copy()))
-        return MLResult(theta=nominal.copy(), log_likelihood=value, success=True, message="no free parameters")
+        return MLResult(
+            theta=nominal.copy(), log_likelihood=value, success=True, message="no free parameters"
+        )
     start = nominal[free] if theta_init is None else as_vector(theta_init, "theta_init", len(free))
 
     def objective(theta_free):
         value = float(log_likelihood(full(theta_free)))
         return np.inf if np.isnan(value) else -value
 
-    sol = optimize.minimize(objective, start, method=method, bounds=bounds,
-                            options={"gtol": 1e-10} if method in (None, "BFGS") and bounds is None else None)
+    sol = optimize.minimize(
+        objective,
+        start,
+        method=method,
+        bounds=bounds,
+        options={"gtol": 1e-10} if method in (None, "BFGS") and bounds is None else None,
+    )
     # BFGS often reports a precision loss at an optimum it cannot improve;
     # a polish by Nelder-Mead from there makes the answer trustworthy.
     if not sol.success and bounds is None:
-        sol = optimize.minimize(objective, sol.x, method="Nelder-Mead",
-                                options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 20000})
-    return MLResult(theta=full(sol.x), log_likelihood=float(-sol.fun), success=bool(sol.success),
-                    message=str(sol.message))
+        sol = optimize.minimize(
+            objective,
+            sol.x,
+            method="Nelder-Mead",
+            options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 20000},
+        )
+    return MLResult(
+        theta=full(sol.x),
+        log_likelihood=float(-sol.fun),
+        success=bool(sol.success),
+        message=str(sol.message),
+    )
 
 
 class LogLikelihoodLaw(FrozenDistribution):
@@ -1564,8 +1696,16 @@ class LogLikelihoodLaw(FrozenDistribution):
         return f"c - chi2({self.dof})/2 with c = {format_number(self.c)}"
 
 
-def likelihood_test(y, U, nominal, free: Sequence[int] = (), *, sigma: float, alpha: float = 0.05,
-                    name: str = "maximum-likelihood test") -> TestResult:
+def likelihood_test(
+    y,
+    U,
+    nominal,
+    free: Sequence[int] = (),
+    *,
+    sigma: float,
+    alpha: float = 0.05,
+    name: str = "maximum-likelihood test",
+) -> TestResult:
     """The lecture's likelihood test quantity ``T = max over Theta_0 of L``, reject when small.
 
     Parameters
@@ -1604,14 +1744,31 @@ def likelihood_test(y, U, nominal, free: Sequence[int] = (), *, sigma: float, al
     stat = c - fit.statistic / (2 * sigma**2)
     null = LogLikelihoodLaw(fit.dof, c)
     crit = float(null.ppf(alpha))
-    return TestResult(name=name, statistic=stat, alpha=alpha, critical_value=crit,
-                      pvalue=float(null.cdf(stat)), reject=stat < crit, null=null, dof=fit.dof,
-                      alternative="less", details={"prediction error T": fit.statistic})
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=float(null.cdf(stat)),
+        reject=stat < crit,
+        null=null,
+        dof=fit.dof,
+        alternative="less",
+        details={"prediction error T": fit.statistic},
+    )
 
 
-def glr_test(log_likelihood: Callable, nominal, free0: Sequence[int] = (), free1: Sequence[int] | None = None,
-             *, alpha: float = 0.05, theta_init=None, bounds=None,
-             name: str = "generalised likelihood ratio test") -> TestResult:
+def glr_test(
+    log_likelihood: Callable,
+    nominal,
+    free0: Sequence[int] = (),
+    free1: Sequence[int] | None = None,
+    *,
+    alpha: float = 0.05,
+    theta_init=None,
+    bounds=None,
+    name: str = "generalised likelihood ratio test",
+) -> TestResult:
     """Generalised likelihood ratio test, calibrated by Wilks' theorem.
 
     Parameters
@@ -1656,30 +1813,55 @@ def glr_test(log_likelihood: Callable, nominal, free0: Sequence[int] = (), free1
     free0 = _indices(free0, p, "free0")
     free1 = list(range(p)) if free1 is None else _indices(free1, p, "free1")
     if not set(free0) < set(free1):
-        raise ValueError(f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)")
+        raise ValueError(
+            f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)"
+        )
     start = nominal if theta_init is None else as_vector(theta_init, "theta_init", p)
     base = nominal.copy()
     # Under H1 the parameters outside free1 keep their nominal values.
-    fit1 = maximum_likelihood(log_likelihood, np.where(np.isin(np.arange(p), free1), start, base), free1,
-                              bounds=None if bounds is None else [bounds[j] for j in free1])
+    fit1 = maximum_likelihood(
+        log_likelihood,
+        np.where(np.isin(np.arange(p), free1), start, base),
+        free1,
+        bounds=None if bounds is None else [bounds[j] for j in free1],
+    )
     init0 = np.where(np.isin(np.arange(p), free0), start, base)
-    fit0 = maximum_likelihood(log_likelihood, init0, free0,
-                              bounds=None if bounds is None else [bounds[j] for j in free0])
+    fit0 = maximum_likelihood(
+        log_likelihood, init0, free0, bounds=None if bounds is None else [bounds[j] for j in free0]
+    )
     stat = max(2.0 * (fit1.log_likelihood - fit0.log_likelihood), 0.0)
     dof = len(free1) - len(free0)
     crit = stats.chi2.isf(alpha, dof)
-    return TestResult(name=name, statistic=stat, alpha=alpha, critical_value=crit,
-                      pvalue=stats.chi2.sf(stat, dof), reject=stat > crit, null=stats.chi2(dof),
-                      dof=dof, alternative="greater",
-                      details={"max log L under H0": fit0.log_likelihood,
-                               "max log L under H1": fit1.log_likelihood,
-                               "calibration": "Wilks (asymptotic)",
-                               "converged": fit0.success and fit1.success})
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=stats.chi2.sf(stat, dof),
+        reject=stat > crit,
+        null=stats.chi2(dof),
+        dof=dof,
+        alternative="greater",
+        details={
+            "max log L under H0": fit0.log_likelihood,
+            "max log L under H1": fit1.log_likelihood,
+            "calibration": "Wilks (asymptotic)",
+            "converged": fit0.success and fit1.success,
+        },
+    )
 
 
-def linear_glr_test(y, U, nominal, free0: Sequence[int] = (), free1: Sequence[int] | None = None, *,
-                    sigma: float, alpha: float = 0.05,
-                    name: str = "generalised likelihood ratio test (linear)") -> TestResult:
+def linear_glr_test(
+    y,
+    U,
+    nominal,
+    free0: Sequence[int] = (),
+    free1: Sequence[int] | None = None,
+    *,
+    sigma: float,
+    alpha: float = 0.05,
+    name: str = "generalised likelihood ratio test (linear)",
+) -> TestResult:
     """Exact GLR test of nested parameter sets in ``y = U theta + v``, known ``sigma``.
 
     Parameters
@@ -1714,7 +1896,9 @@ def linear_glr_test(y, U, nominal, free0: Sequence[int] = (), free1: Sequence[in
     free0 = _indices(free0, p, "free0")
     free1 = list(range(p)) if free1 is None else _indices(free1, p, "free1")
     if not set(free0) < set(free1):
-        raise ValueError(f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)")
+        raise ValueError(
+            f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)"
+        )
     y = as_vector(y, "y", U.shape[0])
     fit0 = prediction_error(y, U, nominal, free0)
     fit1 = prediction_error(y, U, nominal, free1)
@@ -1726,14 +1910,30 @@ def linear_glr_test(y, U, nominal, free0: Sequence[int] = (), free1: Sequence[in
         )
     stat = max(fit0.statistic - fit1.statistic, 0.0) / sigma**2
     crit = stats.chi2.isf(alpha, dof)
-    return TestResult(name=name, statistic=stat, alpha=alpha, critical_value=crit,
-                      pvalue=stats.chi2.sf(stat, dof), reject=stat > crit, null=stats.chi2(dof),
-                      dof=dof, alternative="greater",
-                      details={"T0": fit0.statistic, "T1": fit1.statistic})
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=stats.chi2.sf(stat, dof),
+        reject=stat > crit,
+        null=stats.chi2(dof),
+        dof=dof,
+        alternative="greater",
+        details={"T0": fit0.statistic, "T1": fit1.statistic},
+    )
 
 
-def neyman_pearson_test(z, theta0, theta1, *, sigma: float = 1.0, regressors=None, alpha: float = 0.05,
-                        name: str = "Neyman-Pearson test") -> TestResult:
+def neyman_pearson_test(
+    z,
+    theta0,
+    theta1,
+    *,
+    sigma: float = 1.0,
+    regressors=None,
+    alpha: float = 0.05,
+    name: str = "Neyman-Pearson test",
+) -> TestResult:
     """Most powerful test of two simple hypotheses on a Gaussian mean.
 
     Parameters
@@ -1771,26 +1971,49 @@ def neyman_pearson_test(z, theta0, theta1, *, sigma: float = 1.0, regressors=Non
     if z.ndim != 1:
         raise ValueError(f"z must be a 1-D vector of observations, got shape {z.shape}")
     N = z.size
-    A = np.ones((N, 1)) if regressors is None else as_matrix(regressors, "regressors", shape=(N, None))
+    A = (
+        np.ones((N, 1))
+        if regressors is None
+        else as_matrix(regressors, "regressors", shape=(N, None))
+    )
     t0 = np.atleast_1d(as_float_array(theta0, "theta0"))
     t1 = np.atleast_1d(as_float_array(theta1, "theta1"))
     if t0.shape != (A.shape[1],) or t1.shape != (A.shape[1],):
-        raise ValueError(f"theta0 and theta1 must have {A.shape[1]} element(s), got {t0.shape} and {t1.shape}")
+        raise ValueError(
+            f"theta0 and theta1 must have {A.shape[1]} element(s), got {t0.shape} and {t1.shape}"
+        )
     m0, m1 = A @ t0, A @ t1
     d = float(np.linalg.norm(m1 - m0) / sigma)
     if d == 0:
-        raise ValueError("theta0 and theta1 give the same distribution of z: the hypotheses cannot be told apart")
+        raise ValueError(
+            "theta0 and theta1 give the same distribution of z: the hypotheses cannot be told apart"
+        )
     stat = float((np.sum((z - m0) ** 2) - np.sum((z - m1) ** 2)) / (2 * sigma**2))
     null = stats.norm(loc=-(d**2) / 2, scale=d)
     crit = float(null.isf(alpha))
     power = float(stats.norm.sf(crit, loc=d**2 / 2, scale=d))
-    return TestResult(name=name, statistic=stat, alpha=alpha, critical_value=crit,
-                      pvalue=float(null.sf(stat)), reject=stat > crit, null=null,
-                      alternative="greater", details={"power": power, "separation d": d})
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=float(null.sf(stat)),
+        reject=stat > crit,
+        null=null,
+        alternative="greater",
+        details={"power": power, "separation d": d},
+    )
 
 
-def mode_log_likelihoods(y, U, nominal, modes: Mapping[str, Sequence[int]], *, sigma: float,
-                         prior_std: float | None = None) -> dict:
+def mode_log_likelihoods(
+    y,
+    U,
+    nominal,
+    modes: Mapping[str, Sequence[int]],
+    *,
+    sigma: float,
+    prior_std: float | None = None,
+) -> dict:
     """``log P(y | F)`` for every fault mode of ``y = U theta + v``.
 
     Parameters
@@ -1839,7 +2062,9 @@ def mode_log_likelihoods(y, U, nominal, modes: Mapping[str, Sequence[int]], *, s
             cov = sigma**2 * np.eye(N) + tau**2 * (Uf @ Uf.T)
             L = cholesky_lower(cov, "marginal covariance")
             w = sla.solve_triangular(L, y - U @ nominal, lower=True)
-            out[str(mode)] = float(-0.5 * N * np.log(2 * np.pi) - np.sum(np.log(np.diag(L))) - 0.5 * w @ w)
+            out[str(mode)] = float(
+                -0.5 * N * np.log(2 * np.pi) - np.sum(np.log(np.diag(L))) - 0.5 * w @ w
+            )
     return out
 
 
@@ -1869,7 +2094,9 @@ class FaultRanking:
         width = max(len(m) for m in self.modes)
         lines = [f"{'mode'.ljust(width)}  {'prior':>8}  {'posterior':>10}"]
         for m, pr, po in zip(self.modes, self.prior, self.posterior):
-            lines.append(f"{m.ljust(width)}  {format_number(pr, digits):>8}  {format_number(po, digits):>10}")
+            lines.append(
+                f"{m.ljust(width)}  {format_number(pr, digits):>8}  {format_number(po, digits):>10}"
+            )
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -1887,7 +2114,9 @@ class FaultRanking:
         )
 
 
-def bayes_ranking(log_likelihoods: Mapping[str, float], priors: Mapping[str, float]) -> FaultRanking:
+def bayes_ranking(
+    log_likelihoods: Mapping[str, float], priors: Mapping[str, float]
+) -> FaultRanking:
     """Rank fault modes by ``P(F | z)`` from ``log P(z | F)`` and priors ``P(F)``.
 
     Parameters
@@ -1921,7 +2150,9 @@ def bayes_ranking(log_likelihoods: Mapping[str, float], priors: Mapping[str, flo
     if np.any(~np.isfinite(prior)) or np.any(prior <= 0):
         raise ValueError("priors must be positive probabilities")
     if abs(prior.sum() - 1.0) > 1e-9:
-        raise ValueError(f"priors must sum to 1, they sum to {prior.sum():.6g}; normalise them first")
+        raise ValueError(
+            f"priors must sum to 1, they sum to {prior.sum():.6g}; normalise them first"
+        )
     if np.all(logl == -np.inf):
         raise ValueError(
             "every mode has likelihood 0 (log-likelihood -inf): the data are impossible under all "
@@ -2030,7 +2261,13 @@ class IsolationResult:
         modes = self.structure.modes
         width = max(max(len(m) for m in self.simulated), len("true"))
         col = max(max(len(m) for m in modes), digits + 3)
-        head = "true".ljust(width) + "  " + "  ".join(m.rjust(col) for m in modes) + "  " + "exact".rjust(col)
+        head = (
+            "true".ljust(width)
+            + "  "
+            + "  ".join(m.rjust(col) for m in modes)
+            + "  "
+            + "exact".rjust(col)
+        )
         lines = [head]
         for i, mode in enumerate(self.simulated):
             cells = [f"{v:.{digits}f}".rjust(col) for v in self.membership[i]]
@@ -2054,9 +2291,17 @@ class IsolationResult:
         )
 
 
-def isolation_monte_carlo(structure: DecisionStructure, simulate: Callable, statistics: Callable,
-                          thresholds, *, n_records: int, rng, modes: Sequence[str] | None = None,
-                          exoneration: bool = False) -> IsolationResult:
+def isolation_monte_carlo(
+    structure: DecisionStructure,
+    simulate: Callable,
+    statistics: Callable,
+    thresholds,
+    *,
+    n_records: int,
+    rng,
+    modes: Sequence[str] | None = None,
+    exoneration: bool = False,
+) -> IsolationResult:
     """Simulate every fault mode, run the tests, diagnose, and tabulate.
 
     Parameters
@@ -2096,7 +2341,11 @@ def isolation_monte_carlo(structure: DecisionStructure, simulate: Callable, stat
     rng = as_generator(rng)
     n_tests = len(structure.tests)
     thresholds = as_vector(thresholds, "thresholds", n_tests)
-    modes = structure.modes if modes is None else tuple(structure.modes[structure.mode_index(m)] for m in modes)
+    modes = (
+        structure.modes
+        if modes is None
+        else tuple(structure.modes[structure.mode_index(m)] for m in modes)
+    )
     n_records = _count(n_records, "n_records")
     alarm_rate = np.empty((len(modes), n_tests))
     membership = np.empty((len(modes), len(structure.modes)))
@@ -2104,7 +2353,9 @@ def isolation_monte_carlo(structure: DecisionStructure, simulate: Callable, stat
     for i, mode in enumerate(modes):
         stat = np.asarray(statistics(simulate(mode, n_records, rng)), dtype=float)
         if stat.shape != (n_records, n_tests):
-            raise ValueError(f"statistics returned shape {stat.shape}, expected ({n_records}, {n_tests})")
+            raise ValueError(
+                f"statistics returned shape {stat.shape}, expected ({n_records}, {n_tests})"
+            )
         alarms = stat > thresholds
         D = diagnosis_matrix(structure, alarms, exoneration=exoneration)
         alarm_rate[i] = alarms.mean(axis=0)
@@ -2112,5 +2363,11 @@ def isolation_monte_carlo(structure: DecisionStructure, simulate: Callable, stat
         j = structure.mode_index(mode)
         only = D[:, j] & (D.sum(axis=1) == 1)
         exact[i] = only.mean()
-    return IsolationResult(structure=structure, simulated=tuple(modes), alarm_rate=alarm_rate,
-                           membership=membership, exact=exact, n_records=n_records)
+    return IsolationResult(
+        structure=structure,
+        simulated=tuple(modes),
+        alarm_rate=alarm_rate,
+        membership=membership,
+        exact=exact,
+        n_records=n_records,
+    )

@@ -89,19 +89,27 @@ class FrozenDistribution:
     def mean(self) -> float:
         """E[X], by integrating the survival function (and cdf below 0)."""
         lower, upper = self.support
-        upper_part = integrate.quad(lambda t: float(self.sf(t)), max(lower, 0.0), upper, limit=200)[0]
+        upper_part = integrate.quad(lambda t: float(self.sf(t)), max(lower, 0.0), upper, limit=200)[
+            0
+        ]
         lower_part = 0.0
         if lower < 0:
-            lower_part = integrate.quad(lambda t: float(self.cdf(t)), lower, min(upper, 0.0), limit=200)[0]
+            lower_part = integrate.quad(
+                lambda t: float(self.cdf(t)), lower, min(upper, 0.0), limit=200
+            )[0]
         return max(lower, 0.0) + upper_part - lower_part if lower >= 0 else upper_part - lower_part
 
     def var(self) -> float:
         """Var[X] = E[X²] − E[X]², with E[X²] = ∫ 2|t| P(|X| > |t|) dt."""
         mu = self.mean()
         lower, upper = self.support
-        second = integrate.quad(lambda t: 2 * t * float(self.sf(t)), max(lower, 0.0), upper, limit=200)[0]
+        second = integrate.quad(
+            lambda t: 2 * t * float(self.sf(t)), max(lower, 0.0), upper, limit=200
+        )[0]
         if lower < 0:
-            second += integrate.quad(lambda t: -2 * t * float(self.cdf(t)), lower, min(upper, 0.0), limit=200)[0]
+            second += integrate.quad(
+                lambda t: -2 * t * float(self.cdf(t)), lower, min(upper, 0.0), limit=200
+            )[0]
         elif lower > 0:
             second += lower**2
         return second - mu**2
@@ -121,7 +129,8 @@ class FrozenDistribution:
         params = [
             f"{key}={format_number(value)}"
             for key, value in vars(self).items()
-            if not key.startswith("_") and not isinstance(value, bool)
+            if not key.startswith("_")
+            and not isinstance(value, bool)
             and isinstance(value, (int, float, np.integer, np.floating))
         ]
         return f"{type(self).__name__}({', '.join(params)})"
@@ -156,7 +165,7 @@ class FrozenDistribution:
         return out[()] if out.ndim == 0 else out
 
     def _root(self, func, target, increasing):
-        lower, upper = self.support
+        lower, _upper = self.support
         sign = 1.0 if increasing else -1.0
 
         def gap(x):
@@ -173,4 +182,6 @@ class FrozenDistribution:
         if not np.isfinite(lower):
             while gap(left) > 0:
                 right, left = left, left * 2 if left < 0 else -1.0
-        return optimize.brentq(gap, left, right, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=500)
+        return optimize.brentq(
+            gap, left, right, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=500
+        )

@@ -85,7 +85,6 @@ gain, ``xhat(t|t) = xhat(t|t-1) + K_t eps_t``; the one-step predictor gain is
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 from numpy.linalg import LinAlgError
@@ -95,43 +94,43 @@ from scipy import stats
 from course.distributions import as_generator
 from course.linalg import (
     as_covariance,
-    check_alpha,
     as_float_array,
     as_matrix,
     as_vector,
+    check_alpha,
     psd_sqrt,
     symmetrize,
 )
 from course.results import TestResult, format_number
 
 __all__ = [
-    "LinearModel",
-    "FilterResult",
-    "RiccatiResult",
-    "kf_update",
-    "kf_predict",
-    "kalman_filter",
-    "riccati",
-    "riccati_gains",
-    "steady_state",
-    "numerical_jacobian",
-    "NonlinearModel",
-    "ekf_update",
-    "ekf_predict",
-    "extended_kalman_filter",
-    "RLSResult",
-    "recursive_least_squares",
-    "windowed_sum",
-    "windowed_nis",
-    "windowed_nis_threshold",
-    "windowed_chi2_test",
-    "empirical_threshold",
     "AlarmStatistics",
+    "FilterResult",
+    "LinearModel",
+    "NonlinearModel",
+    "ObserverResult",
+    "RLSResult",
+    "RiccatiResult",
     "alarm_statistics",
     "beta_drift_model",
-    "simulate_beta_system",
-    "ObserverResult",
+    "ekf_predict",
+    "ekf_update",
+    "empirical_threshold",
+    "extended_kalman_filter",
+    "kalman_filter",
+    "kf_predict",
+    "kf_update",
+    "numerical_jacobian",
     "observer_residuals",
+    "recursive_least_squares",
+    "riccati",
+    "riccati_gains",
+    "simulate_beta_system",
+    "steady_state",
+    "windowed_chi2_test",
+    "windowed_nis",
+    "windowed_nis_threshold",
+    "windowed_sum",
 ]
 
 
@@ -204,7 +203,7 @@ def _check_steps(N) -> int:
     return int(N)
 
 
-def _as_signal(value, name: str, width: int, N: Optional[int] = None) -> np.ndarray:
+def _as_signal(value, name: str, width: int, N: int | None = None) -> np.ndarray:
     """A signal of shape ``(*batch, N, width)``; ``(N,)`` is accepted when width is 1."""
     array = as_float_array(value, name)
     if array.ndim == 1:
@@ -251,7 +250,9 @@ def _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean):
                 "G must be n x q where Q is q x q"
             )
     Q = as_covariance(Q, "Q", q, allow_singular=True)
-    x0_cov = np.eye(n) if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
+    x0_cov = (
+        np.eye(n) if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
+    )
     w_mean = np.zeros(q) if w_mean is None else as_vector(w_mean, "w_mean", q)
     v_mean = np.zeros(p) if v_mean is None else as_vector(v_mean, "v_mean", p)
     return Q, G, x0_cov, w_mean, v_mean
@@ -371,8 +372,9 @@ class LinearModel:
 
     _no_input = "B was not given"  # completes "this model has no input (...)"
 
-    def __init__(self, F, H, Q, R, G=None, x0_mean=None, x0_cov=None, w_mean=None,
-                 v_mean=None, B=None):
+    def __init__(
+        self, F, H, Q, R, G=None, x0_mean=None, x0_cov=None, w_mean=None, v_mean=None, B=None
+    ):
         F = as_matrix(F, "F")
         n = F.shape[0]
         if F.shape != (n, n):
@@ -387,9 +389,7 @@ class LinearModel:
         x0_mean = np.zeros(n) if x0_mean is None else as_vector(x0_mean, "x0_mean", n)
         B = np.zeros((n, 0)) if B is None else as_matrix(B, "B", shape=(n, None))
 
-        self.F, self.H, self.Q, self.R, self.G, self.B = (
-            _readonly(a) for a in (F, H, Q, R, G, B)
-        )
+        self.F, self.H, self.Q, self.R, self.G, self.B = (_readonly(a) for a in (F, H, Q, R, G, B))
         self.x0_mean, self.x0_cov = _readonly(x0_mean), _readonly(x0_cov)
         self.w_mean, self.v_mean = _readonly(w_mean), _readonly(v_mean)
         self.n_states, self.n_outputs, self.n_noise, self.n_inputs = n, p, q, B.shape[1]
@@ -518,8 +518,10 @@ def _update_core(x_pred, P_pred, eps, H, R):
     if S.shape[-1] == 1:
         # one output: the solve with a 1 x 1 S is a division
         if np.any(S <= 0):
-            raise LinAlgError("the innovation variance S = H P H^T + R is not positive; "
-                              "R must be positive definite")
+            raise LinAlgError(
+                "the innovation variance S = H P H^T + R is not positive; "
+                "R must be positive definite"
+            )
         K = PHt / S
     else:
         # the Cholesky factorisation is the positive-definiteness check a plain
@@ -615,12 +617,12 @@ class FilterResult:
     """
 
     x_pred: np.ndarray
-    P_pred: Optional[np.ndarray]
+    P_pred: np.ndarray | None
     eps: np.ndarray
     S: np.ndarray
-    K: Optional[np.ndarray]
+    K: np.ndarray | None
     x_filt: np.ndarray
-    P_filt: Optional[np.ndarray]
+    P_filt: np.ndarray | None
     x_next: np.ndarray
     P_next: np.ndarray
 
@@ -630,7 +632,7 @@ class FilterResult:
         return self.eps
 
     @property
-    def gain(self) -> Optional[np.ndarray]:
+    def gain(self) -> np.ndarray | None:
         """Alias of :attr:`K`."""
         return self.K
 
@@ -735,8 +737,9 @@ def riccati(model, N, x0_cov=None) -> RiccatiResult:
     N = _check_steps(N)
     _, P = _prior(model, None, x0_cov)
     n, p = model.n_states, model.n_outputs
-    out = RiccatiResult(np.empty((N, n, n)), np.empty((N, p, p)), np.empty((N, n, p)),
-                        np.empty((N, n, n)))
+    out = RiccatiResult(
+        np.empty((N, n, n)), np.empty((N, p, p)), np.empty((N, n, p)), np.empty((N, n, n))
+    )
     x = np.zeros(n)
     y = np.zeros(p)
     for t in range(N):
@@ -864,8 +867,14 @@ def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
         return _readonly(a) if not batch else np.broadcast_to(a, batch + a.shape)
 
     return FilterResult(
-        x_pred=x_pred, P_pred=shared(P_pred), eps=eps, S=shared(S_all), K=shared(K_all),
-        x_filt=x_filt, P_filt=shared(P_filt), x_next=np.array(np.broadcast_to(x, batch + (n,))),
+        x_pred=x_pred,
+        P_pred=shared(P_pred),
+        eps=eps,
+        S=shared(S_all),
+        K=shared(K_all),
+        x_filt=x_filt,
+        P_filt=shared(P_filt),
+        x_next=np.array(np.broadcast_to(x, batch + (n,))),
         P_next=shared(P),
     )
 
@@ -968,8 +977,21 @@ class NonlinearModel:
 
     _no_input = "n_inputs = 0"
 
-    def __init__(self, g, h, Q, R, x0_mean, x0_cov=None, G=None, jac_g=None, jac_h=None,
-                 w_mean=None, v_mean=None, n_inputs=0):
+    def __init__(
+        self,
+        g,
+        h,
+        Q,
+        R,
+        x0_mean,
+        x0_cov=None,
+        G=None,
+        jac_g=None,
+        jac_h=None,
+        w_mean=None,
+        v_mean=None,
+        n_inputs=0,
+    ):
         for name, fun in (("g", g), ("h", h), ("jac_g", jac_g), ("jac_h", jac_h)):
             if fun is not None and not callable(fun):
                 raise ValueError(f"{name} must be callable, got {type(fun).__name__}")
@@ -980,7 +1002,11 @@ class NonlinearModel:
         R = as_covariance(R, "R", p)
         Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
         q = Q.shape[0]
-        if isinstance(n_inputs, bool) or not isinstance(n_inputs, (int, np.integer)) or n_inputs < 0:
+        if (
+            isinstance(n_inputs, bool)
+            or not isinstance(n_inputs, (int, np.integer))
+            or n_inputs < 0
+        ):
             raise ValueError(f"n_inputs must be a non-negative integer, got {n_inputs!r}")
 
         self.g, self.h, self.jac_g, self.jac_h = g, h, jac_g, jac_h
@@ -1021,7 +1047,7 @@ class NonlinearModel:
         )
 
     @classmethod
-    def from_linear(cls, model: LinearModel, numerical_jacobians: bool = False) -> "NonlinearModel":
+    def from_linear(cls, model: LinearModel, numerical_jacobians: bool = False) -> NonlinearModel:
         """The linear model written as a nonlinear one (``g = F x + B u``, ``h = H x``).
 
         With ``numerical_jacobians=False`` the exact Jacobians ``F`` and ``H``
@@ -1040,15 +1066,27 @@ class NonlinearModel:
 
         jac_g = jac_h = None
         if not numerical_jacobians:
+
             def jac_g(x, u):
                 return np.broadcast_to(F, np.shape(x)[:-1] + F.shape)
 
             def jac_h(x):
                 return np.broadcast_to(H, np.shape(x)[:-1] + H.shape)
 
-        return cls(g, h, model.Q, model.R, model.x0_mean, model.x0_cov, G=model.G,
-                   jac_g=jac_g, jac_h=jac_h, w_mean=model.w_mean, v_mean=model.v_mean,
-                   n_inputs=model.n_inputs)
+        return cls(
+            g,
+            h,
+            model.Q,
+            model.R,
+            model.x0_mean,
+            model.x0_cov,
+            G=model.G,
+            jac_g=jac_g,
+            jac_h=jac_h,
+            w_mean=model.w_mean,
+            v_mean=model.v_mean,
+            n_inputs=model.n_inputs,
+        )
 
     def jacobian_g(self, x, u=None) -> np.ndarray:
         """``dg/dx`` at ``(x, u)``: the user's ``jac_g`` or central differences."""
@@ -1148,8 +1186,9 @@ def ekf_predict(model, x_filt, P_filt, u=None):
     return x_pred, symmetrize(_mm(_mm(F, P_filt), _T(F)) + model.GQG)
 
 
-def extended_kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None,
-                           store_covariances=True) -> FilterResult:
+def extended_kalman_filter(
+    model, y, u=None, x0_mean=None, x0_cov=None, store_covariances=True
+) -> FilterResult:
     """Run the EKF of a :class:`NonlinearModel` on one record or a batch.
 
     Parameters
@@ -1210,10 +1249,17 @@ def extended_kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None,
         P_pred, P_filt, K_all = (_batch_major(a, nb) for a in (P_pred, P_filt, K_all))
     else:
         P_pred = P_filt = K_all = None
-    return FilterResult(x_pred=_batch_major(x_pred, nb), P_pred=P_pred,
-                        eps=_batch_major(eps, nb), S=_batch_major(S_all, nb), K=K_all,
-                        x_filt=_batch_major(x_filt, nb), P_filt=P_filt, x_next=np.array(x),
-                        P_next=np.array(P))
+    return FilterResult(
+        x_pred=_batch_major(x_pred, nb),
+        P_pred=P_pred,
+        eps=_batch_major(eps, nb),
+        S=_batch_major(S_all, nb),
+        K=K_all,
+        x_filt=_batch_major(x_filt, nb),
+        P_filt=P_filt,
+        x_next=np.array(x),
+        P_next=np.array(P),
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -1281,7 +1327,7 @@ class RLSResult:
 def _first_full_rank(Phi: np.ndarray) -> int:
     """Smallest k0 with rank(Phi[:k0]) = k (rank only grows with rows: bisect)."""
     N, k = Phi.shape
-    if N < k or np.linalg.matrix_rank(Phi) < k:
+    if k > N or np.linalg.matrix_rank(Phi) < k:
         raise LinAlgError(
             "Phi never reaches full column rank: the data do not excite every parameter, "
             "so least squares has no unique solution; give a proper prior P0 (and theta0) "
@@ -1440,11 +1486,11 @@ def windowed_sum(values, window) -> np.ndarray:
     zero = np.zeros(values.shape[:-1] + (1,))
     cs = np.concatenate([zero, np.cumsum(np.where(undefined, 0.0, values), axis=-1)], axis=-1)
     out = np.full(values.shape, np.nan)
-    out[..., window - 1:] = cs[..., window:] - cs[..., :-window]
+    out[..., window - 1 :] = cs[..., window:] - cs[..., :-window]
     if undefined.any():
         cn = np.concatenate([zero, np.cumsum(undefined, axis=-1)], axis=-1)
         holes = (cn[..., window:] - cn[..., :-window]) > 0
-        out[..., window - 1:][holes] = np.nan
+        out[..., window - 1 :][holes] = np.nan
     return out
 
 
@@ -1579,7 +1625,9 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
                 "windowed_nis_threshold"
             )
         if n_outputs is not None:
-            raise ValueError("n_outputs is read from the filter result; give it only with NIS values")
+            raise ValueError(
+                "n_outputs is read from the filter result; give it only with NIS values"
+            )
         nis = result.nis()
         p = result.eps.shape[-1] if isinstance(result, FilterResult) else 1
     else:
@@ -1593,9 +1641,14 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
             raise ValueError(f"nis must be a 1-D vector (one record), got shape {nis.shape}")
         # NaN marks undefined samples (allowed); inf or negative values are not NIS values
         if np.isinf(nis).any() or (nis < 0).any():
-            raise ValueError("NIS values must be finite and non-negative (NaN marks undefined samples)")
-        p = 1 if n_outputs is None else _positive_int(
-            n_outputs, "n_outputs", "the number of outputs p per sample")
+            raise ValueError(
+                "NIS values must be finite and non-negative (NaN marks undefined samples)"
+            )
+        p = (
+            1
+            if n_outputs is None
+            else _positive_int(n_outputs, "n_outputs", "the number of outputs p per sample")
+        )
     T = windowed_sum(nis, window)
     N = nis.shape[-1]
     if isinstance(t, bool) or not isinstance(t, (int, np.integer)):
@@ -1616,8 +1669,13 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
     critical = float(null.isf(alpha))
     return TestResult(
         name=f"windowed NIS test (L = {int(window)}, t = {t_index})",
-        statistic=statistic, alpha=alpha, critical_value=critical,
-        pvalue=float(null.sf(statistic)), reject=statistic > critical, null=null, dof=dof,
+        statistic=statistic,
+        alpha=alpha,
+        critical_value=critical,
+        pvalue=float(null.sf(statistic)),
+        reject=statistic > critical,
+        null=null,
+        dof=dof,
         details={"window": int(window), "t": t_index},
     )
 
@@ -1685,7 +1743,7 @@ class AlarmStatistics:
     run_false_alarm_probability: float
     detection_probability: float
     delays: np.ndarray
-    fault_time: Optional[int]
+    fault_time: int | None
 
     def __repr__(self) -> str:
         parts = [
@@ -1755,7 +1813,7 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
         )
     if np.isinf(T).any():
         raise ValueError("statistic contains inf; only NaN (undefined samples) is allowed")
-    n_runs, N = T.shape
+    _n_runs, N = T.shape
     threshold = _finite_float(threshold, "threshold")
     if fault_time is not None:
         if isinstance(fault_time, bool) or not isinstance(fault_time, (int, np.integer)):
@@ -1765,26 +1823,27 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
             raise ValueError(f"fault_time must lie in [0, {N - 1}], got {fault_time}")
     end = N if fault_time is None else fault_time
     with np.errstate(invalid="ignore"):
-        alarms = T > threshold  # NaN compares False
+        alarms = threshold < T  # NaN compares False
     before = alarms[:, :end]
     n_checked = int(np.isfinite(T[:, :end]).sum())
     rate = float(before.sum() / n_checked) if n_checked else float("nan")
     run_fa = float(before.any(axis=1).mean()) if end > 0 else float("nan")
     if fault_time is None:
-        return AlarmStatistics(threshold, rate, n_checked, run_fa, float("nan"),
-                               np.empty(0), None)
+        return AlarmStatistics(threshold, rate, n_checked, run_fa, float("nan"), np.empty(0), None)
     after = alarms[:, fault_time:]
     hit = after.any(axis=1)
     delays = np.where(hit, np.argmax(after, axis=1), np.nan).astype(float)
-    return AlarmStatistics(threshold, rate, n_checked, run_fa, float(hit.mean()), delays,
-                           fault_time)
+    return AlarmStatistics(
+        threshold, rate, n_checked, run_fa, float(hit.mean()), delays, fault_time
+    )
 
 
 # ---------------------------------------------------------------------------
 # the lecture's example: a first-order system with a drifting parameter
 # ---------------------------------------------------------------------------
-def beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=1e-2, x0_mean=(1.0, 0.0),
-                     x0_cov=None) -> NonlinearModel:
+def beta_drift_model(
+    Ts=0.1, q_beta=1e-4, q_x=1e-4, r=1e-2, x0_mean=(1.0, 0.0), x0_cov=None
+) -> NonlinearModel:
     """The EKF model of the lecture's example, state ``z = (beta, x)``.
 
     ``beta_{t+1} = beta_t + w1_t``,
@@ -1845,12 +1904,20 @@ def beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=1e-2, x0_mean=(1.0, 0.0),
 
     if x0_cov is None:
         x0_cov = np.diag([0.25, 0.01])
-    return NonlinearModel(g, h, np.diag([float(q_beta), float(q_x)]), [[float(r)]], x0_mean,
-                          x0_cov, jac_g=jac_g, jac_h=jac_h, n_inputs=1)
+    return NonlinearModel(
+        g,
+        h,
+        np.diag([float(q_beta), float(q_x)]),
+        [[float(r)]],
+        x0_mean,
+        x0_cov,
+        jac_g=jac_g,
+        jac_h=jac_h,
+        n_inputs=1,
+    )
 
 
-def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=None,
-                         batch=None):
+def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=None, batch=None):
     """Simulate the lecture's system for a given ``beta`` trajectory and sensor fault.
 
     ``x_{t+1} = x_t - Ts beta_t x_t + Ts u_t + w_t``, ``y_t = x_t + f_t + e_t``.
@@ -1892,7 +1959,9 @@ def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=N
     u = as_float_array(u, "u")
     N = beta.shape[-1]
     if beta.ndim < 1 or u.ndim < 1 or u.shape[-1] != N:
-        raise ValueError(f"beta and u must be (N,) or (batch, N) with equal N, got {beta.shape}, {u.shape}")
+        raise ValueError(
+            f"beta and u must be (N,) or (batch, N) with equal N, got {beta.shape}, {u.shape}"
+        )
     f = np.zeros(N) if fault is None else as_float_array(fault, "fault")
     if f.shape[-1] != N:
         raise ValueError(f"fault must have N = {N} samples, got shape {f.shape}")
@@ -1937,7 +2006,7 @@ class ObserverResult:
 
     def windowed_energy(self, window, Ts=1.0) -> np.ndarray:
         """``T_t = Ts sum_{k=t-L+1}^{t} |r_k|^2``: the windowed integral of the squared residual."""
-        return float(Ts) * windowed_sum(np.sum(self.r ** 2, axis=-1), window)
+        return float(Ts) * windowed_sum(np.sum(self.r**2, axis=-1), window)
 
 
 def observer_residuals(y, u, f, h, x0, theta0, K1, K2, Ts) -> ObserverResult:
@@ -2017,6 +2086,8 @@ def observer_residuals(y, u, f, h, x0, theta0, K1, K2, Ts) -> ObserverResult:
         X[..., t, :], TH[..., t, :] = x, th
         res = y[..., t, :] - h(x)
         Rs[..., t, :] = res
-        x, th = (x + Ts * (f(x, ut, th) + _mv(K1(x, th, ut), res)),
-                 th + Ts * _mv(K2(x, th, ut), res))
+        x, th = (
+            x + Ts * (f(x, ut, th) + _mv(K1(x, th, ut), res)),
+            th + Ts * _mv(K2(x, th, ut), res),
+        )
     return ObserverResult(x_hat=X, theta_hat=TH, r=Rs)

@@ -14,18 +14,18 @@ from scipy import linalg as sla
 
 __all__ = [
     "LinAlgError",
-    "as_float_array",
-    "as_vector",
-    "as_matrix",
     "as_covariance",
+    "as_float_array",
+    "as_matrix",
+    "as_vector",
     "check_alpha",
-    "cholesky_lower",
-    "whiten",
-    "solve_spd",
-    "column_rank_deficiency",
     "check_full_column_rank",
-    "symmetrize",
+    "cholesky_lower",
+    "column_rank_deficiency",
     "psd_sqrt",
+    "solve_spd",
+    "symmetrize",
+    "whiten",
 ]
 
 #: Relative tolerance for "symmetric": |Q - Q^T| <= SYMMETRY_RTOL * max|Q|.
@@ -54,8 +54,10 @@ def as_float_array(value, name: str, ndim: int | None = None) -> np.ndarray:
         raise ValueError(f"{name} is None; pass an array of numbers")
     if _is_complex(value):
         # float() would drop the imaginary part with only a warning: refuse instead.
-        raise ValueError(f"{name} is complex; pass real numbers (e.g. np.real(...) if the "
-                         "imaginary parts are rounding noise)")
+        raise ValueError(
+            f"{name} is complex; pass real numbers (e.g. np.real(...) if the "
+            "imaginary parts are rounding noise)"
+        )
     try:
         array = np.array(value, dtype=float)  # a copy: callers may not mutate input
     except (TypeError, ValueError) as exc:
@@ -63,7 +65,11 @@ def as_float_array(value, name: str, ndim: int | None = None) -> np.ndarray:
     if ndim is not None and array.ndim != ndim:
         raise ValueError(
             f"{name} must be {ndim}-dimensional, got shape {array.shape}"
-            + (" (pass a column as a 2-D array of shape (m, 1))" if ndim == 2 and array.ndim == 1 else "")
+            + (
+                " (pass a column as a 2-D array of shape (m, 1))"
+                if ndim == 2 and array.ndim == 1
+                else ""
+            )
         )
     if not np.all(np.isfinite(array)):
         bad = np.argwhere(~np.isfinite(array))
@@ -103,9 +109,7 @@ def as_matrix(value, name: str, shape: tuple[int | None, int | None] | None = No
     if shape is not None:
         for axis, expected in enumerate(shape):
             if expected is not None and matrix.shape[axis] != expected:
-                raise ValueError(
-                    f"{name} must have shape {_shape_text(shape)}, got {matrix.shape}"
-                )
+                raise ValueError(f"{name} must have shape {_shape_text(shape)}, got {matrix.shape}")
     return matrix
 
 

@@ -65,16 +65,16 @@ from .results import TestResult, format_number
 
 __all__ = [
     "LeastSquaresFit",
-    "WTestResult",
     "SnoopingResult",
+    "WTestResult",
+    "confidence_band",
+    "data_snooping",
     "fit",
+    "load_sea_level",
+    "mdb",
+    "noncentrality",
     "overall_model_test",
     "w_tests",
-    "data_snooping",
-    "noncentrality",
-    "mdb",
-    "confidence_band",
-    "load_sea_level",
 ]
 
 #: An observation whose residual carries less than this fraction of its
@@ -347,7 +347,9 @@ def _whole_number(value, name: str, minimum: int, or_none: bool = False) -> int:
     ok = not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
     if not ok or not float(value).is_integer() or value < minimum:
         kind = "a positive" if minimum == 1 else "a non-negative"
-        raise ValueError(f"{name} must be {kind} integer{' or None' if or_none else ''}, got {value!r}")
+        raise ValueError(
+            f"{name} must be {kind} integer{' or None' if or_none else ''}, got {value!r}"
+        )
     return int(value)
 
 
@@ -419,7 +421,7 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
         alpha=alpha,
         critical_value=critical,
         pvalue=float(null.sf(T)),
-        reject=T > critical,
+        reject=critical < T,
         null=null,
         dof=dof,
         alternative="greater",
@@ -691,7 +693,9 @@ class SnoopingResult:
         )
 
 
-def data_snooping(A, y, Qyy=None, alpha: float = 0.01, max_removals: int | None = None) -> SnoopingResult:
+def data_snooping(
+    A, y, Qyy=None, alpha: float = 0.01, max_removals: int | None = None
+) -> SnoopingResult:
     """Iterated w-tests: remove the worst rejected observation and refit.
 
     Parameters
@@ -921,9 +925,14 @@ def load_sea_level(case: int):
     Data: TU Delft MUDE open course book, "overall model test" notebook,
     CC BY 4.0 (see ``course/data/sea_level_mude/README.md``).
     """
-    if isinstance(case, bool) or not isinstance(case, (int, np.integer)) or case not in (0, 1, 2, 3):
+    if (
+        isinstance(case, bool)
+        or not isinstance(case, (int, np.integer))
+        or case not in (0, 1, 2, 3)
+    ):
         raise ValueError(f"case must be 0, 1, 2 or 3, got {case!r}")
-    source = resources.files("course").joinpath("data", "sea_level_mude", f"Dataset_{int(case)}.txt")
+    source = resources.files("course").joinpath(
+        "data", "sea_level_mude", f"Dataset_{int(case)}.txt"
+    )
     y = np.loadtxt(io.StringIO(source.read_text(encoding="utf-8")))
     return np.arange(1.0, y.size + 1.0), y
-

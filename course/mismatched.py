@@ -53,26 +53,26 @@ from .quadform import QuadraticForm, WeightedChiSquare
 from .results import TestResult
 
 __all__ = [
-    "ResidualMoments",
     "APPENDIX_MISPRINTS",
+    "ResidualMoments",
+    "correlation_matrix",
+    "correlation_statistic",
+    "correlation_test",
+    "covariance_matrix",
+    "covariance_statistic",
+    "covariance_test",
+    "mean_matrix",
+    "mean_statistic",
+    "mean_test",
+    "moment_zscores",
+    "pair_moments",
+    "power",
+    "principal_directions",
     "residual_moments",
     "residual_moments_as_printed",
-    "simulate_records",
-    "moment_zscores",
-    "principal_directions",
-    "mean_statistic",
-    "covariance_statistic",
-    "correlation_statistic",
-    "mean_matrix",
-    "covariance_matrix",
-    "correlation_matrix",
     "section_moments",
-    "pair_moments",
+    "simulate_records",
     "statistic_law",
-    "mean_test",
-    "covariance_test",
-    "correlation_test",
-    "power",
 ]
 
 #: The misprints of Baram's appendix that :func:`residual_moments_as_printed`
@@ -157,7 +157,9 @@ class ResidualMoments:
         N, p = mean.shape
         cov = as_float_array(self.cov, "cov")
         if cov.shape != (N, p, p):
-            raise ValueError(f"cov must have shape (N, p, p) = {(N, p, p)} to match mean, got {cov.shape}")
+            raise ValueError(
+                f"cov must have shape (N, p, p) = {(N, p, p)} to match mean, got {cov.shape}"
+            )
         cross = as_float_array(self.cross_cov, "cross_cov")
         if cross.shape != (N, N, p, p):
             raise ValueError(
@@ -190,7 +192,9 @@ class ResidualMoments:
 def _check_models(true_model, filter_model):
     for name, model in (("true_model", true_model), ("filter_model", filter_model)):
         if not isinstance(model, LinearModel):
-            raise TypeError(f"{name} must be a course.filters.LinearModel, got {type(model).__name__}")
+            raise TypeError(
+                f"{name} must be a course.filters.LinearModel, got {type(model).__name__}"
+            )
         if model.n_inputs:
             raise ValueError(
                 f"{name} has an input (B); the mismatched-filter analysis here has none: "
@@ -205,7 +209,9 @@ def _check_models(true_model, filter_model):
 
 def _check_steps(N) -> int:
     if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ValueError(f"N (the number of samples per record) must be a positive integer, got {N!r}")
+        raise ValueError(
+            f"N (the number of samples per record) must be a positive integer, got {N!r}"
+        )
     return int(N)
 
 
@@ -416,7 +422,9 @@ def moment_zscores(residuals, moments: ResidualMoments):
     z_mean = (rbar - moments.mean) / np.sqrt(variances / M)
     dev = r - rbar
     sample = np.einsum("ija,ikb->jkab", dev, dev) / (M - 1)
-    se = np.sqrt((variances[:, None, :, None] * variances[None, :, None, :] + moments.cross_cov**2) / M)
+    se = np.sqrt(
+        (variances[:, None, :, None] * variances[None, :, None, :] + moments.cross_cov**2) / M
+    )
     return z_mean, (sample - moments.cross_cov) / se
 
 
@@ -703,7 +711,7 @@ def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
     u, w = _pair(directions, p)
     D = np.zeros((2 * M * p, 2 * M))
     D[: M * p, :M] = np.kron(np.eye(M), u[:, None])
-    D[M * p:, M:] = np.kron(np.eye(M), w[:, None])
+    D[M * p :, M:] = np.kron(np.eye(M), w[:, None])
     return D @ B_M @ D.T
 
 
@@ -762,16 +770,27 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
     mean = np.concatenate([np.tile(moments.mean[j], M), np.tile(moments.mean[k], M)])
     I = np.eye(M)
     Cjk = moments.C(j, k)
-    cov = np.block([[np.kron(I, moments.cov[j]), np.kron(I, Cjk)],
-                    [np.kron(I, Cjk.T), np.kron(I, moments.cov[k])]])
+    cov = np.block(
+        [
+            [np.kron(I, moments.cov[j]), np.kron(I, Cjk)],
+            [np.kron(I, Cjk.T), np.kron(I, moments.cov[k])],
+        ]
+    )
     return mean, symmetrize(cov)
 
 
 _KINDS = ("mean", "covariance", "correlation")
 
 
-def statistic_law(moments: ResidualMoments, kind: str, j: int, M: int, k: int | None = None,
-                  direction=None, full: bool = False):
+def statistic_law(
+    moments: ResidualMoments,
+    kind: str,
+    j: int,
+    M: int,
+    k: int | None = None,
+    direction=None,
+    full: bool = False,
+):
     """Exact law of a section statistic when the residuals have ``moments``.
 
     Parameters
@@ -851,7 +870,9 @@ def statistic_law(moments: ResidualMoments, kind: str, j: int, M: int, k: int | 
         u, w = _pair(direction, p)
         T = np.zeros((2, 2 * p))
         T[0, :p], T[1, p:] = u, w
-        shape = QuadraticForm(np.array([[0.0, 1.0], [1.0, 0.0]]) / (2 * M), cov=symmetrize(T @ S @ T.T))
+        shape = QuadraticForm(
+            np.array([[0.0, 1.0], [1.0, 0.0]]) / (2 * M), cov=symmetrize(T @ S @ T.T)
+        )
     return WeightedChiSquare(shape.weights, shape.dof * (M - 1.0))
 
 
@@ -900,7 +921,9 @@ def _direction_for(null, kind, j, k, gamma):
 
 def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, power_against):
     if not isinstance(null, ResidualMoments):
-        raise TypeError("null must be the ResidualMoments of the pair (M0, M1) from residual_moments")
+        raise TypeError(
+            "null must be the ResidualMoments of the pair (M0, M1) from residual_moments"
+        )
     r = _as_records(residuals)
     M, N, p = r.shape
     if (N, p) != null.mean.shape:
@@ -932,13 +955,28 @@ def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, powe
     if power_against is not None:
         alt_law = statistic_law(power_against, kind, j, M, k=k, direction=direction)
         details["power"] = _rejection_probability(alt_law, critical, alternative)
-    label = f"{name} (j={j}" + (f", k={k}" if k is not None else "") + \
-        (f", direction {gamma}" if gamma is not None else "") + f", M={M})"
-    return TestResult(label, statistic, alpha, critical, _pvalue(law, statistic, alternative),
-                      bool(reject), law, alternative=alternative, details=details)
+    label = (
+        f"{name} (j={j}"
+        + (f", k={k}" if k is not None else "")
+        + (f", direction {gamma}" if gamma is not None else "")
+        + f", M={M})"
+    )
+    return TestResult(
+        label,
+        statistic,
+        alpha,
+        critical,
+        _pvalue(law, statistic, alternative),
+        bool(reject),
+        law,
+        alternative=alternative,
+        details=details,
+    )
 
 
-def mean_test(residuals, j, null, alpha=0.05, alternative="two-sided", power_against=None) -> TestResult:
+def mean_test(
+    residuals, j, null, alpha=0.05, alternative="two-sided", power_against=None
+) -> TestResult:
     """Mean test of section ``j`` on ``||rbar_j||^2``.
 
     Parameters
@@ -973,12 +1011,14 @@ def mean_test(residuals, j, null, alpha=0.05, alternative="two-sided", power_aga
     null pair ``rbar_j ~ N(m_j, P_j / M)``, so the statistic is a
     noncentral quadratic form (:class:`course.quadform.QuadraticForm`).
     """
-    return _run_test("mean test", "mean", residuals, j, None, null, alpha, None, alternative,
-                     power_against)
+    return _run_test(
+        "mean test", "mean", residuals, j, None, null, alpha, None, alternative, power_against
+    )
 
 
-def covariance_test(residuals, j, null, alpha=0.05, gamma=None, alternative="two-sided",
-                    power_against=None) -> TestResult:
+def covariance_test(
+    residuals, j, null, alpha=0.05, gamma=None, alternative="two-sided", power_against=None
+) -> TestResult:
     """Covariance test of section ``j`` (trace, or the gamma-th principal direction).
 
     Parameters
@@ -1003,12 +1043,23 @@ def covariance_test(residuals, j, null, alpha=0.05, gamma=None, alternative="two
     Baram (1980), (2.13)-(2.17) corrected, with the weighted chi-square law
     of :func:`statistic_law` (Imhof's method) for the critical region.
     """
-    return _run_test("covariance test", "covariance", residuals, j, None, null, alpha, gamma,
-                     alternative, power_against)
+    return _run_test(
+        "covariance test",
+        "covariance",
+        residuals,
+        j,
+        None,
+        null,
+        alpha,
+        gamma,
+        alternative,
+        power_against,
+    )
 
 
-def correlation_test(residuals, j, k, null, alpha=0.05, gamma=None, alternative="two-sided",
-                     power_against=None) -> TestResult:
+def correlation_test(
+    residuals, j, k, null, alpha=0.05, gamma=None, alternative="two-sided", power_against=None
+) -> TestResult:
     """Correlation test of sections ``j`` and ``k`` (trace, or a singular pair).
 
     Parameters
@@ -1033,12 +1084,23 @@ def correlation_test(residuals, j, k, null, alpha=0.05, gamma=None, alternative=
     ``S^(1/2) [[0, I], [I, 0]] S^(1/2) / (2M)``), so Imhof's method handles
     what a chi-square table cannot.
     """
-    return _run_test("correlation test", "correlation", residuals, j, k, null, alpha, gamma,
-                     alternative, power_against)
+    return _run_test(
+        "correlation test",
+        "correlation",
+        residuals,
+        j,
+        k,
+        null,
+        alpha,
+        gamma,
+        alternative,
+        power_against,
+    )
 
 
-def power(null, alternative_moments, kind, j, M, alpha=0.05, k=None, gamma=None,
-          alternative="two-sided") -> float:
+def power(
+    null, alternative_moments, kind, j, M, alpha=0.05, k=None, gamma=None, alternative="two-sided"
+) -> float:
     """Probability that a test of level ``alpha`` rejects under ``alternative_moments``.
 
     Parameters

@@ -60,20 +60,20 @@ from course.linalg import as_float_array, check_alpha
 from course.results import TestResult
 
 __all__ = [
-    "nis",
-    "nees",
-    "nis_matrix",
-    "nis_matrix_eigenvalues",
-    "extreme_eigenvalue",
     "ExtremeEigenvalue",
     "TracyWidomApproximation",
-    "simulate_extreme_eigenvalues",
-    "prob_eigenvalues_within",
-    "nis_critical_values",
-    "nis_matrix_critical_values",
-    "nis_test",
-    "nis_matrix_test",
     "consistency_interval",
+    "extreme_eigenvalue",
+    "nees",
+    "nis",
+    "nis_critical_values",
+    "nis_matrix",
+    "nis_matrix_critical_values",
+    "nis_matrix_eigenvalues",
+    "nis_matrix_test",
+    "nis_test",
+    "prob_eigenvalues_within",
+    "simulate_extreme_eigenvalues",
 ]
 
 #: Chiani's shifted-gamma fit of the Tracy-Widom law TW1 ([C14], Table 1):
@@ -104,7 +104,7 @@ def _check_int(value, name: str, minimum: int, what: str) -> int:
 def _check_dims(m, K) -> tuple[int, int]:
     m = _check_int(m, "m", 1, "the innovation dimension")
     K = _check_int(K, "K", 1, "the number of time steps")
-    if K < m:
+    if m > K:
         raise ValueError(
             f"K = {K} < m = {m}: a sum of K < m outer products is singular, so its smallest "
             "eigenvalue is 0 and the Wishart law does not apply; use at least m time steps"
@@ -130,10 +130,12 @@ def _innovations_and_factor(innovations, S, name_eps="innovations", name_S="S"):
     if isinstance(S, np.ndarray) and S.ndim > 2:
         # A covariance shared by all runs often arrives as a broadcast view
         # (stride 0, e.g. a Kalman filter's S): factor each distinct matrix once.
-        S = S[tuple(
-            slice(0, 1) if stride == 0 and size > 1 else slice(None)
-            for stride, size in zip(S.strides[:-2], S.shape[:-2])
-        )]
+        S = S[
+            tuple(
+                slice(0, 1) if stride == 0 and size > 1 else slice(None)
+                for stride, size in zip(S.strides[:-2], S.shape[:-2])
+            )
+        ]
     cov = as_float_array(S, name_S)
     if cov.ndim < 2 or cov.shape[-2:] != (m, m):
         raise ValueError(
@@ -348,8 +350,10 @@ def _log_gamma_ratio_half(a: float) -> float:
     # Stirling for both: a log(a + 1/2) - (a - 1/2) log a - 1/2 = a (log1p(h) - h) + log(a)/2.
     h = 0.5 / a
     return float(
-        a * _log1pmx(np.array(h)) + 0.5 * np.log(a)
-        + _stirling_correction(a + 0.5) - _stirling_correction(a)
+        a * _log1pmx(np.array(h))
+        + 0.5 * np.log(a)
+        + _stirling_correction(a + 0.5)
+        - _stirling_correction(a)
     )
 
 
@@ -368,7 +372,7 @@ def _pfaffian(A: np.ndarray) -> np.ndarray:
     rows = np.arange(A.shape[0])
     pf = np.ones(A.shape[0])
     for k in range(0, n - 1, 2):
-        pivot = k + 1 + np.argmax(np.abs(A[:, k + 1:, k]), axis=1)
+        pivot = k + 1 + np.argmax(np.abs(A[:, k + 1 :, k]), axis=1)
         swap = pivot != k + 1
         if np.any(swap):
             r, p = rows[swap], pivot[swap]
@@ -379,9 +383,11 @@ def _pfaffian(A: np.ndarray) -> np.ndarray:
         pf *= head
         if k + 2 < n:
             safe = np.where(head != 0.0, head, 1.0)
-            tau = A[:, k, k + 2:] / safe[:, None]
-            col = A[:, k + 2:, k + 1]
-            A[:, k + 2:, k + 2:] += tau[:, :, None] * col[:, None, :] - col[:, :, None] * tau[:, None, :]
+            tau = A[:, k, k + 2 :] / safe[:, None]
+            col = A[:, k + 2 :, k + 1]
+            A[:, k + 2 :, k + 2 :] += (
+                tau[:, :, None] * col[:, None, :] - col[:, :, None] * tau[:, None, :]
+            )
     return pf.reshape(batch)
 
 
@@ -424,10 +430,17 @@ def _moments(shape: float, lo: np.ndarray, hi: np.ndarray, count: int):
     else:
         upper_side = lo >= shape
         mass = np.where(
-            ~finite, special.gammaincc(shape, lo),
-            np.where(~has_lo, special.gammainc(shape, hi),
-                     np.where(upper_side, special.gammaincc(shape, lo) - special.gammaincc(shape, hi),
-                              special.gammainc(shape, hi) - special.gammainc(shape, lo))),
+            ~finite,
+            special.gammaincc(shape, lo),
+            np.where(
+                ~has_lo,
+                special.gammainc(shape, hi),
+                np.where(
+                    upper_side,
+                    special.gammaincc(shape, lo) - special.gammaincc(shape, hi),
+                    special.gammainc(shape, hi) - special.gammainc(shape, lo),
+                ),
+            ),
         )
     out = np.empty(lo.shape + (count,))
     out[..., 0] = mass
@@ -470,7 +483,9 @@ def _skew_blocks(m: int, a: float, lo: np.ndarray, hi: np.ndarray, e_scale: floa
     power = np.ones(g.shape[:-1])
     for l in range(m - 1):
         before = H[..., 0, l - 1] if l else 0.0
-        H[..., 0, l + 1] = (l / s) * H[..., 0, l] + l * before + (E[..., l] - upper * power * g[..., 0]) / s
+        H[..., 0, l + 1] = (
+            (l / s) * H[..., 0, l] + l * before + (E[..., l] - upper * power * g[..., 0]) / s
+        )
         power = power * u
     if m > 1:
         H[..., 1:, 0] = g[..., :1] * g[..., 1:] - H[..., 0, 1:]
@@ -478,9 +493,11 @@ def _skew_blocks(m: int, a: float, lo: np.ndarray, hi: np.ndarray, e_scale: floa
         power = np.ones(g.shape[:-1])[..., None]
         for l in range(m - 1):
             before = H[..., 1:, l - 1] if l else 0.0
-            H[..., 1:, l + 1] = (l / s) * H[..., 1:, l] + l * before + (
-                E[..., rows + l] - upper[..., None] * power * g[..., 1:]
-            ) / s
+            H[..., 1:, l + 1] = (
+                (l / s) * H[..., 1:, l]
+                + l * before
+                + (E[..., rows + l] - upper[..., None] * power * g[..., 1:]) / s
+            )
             power = power * u[..., None]
     return H - np.swapaxes(H, -1, -2), g
 
@@ -615,7 +632,11 @@ class ExtremeEigenvalue(FrozenDistribution):
             inside[big] = 1.0 - outside[big]
         if not density:
             return inside.reshape(shape), outside.reshape(shape)
-        return inside.reshape(shape), outside.reshape(shape), self._density(t, J_in, g_in).reshape(shape)
+        return (
+            inside.reshape(shape),
+            outside.reshape(shape),
+            self._density(t, J_in, g_in).reshape(shape),
+        )
 
     def _density(self, t, J, g):
         """pdf at x = 2t/K from the derivative of the inside Pfaffian."""
@@ -701,7 +722,9 @@ class ExtremeEigenvalue(FrozenDistribution):
                 below = y
             else:
                 above = y
-            newton = y - g / slope if np.isfinite(g) and np.isfinite(slope) and slope != 0 else np.nan
+            newton = (
+                y - g / slope if np.isfinite(g) and np.isfinite(slope) and slope != 0 else np.nan
+            )
             if below is not None and above is not None:
                 lo, hi = min(below, above), max(below, above)
                 y_new = newton if lo < newton < hi else 0.5 * (lo + hi)
@@ -790,7 +813,7 @@ class TracyWidomApproximation(FrozenDistribution):
         self.m, self.K = _check_dims(m, K)
         self.which = _check_which(which)
         n, p = np.sqrt(self.K - 0.5), np.sqrt(self.m - 0.5)
-        if self.which == "min" and self.K == self.m:
+        if self.which == "min" and self.m == self.K:
             raise ValueError(
                 "the Tracy-Widom approximation of the smallest eigenvalue needs K > m "
                 "(at K = m the lower edge is a hard edge at 0); use the exact law"
@@ -973,7 +996,7 @@ def simulate_extreme_eigenvalues(m, K, size=None, random_state=None, chunk: int 
         L[:, np.arange(m), np.arange(m)] = np.sqrt(rng.chisquare(dof, size=(n, m)))
         L[:, below[0], below[1]] = rng.standard_normal((n, below[0].size))
         values = np.linalg.eigvalsh(L @ np.swapaxes(L, -1, -2)) / K
-        lmin[start:start + n], lmax[start:start + n] = values[:, 0], values[:, -1]
+        lmin[start : start + n], lmax[start : start + n] = values[:, 0], values[:, -1]
     if not shape:
         return float(lmin[0]), float(lmax[0])
     return lmin.reshape(shape), lmax.reshape(shape)
@@ -1003,7 +1026,10 @@ def nis_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
     [F], eq. (4), with the ``1/K`` of the definition restored:
     ``K eps_bar ~ chi2(mK)``.
     """
-    m, K = _check_int(m, "m", 1, "the innovation dimension"), _check_int(K, "K", 1, "the number of time steps")
+    m, K = (
+        _check_int(m, "m", 1, "the innovation dimension"),
+        _check_int(K, "K", 1, "the number of time steps"),
+    )
     alpha = check_alpha(alpha)
     law = stats.chi2(m * K)
     return float(law.ppf(alpha / 2)), float(law.isf(alpha / 2))
@@ -1162,7 +1188,9 @@ def nis_matrix_test(innovations, S, alpha=0.05) -> TestResult:
         dof=K,
         alternative="two-sided",
         details={
-            "trace (average NIS)": float(np.sum(values)), "m": m, "K": K,
+            "trace (average NIS)": float(np.sum(values)),
+            "m": m,
+            "K": K,
             "exact false-alarm rate": 1.0 - prob_eigenvalues_within(m, K, lower, upper),
         },
     )

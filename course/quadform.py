@@ -56,13 +56,13 @@ from .distributions import FrozenDistribution, as_generator
 from .linalg import as_covariance, as_float_array, as_matrix, as_vector, symmetrize
 
 __all__ = [
+    "QuadraticForm",
+    "WeightedChiSquare",
     "imhof_cdf",
     "imhof_sf",
+    "inversion_integrands",
     "liu_tang_zhang_cdf",
     "liu_tang_zhang_sf",
-    "inversion_integrands",
-    "WeightedChiSquare",
-    "QuadraticForm",
 ]
 
 #: Default absolute and relative tolerances of :func:`imhof_cdf`.  The
@@ -114,7 +114,9 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
         raise ValueError("noncentrality parameters must be non-negative (they are squared means)")
     sigma = float(sigma)
     if not math.isfinite(sigma) or sigma < 0:
-        raise ValueError(f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}")
+        raise ValueError(
+            f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
+        )
     keep = w != 0
     w, h, d = w[keep], h[keep], d[keep]
     if w.size > 1:
@@ -189,7 +191,9 @@ def _saddle(c, w, h, d, sigma2, lo, hi, pole):
         newton = s - g1 / g2
         with np.errstate(invalid="ignore", divide="ignore"):
             secant = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-        fallback = np.where(np.isfinite(secant) & (secant > lo) & (secant < hi), secant, 0.5 * (lo + hi))
+        fallback = np.where(
+            np.isfinite(secant) & (secant > lo) & (secant < hi), secant, 0.5 * (lo + hi)
+        )
         new = np.where((newton > lo) & (newton < hi), newton, fallback)
         done = np.all(np.abs(new - s) <= 1e-7 * np.abs(s) + 1e-300)
         s = new
@@ -314,8 +318,9 @@ def _integrate(c, s0, a, b, w, h, d, sigma2, s_max, pole, atol, rtol):
     size = max(1, _CHUNK // (int(np.max(U) * 32) * max(w.size, 1)))
     for start in range(0, len(c), size):
         i = slice(start, start + size)
-        value[i], error[i], ok = _trapezoid(c[i], s0[i], a[i], b[i], U[i], w, h, d, sigma2,
-                                            pole, atol, rtol)
+        value[i], error[i], ok = _trapezoid(
+            c[i], s0[i], a[i], b[i], U[i], w, h, d, sigma2, pole, atol, rtol
+        )
         converged[i] &= ok
     return value, error, converged
 
@@ -377,7 +382,9 @@ def _probabilities(x, w, h, d, sigma, atol, rtol):
             todo = xs > 0 if not (np.any(ws < 0) or sigma2 > 0) else np.ones(xs.shape, dtype=bool)
             up[~todo], low[~todo] = 1.0, 0.0
             if todo.any():
-                up[todo], low[todo], e[todo], ok[todo] = _contour(xs[todo], ws, h, d, sigma2, atol, rtol)
+                up[todo], low[todo], e[todo], ok[todo] = _contour(
+                    xs[todo], ws, h, d, sigma2, atol, rtol
+                )
         # else: every weight <= 0 and no normal term, so X <= 0 <= xs
         if sign > 0:
             sf[mask], cdf[mask] = up, low
@@ -400,8 +407,10 @@ def _imhof_real_axis(x, w, h, d, sigma, atol):
         return 0.5 * np.sum(h * np.arctan(w * u) + d * w * u / (1 + (w * u) ** 2)) - 0.5 * x0 * u
 
     def log_rho(u):
-        return np.sum(0.25 * h * np.log1p((w * u) ** 2) + 0.5 * d * (w * u) ** 2 / (1 + (w * u) ** 2)) + (
-            sigma * u) ** 2 / 8
+        return (
+            np.sum(0.25 * h * np.log1p((w * u) ** 2) + 0.5 * d * (w * u) ** 2 / (1 + (w * u) ** 2))
+            + (sigma * u) ** 2 / 8
+        )
 
     def integrand(u, x0):
         if u == 0.0:
@@ -409,8 +418,13 @@ def _imhof_real_axis(x, w, h, d, sigma, atol):
         return math.sin(theta(u, x0)) / (u * math.exp(log_rho(u)))
 
     def log_bound(u):
-        return -(math.log(math.pi * k) + k * math.log(u) + np.sum(0.5 * h * np.log(np.abs(w)))
-                 + 0.5 * np.sum(d * (w * u) ** 2 / (1 + (w * u) ** 2)) + (sigma * u) ** 2 / 8)
+        return -(
+            math.log(math.pi * k)
+            + k * math.log(u)
+            + np.sum(0.5 * h * np.log(np.abs(w)))
+            + 0.5 * np.sum(d * (w * u) ** 2 / (1 + (w * u) ** 2))
+            + (sigma * u) ** 2 / 8
+        )
 
     target = math.log(atol / 2)
     lo, hi = 1e-3, 1.0
@@ -427,8 +441,9 @@ def _imhof_real_axis(x, w, h, d, sigma, atol):
     out = np.empty_like(x)
     err = np.empty_like(x)
     for i, x0 in enumerate(x):
-        value, e = integrate.quad(integrand, 0.0, hi, args=(x0,), limit=20000, epsabs=atol / 2,
-                                  epsrel=0.0)
+        value, e = integrate.quad(
+            integrand, 0.0, hi, args=(x0,), limit=20000, epsabs=atol / 2, epsrel=0.0
+        )
         out[i] = 0.5 + value / math.pi
         err[i] = e / math.pi + atol / 2
     return np.clip(out, 0.0, 1.0), err
@@ -451,7 +466,8 @@ def _evaluate(c, weights, dof, noncentrality, sigma, offset, atol, rtol, method)
             warnings.warn(
                 f"imhof: requested accuracy not reached at {int((~conv).sum())} point(s) "
                 f"(largest error estimate {float(np.max(err[~conv])):.2g})",
-                RuntimeWarning, stacklevel=3,
+                RuntimeWarning,
+                stacklevel=3,
             )
     elif method == "imhof":
         if w.size == 0:
@@ -468,8 +484,18 @@ def _evaluate(c, weights, dof, noncentrality, sigma, offset, atol, rtol, method)
     return sf.reshape(shape), cdf.reshape(shape), err.reshape(shape)
 
 
-def imhof_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, rtol=RTOL,
-              method="contour", full_output=False):
+def imhof_cdf(
+    c,
+    weights,
+    dof=None,
+    noncentrality=None,
+    *,
+    sigma=0.0,
+    atol=ATOL,
+    rtol=RTOL,
+    method="contour",
+    full_output=False,
+):
     """``P(Q <= c)`` for ``Q = sum_k w_k chi2(dof_k, noncentrality_k) + sigma Z``.
 
     Parameters
@@ -528,12 +554,22 @@ def imhof_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL,
     mirrored form ``-Q``, so small tail probabilities keep their relative
     accuracy.  See the module docstring for the error control.
     """
-    sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
+    _sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
     return (_squeeze(cdf), _squeeze(err)) if full_output else _squeeze(cdf)
 
 
-def imhof_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, rtol=RTOL,
-             method="contour", full_output=False):
+def imhof_sf(
+    c,
+    weights,
+    dof=None,
+    noncentrality=None,
+    *,
+    sigma=0.0,
+    atol=ATOL,
+    rtol=RTOL,
+    method="contour",
+    full_output=False,
+):
     """``P(Q > c)``, computed directly (not as ``1 - cdf``) in the upper tail.
 
     Parameters
@@ -554,7 +590,7 @@ def imhof_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0, atol=ATOL, 
     whichever tail is smaller at ``c`` is the one integrated, so small
     upper-tail probabilities keep their relative accuracy.
     """
-    sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
+    sf, _cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
     return (_squeeze(sf), _squeeze(err)) if full_output else _squeeze(sf)
 
 
@@ -599,7 +635,9 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
         wu = np.multiply.outer(u, w)
         theta = 0.5 * np.sum(h * np.arctan(wu) + d * wu / (1 + wu**2), axis=-1) - 0.5 * c * u
         log_rho = np.sum(0.25 * h * np.log1p(wu**2) + 0.5 * d * wu**2 / (1 + wu**2), axis=-1)
-        real_axis = np.where(u == 0, 0.5 * (np.sum(w * (h + d)) - c), np.sin(theta) / (u * np.exp(log_rho)))
+        real_axis = np.where(
+            u == 0, 0.5 * (np.sum(w * (h + d)) - c), np.sin(theta) / (u * np.exp(log_rho))
+        )
     pos, neg = w[w > 0], w[w < 0]
     upper = c > float(np.sum(w * (h + d)))
     lo, hi = (0.0, 0.5 / pos.max()) if upper else ((0.5 / neg.min()) if neg.size else -np.inf, 0.0)
@@ -627,7 +665,9 @@ def _density(x, w, h, d, sigma, atol, rtol):
             # base class), or inside a mixed one where the density is
             # finite only when k > 1
             if mixed:
-                out[mask] = np.inf if k <= 1 else _density_core(x[mask], ws, h, d, sigma2, atol, rtol)
+                out[mask] = (
+                    np.inf if k <= 1 else _density_core(x[mask], ws, h, d, sigma2, atol, rtol)
+                )
             continue
         out[mask] = _density_core(sign * x[mask], ws, h, d, sigma2, atol, rtol)
     return np.maximum(out, 0.0)
@@ -789,8 +829,9 @@ class WeightedChiSquare(FrozenDistribution):
     ``kappa_j = 2^{j-1} (j-1)! sum w^j (h + j delta^2)``).
     """
 
-    def __init__(self, weights, dof=None, noncentrality=None, sigma=0.0, offset=0.0,
-                 atol=ATOL, rtol=RTOL):
+    def __init__(
+        self, weights, dof=None, noncentrality=None, sigma=0.0, offset=0.0, atol=ATOL, rtol=RTOL
+    ):
         w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
         self._set_terms(w, h, d, sigma, offset, atol, rtol)
 
@@ -839,23 +880,37 @@ class WeightedChiSquare(FrozenDistribution):
 
     # -- probabilities -----------------------------------------------------
     def _both(self, x):
-        return _probabilities(np.ravel(x) - self.offset, self.weights, self.dof, self.noncentrality,
-                           self.sigma, self.atol, self.rtol)
+        return _probabilities(
+            np.ravel(x) - self.offset,
+            self.weights,
+            self.dof,
+            self.noncentrality,
+            self.sigma,
+            self.atol,
+            self.rtol,
+        )
 
     def _cdf(self, x):
-        sf, cdf, err, conv = self._both(x)
+        _sf, cdf, err, conv = self._both(x)
         _warn_unconverged(conv, err)
         return cdf.reshape(np.shape(x))
 
     def _sf(self, x):
-        sf, cdf, err, conv = self._both(x)
+        sf, _cdf, err, conv = self._both(x)
         _warn_unconverged(conv, err)
         return sf.reshape(np.shape(x))
 
     def _pdf(self, x):
         x = np.asarray(x, dtype=float)
-        out = _density(np.ravel(x) - self.offset, self.weights, self.dof, self.noncentrality,
-                       self.sigma, self.atol, self.rtol)
+        out = _density(
+            np.ravel(x) - self.offset,
+            self.weights,
+            self.dof,
+            self.noncentrality,
+            self.sigma,
+            self.atol,
+            self.rtol,
+        )
         return out.reshape(x.shape)
 
     def approx_sf(self, x):
@@ -865,7 +920,9 @@ class WeightedChiSquare(FrozenDistribution):
 
     def approx_cdf(self, x):
         """``P(Q <= x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
-        _, cdf = _ltz_at(x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset)
+        _, cdf = _ltz_at(
+            x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset
+        )
         return cdf
 
     def _rvs(self, size, rng):
@@ -901,15 +958,20 @@ class WeightedChiSquare(FrozenDistribution):
                 break
             step *= 2
             right = min(right + step, upper)
-        return optimize.brentq(gap, left, right, xtol=1e-13 * max(1.0, std),
-                               rtol=8 * np.finfo(float).eps, maxiter=200)
+        return optimize.brentq(
+            gap, left, right, xtol=1e-13 * max(1.0, std), rtol=8 * np.finfo(float).eps, maxiter=200
+        )
 
     def _approx_quantile(self, q):
-        c1, c2, c3, c4 = _ltz_parameters(self.weights, self.dof, self.noncentrality, self.sigma,
-                                         self.offset)
+        c1, c2, _c3, _c4 = _ltz_parameters(
+            self.weights, self.dof, self.noncentrality, self.sigma, self.offset
+        )
         lower, upper = self.support
         guess = c1 + math.sqrt(2 * c2) * stats.norm.ppf(q)
-        return min(max(guess, lower if np.isfinite(lower) else guess), upper if np.isfinite(upper) else guess)
+        return min(
+            max(guess, lower if np.isfinite(lower) else guess),
+            upper if np.isfinite(upper) else guess,
+        )
 
 
 class QuadraticForm(WeightedChiSquare):
@@ -1049,7 +1111,8 @@ def _warn_unconverged(conv, err):
         warnings.warn(
             f"imhof: requested accuracy not reached at {int(np.sum(~conv))} point(s) "
             f"(largest error estimate {float(np.max(err[~conv])):.2g})",
-            RuntimeWarning, stacklevel=4,
+            RuntimeWarning,
+            stacklevel=4,
         )
 
 

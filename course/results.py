@@ -29,16 +29,17 @@ from __future__ import annotations
 
 import html
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
 __all__ = [
     "TestResult",
-    "format_number",
-    "describe_distribution",
     "as_plain",
+    "describe_distribution",
+    "format_number",
 ]
 
 _ALTERNATIVES = ("greater", "less", "two-sided")

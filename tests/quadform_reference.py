@@ -23,9 +23,14 @@ def imhof_cdf_mp(c, weights, dof, noncentrality, digits=30):
     def integrand(u):
         if u == 0:
             return (sum(w * (h + d) for w, h, d in terms) - c) / 2
-        theta = sum(h * mp.atan(w * u) + d * w * u / (1 + (w * u) ** 2) for w, h, d in terms) / 2 - c * u / 2
-        log_rho = sum(h / 4 * mp.log(1 + (w * u) ** 2) + d * (w * u) ** 2 / (2 * (1 + (w * u) ** 2))
-                      for w, h, d in terms)
+        theta = (
+            sum(h * mp.atan(w * u) + d * w * u / (1 + (w * u) ** 2) for w, h, d in terms) / 2
+            - c * u / 2
+        )
+        log_rho = sum(
+            h / 4 * mp.log(1 + (w * u) ** 2) + d * (w * u) ** 2 / (2 * (1 + (w * u) ** 2))
+            for w, h, d in terms
+        )
         return mp.sin(theta) / (u * mp.exp(log_rho))
 
     sf = mp.mpf(1) / 2 + mp.quadosc(integrand, [0, mp.inf], omega=abs(c) / 2) / mp.pi

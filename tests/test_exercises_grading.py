@@ -11,7 +11,6 @@ import copy
 import csv
 import hashlib
 import json
-import os
 from pathlib import Path
 
 import pytest
@@ -53,8 +52,11 @@ def _with_answer(qid: str, source: str, nb: dict | None = None) -> dict:
 
 
 def _sha_tree(folder: Path) -> dict:
-    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(folder.rglob("*")) if p.is_file()}
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
 
 
 def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
@@ -63,72 +65,100 @@ def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
     subs["solution"] = _solution()
     subs["untouched"] = _release()
     subs["infinite_loop"] = _with_answer("q1", "while True:\n    pass")
-    subs["ignores_sigint"] = _with_answer("q3", (
-        "import signal\n"
-        "def overall_model_test_stat(A, y, Qyy, alpha):\n"
-        "    signal.signal(signal.SIGINT, signal.SIG_IGN)\n"
-        "    signal.signal(signal.SIGTERM, signal.SIG_IGN)\n"
-        "    while True:\n"
-        "        pass"))
+    subs["ignores_sigint"] = _with_answer(
+        "q3",
+        (
+            "import signal\n"
+            "def overall_model_test_stat(A, y, Qyy, alpha):\n"
+            "    signal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+            "    signal.signal(signal.SIGTERM, signal.SIG_IGN)\n"
+            "    while True:\n"
+            "        pass"
+        ),
+    )
     subs["os_exit"] = _with_answer("q2", "import os\nos._exit(3)")
     subs["sys_exit"] = _with_answer("q5", "import sys\nsys.exit('bye')")
-    subs["memory_bomb"] = _with_answer("q4", (
-        "def w_statistics(A, y, Qyy):\n"
-        "    hoard = []\n"
-        "    while True:\n"
-        "        hoard.append(bytearray(1 << 30))"))
-    subs["fork_bomb"] = _with_answer("q1", (
-        "import os\n"
-        "while True:\n"
-        "    os.fork()"))
-    subs["subprocess"] = _with_answer("q2", (
-        "import subprocess\n"
-        "subprocess.run(['sh', '-c', 'echo pwned > /tmp/course_pwned'])\n"
-        "e_hat_day2 = 0"))
-    subs["output_flood"] = _with_answer("q2", (
-        "%time _ = 1\n"
-        "import warnings\n"
-        "warnings.warn('this answer is noisy')\n"
-        "print('x' * 50_000_000)\n"
-        "import sys\n"
-        "sys.stderr.write('y' * 10_000_000)\n"
-        "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
-        "e_hat_day2 = y_day2 - A @ x_hat_day2"))
+    subs["memory_bomb"] = _with_answer(
+        "q4",
+        (
+            "def w_statistics(A, y, Qyy):\n"
+            "    hoard = []\n"
+            "    while True:\n"
+            "        hoard.append(bytearray(1 << 30))"
+        ),
+    )
+    subs["fork_bomb"] = _with_answer("q1", ("import os\nwhile True:\n    os.fork()"))
+    subs["subprocess"] = _with_answer(
+        "q2",
+        (
+            "import subprocess\n"
+            "subprocess.run(['sh', '-c', 'echo pwned > /tmp/course_pwned'])\n"
+            "e_hat_day2 = 0"
+        ),
+    )
+    subs["output_flood"] = _with_answer(
+        "q2",
+        (
+            "%time _ = 1\n"
+            "import warnings\n"
+            "warnings.warn('this answer is noisy')\n"
+            "print('x' * 50_000_000)\n"
+            "import sys\n"
+            "sys.stderr.write('y' * 10_000_000)\n"
+            "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
+            "e_hat_day2 = y_day2 - A @ x_hat_day2"
+        ),
+    )
     forged = json.dumps({"id": 1, "nonce": "0", "status": "ok", "value": [12.0, 3.0]})
-    subs["forged_result"] = _with_answer("q1", (
-        "import os\n"
-        f"line = {forged!r} + '\\n'\n"
-        "print(line * 20)\n"
-        "for fd in map(int, os.listdir('/proc/self/fd')):\n"
-        "    try:\n"
-        "        os.write(fd, line.encode())\n"
-        "    except OSError:\n"
-        "        pass\n"
-        "print('q1: PASS 1/1 points')\n"
-        "x_hat_day1 = np.array([0.0, 0.0])"))
-    subs["monkeypatch"] = _with_answer("q1", (
-        "import builtins, json\n"
-        "np.allclose = lambda *a, **k: True\n"
-        "np.isclose = lambda *a, **k: True\n"
-        "np.array_equal = lambda *a, **k: True\n"
-        "np.testing.assert_allclose = lambda *a, **k: None\n"
-        "builtins.abs = lambda x: 0\n"
-        "builtins.round = lambda *a: 0\n"
-        "json.dumps = lambda *a, **k: '{\"status\": \"ok\"}'\n"
-        "json.loads = lambda *a, **k: {}\n"
-        "import course.exercises.codec as codec\n"
-        "codec.encode = lambda v: [12.0, 3.0]\n"
-        "x_hat_day1 = np.array([0.0, 0.0])"))
-    subs["writes_outside"] = _with_answer("q1", (
-        f"open({str(sentinel)!r}, 'w').write('overwritten')\n"
-        "x_hat_day1 = np.linalg.lstsq(A, y_day1, rcond=None)[0]"))
-    subs["deletes_outside"] = _with_answer("q2", (
-        "import os, shutil\n"
-        f"os.remove({str(sentinel)!r})\n"
-        "e_hat_day2 = 0"))
-    subs["reads_solutions"] = _with_answer("q1", (
-        f"source = open({str(SOLUTION_DIR / 'checks.py')!r}).read()\n"
-        "x_hat_day1 = np.array([12.0, 3.0])"))
+    subs["forged_result"] = _with_answer(
+        "q1",
+        (
+            "import os\n"
+            f"line = {forged!r} + '\\n'\n"
+            "print(line * 20)\n"
+            "for fd in map(int, os.listdir('/proc/self/fd')):\n"
+            "    try:\n"
+            "        os.write(fd, line.encode())\n"
+            "    except OSError:\n"
+            "        pass\n"
+            "print('q1: PASS 1/1 points')\n"
+            "x_hat_day1 = np.array([0.0, 0.0])"
+        ),
+    )
+    subs["monkeypatch"] = _with_answer(
+        "q1",
+        (
+            "import builtins, json\n"
+            "np.allclose = lambda *a, **k: True\n"
+            "np.isclose = lambda *a, **k: True\n"
+            "np.array_equal = lambda *a, **k: True\n"
+            "np.testing.assert_allclose = lambda *a, **k: None\n"
+            "builtins.abs = lambda x: 0\n"
+            "builtins.round = lambda *a: 0\n"
+            'json.dumps = lambda *a, **k: \'{"status": "ok"}\'\n'
+            "json.loads = lambda *a, **k: {}\n"
+            "import course.exercises.codec as codec\n"
+            "codec.encode = lambda v: [12.0, 3.0]\n"
+            "x_hat_day1 = np.array([0.0, 0.0])"
+        ),
+    )
+    subs["writes_outside"] = _with_answer(
+        "q1",
+        (
+            f"open({str(sentinel)!r}, 'w').write('overwritten')\n"
+            "x_hat_day1 = np.linalg.lstsq(A, y_day1, rcond=None)[0]"
+        ),
+    )
+    subs["deletes_outside"] = _with_answer(
+        "q2", (f"import os, shutil\nos.remove({str(sentinel)!r})\ne_hat_day2 = 0")
+    )
+    subs["reads_solutions"] = _with_answer(
+        "q1",
+        (
+            f"source = open({str(SOLUTION_DIR / 'checks.py')!r}).read()\n"
+            "x_hat_day1 = np.array([12.0, 3.0])"
+        ),
+    )
     nb = _solution()
     nb["cells"] = [c for c in nb["cells"] if c.get("id") not in ("q2-answer", "code-02")]
     q3 = next(c for c in nb["cells"] if c.get("id") == "q3-answer")
@@ -141,22 +171,34 @@ def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
     nb["cells"].insert(3, q5)  # moved to the top
     subs["deleted_duplicated_moved"] = nb
     nb = _solution()
-    _cell(nb, "code-02")["source"] = _cell(nb, "code-02")["source"].replace("14.0, 20.0", "99.0, 99.0")
+    _cell(nb, "code-02")["source"] = _cell(nb, "code-02")["source"].replace(
+        "14.0, 20.0", "99.0, 99.0"
+    )
     _cell(nb, "setup")["source"] = _cell(nb, "setup")["source"].replace('"demo"', '"someone-else"')
     subs["edited_protected"] = nb
-    subs["forbidden_static"] = _with_answer("q3", (
-        "def overall_model_test_stat(A, y, Qyy, alpha):\n"
-        "    r = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)\n"
-        "    return r.statistic, r.critical_value, r.reject"))
-    subs["forbidden_runtime"] = _with_answer("q4", (
-        "def w_statistics(A, y, Qyy):\n"
-        "    f = getattr(lsq, 'f' + 'it')\n"
-        "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).w"))
-    subs["copied_numbers"] = _with_answer("q6", "T_mine = 76.50528606174367  # the demo student's value")
+    subs["forbidden_static"] = _with_answer(
+        "q3",
+        (
+            "def overall_model_test_stat(A, y, Qyy, alpha):\n"
+            "    r = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)\n"
+            "    return r.statistic, r.critical_value, r.reject"
+        ),
+    )
+    subs["forbidden_runtime"] = _with_answer(
+        "q4",
+        (
+            "def w_statistics(A, y, Qyy):\n"
+            "    f = getattr(lsq, 'f' + 'it')\n"
+            "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).w"
+        ),
+    )
+    subs["copied_numbers"] = _with_answer(
+        "q6", "T_mine = 76.50528606174367  # the demo student's value"
+    )
     # a Monte Carlo answer that does not simulate: right under H0, wrong for every biased case
-    subs["constant_rate"] = _with_answer("q8", (
-        "def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n"
-        "    return alpha"))
+    subs["constant_rate"] = _with_answer(
+        "q8", ("def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n    return alpha")
+    )
     subs["empty"] = {"cells": [], "metadata": {}, "nbformat": 4, "nbformat_minor": 5}
     subs["not_json"] = "{ this is not json"
     subs["not_a_notebook"] = json.dumps({"hello": "world"})
@@ -182,9 +224,20 @@ def graded(tmp_path_factory):
     before_subs, before_repo = _sha_tree(sub_dir), _sha_tree(ROOT / "solutions")
     options = GradeOptions(jobs=2, timeout=TIMEOUT, memory_mb=512, progress=False)
     summary = grade(SOLUTION_DIR, sub_dir, out, options)
-    rows = {json.loads(line)["student"]: json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()}
-    return {"summary": summary, "rows": rows, "out": out, "sub_dir": sub_dir, "sentinel": sentinel,
-            "before_subs": before_subs, "before_repo": before_repo, "options": options}
+    rows = {
+        json.loads(line)["student"]: json.loads(line)
+        for line in (out / "results.jsonl").read_text().splitlines()
+    }
+    return {
+        "summary": summary,
+        "rows": rows,
+        "out": out,
+        "sub_dir": sub_dir,
+        "sentinel": sentinel,
+        "before_subs": before_subs,
+        "before_repo": before_repo,
+        "options": options,
+    }
 
 
 def _points(row) -> dict:
@@ -343,7 +396,10 @@ def test_feedback_hides_hidden_cases_and_code(graded):
     for sid in graded["rows"]:
         fb = (graded["out"] / "feedback" / f"{sid}.md").read_text()
         assert "def q3" not in fb and "A_SEA" not in fb and "binomial_band" not in fb
-        assert "hidden case" not in fb or "expected" not in fb.split("hidden case", 1)[1].split("\n", 1)[0]
+        assert (
+            "hidden case" not in fb
+            or "expected" not in fb.split("hidden case", 1)[1].split("\n", 1)[0]
+        )
 
 
 def test_rerun_resumes_and_regrade_is_identical(graded, tmp_path):
@@ -360,7 +416,10 @@ def test_rerun_resumes_and_regrade_is_identical(graded, tmp_path):
         (small / src.name).write_bytes(src.read_bytes())
     out2 = tmp_path / "out2"
     grade(SOLUTION_DIR, small, out2, graded["options"])
-    again = {json.loads(l)["student"]: json.loads(l) for l in (out2 / "results.jsonl").read_text().splitlines()}
+    again = {
+        json.loads(l)["student"]: json.loads(l)
+        for l in (out2 / "results.jsonl").read_text().splitlines()
+    }
     for sid, row in again.items():
         assert row == graded["rows"][sid], sid
     assert all(r["checks_sha256"] and r["version"] for r in again.values())

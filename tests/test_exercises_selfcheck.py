@@ -24,8 +24,15 @@ EXERCISE_DIR = ROOT / "exercises" / NAME
 
 # -- codec --------------------------------------------------------------------------------
 def test_codec_round_trip_without_pickle():
-    value = {"a": np.arange(6.0).reshape(2, 3), "b": (1, 2.5, True, None, "s"), "c": [np.int64(3), np.float32(1.5)],
-             "d": float("nan"), "e": np.array([True, False]), "f": 1 + 2j, "g": Band(0.1, 0.2)}
+    value = {
+        "a": np.arange(6.0).reshape(2, 3),
+        "b": (1, 2.5, True, None, "s"),
+        "c": [np.int64(3), np.float32(1.5)],
+        "d": float("nan"),
+        "e": np.array([True, False]),
+        "f": 1 + 2j,
+        "g": Band(0.1, 0.2),
+    }
     back = loads(json.dumps(encode(value), allow_nan=False))
     assert np.array_equal(back["a"], value["a"]) and back["a"].flags.writeable
     assert back["b"] == (1, 2.5, True, None, "s")
@@ -99,8 +106,16 @@ def test_student_rng_is_a_stable_hash_of_the_id():
     assert np.array_equal(a, student_rng(NAME, "survey", " s123 ").standard_normal(3))
     assert not np.array_equal(a, student_rng(NAME, "survey", "s124").standard_normal(3))
     code = "from course.exercises.spec import student_rng; print(student_rng('a', 'b', 'c').integers(1 << 62))"
-    outs = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                           env={"PYTHONHASHSEED": seed, "PATH": "/usr/bin:/bin"}, cwd=ROOT).stdout for seed in ("1", "2")}
+    outs = {
+        subprocess.run(
+            [sys.executable, "-c", code],
+            capture_output=True,
+            text=True,
+            env={"PYTHONHASHSEED": seed, "PATH": "/usr/bin:/bin"},
+            cwd=ROOT,
+        ).stdout
+        for seed in ("1", "2")
+    }
     assert len(outs) == 1 and outs.pop().strip().isdigit()
 
 
@@ -204,7 +219,9 @@ def test_seccomp_blocks_fork_but_not_threads():
         except OSError:
             print("kill blocked")
     """)
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=60
+    )
     assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
 
 
@@ -214,6 +231,11 @@ def test_spawn_mode_grades_like_fork_mode(tmp_path):
     subs = tmp_path / "subs"
     subs.mkdir()
     (subs / "s1.ipynb").write_bytes((ROOT / "solutions" / NAME / f"{NAME}.ipynb").read_bytes())
-    grade(ROOT / "solutions" / NAME, subs, tmp_path / "out", GradeOptions(jobs=1, mode="spawn", progress=False))
+    grade(
+        ROOT / "solutions" / NAME,
+        subs,
+        tmp_path / "out",
+        GradeOptions(jobs=1, mode="spawn", progress=False),
+    )
     row = json.loads((tmp_path / "out" / "results.jsonl").read_text())
     assert row["total"] == row["max"] == 14.0, row

@@ -92,7 +92,9 @@ def test_cubic_model_is_void():
     f = lsq.fit(A, DAY2)
     assert f.redundancy == 0
     np.testing.assert_allclose(f.e_hat, 0, atol=1e-9)
-    with pytest.raises(ValueError, match=r"overall model test is void: there is no redundancy \(m - n = 0"):
+    with pytest.raises(
+        ValueError, match=r"overall model test is void: there is no redundancy \(m - n = 0"
+    ):
         lsq.overall_model_test(f, 0.01)
     with pytest.raises(ValueError, match="w-test is void"):
         lsq.w_tests(f, 0.01)
@@ -152,7 +154,9 @@ def test_bridge_deck():
     np.testing.assert_allclose(f.x_hat, [-2 / 3, 25 / 6], atol=TOL)
     np.testing.assert_allclose(f.Qxx, np.array([[4, -10], [-10, 34]]) / 36, atol=TOL)
     # Row form of the estimator: x̂ = (1/6) [[1, -1, -1, 1], [-1, 4, 4, -1]] d.
-    np.testing.assert_allclose(f.Qxx @ A.T, np.array([[1, -1, -1, 1], [-1, 4, 4, -1]]) / 6, atol=TOL)
+    np.testing.assert_allclose(
+        f.Qxx @ A.T, np.array([[1, -1, -1, 1], [-1, 4, 4, -1]]) / 6, atol=TOL
+    )
 
 
 def test_repeated_measurements_T_over_m_minus_1_is_variance_ratio():
@@ -255,7 +259,9 @@ def test_confidence_band_matches_dense_formula():
     y_new, half = lsq.confidence_band(f, A_new, level=0.9)
     Qxx = np.linalg.inv(A.T @ np.linalg.inv(Qyy) @ A)
     np.testing.assert_allclose(y_new, A_new @ f.x_hat, rtol=1e-12)
-    np.testing.assert_allclose(half, stats.norm.isf(0.05) * np.sqrt(np.diag(A_new @ Qxx @ A_new.T)), rtol=1e-9)
+    np.testing.assert_allclose(
+        half, stats.norm.isf(0.05) * np.sqrt(np.diag(A_new @ Qxx @ A_new.T)), rtol=1e-9
+    )
     with pytest.raises(ValueError, match=r"A_new must have shape \(k, n\) with n = 3"):
         lsq.confidence_band(f, A_new[:, :2])
     with pytest.raises(ValueError, match="level must lie strictly between 0 and 1"):
@@ -277,19 +283,43 @@ def test_rank_deficient_A_names_the_column():
 @pytest.mark.parametrize(
     "A, y, Qyy, error, match",
     [
-        (A_LINE, [1.0, 2.0, 3.0], None, ValueError, "shape mismatch: y has 3 observations but A has 4 rows"),
+        (
+            A_LINE,
+            [1.0, 2.0, 3.0],
+            None,
+            ValueError,
+            "shape mismatch: y has 3 observations but A has 4 rows",
+        ),
         (A_LINE, [[1.0, 2.0, 3.0, 4.0]], None, ValueError, "y must be a 1-D vector"),
         (A_LINE[:, 0], DAY1, None, ValueError, "A must be 2-dimensional"),
-        (A_LINE[:1], [1.0], None, ValueError, r"fewer rows than columns \(m = 1 observations, n = 2"),
+        (
+            A_LINE[:1],
+            [1.0],
+            None,
+            ValueError,
+            r"fewer rows than columns \(m = 1 observations, n = 2",
+        ),
         (A_LINE, [14, np.nan, 20, 24], None, ValueError, "y contains NaN or inf"),
         (np.where(A_LINE == 3, np.inf, A_LINE), DAY1, None, ValueError, "A contains NaN or inf"),
         (A_LINE, DAY1, np.eye(3), ValueError, r"Qyy must have shape \(4, 4\)"),
-        (A_LINE, DAY1, np.ones(4), ValueError, "for uncorrelated observations with variances v pass np.diag"),
+        (
+            A_LINE,
+            DAY1,
+            np.ones(4),
+            ValueError,
+            "for uncorrelated observations with variances v pass np.diag",
+        ),
         (A_LINE, DAY1, np.triu(np.ones((4, 4))), ValueError, "Qyy is not symmetric"),
         (A_LINE, DAY1, np.diag([1.0, 1.0, -1.0, 1.0]), LinAlgError, "Qyy is not positive definite"),
         (A_LINE, DAY1, np.ones((4, 4)), LinAlgError, "Qyy is not positive definite"),
         (A_LINE, DAY1, np.diag([1.0, np.nan, 1.0, 1.0]), ValueError, "Qyy contains NaN or inf"),
-        (A_LINE, DAY1, 2.0, ValueError, r"got a scalar; for equal variances s2 pass s2 \* np.eye\(4\)"),
+        (
+            A_LINE,
+            DAY1,
+            2.0,
+            ValueError,
+            r"got a scalar; for equal variances s2 pass s2 \* np.eye\(4\)",
+        ),
         (A_LINE, None, None, ValueError, "y is None"),
         (A_LINE + 1j, DAY1, None, ValueError, "A is complex; pass real numbers"),
         (A_LINE, DAY1 + 0j, None, ValueError, "y is complex"),
@@ -406,7 +436,9 @@ def test_sea_level_data_cases():
 # ---------------------------------------------------------------------------
 # reliability: noncentrality and mdb
 # ---------------------------------------------------------------------------
-@pytest.mark.parametrize("alpha, power, dof", [(0.001, 0.8, 1), (0.05, 0.5, 1), (0.2, 0.3, 1), (0.01, 0.9, 3)])
+@pytest.mark.parametrize(
+    "alpha, power, dof", [(0.001, 0.8, 1), (0.05, 0.5, 1), (0.2, 0.3, 1), (0.01, 0.9, 3)]
+)
 def test_noncentrality_achieves_power(alpha, power, dof):
     lam0 = lsq.noncentrality(alpha, power, dof)
     k = stats.chi2.isf(alpha, dof)
@@ -429,7 +461,7 @@ def test_noncentrality_known_value_and_monotonicity():
     assert lsq.noncentrality(0.001, 0.9) > lsq.noncentrality(0.001, 0.8)
     assert lsq.noncentrality(0.01, 0.8) < lsq.noncentrality(0.001, 0.8)
     assert lsq.noncentrality(0.001, 0.8, 2) > lsq.noncentrality(0.001, 0.8, 1)
-    with pytest.raises(ValueError, match="power .* must exceed alpha"):
+    with pytest.raises(ValueError, match=r"power .* must exceed alpha"):
         lsq.noncentrality(0.1, 0.05)
     for bad in (0, 1.5, "a", True, np.inf):
         with pytest.raises(ValueError, match="dof must be a positive integer, got"):
@@ -501,11 +533,24 @@ def test_reprs_are_short_deterministic_and_plain():
         "TestResult('overall model test', statistic=6, dof=2, alpha=0.01, critical_value=9.2103, "
         "pvalue=0.04979, reject=False, null=chi2(2))"
     )
-    big = lsq.fit(np.column_stack([np.ones(20), np.arange(20.0)] + [np.arange(20.0) ** k for k in range(2, 8)]),
-                  np.arange(20.0) ** 0.5)
+    big = lsq.fit(
+        np.column_stack(
+            [np.ones(20), np.arange(20.0)] + [np.arange(20.0) ** k for k in range(2, 8)]
+        ),
+        np.arange(20.0) ** 0.5,
+    )
     assert "(8 values)" in repr(big)
-    for text in (repr(f), f._repr_html_(), repr(wt), wt._repr_html_(), wt.summary(), repr(r), r.summary(),
-                 r._repr_html_(), repr(wt.test(0))):
+    for text in (
+        repr(f),
+        f._repr_html_(),
+        repr(wt),
+        wt._repr_html_(),
+        wt.summary(),
+        repr(r),
+        r.summary(),
+        r._repr_html_(),
+        repr(wt.test(0)),
+    ):
         assert "np." not in text and "0x" not in text
 
 
@@ -527,10 +572,24 @@ def test_plot_helpers_return_their_axes():
         assert plots.plot_confidence_band(T4, f1, ax=ax) is ax
         lower = ax.lines[-2].get_ydata()  # the dashed lower edge of the band
         assert np.all(lower < ax.lines[-3].get_ydata())
-        assert plots.plot_sum_of_squares(A_LINE, DAY1, np.linspace(6, 18, 13), np.linspace(0, 6, 7),
-                                         log10=True, ax=ax, minimum=f1.x_hat) is ax
-        assert plots.plot_chi2_histogram(stats.chi2(2).rvs(200, random_state=np.random.default_rng(1)), 2,
-                                         ax=ax, alpha=0.05) is ax
+        assert (
+            plots.plot_sum_of_squares(
+                A_LINE,
+                DAY1,
+                np.linspace(6, 18, 13),
+                np.linspace(0, 6, 7),
+                log10=True,
+                ax=ax,
+                minimum=f1.x_hat,
+            )
+            is ax
+        )
+        assert (
+            plots.plot_chi2_histogram(
+                stats.chi2(2).rvs(200, random_state=np.random.default_rng(1)), 2, ax=ax, alpha=0.05
+            )
+            is ax
+        )
         assert plots.plot_w_tests(lsq.w_tests(lsq.fit(A_LINE, DAY2), 0.01), ax=ax) is ax
         quad = lsq.fit(np.column_stack([A_LINE, T4**2 / 2]), DAY2)
         with pytest.raises(ValueError, match="pass design="):

@@ -43,36 +43,75 @@ from course.results import TestResult
 def two_state_system(drift_pole=0.98):
     """M0: a signal driven by a slow drift; the data-generating model."""
     return LinearModel(
-        F=[[0.9, 1.0], [0.0, drift_pole]], H=[[1.0, 0.0]], Q=np.diag([0.5, 0.02]), R=[[1.0]],
-        x0_mean=[0.0, 1.0], x0_cov=np.diag([1.0, 0.2]), w_mean=[0.1, 0.0], v_mean=[0.3],
+        F=[[0.9, 1.0], [0.0, drift_pole]],
+        H=[[1.0, 0.0]],
+        Q=np.diag([0.5, 0.02]),
+        R=[[1.0]],
+        x0_mean=[0.0, 1.0],
+        x0_cov=np.diag([1.0, 0.2]),
+        w_mean=[0.1, 0.0],
+        v_mean=[0.3],
     )
 
 
 def reduced_filter():
     """M1: one state, no drift, inflated process noise."""
-    return LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]], x0_mean=[0.5], x0_cov=[[2.0]],
-                       v_mean=[0.1], w_mean=[0.05])
+    return LinearModel(
+        F=[[0.95]],
+        H=[[1.0]],
+        Q=[[1.0]],
+        R=[[1.2]],
+        x0_mean=[0.5],
+        x0_cov=[[2.0]],
+        v_mean=[0.1],
+        w_mean=[0.05],
+    )
 
 
 def same_order_pair():
     """Two-state true model and a different two-state filter: every printed
     formula of the appendix is conformable, so each misprint can be measured."""
-    m0 = LinearModel(F=[[0.9, 0.5], [0.0, 0.8]], H=[[1.0, 0.0]], Q=np.diag([0.5, 0.3]), R=[[1.0]],
-                     x0_mean=[1.0, -1.0], x0_cov=np.diag([1.0, 0.5]), w_mean=[0.1, 0.0], v_mean=[0.4])
-    m1 = LinearModel(F=[[0.7, 0.0], [0.0, 0.5]], H=[[1.0, 1.0]], Q=np.diag([2.0, 1.0]), R=[[0.3]],
-                     x0_mean=[0.0, 0.5], x0_cov=np.diag([3.0, 2.0]), v_mean=[-0.2], w_mean=[0.05, 0.1])
+    m0 = LinearModel(
+        F=[[0.9, 0.5], [0.0, 0.8]],
+        H=[[1.0, 0.0]],
+        Q=np.diag([0.5, 0.3]),
+        R=[[1.0]],
+        x0_mean=[1.0, -1.0],
+        x0_cov=np.diag([1.0, 0.5]),
+        w_mean=[0.1, 0.0],
+        v_mean=[0.4],
+    )
+    m1 = LinearModel(
+        F=[[0.7, 0.0], [0.0, 0.5]],
+        H=[[1.0, 1.0]],
+        Q=np.diag([2.0, 1.0]),
+        R=[[0.3]],
+        x0_mean=[0.0, 0.5],
+        x0_cov=np.diag([3.0, 2.0]),
+        v_mean=[-0.2],
+        w_mean=[0.05, 0.1],
+    )
     return m0, m1
 
 
 def two_output_pair(scale_r=1.0):
     """Three states, two outputs; the filter keeps two states."""
     m0 = LinearModel(
-        F=[[0.8, 0.3, 0.0], [0.0, 0.7, 0.2], [0.0, 0.0, 0.9]], H=[[1.0, 0.0, 0.0], [0.0, 1.0, 1.0]],
-        Q=np.diag([0.4, 0.3, 0.1]), R=scale_r * np.array([[1.0, 0.3], [0.3, 0.8]]),
-        x0_mean=[0.5, 0.0, -0.5], x0_cov=np.eye(3), v_mean=[0.1, -0.1],
+        F=[[0.8, 0.3, 0.0], [0.0, 0.7, 0.2], [0.0, 0.0, 0.9]],
+        H=[[1.0, 0.0, 0.0], [0.0, 1.0, 1.0]],
+        Q=np.diag([0.4, 0.3, 0.1]),
+        R=scale_r * np.array([[1.0, 0.3], [0.3, 0.8]]),
+        x0_mean=[0.5, 0.0, -0.5],
+        x0_cov=np.eye(3),
+        v_mean=[0.1, -0.1],
     )
-    m1 = LinearModel(F=[[0.8, 0.2], [0.0, 0.85]], H=[[1.0, 0.0], [0.0, 1.0]], Q=np.diag([0.5, 0.5]),
-                     R=[[1.0, 0.2], [0.2, 1.0]], x0_cov=2 * np.eye(2))
+    m1 = LinearModel(
+        F=[[0.8, 0.2], [0.0, 0.85]],
+        H=[[1.0, 0.0], [0.0, 1.0]],
+        Q=np.diag([0.5, 0.5]),
+        R=[[1.0, 0.2], [0.2, 1.0]],
+        x0_cov=2 * np.eye(2),
+    )
     return m0, m1
 
 
@@ -100,8 +139,8 @@ def brute_force_moments(m0, m1, N):
 
     def outputs(xi):
         x = xi[:n0]
-        W = xi[n0:n0 + N * q0].reshape(N, q0)
-        V = xi[n0 + N * q0:].reshape(N, p)
+        W = xi[n0 : n0 + N * q0].reshape(N, q0)
+        V = xi[n0 + N * q0 :].reshape(N, p)
         ys = []
         for t in range(N):
             ys.append(m0.H @ x + V[t])
@@ -200,27 +239,39 @@ def test_statistics_equal_their_quadratic_forms():
     u, w = np.array([1.0, 0.0]), np.array([0.0, 1.0])
     assert mean_statistic(r, j) == pytest.approx(phi_j @ mean_matrix(M, p) @ phi_j)
     assert covariance_statistic(r, j) == pytest.approx(phi_j @ covariance_matrix(M, p) @ phi_j)
-    assert covariance_statistic(r, j, v) == pytest.approx(phi_j @ covariance_matrix(M, p, v) @ phi_j)
-    assert correlation_statistic(r, j, k) == pytest.approx(phi_jk @ correlation_matrix(M, p) @ phi_jk)
+    assert covariance_statistic(r, j, v) == pytest.approx(
+        phi_j @ covariance_matrix(M, p, v) @ phi_j
+    )
+    assert correlation_statistic(r, j, k) == pytest.approx(
+        phi_jk @ correlation_matrix(M, p) @ phi_jk
+    )
     assert correlation_statistic(r, j, k, (u, w)) == pytest.approx(
-        phi_jk @ correlation_matrix(M, p, (u, w)) @ phi_jk)
+        phi_jk @ correlation_matrix(M, p, (u, w)) @ phi_jk
+    )
     # (2.12)/(2.17): with one orthonormal basis on both sides the projected
     # statistics add up to the trace
     basis = np.linalg.qr(rng.normal(size=(p, p)))[0]
-    assert sum(correlation_statistic(r, j, k, (basis[:, g], basis[:, g])) for g in range(p)) == \
-        pytest.approx(correlation_statistic(r, j, k))
-    assert sum(covariance_statistic(r, j, basis[:, g]) for g in range(p)) == \
-        pytest.approx(covariance_statistic(r, j))
+    assert sum(
+        correlation_statistic(r, j, k, (basis[:, g], basis[:, g])) for g in range(p)
+    ) == pytest.approx(correlation_statistic(r, j, k))
+    assert sum(covariance_statistic(r, j, basis[:, g]) for g in range(p)) == pytest.approx(
+        covariance_statistic(r, j)
+    )
 
 
 def test_reduced_laws_equal_the_papers_full_quadratic_forms():
     m0, m1 = two_output_pair()
     moments = residual_moments(m0, m1, 6)
     M = 4
-    s, U, W = principal_directions(moments, 1, 4)
-    lam, V = principal_directions(moments, 2)
-    cases = [("mean", 2, None, None), ("covariance", 2, None, None), ("covariance", 2, None, V[:, 1]),
-             ("correlation", 1, 4, None), ("correlation", 1, 4, (U[:, 0], W[:, 0]))]
+    _s, U, W = principal_directions(moments, 1, 4)
+    _lam, V = principal_directions(moments, 2)
+    cases = [
+        ("mean", 2, None, None),
+        ("covariance", 2, None, None),
+        ("covariance", 2, None, V[:, 1]),
+        ("correlation", 1, 4, None),
+        ("correlation", 1, 4, (U[:, 0], W[:, 0])),
+    ]
     for kind, j, k, direction in cases:
         small = statistic_law(moments, kind, j, M, k=k, direction=direction)
         full = statistic_law(moments, kind, j, M, k=k, direction=direction, full=True)
@@ -270,7 +321,9 @@ def test_projected_statistics_need_squares_and_an_svd():
     assert np.max(np.abs(V - V.T)) > 0.5
     rows = np.array([covariance_statistic(x, j, V[0]) for x in r])
     assert abs(rows.mean() - (M - 1) / M * lam[0]) > 10 * rows.std() / np.sqrt(reps)
-    assert abs(rows.mean() - (M - 1) / M * V[0] @ moments.cov[j] @ V[0]) < 4.5 * rows.std() / np.sqrt(reps)
+    assert abs(
+        rows.mean() - (M - 1) / M * V[0] @ moments.cov[j] @ V[0]
+    ) < 4.5 * rows.std() / np.sqrt(reps)
 
 
 def test_mean_statistic_is_the_squared_norm():
@@ -302,8 +355,11 @@ def test_false_alarm_rates_and_power_match_the_laws():
         (covariance_test, dict(j=2), lambda x: covariance_statistic(x, 2)),
         (covariance_test, dict(j=2, gamma=0), lambda x: covariance_statistic(x, 2, V[:, 0])),
         (correlation_test, dict(j=1, k=3), lambda x: correlation_statistic(x, 1, 3)),
-        (correlation_test, dict(j=1, k=3, gamma=0),
-         lambda x: correlation_statistic(x, 1, 3, (U[:, 0], W[:, 0]))),
+        (
+            correlation_test,
+            dict(j=1, k=3, gamma=0),
+            lambda x: correlation_statistic(x, 1, 3, (U[:, 0], W[:, 0])),
+        ),
     ]
     _, V = principal_directions(null, 2)
     _, U, W = principal_directions(null, 1, 3)
@@ -331,8 +387,16 @@ def test_false_alarm_rates_and_power_match_the_laws():
 
 def test_power_grows_with_the_number_of_records():
     m0, m1 = two_state_system(), reduced_filter()
-    m2 = LinearModel(F=m0.F, H=m0.H, Q=m0.Q, R=m0.R, x0_mean=m0.x0_mean, x0_cov=m0.x0_cov,
-                     w_mean=m0.w_mean, v_mean=[0.8])  # a larger sensor bias
+    m2 = LinearModel(
+        F=m0.F,
+        H=m0.H,
+        Q=m0.Q,
+        R=m0.R,
+        x0_mean=m0.x0_mean,
+        x0_cov=m0.x0_cov,
+        w_mean=m0.w_mean,
+        v_mean=[0.8],
+    )  # a larger sensor bias
     N = 10
     null, alt = residual_moments(m0, m1, N), residual_moments(m2, m1, N)
     values = [power(null, alt, "mean", 8, M) for M in (5, 20, 80)]

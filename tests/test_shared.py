@@ -125,16 +125,22 @@ def test_format_number_and_helpers():
 # linalg
 # ---------------------------------------------------------------------------
 def test_as_float_array_errors_and_copy():
-    with pytest.raises(ValueError, match=r"y contains NaN or inf \(1 entries, first at index \(2,\)\)"):
+    with pytest.raises(
+        ValueError, match=r"y contains NaN or inf \(1 entries, first at index \(2,\)\)"
+    ):
         cl.as_float_array([1, 2, np.nan], "y")
     with pytest.raises(ValueError, match="y must be numeric"):
         cl.as_float_array(["a", "b"], "y")
-    with pytest.raises(ValueError, match=r"A must be 2-dimensional, got shape \(3,\) \(pass a column"):
+    with pytest.raises(
+        ValueError, match=r"A must be 2-dimensional, got shape \(3,\) \(pass a column"
+    ):
         cl.as_float_array([1, 2, 3], "A", ndim=2)
     with pytest.raises(ValueError, match="y is None"):
         cl.as_float_array(None, "y")
     with pytest.raises(ValueError, match="y is complex; pass real numbers"):
-        cl.as_float_array(np.array([1.0, 2.0 + 1e-20j]), "y")  # never drops imaginary parts silently
+        cl.as_float_array(
+            np.array([1.0, 2.0 + 1e-20j]), "y"
+        )  # never drops imaginary parts silently
     with pytest.raises(ValueError, match="y must be numeric"):
         cl.as_float_array([[1.0, 2.0], [3.0]], "y")
     src = np.arange(3.0)
@@ -144,7 +150,9 @@ def test_as_float_array_errors_and_copy():
 
 
 def test_as_vector_and_as_matrix_messages():
-    with pytest.raises(ValueError, match=r"y must be a 1-D vector, got shape \(3, 1\); pass it flattened"):
+    with pytest.raises(
+        ValueError, match=r"y must be a 1-D vector, got shape \(3, 1\); pass it flattened"
+    ):
         cl.as_vector(np.ones((3, 1)), "y")
     with pytest.raises(ValueError, match="y must have length 4, got 3"):
         cl.as_vector([1, 2, 3], "y", size=4)
@@ -304,13 +312,28 @@ def test_library_modules_do_not_import_matplotlib():
 # the course command
 # ---------------------------------------------------------------------------
 def test_python_m_course_is_the_course_command():
-    out = subprocess.run([sys.executable, "-m", "course", "--help"], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0 and "open" in out.stdout and "release" in out.stdout and "grade" in out.stdout
-    out = subprocess.run([sys.executable, "-m", "course", "open", "--help"], capture_output=True, text=True,
-                         timeout=120)
+    out = subprocess.run(
+        [sys.executable, "-m", "course", "--help"], capture_output=True, text=True, timeout=120
+    )
+    assert (
+        out.returncode == 0
+        and "open" in out.stdout
+        and "release" in out.stdout
+        and "grade" in out.stdout
+    )
+    out = subprocess.run(
+        [sys.executable, "-m", "course", "open", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 0 and "JupyterLab" in out.stdout and "--no-browser" in out.stdout
-    out = subprocess.run([sys.executable, "-m", "course", "release", "x", "--bogus"], capture_output=True,
-                         text=True, timeout=120)
+    out = subprocess.run(
+        [sys.executable, "-m", "course", "release", "x", "--bogus"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 2 and "unrecognized arguments: --bogus" in out.stderr
 
 
@@ -318,11 +341,16 @@ def test_course_open_uses_this_interpreters_jupyter(monkeypatch, tmp_path, capsy
     from course import cli
 
     calls = []
-    monkeypatch.setattr(cli.subprocess, "call", lambda command, cwd: calls.append((command, cwd)) or 0)
+    monkeypatch.setattr(
+        cli.subprocess, "call", lambda command, cwd: calls.append((command, cwd)) or 0
+    )
     monkeypatch.setenv("PATH", "/nonexistent")  # no `jupyter` on PATH: found through sys.executable
     assert cli.main(["open", "--no-browser", "--port=8890"]) == 0
-    (command, cwd), = calls
-    assert command[:3] == [sys.executable, "-m", "jupyterlab"] and command[3:] == ["--no-browser", "--port=8890"]
+    ((command, cwd),) = calls
+    assert command[:3] == [sys.executable, "-m", "jupyterlab"] and command[3:] == [
+        "--no-browser",
+        "--port=8890",
+    ]
     assert cwd.name == "notebooks" and (cwd / "01_least_squares_validation.ipynb").is_file()
     notebook = tmp_path / "x.ipynb"
     notebook.write_text("{}")

@@ -23,7 +23,7 @@ grader, sandbox, runner
 
 from importlib import import_module
 
-__all__ = ["Assignment", "Checks", "Band", "binomial_band", "student_rng"]
+__all__ = ["Assignment", "Band", "Checks", "binomial_band", "student_rng"]
 
 _LAZY = {
     "Assignment": "course.exercises.selfcheck",

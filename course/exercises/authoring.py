@@ -16,12 +16,20 @@ import re
 
 import nbformat
 
-__all__ = ["SETUP_TEMPLATE", "setup_cell", "answer_cell", "check_cell", "md", "code", "new_assignment_notebook"]
+__all__ = [
+    "SETUP_TEMPLATE",
+    "answer_cell",
+    "check_cell",
+    "code",
+    "md",
+    "new_assignment_notebook",
+    "setup_cell",
+]
 
-SETUP_TEMPLATE = '''\
+SETUP_TEMPLATE = """\
 STUDENT_ID = "{student_id}"   # <- your student ID, exactly as registered
 from course.exercises import Assignment
-check = Assignment.load("{name}", student_id=STUDENT_ID)'''
+check = Assignment.load("{name}", student_id=STUDENT_ID)"""
 
 
 def _code(source: str, cell_id: str | None, course: dict | None):
@@ -37,7 +45,9 @@ def setup_cell(name: str, student_id: str = "demo"):
     The solution notebook runs as ``student_id`` (default ``"demo"``); the release always
     replaces that line with a placeholder the student overwrites.
     """
-    return _code(SETUP_TEMPLATE.format(name=name, student_id=student_id), "setup", {"role": "setup"})
+    return _code(
+        SETUP_TEMPLATE.format(name=name, student_id=student_id), "setup", {"role": "setup"}
+    )
 
 
 def answer_cell(question: str, source: str, cell_id: str | None = None):
@@ -47,7 +57,11 @@ def answer_cell(question: str, source: str, cell_id: str | None = None):
 
 def check_cell(question: str, cell_id: str | None = None):
     """``check("q1")``: the student's self-check of ``question``."""
-    return _code(f'check("{question}")', cell_id or f"{question}-check", {"role": "check", "question": question})
+    return _code(
+        f'check("{question}")',
+        cell_id or f"{question}-check",
+        {"role": "check", "question": question},
+    )
 
 
 def md(text: str, cell_id: str | None = None):

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Band", "encode", "decode", "dumps", "loads", "EncodingError", "MAX_ELEMENTS"]
+__all__ = ["MAX_ELEMENTS", "Band", "EncodingError", "decode", "dumps", "encode", "loads"]
 
 #: Largest array (in elements) accepted on either side: a runaway answer cannot flood the pipe.
 MAX_ELEMENTS = 5_000_000
@@ -44,12 +44,14 @@ class Band:
     and ``hi`` may be arrays (element-wise bands).
     """
 
-    __slots__ = ("lo", "hi")
+    __slots__ = ("hi", "lo")
 
     def __init__(self, lo, hi):
         lo_arr, hi_arr = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
         if lo_arr.shape != hi_arr.shape:
-            raise ValueError(f"Band: lo and hi must have the same shape, got {lo_arr.shape} and {hi_arr.shape}")
+            raise ValueError(
+                f"Band: lo and hi must have the same shape, got {lo_arr.shape} and {hi_arr.shape}"
+            )
         if np.any(np.isnan(lo_arr)) or np.any(np.isnan(hi_arr)) or np.any(lo_arr > hi_arr):
             raise ValueError("Band: need lo <= hi (no NaN)")
         self.lo = float(lo_arr) if lo_arr.ndim == 0 else lo_arr
@@ -59,7 +61,11 @@ class Band:
         return f"Band({self.lo!r}, {self.hi!r})"
 
     def __eq__(self, other):
-        return isinstance(other, Band) and np.array_equal(self.lo, other.lo) and np.array_equal(self.hi, other.hi)
+        return (
+            isinstance(other, Band)
+            and np.array_equal(self.lo, other.lo)
+            and np.array_equal(self.hi, other.hi)
+        )
 
     __hash__ = None
 
@@ -135,7 +141,7 @@ def decode(data: Any, allow_band: bool = True) -> Any:
         return [decode(v, allow_band) for v in data]
     if isinstance(data, dict):
         if len(data) == 1:
-            (tag, body), = data.items()
+            ((tag, body),) = data.items()
             if tag == "__ndarray__":
                 dtype = np.dtype(body["dtype"])
                 if dtype.kind not in _ALLOWED_KINDS:

@@ -14,7 +14,7 @@ import numpy as np
 
 from course.exercises.codec import Band
 
-__all__ = ["Verdict", "compare", "describe", "binomial_band"]
+__all__ = ["Verdict", "binomial_band", "compare", "describe"]
 
 
 @dataclass(frozen=True)
@@ -108,8 +108,14 @@ def _is_intish(expected) -> bool:
     return isinstance(expected, np.ndarray) and expected.dtype.kind in "iu"
 
 
-def compare(expected: Any, got: Any, rtol: float = 1e-7, atol: float = 1e-9,
-            reveal: bool = True, path: str = "") -> Verdict:
+def compare(
+    expected: Any,
+    got: Any,
+    rtol: float = 1e-7,
+    atol: float = 1e-9,
+    reveal: bool = True,
+    path: str = "",
+) -> Verdict:
     """Compare ``got`` with ``expected``.
 
     Floats and float arrays: equal shapes and ``|got - expected| <= atol + rtol*|expected|``
@@ -137,20 +143,36 @@ def compare(expected: Any, got: Any, rtol: float = 1e-7, atol: float = 1e-9,
         bad = np.argwhere(~inside)[0] if arr_b.ndim else ()
         i = tuple(bad)
         g = arr_b[i] if arr_b.ndim else arr_b[()]
-        band = f" [{_fmt(lo_b[i] if lo_b.ndim else lo_b[()])}, {_fmt(hi_b[i] if hi_b.ndim else hi_b[()])}]" if reveal else " band"
-        return Verdict(False, f"{label}: got {_fmt(g)}{_where(i, arr_b.shape)}, outside the accepted{band}")
+        band = (
+            f" [{_fmt(lo_b[i] if lo_b.ndim else lo_b[()])}, {_fmt(hi_b[i] if hi_b.ndim else hi_b[()])}]"
+            if reveal
+            else " band"
+        )
+        return Verdict(
+            False, f"{label}: got {_fmt(g)}{_where(i, arr_b.shape)}, outside the accepted{band}"
+        )
     if expected is None:
-        return Verdict(got is None, "" if got is None else f"{label}: expected None, got {describe(got)}")
+        return Verdict(
+            got is None, "" if got is None else f"{label}: expected None, got {describe(got)}"
+        )
     if isinstance(expected, str):
         if got == expected:
             return Verdict(True)
         shown = f"{expected!r}" if reveal else "another string"
-        return Verdict(False, f"{label}: expected {shown}, got {describe(got) if not isinstance(got, str) else repr(got[:60])}")
+        return Verdict(
+            False,
+            f"{label}: expected {shown}, got {describe(got) if not isinstance(got, str) else repr(got[:60])}",
+        )
     if isinstance(expected, (tuple, list)):
         if not isinstance(got, (tuple, list)):
-            return Verdict(False, f"{label}: expected a {type(expected).__name__} of length {len(expected)}, got {describe(got)}")
+            return Verdict(
+                False,
+                f"{label}: expected a {type(expected).__name__} of length {len(expected)}, got {describe(got)}",
+            )
         if len(got) != len(expected):
-            return Verdict(False, f"{label}: expected length {len(expected)}, got length {len(got)}")
+            return Verdict(
+                False, f"{label}: expected length {len(expected)}, got length {len(got)}"
+            )
         for i, (e, g) in enumerate(zip(expected, got)):
             v = compare(e, g, rtol, atol, reveal, f"{path}[{i}]" if path else f"item [{i}]")
             if not v.ok:
@@ -158,11 +180,18 @@ def compare(expected: Any, got: Any, rtol: float = 1e-7, atol: float = 1e-9,
         return Verdict(True)
     if isinstance(expected, dict):
         if not isinstance(got, dict):
-            return Verdict(False, f"{label}: expected a dict with keys {sorted(expected)}, got {describe(got)}")
+            return Verdict(
+                False, f"{label}: expected a dict with keys {sorted(expected)}, got {describe(got)}"
+            )
         if set(got) != set(expected):
-            return Verdict(False, f"{label}: expected keys {sorted(expected)}, got {sorted(map(str, got))[:10]}")
+            return Verdict(
+                False,
+                f"{label}: expected keys {sorted(expected)}, got {sorted(map(str, got))[:10]}",
+            )
         for k in sorted(expected):
-            v = compare(expected[k], got[k], rtol, atol, reveal, f"{path}[{k!r}]" if path else f"[{k!r}]")
+            v = compare(
+                expected[k], got[k], rtol, atol, reveal, f"{path}[{k!r}]" if path else f"[{k!r}]"
+            )
             if not v.ok:
                 return v
         return Verdict(True)
@@ -174,24 +203,35 @@ def compare(expected: Any, got: Any, rtol: float = 1e-7, atol: float = 1e-9,
     if arr is None:
         return Verdict(False, f"{label}: expected {describe(expected)}, got {describe(got)}")
     if arr.shape != exp.shape:
-        return Verdict(False, f"{label}: expected shape {tuple(exp.shape)}, got shape {tuple(arr.shape)}")
+        return Verdict(
+            False, f"{label}: expected shape {tuple(exp.shape)}, got shape {tuple(arr.shape)}"
+        )
 
     if _is_boolish(expected):
         if arr.dtype.kind not in "biu":
-            return Verdict(False, f"{label}: expected bool{'s' if exp.ndim else ''}, got {describe(got)}")
+            return Verdict(
+                False, f"{label}: expected bool{'s' if exp.ndim else ''}, got {describe(got)}"
+            )
         diff = arr.astype(bool) != exp
         if arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1)):
-            return Verdict(False, f"{label}: expected bool{'s' if exp.ndim else ''}, got {describe(got)}")
+            return Verdict(
+                False, f"{label}: expected bool{'s' if exp.ndim else ''}, got {describe(got)}"
+            )
         if not np.any(diff):
             return Verdict(True)
         i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
         g = bool(arr[i]) if arr.ndim else bool(arr[()])
         extra = f": expected {not g}, got {g}" if reveal else f": got {g}"
-        return Verdict(False, f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first{_where(i, diff.shape)}{extra}")
+        return Verdict(
+            False,
+            f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first{_where(i, diff.shape)}{extra}",
+        )
 
     if _is_intish(expected):
         if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
-            return Verdict(False, f"{label}: expected integer{'s' if exp.ndim else ''}, got {describe(got)}")
+            return Verdict(
+                False, f"{label}: expected integer{'s' if exp.ndim else ''}, got {describe(got)}"
+            )
         diff = arr != exp
         if not np.any(diff):
             return Verdict(True)
@@ -199,7 +239,10 @@ def compare(expected: Any, got: Any, rtol: float = 1e-7, atol: float = 1e-9,
         g = arr[i] if arr.ndim else arr[()]
         e = exp[i] if exp.ndim else exp[()]
         extra = f": expected {_fmt(e)}, got {_fmt(g)}" if reveal else f": got {_fmt(g)}"
-        return Verdict(False, f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first{_where(i, diff.shape)}{extra}")
+        return Verdict(
+            False,
+            f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first{_where(i, diff.shape)}{extra}",
+        )
 
     # floats / complex
     if arr.dtype.kind == "c" and exp.dtype.kind != "c":
@@ -262,13 +305,20 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
     if "band" in sig:
         sig = {"kind": "float", "shape": sig["band"]}
     if "none" in sig:
-        return Verdict(got is None, "" if got is None else f"{label}: expected None, got {describe(got)}")
+        return Verdict(
+            got is None, "" if got is None else f"{label}: expected None, got {describe(got)}"
+        )
     if "str" in sig:
-        return Verdict(isinstance(got, str), "" if isinstance(got, str) else f"{label}: expected a string, got {describe(got)}")
+        return Verdict(
+            isinstance(got, str),
+            "" if isinstance(got, str) else f"{label}: expected a string, got {describe(got)}",
+        )
     if "sequence" in sig:
         items = sig["sequence"]
         if not isinstance(got, (tuple, list)) or len(got) != len(items):
-            return Verdict(False, f"{label}: expected a sequence of length {len(items)}, got {describe(got)}")
+            return Verdict(
+                False, f"{label}: expected a sequence of length {len(items)}, got {describe(got)}"
+            )
         for i, (s, g) in enumerate(zip(items, got)):
             v = check_signature(s, g, f"{path}[{i}]" if path else f"item [{i}]")
             if not v.ok:
@@ -277,7 +327,9 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
     if "dict" in sig:
         keys = sig["dict"]
         if not isinstance(got, dict) or set(got) != set(keys):
-            return Verdict(False, f"{label}: expected a dict with keys {sorted(keys)}, got {describe(got)}")
+            return Verdict(
+                False, f"{label}: expected a dict with keys {sorted(keys)}, got {describe(got)}"
+            )
         for k in sorted(keys):
             v = check_signature(keys[k], got[k], f"{path}[{k!r}]" if path else f"[{k!r}]")
             if not v.ok:
@@ -296,7 +348,9 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
     if kind in ("float", "int") and arr.dtype.kind == "c":
         return Verdict(False, f"{label}: expected real numbers, got complex")
     if kind == "int" and arr.dtype.kind == "f" and not np.all(np.mod(arr, 1) == 0):
-        return Verdict(False, f"{label}: expected integer{'s' if shape else ''}, got {describe(got)}")
+        return Verdict(
+            False, f"{label}: expected integer{'s' if shape else ''}, got {describe(got)}"
+        )
     if arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
         return Verdict(False, f"{label}: contains NaN or inf")
     return Verdict(True)

@@ -28,12 +28,17 @@ from pathlib import Path
 
 from course.exercises.codec import EncodingError, decode, encode
 from course.exercises.compare import compare
-from course.exercises.notebook import SubmissionError, build_plan, forbidden_mentions, read_submission
+from course.exercises.notebook import (
+    SubmissionError,
+    build_plan,
+    forbidden_mentions,
+    read_submission,
+)
 from course.exercises.release import checks_digest, load_assignment
-from course.exercises.selfcheck import PLACEHOLDER_ID
 from course.exercises.sandbox import ChildDied, ChildTimeout, Limits, Sandbox
+from course.exercises.selfcheck import PLACEHOLDER_ID
 
-__all__ = ["GradeOptions", "Grader", "grade", "find_submissions", "Summary"]
+__all__ = ["GradeOptions", "Grader", "Summary", "find_submissions", "grade"]
 
 ABNORMAL = ("timeout", "crash", "memory", "forbidden", "grader error", "skipped")
 
@@ -71,11 +76,17 @@ def find_submissions(folder: Path, assignment: str) -> list[tuple[str, Path | No
             if sid in found:
                 continue
             preferred = entry / f"{assignment}.ipynb"
-            notebooks = sorted(p for p in entry.rglob("*.ipynb") if ".ipynb_checkpoints" not in p.parts)
+            notebooks = sorted(
+                p for p in entry.rglob("*.ipynb") if ".ipynb_checkpoints" not in p.parts
+            )
             if preferred.is_file():
                 found[sid] = (sid, preferred, None)
             elif len(notebooks) >= 1:
-                note = None if len(notebooks) == 1 else f"several notebooks in the folder; graded {notebooks[0].name}"
+                note = (
+                    None
+                    if len(notebooks) == 1
+                    else f"several notebooks in the folder; graded {notebooks[0].name}"
+                )
                 found[sid] = (sid, notebooks[0], note)
             else:
                 found[sid] = (sid, None, "no notebook (.ipynb) in the submission folder")
@@ -99,10 +110,17 @@ class Grader:
         # references that do not depend on the student: computed once, here, in the parent
         self.case_expected = {
             q.id: [q.expected(case) for case in q.public_cases + q.hidden_cases]
-            for q in self.questions if q.kind == "function"
+            for q in self.questions
+            if q.kind == "function"
         }
-        self.value_expected = {q.id: q.expected() for q in self.questions if q.kind == "value" and q.data is None}
-        solutions_root = self.solution_dir.parent if self.solution_dir.parent.name == "solutions" else self.solution_dir
+        self.value_expected = {
+            q.id: q.expected() for q in self.questions if q.kind == "value" and q.data is None
+        }
+        solutions_root = (
+            self.solution_dir.parent
+            if self.solution_dir.parent.name == "solutions"
+            else self.solution_dir
+        )
         self.sandbox = Sandbox(
             mode=self.options.mode,
             limits=Limits(memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5),
@@ -149,8 +167,13 @@ class Grader:
         }
 
     def _question_result(self, q, status, message="", points=0.0, cases=None) -> dict:
-        return {"points": round(float(points), 4), "max": q.points, "status": status,
-                "message": message, "cases": cases or []}
+        return {
+            "points": round(float(points), 4),
+            "max": q.points,
+            "status": status,
+            "message": message,
+            "cases": cases or [],
+        }
 
     def grade_one(self, sid: str, path: Path | None, problem: str | None = None) -> dict:
         """Grade one submission; never raises (a grader failure is recorded in the row)."""
@@ -159,11 +182,19 @@ class Grader:
             self._grade(row, sid, path, problem)
         except Exception as exc:  # a bug or sandbox failure must not abort the batch
             for q in self.questions:
-                row["questions"].setdefault(q.id, self._question_result(q, "grader error", "not graded"))
-            row["notes"].append(f"The grader failed on this submission ({type(exc).__name__}: {exc}); please tell your instructor.")
+                row["questions"].setdefault(
+                    q.id, self._question_result(q, "grader error", "not graded")
+                )
+            row["notes"].append(
+                f"The grader failed on this submission ({type(exc).__name__}: {exc}); please tell your instructor."
+            )
             row["status"] = "grader error"
         row["total"] = round(sum(r["points"] for r in row["questions"].values()), 4)
-        abnormal = [f"{qid}: {r['status']}" for qid, r in row["questions"].items() if r["status"] in ABNORMAL]
+        abnormal = [
+            f"{qid}: {r['status']}"
+            for qid, r in row["questions"].items()
+            if r["status"] in ABNORMAL
+        ]
         if row["status"] == "ok" and abnormal:
             row["status"] = "; ".join(abnormal)
         return row
@@ -183,19 +214,27 @@ class Grader:
             row["status"] = "invalid notebook"
             row["notes"].append(f"The submission could not be read: {exc}.")
             for q in self.questions:
-                row["questions"][q.id] = self._question_result(q, "not answered", "not graded: the notebook could not be read")
+                row["questions"][q.id] = self._question_result(
+                    q, "not answered", "not graded: the notebook could not be read"
+                )
             return
         plan = build_plan(self.release, nb, sid)
         row["notes"].extend(plan.notes)
         nb_id = plan.notebook_student_id
         if nb_id is not None and nb_id.strip() == PLACEHOLDER_ID:
-            row["notes"].append(f"STUDENT_ID was not set in the notebook; graded as {sid!r} (the submission's name).")
+            row["notes"].append(
+                f"STUDENT_ID was not set in the notebook; graded as {sid!r} (the submission's name)."
+            )
         elif nb_id is not None and nb_id.strip() != sid:
-            row["notes"].append(f"STUDENT_ID in the notebook is {nb_id!r}, but the submission is named {sid!r}: "
-                                f"graded as {sid!r}, with the data of {sid!r}.")
+            row["notes"].append(
+                f"STUDENT_ID in the notebook is {nb_id!r}, but the submission is named {sid!r}: "
+                f"graded as {sid!r}, with the data of {sid!r}."
+            )
         if not plan.answered and not any(c.origin == "extra" for c in plan.cells):
             for q in self.questions:
-                row["questions"][q.id] = self._question_result(q, "not answered", "no answer cell found")
+                row["questions"][q.id] = self._question_result(
+                    q, "not answered", "no answer cell found"
+                )
             if not nb.get("cells"):
                 row["notes"].append("The notebook is empty.")
             return
@@ -237,13 +276,23 @@ class _Session:
                 continue
             limit = self.g.timeout_for(cell.question)
             try:
-                reply = self.child.request("run", min(limit, max(0.1, self.deadline - time.monotonic())),
-                                           source=cell.source, question=cell.question)
+                reply = self.child.request(
+                    "run",
+                    min(limit, max(0.1, self.deadline - time.monotonic())),
+                    source=cell.source,
+                    question=cell.question,
+                )
             except ChildTimeout:
-                self._cell_failed(i, "timeout", f"{cell.label} did not finish within {limit:g} s and was stopped")
+                self._cell_failed(
+                    i, "timeout", f"{cell.label} did not finish within {limit:g} s and was stopped"
+                )
                 return False
             except ChildDied as exc:
-                self._cell_failed(i, self._failure_status(exc.cause), f"{cell.label} stopped the process: {exc.cause}")
+                self._cell_failed(
+                    i,
+                    self._failure_status(exc.cause),
+                    f"{cell.label} stopped the process: {exc.cause}",
+                )
                 return False
             if cell.question:
                 self.hits.setdefault(cell.question, set()).update(reply.get("tripwire") or [])
@@ -251,7 +300,9 @@ class _Session:
                 err = reply.get("error") or {}
                 self.cell_errors[i] = err
                 if cell.question and err.get("type") == "MemoryError":
-                    self.hard.setdefault(cell.question, ("memory", f"{cell.label} ran out of memory (MemoryError)"))
+                    self.hard.setdefault(
+                        cell.question, ("memory", f"{cell.label} ran out of memory (MemoryError)")
+                    )
         return True
 
     def _cell_failed(self, i: int, status: str, message: str) -> None:
@@ -260,7 +311,9 @@ class _Session:
         if cell.question:
             self.hard.setdefault(cell.question, (status, message))
         else:
-            self.row["notes"].append(f"{message[0].upper() + message[1:]}; it was skipped ({status}).")
+            self.row["notes"].append(
+                f"{message[0].upper() + message[1:]}; it was skipped ({status})."
+            )
         self._drop_child()
 
     def _drop_child(self) -> None:
@@ -273,9 +326,12 @@ class _Session:
         while self.child is None:
             if time.monotonic() > self.deadline:
                 return False
-            init = {"student_id": self.sid, "assignment": self.g.name,
-                    "data": {k: encode(v) for k, v in self.data.items()},
-                    "forbid": {q.id: list(q.forbid) for q in self.g.questions if q.forbid}}
+            init = {
+                "student_id": self.sid,
+                "assignment": self.g.name,
+                "data": {k: encode(v) for k, v in self.data.items()},
+                "forbid": {q.id: list(q.forbid) for q in self.g.questions if q.forbid},
+            }
             self.child = self.g.sandbox.start(init, self.g.options.ready_timeout)
             if not self._run_cells():
                 self._drop_child()
@@ -290,8 +346,11 @@ class _Session:
             self._drop_child()
 
     def _answer_cell_error(self, qid: str):
-        errors = [self.cell_errors[i] for i, c in enumerate(self.plan.cells)
-                  if c.question == qid and c.origin == "answer" and i in self.cell_errors]
+        errors = [
+            self.cell_errors[i]
+            for i, c in enumerate(self.plan.cells)
+            if c.question == qid and c.origin == "answer" and i in self.cell_errors
+        ]
         return errors[-1] if errors else None
 
     def _grade_question(self, q) -> dict:
@@ -300,14 +359,22 @@ class _Session:
             return g._question_result(q, "not answered", "no answer cell found (deleted?)")
         static = forbidden_mentions(self.plan.answer_sources.get(q.id, ""), q.forbid)
         if static:
-            return g._question_result(q, "forbidden", f"the answer uses {', '.join(static)}, which this question forbids")
+            return g._question_result(
+                q, "forbidden", f"the answer uses {', '.join(static)}, which this question forbids"
+            )
         if not self.ensure_child():
-            return g._question_result(q, "skipped", "not graded: the time budget for this submission ran out")
+            return g._question_result(
+                q, "skipped", "not graded: the time budget for this submission ran out"
+            )
         if q.id in self.hard:
             status, message = self.hard[q.id]
             return g._question_result(q, status, message)
         if self.hits.get(q.id):
-            return g._question_result(q, "forbidden", f"the answer calls {', '.join(sorted(self.hits[q.id]))}, which this question forbids")
+            return g._question_result(
+                q,
+                "forbidden",
+                f"the answer calls {', '.join(sorted(self.hits[q.id]))}, which this question forbids",
+            )
         if q.kind == "value":
             return self._grade_value(q)
         return self._grade_function(q)
@@ -324,15 +391,21 @@ class _Session:
             reply = self.child.request("value", 30, name=q.target)
         except (ChildTimeout, ChildDied) as exc:
             self._drop_child()
-            return g._question_result(q, "crash", f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})")
+            return g._question_result(
+                q, "crash", f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})"
+            )
         status = reply.get("status")
         if status == "undefined":
             return self._missing(q, f"no variable {q.target}")
         if status == "stub":
             return g._question_result(q, "not answered", f"{q.target} is still ...")
         if status != "ok":
-            return g._question_result(q, "error", f"{q.target} must be plain data (numbers, arrays, bools, strings): "
-                                      f"{self._err_text(reply.get('error') or {})}")
+            return g._question_result(
+                q,
+                "error",
+                f"{q.target} must be plain data (numbers, arrays, bools, strings): "
+                f"{self._err_text(reply.get('error') or {})}",
+            )
         try:
             got = decode(reply.get("value"), allow_band=False)
         except (EncodingError, TypeError, ValueError, KeyError):
@@ -375,11 +448,19 @@ class _Session:
                 continue
             limit = g.timeout_for(q.id)
             try:
-                reply = self.child.request("call", limit, name=q.target, question=q.id,
-                                           args=encode(case.args), kwargs=encode(case.kwargs))
+                reply = self.child.request(
+                    "call",
+                    limit,
+                    name=q.target,
+                    question=q.id,
+                    args=encode(case.args),
+                    kwargs=encode(case.kwargs),
+                )
             except ChildTimeout:
                 status = "timeout"
-                first_message = f"{q.target} did not return within {limit:g} s on {label} and was stopped"
+                first_message = (
+                    f"{q.target} did not return within {limit:g} s on {label} and was stopped"
+                )
                 results.append({"label": label, "ok": False, "message": "timeout"})
                 self._drop_child()
                 continue
@@ -424,8 +505,14 @@ class _Session:
             if not verdict.ok:
                 first_message = first_message or f"{label}: {verdict.message}"
         if self.hits.get(q.id):
-            return g._question_result(q, "forbidden", f"the answer calls {', '.join(sorted(self.hits[q.id]))}, "
-                                      "which this question forbids", 0.0, results)
+            return g._question_result(
+                q,
+                "forbidden",
+                f"the answer calls {', '.join(sorted(self.hits[q.id]))}, "
+                "which this question forbids",
+                0.0,
+                results,
+            )
         passed = sum(1 for r in results if r["ok"])
         if status == "not answered" and passed == 0:
             return g._question_result(q, "not answered", first_message, 0.0, results)
@@ -434,11 +521,16 @@ class _Session:
         if status is None:
             if passed == len(results):
                 status = "pass"
-            elif all(r["message"].startswith("raised ") for r in results if not r["ok"]) and passed == 0:
+            elif (
+                all(r["message"].startswith("raised ") for r in results if not r["ok"])
+                and passed == 0
+            ):
                 status = "error"
             else:
                 status = "partial" if points > 0 else "fail"
-        return g._question_result(q, status, "" if passed == len(results) else first_message, points, results)
+        return g._question_result(
+            q, status, "" if passed == len(results) else first_message, points, results
+        )
 
 
 # --------------------------------------------------------------------------------------
@@ -451,28 +543,39 @@ def _fmt_points(x: float) -> str:
 def feedback_markdown(row: dict, checks) -> str:
     """The student's feedback: per question points, status, message and hint."""
     lines = [f"# {checks.title}: feedback for {row['student']}", ""]
-    lines.append(f"**Total: {_fmt_points(row['total'])} / {_fmt_points(row['max'])}**"
-                 + ("" if row["status"] == "ok" else f"  (status: {row['status']})"))
+    lines.append(
+        f"**Total: {_fmt_points(row['total'])} / {_fmt_points(row['max'])}**"
+        + ("" if row["status"] == "ok" else f"  (status: {row['status']})")
+    )
     lines += ["", "| question | points | status |", "|---|---|---|"]
     for qid, r in row["questions"].items():
-        lines.append(f"| {qid} | {_fmt_points(r['points'])} / {_fmt_points(r['max'])} | {r['status']} |")
+        lines.append(
+            f"| {qid} | {_fmt_points(r['points'])} / {_fmt_points(r['max'])} | {r['status']} |"
+        )
     for qid, r in row["questions"].items():
         q = checks.questions.get(qid)
-        lines += ["", f"## {qid}: {_fmt_points(r['points'])} / {_fmt_points(r['max'])} ({r['status']})"]
+        lines += [
+            "",
+            f"## {qid}: {_fmt_points(r['points'])} / {_fmt_points(r['max'])} ({r['status']})",
+        ]
         if r["message"]:
             lines.append("")
             lines.append(r["message"])
         if r["cases"] and len(r["cases"]) > 1 and r["status"] != "not answered":
             lines.append("")
             for case in r["cases"]:
-                lines.append(f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
-                             + (f": {case['message']}" if case["message"] and not case["ok"] else ""))
+                lines.append(
+                    f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
+                    + (f": {case['message']}" if case["message"] and not case["ok"] else "")
+                )
         if q is not None and q.hint and r["points"] < r["max"]:
             lines += ["", f"Hint: {q.hint}"]
     if row["notes"]:
         lines += ["", "## Notes", ""] + [f"- {n}" for n in row["notes"]]
     lines.append("")
-    lines.append(f"<sub>{row['assignment']} · checks {row['checks_sha256'][:12]} · course {row['version']}</sub>")
+    lines.append(
+        f"<sub>{row['assignment']} · checks {row['checks_sha256'][:12]} · course {row['version']}</sub>"
+    )
     return "\n".join(lines) + "\n"
 
 
@@ -481,8 +584,15 @@ def write_csv(rows: list[dict], question_ids: list[str], path: Path) -> None:
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(["student", *question_ids, "total", "max", "status"])
     for row in sorted(rows, key=lambda r: r["student"]):
-        writer.writerow([row["student"], *(_fmt_points(row["questions"].get(q, {}).get("points", 0)) for q in question_ids),
-                         _fmt_points(row["total"]), _fmt_points(row["max"]), row["status"]])
+        writer.writerow(
+            [
+                row["student"],
+                *(_fmt_points(row["questions"].get(q, {}).get("points", 0)) for q in question_ids),
+                _fmt_points(row["total"]),
+                _fmt_points(row["max"]),
+                row["status"],
+            ]
+        )
     path.write_text(buf.getvalue(), encoding="utf-8")
 
 
@@ -498,22 +608,36 @@ class Summary:
 
     def text(self) -> str:
         n = len(self.rows)
-        lines = [f"Graded {self.graded} submission(s), {self.resumed} already graded (resumed), "
-                 f"in {self.seconds:.1f} s; results in {self.out}"]
+        lines = [
+            f"Graded {self.graded} submission(s), {self.resumed} already graded (resumed), "
+            f"in {self.seconds:.1f} s; results in {self.out}"
+        ]
         if not n:
             return lines[0]
         lines.append(f"{'question':<10}{'max':>6}{'mean':>8}{'full marks':>12}")
         for qid in self.question_ids:
             pts = [r["questions"][qid]["points"] for r in self.rows if qid in r["questions"]]
-            full = sum(1 for r in self.rows if qid in r["questions"] and r["questions"][qid]["points"] >= r["questions"][qid]["max"])
+            full = sum(
+                1
+                for r in self.rows
+                if qid in r["questions"]
+                and r["questions"][qid]["points"] >= r["questions"][qid]["max"]
+            )
             mean = sum(pts) / len(pts) if pts else 0.0
-            lines.append(f"{qid:<10}{_fmt_points(self.max_points[qid]):>6}{mean:>8.2f}{100 * full / n:>11.0f}%")
+            lines.append(
+                f"{qid:<10}{_fmt_points(self.max_points[qid]):>6}{mean:>8.2f}{100 * full / n:>11.0f}%"
+            )
         total = sum(r["total"] for r in self.rows) / n
         lines.append(f"{'total':<10}{_fmt_points(sum(self.max_points.values())):>6}{total:>8.2f}")
         statuses: dict[str, int] = {}
         for r in self.rows:
             statuses[r["status"]] = statuses.get(r["status"], 0) + 1
-        lines.append("status: " + ", ".join(f"{k} ({v})" for k, v in sorted(statuses.items(), key=lambda kv: (-kv[1], kv[0]))))
+        lines.append(
+            "status: "
+            + ", ".join(
+                f"{k} ({v})" for k, v in sorted(statuses.items(), key=lambda kv: (-kv[1], kv[0]))
+            )
+        )
         return "\n".join(lines)
 
 
@@ -532,11 +656,17 @@ def _read_results(path: Path) -> dict[str, dict]:
     return rows
 
 
-def grade(solution_dir: Path, submissions: Path, out: Path, options: GradeOptions | None = None) -> Summary:
+def grade(
+    solution_dir: Path, submissions: Path, out: Path, options: GradeOptions | None = None
+) -> Summary:
     """Grade every submission in ``submissions`` into ``out`` (see the module docstring)."""
     options = options or GradeOptions()
     start = time.monotonic()
-    solution_dir, submissions, out = Path(solution_dir).resolve(), Path(submissions).resolve(), Path(out).resolve()
+    solution_dir, submissions, out = (
+        Path(solution_dir).resolve(),
+        Path(submissions).resolve(),
+        Path(out).resolve(),
+    )
     out.mkdir(parents=True, exist_ok=True)
     (out / "feedback").mkdir(exist_ok=True)
     results_path = out / "results.jsonl"
@@ -550,7 +680,11 @@ def grade(solution_dir: Path, submissions: Path, out: Path, options: GradeOption
         pending = []
         for sid, path, problem in todo:
             old = previous.get(sid)
-            if old and old.get("checks_sha256") == grader.digest and old.get("version") == grader.version:
+            if (
+                old
+                and old.get("checks_sha256") == grader.digest
+                and old.get("version") == grader.version
+            ):
                 rows[sid] = old
             else:
                 pending.append((sid, path, problem))
@@ -561,18 +695,31 @@ def grade(solution_dir: Path, submissions: Path, out: Path, options: GradeOption
                 with open(results_path, "a", encoding="utf-8") as f:
                     f.write(json.dumps(row, sort_keys=True, ensure_ascii=False) + "\n")
                     f.flush()
-                (out / "feedback" / f"{row['student']}.md").write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
+                (out / "feedback" / f"{row['student']}.md").write_text(
+                    feedback_markdown(row, grader.checks), encoding="utf-8"
+                )
                 rows[row["student"]] = row
 
         try:
             from tqdm import tqdm
         except ImportError:  # pragma: no cover
             tqdm = None
-        bar = tqdm(total=len(pending), desc=f"grading {grader.name}", unit="student", file=sys.stderr,
-                   disable=not options.progress or tqdm is None) if tqdm else None
+        bar = (
+            tqdm(
+                total=len(pending),
+                desc=f"grading {grader.name}",
+                unit="student",
+                file=sys.stderr,
+                disable=not options.progress or tqdm is None,
+            )
+            if tqdm
+            else None
+        )
         jobs = max(1, int(options.jobs))
         with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(grader.grade_one, sid, path, problem) for sid, path, problem in pending]
+            futures = [
+                pool.submit(grader.grade_one, sid, path, problem) for sid, path, problem in pending
+            ]
             for fut in as_completed(futures):
                 finish(fut.result())
                 if bar is not None:
@@ -586,5 +733,12 @@ def grade(solution_dir: Path, submissions: Path, out: Path, options: GradeOption
         qids = [q.id for q in grader.questions]
         final = [rows[sid] for sid, _, _ in todo]
         write_csv(final, qids, out / "grades.csv")
-        return Summary(final, qids, {q.id: q.points for q in grader.questions}, len(pending), resumed,
-                       time.monotonic() - start, out)
+        return Summary(
+            final,
+            qids,
+            {q.id: q.points for q in grader.questions},
+            len(pending),
+            resumed,
+            time.monotonic() - start,
+            out,
+        )

@@ -23,15 +23,15 @@ import nbformat
 
 __all__ = [
     "MarkerError",
-    "SubmissionError",
-    "ReleaseCell",
-    "Release",
-    "make_release",
-    "read_submission",
-    "PlanCell",
     "Plan",
+    "PlanCell",
+    "Release",
+    "ReleaseCell",
+    "SubmissionError",
     "build_plan",
     "forbidden_mentions",
+    "make_release",
+    "read_submission",
     "student_id_in",
 ]
 
@@ -44,7 +44,9 @@ _MARKER_WORDS = re.compile(r"(BEGIN|END)\s+(SOLUTION|HIDDEN\s+TESTS)", re.IGNORE
 _CHECK_SOURCE = re.compile(r"""^\s*check\(\s*["']([A-Za-z][A-Za-z0-9_]*)["']\s*\)\s*$""")
 _STUDENT_ID_LINE = re.compile(r"^STUDENT_ID\s*=.*$", re.MULTILINE)
 _ROLES = ("setup", "answer", "check", "context")
-PLACEHOLDER_LINE = 'STUDENT_ID = "replace-with-your-student-id"   # <- your student ID, exactly as registered'
+PLACEHOLDER_LINE = (
+    'STUDENT_ID = "replace-with-your-student-id"   # <- your student ID, exactly as registered'
+)
 MAX_NOTEBOOK_BYTES = 50_000_000
 
 
@@ -87,7 +89,9 @@ def _compiles(source: str) -> str | None:
 # --------------------------------------------------------------------------------------
 # release
 # --------------------------------------------------------------------------------------
-def strip_markers(source: str, where: str, question: str | None, allow_solution: bool) -> tuple[str, int]:
+def strip_markers(
+    source: str, where: str, question: str | None, allow_solution: bool
+) -> tuple[str, int]:
     """Return the released source (stubs for SOLUTION regions, HIDDEN TESTS regions removed)
     and the number of solution regions; raise :class:`MarkerError` on malformed markers."""
     out: list[str] = []
@@ -99,15 +103,21 @@ def strip_markers(source: str, where: str, question: str | None, allow_solution:
         if stripped in (BEGIN_SOLUTION, END_SOLUTION, BEGIN_HIDDEN, END_HIDDEN):
             if stripped == BEGIN_SOLUTION:
                 if state is not None:
-                    raise MarkerError(f"{where}, line {n}: '{BEGIN_SOLUTION}' inside an open region (line {state[2] if state[0] == 'solution' else state[1]}); close it first")
+                    raise MarkerError(
+                        f"{where}, line {n}: '{BEGIN_SOLUTION}' inside an open region (line {state[2] if state[0] == 'solution' else state[1]}); close it first"
+                    )
                 if not allow_solution:
-                    raise MarkerError(f"{where}, line {n}: a SOLUTION region outside an answer cell; "
-                                      "tag the cell as an answer (course.exercises.authoring.answer_cell)")
+                    raise MarkerError(
+                        f"{where}, line {n}: a SOLUTION region outside an answer cell; "
+                        "tag the cell as an answer (course.exercises.authoring.answer_cell)"
+                    )
                 indent = line[: len(line) - len(line.lstrip())]
                 state = ("solution", indent, n, [])
             elif stripped == END_SOLUTION:
                 if state is None or state[0] != "solution":
-                    raise MarkerError(f"{where}, line {n}: '{END_SOLUTION}' without a matching '{BEGIN_SOLUTION}'")
+                    raise MarkerError(
+                        f"{where}, line {n}: '{END_SOLUTION}' without a matching '{BEGIN_SOLUTION}'"
+                    )
                 _, indent, _, stubs = state
                 if stubs:
                     out.extend(stubs)
@@ -118,24 +128,31 @@ def strip_markers(source: str, where: str, question: str | None, allow_solution:
                 state = None
             elif stripped == BEGIN_HIDDEN:
                 if state is not None:
-                    raise MarkerError(f"{where}, line {n}: '{BEGIN_HIDDEN}' inside an open region; close it first")
+                    raise MarkerError(
+                        f"{where}, line {n}: '{BEGIN_HIDDEN}' inside an open region; close it first"
+                    )
                 state = ("hidden", n)
             else:
                 if state is None or state[0] != "hidden":
-                    raise MarkerError(f"{where}, line {n}: '{END_HIDDEN}' without a matching '{BEGIN_HIDDEN}'")
+                    raise MarkerError(
+                        f"{where}, line {n}: '{END_HIDDEN}' without a matching '{BEGIN_HIDDEN}'"
+                    )
                 state = None
             continue
         if _MARKER_WORDS.search(line) and stripped.startswith("#"):
-            raise MarkerError(f"{where}, line {n}: malformed marker {stripped!r}; write exactly "
-                              f"'{BEGIN_SOLUTION}', '{END_SOLUTION}', '{BEGIN_HIDDEN}' or '{END_HIDDEN}'")
+            raise MarkerError(
+                f"{where}, line {n}: malformed marker {stripped!r}; write exactly "
+                f"'{BEGIN_SOLUTION}', '{END_SOLUTION}', '{BEGIN_HIDDEN}' or '{END_HIDDEN}'"
+            )
         if state is None:
             if stripped.startswith(STUB_PREFIX):
-                raise MarkerError(f"{where}, line {n}: '{STUB_PREFIX}' lines belong inside a SOLUTION region")
+                raise MarkerError(
+                    f"{where}, line {n}: '{STUB_PREFIX}' lines belong inside a SOLUTION region"
+                )
             out.append(line)
-        elif state[0] == "solution":
-            if stripped.startswith(STUB_PREFIX):
-                indent = line[: len(line) - len(line.lstrip())]
-                state[3].append(indent + stripped[len(STUB_PREFIX):].lstrip())
+        elif state[0] == "solution" and stripped.startswith(STUB_PREFIX):
+            indent = line[: len(line) - len(line.lstrip())]
+            state[3].append(indent + stripped[len(STUB_PREFIX) :].lstrip())
         # hidden regions are dropped
     if state is not None:
         kind = BEGIN_SOLUTION if state[0] == "solution" else BEGIN_HIDDEN
@@ -207,7 +224,11 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
         if ctype == "markdown" or ctype == "raw":
             if _MARKER_WORDS.search(src):
                 raise MarkerError(f"{where}: markers are only supported in code cells")
-            new = nbformat.v4.new_markdown_cell(src) if ctype == "markdown" else nbformat.v4.new_raw_cell(src)
+            new = (
+                nbformat.v4.new_markdown_cell(src)
+                if ctype == "markdown"
+                else nbformat.v4.new_raw_cell(src)
+            )
             new["id"] = cid
             new["metadata"] = {"course": {"role": "text"}}
             if cell.get("attachments"):
@@ -232,21 +253,29 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
         if role == "setup" and not first_code:
             raise MarkerError(f"{where}: the setup cell must be the first code cell")
         if first_code and role != "setup":
-            raise MarkerError(f"{where}: the first code cell must be the setup cell with STUDENT_ID "
-                              "(course.exercises.authoring.setup_cell)")
+            raise MarkerError(
+                f"{where}: the first code cell must be the setup cell with STUDENT_ID "
+                "(course.exercises.authoring.setup_cell)"
+            )
         first_code = False
         if role in ("answer", "check") and not question:
             raise MarkerError(f"{where}: an {role} cell needs metadata course.question")
         released, regions = strip_markers(src, where, question, allow_solution=(role == "answer"))
         if role == "answer":
             if regions == 0:
-                raise MarkerError(f"{where}: answer cell for {question} has no '{BEGIN_SOLUTION}' region")
+                raise MarkerError(
+                    f"{where}: answer cell for {question} has no '{BEGIN_SOLUTION}' region"
+                )
             if question in seen_answers:
-                raise MarkerError(f"{where}: second answer cell for {question} (first: cell {seen_answers[question]})")
+                raise MarkerError(
+                    f"{where}: second answer cell for {question} (first: cell {seen_answers[question]})"
+                )
             seen_answers[question] = index
         if role == "setup":
             if not _STUDENT_ID_LINE.search(released):
-                raise MarkerError(f"{where}: the setup cell must assign STUDENT_ID on a line of its own")
+                raise MarkerError(
+                    f"{where}: the setup cell must assign STUDENT_ID on a line of its own"
+                )
             # the solution may carry a real ID (e.g. "demo"); students always get the placeholder
             released = _STUDENT_ID_LINE.sub(lambda _m: PLACEHOLDER_LINE, released, count=1)
         for text, what in ((src, "solution"), (released, "released")):
@@ -272,7 +301,9 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                 raise MarkerError(f"{where_nb}: the answer cell of {qid} must {what} {q.target!r}")
         for qid in seen_answers:
             if qid not in questions:
-                raise MarkerError(f"{where_nb}: answer cell for {qid!r}, which checks.py does not define")
+                raise MarkerError(
+                    f"{where_nb}: answer cell for {qid!r}, which checks.py does not define"
+                )
 
     nb = nbformat.v4.new_notebook()
     nb["cells"] = cells_out
@@ -319,10 +350,14 @@ def read_submission(path) -> dict:
     try:
         nb = json.loads(raw.decode("utf-8", errors="replace"))
     except (json.JSONDecodeError, RecursionError) as exc:
-        raise SubmissionError(f"the notebook is not valid JSON ({getattr(exc, 'msg', 'too deeply nested')}"
-                              f"{f' at line {exc.lineno}' if hasattr(exc, 'lineno') else ''})") from None
+        raise SubmissionError(
+            f"the notebook is not valid JSON ({getattr(exc, 'msg', 'too deeply nested')}"
+            f"{f' at line {exc.lineno}' if hasattr(exc, 'lineno') else ''})"
+        ) from None
     if not isinstance(nb, dict) or not isinstance(nb.get("cells", None), list):
-        raise SubmissionError("the file is JSON but not a Jupyter notebook (no 'cells' list; nbformat 4 expected)")
+        raise SubmissionError(
+            "the file is JSON but not a Jupyter notebook (no 'cells' list; nbformat 4 expected)"
+        )
     return nb
 
 
@@ -352,9 +387,13 @@ def student_id_in(source: str) -> str | None:
     except (SyntaxError, ValueError):
         return None
     for node in tree.body:
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "STUDENT_ID" for t in node.targets):
-            if isinstance(node.value, ast.Constant) and isinstance(node.value.value, str):
-                return node.value.value
+        if (
+            isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == "STUDENT_ID" for t in node.targets)
+            and isinstance(node.value, ast.Constant)
+            and isinstance(node.value.value, str)
+        ):
+            return node.value.value
     return None
 
 
@@ -363,7 +402,9 @@ def _normalise(source: str) -> str:
 
 
 def setup_source(release: Release, student_id: str) -> str:
-    return _STUDENT_ID_LINE.sub(lambda _m: f"STUDENT_ID = {json.dumps(student_id)}", release.setup.source, count=1)
+    return _STUDENT_ID_LINE.sub(
+        lambda _m: f"STUDENT_ID = {json.dumps(student_id)}", release.setup.source, count=1
+    )
 
 
 def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
@@ -397,27 +438,38 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
         elif meta.get("role") == "answer" and meta.get("question") in answer_slot:
             match = next(c for c in code_cells if c.index == answer_slot[meta["question"]])
         elif meta.get("role") in ("setup", "context", "check"):
-            plan.notes.append(f"Ignored a copy of a protected cell (notebook cell {pos + 1}); protected cells run as released.")
+            plan.notes.append(
+                f"Ignored a copy of a protected cell (notebook cell {pos + 1}); protected cells run as released."
+            )
             continue
         if match is None:
             n_extra += 1
-            slots[anchor].append(PlanCell(src, None, "extra", f"your added cell at position {pos + 1}"))
+            slots[anchor].append(
+                PlanCell(src, None, "extra", f"your added cell at position {pos + 1}")
+            )
             continue
         if match.role == "answer":
-            slots[match.index].append(PlanCell(src, match.question, "answer", f"answer cell of {match.question}"))
+            slots[match.index].append(
+                PlanCell(src, match.question, "answer", f"answer cell of {match.question}")
+            )
             plan.answered.add(match.question)
         elif match.role == "setup":
             plan.notebook_student_id = student_id_in(src)
-            if _normalise(_STUDENT_ID_LINE.sub("", src)) != _normalise(_STUDENT_ID_LINE.sub("", match.source)):
+            if _normalise(_STUDENT_ID_LINE.sub("", src)) != _normalise(
+                _STUDENT_ID_LINE.sub("", match.source)
+            ):
                 plan.notes.append("The setup cell was edited; the released version was used.")
-        elif match.role == "context":
-            if _normalise(src) != _normalise(match.source):
-                plan.notes.append(f"Protected cell {match.id!r} was edited; the released version was used.")
+        elif match.role == "context" and _normalise(src) != _normalise(match.source):
+            plan.notes.append(
+                f"Protected cell {match.id!r} was edited; the released version was used."
+            )
         anchor = match.index
 
     for cell in code_cells:
         if cell.role == "setup":
-            plan.cells.append(PlanCell(setup_source(release, student_id), None, "setup", "setup cell"))
+            plan.cells.append(
+                PlanCell(setup_source(release, student_id), None, "setup", "setup cell")
+            )
             plan.cells.extend(slots[cell.index])
         elif cell.role == "context":
             plan.cells.append(PlanCell(cell.source, None, "context", f"protected cell {cell.id!r}"))
@@ -430,7 +482,9 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
                 plan.cells.append(PlanCell(item.source, q, item.origin, item.label))
             plan.answer_sources[q] = "\n\n".join(item.source for item in slots[cell.index])
             if q not in plan.answered:
-                plan.notes.append(f"No answer cell for {q} was found (deleted?); {q} counts as not answered.")
+                plan.notes.append(
+                    f"No answer cell for {q} was found (deleted?); {q} counts as not answered."
+                )
     return plan
 
 
@@ -446,16 +500,23 @@ def forbidden_mentions(source: str, forbid) -> list[str]:
         last = dotted.rsplit(".", 1)[-1]
         found = False
         if tree is None:
-            found = re.search(rf"(\.|import\s+|import\s.*,\s*)\b{re.escape(last)}\b", source) is not None
+            found = (
+                re.search(rf"(\.|import\s+|import\s.*,\s*)\b{re.escape(last)}\b", source)
+                is not None
+            )
         else:
             for node in ast.walk(tree):
-                if isinstance(node, ast.Attribute) and node.attr == last:
-                    found = True
-                elif isinstance(node, ast.ImportFrom) and any(a.name == last for a in node.names):
-                    found = True
-                elif isinstance(node, ast.Import) and any(a.name == dotted or a.name.endswith("." + last) for a in node.names):
-                    found = True
-                elif isinstance(node, ast.Constant) and node.value == last:
+                if (
+                    (isinstance(node, ast.Attribute) and node.attr == last)
+                    or (
+                        isinstance(node, ast.ImportFrom) and any(a.name == last for a in node.names)
+                    )
+                    or (
+                        isinstance(node, ast.Import)
+                        and any(a.name == dotted or a.name.endswith("." + last) for a in node.names)
+                    )
+                    or (isinstance(node, ast.Constant) and node.value == last)
+                ):
                     found = True
                 if found:
                     break

@@ -19,7 +19,15 @@ from course.exercises.compare import signature
 from course.exercises.notebook import Release, make_release
 from course.exercises.spec import DEMO_STUDENT_ID, Checks, load_checks
 
-__all__ = ["FORMAT", "load_assignment", "public_spec", "release_files", "release", "checks_digest", "find_solutions"]
+__all__ = [
+    "FORMAT",
+    "checks_digest",
+    "find_solutions",
+    "load_assignment",
+    "public_spec",
+    "release",
+    "release_files",
+]
 
 FORMAT = 1
 CHECKS_FILE = "checks.json"
@@ -40,7 +48,9 @@ def load_assignment(solution_dir: Path) -> tuple[Checks, Release]:
     checks = load_checks(solution_dir)
     nb_path = solution_dir / f"{name}.ipynb"
     if not nb_path.is_file():
-        raise FileNotFoundError(f"{nb_path} does not exist: the solution notebook is named after its folder")
+        raise FileNotFoundError(
+            f"{nb_path} does not exist: the solution notebook is named after its folder"
+        )
     solution_nb = nbformat.read(nb_path, as_version=4)
     rel = make_release(solution_nb, name, checks.questions)
     return checks, rel
@@ -68,12 +78,14 @@ def public_spec(checks: Checks) -> dict:
         }
         if q.kind == "function":
             for case in q.public_cases:
-                entry["cases"].append({
-                    "label": case.label,
-                    "args": encode(case.args),
-                    "kwargs": encode(case.kwargs),
-                    "expected": encode(q.expected(case)),
-                })
+                entry["cases"].append(
+                    {
+                        "label": case.label,
+                        "args": encode(case.args),
+                        "kwargs": encode(case.kwargs),
+                        "expected": encode(q.expected(case)),
+                    }
+                )
             entry["hidden_cases"] = len(q.hidden_cases)
         else:
             data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
@@ -111,14 +123,20 @@ def release_files(solution_dir: Path) -> dict[str, bytes]:
     if checks.data_module is not None:
         data_file = solution_dir / "data.py"
         if not data_file.is_file():
-            raise FileNotFoundError(f"{data_file}: Checks(data=...) needs the public data.py next to checks.py")
+            raise FileNotFoundError(
+                f"{data_file}: Checks(data=...) needs the public data.py next to checks.py"
+            )
         files["data.py"] = data_file.read_bytes()
     for extra in checks.files:
         path = (solution_dir / extra).resolve()
         if solution_dir not in path.parents or not path.is_file():
-            raise FileNotFoundError(f"{name}: listed file {extra!r} is not a file inside {solution_dir}")
+            raise FileNotFoundError(
+                f"{name}: listed file {extra!r} is not a file inside {solution_dir}"
+            )
         if path.name in ("checks.py",) or path.suffix == ".ipynb":
-            raise ValueError(f"{name}: refusing to release {extra!r} (checks and solutions stay private)")
+            raise ValueError(
+                f"{name}: refusing to release {extra!r} (checks and solutions stay private)"
+            )
         files[Path(extra).as_posix()] = path.read_bytes()
     return files
 

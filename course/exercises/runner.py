@@ -25,9 +25,24 @@ import os
 import resource
 import signal
 import sys
+import typing
 from builtins import (  # bound now, so a student patching builtins cannot break the protocol
-    BaseException, Exception, NotImplementedError, SystemExit, bytes, callable, dict, getattr,
-    int, isinstance, len, list, set, sorted, str, tuple, type,
+    BaseException,
+    Exception,
+    NotImplementedError,
+    bytes,
+    callable,
+    dict,
+    getattr,
+    int,
+    isinstance,
+    len,
+    list,
+    set,
+    sorted,
+    str,
+    tuple,
+    type,
 )
 
 from course.exercises import codec
@@ -44,8 +59,16 @@ MAX_RESPONSE_BYTES = 64_000_000
 
 
 _PROTECTED_MODULES = (
-    "builtins", "json", "json.decoder", "json.encoder", "json.scanner", "base64", "binascii",
-    "math", "numpy", "course.exercises.codec",
+    "builtins",
+    "json",
+    "json.decoder",
+    "json.encoder",
+    "json.scanner",
+    "base64",
+    "binascii",
+    "math",
+    "numpy",
+    "course.exercises.codec",
 )
 
 
@@ -58,8 +81,11 @@ class _Trusted:
     """
 
     def __init__(self):
-        self.snapshots = [(vars(sys.modules[name]), dict(vars(sys.modules[name])))
-                          for name in _PROTECTED_MODULES if name in sys.modules]
+        self.snapshots = [
+            (vars(sys.modules[name]), dict(vars(sys.modules[name])))
+            for name in _PROTECTED_MODULES
+            if name in sys.modules
+        ]
         self._changes = []
 
     def __enter__(self):
@@ -88,8 +114,8 @@ _TRUSTED = contextlib.nullcontext()  # replaced by a _Trusted snapshot before st
 
 class _State:
     question = None
-    hits: dict = {}
-    forbid: dict = {}
+    hits: typing.ClassVar[dict] = {}
+    forbid: typing.ClassVar[dict] = {}
 
 
 _STATE = _State()
@@ -182,7 +208,9 @@ def enter_sandbox_dir(tmpdir: str) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGCHLD, signal.SIG_DFL)
-    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # over-long files fail with EFBIG instead of killing us
+    signal.signal(
+        signal.SIGXFSZ, signal.SIG_IGN
+    )  # over-long files fail with EFBIG instead of killing us
 
 
 def _vm_size() -> int:
@@ -195,12 +223,11 @@ def _vm_size() -> int:
 
 def set_limits(limits: dict) -> None:
     """Apply resource limits; the memory limit is a budget on top of what is already mapped."""
+
     def lim(res, value):
         value = int(value)
-        try:
+        with contextlib.suppress(ValueError, OSError):
             resource.setrlimit(res, (value, value))
-        except (ValueError, OSError):
-            pass
 
     if limits.get("memory_mb"):
         lim(resource.RLIMIT_AS, _vm_size() + int(limits["memory_mb"]) * 1024 * 1024)
@@ -213,19 +240,57 @@ def set_limits(limits: dict) -> None:
         lim(resource.RLIMIT_NPROC, limits["nproc"])
 
 
-_BLOCKED_EVENTS = frozenset({
-    "os.system", "os.exec", "os.posix_spawn", "os.spawn", "os.fork", "os.forkpty", "os.vfork",
-    "subprocess.Popen", "pty.spawn", "os.startfile", "webbrowser.open",
-    "ctypes.dlopen", "ctypes.dlsym", "ctypes.call_function", "ctypes.cdata",
-    "socket.__new__", "socket.connect", "socket.bind", "socket.sendto", "socket.sendmsg",
-    "resource.setrlimit", "resource.prlimit", "signal.pthread_kill", "sys.remote_exec",
-})
+_BLOCKED_EVENTS = frozenset(
+    {
+        "os.system",
+        "os.exec",
+        "os.posix_spawn",
+        "os.spawn",
+        "os.fork",
+        "os.forkpty",
+        "os.vfork",
+        "subprocess.Popen",
+        "pty.spawn",
+        "os.startfile",
+        "webbrowser.open",
+        "ctypes.dlopen",
+        "ctypes.dlsym",
+        "ctypes.call_function",
+        "ctypes.cdata",
+        "socket.__new__",
+        "socket.connect",
+        "socket.bind",
+        "socket.sendto",
+        "socket.sendmsg",
+        "resource.setrlimit",
+        "resource.prlimit",
+        "signal.pthread_kill",
+        "sys.remote_exec",
+    }
+)
 _PATH_EVENTS = {
-    "os.remove": (0,), "os.rename": (0, 1), "os.rmdir": (0,), "os.mkdir": (0,), "os.chmod": (0,),
-    "os.chown": (0,), "os.link": (0, 1), "os.symlink": (1,), "os.truncate": (0,), "os.utime": (0,),
-    "shutil.rmtree": (0,), "os.mkfifo": (0,), "os.mknod": (0,), "os.setxattr": (0,),
-    "os.removexattr": (0,), "os.chflags": (0,), "os.lchmod": (0,), "os.lchflags": (0,),
-    "shutil.copyfile": (1,), "shutil.copytree": (1,), "shutil.move": (1,), "shutil.chown": (0,),
+    "os.remove": (0,),
+    "os.rename": (0, 1),
+    "os.rmdir": (0,),
+    "os.mkdir": (0,),
+    "os.chmod": (0,),
+    "os.chown": (0,),
+    "os.link": (0, 1),
+    "os.symlink": (1,),
+    "os.truncate": (0,),
+    "os.utime": (0,),
+    "shutil.rmtree": (0,),
+    "os.mkfifo": (0,),
+    "os.mknod": (0,),
+    "os.setxattr": (0,),
+    "os.removexattr": (0,),
+    "os.chflags": (0,),
+    "os.lchmod": (0,),
+    "os.lchflags": (0,),
+    "shutil.copyfile": (1,),
+    "shutil.copytree": (1,),
+    "shutil.move": (1,),
+    "shutil.chown": (0,),
 }
 
 
@@ -271,19 +336,29 @@ def make_audit_hook(tmpdir: str, deny_read=()):
             flags = args[2] if len(args) > 2 and isinstance(args[2], int) else 0
             mode = args[1] if isinstance(args[1], str) else ""
             if (flags & write_flags or any(c in mode for c in "wax+")) and not writable(full):
-                raise PermissionError(f"not allowed while grading: writing {args[0]!r} (outside the temporary folder)")
+                raise PermissionError(
+                    f"not allowed while grading: writing {args[0]!r} (outside the temporary folder)"
+                )
             if not readable(full):
                 raise PermissionError(f"not allowed while grading: reading {args[0]!r}")
         elif event in path_events:
             for i in path_events[event]:
-                if i < len(args) and not isinstance(args[i], int) and not writable(resolve(args[i])):
+                if (
+                    i < len(args)
+                    and not isinstance(args[i], int)
+                    and not writable(resolve(args[i]))
+                ):
                     raise PermissionError(f"not allowed while grading: {event} {args[i]!r}")
         elif event in ("os.kill", "os.killpg"):
             if not (event == "os.kill" and args and args[0] == me):
                 raise PermissionError(f"not allowed while grading: {event}")
-        elif event in ("os.listdir", "os.scandir") and args and args[0] is not None:
-            if not readable(resolve(args[0])):
-                raise PermissionError("not allowed while grading: listing a protected folder")
+        elif (
+            event in ("os.listdir", "os.scandir")
+            and args
+            and args[0] is not None
+            and not readable(resolve(args[0]))
+        ):
+            raise PermissionError("not allowed while grading: listing a protected folder")
 
     return hook
 
@@ -303,8 +378,8 @@ def install_tripwires(forbid: dict, user_ns: dict) -> None:
 
 def make_shell():
     """A plain IPython shell (no history database, no colours): IPython semantics for cells."""
-    from traitlets.config import Config
     from IPython.core.interactiveshell import InteractiveShell
+    from traitlets.config import Config
 
     config = Config()
     config.HistoryManager.enabled = False
@@ -322,9 +397,19 @@ def make_shell():
 
 
 PRELOAD = (
-    "numpy", "scipy", "scipy.linalg", "scipy.stats", "scipy.optimize", "matplotlib",
-    "matplotlib.pyplot", "IPython.core.interactiveshell", "course", "course.results",
-    "course.linalg", "course.lsq", "course.exercises.selfcheck",
+    "numpy",
+    "scipy",
+    "scipy.linalg",
+    "scipy.stats",
+    "scipy.optimize",
+    "matplotlib",
+    "matplotlib.pyplot",
+    "IPython.core.interactiveshell",
+    "course",
+    "course.results",
+    "course.linalg",
+    "course.lsq",
+    "course.exercises.selfcheck",
 )
 
 
@@ -450,7 +535,11 @@ class Child:
                 return
             op = getattr(self, "op_" + str(req.get("op")), None)
             try:
-                reply = op(req) if op is not None else {"status": "error", "error": {"type": "Protocol", "message": "unknown op"}}
+                reply = (
+                    op(req)
+                    if op is not None
+                    else {"status": "error", "error": {"type": "Protocol", "message": "unknown op"}}
+                )
             except BaseException as exc:
                 reply = {"status": "error", "error": _error_info(exc)}
             reply["id"] = req.get("id")
@@ -459,8 +548,14 @@ class Child:
                 self.send(reply)
             except BaseException:
                 try:
-                    self.send({"id": req.get("id"), "nonce": req.get("nonce"), "status": "error",
-                               "error": {"type": "Protocol", "message": "reply could not be encoded"}})
+                    self.send(
+                        {
+                            "id": req.get("id"),
+                            "nonce": req.get("nonce"),
+                            "status": "error",
+                            "error": {"type": "Protocol", "message": "reply could not be encoded"},
+                        }
+                    )
                 except BaseException:
                     return
 
@@ -498,8 +593,15 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
         seccomp.die_with_parent()
         secure = seccomp.install() if use_seccomp else False  # uses ctypes: before the hook
         sys.addaudithook(make_audit_hook(tmpdir, init.get("deny_read", ())))
-        child.send({"id": init.get("id"), "nonce": init.get("nonce"), "status": "ready",
-                    "seccomp": bool(secure), "pid": os.getpid()})
+        child.send(
+            {
+                "id": init.get("id"),
+                "nonce": init.get("nonce"),
+                "status": "ready",
+                "seccomp": bool(secure),
+                "pid": os.getpid(),
+            }
+        )
         child.serve()
     except BaseException:
         code = 4

@@ -57,10 +57,11 @@ What this sandbox does NOT stop (it is defence in depth, not a security boundary
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-import select
 import secrets
+import select
 import shutil
 import signal
 import socket
@@ -72,7 +73,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Limits", "ChildDied", "ChildTimeout", "SandboxError", "Sandbox", "describe_exit"]
+__all__ = ["ChildDied", "ChildTimeout", "Limits", "Sandbox", "SandboxError", "describe_exit"]
 
 _PACKAGE_PARENT = str(Path(__file__).resolve().parents[2])
 MAX_REPLY_BYTES = 64_000_000
@@ -89,8 +90,13 @@ class Limits:
     seccomp: bool = True
 
     def as_dict(self) -> dict:
-        return dict(memory_mb=self.memory_mb, cpu_seconds=self.cpu_seconds, file_mb=self.file_mb,
-                    output_chars=self.output_chars, seccomp=self.seccomp)
+        return dict(
+            memory_mb=self.memory_mb,
+            cpu_seconds=self.cpu_seconds,
+            file_mb=self.file_mb,
+            output_chars=self.output_chars,
+            seccomp=self.seccomp,
+        )
 
 
 class SandboxError(RuntimeError):
@@ -134,15 +140,21 @@ def describe_exit(returncode: int | None) -> str:
 
 
 def _scrubbed_env(extra: dict | None = None) -> dict:
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "JUPYTER", "IPYTHON", "MPL"))}
-    env.update({
-        "MPLBACKEND": "Agg",
-        "OPENBLAS_NUM_THREADS": "1",
-        "OMP_NUM_THREADS": "1",
-        "MKL_NUM_THREADS": "1",
-        "PYTHONDONTWRITEBYTECODE": "1",
-        "PYTHONPATH": _PACKAGE_PARENT,
-    })
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith(("PYTHON", "JUPYTER", "IPYTHON", "MPL"))
+    }
+    env.update(
+        {
+            "MPLBACKEND": "Agg",
+            "OPENBLAS_NUM_THREADS": "1",
+            "OMP_NUM_THREADS": "1",
+            "MKL_NUM_THREADS": "1",
+            "PYTHONDONTWRITEBYTECODE": "1",
+            "PYTHONPATH": _PACKAGE_PARENT,
+        }
+    )
     env.update(extra or {})
     return env
 
@@ -150,7 +162,9 @@ def _scrubbed_env(extra: dict | None = None) -> dict:
 class Child:
     """Parent-side handle of one sandboxed child."""
 
-    def __init__(self, sandbox: "Sandbox", pid: int, tmpdir: str, req_w: int, resp_r: int, popen=None):
+    def __init__(
+        self, sandbox: Sandbox, pid: int, tmpdir: str, req_w: int, resp_r: int, popen=None
+    ):
         self.sandbox = sandbox
         self.pid = pid
         self.tmpdir = tmpdir
@@ -217,7 +231,11 @@ class Child:
                     reply = json.loads(line)
                 except ValueError:
                     continue
-                if isinstance(reply, dict) and reply.get("nonce") == nonce and reply.get("id") == self._next_id:
+                if (
+                    isinstance(reply, dict)
+                    and reply.get("nonce") == nonce
+                    and reply.get("id") == self._next_id
+                ):
                     return reply
         except ChildTimeout:
             self.kill()
@@ -231,19 +249,15 @@ class Child:
         """SIGKILL the child's whole process group (idempotent)."""
         if self.alive:
             self.killed_by_us = True
-            try:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(self.pid, signal.SIGKILL)
-            except (ProcessLookupError, PermissionError):
-                pass
             self.alive = False
 
     def _death_cause(self) -> str:
         was_alive = self.alive
         if was_alive:
-            try:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(self.pid, signal.SIGKILL)  # make sure nothing of it keeps running
-            except (ProcessLookupError, PermissionError):
-                pass
             self.alive = False
         status = self.sandbox._exit_status(self)
         return describe_exit(status)
@@ -259,21 +273,15 @@ class Child:
     def close(self) -> None:
         """Stop the child (politely, then SIGKILL) and delete its temp dir."""
         if self.alive:
-            try:
+            with contextlib.suppress(ChildTimeout, ChildDied):
                 self._send({"op": "exit"}, time.monotonic() + 0.5)
-            except (ChildTimeout, ChildDied):
-                pass
             self.kill()
         if self.popen is not None:
-            try:
+            with contextlib.suppress(subprocess.TimeoutExpired):
                 self.popen.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                pass
         for fd in (self.req_w, self.resp_r):
-            try:
+            with contextlib.suppress(OSError):
                 os.close(fd)
-            except OSError:
-                pass
         self.req_w = self.resp_r = -1
         shutil.rmtree(self.tmpdir, ignore_errors=True)
 
@@ -283,7 +291,11 @@ class Sandbox:
 
     def __init__(self, mode: str = "auto", limits: Limits | None = None, preload=(), deny_read=()):
         if mode == "auto":
-            mode = "fork" if (sys.platform.startswith("linux") and hasattr(socket, "send_fds")) else "spawn"
+            mode = (
+                "fork"
+                if (sys.platform.startswith("linux") and hasattr(socket, "send_fds"))
+                else "spawn"
+            )
         if mode not in ("fork", "spawn"):
             raise ValueError(f"unknown sandbox mode {mode!r}")
         self.mode = mode
@@ -304,9 +316,21 @@ class Sandbox:
         parent_sock, child_sock = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         log = open(os.path.join(self._rundir, "forkserver.log"), "wb")
         self._server = subprocess.Popen(
-            [sys.executable, "-m", "course.exercises.sandbox", str(child_sock.fileno()), json.dumps(self.preload)],
-            pass_fds=(child_sock.fileno(),), cwd=self._rundir, env=_scrubbed_env(),
-            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+            [
+                sys.executable,
+                "-m",
+                "course.exercises.sandbox",
+                str(child_sock.fileno()),
+                json.dumps(self.preload),
+            ],
+            pass_fds=(child_sock.fileno(),),
+            cwd=self._rundir,
+            env=_scrubbed_env(),
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
         log.close()
         child_sock.close()
         self._sock = parent_sock
@@ -317,7 +341,9 @@ class Sandbox:
             reply = None
         if not reply or reply.get("status") != "ready":
             self.close()
-            raise SandboxError("the fork server did not start; see " + os.path.join(self._rundir, "forkserver.log"))
+            raise SandboxError(
+                "the fork server did not start; see " + os.path.join(self._rundir, "forkserver.log")
+            )
 
     def _server_call(self, message: dict, fds=()) -> dict:
         data = json.dumps(message).encode()
@@ -344,15 +370,22 @@ class Sandbox:
                 with self._lock:
                     if self._server is None or self._server.poll() is not None:
                         self._start_server()
-                    reply = self._server_call({"op": "spawn", "tmpdir": tmpdir}, fds=(req_r, resp_w))
+                    reply = self._server_call(
+                        {"op": "spawn", "tmpdir": tmpdir}, fds=(req_r, resp_w)
+                    )
                 pid = int(reply["pid"])
             else:
                 log = open(os.path.join(tmpdir, "startup.txt"), "wb")
                 popen = subprocess.Popen(
                     [sys.executable, "-m", "course.exercises.runner", str(req_r), str(resp_w)],
-                    pass_fds=(req_r, resp_w), cwd=tmpdir,
+                    pass_fds=(req_r, resp_w),
+                    cwd=tmpdir,
                     env=_scrubbed_env({"MPLCONFIGDIR": os.path.join(self._rundir, "matplotlib")}),
-                    stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+                    stdin=subprocess.DEVNULL,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    start_new_session=True,
+                )
                 log.close()
                 pid = popen.pid
         finally:
@@ -388,10 +421,8 @@ class Sandbox:
     def close(self) -> None:
         """Stop the fork server and remove the run directory."""
         if self._sock is not None:
-            try:
+            with contextlib.suppress(OSError):
                 self._sock.close()
-            except OSError:
-                pass
             self._sock = None
         if self._server is not None:
             try:
@@ -451,12 +482,14 @@ def _server_main(sock_fd: int, preload_json: str) -> None:
                 try:
                     os.setsid()
                     keep = {0, 1, 2, req_r, resp_w}
-                    for fd in map(int, os.listdir("/proc/self/fd")) if os.path.isdir("/proc/self/fd") else []:
+                    for fd in (
+                        map(int, os.listdir("/proc/self/fd"))
+                        if os.path.isdir("/proc/self/fd")
+                        else []
+                    ):
                         if fd not in keep:
-                            try:
+                            with contextlib.suppress(OSError):
                                 os.close(fd)
-                            except OSError:
-                                pass
                     if not os.path.isdir("/proc/self/fd"):
                         sock.close()
                     runner.child_main(req_r, resp_w, req["tmpdir"])

@@ -22,7 +22,7 @@ import os
 import platform
 import struct
 
-__all__ = ["install", "available", "die_with_parent"]
+__all__ = ["available", "die_with_parent", "install"]
 
 _LD_W_ABS = 0x20
 _JEQ_K = 0x15
@@ -40,12 +40,42 @@ _SECCOMP_MODE_FILTER = 2
 
 # (audit arch, syscall numbers); fork/vfork do not exist on aarch64.
 _ARCHES = {
-    "x86_64": (0xC000003E, dict(fork=57, vfork=58, execve=59, execveat=322, clone=56, clone3=435,
-                                 kill=62, tkill=200, tgkill=234, ptrace=101, setrlimit=160,
-                                 prlimit64=302, process_vm_readv=310, process_vm_writev=311)),
-    "aarch64": (0xC00000B7, dict(execve=221, execveat=281, clone=220, clone3=435, kill=129,
-                                  tkill=130, tgkill=131, ptrace=117, setrlimit=164, prlimit64=261,
-                                  process_vm_readv=270, process_vm_writev=271)),
+    "x86_64": (
+        0xC000003E,
+        dict(
+            fork=57,
+            vfork=58,
+            execve=59,
+            execveat=322,
+            clone=56,
+            clone3=435,
+            kill=62,
+            tkill=200,
+            tgkill=234,
+            ptrace=101,
+            setrlimit=160,
+            prlimit64=302,
+            process_vm_readv=310,
+            process_vm_writev=311,
+        ),
+    ),
+    "aarch64": (
+        0xC00000B7,
+        dict(
+            execve=221,
+            execveat=281,
+            clone=220,
+            clone3=435,
+            kill=129,
+            tkill=130,
+            tgkill=131,
+            ptrace=117,
+            setrlimit=164,
+            prlimit64=261,
+            process_vm_readv=270,
+            process_vm_writev=271,
+        ),
+    ),
 }
 
 
@@ -61,13 +91,21 @@ def _program(pid: int):
     def emit(op, k=0, jt=None, jf=None):
         code.append([op, jt, jf, k])
 
-    emit(_LD_W_ABS, 4)                                  # seccomp_data.arch
+    emit(_LD_W_ABS, 4)  # seccomp_data.arch
     emit(_JEQ_K, arch, jt=None, jf="deny")
-    emit(_LD_W_ABS, 0)                                  # seccomp_data.nr
+    emit(_LD_W_ABS, 0)  # seccomp_data.nr
     if platform.machine() == "x86_64":
-        emit(0x35, 0x40000000, jt="deny", jf=None)      # JGE: x32 ABI syscalls
-    for name in ("fork", "vfork", "execve", "execveat", "ptrace", "setrlimit", "process_vm_readv",
-                 "process_vm_writev"):
+        emit(0x35, 0x40000000, jt="deny", jf=None)  # JGE: x32 ABI syscalls
+    for name in (
+        "fork",
+        "vfork",
+        "execve",
+        "execveat",
+        "ptrace",
+        "setrlimit",
+        "process_vm_readv",
+        "process_vm_writev",
+    ):
         if name in nr:
             emit(_JEQ_K, nr[name], jt="deny", jf=None)
     emit(_JEQ_K, nr["clone3"], jt="enosys", jf=None)
@@ -78,15 +116,15 @@ def _program(pid: int):
     emit(_RET_K, _RET_ALLOW)
     labels = {}
     labels["clone"] = len(code)
-    emit(_LD_W_ABS, 16)                                 # args[0] low word: clone flags
+    emit(_LD_W_ABS, 16)  # args[0] low word: clone flags
     emit(_JSET_K, _CLONE_THREAD, jt="allow", jf="deny")
     labels["signal"] = len(code)
-    emit(_LD_W_ABS, 16)                                 # args[0]: target pid / tgid
+    emit(_LD_W_ABS, 16)  # args[0]: target pid / tgid
     emit(_JEQ_K, pid, jt="allow", jf="deny")
     labels["prlimit"] = len(code)
-    emit(_LD_W_ABS, 32)                                 # args[2] (new limit pointer), low word
+    emit(_LD_W_ABS, 32)  # args[2] (new limit pointer), low word
     emit(_JEQ_K, 0, jt=None, jf="deny")
-    emit(_LD_W_ABS, 36)                                 # high word
+    emit(_LD_W_ABS, 36)  # high word
     emit(_JEQ_K, 0, jt="allow", jf="deny")
     labels["allow"] = len(code)
     emit(_RET_K, _RET_ALLOW)
@@ -121,9 +159,7 @@ def install() -> bool:
     prog = _SockFprog(count, ctypes.cast(buf, ctypes.c_void_p))
     if libc.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0:
         return False
-    if libc.prctl(_PR_SET_SECCOMP, _SECCOMP_MODE_FILTER, ctypes.byref(prog), 0, 0) != 0:
-        return False
-    return True
+    return libc.prctl(_PR_SET_SECCOMP, _SECCOMP_MODE_FILTER, ctypes.byref(prog), 0, 0) == 0
 
 
 def die_with_parent() -> bool:

@@ -23,7 +23,7 @@ from course.exercises.codec import decode, encode
 from course.exercises.compare import check_signature, compare, describe
 from course.exercises.tripwire import wrap_forbidden
 
-__all__ = ["Assignment", "PLACEHOLDER_ID"]
+__all__ = ["PLACEHOLDER_ID", "Assignment"]
 
 PLACEHOLDER_ID = "replace-with-your-student-id"
 _REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -122,7 +122,9 @@ class Assignment:
     def data(self, key: str):
         """Your personal data set ``key`` (generated from your STUDENT_ID)."""
         if key not in self.spec.get("data_keys", []):
-            raise KeyError(f"assignment {self.name} has no data set {key!r}; known: {self.spec.get('data_keys', [])}")
+            raise KeyError(
+                f"assignment {self.name} has no data set {key!r}; known: {self.spec.get('data_keys', [])}"
+            )
         self._require_id()
         if key not in self._data_cache:
             from course.exercises.spec import student_rng
@@ -133,7 +135,9 @@ class Assignment:
 
     def _require_id(self):
         if not self.student_id or self.student_id == PLACEHOLDER_ID:
-            raise ValueError("Set STUDENT_ID in the first cell to your student ID, then re-run that cell.")
+            raise ValueError(
+                "Set STUDENT_ID in the first cell to your student ID, then re-run that cell."
+            )
 
     # -- checking -----------------------------------------------------------------------
     def __repr__(self):
@@ -154,11 +158,15 @@ class Assignment:
 
     def _check(self, qid, ns, value, explicit) -> None:
         if qid not in self._questions:
-            print(f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})")
+            print(
+                f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
+            )
             return
         q = self._questions[qid]
         points = f"{q['points']:g} point{'s' if q['points'] != 1 else ''}"
-        print(f"{qid} ({points}): {'function' if q['kind'] == 'function' else 'variable'} {q['target']}")
+        print(
+            f"{qid} ({points}): {'function' if q['kind'] == 'function' else 'variable'} {q['target']}"
+        )
         if q["kind"] == "function":
             self._check_function(q, value if explicit else ns.get(q["target"], _MISSING))
         else:
@@ -194,21 +202,29 @@ class Assignment:
         # private value (per-student or not public): type/shape, then public properties
         results = []
         verdict = check_signature(q["signature"], got)
-        results.append((f"type and shape ({_sig_text(q['signature'])})", verdict.ok, verdict.message))
+        results.append(
+            (f"type and shape ({_sig_text(q['signature'])})", verdict.ok, verdict.message)
+        )
         if verdict.ok and q.get("properties"):
             try:
                 data = self.data(q["data"]) if q.get("data") else None
                 for text, ok in getattr(self._data_mod(), q["properties"])(data, got):
                     results.append((str(text), bool(ok), ""))
             except Exception as exc:  # a property function must not break the self-check
-                results.append(("properties", False, f"could not evaluate: {type(exc).__name__}: {exc}"))
+                results.append(
+                    ("properties", False, f"could not evaluate: {type(exc).__name__}: {exc}")
+                )
         failed = [r for r in results if not r[1]]
         if failed and q["hint"]:
             print(f"  Hint: {q['hint']}")
         for text, ok, message in results:
-            print(f"  {'PASS' if ok else 'FAIL'}: {text}" + (f"\n      {message}" if message else ""))
+            print(
+                f"  {'PASS' if ok else 'FAIL'}: {text}" + (f"\n      {message}" if message else "")
+            )
         who = f" for your ID {self.student_id!r}" if q.get("data") else ""
-        print(f"  The value itself{who} is not shipped with the notebook: it is checked at grading.")
+        print(
+            f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
+        )
 
     def _check_function(self, q, func) -> None:
         if func is _MISSING:
@@ -231,10 +247,15 @@ class Assignment:
                 if got is Ellipsis:
                     return self._not_answered(q, f"{q['target']} returns ...")
                 try:
-                    verdict = compare(decode(case["expected"]), decode(encode(got)), q["rtol"], q["atol"])
+                    verdict = compare(
+                        decode(case["expected"]), decode(encode(got)), q["rtol"], q["atol"]
+                    )
                     message = verdict.message
                 except TypeError as exc:
-                    verdict, message = None, f"returned {describe(got)}, which is not plain data ({exc})"
+                    verdict, message = (
+                        None,
+                        f"returned {describe(got)}, which is not plain data ({exc})",
+                    )
             if verdict is not None and verdict.ok:
                 passed += 1
                 print(f"  PASS: {case['label']}")
@@ -246,11 +267,17 @@ class Assignment:
             print(f"      {message}")
         n = len(q["cases"])
         hidden = q["hidden_cases"]
-        more = f"; {hidden} hidden case{'s' if hidden != 1 else ''} run{'s' if hidden == 1 else ''} at grading" if hidden else ""
+        more = (
+            f"; {hidden} hidden case{'s' if hidden != 1 else ''} run{'s' if hidden == 1 else ''} at grading"
+            if hidden
+            else ""
+        )
         print(f"  {passed} of {n} public case{'s pass' if n != 1 else ' passes'}{more}.")
         if forbidden:
-            print(f"  Warning: your function calls {', '.join(sorted(forbidden))}, which this question "
-                  "forbids: it would score 0 at grading. Use numpy primitives instead.")
+            print(
+                f"  Warning: your function calls {', '.join(sorted(forbidden))}, which this question "
+                "forbids: it would score 0 at grading. Use numpy primitives instead."
+            )
 
 
 class _Missing:

@@ -13,9 +13,10 @@ import importlib.util
 import re
 import sys
 import types
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -23,14 +24,14 @@ from course.exercises.codec import Band, decode, encode
 from course.exercises.compare import binomial_band
 
 __all__ = [
-    "Band",
-    "binomial_band",
-    "Case",
-    "Question",
-    "Checks",
-    "student_rng",
-    "load_checks",
     "DEMO_STUDENT_ID",
+    "Band",
+    "Case",
+    "Checks",
+    "Question",
+    "binomial_band",
+    "load_checks",
+    "student_rng",
 ]
 
 #: The student ID the public self-check and ``course release`` use where one is needed.
@@ -48,7 +49,7 @@ def student_rng(assignment: str, key: str, student_id: str) -> np.random.Generat
     whitespace of the ID ignored), so it is the same on every machine and in every process;
     Python's ``hash`` is salted per process and is never used.
     """
-    text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode("utf-8")
+    text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode()
     seed = int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
     return np.random.default_rng(seed)
 
@@ -83,10 +84,14 @@ class Question:
     partial: bool = True
     cases: list = field(default_factory=list)
 
-    def case(self, *args, label: str | None = None, hidden: bool = False, kwargs: dict | None = None) -> Case:
+    def case(
+        self, *args, label: str | None = None, hidden: bool = False, kwargs: dict | None = None
+    ) -> Case:
         """Add a call of the student's function with these arguments (function questions only)."""
         if self.kind != "function":
-            raise ValueError(f"{self.id}: cases belong to function questions; a value question has one value")
+            raise ValueError(
+                f"{self.id}: cases belong to function questions; a value question has one value"
+            )
         kwargs = dict(kwargs or {})
         try:
             encode(args), encode(kwargs)
@@ -137,8 +142,15 @@ class Checks:
         Extra files of ``solutions/<name>/`` copied verbatim into the release (public!).
     """
 
-    def __init__(self, name: str, title: str = "", data: types.ModuleType | None = None,
-                 timeout: float = 10.0, preload=(), files=()):
+    def __init__(
+        self,
+        name: str,
+        title: str = "",
+        data: types.ModuleType | None = None,
+        timeout: float = 10.0,
+        preload=(),
+        files=(),
+    ):
         if not _NAME.match(str(name)):
             raise ValueError(f"assignment name {name!r}: use letters, digits, '_', '-', '.'")
         self.name = str(name)
@@ -152,7 +164,9 @@ class Checks:
     # -- decorators --------------------------------------------------------------------
     def _register(self, question: Question) -> Question:
         if not _QID.match(question.id):
-            raise ValueError(f"question id {question.id!r}: start with a letter; letters, digits, '_'")
+            raise ValueError(
+                f"question id {question.id!r}: start with a letter; letters, digits, '_'"
+            )
         if question.id in self.questions:
             raise ValueError(f"question {question.id!r} is defined twice")
         if not _IDENT.match(question.target):
@@ -163,40 +177,97 @@ class Checks:
             raise ValueError(f"{question.id}: tolerances must be non-negative")
         for name in question.forbid:
             if "." not in name:
-                raise ValueError(f"{question.id}: forbid entries are dotted names such as 'course.lsq.w_tests', got {name!r}")
-        if question.data is not None:
-            if self.data_module is None or not callable(getattr(self.data_module, question.data, None)):
-                raise ValueError(f"{question.id}: data={question.data!r} needs a function {question.data}(rng) in data.py "
-                                 "and Checks(..., data=data)")
-        if question.properties is not None:
-            if self.data_module is None or not callable(getattr(self.data_module, question.properties, None)):
-                raise ValueError(f"{question.id}: properties={question.properties!r} is not a function in data.py")
+                raise ValueError(
+                    f"{question.id}: forbid entries are dotted names such as 'course.lsq.w_tests', got {name!r}"
+                )
+        if question.data is not None and (
+            self.data_module is None or not callable(getattr(self.data_module, question.data, None))
+        ):
+            raise ValueError(
+                f"{question.id}: data={question.data!r} needs a function {question.data}(rng) in data.py "
+                "and Checks(..., data=data)"
+            )
+        if question.properties is not None and (
+            self.data_module is None
+            or not callable(getattr(self.data_module, question.properties, None))
+        ):
+            raise ValueError(
+                f"{question.id}: properties={question.properties!r} is not a function in data.py"
+            )
         self.questions[question.id] = question
         return question
 
-    def value(self, qid: str, *, var: str, points: float, hint: str = "", rtol: float = 1e-7,
-              atol: float = 1e-9, data: str | None = None, public: bool = True,
-              properties: str | None = None, forbid=(), timeout: float | None = None,
-              partial: bool = True):
+    def value(
+        self,
+        qid: str,
+        *,
+        var: str,
+        points: float,
+        hint: str = "",
+        rtol: float = 1e-7,
+        atol: float = 1e-9,
+        data: str | None = None,
+        public: bool = True,
+        properties: str | None = None,
+        forbid=(),
+        timeout: float | None = None,
+        partial: bool = True,
+    ):
         """Register a question whose answer is the variable ``var``; decorate its reference."""
 
         def decorator(reference):
-            return self._register(Question(
-                id=qid, kind="value", target=var, points=float(points), hint=hint, reference=reference,
-                rtol=float(rtol), atol=float(atol), data=data, public=bool(public) and data is None,
-                properties=properties, forbid=tuple(forbid), timeout=timeout, partial=partial))
+            return self._register(
+                Question(
+                    id=qid,
+                    kind="value",
+                    target=var,
+                    points=float(points),
+                    hint=hint,
+                    reference=reference,
+                    rtol=float(rtol),
+                    atol=float(atol),
+                    data=data,
+                    public=bool(public) and data is None,
+                    properties=properties,
+                    forbid=tuple(forbid),
+                    timeout=timeout,
+                    partial=partial,
+                )
+            )
 
         return decorator
 
-    def function(self, qid: str, *, func: str, points: float, hint: str = "", rtol: float = 1e-7,
-                 atol: float = 1e-9, forbid=(), timeout: float | None = None, partial: bool = True):
+    def function(
+        self,
+        qid: str,
+        *,
+        func: str,
+        points: float,
+        hint: str = "",
+        rtol: float = 1e-7,
+        atol: float = 1e-9,
+        forbid=(),
+        timeout: float | None = None,
+        partial: bool = True,
+    ):
         """Register a question whose answer is the function ``func``; decorate its reference."""
 
         def decorator(reference):
-            return self._register(Question(
-                id=qid, kind="function", target=func, points=float(points), hint=hint,
-                reference=reference, rtol=float(rtol), atol=float(atol), forbid=tuple(forbid),
-                timeout=timeout, partial=partial))
+            return self._register(
+                Question(
+                    id=qid,
+                    kind="function",
+                    target=func,
+                    points=float(points),
+                    hint=hint,
+                    reference=reference,
+                    rtol=float(rtol),
+                    atol=float(atol),
+                    forbid=tuple(forbid),
+                    timeout=timeout,
+                    partial=partial,
+                )
+            )
 
         return decorator
 
@@ -219,7 +290,9 @@ class Checks:
             raise ValueError(f"{self.name}: checks.py defines no questions")
         for q in self.questions.values():
             if q.kind == "function" and not q.public_cases:
-                raise ValueError(f"{q.id}: a function question needs at least one public case (q.case(...))")
+                raise ValueError(
+                    f"{q.id}: a function question needs at least one public case (q.case(...))"
+                )
 
 
 def _safe_module_name(path: Path) -> str:
@@ -249,10 +322,14 @@ def load_checks(solution_dir: str | Path) -> Checks:
     chosen = getattr(module, "CHECKS", None)
     if not isinstance(chosen, Checks):
         if len(found) != 1:
-            raise ValueError(f"{checks_file}: define exactly one Checks object (conventionally CHECKS)")
+            raise ValueError(
+                f"{checks_file}: define exactly one Checks object (conventionally CHECKS)"
+            )
         chosen = found[0]
     if chosen.name != solution_dir.name:
-        raise ValueError(f"{checks_file}: Checks name {chosen.name!r} differs from the folder name {solution_dir.name!r}")
+        raise ValueError(
+            f"{checks_file}: Checks name {chosen.name!r} differs from the folder name {solution_dir.name!r}"
+        )
     chosen.validate()
     chosen.solution_dir = solution_dir
     return chosen

@@ -6,7 +6,7 @@ axes it drew on.  Matplotlib is imported lazily, inside the functions.
 
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy import stats
@@ -14,14 +14,14 @@ from scipy import stats
 from . import _mark_alarms, axes_or_new
 
 __all__ = [
-    "plot_residual_geometry",
-    "plot_density",
-    "plot_likelihood",
     "plot_criterion",
+    "plot_density",
+    "plot_isolation",
+    "plot_likelihood",
     "plot_null_histogram",
     "plot_power_curves",
-    "plot_isolation",
     "plot_recursive_estimates",
+    "plot_residual_geometry",
     "plot_windowed_statistic",
 ]
 
@@ -66,15 +66,37 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     reach = max(abs(along), n1, perp, 1.0) * 1.25
     ax.plot([-reach, reach], [0, 0], color="0.7", lw=1, label=r"span$(U_1)$: $(1-\theta_1)U_1$")
     arrow = dict(arrowprops=dict(arrowstyle="->", lw=2), annotation_clip=False)
-    ax.annotate("", xy=(n1, 0), xytext=(0, 0), **{**arrow, "arrowprops": dict(arrowstyle="->", lw=2, color="C0")})
+    ax.annotate(
+        "",
+        xy=(n1, 0),
+        xytext=(0, 0),
+        **{**arrow, "arrowprops": dict(arrowstyle="->", lw=2, color="C0")},
+    )
     ax.text(n1, -0.08 * reach, r"$U_1$", color="C0", ha="center", va="top")
-    ax.annotate("", xy=tuple(point), xytext=(0, 0),
-                **{**arrow, "arrowprops": dict(arrowstyle="->", lw=2, color="C1")})
-    ax.text(point[0], point[1] + 0.04 * reach, r"$(1-\theta_2)U_2$", color="C1", ha="center", va="bottom")
+    ax.annotate(
+        "",
+        xy=tuple(point),
+        xytext=(0, 0),
+        **{**arrow, "arrowprops": dict(arrowstyle="->", lw=2, color="C1")},
+    )
+    ax.text(
+        point[0],
+        point[1] + 0.04 * reach,
+        r"$(1-\theta_2)U_2$",
+        color="C1",
+        ha="center",
+        va="bottom",
+    )
     ax.plot([along], [0], "o", color="C2", label=r"best $(1-\hat\theta_1)U_1$")
     if ortho:
-        ax.plot([along, along], [0, perp], color="C3", lw=2, ls="--",
-                label=rf"$\sqrt{{T}}$ = {perp:.3g}")
+        ax.plot(
+            [along, along],
+            [0, perp],
+            color="C3",
+            lw=2,
+            ls="--",
+            label=rf"$\sqrt{{T}}$ = {perp:.3g}",
+        )
     else:
         ax.plot([], [], color="C3", lw=2, ls="--", label=r"$\sqrt{T}$ = 0: $U_2 \parallel U_1$")
     ax.set_aspect("equal")
@@ -154,11 +176,22 @@ def plot_likelihood(z, sigma: float = 1.0, theta=None, ax=None, show_factors: bo
     theta = np.asarray(theta, dtype=float)
     factors = stats.norm.pdf(z[:, None], theta[None, :], sigma)
     like = np.prod(factors, axis=0)
-    label = "L(θ | z = " + (f"{z[0]:g}" if z.size == 1 else "(" + ", ".join(f"{v:g}" for v in z) + ")") + ")"
+    label = (
+        "L(θ | z = "
+        + (f"{z[0]:g}" if z.size == 1 else "(" + ", ".join(f"{v:g}" for v in z) + ")")
+        + ")"
+    )
     ax.plot(theta, like, color="C0", lw=2, label=label)
     if show_factors and z.size > 1:
         for i, zi in enumerate(z):
-            ax.plot(theta, factors[i], ls="--", lw=1, color=f"C{i + 1}", label=f"f(z{i + 1} = {zi:g} | θ)")
+            ax.plot(
+                theta,
+                factors[i],
+                ls="--",
+                lw=1,
+                color=f"C{i + 1}",
+                label=f"f(z{i + 1} = {zi:g} | θ)",
+            )
     mle = float(z.mean())
     peak = float(np.prod(stats.norm.pdf(z, mle, sigma)))
     ax.axvline(mle, color="C3", ls=":", lw=1)
@@ -196,8 +229,9 @@ def plot_criterion(theta, values, ax=None, minimiser=None, label: str = r"$V(\th
     return ax
 
 
-def plot_null_histogram(samples, null, critical_value: float, ax=None, bins: int = 50,
-                        label: str = "simulated under H0"):
+def plot_null_histogram(
+    samples, null, critical_value: float, ax=None, bins: int = 50, label: str = "simulated under H0"
+):
     """Histogram of a simulated test quantity with its null density and threshold.
 
     Parameters
@@ -232,8 +266,14 @@ def plot_null_histogram(samples, null, critical_value: float, ax=None, bins: int
     return ax
 
 
-def plot_power_curves(sizes, theory: Mapping[str, Sequence[float]], simulated: Mapping[str, Sequence[float]] | None = None,
-                      alpha: float | None = None, ax=None, xlabel: str = "fault size"):
+def plot_power_curves(
+    sizes,
+    theory: Mapping[str, Sequence[float]],
+    simulated: Mapping[str, Sequence[float]] | None = None,
+    alpha: float | None = None,
+    ax=None,
+    xlabel: str = "fault size",
+):
     """Alarm probability against fault size: theory as lines, Monte Carlo as markers.
 
     Parameters
@@ -292,15 +332,23 @@ def plot_isolation(result, ax=None, cmap: str = "Blues"):
     ax.set_yticks(range(len(result.simulated)), result.simulated)
     for i in range(M.shape[0]):
         for j in range(M.shape[1]):
-            ax.text(j, i, f"{M[i, j]:.2f}", ha="center", va="center",
-                    color="white" if M[i, j] > 0.6 else "black")
+            ax.text(
+                j,
+                i,
+                f"{M[i, j]:.2f}",
+                ha="center",
+                va="center",
+                color="white" if M[i, j] > 0.6 else "black",
+            )
     ax.set_xlabel("mode among the diagnoses")
     ax.set_ylabel("true mode")
     ax.set_title("P(mode is a diagnosis | true mode)")
     return ax
 
 
-def plot_recursive_estimates(t, theta, nominal=None, labels: Sequence[str] | None = None, ax=None, band=None):
+def plot_recursive_estimates(
+    t, theta, nominal=None, labels: Sequence[str] | None = None, ax=None, band=None
+):
     """Recursive parameter estimates over time, with optional ±band and nominal lines.
 
     Parameters
@@ -328,7 +376,9 @@ def plot_recursive_estimates(t, theta, nominal=None, labels: Sequence[str] | Non
         if band is not None:
             b = np.asarray(band, dtype=float)
             b = b[:, None] if b.ndim == 1 else b
-            ax.fill_between(t, theta[:, i] - b[:, i], theta[:, i] + b[:, i], color=f"C{i}", alpha=0.2)
+            ax.fill_between(
+                t, theta[:, i] - b[:, i], theta[:, i] + b[:, i], color=f"C{i}", alpha=0.2
+            )
         if nominal is not None:
             ax.axhline(np.atleast_1d(nominal)[i], color=f"C{i}", ls=":", lw=1)
     ax.set_xlabel("t")
@@ -337,7 +387,9 @@ def plot_recursive_estimates(t, theta, nominal=None, labels: Sequence[str] | Non
     return ax
 
 
-def plot_windowed_statistic(t, statistic, threshold: float, ax=None, label: str = "windowed test quantity"):
+def plot_windowed_statistic(
+    t, statistic, threshold: float, ax=None, label: str = "windowed test quantity"
+):
     """A test quantity over time with its threshold; alarms are marked.
 
     Parameters

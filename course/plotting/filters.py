@@ -11,13 +11,13 @@ import numpy as np
 from . import _mark_alarms, axes_or_new
 
 __all__ = [
-    "plot_signals",
-    "plot_estimate",
-    "plot_residual",
-    "plot_test_statistic",
     "plot_alarm_rate",
     "plot_delay_histogram",
+    "plot_estimate",
     "plot_normalized_histogram",
+    "plot_residual",
+    "plot_signals",
+    "plot_test_statistic",
 ]
 
 
@@ -51,16 +51,31 @@ def plot_signals(t, y, u=None, ax=None, fault_time=None, y_label="y", u_label="u
     ax = axes_or_new(ax)
     ax.plot(t, np.asarray(y).reshape(len(t), -1)[:, 0], color="C0", lw=1, label=y_label)
     if u is not None:
-        ax.plot(t, np.asarray(u).reshape(len(t), -1)[:, 0], color="C1", lw=1, ds="steps-post",
-                label=u_label)
+        ax.plot(
+            t,
+            np.asarray(u).reshape(len(t), -1)[:, 0],
+            color="C1",
+            lw=1,
+            ds="steps-post",
+            label=u_label,
+        )
     _mark_fault(ax, fault_time)
     ax.set_xlabel("t")
     ax.legend(loc="best")
     return ax
 
 
-def plot_estimate(t, estimate, std, truth=None, ax=None, nsigma=2.0, label="estimate",
-                  truth_label="true value", fault_time=None):
+def plot_estimate(
+    t,
+    estimate,
+    std,
+    truth=None,
+    ax=None,
+    nsigma=2.0,
+    label="estimate",
+    truth_label="true value",
+    fault_time=None,
+):
     """An estimate with its ``± nsigma`` standard-deviation band and, optionally, the truth.
 
     Parameters
@@ -84,8 +99,15 @@ def plot_estimate(t, estimate, std, truth=None, ax=None, nsigma=2.0, label="esti
     """
     ax = axes_or_new(ax)
     estimate, std = np.asarray(estimate, float), np.asarray(std, float)
-    ax.fill_between(t, estimate - nsigma * std, estimate + nsigma * std, color="C0", alpha=0.25,
-                    lw=0, label=f"± {nsigma:g} std")
+    ax.fill_between(
+        t,
+        estimate - nsigma * std,
+        estimate + nsigma * std,
+        color="C0",
+        alpha=0.25,
+        lw=0,
+        label=f"± {nsigma:g} std",
+    )
     ax.plot(t, estimate, color="C0", lw=1.2, label=label)
     if truth is not None:
         ax.plot(t, truth, color="k", lw=1, ls="--", label=truth_label)
@@ -95,8 +117,9 @@ def plot_estimate(t, estimate, std, truth=None, ax=None, nsigma=2.0, label="esti
     return ax
 
 
-def plot_residual(t, residual, std=None, ax=None, nsigma=2.0, label="residual", fault_time=None,
-                  color="C3"):
+def plot_residual(
+    t, residual, std=None, ax=None, nsigma=2.0, label="residual", fault_time=None, color="C3"
+):
     """A residual (innovation) with an optional ``± nsigma sqrt(S_t)`` band around zero.
 
     Parameters
@@ -122,8 +145,9 @@ def plot_residual(t, residual, std=None, ax=None, nsigma=2.0, label="residual", 
     residual = np.asarray(residual, float).reshape(len(t), -1)[:, 0]
     if std is not None:
         std = np.asarray(std, float).reshape(len(t), -1)[:, 0]
-        ax.fill_between(t, -nsigma * std, nsigma * std, color="0.8", lw=0,
-                        label=f"± {nsigma:g} sqrt(S)")
+        ax.fill_between(
+            t, -nsigma * std, nsigma * std, color="0.8", lw=0, label=f"± {nsigma:g} sqrt(S)"
+        )
     ax.plot(t, residual, color=color, lw=1, label=label)
     ax.axhline(0.0, color="k", lw=0.5)
     _mark_fault(ax, fault_time)
@@ -132,8 +156,9 @@ def plot_residual(t, residual, std=None, ax=None, nsigma=2.0, label="residual", 
     return ax
 
 
-def plot_test_statistic(t, statistic, threshold, ax=None, label="test quantity", fault_time=None,
-                        color="C2", log=False):
+def plot_test_statistic(
+    t, statistic, threshold, ax=None, label="test quantity", fault_time=None, color="C2", log=False
+):
     """A thresholded test quantity; samples above the threshold are marked as alarms.
 
     Parameters

@@ -13,13 +13,13 @@ from . import axes_or_new
 
 __all__ = [
     "line_design",
-    "plot_line_fit",
-    "plot_error_bars",
-    "plot_confidence_band",
-    "sum_of_squares_grid",
-    "plot_sum_of_squares",
     "plot_chi2_histogram",
+    "plot_confidence_band",
+    "plot_error_bars",
+    "plot_line_fit",
+    "plot_sum_of_squares",
     "plot_w_tests",
+    "sum_of_squares_grid",
 ]
 
 
@@ -57,7 +57,14 @@ def _grid(t, design, num=200):
 
 
 def plot_line_fit(
-    t, y, fit, design=None, ax=None, data_label="observations", fit_label="least-squares fit", show_data=True
+    t,
+    y,
+    fit,
+    design=None,
+    ax=None,
+    data_label="observations",
+    fit_label="least-squares fit",
+    show_data=True,
 ):
     """Observations as circles and the fitted curve as a line.
 
@@ -149,7 +156,9 @@ def sum_of_squares_grid(A, y, x1_values, x2_values, Qyy=None):
     A = np.asarray(A, dtype=float)
     y = np.asarray(y, dtype=float)
     if A.shape[1] != 2:
-        raise ValueError(f"the sum-of-squares surface needs exactly 2 parameters, A has {A.shape[1]}")
+        raise ValueError(
+            f"the sum-of-squares surface needs exactly 2 parameters, A has {A.shape[1]}"
+        )
     X1, X2 = np.meshgrid(np.asarray(x1_values, float), np.asarray(x2_values, float))
     residuals = y[:, None] - A @ np.vstack([X1.ravel(), X2.ravel()])
     if Qyy is not None:
@@ -158,8 +167,16 @@ def sum_of_squares_grid(A, y, x1_values, x2_values, Qyy=None):
 
 
 def plot_sum_of_squares(
-    A, y, x1_values, x2_values, Qyy=None, log10=False, surface=False, ax=None,
-    minimum=None, labels=("x(t0)", "ẋ"),
+    A,
+    y,
+    x1_values,
+    x2_values,
+    Qyy=None,
+    log10=False,
+    surface=False,
+    ax=None,
+    minimum=None,
+    labels=("x(t0)", "ẋ"),
 ):
     """The least-squares criterion over two parameters (Figure 10.2).
 
@@ -224,8 +241,15 @@ def plot_chi2_histogram(T, dof, ax=None, alpha=None, bins=40):
     ax = axes_or_new(ax)
     T = np.asarray(T, dtype=float)
     upper = max(float(np.quantile(T, 0.995)), stats.chi2.isf(0.005, dof))
-    ax.hist(T, bins=bins, range=(0, upper), density=True, color="C0", alpha=0.5,
-            label=f"simulated T ({T.size} runs)")
+    ax.hist(
+        T,
+        bins=bins,
+        range=(0, upper),
+        density=True,
+        color="C0",
+        alpha=0.5,
+        label=f"simulated T ({T.size} runs)",
+    )
     grid = np.linspace(1e-3, upper, 400)
     ax.plot(grid, stats.chi2.pdf(grid, dof), color="C3", label=f"χ²({dof}) density")
     if alpha is not None:

@@ -12,11 +12,11 @@ import numpy as np
 from course.plotting import axes_or_new
 
 __all__ = [
-    "plot_residual_band",
     "plot_cross_covariance",
-    "plot_law_against_sample",
     "plot_imhof_integrands",
+    "plot_law_against_sample",
     "plot_power_curves",
+    "plot_residual_band",
 ]
 
 
@@ -40,11 +40,23 @@ def plot_residual_band(moments, residuals=None, output=0, ax=None, n_records=20,
         r = np.asarray(residuals, dtype=float)
         r = r[..., None] if r.ndim == 2 else r
         for i in range(min(n_records, r.shape[0])):
-            ax.plot(t, r[i, :, output], color="0.6", lw=0.6, alpha=0.6,
-                    label="records" if i == 0 else None)
+            ax.plot(
+                t,
+                r[i, :, output],
+                color="0.6",
+                lw=0.6,
+                alpha=0.6,
+                label="records" if i == 0 else None,
+            )
         ax.plot(t, r[:, :, output].mean(axis=0), color="C1", lw=1.5, label="cross-record mean")
-    ax.fill_between(t, m - sigmas * sd, m + sigmas * sd, color="C0", alpha=0.2,
-                    label=f"predicted mean $\\pm$ {sigmas:g} sd")
+    ax.fill_between(
+        t,
+        m - sigmas * sd,
+        m + sigmas * sd,
+        color="C0",
+        alpha=0.2,
+        label=f"predicted mean $\\pm$ {sigmas:g} sd",
+    )
     ax.plot(t, m, color="C0", lw=2, label="predicted mean $m_t$")
     ax.axhline(0.0, color="k", lw=0.5)
     ax.set_xlabel("time t")
@@ -80,8 +92,16 @@ def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True):
     return ax
 
 
-def plot_law_against_sample(sample, law, ax=None, bins=50, critical=None, label="Monte Carlo",
-                            law_label="exact law (Imhof)", grid=None):
+def plot_law_against_sample(
+    sample,
+    law,
+    ax=None,
+    bins=50,
+    critical=None,
+    label="Monte Carlo",
+    law_label="exact law (Imhof)",
+    grid=None,
+):
     """Histogram of Monte Carlo values of a statistic with its exact density.
 
     ``critical`` (a number or a ``(lower, upper)`` pair) is drawn as dashed
@@ -89,7 +109,9 @@ def plot_law_against_sample(sample, law, ax=None, bins=50, critical=None, label=
     """
     ax = axes_or_new(ax)
     sample = np.asarray(sample, dtype=float)
-    heights, _, _ = ax.hist(sample, bins=bins, density=True, color="0.75", edgecolor="white", label=label)
+    heights, _, _ = ax.hist(
+        sample, bins=bins, density=True, color="0.75", edgecolor="white", label=label
+    )
     if grid is None:
         lo, hi = np.quantile(sample, [0.0005, 0.9995])
         grid = np.linspace(lo, hi, 300)

@@ -12,11 +12,11 @@ import numpy as np
 from course.plotting import axes_or_new
 
 __all__ = [
-    "plot_sample_against_law",
-    "plot_extreme_laws",
     "plot_cdf_errors",
-    "plot_detection",
     "plot_consistency",
+    "plot_detection",
+    "plot_extreme_laws",
+    "plot_sample_against_law",
 ]
 
 

@@ -22,8 +22,13 @@ def modes(rng):
         theta[mode - 1] += rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 0.3)
     sigma = 0.15
     y = U @ theta + sigma * rng.standard_normal(N)
-    return {"U": U, "y": np.round(y, 4), "sigma": sigma, "tau": 0.3,
-            "priors": np.array([0.7, 0.1, 0.1, 0.1])}
+    return {
+        "U": U,
+        "y": np.round(y, 4),
+        "sigma": sigma,
+        "tau": 0.3,
+        "priors": np.array([0.7, 0.1, 0.1, 0.1]),
+    }
 
 
 def posterior_properties(d, value):
@@ -32,5 +37,8 @@ def posterior_properties(d, value):
     ok = v.shape == (4,)
     return [
         ("four probabilities, in the order NF, F1, F2, F3", ok),
-        ("non-negative and summing to one", bool(ok and np.all(v >= 0) and abs(v.sum() - 1) < 1e-9)),
+        (
+            "non-negative and summing to one",
+            bool(ok and np.all(v >= 0) and abs(v.sum() - 1) < 1e-9),
+        ),
     ]

@@ -11,12 +11,24 @@ from course import filters, mismatched
 
 #: The model under test (M0) and the reduced filter (M1) of notebook 06.
 M0 = filters.LinearModel(
-    F=[[0.9, 1.0], [0.0, 0.98]], H=[[1.0, 0.0]], Q=np.diag([0.5, 0.02]), R=[[1.0]],
-    x0_mean=[0.0, 1.0], x0_cov=np.diag([1.0, 0.2]), w_mean=[0.1, 0.0], v_mean=[0.3],
+    F=[[0.9, 1.0], [0.0, 0.98]],
+    H=[[1.0, 0.0]],
+    Q=np.diag([0.5, 0.02]),
+    R=[[1.0]],
+    x0_mean=[0.0, 1.0],
+    x0_cov=np.diag([1.0, 0.2]),
+    w_mean=[0.1, 0.0],
+    v_mean=[0.3],
 )
 M1 = filters.LinearModel(
-    F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]], x0_mean=[0.5], x0_cov=[[2.0]],
-    w_mean=[0.05], v_mean=[0.1],
+    F=[[0.95]],
+    H=[[1.0]],
+    Q=[[1.0]],
+    R=[[1.2]],
+    x0_mean=[0.5],
+    x0_cov=[[2.0]],
+    w_mean=[0.05],
+    v_mean=[0.1],
 )
 
 
@@ -31,8 +43,16 @@ def experiment(rng):
     truth = M0
     if rng.random() < 0.5:
         drift = rng.uniform(1.6, 2.4)
-        truth = filters.LinearModel(F=M0.F, H=M0.H, Q=M0.Q, R=M0.R, x0_mean=[0.0, drift],
-                                    x0_cov=M0.x0_cov, w_mean=M0.w_mean, v_mean=M0.v_mean)
+        truth = filters.LinearModel(
+            F=M0.F,
+            H=M0.H,
+            Q=M0.Q,
+            R=M0.R,
+            x0_mean=[0.0, drift],
+            x0_cov=M0.x0_cov,
+            w_mean=M0.w_mean,
+            v_mean=M0.v_mean,
+        )
     residuals = mismatched.simulate_records(truth, M1, M, N, rng)
     null = mismatched.residual_moments(M0, M1, N)
     j = int(rng.integers(2, 8))

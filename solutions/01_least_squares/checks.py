@@ -46,25 +46,43 @@ CHECKS = Checks(
 )
 
 
-@CHECKS.value("q1", var="x_hat_day1", points=1, rtol=1e-8, atol=1e-8,
-              hint="Stack a column of ones and the times into A, then solve the least-squares problem "
-                   "(np.linalg.lstsq, or lsq.fit). The chapter's answer is a round pair.")
+@CHECKS.value(
+    "q1",
+    var="x_hat_day1",
+    points=1,
+    rtol=1e-8,
+    atol=1e-8,
+    hint="Stack a column of ones and the times into A, then solve the least-squares problem "
+    "(np.linalg.lstsq, or lsq.fit). The chapter's answer is a round pair.",
+)
 def q1():
     return lsq.fit(A_LINE, Y_DAY1).x_hat
 
 
-@CHECKS.value("q2", var="e_hat_day2", points=1, rtol=1e-8, atol=1e-8,
-              hint="Residuals are observations minus adjusted observations: e = y - A x_hat, "
-                   "in the order of the observations.")
+@CHECKS.value(
+    "q2",
+    var="e_hat_day2",
+    points=1,
+    rtol=1e-8,
+    atol=1e-8,
+    hint="Residuals are observations minus adjusted observations: e = y - A x_hat, "
+    "in the order of the observations.",
+)
 def q2():
     return lsq.fit(A_LINE, Y_DAY2).e_hat
 
 
-@CHECKS.function("q3", func="overall_model_test_stat", points=3, rtol=1e-6, atol=1e-8,
-                 forbid=["course.lsq.overall_model_test", "course.lsq.fit", "course.lsq.data_snooping"],
-                 hint="T = e^T Qyy^{-1} e with the WEIGHTED residuals, m - n degrees of freedom, and the "
-                      "critical value scipy.stats.chi2.isf(alpha, m - n). Avoid inverting Qyy: whiten with "
-                      "its Cholesky factor. Return (T, critical_value, reject).")
+@CHECKS.function(
+    "q3",
+    func="overall_model_test_stat",
+    points=3,
+    rtol=1e-6,
+    atol=1e-8,
+    forbid=["course.lsq.overall_model_test", "course.lsq.fit", "course.lsq.data_snooping"],
+    hint="T = e^T Qyy^{-1} e with the WEIGHTED residuals, m - n degrees of freedom, and the "
+    "critical value scipy.stats.chi2.isf(alpha, m - n). Avoid inverting Qyy: whiten with "
+    "its Cholesky factor. Return (T, critical_value, reject).",
+)
 def q3(A, y, Qyy, alpha):
     result = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)
     return (result.statistic, result.critical_value, bool(result.reject))
@@ -79,11 +97,17 @@ q3.case(A6, Y6, Q6, 0.05, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.function("q4", func="w_statistics", points=3, rtol=1e-6, atol=1e-8,
-                 forbid=["course.lsq.w_tests", "course.lsq.fit", "course.lsq.data_snooping"],
-                 hint="Baarda: w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii) with "
-                      "Qee = Qyy - A Qxx A^T; for a diagonal Qyy this is e_i / sigma_ei. "
-                      "Return one w per observation.")
+@CHECKS.function(
+    "q4",
+    func="w_statistics",
+    points=3,
+    rtol=1e-6,
+    atol=1e-8,
+    forbid=["course.lsq.w_tests", "course.lsq.fit", "course.lsq.data_snooping"],
+    hint="Baarda: w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii) with "
+    "Qee = Qyy - A Qxx A^T; for a diagonal Qyy this is e_i / sigma_ei. "
+    "Return one w per observation.",
+)
 def q4(A, y, Qyy):
     return np.asarray(lsq.w_tests(lsq.fit(A, y, Qyy), 0.05).w)
 
@@ -95,35 +119,59 @@ q4.case(A6, Y6, Q6, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q5", var="band_t2", points=1, rtol=1e-6, atol=1e-8,
-              hint="sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
-                   "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).")
+@CHECKS.value(
+    "q5",
+    var="band_t2",
+    points=1,
+    rtol=1e-6,
+    atol=1e-8,
+    hint="sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
+    "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).",
+)
 def q5():
     f = lsq.fit(A_LINE, Y_DAY1)
     _, half = lsq.confidence_band(f, np.array([[1.0, 2.0]]), level=0.95)
     return (float(f.sigma_y_hat[1]), float(half[0]))
 
 
-@CHECKS.value("q6", var="T_mine", points=2, data="survey", properties="survey_T_properties",
-              rtol=1e-6, atol=1e-8,
-              hint="Fit mine['A'], mine['y'] with mine['Qyy'] (weighted!) and take the overall model "
-                   "test statistic of the full data set.")
+@CHECKS.value(
+    "q6",
+    var="T_mine",
+    points=2,
+    data="survey",
+    properties="survey_T_properties",
+    rtol=1e-6,
+    atol=1e-8,
+    hint="Fit mine['A'], mine['y'] with mine['Qyy'] (weighted!) and take the overall model "
+    "test statistic of the full data set.",
+)
 def q6(d):
     return lsq.overall_model_test(lsq.fit(d["A"], d["y"], d["Qyy"]), d["alpha"]).statistic
 
 
-@CHECKS.value("q7", var="suspect_mine", points=1, data="survey", properties="survey_index_properties",
-              hint="Data snooping at mine['alpha'] removes the observation with the largest rejected |w| "
-                   "first; give its 0-based index as an int.")
+@CHECKS.value(
+    "q7",
+    var="suspect_mine",
+    points=1,
+    data="survey",
+    properties="survey_index_properties",
+    hint="Data snooping at mine['alpha'] removes the observation with the largest rejected |w| "
+    "first; give its 0-based index as an int.",
+)
 def q7(d):
     return int(lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).removed[0])
 
 
-@CHECKS.function("q8", func="rejection_rate", points=2, timeout=30,
-                 hint="Simulate n_runs data sets y = A x + bias + noise with noise ~ N(0, Qyy) (Cholesky factor "
-                      "times standard normals, rng = np.random.default_rng(seed)), apply the overall model test to "
-                      "each and return the fraction rejected. Without a bias it is close to alpha; with a bias it "
-                      "estimates the power of the test.")
+@CHECKS.function(
+    "q8",
+    func="rejection_rate",
+    points=2,
+    timeout=30,
+    hint="Simulate n_runs data sets y = A x + bias + noise with noise ~ N(0, Qyy) (Cholesky factor "
+    "times standard normals, rng = np.random.default_rng(seed)), apply the overall model test to "
+    "each and return the fraction rejected. Without a bias it is close to alpha; with a bias it "
+    "estimates the power of the test.",
+)
 def q8(A, Qyy, alpha, n_runs, seed, bias):
     # Under a bias b, T ~ chi2(m - n, lambda) with lambda = ||Q2^T L^{-1} b||^2, the weighted squared norm
     # of the residuals of fitting b itself; lambda = 0 gives the false-alarm rate alpha. Any correct
@@ -135,12 +183,29 @@ def q8(A, Qyy, alpha, n_runs, seed, bias):
     return binomial_band(n_runs, p, miss=1e-4)
 
 
-q8.case(A_LINE, I4, 0.05, 20000, 2024, np.zeros(4), label="line fit, Qyy = I, alpha = 0.05, no bias")
-q8.case(A_LINE, I4, 0.05, 20000, 2025, np.array([0.0, 0.0, 3.0, 0.0]),
-        label="line fit, Qyy = I, alpha = 0.05, bias 3 in observation 2")
+q8.case(
+    A_LINE, I4, 0.05, 20000, 2024, np.zeros(4), label="line fit, Qyy = I, alpha = 0.05, no bias"
+)
+q8.case(
+    A_LINE,
+    I4,
+    0.05,
+    20000,
+    2025,
+    np.array([0.0, 0.0, 3.0, 0.0]),
+    label="line fit, Qyy = I, alpha = 0.05, bias 3 in observation 2",
+)
 ### BEGIN HIDDEN TESTS
 q8.case(A_QUAD, _correlated(4, 0.6, 1.5), 0.01, 20000, 7, np.zeros(4), hidden=True)
 q8.case(A_SEA, np.diag([1.0, 2.0, 0.5, 1.0, 3.0]), 0.10, 20000, 11, np.zeros(5), hidden=True)
-q8.case(A_SEA, np.diag([1.0, 2.0, 0.5, 1.0, 3.0]), 0.05, 20000, 13, np.array([0.0, 0.0, 0.0, 3.0, 0.0]), hidden=True)
+q8.case(
+    A_SEA,
+    np.diag([1.0, 2.0, 0.5, 1.0, 3.0]),
+    0.05,
+    20000,
+    13,
+    np.array([0.0, 0.0, 0.0, 3.0, 0.0]),
+    hidden=True,
+)
 q8.case(A6, Q6, 0.05, 20000, 17, np.array([0.0, 0.0, 4.0, 0.0, 0.0, 0.0]), hidden=True)
 ### END HIDDEN TESTS

@@ -18,7 +18,13 @@ def survey(rng):
     y = A @ x_true + sigma * rng.standard_normal(m)
     k = int(rng.integers(1, m - 1))  # not an end point, where redundancy is lowest
     y[k] += rng.choice([-1.0, 1.0]) * rng.uniform(8.0, 10.0) * sigma[k]
-    return {"t": t, "A": A, "y": np.round(y, 3), "Qyy": np.diag(np.round(sigma, 3) ** 2), "alpha": 0.01}
+    return {
+        "t": t,
+        "A": A,
+        "y": np.round(y, 3),
+        "Qyy": np.diag(np.round(sigma, 3) ** 2),
+        "alpha": 0.01,
+    }
 
 
 def survey_T_properties(d, value):

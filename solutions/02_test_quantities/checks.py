@@ -5,7 +5,6 @@ are sent to the student's function only at grading time.
 """
 
 import numpy as np
-from scipy import stats
 
 from course import diagnosis as dg
 from course.exercises.spec import Checks, binomial_band
@@ -44,11 +43,18 @@ CHECKS = Checks(
 )
 
 
-@CHECKS.function("q1", func="single_fault_diagnoses", points=2,
-                 forbid=["course.diagnosis.diagnoses", "course.diagnosis.diagnosis_matrix",
-                         "course.diagnosis.DecisionStructure"],
-                 hint="An alarm from test k rules out every mode with a 0 in row k; a silent test rules "
-                      "out nothing. Keep the modes in the order of the columns; return a list.")
+@CHECKS.function(
+    "q1",
+    func="single_fault_diagnoses",
+    points=2,
+    forbid=[
+        "course.diagnosis.diagnoses",
+        "course.diagnosis.diagnosis_matrix",
+        "course.diagnosis.DecisionStructure",
+    ],
+    hint="An alarm from test k rules out every mode with a 0 in row k; a silent test rules "
+    "out nothing. Keep the modes in the order of the columns; return a list.",
+)
 def q1(sensitivity, modes, alarms):
     structure = dg.DecisionStructure(np.asarray(sensitivity), modes=list(modes))
     return list(dg.diagnoses(structure, [bool(a) for a in alarms]))
@@ -62,18 +68,31 @@ q1.case(STRUCTURE5, MODES5, [True, True, False, False], hidden=True)
 q1.case(STRUCTURE5, MODES5, [False, True, False, True], hidden=True)
 
 
-@CHECKS.value("q2", var="hypotheses_T2", points=1,
-              hint="Read row T2 of the five-mode structure: modes with 0 form H0, modes with X form H1. "
-                   "Give (list_H0, list_H1), each in column order.")
+@CHECKS.value(
+    "q2",
+    var="hypotheses_T2",
+    points=1,
+    hint="Read row T2 of the five-mode structure: modes with 0 form H0, modes with X form H1. "
+    "Give (list_H0, list_H1), each in column order.",
+)
 def q2():
     return (["NF", "F1", "F4"], ["F2", "F3"])
 
 
-@CHECKS.function("q3", func="T1_statistic", points=2, rtol=1e-7, atol=1e-10,
-                 forbid=["course.diagnosis.prediction_error", "course.diagnosis.least_squares_residual",
-                         "course.diagnosis.prediction_error_test"],
-                 hint="Minimise sum (y - th1 u1 - u2 - u3)^2 over th1: the minimiser is a ratio of two sums. "
-                      "If u1 is identically zero every th1 gives the same sum: do not divide by zero.")
+@CHECKS.function(
+    "q3",
+    func="T1_statistic",
+    points=2,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error_test",
+    ],
+    hint="Minimise sum (y - th1 u1 - u2 - u3)^2 over th1: the minimiser is a ratio of two sums. "
+    "If u1 is identically zero every th1 gives the same sum: do not divide by zero.",
+)
 def q3(y, u1, u2, u3):
     return float(dg.prediction_error(y, np.column_stack([u1, u2, u3]), NOMINAL, free=[0]).statistic)
 
@@ -85,35 +104,58 @@ q3.case(U @ [1.0, 1.0, 0.5], U1, U2, U3, hidden=True)
 q3.case(np.arange(5.0), np.array([1.0, 0, 2, 0, 1]), np.ones(5), np.zeros(5), hidden=True)
 
 
-@CHECKS.function("q4", func="regression_residual", points=2, rtol=1e-6, atol=1e-9,
-                 forbid=["course.diagnosis.prediction_error", "course.diagnosis.least_squares_residual",
-                         "course.diagnosis.prediction_error_test"],
-                 hint="Project Y onto the orthogonal complement of the column space of Phi with an SVD "
-                      "(or np.linalg.lstsq, which reports the rank); never solve the normal equations. "
-                      "dof = N - rank(Phi). Return (T, dof).")
+@CHECKS.function(
+    "q4",
+    func="regression_residual",
+    points=2,
+    rtol=1e-6,
+    atol=1e-9,
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error_test",
+    ],
+    hint="Project Y onto the orthogonal complement of the column space of Phi with an SVD "
+    "(or np.linalg.lstsq, which reports the rank); never solve the normal equations. "
+    "dof = N - rank(Phi). Return (T, dof).",
+)
 def q4(Phi, Y):
     fit = dg.least_squares_residual(Y, Phi)
     return (float(fit.statistic), int(fit.dof))
 
 
 q4.case(U, Y_RECORD, label="full column rank")
-q4.case(np.column_stack([U1, 2 * U1, U3]), Y_RECORD, label="second column = 2 x first (no excitation)")
+q4.case(
+    np.column_stack([U1, 2 * U1, U3]), Y_RECORD, label="second column = 2 x first (no excitation)"
+)
 q4.case(np.column_stack([_A, _B, _A - 2 * _B]), _R.standard_normal(12), hidden=True)
 q4.case(np.column_stack([np.zeros(12), _B]), _R.standard_normal(12), hidden=True)
 q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
 
 
-@CHECKS.value("q5", var="T_bias_free", points=1, rtol=1e-8, atol=1e-12,
-              hint="T = (1/N) sum (y - u - b_hat)^2 with b_hat the mean of y - u (the lecture's 1/N form).")
+@CHECKS.value(
+    "q5",
+    var="T_bias_free",
+    points=1,
+    rtol=1e-8,
+    atol=1e-12,
+    hint="T = (1/N) sum (y - u - b_hat)^2 with b_hat the mean of y - u (the lecture's 1/N form).",
+)
 def q5():
     b_hat = np.mean(Y_GB - U_GB)
     return float(np.mean((Y_GB - U_GB - b_hat) ** 2))
 
 
-@CHECKS.value("q6", var="threshold_and_power", points=2, rtol=1e-6, atol=1e-9,
-              hint="Under H0, T1/sigma^2 ~ chi2(N - 1): J = sigma^2 chi2.isf(alpha, N - 1). Under F2, "
-                   "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
-                   "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).")
+@CHECKS.value(
+    "q6",
+    var="threshold_and_power",
+    points=2,
+    rtol=1e-6,
+    atol=1e-9,
+    hint="Under H0, T1/sigma^2 ~ chi2(N - 1): J = sigma^2 chi2.isf(alpha, N - 1). Under F2, "
+    "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
+    "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
+)
 def q6():
     J = dg.residual_threshold(0.01, N - 1, SIGMA)
     power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
@@ -124,27 +166,45 @@ def _three_statistics(d):
     return dg.linear_test_statistics(d["y"][:, None], d["U"], NOMINAL, [(0,), (1,), (2,)])[0]
 
 
-@CHECKS.value("q7", var="T_mine", points=2, data="record", properties="statistics_properties",
-              rtol=1e-6, atol=1e-9,
-              hint="T_k leaves theta_k free and fixes the other two at 1: apply your q3/q4 idea to each test. "
-                   "Return the three numbers in the order T1, T2, T3.")
+@CHECKS.value(
+    "q7",
+    var="T_mine",
+    points=2,
+    data="record",
+    properties="statistics_properties",
+    rtol=1e-6,
+    atol=1e-9,
+    hint="T_k leaves theta_k free and fixes the other two at 1: apply your q3/q4 idea to each test. "
+    "Return the three numbers in the order T1, T2, T3.",
+)
 def q7(d):
     return _three_statistics(d)
 
 
-@CHECKS.value("q8", var="diagnosis_mine", points=1, data="record", properties="diagnosis_properties",
-              hint="Each test alarms when T_k > sigma^2 chi2.isf(alpha, N - 1) with mine['sigma'] and "
-                   "mine['alpha']; then apply your single_fault_diagnoses to the lecture structure.")
+@CHECKS.value(
+    "q8",
+    var="diagnosis_mine",
+    points=1,
+    data="record",
+    properties="diagnosis_properties",
+    hint="Each test alarms when T_k > sigma^2 chi2.isf(alpha, N - 1) with mine['sigma'] and "
+    "mine['alpha']; then apply your single_fault_diagnoses to the lecture structure.",
+)
 def q8(d):
     N_d = d["y"].size
     alarms = _three_statistics(d) > dg.residual_threshold(d["alpha"], N_d - 1, d["sigma"])
     return list(dg.diagnoses(dg.DecisionStructure(LECTURE, modes=MODES), alarms))
 
 
-@CHECKS.function("q9", func="detection_rate", points=2, timeout=30,
-                 hint="Simulate n_runs records y = U theta + sigma * noise (rng = np.random.default_rng(seed); "
-                      "all runs at once as columns of an (N, n_runs) array), compute T1 for each, and return the "
-                      "fraction above the threshold of q6 at this alpha. It should match the power formula.")
+@CHECKS.function(
+    "q9",
+    func="detection_rate",
+    points=2,
+    timeout=30,
+    hint="Simulate n_runs records y = U theta + sigma * noise (rng = np.random.default_rng(seed); "
+    "all runs at once as columns of an (N, n_runs) array), compute T1 for each, and return the "
+    "fraction above the threshold of q6 at this alpha. It should match the power formula.",
+)
 def q9(U_, theta, sigma, alpha, n_runs, seed):
     p = dg.prediction_error_power(U_, NOMINAL, [0], theta, sigma=sigma, alpha=alpha)
     return binomial_band(n_runs, p, miss=1e-4)

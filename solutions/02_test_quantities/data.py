@@ -33,7 +33,10 @@ def statistics_properties(d, value):
     v = np.asarray(value, dtype=float)
     return [
         ("three numbers, one per test", v.shape == (3,)),
-        ("test quantities are sums of squares: non-negative", bool(v.shape == (3,) and np.all(v >= 0))),
+        (
+            "test quantities are sums of squares: non-negative",
+            bool(v.shape == (3,) and np.all(v >= 0)),
+        ),
     ]
 
 
@@ -41,5 +44,7 @@ def diagnosis_properties(d, value):
     """Public sanity checks of a diagnosis (a list of mode names)."""
     ok = isinstance(value, (list, tuple)) and all(isinstance(m, str) and m in MODES for m in value)
     ordered = ok and list(value) == [m for m in MODES if m in value]
-    return [("a list of mode names among NF, F1, F2, F3", bool(ok)),
-            ("in the order NF, F1, F2, F3", bool(ordered))]
+    return [
+        ("a list of mode names among NF, F1, F2, F3", bool(ok)),
+        ("in the order NF, F1, F2, F3", bool(ordered)),
+    ]

@@ -25,7 +25,9 @@ MODES = {"NF": (), "F1": (0,), "F2": (1,), "F3": (2,)}
 
 
 def _record(theta, seed, sigma=SIGMA):
-    return U @ np.asarray(theta, dtype=float) + sigma * np.random.default_rng(seed).standard_normal(N)
+    return U @ np.asarray(theta, dtype=float) + sigma * np.random.default_rng(seed).standard_normal(
+        N
+    )
 
 
 CHECKS = Checks(
@@ -37,12 +39,21 @@ CHECKS = Checks(
 )
 
 
-@CHECKS.function("q1", func="joint_parameter_test", points=2, rtol=1e-7, atol=1e-10,
-                 forbid=["course.diagnosis.regression_parameter_test", "course.diagnosis.estimate_parameters",
-                         "course.diagnosis.parameter_estimate_test"],
-                 hint="Regress y - u3 on [u1, u2] (QR or lstsq); the covariance of the estimate is "
-                      "sigma^2 (Phi^T Phi)^{-1} = sigma^2 R^{-1} R^{-T}. Reject when |theta2_hat - 1| > "
-                      "std * stats.norm.isf(alpha / 2). Return (theta2_hat, std, reject).")
+@CHECKS.function(
+    "q1",
+    func="joint_parameter_test",
+    points=2,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=[
+        "course.diagnosis.regression_parameter_test",
+        "course.diagnosis.estimate_parameters",
+        "course.diagnosis.parameter_estimate_test",
+    ],
+    hint="Regress y - u3 on [u1, u2] (QR or lstsq); the covariance of the estimate is "
+    "sigma^2 (Phi^T Phi)^{-1} = sigma^2 R^{-1} R^{-T}. Reject when |theta2_hat - 1| > "
+    "std * stats.norm.isf(alpha / 2). Return (theta2_hat, std, reject).",
+)
 def q1(U_, y, sigma, alpha):
     est = dg.estimate_parameters(y, U_, NOMINAL, [0, 1], sigma=sigma)
     std = float(est.std[1])
@@ -57,17 +68,29 @@ q1.case(U, _record([1.0, 1.0, 1.4], 4), SIGMA, 0.01, hidden=True)
 q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
 
 
-@CHECKS.value("q2", var="leak_theta2", points=1, rtol=1e-8, atol=1e-10,
-              hint="With theta1 fixed at 1 the estimate of theta2 regresses the data minus u1 - u3 on u2; "
-                   "take the expectation with theta1 = 1.3: E theta2_hat = 1 + 0.3 u2'u1 / u2'u2.")
+@CHECKS.value(
+    "q2",
+    var="leak_theta2",
+    points=1,
+    rtol=1e-8,
+    atol=1e-10,
+    hint="With theta1 fixed at 1 the estimate of theta2 regresses the data minus u1 - u3 on u2; "
+    "take the expectation with theta1 = 1.3: E theta2_hat = 1 + 0.3 u2'u1 / u2'u2.",
+)
 def q2():
     return float(1.0 + 0.3 * (U2 @ U1) / (U2 @ U2))
 
 
-@CHECKS.value("q3", var="power_pair", points=2, rtol=1e-6, atol=1e-9,
-              hint="Parameter test: b = 0.1, s = std of theta2_hat (joint estimate), power = "
-                   "Phi(b/s - z) + Phi(-b/s - z) with z = norm.isf(alpha/2). Prediction-error test T1 (theta1 "
-                   "free): non-central chi2(N - 1) with lambda = ||(I - P1) u2 0.1||^2 / sigma^2.")
+@CHECKS.value(
+    "q3",
+    var="power_pair",
+    points=2,
+    rtol=1e-6,
+    atol=1e-9,
+    hint="Parameter test: b = 0.1, s = std of theta2_hat (joint estimate), power = "
+    "Phi(b/s - z) + Phi(-b/s - z) with z = norm.isf(alpha/2). Prediction-error test T1 (theta1 "
+    "free): non-central chi2(N - 1) with lambda = ||(I - P1) u2 0.1||^2 / sigma^2.",
+)
 def q3():
     theta = [1.0, 1.1, 1.0]
     p_param = dg.parameter_estimate_power(U, NOMINAL, [0, 1], 1, theta, sigma=SIGMA, alpha=0.05)
@@ -75,10 +98,16 @@ def q3():
     return (p_param, p_pe)
 
 
-@CHECKS.function("q4", func="likelihood", points=1, rtol=1e-8, atol=1e-14,
-                 forbid=["course.diagnosis.normal_likelihood", "course.diagnosis.normal_log_likelihood"],
-                 hint="L(theta | z) is the product over the observations of the N(theta, sigma^2) density at "
-                      "z_i; return one value per theta (an array shaped like theta).")
+@CHECKS.function(
+    "q4",
+    func="likelihood",
+    points=1,
+    rtol=1e-8,
+    atol=1e-14,
+    forbid=["course.diagnosis.normal_likelihood", "course.diagnosis.normal_log_likelihood"],
+    hint="L(theta | z) is the product over the observations of the N(theta, sigma^2) density at "
+    "z_i; return one value per theta (an array shaped like theta).",
+)
 def q4(theta, z, sigma):
     return np.asarray(dg.normal_likelihood(np.asarray(theta, dtype=float), z, sigma))
 
@@ -89,19 +118,34 @@ q4.case(np.array([0.5, 1.0, 4.0]), np.array([1.0, 2.0, 0.5, 3.0]), 2.0, hidden=T
 q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
 
 
-@CHECKS.value("q5", var="ml_35", points=1, rtol=1e-6, atol=1e-9,
-              hint="Maximise L(theta | 3, 5) for N(theta, 1): the maximiser is the sample mean; give "
-                   "(theta_ml, L(theta_ml | 3, 5)).")
+@CHECKS.value(
+    "q5",
+    var="ml_35",
+    points=1,
+    rtol=1e-6,
+    atol=1e-9,
+    hint="Maximise L(theta | 3, 5) for N(theta, 1): the maximiser is the sample mean; give "
+    "(theta_ml, L(theta_ml | 3, 5)).",
+)
 def q5():
     return (4.0, float(np.exp(-1.0) / (2 * np.pi)))
 
 
-@CHECKS.function("q6", func="glr_nf_vs_f2", points=2, rtol=1e-6, atol=1e-9,
-                 forbid=["course.diagnosis.linear_glr_test", "course.diagnosis.glr_test",
-                         "course.diagnosis.prediction_error"],
-                 hint="-2 log Lambda = (T0 - T1)/sigma^2 with T0 = ||y - u1 - u2 - u3||^2 (NF) and T1 the "
-                      "smallest prediction error with theta2 free (others 1). It is chi2(1) under NF: "
-                      "return (statistic, stats.chi2.sf(statistic, 1)).")
+@CHECKS.function(
+    "q6",
+    func="glr_nf_vs_f2",
+    points=2,
+    rtol=1e-6,
+    atol=1e-9,
+    forbid=[
+        "course.diagnosis.linear_glr_test",
+        "course.diagnosis.glr_test",
+        "course.diagnosis.prediction_error",
+    ],
+    hint="-2 log Lambda = (T0 - T1)/sigma^2 with T0 = ||y - u1 - u2 - u3||^2 (NF) and T1 the "
+    "smallest prediction error with theta2 free (others 1). It is chi2(1) under NF: "
+    "return (statistic, stats.chi2.sf(statistic, 1)).",
+)
 def q6(U_, y, sigma):
     r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[1], sigma=sigma)
     return (r.statistic, r.pvalue)
@@ -113,12 +157,20 @@ q6.case(U, _record([1.3, 1.0, 1.0], 13), SIGMA, hidden=True)
 q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
 
 
-@CHECKS.function("q7", func="np_power", points=2, rtol=1e-7, atol=1e-10,
-                 hint="log Q is N(-d^2/2, d^2) under H0 and N(d^2/2, d^2) under H1 with "
-                      "d = sqrt(n) |theta1 - theta0| / sigma, so the power is Phi(d - z_alpha).")
+@CHECKS.function(
+    "q7",
+    func="np_power",
+    points=2,
+    rtol=1e-7,
+    atol=1e-10,
+    hint="log Q is N(-d^2/2, d^2) under H0 and N(d^2/2, d^2) under H1 with "
+    "d = sqrt(n) |theta1 - theta0| / sigma, so the power is Phi(d - z_alpha).",
+)
 def q7(n, theta0, theta1, sigma, alpha):
     z = np.zeros(int(n))
-    return float(dg.neyman_pearson_test(z, theta0, theta1, sigma=sigma, alpha=alpha).details["power"])
+    return float(
+        dg.neyman_pearson_test(z, theta0, theta1, sigma=sigma, alpha=alpha).details["power"]
+    )
 
 
 q7.case(2, 0.0, 1.0, 1.0, 0.05, label="the lecture's two observations, theta1 = 1")
@@ -127,10 +179,15 @@ q7.case(10, 1.0, 0.8, 0.5, 0.01, hidden=True)
 q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
 
 
-@CHECKS.function("q8", func="boundary_false_alarm", points=2, timeout=30,
-                 hint="Simulate n_runs samples of n N(0, 1) values (rng = np.random.default_rng(seed)), "
-                      "compute -2 log Lambda = n max(0, mean)^2 for the one-sided fault b >= 0, and return the "
-                      "fraction above stats.chi2.isf(alpha, 1). Wilks does not hold on the boundary.")
+@CHECKS.function(
+    "q8",
+    func="boundary_false_alarm",
+    points=2,
+    timeout=30,
+    hint="Simulate n_runs samples of n N(0, 1) values (rng = np.random.default_rng(seed)), "
+    "compute -2 log Lambda = n max(0, mean)^2 for the one-sided fault b >= 0, and return the "
+    "fraction above stats.chi2.isf(alpha, 1). Wilks does not hold on the boundary.",
+)
 def q8(n, alpha, n_runs, seed):
     # -2 log Lambda is 0 with probability 1/2, chi2(1) otherwise: the rate is alpha / 2.
     return binomial_band(n_runs, alpha / 2, miss=1e-4)
@@ -141,13 +198,22 @@ q8.case(5, 0.10, 20000, 7, hidden=True)
 q8.case(40, 0.01, 20000, 11, hidden=True)
 
 
-@CHECKS.value("q9", var="posterior_mine", points=3, data="modes", properties="posterior_properties",
-              rtol=1e-6, atol=1e-9,
-              hint="Under Fi, y ~ N(U 1, sigma^2 I + tau^2 u_i u_i^T); under NF, y ~ N(U 1, sigma^2 I) "
-                   "(stats.multivariate_normal.logpdf). Combine with mine['priors'] by Bayes' rule, in the "
-                   "log domain, and return the four posteriors in the order NF, F1, F2, F3.")
+@CHECKS.value(
+    "q9",
+    var="posterior_mine",
+    points=3,
+    data="modes",
+    properties="posterior_properties",
+    rtol=1e-6,
+    atol=1e-9,
+    hint="Under Fi, y ~ N(U 1, sigma^2 I + tau^2 u_i u_i^T); under NF, y ~ N(U 1, sigma^2 I) "
+    "(stats.multivariate_normal.logpdf). Combine with mine['priors'] by Bayes' rule, in the "
+    "log domain, and return the four posteriors in the order NF, F1, F2, F3.",
+)
 def q9(d):
-    logl = dg.mode_log_likelihoods(d["y"], d["U"], NOMINAL, MODES, sigma=d["sigma"], prior_std=d["tau"])
+    logl = dg.mode_log_likelihoods(
+        d["y"], d["U"], NOMINAL, MODES, sigma=d["sigma"], prior_std=d["tau"]
+    )
     ranking = dg.bayes_ranking(logl, dict(zip(MODES, d["priors"])))
     post = ranking.as_dict()
     return np.array([post[m] for m in MODES])

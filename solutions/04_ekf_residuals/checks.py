@@ -20,8 +20,16 @@ N7, T_FAULT7 = 200, 150
 _t7 = np.arange(N7)
 U7 = np.where((_t7 // 40) % 2 == 0, 0.5, 1.5)
 BETA7 = 0.8 + 0.6 * _t7 / N7
-_, Y7 = kf.simulate_beta_system(BETA7, U7, np.random.default_rng(4042), Ts=TS, q_x=Q_X, r=R,
-                                x0=0.5, fault=np.where(_t7 >= T_FAULT7, 0.2, 0.0))
+_, Y7 = kf.simulate_beta_system(
+    BETA7,
+    U7,
+    np.random.default_rng(4042),
+    Ts=TS,
+    q_x=Q_X,
+    r=R,
+    x0=0.5,
+    fault=np.where(_t7 >= T_FAULT7, 0.2, 0.0),
+)
 
 # Records for the function questions (scalar model x(t+1) = a x(t) + w, y = x + v).
 _rng = np.random.default_rng(20240604)
@@ -54,26 +62,42 @@ CHECKS = Checks(
     preload=["course.filters", "scipy.stats"],
 )
 
-_NO_FILTERS = ["course.filters.kalman_filter", "course.filters.extended_kalman_filter",
-               "course.filters.kf_update", "course.filters.ekf_update",
-               "course.filters.recursive_least_squares"]
+_NO_FILTERS = [
+    "course.filters.kalman_filter",
+    "course.filters.extended_kalman_filter",
+    "course.filters.kf_update",
+    "course.filters.ekf_update",
+    "course.filters.recursive_least_squares",
+]
 
 
-@CHECKS.value("q1", var="steady", points=1, rtol=1e-8, atol=1e-10,
-              hint="For x(t+1) = x(t) + w, y = x + v the Riccati recursion is "
-                   "P <- P - P^2/(P + r) + q. Set P equal on both sides and solve the quadratic; "
-                   "then K = P/(P + r). Return (P, K).")
+@CHECKS.value(
+    "q1",
+    var="steady",
+    points=1,
+    rtol=1e-8,
+    atol=1e-10,
+    hint="For x(t+1) = x(t) + w, y = x + v the Riccati recursion is "
+    "P <- P - P^2/(P + r) + q. Set P equal on both sides and solve the quadratic; "
+    "then K = P/(P + r). Return (P, K).",
+)
 def q1():
     model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]])
     ss = kf.steady_state(model)
     return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
 
 
-@CHECKS.function("q2", func="normalized_innovations", points=3, rtol=1e-7, atol=1e-9,
-                 forbid=_NO_FILTERS,
-                 hint="Per sample: eps = y - xhat, S = P + r, K = P/S, xhat <- xhat + K eps, "
-                      "P <- (1-K)^2 P + K^2 r, then predict xhat <- a xhat, P <- a^2 P + q. "
-                      "Start with xhat = m0, P = p0 and update BEFORE predicting. Return eps/sqrt(S).")
+@CHECKS.function(
+    "q2",
+    func="normalized_innovations",
+    points=3,
+    rtol=1e-7,
+    atol=1e-9,
+    forbid=_NO_FILTERS,
+    hint="Per sample: eps = y - xhat, S = P + r, K = P/S, xhat <- xhat + K eps, "
+    "P <- (1-K)^2 P + K^2 r, then predict xhat <- a xhat, P <- a^2 P + q. "
+    "Start with xhat = m0, P = p0 and update BEFORE predicting. Return eps/sqrt(S).",
+)
 def q2(y, a, q, r, m0, p0):
     return _scalar_filter(y, a, q, r, m0, p0).normalized_innovations()[:, 0]
 
@@ -85,12 +109,18 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.function("q3", func="windowed_statistic", points=1, rtol=1e-9, atol=1e-12,
-                 forbid=["course.filters.windowed_sum", "course.filters.windowed_nis"],
-                 hint="T[k] = z[k]^2 + ... + z[k+L-1]^2 for k = 0, ..., N-L: N-L+1 values. "
-                      "np.cumsum or np.convolve do it without a Python loop.")
+@CHECKS.function(
+    "q3",
+    func="windowed_statistic",
+    points=1,
+    rtol=1e-9,
+    atol=1e-12,
+    forbid=["course.filters.windowed_sum", "course.filters.windowed_nis"],
+    hint="T[k] = z[k]^2 + ... + z[k+L-1]^2 for k = 0, ..., N-L: N-L+1 values. "
+    "np.cumsum or np.convolve do it without a Python loop.",
+)
 def q3(z, L):
-    return kf.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1:]
+    return kf.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1 :]
 
 
 q3.case(np.arange(6.0), 3, label="z = 0..5, L = 3")
@@ -101,26 +131,38 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q4", var="threshold", points=1, rtol=1e-6, atol=1e-8,
-              hint="A sum of L squared independent N(0, 1) values is chi2(L); the threshold for a "
-                   "false-alarm probability alpha is its upper alpha quantile, scipy.stats.chi2.isf.")
+@CHECKS.value(
+    "q4",
+    var="threshold",
+    points=1,
+    rtol=1e-6,
+    atol=1e-8,
+    hint="A sum of L squared independent N(0, 1) values is chi2(L); the threshold for a "
+    "false-alarm probability alpha is its upper alpha quantile, scipy.stats.chi2.isf.",
+)
 def q4():
     return float(stats.chi2.isf(0.001, 10))
 
 
-@CHECKS.value("q5", var="first_alarm", points=2, data="record",
-              properties="record_alarm_properties",
-              hint="Build kf.beta_drift_model(Ts=mine['Ts'], q_beta=mine['q_beta'], q_x=mine['q_x'], "
-                   "r=mine['r'], x0_mean=(1.0, 0.5)), run kf.extended_kalman_filter on (y, u), "
-                   "take kf.windowed_nis with L = mine['window'] and return the first sample index "
-                   "t where it exceeds the chi2 threshold for mine['alpha'], as an int.")
+@CHECKS.value(
+    "q5",
+    var="first_alarm",
+    points=2,
+    data="record",
+    properties="record_alarm_properties",
+    hint="Build kf.beta_drift_model(Ts=mine['Ts'], q_beta=mine['q_beta'], q_x=mine['q_x'], "
+    "r=mine['r'], x0_mean=(1.0, 0.5)), run kf.extended_kalman_filter on (y, u), "
+    "take kf.windowed_nis with L = mine['window'] and return the first sample index "
+    "t where it exceeds the chi2 threshold for mine['alpha'], as an int.",
+)
 def q5(d):
-    model = kf.beta_drift_model(Ts=d["Ts"], q_beta=d["q_beta"], q_x=d["q_x"], r=d["r"],
-                                x0_mean=(1.0, 0.5))
+    model = kf.beta_drift_model(
+        Ts=d["Ts"], q_beta=d["q_beta"], q_x=d["q_x"], r=d["r"], x0_mean=(1.0, 0.5)
+    )
     res = kf.extended_kalman_filter(model, d["y"], d["u"])
     T = kf.windowed_nis(res, d["window"])
     with np.errstate(invalid="ignore"):
-        alarms = np.flatnonzero(T > kf.windowed_nis_threshold(d["alpha"], d["window"]))
+        alarms = np.flatnonzero(kf.windowed_nis_threshold(d["alpha"], d["window"]) < T)
     return int(alarms[0]) if alarms.size else -1
 
 
@@ -142,15 +184,22 @@ def _run_false_alarm_probability(a, q, r, N, L, alpha, n_ref=200_000, seed=20240
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
     _, y = model.simulate(int(N), np.random.default_rng(seed), batch=n_ref)
     T = kf.windowed_nis(kf.kalman_filter(model, y), int(L))
-    return kf.alarm_statistics(T, kf.windowed_nis_threshold(alpha, int(L))).run_false_alarm_probability
+    return kf.alarm_statistics(
+        T, kf.windowed_nis_threshold(alpha, int(L))
+    ).run_false_alarm_probability
 
 
-@CHECKS.function("q6", func="false_alarm_rates", points=2, timeout=30,
-                 hint="Simulate n_runs records with rng = np.random.default_rng(seed) "
-                      "(x0 ~ N(0, 1)), filter them with the correct model (all runs at once: the gains "
-                      "do not depend on the data) and form the window sums of squared normalised "
-                      "innovations (full windows only). Return (fraction of runs whose LAST window "
-                      "exceeds chi2.isf(alpha, L), fraction of runs with AT LEAST ONE window above it).")
+@CHECKS.function(
+    "q6",
+    func="false_alarm_rates",
+    points=2,
+    timeout=30,
+    hint="Simulate n_runs records with rng = np.random.default_rng(seed) "
+    "(x0 ~ N(0, 1)), filter them with the correct model (all runs at once: the gains "
+    "do not depend on the data) and form the window sums of squared normalised "
+    "innovations (full windows only). Return (fraction of runs whose LAST window "
+    "exceeds chi2.isf(alpha, L), fraction of runs with AT LEAST ONE window above it).",
+)
 def q6(a, q, r, N, L, alpha, n_runs, seed):
     # The last window holds L independent N(0,1) squares under H0: its rate is exactly alpha.
     # "Any window" has no closed form (overlapping windows are dependent): a large reference
@@ -166,11 +215,18 @@ q6.case(1.0, 0.01, 0.5, 30, 5, 0.01, 20000, 7, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q7", var="false_alarms", points=2, rtol=0, atol=0, public=False,
-              hint="Run kf.extended_kalman_filter with kf.beta_drift_model(..., q_beta=0.0, ...) and "
-                   "with q_beta=1e-4 on the same (y7, u7); count the samples t < t_fault7 where "
-                   "kf.windowed_nis(result, 10) exceeds kf.windowed_nis_threshold(0.001, 10). "
-                   "Return (count_constant, count_random_walk) as ints.")
+@CHECKS.value(
+    "q7",
+    var="false_alarms",
+    points=2,
+    rtol=0,
+    atol=0,
+    public=False,
+    hint="Run kf.extended_kalman_filter with kf.beta_drift_model(..., q_beta=0.0, ...) and "
+    "with q_beta=1e-4 on the same (y7, u7); count the samples t < t_fault7 where "
+    "kf.windowed_nis(result, 10) exceeds kf.windowed_nis_threshold(0.001, 10). "
+    "Return (count_constant, count_random_walk) as ints.",
+)
 def q7():
     thr = kf.windowed_nis_threshold(0.001, 10)
     counts = []
@@ -182,22 +238,44 @@ def q7():
     return tuple(counts)
 
 
-@CHECKS.function("q8", func="rls_update", points=2, rtol=1e-9, atol=1e-12,
-                 forbid=_NO_FILTERS,
-                 hint="RLS is the Kalman measurement update with H = phi^T and a constant parameter: "
-                      "S = phi^T P phi + r, K = P phi / S, theta <- theta + K (y - phi^T theta), "
-                      "P <- P - K phi^T P (or the Joseph form). Return (theta_new, P_new).")
+@CHECKS.function(
+    "q8",
+    func="rls_update",
+    points=2,
+    rtol=1e-9,
+    atol=1e-12,
+    forbid=_NO_FILTERS,
+    hint="RLS is the Kalman measurement update with H = phi^T and a constant parameter: "
+    "S = phi^T P phi + r, K = P phi / S, theta <- theta + K (y - phi^T theta), "
+    "P <- P - K phi^T P (or the Joseph form). Return (theta_new, P_new).",
+)
 def q8(theta, P, phi, y, r):
-    x, Pn, _, _, _ = kf.kf_update(np.asarray(theta, float), np.asarray(P, float),
-                                  np.array([float(y)]), np.asarray(phi, float)[None, :],
-                                  np.array([[float(r)]]))
+    x, Pn, _, _, _ = kf.kf_update(
+        np.asarray(theta, float),
+        np.asarray(P, float),
+        np.array([float(y)]),
+        np.asarray(phi, float)[None, :],
+        np.array([[float(r)]]),
+    )
     return (x, Pn)
 
 
-q8.case(np.array([0.0, 0.0]), np.eye(2), np.array([1.0, 2.0]), 3.0, 1.0,
-        label="theta = 0, P = I, phi = (1, 2), y = 3, r = 1")
+q8.case(
+    np.array([0.0, 0.0]),
+    np.eye(2),
+    np.array([1.0, 2.0]),
+    3.0,
+    1.0,
+    label="theta = 0, P = I, phi = (1, 2), y = 3, r = 1",
+)
 ### BEGIN HIDDEN TESTS
-q8.case(np.array([1.0, -1.0, 0.5]), np.diag([2.0, 1.0, 0.5]), np.array([0.3, -1.0, 2.0]), 0.7, 0.2,
-        hidden=True)
+q8.case(
+    np.array([1.0, -1.0, 0.5]),
+    np.diag([2.0, 1.0, 0.5]),
+    np.array([0.3, -1.0, 2.0]),
+    0.7,
+    0.2,
+    hidden=True,
+)
 q8.case(np.array([5.0]), np.array([[0.01]]), np.array([2.0]), 9.0, 4.0, hidden=True)
 ### END HIDDEN TESTS

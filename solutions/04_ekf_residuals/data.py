@@ -27,8 +27,16 @@ def record(rng):
     for k in range(N - 1):
         x[k + 1] = x[k] - Ts * beta[k] * x[k] + Ts * u[k] + w[k]
     y = x + np.where(t >= t_fault, size, 0.0) + e
-    return {"Ts": Ts, "q_x": q_x, "r": r, "q_beta": 1e-4, "u": u, "y": y,
-            "window": 10, "alpha": 0.001}
+    return {
+        "Ts": Ts,
+        "q_x": q_x,
+        "r": r,
+        "q_beta": 1e-4,
+        "u": u,
+        "y": y,
+        "window": 10,
+        "alpha": 0.001,
+    }
 
 
 def record_alarm_properties(d, value):

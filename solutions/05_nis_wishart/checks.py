@@ -40,11 +40,17 @@ CHECKS = Checks(
 )
 
 
-@CHECKS.function("q1", func="nis_per_step", points=2, rtol=1e-9, atol=1e-12,
-                 forbid=["course.nis.nis", "course.nis.nees", "course.nis.nis_matrix"],
-                 hint="For each step solve with the Cholesky factor: z = solve(B_k, eps_k) with "
-                      "S_k = B_k B_k^T, then NIS_k = z @ z. S is one (m, m) matrix or a (K, m, m) "
-                      "stack: np.broadcast_to(S, (K, m, m)) handles both.")
+@CHECKS.function(
+    "q1",
+    func="nis_per_step",
+    points=2,
+    rtol=1e-9,
+    atol=1e-12,
+    forbid=["course.nis.nis", "course.nis.nees", "course.nis.nis_matrix"],
+    hint="For each step solve with the Cholesky factor: z = solve(B_k, eps_k) with "
+    "S_k = B_k B_k^T, then NIS_k = z @ z. S is one (m, m) matrix or a (K, m, m) "
+    "stack: np.broadcast_to(S, (K, m, m)) handles both.",
+)
 def q1(eps, S):
     return nis.nis(eps, S)
 
@@ -56,12 +62,21 @@ q1.case(EPS_C, S_C, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.function("q2", func="nis_matrix", points=2, rtol=1e-9, atol=1e-12,
-                 forbid=["course.nis.nis_matrix", "course.nis.nis_matrix_eigenvalues",
-                         "course.nis.nis_matrix_test"],
-                 hint="Pi = (1/K) sum_k z_k z_k^T with z_k = B_k^{-1} eps_k (B_k lower Cholesky "
-                      "factor of S_k): the mean of the outer products of the whitened innovations. "
-                      "Its trace equals the average NIS of q1.")
+@CHECKS.function(
+    "q2",
+    func="nis_matrix",
+    points=2,
+    rtol=1e-9,
+    atol=1e-12,
+    forbid=[
+        "course.nis.nis_matrix",
+        "course.nis.nis_matrix_eigenvalues",
+        "course.nis.nis_matrix_test",
+    ],
+    hint="Pi = (1/K) sum_k z_k z_k^T with z_k = B_k^{-1} eps_k (B_k lower Cholesky "
+    "factor of S_k): the mean of the outer products of the whitened innovations. "
+    "Its trace equals the average NIS of q1.",
+)
 def q2(eps, S):
     return nis.nis_matrix(eps, S)
 
@@ -73,30 +88,48 @@ q2.case(EPS_C, S_C, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q3", var="eps_bar_interval", points=1, rtol=1e-7, atol=1e-10,
-              forbid=["course.nis.consistency_interval", "course.nis.nis_critical_values"],
-              hint="With the poster's 1/K, K * eps_bar ~ chi2(m K): take the chi2(60) quantiles "
-                   "at 0.025 and 0.975 and divide them by K = 20.")
+@CHECKS.value(
+    "q3",
+    var="eps_bar_interval",
+    points=1,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=["course.nis.consistency_interval", "course.nis.nis_critical_values"],
+    hint="With the poster's 1/K, K * eps_bar ~ chi2(m K): take the chi2(60) quantiles "
+    "at 0.025 and 0.975 and divide them by K = 20.",
+)
 def q3():
     law = stats.chi2(60)
     return (float(law.ppf(0.025)) / 20, float(law.isf(0.025)) / 20)
 
 
-@CHECKS.value("q4", var="thresholds", points=1, rtol=1e-7, atol=1e-10,
-              forbid=["course.nis.nis_matrix_critical_values"],
-              hint="Split alpha equally: the lower threshold is the alpha/2 quantile (ppf) of the "
-                   "law of lambda_min, the upper one the alpha/2 upper quantile (isf) of the law of "
-                   "lambda_max: nis.extreme_eigenvalue(2, 30, 'min' / 'max').")
+@CHECKS.value(
+    "q4",
+    var="thresholds",
+    points=1,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=["course.nis.nis_matrix_critical_values"],
+    hint="Split alpha equally: the lower threshold is the alpha/2 quantile (ppf) of the "
+    "law of lambda_min, the upper one the alpha/2 upper quantile (isf) of the law of "
+    "lambda_max: nis.extreme_eigenvalue(2, 30, 'min' / 'max').",
+)
 def q4():
     return nis.nis_matrix_critical_values(2, 30, 0.05)
 
 
-@CHECKS.function("q5", func="matrix_test", points=2, rtol=1e-7, atol=1e-10,
-                 forbid=["course.nis.nis_matrix_test"],
-                 hint="lmin and lmax are the extreme eigenvalues (np.linalg.eigvalsh) of your "
-                      "nis_matrix(eps, S); reject when lmin < ppf_min(alpha/2) or "
-                      "lmax > isf_max(alpha/2) of the exact laws with m = eps.shape[1], "
-                      "K = eps.shape[0]. Return (lmin, lmax, reject) with reject a bool.")
+@CHECKS.function(
+    "q5",
+    func="matrix_test",
+    points=2,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=["course.nis.nis_matrix_test"],
+    hint="lmin and lmax are the extreme eigenvalues (np.linalg.eigvalsh) of your "
+    "nis_matrix(eps, S); reject when lmin < ppf_min(alpha/2) or "
+    "lmax > isf_max(alpha/2) of the exact laws with m = eps.shape[1], "
+    "K = eps.shape[0]. Return (lmin, lmax, reject) with reject a bool.",
+)
 def q5(eps, S, alpha):
     result = nis.nis_matrix_test(eps, S, alpha)
     lmin, lmax = result.statistic
@@ -111,24 +144,36 @@ q5.case(EPS_E, S_A, 0.01, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q6", var="pvalues", points=2, rtol=1e-6, atol=1e-9, data="record",
-              properties="record_properties",
-              hint="p_nis = 2 min(F, 1 - F) of chi2(m K) at the NIS sum K * eps_bar; "
-                   "p_matrix = min(1, 2 min(F_min(lmin), 1 - F_max(lmax))) with the exact laws "
-                   "of nis.extreme_eigenvalue. nis.nis_test and nis.nis_matrix_test compute both.")
+@CHECKS.value(
+    "q6",
+    var="pvalues",
+    points=2,
+    rtol=1e-6,
+    atol=1e-9,
+    data="record",
+    properties="record_properties",
+    hint="p_nis = 2 min(F, 1 - F) of chi2(m K) at the NIS sum K * eps_bar; "
+    "p_matrix = min(1, 2 min(F_min(lmin), 1 - F_max(lmax))) with the exact laws "
+    "of nis.extreme_eigenvalue. nis.nis_test and nis.nis_matrix_test compute both.",
+)
 def q6(d):
     p_nis = nis.nis_test(d["eps"], d["S"], d["alpha"]).pvalue
     p_matrix = nis.nis_matrix_test(d["eps"], d["S"], d["alpha"]).pvalue
     return (float(p_nis), float(p_matrix))
 
 
-@CHECKS.function("q7", func="false_alarm_rate", points=2, timeout=30,
-                 forbid=["course.nis.simulate_extreme_eigenvalues", "course.nis.prob_eigenvalues_within"],
-                 hint="rng = np.random.default_rng(seed); draw innovations of shape (n_runs, K, m) "
-                      "from N(0, I) (any S would do after whitening), form the NIS matrices of all "
-                      "runs at once (np.einsum), take their extreme eigenvalues (np.linalg.eigvalsh "
-                      "works on stacks) and return the fraction of runs outside the thresholds of "
-                      "nis.nis_matrix_critical_values(m, K, alpha).")
+@CHECKS.function(
+    "q7",
+    func="false_alarm_rate",
+    points=2,
+    timeout=30,
+    forbid=["course.nis.simulate_extreme_eigenvalues", "course.nis.prob_eigenvalues_within"],
+    hint="rng = np.random.default_rng(seed); draw innovations of shape (n_runs, K, m) "
+    "from N(0, I) (any S would do after whitening), form the NIS matrices of all "
+    "runs at once (np.einsum), take their extreme eigenvalues (np.linalg.eigvalsh "
+    "works on stacks) and return the fraction of runs outside the thresholds of "
+    "nis.nis_matrix_critical_values(m, K, alpha).",
+)
 def q7(m, K, alpha, n_runs, seed):
     # The exact false-alarm rate is 1 - P(all eigenvalues inside the thresholds).
     lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
@@ -142,10 +187,16 @@ q7.case(3, 10, 0.1, 20000, 7, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q8", var="nees_interval", points=1, rtol=1e-7, atol=1e-10,
-              forbid=["course.nis.consistency_interval"],
-              hint="N times the run-averaged NEES is chi2(n N) with n = 4 states and N = 50 runs: "
-                   "divide the chi2(200) quantiles at 0.025 and 0.975 by N.")
+@CHECKS.value(
+    "q8",
+    var="nees_interval",
+    points=1,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=["course.nis.consistency_interval"],
+    hint="N times the run-averaged NEES is chi2(n N) with n = 4 states and N = 50 runs: "
+    "divide the chi2(200) quantiles at 0.025 and 0.975 by N.",
+)
 def q8():
     law = stats.chi2(200)
     return (float(law.ppf(0.025)) / 50, float(law.isf(0.025)) / 50)

@@ -12,23 +12,45 @@ from course.quadform import WeightedChiSquare
 
 from . import data
 
-_FORBID_MOMENTS = ["course.mismatched.residual_moments", "course.mismatched.residual_moments_as_printed"]
-_FORBID_TESTS = ["course.mismatched.mean_test", "course.mismatched.covariance_test",
-                 "course.mismatched.correlation_test", "course.mismatched.statistic_law",
-                 "course.mismatched.power"]
+_FORBID_MOMENTS = [
+    "course.mismatched.residual_moments",
+    "course.mismatched.residual_moments_as_printed",
+]
+_FORBID_TESTS = [
+    "course.mismatched.mean_test",
+    "course.mismatched.covariance_test",
+    "course.mismatched.correlation_test",
+    "course.mismatched.statistic_law",
+    "course.mismatched.power",
+]
 
 # a reduced-order pair (2 true states, 1 filter state) and a same-order pair with two outputs
 F0_A, H0_A = np.array(data.M0.F), np.array(data.M0.H)
 F1_A, H1_A = np.array(data.M1.F), np.array(data.M1.H)
 K_A = filters.riccati_gains(data.M1, 6)
 
-_B0 = filters.LinearModel(F=[[0.8, 0.3], [0.0, 0.7]], H=[[1.0, 0.0], [0.5, 1.0]], Q=np.diag([0.4, 0.3]),
-                          R=[[1.0, 0.3], [0.3, 0.8]], x0_cov=np.diag([1.0, 0.5]))
-_B1 = filters.LinearModel(F=[[0.6, 0.0], [0.1, 0.9]], H=np.eye(2), Q=np.eye(2), R=[[0.5, 0.0], [0.0, 0.7]],
-                          x0_cov=2 * np.eye(2))
+_B0 = filters.LinearModel(
+    F=[[0.8, 0.3], [0.0, 0.7]],
+    H=[[1.0, 0.0], [0.5, 1.0]],
+    Q=np.diag([0.4, 0.3]),
+    R=[[1.0, 0.3], [0.3, 0.8]],
+    x0_cov=np.diag([1.0, 0.5]),
+)
+_B1 = filters.LinearModel(
+    F=[[0.6, 0.0], [0.1, 0.9]],
+    H=np.eye(2),
+    Q=np.eye(2),
+    R=[[0.5, 0.0], [0.0, 0.7]],
+    x0_cov=2 * np.eye(2),
+)
 K_B = filters.riccati_gains(_B1, 5)
-_C0 = filters.LinearModel(F=[[0.5, 0.2, 0.0], [0.0, 0.9, 0.1], [0.0, 0.0, 0.95]], H=[[1.0, 0.0, 1.0]],
-                          Q=np.diag([1.0, 0.2, 0.05]), R=[[0.5]], x0_cov=np.eye(3))
+_C0 = filters.LinearModel(
+    F=[[0.5, 0.2, 0.0], [0.0, 0.9, 0.1], [0.0, 0.0, 0.95]],
+    H=[[1.0, 0.0, 1.0]],
+    Q=np.diag([1.0, 0.2, 0.05]),
+    R=[[0.5]],
+    x0_cov=np.eye(3),
+)
 _C1 = filters.LinearModel(F=[[0.7]], H=[[1.0]], Q=[[1.5]], R=[[0.8]], x0_cov=[[3.0]])
 K_C = filters.riccati_gains(_C1, 8)
 
@@ -50,13 +72,24 @@ def _augmented(F0, H0, F1, H1, K):
     return F, np.hstack([H0, -H1])
 
 
-@CHECKS.function("q1", func="augmented_matrices", points=2, rtol=1e-10, atol=1e-12,
-                 forbid=_FORBID_MOMENTS,
-                 hint="F~ = [[F0, 0], [F1 K H0, F1 (I - K H1)]] with a zero upper-right block "
-                      "(n0 x n1) and H~ = [H0, -H1] (np.hstack): r = H0 x - H1 xhat + v.")
+@CHECKS.function(
+    "q1",
+    func="augmented_matrices",
+    points=2,
+    rtol=1e-10,
+    atol=1e-12,
+    forbid=_FORBID_MOMENTS,
+    hint="F~ = [[F0, 0], [F1 K H0, F1 (I - K H1)]] with a zero upper-right block "
+    "(n0 x n1) and H~ = [H0, -H1] (np.hstack): r = H0 x - H1 xhat + v.",
+)
 def q1(F0, H0, F1, H1, K):
-    return _augmented(np.asarray(F0, float), np.asarray(H0, float), np.asarray(F1, float),
-                      np.asarray(H1, float), np.asarray(K, float))
+    return _augmented(
+        np.asarray(F0, float),
+        np.asarray(H0, float),
+        np.asarray(F1, float),
+        np.asarray(H1, float),
+        np.asarray(K, float),
+    )
 
 
 q1.case(F0_A, H0_A, F1_A, H1_A, K_A[0], label="2 true states, 1 filter state, p = 1")
@@ -67,16 +100,31 @@ q1.case(np.array(_C0.F), np.array(_C0.H), np.array(_C1.F), np.array(_C1.H), K_C[
 
 
 def _model_args(m0, m1, K):
-    return (np.array(m0.F), np.array(m0.G), np.array(m0.Q), np.array(m0.H), np.array(m0.R),
-            np.array(m0.x0_cov), np.array(m1.F), np.array(m1.H), np.array(K))
+    return (
+        np.array(m0.F),
+        np.array(m0.G),
+        np.array(m0.Q),
+        np.array(m0.H),
+        np.array(m0.R),
+        np.array(m0.x0_cov),
+        np.array(m1.F),
+        np.array(m1.H),
+        np.array(K),
+    )
 
 
-@CHECKS.function("q2", func="residual_covariances", points=2, rtol=1e-9, atol=1e-12,
-                 forbid=_FORBID_MOMENTS,
-                 hint="Psi~_0 = blockdiag(Psi0, 0); for t = 0..N-1: P_t = H~ Psi~_t H~^T + R0, then "
-                      "Psi~_{t+1} = F~_t Psi~_t F~_t^T + G~_t blockdiag(Q0, R0) G~_t^T with "
-                      "G~_t = [[G0, 0], [0, F1 K_t]] -- no Q1 block: the filter's process noise is "
-                      "not a random input of the filter.")
+@CHECKS.function(
+    "q2",
+    func="residual_covariances",
+    points=2,
+    rtol=1e-9,
+    atol=1e-12,
+    forbid=_FORBID_MOMENTS,
+    hint="Psi~_0 = blockdiag(Psi0, 0); for t = 0..N-1: P_t = H~ Psi~_t H~^T + R0, then "
+    "Psi~_{t+1} = F~_t Psi~_t F~_t^T + G~_t blockdiag(Q0, R0) G~_t^T with "
+    "G~_t = [[G0, 0], [0, F1 K_t]] -- no Q1 block: the filter's process noise is "
+    "not a random input of the filter.",
+)
 def q2(F0, G0, Q0, H0, R0, Psi0, F1, H1, K):
     n0, n1 = F0.shape[0], F1.shape[0]
     N, p = K.shape[0], H0.shape[0]
@@ -103,9 +151,15 @@ q2.case(*_model_args(_C0, _C1, K_C), hidden=True)
 P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
 
 
-@CHECKS.value("q3", var="expected_c", points=1, rtol=1e-9, atol=1e-12,
-              hint="The sample mean is subtracted, so c_j = tr(Pbar_j) with divisor M has expectation "
-                   "(M - 1)/M tr(P_j), not tr(P_j).")
+@CHECKS.value(
+    "q3",
+    var="expected_c",
+    points=1,
+    rtol=1e-9,
+    atol=1e-12,
+    hint="The sample mean is subtracted, so c_j = tr(Pbar_j) with divisor M has expectation "
+    "(M - 1)/M tr(P_j), not tr(P_j).",
+)
 def q3():
     return 3.0 / 4.0 * float(np.trace(P_Q3))
 
@@ -116,17 +170,29 @@ R_B = _rng.normal(size=(9, 4, 2)) @ np.array([[1.0, 0.4], [0.0, 0.8]])
 R_C = _rng.normal(size=(3, 7, 3))
 
 
-@CHECKS.function("q4", func="section_statistics", points=2, rtol=1e-10, atol=1e-12,
-                 forbid=["course.mismatched.mean_statistic", "course.mismatched.covariance_statistic",
-                         "course.mismatched.correlation_statistic"],
-                 hint="rbar_j = residuals[:, j].mean(axis=0); mean statistic rbar_j @ rbar_j (the "
-                      "squared norm); covariance statistic mean over records of |r_ij - rbar_j|^2; "
-                      "correlation statistic mean over records of (r_ij - rbar_j) . (r_ik - rbar_k). "
-                      "Divide by M, not M - 1.")
+@CHECKS.function(
+    "q4",
+    func="section_statistics",
+    points=2,
+    rtol=1e-10,
+    atol=1e-12,
+    forbid=[
+        "course.mismatched.mean_statistic",
+        "course.mismatched.covariance_statistic",
+        "course.mismatched.correlation_statistic",
+    ],
+    hint="rbar_j = residuals[:, j].mean(axis=0); mean statistic rbar_j @ rbar_j (the "
+    "squared norm); covariance statistic mean over records of |r_ij - rbar_j|^2; "
+    "correlation statistic mean over records of (r_ij - rbar_j) . (r_ik - rbar_k). "
+    "Divide by M, not M - 1.",
+)
 def q4(residuals, j, k):
     r = np.asarray(residuals, float)
-    return (mismatched.mean_statistic(r, j), mismatched.covariance_statistic(r, j),
-            mismatched.correlation_statistic(r, j, k))
+    return (
+        mismatched.mean_statistic(r, j),
+        mismatched.covariance_statistic(r, j),
+        mismatched.correlation_statistic(r, j, k),
+    )
 
 
 q4.case(R_A, 2, 3, label="M = 6 records, N = 5, p = 1")
@@ -136,11 +202,17 @@ q4.case(R_C, 6, 1, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.function("q5", func="covariance_critical_values", points=2, rtol=1e-7, atol=1e-10,
-                 forbid=_FORBID_TESTS,
-                 hint="c_j = sum of eig(P_j)/M times independent chi2(M - 1): use "
-                      "course.quadform.WeightedChiSquare(np.linalg.eigvalsh(P) / M, dof=M - 1) and "
-                      "return (law.ppf(alpha/2), law.isf(alpha/2)).")
+@CHECKS.function(
+    "q5",
+    func="covariance_critical_values",
+    points=2,
+    rtol=1e-7,
+    atol=1e-10,
+    forbid=_FORBID_TESTS,
+    hint="c_j = sum of eig(P_j)/M times independent chi2(M - 1): use "
+    "course.quadform.WeightedChiSquare(np.linalg.eigvalsh(P) / M, dof=M - 1) and "
+    "return (law.ppf(alpha/2), law.isf(alpha/2)).",
+)
 def q5(P, M, alpha):
     return _covariance_critical_values(P, M, alpha)
 
@@ -157,12 +229,20 @@ q5.case(np.diag([3.0, 1.0, 0.2]), 6, 0.01, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value("q6", var="pvalues", points=2, rtol=1e-6, atol=1e-9, data="experiment",
-              properties="experiment_properties", forbid=_FORBID_TESTS,
-              hint="Mean test: rbar_j ~ N(m_j, P_j/M), so ||rbar_j||^2 is "
-                   "QuadraticForm(np.eye(1), m_j, P_j / M); correlation test: the weights of "
-                   "QuadraticForm([[0, 1], [1, 0]] / (2M), cov=[[P_j, C], [C, P_k]]), each with "
-                   "M - 1 degrees of freedom (WeightedChiSquare). Two-sided p = min(1, 2 min(cdf, sf)).")
+@CHECKS.value(
+    "q6",
+    var="pvalues",
+    points=2,
+    rtol=1e-6,
+    atol=1e-9,
+    data="experiment",
+    properties="experiment_properties",
+    forbid=_FORBID_TESTS,
+    hint="Mean test: rbar_j ~ N(m_j, P_j/M), so ||rbar_j||^2 is "
+    "QuadraticForm(np.eye(1), m_j, P_j / M); correlation test: the weights of "
+    "QuadraticForm([[0, 1], [1, 0]] / (2M), cov=[[P_j, C], [C, P_k]]), each with "
+    "M - 1 degrees of freedom (WeightedChiSquare). Two-sided p = min(1, 2 min(cdf, sf)).",
+)
 def q6(d):
     null = mismatched.ResidualMoments(d["mean"], d["cov"], d["cross_cov"])
     p_mean = mismatched.mean_test(d["residuals"], d["j"], null, d["alpha"]).pvalue
@@ -174,10 +254,17 @@ P0_Q7 = np.array([[1.5, 0.4], [0.4, 1.0]])
 P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
 
 
-@CHECKS.value("q7", var="power_cov", points=1, rtol=1e-6, atol=1e-9, forbid=_FORBID_TESTS,
-              hint="Critical values (lower, upper) from the law under P0 (your q5), then "
-                   "power = F2(lower) + 1 - F2(upper) with F2 the law of c_j under P2 "
-                   "(weights eig(P2)/M, M - 1 degrees of freedom).")
+@CHECKS.value(
+    "q7",
+    var="power_cov",
+    points=1,
+    rtol=1e-6,
+    atol=1e-9,
+    forbid=_FORBID_TESTS,
+    hint="Critical values (lower, upper) from the law under P0 (your q5), then "
+    "power = F2(lower) + 1 - F2(upper) with F2 the law of c_j under P2 "
+    "(weights eig(P2)/M, M - 1 degrees of freedom).",
+)
 def q7():
     lower, upper = _covariance_critical_values(P0_Q7, 20, 0.05)
     law = WeightedChiSquare(np.linalg.eigvalsh(P2_Q7) / 20, dof=19.0)

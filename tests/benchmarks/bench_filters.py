@@ -103,10 +103,14 @@ def main(argv=None):
     ratio = t_base_full / t_ours
     print(f"EKF Monte Carlo, lecture example: {args.runs} runs x {args.steps} steps")
     print(f"  course.filters (vectorised, best of {args.repeats}): {t_ours:8.3f} s")
-    print(f"  filterpy ExtendedKalmanFilter, per-run loop: {t_base:8.3f} s for {nb} runs"
-          f" -> {t_base_full:8.1f} s for {args.runs} runs")
+    print(
+        f"  filterpy ExtendedKalmanFilter, per-run loop: {t_base:8.3f} s for {nb} runs"
+        f" -> {t_base_full:8.1f} s for {args.runs} runs"
+    )
     print(f"  innovations agree to {err:.1e}")
-    print(f"  speed-up: {ratio:.1f}x (target >= {TARGET:g}x): {'met' if ratio >= TARGET else 'NOT met'}")
+    print(
+        f"  speed-up: {ratio:.1f}x (target >= {TARGET:g}x): {'met' if ratio >= TARGET else 'NOT met'}"
+    )
     return 0 if ratio >= TARGET else 1
 
 

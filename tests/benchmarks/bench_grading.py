@@ -61,8 +61,13 @@ def run_nbgrader_style(subs: Path) -> float:
     start = time.perf_counter()
     for path in sorted(subs.glob("*.ipynb")):
         nb = nbformat.read(path, as_version=4)
-        client = NotebookClient(nb, kernel_name="python3", timeout=120, allow_errors=True,
-                                resources={"metadata": {"path": str(ROOT / "exercises" / NAME)}})
+        client = NotebookClient(
+            nb,
+            kernel_name="python3",
+            timeout=120,
+            allow_errors=True,
+            resources={"metadata": {"path": str(ROOT / "exercises" / NAME)}},
+        )
         client.execute()  # starts a new kernel, runs every cell, shuts the kernel down
     return time.perf_counter() - start
 
@@ -70,7 +75,9 @@ def run_nbgrader_style(subs: Path) -> float:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=40, help="number of submissions (default 40)")
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="parallel students for ours")
+    parser.add_argument(
+        "--jobs", type=int, default=os.cpu_count() or 1, help="parallel students for ours"
+    )
     args = parser.parse_args(argv)
     os.environ.setdefault("MPLBACKEND", "Agg")
     tmp = Path(tempfile.mkdtemp(prefix="bench-grading-"))
@@ -78,15 +85,23 @@ def main(argv=None) -> int:
         subs = tmp / "subs"
         subs.mkdir()
         make_submissions(subs, args.n)
-        print(f"{args.n} submissions of {NAME}; {os.cpu_count()} cores; ours with --jobs {args.jobs}")
+        print(
+            f"{args.n} submissions of {NAME}; {os.cpu_count()} cores; ours with --jobs {args.jobs}"
+        )
         ours = run_ours(subs, tmp / "out", args.jobs)
-        print(f"course grade (sandboxed, parallel, incl. fork-server start): {ours:8.1f} s"
-              f"  ({ours / args.n:.2f} s per notebook)")
+        print(
+            f"course grade (sandboxed, parallel, incl. fork-server start): {ours:8.1f} s"
+            f"  ({ours / args.n:.2f} s per notebook)"
+        )
         base = run_nbgrader_style(subs)
-        print(f"nbgrader-style (one Jupyter kernel per notebook, serial):  {base:8.1f} s"
-              f"  ({base / args.n:.2f} s per notebook)")
+        print(
+            f"nbgrader-style (one Jupyter kernel per notebook, serial):  {base:8.1f} s"
+            f"  ({base / args.n:.2f} s per notebook)"
+        )
         ratio = base / ours
-        print(f"speed-up: {ratio:.1f}x (target >= {TARGET:g}x): {'met' if ratio >= TARGET else 'NOT met'}")
+        print(
+            f"speed-up: {ratio:.1f}x (target >= {TARGET:g}x): {'met' if ratio >= TARGET else 'NOT met'}"
+        )
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return 0

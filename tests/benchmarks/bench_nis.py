@@ -72,14 +72,20 @@ def main(argv=None):
     gap = max(np.max(np.abs(e_min - s_min)), np.max(np.abs(e_max - s_max)))
     ratio = t_mc / t_exact
 
-    print(f"task: CDFs of lambda_min and lambda_max of W/K on 200 points + critical values, m={m}, K={K}")
+    print(
+        f"task: CDFs of lambda_min and lambda_max of W/K on 200 points + critical values, m={m}, K={K}"
+    )
     print(f"accuracy: sup-error {eps:g} at 95% (Monte Carlo needs N = {n_draws} draws by DKW)")
     print(f"exact (course.nis, Chiani Pfaffian):   {t_exact * 1e3:10.1f} ms")
     print(f"Monte Carlo (Bartlett + eigvalsh):     {t_mc * 1e3:10.1f} ms")
-    print(f"ratio Monte Carlo / exact:             {ratio:10.0f}x  (target >= 100x: "
-          f"{'met' if ratio >= 100 else 'NOT met'})")
-    print(f"check: sup |exact - MC| = {gap:.2e} (<= {eps:g} expected); critical values "
-          f"exact ({e_crit[0]:.5f}, {e_crit[1]:.5f}) vs MC ({s_crit[0]:.5f}, {s_crit[1]:.5f})")
+    print(
+        f"ratio Monte Carlo / exact:             {ratio:10.0f}x  (target >= 100x: "
+        f"{'met' if ratio >= 100 else 'NOT met'})"
+    )
+    print(
+        f"check: sup |exact - MC| = {gap:.2e} (<= {eps:g} expected); critical values "
+        f"exact ({e_crit[0]:.5f}, {e_crit[1]:.5f}) vs MC ({s_crit[0]:.5f}, {s_crit[1]:.5f})"
+    )
     return ratio
 
 
