@@ -3,8 +3,9 @@
 The filter is often deliberately simpler than the model it is meant to
 validate (fewer states, other noise levels).  Its residuals are then
 correlated, non-zero mean and non-stationary *even when the model is right*,
-so whiteness and chi-square tests do not apply.  Baram (1980,
-``seeds/mismatched_filters_baram.txt``) uses many independent data records
+so whiteness and chi-square tests do not apply.  Y. Baram (1980), "Model
+validation using mismatched filters" (full reference in the course
+bibliography, docs/bibliography.md), uses many independent data records
 instead: at a fixed time ``j`` the residuals of different records (a
 *cross-record section*) are independent and identically distributed, and the
 mean, covariance and correlation statistics of a section are quadratic forms
@@ -44,17 +45,23 @@ mean_test, covariance_test, correlation_test, power
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from .filters import LinearModel, kalman_filter, riccati_gains
-from .linalg import as_float_array, check_alpha, symmetrize
-from .quadform import QuadraticForm, WeightedChiSquare
-from .results import TestResult
+from course.filters import LinearModel, kalman_filter, riccati_gains
+from course.linalg import readonly, symmetrize
+from course.quadform import QuadraticForm, WeightedChiSquare
+from course.results import TestResult, critical_value, rejection_probability
+from course.validation import as_count, as_float_array, as_index, as_probability
 
 __all__ = [
     "APPENDIX_MISPRINTS",
+    "EigenDirections",
+    "MomentZScores",
     "ResidualMoments",
+    "SectionMoments",
+    "SingularDirections",
     "correlation_matrix",
     "correlation_statistic",
     "correlation_test",
@@ -207,12 +214,8 @@ def _check_models(true_model, filter_model):
         )
 
 
-def _check_steps(N) -> int:
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ValueError(
-            f"N (the number of samples per record) must be a positive integer, got {N!r}"
-        )
-    return int(N)
+def _check_steps(N: Any) -> int:
+    return as_count(N, "N", what="the number of samples per record")
 
 
 def residual_moments(true_model, filter_model, N) -> ResidualMoments:
@@ -381,13 +384,48 @@ def simulate_records(true_model, filter_model, M, N, rng) -> np.ndarray:
     """
     _check_models(true_model, filter_model)
     N = _check_steps(N)
-    if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 1:
-        raise ValueError(f"M (the number of records) must be a positive integer, got {M!r}")
-    _, y = true_model.simulate(N, rng, batch=int(M))
+    M = as_count(M, "M", what="the number of records")
+    _, y = true_model.simulate(N, rng, batch=M)
     return np.array(kalman_filter(filter_model, y).eps)
 
 
-def moment_zscores(residuals, moments: ResidualMoments):
+class MomentZScores(NamedTuple):
+    """Result of :func:`moment_zscores` (unpacks as ``z_mean, z_cov``)."""
+
+    z_mean: np.ndarray
+    """``(N, p)`` standardised errors of the sample means."""
+    z_cov: np.ndarray
+    """``(N, N, p, p)`` standardised errors of the sample cross-covariances."""
+
+
+class EigenDirections(NamedTuple):
+    """Principal directions of ``P_j`` (unpacks as ``values, vectors``)."""
+
+    values: np.ndarray
+    """Eigenvalues in decreasing order."""
+    vectors: np.ndarray
+    """Eigenvectors as the *columns*, in the same order."""
+
+
+class SingularDirections(NamedTuple):
+    """Principal directions of ``C(j, k) = U diag(s) W^T`` (unpacks as ``s, U, W``)."""
+
+    values: np.ndarray
+    """Singular values in decreasing order."""
+    left: np.ndarray
+    """``U``: its columns project ``r_j``."""
+    right: np.ndarray
+    """``W``: its columns project ``r_k``."""
+
+
+class SectionMoments(NamedTuple):
+    """Mean and covariance of a stacked section (unpacks as ``mean, cov``)."""
+
+    mean: np.ndarray
+    cov: np.ndarray
+
+
+def moment_zscores(residuals: Any, moments: ResidualMoments) -> MomentZScores:
     """Standardised differences between sample moments and ``moments``.
 
     Parameters
@@ -399,9 +437,9 @@ def moment_zscores(residuals, moments: ResidualMoments):
 
     Returns
     -------
-    z_mean : (N, p) ndarray
-        ``(rbar_t - m_t) / sqrt(P_t,aa / M)``.
-    z_cov : (N, N, p, p) ndarray
+    MomentZScores
+        ``z_mean`` ``(N, p)``: ``(rbar_t - m_t) / sqrt(P_t,aa / M)``;
+        ``z_cov`` ``(N, N, p, p)``:
         ``(S(j, k)_ab - C(j, k)_ab) / se`` with the unbiased sample
         cross-covariance ``S`` (divisor ``M - 1``) and the normal-theory
         standard error ``se^2 = (P_j,aa P_k,bb + C(j, k)_ab^2) / M``.
@@ -425,7 +463,7 @@ def moment_zscores(residuals, moments: ResidualMoments):
     se = np.sqrt(
         (variances[:, None, :, None] * variances[None, :, None, :] + moments.cross_cov**2) / M
     )
-    return z_mean, (sample - moments.cross_cov) / se
+    return MomentZScores(z_mean, (sample - moments.cross_cov) / se)
 
 
 # ---------------------------------------------------------------------------
@@ -444,10 +482,8 @@ def _as_records(residuals) -> np.ndarray:
     return r
 
 
-def _index(j, N, name) -> int:
-    if isinstance(j, bool) or not isinstance(j, (int, np.integer)) or not 0 <= j < N:
-        raise ValueError(f"{name} must be an integer time index in 0..{N - 1}, got {j!r}")
-    return int(j)
+def _index(j: Any, N: int, name: str) -> int:
+    return as_index(j, name, N, what="a time index")
 
 
 def _unit(v, p, name) -> np.ndarray:
@@ -474,11 +510,14 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
 
     Returns
     -------
-    (lam, V) or (s, U, W)
-        For ``k is None``: the eigenvalues of ``P_j`` in decreasing order
-        and the eigenvectors as the *columns* of ``V``.  Otherwise the
-        singular value decomposition ``C(j, k) = U diag(s) W^T``;
-        ``U[:, g]`` projects ``r_j`` and ``W[:, g]`` projects ``r_k``.
+    EigenDirections or SingularDirections
+        For ``k is None``: :class:`EigenDirections` ``(values, vectors)``,
+        the eigenvalues of ``P_j`` in decreasing order and the eigenvectors
+        as the *columns* of ``vectors``.  Otherwise
+        :class:`SingularDirections` ``(values, left, right)``, the singular
+        value decomposition ``C(j, k) = U diag(s) W^T``: ``left[:, g]``
+        projects ``r_j`` and ``right[:, g]`` projects ``r_k``.  Both unpack
+        like the tuples of earlier releases, ``lam, V`` and ``s, U, W``.
 
     Notes
     -----
@@ -492,10 +531,10 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
     j = _index(j, N, "j")
     if k is None:
         lam, V = np.linalg.eigh(moments.cov[j])
-        return lam[::-1], V[:, ::-1]
+        return EigenDirections(lam[::-1], V[:, ::-1])
     k = _index(k, N, "k")
     U, s, Wt = np.linalg.svd(moments.C(j, k))
-    return s, U, Wt.T
+    return SingularDirections(s, U, Wt.T)
 
 
 def mean_statistic(residuals, j: int) -> float:
@@ -615,10 +654,8 @@ def _centering(M) -> np.ndarray:
     return np.eye(M) - np.full((M, M), 1.0 / M)
 
 
-def _check_M(M) -> int:
-    if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 2:
-        raise ValueError(f"M (the number of records) must be an integer >= 2, got {M!r}")
-    return int(M)
+def _check_M(M: Any) -> int:
+    return as_count(M, "M", minimum=2, what="the number of records")
 
 
 def mean_matrix(M: int, p: int) -> np.ndarray:
@@ -728,9 +765,8 @@ def section_moments(moments: ResidualMoments, j: int, M: int):
 
     Returns
     -------
-    mean : ndarray, shape (M p,)
-        ``1 kron m_j``.
-    cov : ndarray, shape (M p, M p)
+    SectionMoments
+        ``mean`` ``(M p,)``: ``1 kron m_j``; ``cov`` ``(M p, M p)``:
         ``I_M kron P_j`` (records are independent).
 
     Notes
@@ -739,7 +775,7 @@ def section_moments(moments: ResidualMoments, j: int, M: int):
     """
     M = _check_M(M)
     j = _index(j, moments.n_steps, "j")
-    return np.tile(moments.mean[j], M), np.kron(np.eye(M), moments.cov[j])
+    return SectionMoments(np.tile(moments.mean[j], M), np.kron(np.eye(M), moments.cov[j]))
 
 
 def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
@@ -755,8 +791,8 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
 
     Returns
     -------
-    mean : ndarray, shape (2 M p,)
-    cov : ndarray, shape (2 M p, 2 M p)
+    SectionMoments
+        ``mean`` ``(2 M p,)`` and ``cov`` ``(2 M p, 2 M p)``,
         ``[[I_M kron P_j, I_M kron C(j, k)], [I_M kron C(j, k)^T, I_M kron P_k]]``.
 
     Notes
@@ -776,7 +812,7 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
             [np.kron(I, Cjk.T), np.kron(I, moments.cov[k])],
         ]
     )
-    return mean, symmetrize(cov)
+    return SectionMoments(mean, symmetrize(cov))
 
 
 _KINDS = ("mean", "covariance", "correlation")
@@ -879,32 +915,6 @@ def statistic_law(
 # ---------------------------------------------------------------------------
 # tests
 # ---------------------------------------------------------------------------
-def _critical(law, alpha, alternative):
-    if alternative == "greater":
-        return float(law.isf(alpha))
-    if alternative == "less":
-        return float(law.ppf(alpha))
-    if alternative == "two-sided":
-        return (float(law.ppf(alpha / 2)), float(law.isf(alpha / 2)))
-    raise ValueError(f"alternative must be 'greater', 'less' or 'two-sided', got {alternative!r}")
-
-
-def _rejection_probability(law, critical, alternative) -> float:
-    if alternative == "greater":
-        return float(law.sf(critical))
-    if alternative == "less":
-        return float(law.cdf(critical))
-    return float(law.cdf(critical[0]) + law.sf(critical[1]))
-
-
-def _pvalue(law, statistic, alternative) -> float:
-    if alternative == "greater":
-        return float(law.sf(statistic))
-    if alternative == "less":
-        return float(law.cdf(statistic))
-    return float(min(1.0, 2.0 * min(law.cdf(statistic), law.sf(statistic))))
-
-
 def _direction_for(null, kind, j, k, gamma):
     """The gamma-th principal direction (0-based) of the null pair, or None."""
     if gamma is None:
@@ -931,7 +941,7 @@ def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, powe
             f"residuals have N = {N} samples of p = {p} outputs but the null moments are for "
             f"N = {null.n_steps}, p = {null.n_outputs}"
         )
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     direction = _direction_for(null, kind, j, k, gamma)
     if kind == "mean":
         statistic = mean_statistic(r, j)
@@ -940,38 +950,23 @@ def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, powe
     else:
         statistic = correlation_statistic(r, j, k, direction)
     law = statistic_law(null, kind, j, M, k=k, direction=direction)
-    critical = _critical(law, alpha, alternative)
-    if alternative == "greater":
-        reject = statistic > critical
-    elif alternative == "less":
-        reject = statistic < critical
-    else:
-        reject = statistic < critical[0] or statistic > critical[1]
-    details = {"M": M, "j": j}
+    details: dict[str, Any] = {"M": M, "j": j}
     if k is not None:
         details["k"] = k
     if gamma is not None:
         details["direction"] = gamma
     if power_against is not None:
         alt_law = statistic_law(power_against, kind, j, M, k=k, direction=direction)
-        details["power"] = _rejection_probability(alt_law, critical, alternative)
+        details["power"] = rejection_probability(
+            alt_law, critical_value(law, alpha, alternative), alternative
+        )
     label = (
         f"{name} (j={j}"
         + (f", k={k}" if k is not None else "")
         + (f", direction {gamma}" if gamma is not None else "")
         + f", M={M})"
     )
-    return TestResult(
-        label,
-        statistic,
-        alpha,
-        critical,
-        _pvalue(law, statistic, alternative),
-        bool(reject),
-        law,
-        alternative=alternative,
-        details=details,
-    )
+    return TestResult.from_null(label, statistic, law, alpha, alternative, details=details)
 
 
 def mean_test(
@@ -1135,13 +1130,11 @@ def power(
     """
     if kind not in _KINDS:
         raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     direction = _direction_for(null, kind, j, k, gamma)
     law0 = statistic_law(null, kind, j, M, k=k, direction=direction)
     law2 = statistic_law(alternative_moments, kind, j, M, k=k, direction=direction)
-    return _rejection_probability(law2, _critical(law0, alpha, alternative), alternative)
+    return rejection_probability(law2, critical_value(law0, alpha, alternative), alternative)
 
 
-def _readonly(a):
-    a.setflags(write=False)
-    return a
+_readonly = readonly

@@ -267,8 +267,8 @@ def test_frozen_distribution_input_checks_and_rvs():
         d.ppf(1.5)
     with pytest.raises(ValueError, match="x contains NaN"):
         d.cdf(np.nan)
-    a = d.rvs(size=5, random_state=np.random.default_rng(3))
-    b = d.rvs(size=5, random_state=np.random.default_rng(3))
+    a = d.rvs(size=5, rng=np.random.default_rng(3))
+    b = d.rvs(size=5, rng=np.random.default_rng(3))
     np.testing.assert_array_equal(a, b)
     g = np.random.default_rng(1)
     assert as_generator(g) is g

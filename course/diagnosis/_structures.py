@@ -1,4 +1,9 @@
-"""Decision structures: which tests may alarm in which fault modes, and the diagnoses."""
+"""Decision structures: which tests may alarm in which fault modes, and the diagnoses.
+
+Source: the LiU lecture on test quantities (Linköping University, Swedish
+slides; full reference in the course bibliography, docs/bibliography.md),
+slide "Teststorheten är ett modellvalideringsmått".
+"""
 
 from __future__ import annotations
 
@@ -9,11 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from course.diagnosis._common import _indices, _range_basis
-from course.linalg import (
-    as_matrix,
-)
+from course.diagnosis._common import _indices
+from course.linalg import range_basis
 from course.results import TestResult
+from course.validation import as_count, as_index, as_matrix
 
 _ZERO_MARKS = {"0", "o", "O", "-", ""}
 _X_MARKS = {"x", "X", "1"}
@@ -74,7 +78,7 @@ class DecisionStructure:
 
     Notes
     -----
-    The decision structure of the lecture (test_quantities_lecture_sv.txt,
+    The decision structure of the LiU lecture (slide
     "Teststorheten är ett modellvalideringsmått"): the row
     ``(0, 0, X, X)`` of a test over ``(NF, F1, F2, F3)`` means
     ``H0: Fp in {NF, F1}`` against ``H1: Fp in {F2, F3}``, and the model
@@ -285,9 +289,7 @@ def _names(names, what, size) -> tuple:
 
 def _lookup(key, names, what) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
-        if not 0 <= int(key) < len(names):
-            raise ValueError(f"{what} index {key} out of range 0..{len(names) - 1}")
-        return int(key)
+        return as_index(key, what, len(names))
     try:
         return names.index(str(key))
     except ValueError:
@@ -357,7 +359,7 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
     every mode with a 0 in row ``T``.  Under the single-fault assumption the
     diagnoses are the intersection, over the alarmed tests, of the sets of
     modes with an X (the lecture's decision structure,
-    test_quantities_lecture_sv.txt, "Teststorheten är ett
+    LiU lecture, slide "Teststorheten är ett
     modellvalideringsmått").
 
     *Multiple faults.*  If several faults may be present at once, a mode
@@ -460,7 +462,7 @@ def multiple_fault_diagnoses(
     conflicts = [frozenset(j for j in faults if S[k, j]) for k in np.flatnonzero(alarm)]
     if any(not c for c in conflicts):
         return []
-    limit = len(faults) if max_size is None else int(max_size)
+    limit = len(faults) if max_size is None else as_count(max_size, "max_size", minimum=0)
     found: list[frozenset] = []
     for size in range(limit + 1):
         for candidate in itertools.combinations(faults, size):
@@ -508,7 +510,7 @@ def linear_decision_structure(
     matrix = np.zeros((len(tests), len(modes)), dtype=bool)
     for k, free in enumerate(tests.values()):
         free = _indices(free, p, "test free parameters")
-        basis = _range_basis(U[:, free])
+        basis = range_basis(U[:, free])
         for j, faulty in enumerate(modes.values()):
             faulty = _indices(faulty, p, "mode parameters")
             if not faulty:

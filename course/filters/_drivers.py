@@ -1,4 +1,9 @@
-"""Filter drivers over whole records (and batches of them) and the Riccati recursion."""
+"""Filter drivers over whole records (and batches of them) and the Riccati recursion.
+
+Source: the LiU lecture on test quantities, slide "Extended Kalman Filter";
+Y. Baram (1980), "Model validation using mismatched filters", (A17)-(A18)
+(full references in the course bibliography, docs/bibliography.md).
+"""
 
 from __future__ import annotations
 
@@ -15,25 +20,17 @@ from course.filters._models import (
     _check_steps,
     _model_records,
 )
-from course.filters._stacked import _batch_major, _readonly, _time_major
+from course.filters._stacked import _batch_major, _time_major
 from course.filters._steps import ekf_predict, ekf_update, kf_predict, kf_update
-from course.linalg import (
-    as_covariance,
-    as_vector,
-    symmetrize,
-)
+from course.linalg import readonly as _readonly
+from course.linalg import symmetrize
+from course.nis import _statistics as _nis_home
+from course.validation import as_covariance, as_vector
 
 
 # ---------------------------------------------------------------------------
 # results
 # ---------------------------------------------------------------------------
-def _first_of_broadcast(a: np.ndarray, nbatch: int) -> np.ndarray:
-    """Drop leading batch axes that are pure broadcasts (stride 0)."""
-    if nbatch and all(s == 0 for s in a.strides[:nbatch]):
-        return a[(0,) * nbatch]
-    return a
-
-
 @dataclass(frozen=True, repr=False, eq=False)
 class FilterResult:
     """Per-step output of a (extended) Kalman filter.
@@ -109,20 +106,16 @@ class FilterResult:
         Under H0 (the filter's model is true) they are independent ``N(0, I)``
         over time; with one output this is ``eps_t / sqrt(S_t)``.
         """
-        S = _first_of_broadcast(self.S, len(self.batch_shape))
-        if S.shape[-1] == 1:
-            return self.eps / np.sqrt(S[..., 0])
-        L = np.linalg.cholesky(S)
-        L = np.broadcast_to(L, self.eps.shape[:-1] + L.shape[-2:])
-        return np.linalg.solve(L, self.eps[..., None])[..., 0]
+        return _nis_home._normalized(self.eps, self.S)
 
     def nis(self) -> np.ndarray:
         """Normalised innovation squared ``eps_t^T S_t^{-1} eps_t``, shape ``(*batch, N)``.
 
-        Under H0 each value is ``chi2(p)``.
+        Under H0 each value is ``chi2(p)``.  Computed by the NIS's one home,
+        :mod:`course.nis` (the same numbers as :func:`course.nis.nis` of
+        ``eps`` and ``S``).
         """
-        z = self.normalized_innovations()
-        return np.einsum("...i,...i->...", z, z)
+        return _nis_home._nis(self.eps, self.S)
 
 
 @dataclass(frozen=True, repr=False, eq=False)
