@@ -8,6 +8,7 @@ Kolmogorov-Smirnov) at a 1e-4 miss level.
 
 import numpy as np
 import pytest
+from conftest import binomial_band
 from numpy.linalg import LinAlgError
 from scipy import integrate, stats
 
@@ -165,11 +166,6 @@ MISS = 1e-4  # probability that a seeded statistical check fails by chance
 def dkw_halfwidth(n, miss=MISS):
     """Dvoretzky-Kiefer-Wolfowitz: P(sup|F_n - F| > eps) <= 2 exp(-2 n eps^2)."""
     return np.sqrt(np.log(2 / miss) / (2 * n))
-
-
-def binomial_band(n, p, miss=MISS):
-    lo, hi = stats.binom.interval(1 - miss, n, p)
-    return lo / n, hi / n
 
 
 def random_covariances(rng, count, m):

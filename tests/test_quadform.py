@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import binomial_band
 from numpy.linalg import LinAlgError
 from scipy import stats
 
@@ -126,12 +127,6 @@ DAVIES_PUBLISHED = {
     ((30, 1), (1, 20), (0, 0)): [0.004925, 0.573251, 0.896501],
     ((30, 1), (1, 30), (0, 0)): [0.017101, 0.566488, 0.871323],
 }
-
-
-def binomial_band(p, n, miss=1e-6):
-    """Interval holding the empirical frequency of an event of probability p."""
-    lo, hi = stats.binom.interval(1 - miss, n, p)
-    return lo / n, hi / n
 
 
 # ---------------------------------------------------------------------------
@@ -287,7 +282,7 @@ def test_mixed_form_against_monte_carlo():
     cdf = law.cdf(points)
     empirical = (draws[:, None] <= points).mean(axis=0)
     for p, f in zip(cdf, empirical):
-        lo, hi = binomial_band(p, n, miss=1e-4 / len(points))
+        lo, hi = binomial_band(n, p, miss=1e-4 / len(points))
         assert lo <= f <= hi
 
 
@@ -306,7 +301,7 @@ def test_quadratic_form_against_direct_simulation():
     cdf = form.cdf(points)
     empirical = (draws[:, None] <= points).mean(axis=0)
     for p, f in zip(cdf, empirical):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / len(points))
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / len(points))
         assert lo <= f <= hi
 
 
@@ -323,7 +318,7 @@ def test_quadratic_form_singular_covariance_against_simulation():
     assert abs(draws.mean() - form.mean()) < 5 * math.sqrt(form.var() / draws.size)
     points = np.quantile(draws, [0.01, 0.3, 0.7, 0.99])
     for p, f in zip(form.cdf(points), (draws[:, None] <= points).mean(axis=0)):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / len(points))
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / len(points))
         assert lo <= f <= hi
 
 
