@@ -252,6 +252,14 @@ class FrozenDistribution:
         return out[()] if out.ndim == 0 else out
 
     def _invert(self, q: Any, func: Callable, increasing: bool) -> Any:
+        if isinstance(q, (float, int)) and not isinstance(q, bool):
+            # A frozen law does not change: a test's critical values (root
+            # searches on an exact cdf) are computed once per law and level.
+            memo = self.__dict__.setdefault("_quantile_memo", {})
+            key = (increasing, float(q))
+            if key not in memo:
+                memo[key] = self._invert(np.asarray(q, dtype=float), func, increasing)
+            return memo[key]
         q = np.asarray(q, dtype=float)
         if np.any((q < 0) | (q > 1) | np.isnan(q)):
             raise ValueError("probabilities must lie in [0, 1]")
@@ -331,8 +339,6 @@ class TailPair:
         self.lower = lower
         self.upper = upper
         self._joint_rvs = joint_rvs
-        # Quantiles of the course's exact laws cost root searches: remember them.
-        self._quantiles: dict[tuple[str, float], float] = {}
 
     def cdf(self, x: Any) -> Any:
         """P(low <= x), the lower tail."""
@@ -344,19 +350,11 @@ class TailPair:
 
     def ppf(self, q: Any) -> Any:
         """Quantile of ``low``."""
-        return self._quantile("ppf", self.lower, q)
+        return self.lower.ppf(q)
 
     def isf(self, q: Any) -> Any:
         """Inverse survival function of ``high``."""
-        return self._quantile("isf", self.upper, q)
-
-    def _quantile(self, kind: str, law: Any, q: Any) -> Any:
-        if not isinstance(q, (float, int)):
-            return getattr(law, kind)(q)
-        key = (kind, float(q))
-        if key not in self._quantiles:
-            self._quantiles[key] = float(getattr(law, kind)(q))
-        return self._quantiles[key]
+        return self.upper.isf(q)
 
     def rvs(self, size: Any = None, *, rng: Any = None) -> tuple[Any, Any]:
         """Joint draws ``(low, high)``, when a joint sampler was given."""

@@ -44,6 +44,7 @@ mean_test, covariance_test, correlation_test, power
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -816,6 +817,7 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
 
 
 _KINDS = ("mean", "covariance", "correlation")
+_LAWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def statistic_law(
@@ -879,6 +881,17 @@ def statistic_law(
         if k is None:
             raise ValueError("the correlation statistic needs a second section k")
         k = _index(k, N, "k")
+    # A law is a function of its arguments: remember it with the moments, so
+    # that testing many records against one null (a Monte Carlo study) builds
+    # it, and finds its quantiles, once.
+    key = (kind, j, M, k, full, None if direction is None else np.asarray(direction).tobytes())
+    cache = _LAWS.setdefault(moments, {})
+    if key not in cache:
+        cache[key] = _statistic_law(moments, kind, j, M, k, direction, full, p)
+    return cache[key]
+
+
+def _statistic_law(moments, kind, j, M, k, direction, full, p):
     if full:
         if kind == "mean":
             mean, cov = section_moments(moments, j, M)

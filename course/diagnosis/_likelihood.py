@@ -7,6 +7,7 @@ slides "Likelihood-funktionen" to "Likelihood och Bayes".
 
 from __future__ import annotations
 
+import dataclasses
 import html
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -557,17 +558,9 @@ def neyman_pearson_test(
             "theta0 and theta1 give the same distribution of z: the hypotheses cannot be told apart"
         )
     stat = float((np.sum((z - m0) ** 2) - np.sum((z - m1) ** 2)) / (2 * sigma**2))
-    result = TestResult.from_null(
-        name, stat, stats.norm(loc=-(d**2) / 2, scale=d), alpha, details={"separation d": d}
-    )
+    result = TestResult.from_null(name, stat, stats.norm(loc=-(d**2) / 2, scale=d), alpha)
     power = result.power(stats.norm(loc=d**2 / 2, scale=d))
-    return TestResult.from_null(
-        name,
-        stat,
-        result.null,
-        alpha,
-        details={"power": power, "separation d": d},
-    )
+    return dataclasses.replace(result, details={"power": power, "separation d": d})
 
 
 def mode_log_likelihoods(

@@ -7,7 +7,6 @@ and Y. Baram (1980), "Model validation using mismatched filters", eqs.
 
 from __future__ import annotations
 
-import numbers
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -38,7 +37,7 @@ class Simulation(NamedTuple):
 def _batch_shape(batch: Any) -> tuple:
     if batch is None:
         return ()
-    if isinstance(batch, (numbers.Number, np.generic)):
+    if np.ndim(batch) == 0:
         batch = (batch,)
     return tuple(as_count(b, "batch", what="the number of independent runs") for b in batch)
 
