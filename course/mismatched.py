@@ -259,6 +259,15 @@ def residual_moments(true_model, filter_model, N) -> ResidualMoments:
     - for ``j < k``: ``C(k, j) = H~ Z_{k,j}`` with ``Z_{j+1,j} = F~_j Psi~_j H~^T
       + [0; F^1 K_j R^0]`` and ``Z_{t+1,j} = F~_t Z_{t,j}`` (A27 corrected: the
       transition from j to k, and ``v_j`` enters the estimate through the gain).
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> moments = residual_moments(true, filt, 5)
+    >>> moments.mean.shape, moments.cov.shape, moments.cross_cov.shape
+    ((5, 1), (5, 1, 1), (5, 5, 1, 1))
     """
     return _moments(true_model, filter_model, N, misprint=None)
 
@@ -290,6 +299,15 @@ def residual_moments_as_printed(true_model, filter_model, N, misprint) -> Residu
     -----
     :data:`APPENDIX_MISPRINTS` lists each printed formula (Baram 1980,
     appendix and (2.4)) next to its correction.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> printed = residual_moments_as_printed(true, filt, 5, "H_tilde_sign")
+    >>> bool(printed.cov[-1, 0, 0] != residual_moments(true, filt, 5).cov[-1, 0, 0])
+    True
     """
     if misprint not in APPENDIX_MISPRINTS:
         raise ValueError(f"misprint must be one of {sorted(APPENDIX_MISPRINTS)}, got {misprint!r}")
@@ -382,6 +400,15 @@ def simulate_records(true_model, filter_model, M, N, rng) -> np.ndarray:
     section 1: independent noise sequences across experiments), filtered
     by :func:`course.filters.kalman_filter` with ``filter_model``; the
     residual is that filter's innovation, (2.1).
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> import numpy as np
+    >>> simulate_records(true, filt, 200, 5, np.random.default_rng(0)).shape
+    (200, 5, 1)
     """
     _check_models(true_model, filter_model)
     N = _check_steps(N)
@@ -449,6 +476,17 @@ def moment_zscores(residuals: Any, moments: ResidualMoments) -> MomentZScores:
     -----
     If the moments are right, every entry is approximately ``N(0, 1)``;
     a wrong formula shows up as entries of tens or hundreds.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> import numpy as np
+    >>> r = simulate_records(true, filt, 4000, 5, np.random.default_rng(0))
+    >>> z = moment_zscores(r, residual_moments(true, filt, 5))
+    >>> bool(np.abs(z.z_mean).max() < 5 and np.abs(z.z_cov).max() < 5)
+    True
     """
     r = _as_records(residuals)
     M = r.shape[0]
@@ -527,6 +565,15 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
     prints ``a^(g) V_j r``, a row of ``V_j``); and ``C(j, k)`` is not
     symmetric, so its left and right principal directions differ and come
     from an SVD, with ``E c^(g)(j, k) = (M - 1)/M s_g``.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> values, vectors = principal_directions(residual_moments(true, filt, 5), 2)
+    >>> vectors.shape
+    (1, 1)
     """
     N = moments.n_steps
     j = _index(j, N, "j")
@@ -558,6 +605,11 @@ def mean_statistic(residuals, j: int) -> float:
     Baram (1980), (2.5)-(2.6): the paper writes ``||rbar_j|| = rbar_j^T
     rbar_j``; the statistic is the *squared* norm, the quadratic form
     ``phi_j^T A phi_j`` of (3.2)-(3.3) (see :func:`mean_matrix`).
+
+    Examples
+    --------
+    >>> mean_statistic([[1.0, 2.0], [3.0, 0.0]], 0)   # two records, mean 2 at time 0
+    4.0
     """
     r = _as_records(residuals)
     j = _index(j, r.shape[1], "j")
@@ -591,6 +643,11 @@ def covariance_statistic(residuals, j: int, direction=None) -> float:
     themselves gives zero identically) and projects with ``V_j^T``.  With
     the divisor ``M`` and the sample mean removed,
     ``E c_j = (M - 1)/M tr P_j`` and ``E c_j^(g) = (M - 1)/M v^T P_j v``.
+
+    Examples
+    --------
+    >>> covariance_statistic([[1.0, 2.0], [3.0, 0.0]], 0)   # ((1-2)^2 + (3-2)^2) / 2
+    1.0
     """
     r = _as_records(residuals)
     j = _index(j, r.shape[1], "j")
@@ -628,6 +685,11 @@ def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
     ``E c^(g)(j, k) = (M - 1)/M u^T C(j, k) w``.  With an SVD the projected
     statistics no longer add up to the trace as (2.11)-(2.12) state (that
     needs one orthonormal basis on both sides).
+
+    Examples
+    --------
+    >>> correlation_statistic([[1.0, 2.0], [3.0, 0.0]], 0, 1)   # ((-1)(1) + (1)(-1)) / 2
+    -1.0
     """
     r = _as_records(residuals)
     N, p = r.shape[1], r.shape[2]
@@ -678,6 +740,13 @@ def mean_matrix(M: int, p: int) -> np.ndarray:
     -----
     Baram (1980), (3.1)-(3.3).  The paper writes ``I_n``; the blocks act on
     ``p``-dimensional residuals, so they are ``I_p``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> phi = np.array([1.0, 3.0])                  # one time, two records, p = 1
+    >>> float(phi @ mean_matrix(2, 1) @ phi)        # the squared norm of the mean, 2^2
+    4.0
     """
     M = _check_M(M)
     return np.kron(np.full((M, M), 1.0 / M**2), np.eye(int(p)))
@@ -704,6 +773,13 @@ def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
     -----
     Baram (1980), (3.11)-(3.15); ``J = I_M - 1 1^T / M`` removes the sample
     mean (3.10), and needs ``kron I_p`` for vector residuals.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> phi = np.array([1.0, 3.0])
+    >>> float(phi @ covariance_matrix(2, 1) @ phi)  # covariance_statistic of the same section
+    1.0
     """
     M = _check_M(M)
     J = _centering(M) / M
@@ -738,6 +814,13 @@ def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
     Baram (1980), (3.4)-(3.10), with ``J kron I_p`` for vector residuals
     and, in (3.7)-(3.8), the left and right singular vectors of ``C(j, k)``
     in place of one set of principal directions.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> phi = np.array([1.0, 3.0, 2.0, 0.0])        # (section j, section k)
+    >>> float(phi @ correlation_matrix(2, 1) @ phi)
+    -1.0
     """
     M = _check_M(M)
     p = int(p)
@@ -773,6 +856,15 @@ def section_moments(moments: ResidualMoments, j: int, M: int):
     Notes
     -----
     Baram (1980), (3.18) and (3.20).
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> mean, cov = section_moments(residual_moments(true, filt, 5), 2, M=3)
+    >>> mean.shape, cov.shape
+    ((3,), (3, 3))
     """
     M = _check_M(M)
     j = _index(j, moments.n_steps, "j")
@@ -800,6 +892,15 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
     -----
     Baram (1980), (3.19) and (3.21)-(3.23), with ``C(j, k) = E (r_j -
     m_j)(r_k - m_k)^T`` ((2.4) corrected).
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> mean, cov = pair_moments(residual_moments(true, filt, 5), 1, 3, M=3)
+    >>> mean.shape, cov.shape
+    ((6,), (6, 6))
     """
     M = _check_M(M)
     N = moments.n_steps
@@ -871,6 +972,15 @@ def statistic_law(
       jointly normal, covariance ``S = [[P_j, C], [C^T, P_k]]``: weights the
       eigenvalues of ``S^{1/2} E S^{1/2} / (2M)``, ``E = [[0, I], [I, 0]]``,
       each with ``M - 1`` degrees of freedom.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> law = statistic_law(residual_moments(true, filt, 5), "covariance", 2, M=10)
+    >>> round(float(law.mean()), 4) == round(0.9 * float(residual_moments(true, filt, 5).cov[2, 0, 0]), 4)
+    True
     """
     if kind not in _KINDS:
         raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
@@ -1018,6 +1128,18 @@ def mean_test(
     Baram (1980), (2.5)-(2.6) (squared norm) and (3.2)-(3.3): under the
     null pair ``rbar_j ~ N(m_j, P_j / M)``, so the statistic is a
     noncentral quadratic form (:class:`course.quadform.QuadraticForm`).
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> import numpy as np
+    >>> null = residual_moments(true, filt, 5)
+    >>> r = simulate_records(true, filt, 20, 5, np.random.default_rng(3))
+    >>> result = mean_test(r, 2, null)
+    >>> result.alternative, 0.0 <= result.pvalue <= 1.0
+    ('two-sided', True)
     """
     return _run_test(
         "mean test", "mean", residuals, j, None, null, alpha, None, alternative, power_against
@@ -1050,6 +1172,18 @@ def covariance_test(
     -----
     Baram (1980), (2.13)-(2.17) corrected, with the weighted chi-square law
     of :func:`statistic_law` (Imhof's method) for the critical region.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> import numpy as np
+    >>> null = residual_moments(true, filt, 5)
+    >>> noisier = LinearModel(F=true.F, H=true.H, Q=true.Q, R=[[3.0]])
+    >>> r = simulate_records(noisier, filt, 50, 5, np.random.default_rng(3))
+    >>> covariance_test(r, 2, null).reject
+    True
     """
     return _run_test(
         "covariance test",
@@ -1091,6 +1225,18 @@ def correlation_test(
     the law has weights of both signs (the eigenvalues of
     ``S^(1/2) [[0, I], [I, 0]] S^(1/2) / (2M)``), so Imhof's method handles
     what a chi-square table cannot.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> import numpy as np
+    >>> null = residual_moments(true, filt, 5)
+    >>> r = simulate_records(true, filt, 50, 5, np.random.default_rng(3))
+    >>> result = correlation_test(r, 1, 3, null, alternative="greater")
+    >>> result.alternative, result.name
+    ('greater', 'correlation test (j=1, k=3, M=50)')
     """
     return _run_test(
         "correlation test",
@@ -1140,6 +1286,16 @@ def power(
     -----
     Baram (1980), section 3: both laws are quadratic forms in the normal
     section vectors, evaluated exactly by Imhof's method.
+
+    Examples
+    --------
+    >>> from course.filters import LinearModel
+    >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
+    >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
+    >>> noisier = LinearModel(F=true.F, H=true.H, Q=true.Q, R=[[3.0]])
+    >>> null, alt = residual_moments(true, filt, 5), residual_moments(noisier, filt, 5)
+    >>> [round(power(null, alt, "covariance", 2, M), 2) for M in (5, 20, 50)]
+    [0.17, 0.45, 0.79]
     """
     if kind not in _KINDS:
         raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")

@@ -926,7 +926,7 @@ class WeightedChiSquare(FrozenDistribution):
         return cdf
 
     def _rvs(self, size, rng):
-        shape = () if size is None else ((int(size),) if np.isscalar(size) else tuple(size))
+        shape = () if size is None else ((int(size),) if np.ndim(size) == 0 else tuple(size))
         out = np.full(shape, self.offset)
         for w, h, d in zip(self.weights, self.dof, self.noncentrality):
             draw = rng.noncentral_chisquare(h, d, shape) if d > 0 else rng.chisquare(h, shape)

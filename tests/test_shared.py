@@ -455,3 +455,26 @@ def test_stacked_cholesky_and_whitening():
     m = cl.readonly(np.zeros(3))
     with pytest.raises(ValueError):
         m[0] = 1.0
+
+
+def test_version_is_written_once_and_shown_by_the_command(capsys):
+    import importlib.metadata
+
+    import course
+    from course import cli
+
+    assert importlib.metadata.version("residual-validation-course") == course.__version__
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"course {course.__version__}"
+
+
+def test_package_data_comes_from_importlib_resources():
+    from importlib import resources
+
+    from course import lsq
+
+    text = resources.files("course").joinpath("data", "sea_level_mude", "Dataset_0.txt").read_text()
+    t, y = lsq.load_sea_level(0)
+    assert y.size == len(text.split()) == t.size == 20

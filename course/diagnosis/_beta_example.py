@@ -151,6 +151,15 @@ def simulate_beta_system(
     ``dx/dt = -beta x + u``, here with process noise ``w ~ N(0, q_x)`` and
     measurement noise ``e ~ N(0, r)``.  Unlike :func:`beta_drift_model`,
     ``beta`` is a given trajectory (a ramp, a sine, ...), not a random walk.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(100)
+    >>> states, y = simulate_beta_system(0.8 + 0.002 * t, np.ones(100), np.random.default_rng(0),
+    ...                                  fault=np.where(t >= 60, 0.2, 0.0), batch=3)
+    >>> states.shape, y.shape
+    ((3, 100, 2), (3, 100, 1))
     """
     rng = as_generator(rng)
     beta = as_float_array(beta, "beta")

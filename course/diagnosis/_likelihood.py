@@ -317,6 +317,15 @@ def likelihood_test(
     test make the same decisions.  The null law is ``c - chi2(N - rank)/2``
     (lecture, "Teststorheter baserade på likelihood-funktionen, forts.":
     "H0 is rejected when T(z) is below a threshold").
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(5), np.arange(5.0)])
+    >>> y = np.array([0.1, 1.0, 1.9, 3.2, 3.9])
+    >>> result = likelihood_test(y, U, [0.0, 1.0], [0], sigma=0.1)
+    >>> result.alternative, result.reject
+    ('less', False)
     """
     alpha = as_probability(alpha)
     sigma = _check_sigma(sigma)
@@ -385,6 +394,16 @@ def glr_test(
     :func:`linear_glr_test`.  The lecture mentions generalised
     Neyman-Pearson results for composite hypotheses (slide
     "Neyman-Pearson lemma, likelihood-kvot").
+
+    Examples
+    --------
+    The rate of exponential data: ``-2 log Lambda`` against Wilks' ``chi2(1)``.
+
+    >>> import numpy as np
+    >>> z = np.array([0.5, 1.7, 0.9, 1.2, 0.3, 2.1])
+    >>> result = glr_test(lambda th: z.size * th[0] - np.exp(th[0]) * z.sum(), [0.0])
+    >>> result.dof, round(result.statistic, 4)
+    (1, 0.0758)
     """
     alpha = as_probability(alpha)
     nominal = as_vector(nominal, "nominal")
@@ -462,6 +481,15 @@ def linear_glr_test(
     projection on the part of range(U_free1) orthogonal to range(U_free0):
     exactly ``sigma^2 chi2(rank1 - rank0)`` under H0, for every ``N``.
     Wilks' theorem is exact here.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(5), np.arange(5.0)])
+    >>> y = np.array([0.1, 1.0, 1.9, 3.2, 3.9])
+    >>> result = linear_glr_test(y, U, [0.0, 1.0], free0=[0], sigma=0.1)
+    >>> result.dof, result.reject
+    (1, False)
     """
     alpha = as_probability(alpha)
     sigma = _check_sigma(sigma)
@@ -533,6 +561,14 @@ def neyman_pearson_test(
     ``d = ||m1 - m0|| / sigma`` it is ``N(-d^2/2, d^2)`` under H0 and
     ``N(d^2/2, d^2)`` under H1, so threshold and power are exact:
     ``power = Phi(d - z_alpha)``.
+
+    Examples
+    --------
+    The lecture's two observations, theta = 0 against theta = 1:
+
+    >>> result = neyman_pearson_test([3.0, 5.0], theta0=0.0, theta1=1.0)
+    >>> round(result.statistic, 6), result.reject, round(result.details["power"], 4)
+    (7.0, True, 0.4088)
     """
     alpha = as_probability(alpha)
     sigma = _check_sigma(sigma)
@@ -603,6 +639,14 @@ def mode_log_likelihoods(
     charges a mode for its free parameter (an Occam factor) and prefers NF
     when the data do not need the fault.  Under ``F`` with the prior above,
     ``y ~ N(U nominal, sigma^2 I + prior_std^2 U_F U_F^T)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.eye(3)
+    >>> logl = mode_log_likelihoods([1.0, 2.0, 1.0], U, [1, 1, 1], {"NF": (), "F2": (1,)}, sigma=1.0)
+    >>> {mode: round(value, 4) for mode, value in logl.items()}
+    {'NF': -3.2568, 'F2': -2.7568}
     """
     sigma = _check_sigma(sigma)
     U, nominal = _model(U, nominal)
@@ -693,6 +737,12 @@ def bayes_ranking(
     Bayes' rule ``P(F_i | z) = P(z | F_i) P(F_i) / sum_j P(z | F_j) P(F_j)``
     (lecture, slide "Likelihood och Bayes"), computed with log-sum-exp so
     that tiny likelihoods do not underflow.
+
+    Examples
+    --------
+    >>> ranking = bayes_ranking({"NF": -3.0, "F1": -1.0}, {"NF": 0.9, "F1": 0.1})
+    >>> ranking.modes, [round(p, 3) for p in ranking.posterior]
+    (('NF', 'F1'), [0.549, 0.451])
     """
     modes = list(log_likelihoods)
     if set(modes) != set(priors):

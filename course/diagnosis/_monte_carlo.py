@@ -232,6 +232,26 @@ def isolation_monte_carlo(
     single-fault diagnoses of :func:`diagnosis_matrix`; and "exact" is
     ``P(D = {F} | F)``.  Each is a binomial proportion over ``n_records``
     records, with standard error at most ``0.5 / sqrt(n_records)``.
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(20), np.linspace(0, 1, 20), np.cos(np.arange(20.0))])
+    >>> theta = {"NF": [1, 1, 1], "F1": [2, 1, 1], "F2": [1, 2, 1], "F3": [1, 1, 2]}
+    >>> def simulate(mode, n, rng):
+    ...     return simulate_regression_records(U, theta[mode], sigma=0.1, n_records=n, rng=rng)
+    >>> def statistics(Y):
+    ...     return linear_test_statistics(Y, U, [1, 1, 1], [(0,), (1,), (2,)])
+    >>> from course.chi2 import residual_threshold
+    >>> J = [residual_threshold(19, 0.01, sigma=0.1)] * 3
+    >>> iso = isolation_monte_carlo(ds, simulate, statistics, J, n_records=500, rng=0)
+    >>> iso.exact.round(1)  # NF alone is never the diagnosis: no alarm rules nothing out
+    array([0., 1., 1., 1.])
     """
     if not isinstance(structure, DecisionStructure):
         raise ValueError("structure must be a DecisionStructure")

@@ -306,8 +306,8 @@ def parameter_estimate_power(
     --------
     >>> import numpy as np
     >>> U = np.column_stack([np.ones(6), np.arange(6.0)])
-    >>> parameter_estimate_power(U, [0, 1], [0, 1], 1, [[0, 1.0], [0, 1.2]], sigma=0.1).round(3)
-    array([0.05 , 0.995])
+    >>> parameter_estimate_power(U, [0, 1], [0, 1], 1, [[0, 1.0], [0, 1.05]], sigma=0.1).round(3)
+    array([0.05 , 0.552])
     """
     alpha = as_probability(alpha)
     U, nominal = _model(U, nominal)

@@ -379,8 +379,8 @@ def prediction_error_power(
     --------
     >>> import numpy as np
     >>> U = np.column_stack([np.ones(20), np.linspace(0, 1, 20)])
-    >>> prediction_error_power(U, [1, 1], [0], [[1, 1.0], [1, 3.0]], sigma=0.3).round(3)
-    array([0.05 , 0.973])
+    >>> prediction_error_power(U, [1, 1], [0], [[1, 1.0], [1, 1.5]], sigma=0.3).round(3)
+    array([0.05 , 0.203])
     """
     alpha = as_probability(alpha)
     U, nominal = _model(U, nominal)

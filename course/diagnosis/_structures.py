@@ -372,6 +372,18 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
     diagnosis is also consistent.  This needs the further assumption that
     a combination of faults can only make a test alarm if one of its
     members can.  See :func:`multiple_fault_diagnoses`.
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> diagnoses(ds, ["T2", "T3"])
+    ('F1',)
+    >>> diagnoses(ds, [])
+    ('NF', 'F1', 'F2', 'F3')
     """
     if not isinstance(structure, DecisionStructure):
         raise ValueError(
@@ -405,6 +417,17 @@ def diagnosis_matrix(
     Mode ``j`` is inconsistent with pattern ``m`` exactly when some alarmed
     test has a 0 for ``j``: ``any_k alarm[m, k] and not X[k, j]``, one
     boolean matrix product for all patterns.
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> diagnosis_matrix(ds, [[False, True, True], [True, True, True]])
+    array([[False,  True, False, False],
+           [False, False, False, False]])
     """
     alarms = np.asarray(alarms)
     if alarms.ndim != 2 or alarms.shape[1] != len(structure.tests):
@@ -455,6 +478,16 @@ def multiple_fault_diagnoses(
     candidate sets by increasing size and keeping those with no diagnosed
     subset gives the minimal ones (fine for the handful of faults of a
     course example; large systems need Reiter's HS-tree or similar).
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> multiple_fault_diagnoses(ds, ["T1", "T2", "T3"])
+    [('F1', 'F2'), ('F1', 'F3'), ('F2', 'F3')]
     """
     alarm = _alarm_vector(structure, alarms)
     faults = [j for j, m in enumerate(structure.modes) if m != no_fault]
@@ -504,6 +537,19 @@ def linear_decision_structure(
     free columns, so a fault ``U_F d`` is seen exactly when
     ``(I - P) U_F != 0``; the lecture's "F2 is detected when U2 is not
     parallel to U1" is the case of one free column.
+
+    Examples
+    --------
+    With U2 parallel to U1, the test that leaves theta_1 free cannot see F2:
+
+    >>> import numpy as np
+    >>> u = np.linspace(1.0, 2.0, 10)
+    >>> U = np.column_stack([u, -0.7 * u, np.cos(np.arange(10.0))])
+    >>> modes = {"NF": (), "F1": (0,), "F2": (1,), "F3": (2,)}
+    >>> print(linear_decision_structure(U, modes, {"T1": (0,), "T3": (2,)}))
+        NF  F1  F2  F3
+    T1   0   0   0   X
+    T3   0   X   X   0
     """
     U = as_matrix(U, "U")
     p = U.shape[1]

@@ -315,6 +315,13 @@ def numerical_jacobian(f, x, step=None) -> np.ndarray:
     ``h_j = step * max(1, |x_j|)``.  All ``2 n`` perturbed points of every
     batch member are evaluated in one call of ``f`` (an extra axis of size
     ``n`` before the last), so the cost is one vectorised call.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> numerical_jacobian(lambda x: np.stack([x[..., 0] * x[..., 1], x[..., 1]], -1), [2.0, 3.0]).round(8)
+    array([[3., 2.],
+           [0., 1.]])
     """
     x = np.asarray(x, dtype=float)
     n = x.shape[-1]

@@ -163,6 +163,18 @@ def recursive_least_squares(
     normalised innovations are independent ``N(0, 1)`` while the model holds,
     which makes :func:`windowed_nis` of the result a recursive test quantity
     (chapter 2, "recursive computation").
+
+    Examples
+    --------
+    With a constant parameter (q = 0) and the diffuse start, the last estimate
+    is the batch least-squares estimate:
+
+    >>> import numpy as np
+    >>> Phi = np.column_stack([np.ones(30), np.linspace(0.0, 1.0, 30)])
+    >>> y = Phi @ [1.0, -2.0] + 0.1 * np.random.default_rng(0).standard_normal(30)
+    >>> rls = recursive_least_squares(Phi, y, r=0.01)
+    >>> bool(np.allclose(rls.theta[-1], np.linalg.lstsq(Phi, y, rcond=None)[0]))
+    True
     """
     Phi = as_matrix(Phi, "Phi")
     N, k = Phi.shape

@@ -175,6 +175,12 @@ def kf_predict(x_filt, P_filt, F, GQG, offset=None):
     -----
     The time update of the lecture's EKF slide with constant ``G``
     (LiU lecture, "Extended Kalman Filter").
+
+    Examples
+    --------
+    >>> step = kf_predict([1.0], [[1.0]], [[2.0]], [[0.5]])
+    >>> step.x_pred, step.P_pred
+    (array([2.]), array([[4.5]]))
     """
     x_filt, P_filt, F, GQG = (np.asarray(a, dtype=float) for a in (x_filt, P_filt, F, GQG))
     _check_predict_shapes(x_filt, P_filt, F, GQG)
@@ -213,6 +219,15 @@ def ekf_update(model, x_pred, P_pred, y):
     ``xhat(t|t) = xhat(t|t-1) + K_t (y_t - h(xhat(t|t-1)))``.  The lecture's
     ``P(t|t) = P(t|t-1) - K_t H_t P(t|t-1)`` is replaced by the equivalent
     Joseph form (see :func:`kf_update`).
+
+    Examples
+    --------
+    >>> from course.filters import NonlinearModel
+    >>> model = NonlinearModel(g=lambda x, u: x, h=lambda x: x**2, Q=[[0.0]], R=[[1.0]],
+    ...                        x0_mean=[2.0])
+    >>> step = ekf_update(model, [2.0], [[1.0]], [5.0])
+    >>> step.eps, step.S          # y - h(x) and H P H^T + R with H = 2x = 4
+    (array([1.]), array([[17.]]))
     """
     x_pred, P_pred, y = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y))
     H = model.jacobian_h(x_pred)
@@ -247,6 +262,15 @@ def ekf_predict(model, x_filt, P_filt, u=None):
     ``xhat(t|t)`` (LiU lecture, slide "Extended Kalman
     Filter", time update; its ``G_t = dg/dw`` is the constant ``G`` here
     because the noise enters additively).
+
+    Examples
+    --------
+    >>> from course.filters import NonlinearModel
+    >>> model = NonlinearModel(g=lambda x, u: 0.5 * x**2, h=lambda x: x, Q=[[0.1]], R=[[1.0]],
+    ...                        x0_mean=[2.0])
+    >>> step = ekf_predict(model, [2.0], [[1.0]])
+    >>> step.x_pred, step.P_pred.round(6)  # g(x) and F P F^T + Q with F = x = 2
+    (array([2.]), array([[4.1]]))
     """
     x_filt, P_filt = np.asarray(x_filt, dtype=float), np.asarray(P_filt, dtype=float)
     F = model.jacobian_g(x_filt, u)

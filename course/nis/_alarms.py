@@ -39,6 +39,13 @@ def empirical_threshold(null_statistic, alpha) -> float:
     ``F_hat`` the empirical distribution function of the simulated values
     (numpy's linear-interpolation quantile).  Its accuracy is that of a
     Monte Carlo quantile: simulate many more than ``1 / alpha`` values.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> null = np.random.default_rng(0).chisquare(4, size=200_000)
+    >>> round(empirical_threshold(null, 0.05), 1)   # chi2.isf(0.05, 4) = 9.49
+    9.5
     """
     alpha = as_probability(alpha)
     try:
@@ -137,6 +144,14 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     (false alarms, detection) to the next lecture
     (LiU lecture, last slide); these are its Monte Carlo
     estimates.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> T = np.array([[0.1, 2.0, 0.3, 5.0, 6.0], [0.2, 0.1, 0.2, 0.4, 7.0]])
+    >>> stats = alarm_statistics(T, 1.0, fault_time=3)
+    >>> stats.false_alarm_rate, stats.detection_probability, stats.delays
+    (0.16666666666666666, 1.0, array([0., 1.]))
     """
     try:
         T = np.array(statistic, dtype=float)

@@ -155,8 +155,9 @@ def nis_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
     --------
     >>> import numpy as np
     >>> eps = np.random.default_rng(0).standard_normal((50, 2))
-    >>> nis_test(eps, np.eye(2)).critical_value
-    CriticalValues(lower=74.22193388326906, upper=129.56119...)
+    >>> result = nis_test(eps, np.eye(2))
+    >>> [round(c, 2) for c in result.critical_value], result.dof
+    ([74.22, 129.56], 100)
     """
     eps, L = _single_record(innovations, S)
     K, m = eps.shape

@@ -450,6 +450,14 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
     -----
     [C17], Theorem 1: the same Pfaffian as :class:`ExtremeEigenvalue` with
     the entries integrated over ``[K lower/2, K upper/2]``.
+
+    Examples
+    --------
+    The exact false-alarm rate of the NIS-matrix test at its thresholds:
+
+    >>> lower, upper = 0.5530, 1.5848        # nis_matrix_critical_values(2, 50)
+    >>> round(1 - prob_eigenvalues_within(2, 50, lower, upper), 3)
+    0.05
     """
     m, K = _check_dims(m, K)
     lower, upper = float(lower), float(upper)

@@ -135,6 +135,12 @@ def nis(innovations, S) -> np.ndarray:
     With ``S_k = B_k B_k^T`` (lower Cholesky factor),
     ``eps_k^T S_k^{-1} eps_k = |B_k^{-1} eps_k|^2``; the whitened vector is
     found by forward substitution, never with an inverse ([F], eq. 4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nis([[1.0, 2.0], [2.0, 0.0]], np.diag([1.0, 4.0]))
+    array([2., 4.])
     """
     eps, L = _innovations_and_factor(innovations, S)
     return whitened_squared_norms(L, eps)
@@ -160,6 +166,12 @@ def nees(errors, P) -> np.ndarray:
     -----
     ``e_k^T P_k^{-1} e_k = |B_k^{-1} e_k|^2`` with ``P_k = B_k B_k^T``
     (Cholesky, forward substitution; no inverse is formed).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nees([[0.5, 0.0]], np.diag([0.25, 1.0]))
+    array([1.])
     """
     eps, L = _innovations_and_factor(errors, P, "errors", "P")
     return whitened_squared_norms(L, eps)
@@ -189,6 +201,14 @@ def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
     [F], eq. (3).  Under H0, ``K * Pi ~ W_m(K, I)``: the poster states
     ``Pi ~ W_m(K, I)``, which forgets its own ``1/K``; ``Pi`` itself has mean
     ``I``.  Its trace is the time-averaged NIS ([F], eq. 4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eps = np.array([[1.0, 0.0], [0.0, 2.0]])
+    >>> nis_matrix(eps, np.eye(2))
+    array([[0.5, 0. ],
+           [0. , 2. ]])
     """
     eps, L = _innovations_and_factor(innovations, S)
     z = _whiten(L, eps)
@@ -225,6 +245,14 @@ def nis_matrix_eigenvalues(innovations: Any, S: Any) -> EigenvaluePair:
     -----
     Under H0 they follow :func:`extreme_eigenvalue` ``(m, K, "min")`` and
     ``(m, K, "max")``: ``K Pi ~ W_m(K, I)`` ([F], eq. 3, ``1/K`` restored).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eps = np.array([[1.0, 0.0], [0.0, 2.0]])
+    >>> lmin, lmax = nis_matrix_eigenvalues(eps, np.eye(2))
+    >>> float(lmin), float(lmax)
+    (0.5, 2.0)
     """
     values = np.linalg.eigvalsh(nis_matrix(innovations, S))
     return EigenvaluePair(values[..., 0], values[..., -1])
