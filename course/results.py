@@ -252,6 +252,12 @@ def as_plain(value: Any) -> Any:
 
     Arrays are returned unchanged: only scalars are converted, so that a
     result prints ``6.0`` and never ``np.float64(6.0)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> as_plain((np.float64(6.0), np.int64(2)))
+    (6.0, 2)
     """
     # numpy scalars first: np.float64 subclasses float and would slip through.
     if isinstance(value, np.generic) or (isinstance(value, np.ndarray) and value.ndim == 0):
@@ -274,6 +280,11 @@ def format_number(value: Any, digits: int = 5) -> str:
     Integers (and floats that are whole numbers of modest size) print
     without a decimal point; other floats use ``digits`` significant digits;
     tuples print as ``(a, b)``.
+
+    Examples
+    --------
+    >>> format_number(6.0), format_number(0.0497870684), format_number((74.2219, 129.5612), 4)
+    ('6', '0.049787', '(74.22, 129.6)')
     """
     value = as_plain(value)
     if isinstance(value, bool) or value is None:
@@ -292,7 +303,14 @@ def format_number(value: Any, digits: int = 5) -> str:
 
 
 def describe_distribution(dist: Any) -> str:
-    """A short, deterministic name for a frozen distribution, e.g. ``chi2(2)``."""
+    """A short, deterministic name for a frozen distribution, e.g. ``chi2(2)``.
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> describe_distribution(stats.chi2(3, scale=0.04))
+    'chi2(3, scale=0.04)'
+    """
     if dist is None:
         return "None"
     inner = getattr(dist, "dist", None)

@@ -45,8 +45,9 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     through ``U1``; the best it can do is the orthogonal projection of
     ``f U2``, and ``sqrt(T)`` is the length of the perpendicular.  When
     ``U2`` is parallel to ``U1`` the perpendicular vanishes: the fault is
-    invisible (test_quantities_lecture_sv.txt, the geometric slide of
-    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``).
+    invisible (the LiU lecture on test quantities, the geometric slide of
+    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``; full reference in
+    the course bibliography, docs/bibliography.md).
 
     Returns
     -------
