@@ -1043,8 +1043,7 @@ def _direction_for(null, kind, j, k, gamma):
     if gamma is None:
         return None
     p = null.n_outputs
-    if isinstance(gamma, bool) or not isinstance(gamma, (int, np.integer)) or not 0 <= gamma < p:
-        raise ValueError(f"gamma must be a direction index in 0..{p - 1}, got {gamma!r}")
+    gamma = as_index(gamma, "gamma", p, what="a principal direction")
     if kind == "covariance":
         _, V = principal_directions(null, j)
         return V[:, gamma]

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from course.diagnosis._common import _indices
-from course.linalg import range_basis
+from course.linalg import range_basis, readonly
 from course.results import TestResult
 from course.validation import as_count, as_index, as_matrix
 
@@ -114,7 +114,7 @@ class DecisionStructure:
             else:
                 modes = [f"F{k + 1}" for k in range(n_modes)]
         tests, modes = _names(tests, "tests", n_tests), _names(modes, "modes", n_modes)
-        matrix.setflags(write=False)
+        readonly(matrix)
         self._sensitivity = matrix
         self._tests = tests
         self._modes = modes
