@@ -25,6 +25,12 @@ Small helpers
 The rules are the course's rules: no explicit inverse where a Cholesky
 factor, a triangular solve or a QR decomposition does the job, and a failed
 factorisation raises :class:`numpy.linalg.LinAlgError` naming the argument.
+A Cholesky factorisation that succeeds only by rounding is refused too: a
+covariance is *numerically singular* when some ``L_ii**2 <= 4 eps m Q_ii``
+(:data:`course.validation.SINGULAR_RTOL`).  The public functions check
+their arguments (:mod:`course.validation`); the library's hot loops call
+unchecked private twins (``_symmetrize``, ``_whiten_vectors``, ...) on arrays
+it has already validated.
 
 The input checks (``as_float_array``, ``as_covariance``, ``check_alpha``,
 ...) live in :mod:`course.validation`; they are re-exported here because
@@ -41,9 +47,14 @@ from scipy import linalg as sla
 
 from course.validation import (
     SYMMETRY_RTOL,
+    InputTypeError,
+    _refuse_singular_pivots,
+    as_count,
     as_covariance,
+    as_finite,
     as_float_array,
     as_matrix,
+    as_positive,
     as_vector,
     check_alpha,
 )
@@ -90,7 +101,19 @@ def readonly(array: np.ndarray) -> np.ndarray:
     >>> a.flags.writeable
     False
     """
+    if not isinstance(array, np.ndarray):
+        raise InputTypeError(
+            f"array must be a numpy array (readonly marks it in place), got {type(array).__name__}"
+        )
     array.setflags(write=False)
+    return array
+
+
+def _square_stack(value, name: str) -> np.ndarray:
+    """A finite float array of shape ``(..., m, m)``."""
+    array = as_float_array(value, name, min_ndim=2, empty=False)
+    if array.shape[-1] != array.shape[-2]:
+        raise ValueError(f"{name} must be square, (m, m) or a stack (..., m, m), got {array.shape}")
     return array
 
 
@@ -103,6 +126,11 @@ def symmetrize(P: np.ndarray) -> np.ndarray:
     array([[1., 1.],
            [1., 1.]])
     """
+    return _symmetrize(_square_stack(P, "P"))
+
+
+def _symmetrize(P: np.ndarray) -> np.ndarray:
+    """:func:`symmetrize` without input checks (for arrays the library built)."""
     return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
@@ -119,7 +147,9 @@ def psd_sqrt(C: np.ndarray) -> np.ndarray:
     array([[2., 0.],
            [0., 0.]])
     """
-    eigenvalues, vectors = np.linalg.eigh(symmetrize(np.asarray(C, dtype=float)))
+    C = as_float_array(C, "C", ndim=2)
+    C = as_covariance(C, "C", C.shape[0], allow_singular=True)
+    eigenvalues, vectors = np.linalg.eigh(_symmetrize(C))
     eigenvalues = np.clip(eigenvalues, 0.0, None)
     return (vectors * np.sqrt(eigenvalues)) @ vectors.T
 
@@ -128,10 +158,11 @@ def psd_sqrt(C: np.ndarray) -> np.ndarray:
 # Cholesky factors and whitening
 # ---------------------------------------------------------------------------
 def cholesky_lower(matrix: np.ndarray, name: str = "matrix") -> np.ndarray:
-    """Lower Cholesky factor L with ``matrix = L @ L.T`` (one matrix, unchecked input).
+    """Lower Cholesky factor L with ``matrix = L @ L.T`` (one matrix).
 
     Raises a :class:`numpy.linalg.LinAlgError` naming ``name`` when the
-    matrix is not positive definite.
+    matrix is not positive definite or numerically singular (see the module
+    docstring), a ``ValueError`` when it is not a finite square matrix.
 
     Examples
     --------
@@ -139,13 +170,26 @@ def cholesky_lower(matrix: np.ndarray, name: str = "matrix") -> np.ndarray:
     array([[2., 0.],
            [1., 1.]])
     """
+    matrix = as_float_array(matrix, name, ndim=2, empty=False)
+    if matrix.shape[0] != matrix.shape[1]:
+        raise ValueError(f"{name} must be a square matrix, got shape {matrix.shape}")
+    return _checked_cholesky(matrix, name)
+
+
+def _checked_cholesky(cov: np.ndarray, name: str) -> np.ndarray:
+    """Cholesky factors of a finite square stack: symmetric, PD, not numerically singular."""
+    scale = np.max(np.abs(cov), axis=(-2, -1), keepdims=True)
+    if np.any(np.abs(cov - np.swapaxes(cov, -1, -2)) > SYMMETRY_RTOL * scale):
+        raise ValueError(f"{name} is not symmetric; a covariance matrix must equal its transpose")
     try:
-        return sla.cholesky(np.asarray(matrix, dtype=float), lower=True, check_finite=False)
-    except (LinAlgError, sla.LinAlgError):
+        L = np.linalg.cholesky(cov)
+    except LinAlgError:
         raise LinAlgError(
             f"{name} is not positive definite (Cholesky factorisation failed); "
             "check that it is a valid covariance matrix"
         ) from None
+    _refuse_singular_pivots(L, np.diagonal(cov, axis1=-2, axis2=-1), name)
+    return L
 
 
 def cholesky_factor(S, name: str = "S") -> np.ndarray:
@@ -172,7 +216,8 @@ def cholesky_factor(S, name: str = "S") -> np.ndarray:
         Not square, NaN or inf, or not symmetric (relative tolerance
         :data:`course.validation.SYMMETRY_RTOL`).
     numpy.linalg.LinAlgError
-        Some matrix is not positive definite.
+        Some matrix is not positive definite, or numerically singular: some
+        ``L_ii**2 <= 4 eps m S_ii`` (:data:`course.validation.SINGULAR_RTOL`).
 
     Examples
     --------
@@ -188,19 +233,7 @@ def cholesky_factor(S, name: str = "S") -> np.ndarray:
                 for stride, size in zip(S.strides[:-2], S.shape[:-2])
             )
         ]
-    cov = as_float_array(S, name)
-    if cov.ndim < 2 or cov.shape[-1] != cov.shape[-2]:
-        raise ValueError(f"{name} must be a square matrix or a stack (..., m, m), got {cov.shape}")
-    scale = np.max(np.abs(cov), axis=(-2, -1), keepdims=True)
-    if np.any(np.abs(cov - np.swapaxes(cov, -1, -2)) > SYMMETRY_RTOL * scale):
-        raise ValueError(f"{name} is not symmetric; a covariance matrix must equal its transpose")
-    try:
-        return np.linalg.cholesky(cov)
-    except LinAlgError:
-        raise LinAlgError(
-            f"{name} is not positive definite (Cholesky factorisation failed); "
-            "check that it is a valid covariance matrix"
-        ) from None
+    return _checked_cholesky(_square_stack(S, name), name)
 
 
 def whiten(L: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -214,7 +247,43 @@ def whiten(L: np.ndarray, values: np.ndarray) -> np.ndarray:
     >>> whiten(np.array([[2.0, 0.0], [1.0, 1.0]]), np.array([2.0, 2.0]))
     array([1., 1.])
     """
+    L = _lower_factor(L, "L", ndim=2)
+    values = as_float_array(values, "values", empty=False)
+    if values.ndim not in (1, 2) or values.shape[0] != L.shape[0]:
+        raise ValueError(
+            f"values must have shape ({L.shape[0]},) or ({L.shape[0]}, k) to match L of shape "
+            f"{L.shape}, got {values.shape}"
+        )
     return sla.solve_triangular(L, values, lower=True, check_finite=False)
+
+
+def _lower_factor(L, name: str, ndim: int | None = None) -> np.ndarray:
+    """A finite square (stack of) lower-triangular factor(s) with a non-zero diagonal."""
+    L = _square_stack(L, name)
+    if ndim is not None and L.ndim != ndim:
+        raise ValueError(f"{name} must be one square matrix, got shape {L.shape}")
+    if not np.all(np.diagonal(L, axis1=-2, axis2=-1)):
+        raise LinAlgError(
+            f"{name} is singular (a zero on its diagonal): it is not the Cholesky factor of a "
+            "positive definite covariance"
+        )
+    return L
+
+
+def _vectors_for(L: np.ndarray, vectors, name: str) -> np.ndarray:
+    vectors = as_float_array(vectors, name, min_ndim=1, empty=False)
+    m = L.shape[-1]
+    if vectors.shape[-1] != m:
+        raise ValueError(
+            f"{name} must have length m = {m} along the last axis, got {vectors.shape}"
+        )
+    try:
+        np.broadcast_shapes(L.shape[:-2], vectors.shape[:-1])
+    except ValueError:
+        raise ValueError(
+            f"{name} of shape {vectors.shape} does not broadcast against L of shape {L.shape}"
+        ) from None
+    return vectors
 
 
 def whiten_vectors(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
@@ -240,6 +309,12 @@ def whiten_vectors(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     array([[1., 1.],
            [2., 1.]])
     """
+    L = _lower_factor(L, "L")
+    return _whiten_vectors(L, _vectors_for(L, vectors, "vectors"))
+
+
+def _whiten_vectors(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """:func:`whiten_vectors` without input checks (for arrays the library validated)."""
     m = vectors.shape[-1]
     shape = np.broadcast_shapes(L.shape[:-2], vectors.shape[:-1]) + (m,)
     z = np.empty(shape)
@@ -259,7 +334,13 @@ def whitened_squared_norms(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     >>> whitened_squared_norms(2 * np.eye(2), np.array([[2.0, 0.0], [2.0, 2.0]]))
     array([1., 2.])
     """
-    z = whiten_vectors(L, vectors)
+    L = _lower_factor(L, "L")
+    return _whitened_squared_norms(L, _vectors_for(L, vectors, "vectors"))
+
+
+def _whitened_squared_norms(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """:func:`whitened_squared_norms` without input checks."""
+    z = _whiten_vectors(L, vectors)
     return np.einsum("...i,...i->...", z, z)
 
 
@@ -272,6 +353,12 @@ def solve_spd(matrix: np.ndarray, rhs: np.ndarray, name: str = "matrix") -> np.n
     array([1. , 0.5])
     """
     L = cholesky_lower(matrix, name)
+    rhs = as_float_array(rhs, "rhs", empty=False)
+    if rhs.ndim not in (1, 2) or rhs.shape[0] != L.shape[0]:
+        raise ValueError(
+            f"rhs must have shape ({L.shape[0]},) or ({L.shape[0]}, k) to match {name}, "
+            f"got {rhs.shape}"
+        )
     return sla.cho_solve((L, True), rhs, check_finite=False)
 
 
@@ -290,9 +377,26 @@ def rank_tolerance(shape: tuple[int, ...], largest: float, rtol: float | None = 
     >>> bool(rank_tolerance((10, 2), 1.0) == 10 * np.finfo(float).eps)
     True
     """
+    shape = _shape(shape)
+    largest = as_finite(largest, "largest")
+    if largest < 0:
+        raise ValueError(f"largest is a singular value, so it cannot be negative; got {largest!r}")
+    rtol = _rtol(rtol, shape)
+    return rtol * largest
+
+
+def _shape(shape) -> tuple[int, ...]:
+    if isinstance(shape, (str, bytes)) or not isinstance(shape, (tuple, list)) or not shape:
+        raise ValueError(
+            f"shape must be the shape of a matrix, a tuple such as (m, n); got {shape!r}"
+        )
+    return tuple(as_count(n, "shape", minimum=0) for n in shape)
+
+
+def _rtol(rtol, shape: tuple[int, ...]) -> float:
     if rtol is None:
-        rtol = max(shape) * np.finfo(float).eps
-    return float(rtol) * float(largest)
+        return max(shape) * np.finfo(float).eps
+    return as_positive(rtol, "rtol", what="the relative rank tolerance")
 
 
 def numerical_rank(
@@ -305,10 +409,13 @@ def numerical_rank(
     >>> numerical_rank(np.array([3.0, 1e-20]), (5, 2))
     1
     """
-    s = np.asarray(singular_values, dtype=float)
-    if s.size == 0 or s[0] == 0.0:
+    s = as_vector(singular_values, "singular_values", empty=True)
+    if np.any(s < 0):
+        raise ValueError("singular_values cannot be negative")
+    shape = _shape(shape)
+    if s.size == 0 or s.max() == 0.0:
         return 0
-    return int(np.sum(s > rank_tolerance(shape, s[0], rtol)))
+    return int(np.sum(s > _rtol(rtol, shape) * s.max()))
 
 
 def matrix_rank(A: np.ndarray, rtol: float | None = None) -> int:
@@ -319,7 +426,7 @@ def matrix_rank(A: np.ndarray, rtol: float | None = None) -> int:
     >>> matrix_rank(np.array([[1.0, 2.0], [2.0, 4.0]]))
     1
     """
-    A = np.asarray(A, dtype=float)
+    A = as_matrix(A, "A", empty=True)
     if A.size == 0:
         return 0
     return numerical_rank(np.linalg.svd(A, compute_uv=False), A.shape, rtol)
@@ -333,7 +440,7 @@ def range_basis(A: np.ndarray, rtol: float | None = None) -> np.ndarray:
     >>> range_basis(np.array([[1.0, 2.0], [1.0, 2.0]])).shape
     (2, 1)
     """
-    A = np.asarray(A, dtype=float)
+    A = as_matrix(A, "A", empty=True)
     N, p = A.shape
     if p == 0 or N == 0:
         return np.zeros((N, 0))
@@ -352,7 +459,7 @@ def column_rank_deficiency(A: np.ndarray, rtol: float | None = None) -> list[int
     >>> column_rank_deficiency(np.array([[1.0, 2.0, 0.0], [1.0, 2.0, 1.0], [0.0, 0.0, 1.0]]))
     [0]
     """
-    A = np.asarray(A, dtype=float)
+    A = as_matrix(A, "A", empty=True)
     m, n = A.shape
     if n == 0:
         return []
@@ -368,7 +475,7 @@ def check_full_column_rank(A: np.ndarray, name: str = "A") -> None:
     --------
     >>> check_full_column_rank(np.eye(3))
     """
-    dependent = column_rank_deficiency(A)
+    dependent = column_rank_deficiency(as_matrix(A, name))
     if dependent:
         raise LinAlgError(
             f"{name} does not have full column rank: column(s) {dependent} are linear "

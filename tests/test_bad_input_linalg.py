@@ -22,6 +22,7 @@ from bad_input import (
     real,
     vector,
 )
+from scipy import stats
 
 from course import linalg, validation
 
@@ -69,6 +70,31 @@ TABLE = {
         size=2,
         allow_singular=flag(False),
     ),
+    "as_std": case(
+        validation.as_std,
+        value=value_named_y(0.2, {**REAL_BAD, "zero": 0.0, "1e300": 1e300, "1e-300": 1e-300}),
+        name="y",
+    ),
+    "as_size": case(
+        validation.as_size,
+        value=value_named_y(
+            (2, 3), {"fraction": 2.5, "negative": (2, -1), "text": "3", "NaN": np.nan}
+        ),
+        name="y",
+    ),
+    "as_flag": case(
+        validation.as_flag,
+        value=value_named_y(True, {"text": "no", "None": None, "number": 1}),
+        name="y",
+    ),
+    "as_callable": case(
+        validation.as_callable, value=value_named_y(np.sin, {"None": None, "number": 3.0}), name="y"
+    ),
+    "as_law": case(
+        validation.as_law,
+        value=value_named_y(stats.norm(), {"None": None, "number": 3.0}),
+        name="y",
+    ),
     "as_count": case(validation.as_count, value=value_named_y(3, COUNT_BAD), name="y"),
     "as_index": case(
         validation.as_index,
@@ -103,7 +129,7 @@ TABLE = {
     "symmetrize": case(linalg.symmetrize, P=array(S, min_ndim=2)),
     "psd_sqrt": case(linalg.psd_sqrt, C=covariance(S, psd=True)),
     "cholesky_lower": case(linalg.cholesky_lower, matrix=covariance(S), name="matrix"),
-    "cholesky_factor": case(linalg.cholesky_factor, S=covariance(S, ndims=(2, 3)), name="S"),
+    "cholesky_factor": case(linalg.cholesky_factor, S=covariance(S, min_ndim=2), name="S"),
     "whiten": case(
         linalg.whiten,
         L=matrix(L).but(singular=np.zeros((2, 2))),
@@ -162,6 +188,7 @@ TABLE = {
 }
 
 EXEMPT = {
+    "InputTypeError": "an exception class",
     "QRSolution": "a named tuple the library returns",
     "MinNormSolution": "a named tuple the library returns",
 }

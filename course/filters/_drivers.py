@@ -22,8 +22,8 @@ from course.filters._models import (
 )
 from course.filters._stacked import _batch_major, _time_major
 from course.filters._steps import ekf_predict, ekf_update, kf_predict, kf_update
+from course.linalg import _symmetrize as symmetrize
 from course.linalg import readonly as _readonly
-from course.linalg import symmetrize
 from course.nis import _statistics as _nis_home
 from course.validation import as_covariance, as_vector
 

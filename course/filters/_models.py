@@ -12,7 +12,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from course.filters._stacked import _T, _batch_major, _time_major
-from course.linalg import psd_sqrt, readonly, symmetrize
+from course.linalg import _symmetrize as symmetrize
+from course.linalg import psd_sqrt, readonly
 from course.validation import (
     as_count,
     as_covariance,

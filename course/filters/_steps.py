@@ -12,7 +12,7 @@ import numpy as np
 from numpy.linalg import LinAlgError
 
 from course.filters._stacked import _T, _mm, _mv
-from course.linalg import symmetrize
+from course.linalg import _symmetrize as symmetrize
 
 
 class MeasurementUpdate(NamedTuple):

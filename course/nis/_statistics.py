@@ -14,7 +14,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from course.linalg import cholesky_factor, whiten_vectors, whitened_squared_norms
+from course.linalg import _whiten_vectors as whiten_vectors
+from course.linalg import _whitened_squared_norms as whitened_squared_norms
+from course.linalg import cholesky_factor
 from course.validation import as_count, as_float_array
 
 
