@@ -6,13 +6,12 @@ own sources are in the course bibliography, docs/bibliography.md.
 
 from __future__ import annotations
 
-import numbers
 from typing import Any
 
 import numpy as np
 from scipy import stats
 
-from course.distributions import _NO_STATE, FrozenDistribution, _rng_argument
+from course.distributions import _NO_STATE, FrozenDistribution, _levels, _points, _rng_argument
 from course.nis._pfaffians import (
     _augment,
     _bordered,
@@ -22,7 +21,7 @@ from course.nis._pfaffians import (
     _skew_blocks,
 )
 from course.nis._statistics import EigenvaluePair, _check_dims, _check_which
-from course.validation import as_count
+from course.validation import as_count, as_finite, as_size
 
 #: Chiani's shifted-gamma fit of the Tracy-Widom law TW1 ([C14], Table 1):
 #: TW1 ~ Gamma(shape=k, scale=theta) - alpha.
@@ -179,7 +178,7 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     # -- public overrides ---------------------------------------------------------
     def _check_x(self, x):
-        x = np.asarray(x, dtype=float)
+        x = _points(x)
         if np.any(x < 0):
             raise ValueError(
                 "x must be >= 0: the eigenvalues of the NIS matrix (a sum of outer products) "
@@ -359,13 +358,13 @@ class TracyWidomApproximation(FrozenDistribution):
 
     def ppf(self, q):
         """Quantile, in closed form from the gamma quantile."""
-        q = np.asarray(q, dtype=float)
+        q = _levels(q)
         g = self._gamma.ppf(q) if self._sign > 0 else self._gamma.isf(q)
         return self._from_gamma(g)
 
     def isf(self, q):
         """Inverse survival function, in closed form."""
-        q = np.asarray(q, dtype=float)
+        q = _levels(q)
         g = self._gamma.isf(q) if self._sign > 0 else self._gamma.ppf(q)
         return self._from_gamma(g)
 
@@ -460,12 +459,22 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
     0.05
     """
     m, K = _check_dims(m, K)
-    lower, upper = float(lower), float(upper)
-    if np.isnan(lower) or np.isnan(upper) or lower < 0 or not upper > lower:
-        raise ValueError(f"need 0 <= lower < upper, got lower = {lower}, upper = {upper}")
+    lower = as_finite(lower, "lower", what="the lower threshold")
+    upper = (
+        float(np.inf) if _is_inf(upper) else as_finite(upper, "upper", what="the upper threshold")
+    )
+    if lower < 0 or not upper > lower:
+        raise ValueError(
+            f"need 0 <= lower < upper (thresholds on eigenvalues), got lower = {lower}, "
+            f"upper = {upper}"
+        )
     law = ExtremeEigenvalue(m, K, "max")
     J, g = law._blocks(np.full(1, K * lower / 2), np.full(1, K * upper / 2))
     return float(np.clip(_pfaffian(_augment(J, g))[0] / law._pf_full, 0.0, 1.0))
+
+
+def _is_inf(value: Any) -> bool:
+    return isinstance(value, (float, np.floating)) and value == np.inf
 
 
 def simulate_extreme_eigenvalues(
@@ -515,8 +524,7 @@ def simulate_extreme_eigenvalues(
     """
     m, K = _check_dims(m, K)
     rng = _rng_argument(rng, random_state, "simulate_extreme_eigenvalues")
-    sizes = (size,) if isinstance(size, (numbers.Number, np.generic)) else size
-    shape = () if size is None else tuple(as_count(n, "size", minimum=0) for n in sizes)
+    shape = as_size(size) or ()
     chunk = as_count(chunk, "chunk")
     total = int(np.prod(shape)) if shape else 1
     lmin, lmax = np.empty(total), np.empty(total)

@@ -52,7 +52,7 @@ def _check_which(which: Any) -> str:
 
 def _innovations_and_factor(innovations, S, name_eps="innovations", name_S="S"):
     """Validate (..., K, m) innovations and their covariances; return (eps, L)."""
-    eps = as_float_array(innovations, name_eps)
+    eps = as_float_array(innovations, name_eps, empty=False)
     if eps.ndim < 2:
         raise ValueError(
             f"{name_eps} must have shape (K, m) or (..., K, m) (time along the second-to-last "
