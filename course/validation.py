@@ -79,6 +79,7 @@ __all__ = [
     "as_callable",
     "as_count",
     "as_covariance",
+    "as_covariance_stack",
     "as_finite",
     "as_flag",
     "as_float_array",
@@ -125,6 +126,7 @@ def as_float_array(
     min_ndim: int | None = None,
     finite: bool = True,
     empty: bool = True,
+    nan: bool = False,
 ) -> np.ndarray:
     """Return ``value`` as a float64 copy, refusing NaN, inf and a wrong ndim.
 
@@ -143,6 +145,9 @@ def as_float_array(
         where a law is evaluated (``cdf(inf)`` is 1).
     empty : bool, default True
         Accept an array without elements.
+    nan : bool, default False
+        Accept NaN, where it marks an undefined sample (a window not yet
+        full); a user's data never get this.
 
     Returns
     -------
@@ -194,11 +199,15 @@ def as_float_array(
                 else ""
             )
         )
-    bad_entries = np.isnan(array) if not finite else ~np.isfinite(array)
+    bad_entries = np.zeros(array.shape, bool)
+    if finite:
+        bad_entries |= np.isinf(array)
+    if not nan:
+        bad_entries |= np.isnan(array)
     if bad_entries.any():
         bad = np.argwhere(bad_entries)
         where = tuple(int(i) for i in bad[0])
-        what = "NaN" if not finite else "NaN or inf"
+        what = " or ".join(w for w, on in (("NaN", not nan), ("inf", finite)) if on)
         raise ValueError(
             f"{name} contains {what} ({len(bad)} entries, first at index {where}); "
             "remove or replace those values before fitting"
@@ -361,6 +370,45 @@ def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False
         ) from None
     _refuse_singular_pivots(L, np.ones(size), name)
     return matrix
+
+
+def as_covariance_stack(
+    value: Any, name: str, size: int | None = None, *, allow_singular: bool = False
+) -> np.ndarray:
+    """A covariance ``(m, m)`` or a stack of them ``(..., m, m)``, each checked as by :func:`as_covariance`.
+
+    Examples
+    --------
+    >>> as_covariance_stack(np.stack([np.eye(2), 2 * np.eye(2)]), "P", 2).shape
+    (2, 2, 2)
+    """
+    stack = as_float_array(value, name, min_ndim=2, empty=False)
+    m = stack.shape[-1]
+    if stack.shape[-2] != m or (size is not None and m != size):
+        expected = "(..., m, m)" if size is None else f"(..., {size}, {size})"
+        raise ValueError(f"{name} must have shape {expected}, got {stack.shape}")
+    scale = np.maximum(np.max(np.abs(stack), axis=(-2, -1), keepdims=True), np.finfo(float).tiny)
+    if np.any(np.abs(stack - np.swapaxes(stack, -1, -2)) > SYMMETRY_RTOL * scale):
+        raise ValueError(f"{name} is not symmetric; a covariance matrix must equal its transpose")
+    if allow_singular:
+        smallest = np.linalg.eigvalsh(stack / scale)[..., 0]
+        if np.any(smallest < -np.finfo(float).eps * m):
+            worst = float(np.min(smallest * scale[..., 0, 0]))
+            raise _not_definite(name, "positive semi-definite", worst)
+        return stack
+    variances = np.diagonal(stack, axis1=-2, axis2=-1)
+    if np.any(variances <= 0):
+        raise _not_definite(name, "positive definite", float(np.min(variances)))
+    std = np.sqrt(variances)
+    try:
+        L = np.linalg.cholesky(stack / std[..., :, None] / std[..., None, :])
+    except LinAlgError:
+        raise LinAlgError(
+            f"{name} is not positive definite (Cholesky factorisation failed); a covariance "
+            "matrix needs positive variances and correlations in [-1, 1]"
+        ) from None
+    _refuse_singular_pivots(L, np.ones(variances.shape), name)
+    return stack
 
 
 def _smallest_eigenvalue(matrix: np.ndarray, scale: float) -> float:

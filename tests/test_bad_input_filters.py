@@ -95,7 +95,7 @@ TABLE = {
         x0_cov=covariance(P0, psd=True, none_ok=True),
         w_mean=vector([0.2], none_ok=True),
         v_mean=vector([-0.1], none_ok=True),
-        B=matrix(B, none_ok=True),
+        B=matrix(B, none_ok=True, shaped=False),  # any number of inputs
     ),
     "LinearModel.simulate": case(
         MODEL.simulate,
@@ -149,7 +149,7 @@ TABLE = {
         x_filt=state(),
         P_filt=state_cov(),
         F=array(F, min_ndim=2),
-        GQG=state_cov(G @ Q @ G.T),
+        GQG=state_cov(np.diag([0.01, 0.04])),
         offset=array([0.1, 0.0], min_ndim=1, none_ok=True),
     ),
     "ekf_update": case(
@@ -168,7 +168,7 @@ TABLE = {
     ),
     "extended_kalman_filter": case(
         kf.extended_kalman_filter,
-        model=model_arg(NONLINEAR).but(linear_model=MODEL),
+        model=model_arg(NONLINEAR),
         y=signal(Y_NL),
         u=Arg(None, {"given without inputs": U}),
         x0_mean=vector(X0, none_ok=True),
@@ -186,7 +186,7 @@ TABLE = {
     "numerical_jacobian": case(
         kf.numerical_jacobian,
         f=function(h),
-        x=state(),
+        x=array(X0, min_ndim=1, shaped=False),  # h takes any number of states
         step=positive(1e-5, none_ok=True),
     ),
     "recursive_least_squares": case(
@@ -197,7 +197,7 @@ TABLE = {
         r=scale(0.01),
         q=Arg(None, {"negative": -1.0, "NaN": np.nan, "text": "q"}),
         theta0=Arg(None, {"without P0": [0.0, 0.0]}),
-        P0=Arg(None, {"without theta0": np.eye(2)}),
+        P0=Arg(None, {"indefinite": -np.eye(2), "NaN": np.full((2, 2), np.nan)}),
     ),
     "riccati": case(
         kf.riccati,
