@@ -71,17 +71,27 @@ __all__ = [
 #: small one also relatively.
 ATOL = 0.0
 RTOL = 1e-10
-_TINY = 1e-300
 
 # Weights closer than this (relative to the largest) are merged into one
 # chi-square term: the law changes by far less than the tolerance.
 _MERGE_RTOL = 1e-12
 # Eigenvalues below this fraction of the largest are treated as zero.
 _ZERO_RTOL = 1e-12
-# Complex work arrays are processed in chunks of at most this many entries.
-_CHUNK = 2_000_000
-_MAX_LEVELS = 9
-_U_GRID = np.arange(0.25, 120.0, 0.25)
+# Work arrays (points x nodes x weights) are processed in chunks of at most
+# this many entries.
+_CHUNK = 1_000_000
+# Step halvings after the first two trapezoid levels, and Newton steps.
+_MAX_HALVINGS = 6
+_MAX_NEWTON = 100
+# Truncation points beyond this (cosh(60) ~ 6e25) mean no convergence.
+_U_MAX = 60.0
+# Trapezoid step relative to the strip-width estimate (see _plan).
+_STEP_SAFETY = 1.0
+_MAX_STEP = 0.5
+# Below exp(-760) a probability is 0 in double precision.
+_LOG_UNDERFLOW = -760.0
+# Up to this many terms, one point's saddle is found in Python floats.
+_PYTHON_TERMS = 24
 
 
 # ---------------------------------------------------------------------------
@@ -133,265 +143,572 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
 
 
 # ---------------------------------------------------------------------------
-# the contour integral
+# the normalised terms of one tail
 # ---------------------------------------------------------------------------
-def _cumulant_derivatives(s, w, h, d, sigma2):
-    """K'(s), K''(s), K'''(s) of the log-MGF ``K``, for real s of shape (m,)."""
-    z = 1.0 - 2.0 * np.multiply.outer(s, w)
-    wz = w / z
-    k1 = np.sum(h * wz + d * wz / z, axis=-1) + sigma2 * s
-    k2 = np.sum(2.0 * h * wz**2 + 4.0 * d * wz**2 / z, axis=-1) + sigma2
-    k3 = np.sum(8.0 * h * wz**3 + 24.0 * d * wz**3 / z, axis=-1)
-    return k1, k2, k3
+class _Side:
+    """Terms of ``X = sum w chi2(h, d) + N(0, sigma2)`` scaled to ``max(|w|, sigma) = 1``.
 
-
-def _saddle(c, w, h, d, sigma2, lo, hi, pole):
-    """Real saddle point of ``phi(s) = K(s) - s c - log|s|`` (``pole``) or
-    ``K(s) - s c`` in the interval ``(lo, hi)``, with ``phi''`` and ``phi'''``.
-
-    ``phi`` is convex on the interval, so ``phi'`` increases: Newton steps
-    safeguarded by bisection find its root.  The saddle only has to be
-    approximate (any point of the interval gives the same integral).
+    The laws are scale-invariant, ``P(Q <= c) = P(Q/m <= c/m)``, so every
+    integral is done on the normalised law: whatever the user's units
+    (weights of 1e-300 or 1e300 alike), the saddle point, the path and the
+    integrand stay near unit size.  ``w`` is sorted increasingly and holds no
+    two equal weights.  Holds the constants the contour integral needs.
     """
-    scale = 0.5 / np.max(np.abs(w)) if w.size else 1.0 / math.sqrt(sigma2)
 
-    def derivatives(s):
-        k1, k2, k3 = _cumulant_derivatives(s, w, h, d, sigma2)
-        if pole:
-            return k1 - c - 1.0 / s, k2 + 1.0 / s**2, k3 - 2.0 / s**3
-        return k1 - c, k2, k3
-
-    lo = np.full(c.shape, float(lo))
-    hi = np.full(c.shape, float(hi))
-    # an unbounded side: walk out until phi' changes sign
-    if np.isinf(hi[0]):
-        hi[:] = scale
-        for _ in range(2000):
-            grow = derivatives(hi)[0] <= 0
-            if not grow.any():
-                break
-            hi[grow] *= 2.0
-    if np.isinf(lo[0]):
-        lo[:] = -scale
-        for _ in range(2000):
-            grow = derivatives(lo)[0] >= 0
-            if not grow.any():
-                break
-            lo[grow] *= 2.0
-    # Newton inside the bracket; when it jumps out, a secant step between the
-    # bracket ends (once both values are finite), else bisection
-    f_lo = np.full(c.shape, -np.inf)
-    f_hi = np.full(c.shape, np.inf)
-    s = 0.5 * (lo + hi)
-    for _ in range(100):
-        g1, g2, _ = derivatives(s)
-        up = g1 > 0
-        hi, f_hi = np.where(up, s, hi), np.where(up, g1, f_hi)
-        lo, f_lo = np.where(up, lo, s), np.where(up, f_lo, g1)
-        newton = s - g1 / g2
-        with np.errstate(invalid="ignore", divide="ignore"):
-            secant = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-        fallback = np.where(
-            np.isfinite(secant) & (secant > lo) & (secant < hi), secant, 0.5 * (lo + hi)
+    def __init__(self, w, h, d, sigma2):
+        self.w, self.h, self.d, self.sigma2 = w, h, d, sigma2
+        self.w2 = 2.0 * w
+        self.hw = h * w
+        self.dw = d * w
+        self.c2 = 2.0 * w * self.hw
+        self.c3 = 8.0 * w * w * self.hw
+        self.n2 = 4.0 * w * self.dw
+        self.n3 = 24.0 * w * w * self.dw
+        small = w.size <= _PYTHON_TERMS
+        # a few terms are summed faster by Python than by numpy calls
+        total = math.fsum if small else np.sum
+        wl, hl, dl = (w.tolist(), h.tolist(), d.tolist()) if small else (w, h, d)
+        positive = w.size > 0 and w[-1] > 0
+        self.noncentral = bool(total(dl) > 0)
+        self.half_d_sum = 0.5 * float(total(dl))
+        self.k = 0.5 * float(total(hl))
+        self.mean = float(total(self.hw.tolist() if small else self.hw)) + float(
+            total(self.dw.tolist() if small else self.dw)
         )
-        new = np.where((newton > lo) & (newton < hi), newton, fallback)
-        done = np.all(np.abs(new - s) <= 1e-7 * np.abs(s) + 1e-300)
-        s = new
-        if done:
+        second = self.c2 + self.n2  # 2 w^2 (h + 2 d)
+        self.var = float(total(second.tolist() if small else second)) + sigma2
+        self.s_max = 0.5 / float(w[-1]) if positive else math.inf
+        self.s_min = 0.5 / float(w[0]) if w.size and w[0] < 0 else -math.inf
+        # the largest weight's term: it dominates the far upper tail
+        self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
+        # |M(s)| <= D (Re s)^-k for Re s >= 1/max(w) (see _plan)
+        if small:
+            log_d = -0.5 * math.fsum(hi * math.log(abs(wi)) for wi, hi in zip(wl, hl))
+            log_d -= 0.5 * math.fsum(di for wi, di in zip(wl, dl) if wi > 0)
+            d_over_w = math.fsum(0.25 * di / wi for wi, di in zip(wl, dl))
+        else:
+            log_d = -0.5 * float(h @ np.log(np.abs(w))) - 0.5 * float(d @ (w > 0))
+            d_over_w = float(d @ (0.25 / w))
+        self.log_d = log_d
+        # for the bound on the lower-tail saddle of a positive form
+        self.d_over_w = d_over_w if self.noncentral and w[0] > 0 else 0.0
+        # P(X <= x) ~ C x^k / Gamma(k+1) near 0 for a positive form (see _near_zero)
+        if w.size and w[0] > 0:
+            self.zero_slope = float(
+                total(((h + d) * (0.25 / w)).tolist() if small else (h + d) / (4 * w))
+            )
+            log_two_w = np.log(self.w2)
+            self.log_c0 = -0.5 * float(total((h * log_two_w).tolist() if small else h * log_two_w))
+            self.log_c0 += -self.half_d_sum - math.lgamma(self.k + 1.0)
+        self.rows = self.cgf_rows = None
+        if small:
+            columns = (self.w2, self.hw, self.dw, self.c2, self.c3, self.n2, self.n3)
+            self.rows = tuple(zip(*(c.tolist() for c in columns)))
+            self.cgf_rows = tuple(zip(self.w2.tolist(), (0.5 * h).tolist(), (0.5 * d).tolist()))
+
+    @classmethod
+    def mirrored(cls, w, h, d, sigma2):
+        """The side of ``-X``: weights negated, kept in increasing order."""
+        return cls(-w[::-1], h[::-1], d[::-1], sigma2)
+
+    # -- the cumulant generating function K(s) = log M(s) ---------------------
+    def derivatives(self, s, x, pole):
+        """``phi'``, ``phi''``, ``phi'''`` of ``phi(s) = K(s) - s x [- log|s|]``, s of shape (n,)."""
+        t = 1.0 / (1.0 - np.multiply.outer(s, self.w2))
+        t2 = t * t
+        g1 = t @ self.hw + (self.sigma2 * s - x)
+        g2 = t2 @ self.c2 + self.sigma2
+        g3 = (t2 * t) @ self.c3
+        if self.noncentral:
+            g1 = g1 + t2 @ self.dw
+            g2 = g2 + (t2 * t) @ self.n2
+            g3 = g3 + (t2 * t2) @ self.n3
+        if pole:
+            inv = 1.0 / s
+            g1 = g1 - inv
+            g2 = g2 + inv * inv
+            g3 = g3 - 2.0 * inv**3
+        return g1, g2, g3
+
+    def derivatives_at(self, s, x, pole):
+        """:meth:`derivatives` at one real ``s`` (Python floats)."""
+        if self.rows is None:
+            g = self.derivatives(np.array([s]), x, pole)
+            return float(g[0][0]), float(g[1][0]), float(g[2][0])
+        g1, g2, g3 = self.sigma2 * s - x, self.sigma2, 0.0
+        for w2, hw, dw, c2, c3, n2, n3 in self.rows:
+            t = 1.0 / (1.0 - s * w2)
+            t2 = t * t
+            g1 += t * hw + t2 * dw
+            g2 += t2 * (c2 + t * n2)
+            g3 += t2 * t * (c3 + t * n3)
+        if pole:
+            inv = 1.0 / s
+            g1 -= inv
+            g2 += inv * inv
+            g3 -= 2.0 * inv**3
+        return g1, g2, g3
+
+    def cgf(self, s):
+        """``K(s)`` at real ``s`` of shape (n,) inside the interval of convergence."""
+        z = 1.0 - np.multiply.outer(s, self.w2)
+        value = np.log(z) @ (-0.5 * self.h) + 0.5 * self.sigma2 * s * s
+        if self.noncentral:
+            value = value + (1.0 / z - 1.0) @ (0.5 * self.d)
+        return value
+
+    def cgf_at(self, s):
+        """:meth:`cgf` at one real ``s`` (Python floats)."""
+        if self.cgf_rows is None:
+            return float(self.cgf(np.array([s]))[0])
+        value = 0.5 * self.sigma2 * s * s
+        for w2, half_h, half_d in self.cgf_rows:
+            z = 1.0 - s * w2
+            value += half_d * (1.0 / z - 1.0) - half_h * math.log(z)
+        return value
+
+    # -- where the saddle point lies ------------------------------------------
+    def bracket(self, x, upper):
+        """Finite ``(lo, hi)`` holding the saddle of ``phi`` (with or without the pole) and a guess.
+
+        Upper tail: ``(0, s_max)``; lower tail: ``(s_min, 0)``.  Infinite ends
+        are replaced by bounds from ``K'`` (see the comments); the guess is the
+        saddle of a Gaussian model of ``K``, or of the dominant term alone in
+        the far upper tail, or of the behaviour at ``-inf`` far below a
+        positive form.  Works on floats and arrays alike.
+        """
+        dx = x - self.mean
+        root = np.sqrt(dx * dx + 4.0 * self.var)
+        if upper:
+            # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
+            guess = 2.0 / (root - dx)
+            lo = 0.0 * x
+            if self.top is not None:
+                hi = self.s_max + lo
+                w, h, d = self.top
+                # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
+                t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * x)
+                guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
+            else:
+                # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
+                # beyond the root of sigma2 s^2 - (x - mean) s - 1
+                hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
+        else:
+            guess = -2.0 / (root + dx)
+            hi = 0.0 * x
+            if math.isfinite(self.s_min):
+                lo = self.s_min + hi
+            else:
+                # a positive form: K'(s) <= k/|s| + sum d/(4 w s^2) for s < 0, so
+                # phi' < 0 left of the root of that bound + 1/|s| = x; with a
+                # normal term also left of -sqrt((k + 1)/sigma2)
+                k1 = self.k + 1.0
+                with np.errstate(divide="ignore"):
+                    bound = (k1 + np.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * x)
+                if self.sigma2:
+                    bound = np.minimum(bound, math.sqrt(k1 / self.sigma2))
+                lo = -bound
+                # far below the weights the bound is the saddle itself
+                guess = np.where(x * self.k < 0.1 * self.mean, lo, guess)
+        return lo, hi, guess
+
+
+def _saddle(x, side, upper, pole):
+    """Vertex ``s0`` near the real saddle of ``phi``, with ``phi''`` and ``phi'''`` there.
+
+    ``phi`` is convex on the bracket, so ``phi'`` increases: Newton steps
+    safeguarded by bisection (in the logit of ``s`` over the far end, so that
+    roots near either singular end are reached in a few steps).  The saddle
+    only has to be approximate, ``|phi'| phi''^{-1/2} < 0.05``: any vertex in the
+    interval gives the same integral.
+    """
+    lo, hi, guess = side.bracket(x, upper)
+    lo, hi = np.broadcast_to(lo, x.shape).copy(), np.broadcast_to(hi, x.shape).copy()
+    width = hi - lo
+    s = np.clip(guess, lo + 1e-9 * width, hi - 1e-9 * width)
+    for _ in range(_MAX_NEWTON):
+        g1, g2, g3 = side.derivatives(s, x, pole)
+        done = np.abs(g1) <= 0.05 * np.sqrt(g2)
+        if done.all():
             break
-    _, g2, g3 = derivatives(s)
+        right = g1 > 0
+        hi = np.where(right, s, hi)
+        lo = np.where(right, lo, s)
+        newton = s - g1 / g2
+        s = np.where(done, s, np.where((newton > lo) & (newton < hi), newton, _bisect(lo, hi)))
     return s, g2, g3
 
 
-def _contour_integrand(u, c, s0, a, b, w, h, d, sigma2, pole):
-    """Im[f(s(u)) s'(u)] on the hyperbola ``s(u) = s0 + a(cosh u - 1) + i b sinh u``.
+def _saddle_at(x, side, upper, pole):
+    """:func:`_saddle` for one point (Python floats: no numpy call per step)."""
+    lo, hi, guess = (float(v) for v in side.bracket(x, upper))
+    width = hi - lo
+    s = min(max(guess, lo + 1e-9 * width), hi - 1e-9 * width)
+    for _ in range(_MAX_NEWTON):
+        g1, g2, g3 = side.derivatives_at(s, x, pole)
+        if abs(g1) <= 0.05 * math.sqrt(g2):
+            break
+        if g1 > 0:
+            hi = s
+        else:
+            lo = s
+        newton = s - g1 / g2
+        s = newton if lo < newton < hi else float(_bisect(lo, hi))
+    return s, g2, g3
 
-    ``f(s) = M(s) exp(-s c) / s`` for probabilities, ``M(s) exp(-s c)`` for
-    the density; ``M`` is the moment generating function.  Shapes: u (m,),
-    c/s0/a/b (n,) -> (n, m).
+
+def _bisect(lo, hi):
+    """Midpoint of ``(lo, hi)`` in the logit of ``s / far end`` (or plain, across 0)."""
+    far = np.where(np.abs(lo) > np.abs(hi), lo, hi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.clip(np.stack([lo, hi]) / far, 1e-300, 1.0 - 1e-16)
+        y = np.log(p) - np.log1p(-p)
+        mid = far / (1.0 + np.exp(-0.5 * (y[0] + y[1])))
+    return np.where(lo * hi >= 0, mid, 0.5 * (lo + hi))
+
+
+# ---------------------------------------------------------------------------
+# the contour integral
+# ---------------------------------------------------------------------------
+class _ScalarMath:
+    """The few functions :func:`_plan` needs, for Python floats (numpy has them for arrays)."""
+
+    log, exp, sqrt, abs = math.log, math.exp, math.sqrt, abs
+    maximum, minimum = max, min
+
+    @staticmethod
+    def where(condition, a, b):
+        return a if condition else b
+
+
+_SCALAR = _ScalarMath()
+
+
+def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
+    """Path, scale, truncation point and step of the contour integral at ``x``.
+
+    ``xp`` is :data:`_SCALAR` for one point (floats) or ``numpy`` (arrays).
+    Returns ``(a, b, e0, log_tol, U, step)``: the hyperbola's half-widths;
+    ``E0 = K(s0) - s0 x`` (the integrand is computed as ``exp(E - E0)``, so
+    that tails down to 1e-300 neither underflow nor lose digits); the log of
+    the absolute tolerance on that scaled integral; the truncation point
+    ``U``; the trapezoid step of the coarse level.
+
+    Truncation (the analogue of Imhof's (1961) bound ``T_U``): for ``Re s = X
+    >= 1/max(w)`` every factor obeys ``|1 - 2 w s| >= |w| X``, so ``|M(s)| <=
+    D X^{-k}`` with ``D = prod |w|^{-h/2} exp(-sum_{w>0} d/2)`` (the
+    noncentral factors only help; the normal factor is at most one once ``Im
+    s >= Re s``).  With ``|s'(u)| <= kappa dX/du`` the neglected integral is
+    below ``kappa D int_X^inf t^{-k-e} exp(-x t) dt / pi`` (``e = 1`` with the
+    pole), which is below both ``kappa D X^{1-k-e} / ((k+e-1) pi)`` and
+    ``kappa D X^{-k-e} exp(-x X) / (x pi)`` for ``X >= 1``.
+
+    Step: the trapezoidal rule on an integrand analytic in a strip of
+    half-width ``delta`` errs by about ``exp(-2 pi delta / step)``; near the
+    vertex ``u`` maps to ``s0 + i b u``, so ``delta`` is the distance from
+    ``s0`` to the nearest singularity (the pole, ``1/(2 w)``) over ``b``, and
+    a Gaussian ``exp(-u^2/2)`` errs by ``2 exp(-2 pi^2 / step^2)``.  The coarse
+    step aims at ``sqrt(rtol)``: the fine level (half the step) then reaches
+    about ``rtol`` and the difference of the two levels estimates it.
     """
-    cu, su = np.cosh(u), np.sinh(u)
-    s = s0[:, None] + a[:, None] * (cu - 1.0) + 1j * b[:, None] * su
-    ds = a[:, None] * su + 1j * b[:, None] * cu
-    z = 1.0 - 2.0 * s[..., None] * w
-    # principal logarithm: Im z = -2 w Im s keeps z off the cut on the path
-    log_m = np.sum(-0.5 * h * np.log(z) + 0.5 * d * (1.0 / z - 1.0), axis=-1)
-    exponent = log_m - s * c[:, None]
-    if sigma2:
-        exponent = exponent + 0.5 * sigma2 * s * s
-    value = np.exp(exponent) * ds
+    b = 1.0 / xp.sqrt(g2)
+    ratio = xp.minimum(xp.maximum(xp.abs(g3) * b**3 / 3.0, 0.02), 0.5 if side.sigma2 else 1.0)
+    a = ratio * b
+    e0 = k0 - s0 * x
+    vertex = b / xp.abs(s0) if pole else b
+    log_tol = math.log(rtol * math.sqrt(2.0 * math.pi)) + xp.log(vertex)
+    if atol > 0:
+        log_tol = xp.maximum(log_tol, math.log(atol * math.pi) - e0)
+    # -- truncation -----------------------------------------------------------
+    k_e = side.k + (1.0 if pole else 0.0)
+    # kappa = |s'| / (dX/du) <= sqrt(1 + (b/a)^2 coth(U)^2), and coth(1)^2 < 1.72
+    log_rhs = (
+        side.log_d
+        + 0.5 * xp.log(1.0 + 1.72 / (ratio * ratio))
+        - math.log(math.pi)
+        - e0
+        - (log_tol + math.log(0.01))
+    )
+    log_x_need = 700.0
+    if k_e > 1:
+        log_x_need = xp.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
+    x_safe = xp.maximum(x, 1e-300)
+    x_need = xp.minimum(xp.exp(log_x_need), xp.maximum(log_rhs - xp.log(x_safe), 0.0) / x_safe)
+    x_need = xp.maximum(x_need, 1.0)
+    if math.isfinite(side.s_max):
+        x_need = xp.maximum(x_need, 2.0 * side.s_max)
+    y = 1.0 + xp.maximum(x_need - s0, 0.0) / a
+    U = xp.maximum(xp.log(y + xp.sqrt(y * y - 1.0)), 1.0)
+    if side.sigma2:
+        U = xp.maximum(U, xp.log(4.0 * xp.abs(s0) / b + 3.0))
+    # -- step -------------------------------------------------------------------
+    log_inv = -math.log(max(rtol, 1e-16))
+    gap = xp.abs(s0) / b if pole else 1e300
+    if (upper or not pole) and math.isfinite(side.s_max):
+        gap = xp.minimum(gap, (side.s_max - s0) / b)
+    if (not upper or not pole) and math.isfinite(side.s_min):
+        gap = xp.minimum(gap, (s0 - side.s_min) / b)
+    step = xp.minimum(_STEP_SAFETY * 2.0 * math.pi * gap / log_inv, _MAX_STEP)
+    return a, b, e0, log_tol, U, step
+
+
+def _integrand(u, x, side, pole, s0, a, b, k0):
+    """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola, shape (points, nodes).
+
+    ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``; the
+    logarithm of ``1 - 2 w s`` is taken in real arithmetic (modulus and
+    angle: much faster than a complex log), ``Im(1 - 2 w s) = -2 w Im s``
+    keeps it off the cut.  ``E - E0`` is formed from the differences
+    ``s - s0`` so that no digits cancel when ``s0 x`` is large.
+    """
+    cosh_m1 = np.cosh(u) - 1.0
+    sinh = np.sinh(u)
+    dre = a[:, None] * cosh_m1
+    im = b[:, None] * sinh
+    re = s0[:, None] + dre
+    zr = 1.0 - re[..., None] * side.w2
+    zi = -im[..., None] * side.w2
+    modulus = np.hypot(zr, zi)
+    e_re = np.log(modulus) @ (-0.5 * side.h) - k0[:, None] - x[:, None] * dre
+    e_im = np.arctan2(zi, zr) @ (-0.5 * side.h) - x[:, None] * im
+    if side.noncentral:
+        inv2 = 0.5 / (modulus * modulus)
+        e_re = e_re + (zr * inv2) @ side.d - side.half_d_sum
+        e_im = e_im - (zi * inv2) @ side.d
+    if side.sigma2:
+        # k0 holds sigma2 s0^2 / 2: add Re(sigma2 s^2 / 2) = that + sigma2 (re^2 - s0^2 - im^2) / 2
+        e_re = e_re + 0.5 * side.sigma2 * (dre * (re + s0[:, None]) - im * im + (s0 * s0)[:, None])
+        e_im = e_im + side.sigma2 * re * im
+    value = np.exp(e_re + 1j * e_im) * (a[:, None] * sinh + 1j * b[:, None] * (cosh_m1 + 1.0))
     if pole:
-        value = value / s
+        value = value / (re + 1j * im)
     return value.imag
 
 
-def _truncation_point(c, s0, a, b, w, h, d, sigma2, s_max, pole, tol):
-    """Smallest grid value U whose rigorous tail bound is below ``tol``.
+def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
+    """``(1/pi) int_0^U Im[...] du`` by the trapezoidal rule; (value, error, converged).
 
-    For ``Re s = x >= 1/max(w)`` every factor obeys ``|1 - 2 w s| >= |w| x``,
-    so ``|M(s)| <= D x^{-k}`` with ``D = prod |w|^{-h/2} exp(-sum_{w>0} d/2)``
-    (the noncentral factors only help; the normal factor is at most one once
-    ``Im s >= Re s``).  With ``|s'(u)| <= kappa dx/du`` the neglected integral
-    is below ``kappa D int_x^inf t^{-k-e} exp(-c t) dt / pi`` (``e = 1`` with
-    the pole): the analogue of Imhof's (1961) truncation bound ``T_U``.
+    One evaluation at the fine step gives two levels (the coarse one from
+    every other node).  Their difference ``D`` bounds the coarse level's
+    error; the rule converges geometrically, so the fine level errs by about
+    ``D^2 / |I|`` (estimated as ``min(D, 10 D^2/|I|)``).  Points whose
+    estimate exceeds the tolerance get the step halved (new nodes only).
+    Returns ``exp(E0)`` times the integral: ``P(X > x)`` on an upper path,
+    ``-P(X <= x)`` on a lower one (the residue at the pole is 1), the density
+    without the pole.
     """
-    k = 0.5 * np.sum(h)
-    e = 1.0 if pole else 0.0
-    log_d = -np.sum(0.5 * h * np.log(np.abs(w))) - 0.5 * np.sum(d[w > 0])
-    U = _U_GRID[None, :]
-    x = s0[:, None] + a[:, None] * (np.cosh(U) - 1.0)
-    kappa = np.sqrt(1.0 + (b / a)[:, None] ** 2 / np.tanh(U) ** 2)
-    cc = c[:, None]
-    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-        log_x = np.log(x)
-        bound = np.full(x.shape, np.inf)
-        if k + e > 1:
-            bound = np.exp(log_d + (1 - k - e) * log_x) / (k + e - 1)
-        decay = np.exp(log_d - (k + e) * log_x - cc * x) / np.where(cc > 0, cc, 1.0)
-        bound = np.minimum(bound, np.where(cc > 0, decay, np.inf)) * kappa / np.pi
-    ok = (bound <= np.reshape(tol, (-1, 1))) & (x > 0)
-    if np.isfinite(s_max):
-        ok &= x >= 2.0 * s_max
-    if sigma2:
-        ok &= b[:, None] * np.sinh(U) >= x
-    first = np.argmax(ok, axis=1)
-    found = ok[np.arange(len(c)), first]
-    return np.where(found, _U_GRID[first], _U_GRID[-1]), found
-
-
-def _path(c, w, h, d, sigma2, lo, hi, pole):
-    """Vertex, shape (a, b) of the hyperbola through the saddle in (lo, hi).
-
-    ``b = phi''^{-1/2}`` is the saddle's width; ``a/b = phi'''/(3 phi''^{3/2})``
-    makes the hyperbola osculate the steepest-descent path at the vertex
-    (clipped to [0.02, 1]; at most 1/2 with a normal term, so that
-    ``exp(sigma^2 s^2/2)`` decays along it).
-    """
-    s0, g2, g3 = _saddle(c, w, h, d, sigma2, lo, hi, pole)
-    b = 1.0 / np.sqrt(g2)
-    ratio = np.clip(g3 / (3.0 * g2**1.5), 0.02, 0.5 if sigma2 else 1.0)
-    return s0, ratio * b, b
-
-
-def _contour(c, w, h, d, sigma2, atol, rtol):
-    """Tail probabilities of X = sum w chi2(h, d) + N(0, sigma2) at c >= 0.
-
-    Points above the mean get ``P(X > c)`` from a vertex in ``(0, s_max)``;
-    points at or below it get ``P(X <= c)`` from a vertex in ``(s_min, 0)``
-    (left of the pole at 0; the residue there is 1).  Each is the small tail
-    at its point, computed without cancellation.  Returns (sf, cdf, error,
-    converged).  Needs a positive weight or a normal term.
-    """
-    pos, neg = w[w > 0], w[w < 0]
-    s_max = 0.5 / pos.max() if pos.size else np.inf
-    s_min = 0.5 / neg.min() if neg.size else -np.inf
-    mean = float(np.sum(w * (h + d)))
-    sf, cdf = np.empty_like(c), np.empty_like(c)
-    err = np.empty_like(c)
-    conv = np.ones(c.shape, dtype=bool)
-    for upper in (True, False):
-        mask = (c > mean) if upper else (c <= mean)
-        if not mask.any():
-            continue
-        cm = c[mask]
-        lo, hi = (0.0, s_max) if upper else (s_min, 0.0)
-        s0, a, b = _path(cm, w, h, d, sigma2, lo, hi, pole=True)
-        integral, e, ok = _integrate(cm, s0, a, b, w, h, d, sigma2, s_max, True, atol, rtol)
-        tail = np.clip(integral if upper else -integral, 0.0, 1.0)
-        sf[mask], cdf[mask] = (tail, 1.0 - tail) if upper else (1.0 - tail, tail)
-        err[mask], conv[mask] = e, ok
-    return sf, cdf, err, conv
-
-
-def _integrate(c, s0, a, b, w, h, d, sigma2, s_max, pole, atol, rtol):
-    """(1/pi) int_0^inf Im[f(s(u)) s'(u)] du with truncation and step control."""
-    # the integrand at the vertex sets the scale of the result (saddle-point
-    # estimate), so the truncation error can be made small *relative* to it
-    vertex = np.abs(_contour_integrand(np.zeros(1), c, s0, a, b, w, h, d, sigma2, pole)[:, 0])
-    scale = 1.25 * vertex / np.pi
-    tol = np.maximum(atol, 1e-3 * rtol * scale) / 4
-    U, found = _truncation_point(c, s0, a, b, w, h, d, sigma2, s_max, pole, tol)
-    value = np.empty_like(c)
-    error = np.empty_like(c)
-    converged = np.array(found)
-    # chunks over c keep the (n_c, n_nodes, n_weights) work array small
-    size = max(1, _CHUNK // (int(np.max(U) * 32) * max(w.size, 1)))
-    for start in range(0, len(c), size):
+    np.zeros(x.shape)
+    error = np.zeros(x.shape)
+    converged = U <= _U_MAX
+    U = np.minimum(U, _U_MAX)
+    h = 0.5 * float(np.min(step))
+    n = math.ceil(float(np.max(U)) / h)
+    nodes = h * np.arange(n + 1)
+    total = np.empty(x.shape)
+    coarse = np.empty(x.shape)
+    # chunks over x keep the (points, nodes, weights) work arrays small
+    size = max(1, _CHUNK // ((n + 1) * max(side.w.size, 1)))
+    for start in range(0, x.size, size):
         i = slice(start, start + size)
-        value[i], error[i], ok = _trapezoid(
-            c[i], s0[i], a[i], b[i], U[i], w, h, d, sigma2, pole, atol, rtol
+        f = _integrand(nodes, x[i], side, pole, s0[i], a[i], b[i], k0[i])
+        f *= nodes <= U[i, None]
+        f[:, 0] *= 0.5
+        total[i] = h * f.sum(axis=1)
+        coarse[i] = 2.0 * h * f[:, ::2].sum(axis=1)
+    tol = np.exp(log_tol)
+    active = np.arange(x.size)
+    diff = np.abs(total - coarse)
+    for level in range(_MAX_HALVINGS + 1):
+        j = active
+        estimate = diff[j]
+        error[j] = estimate
+        done = estimate <= np.maximum(tol[j], rtol * np.abs(total[j]))
+        active = j[~done]
+        if active.size == 0 or level == _MAX_HALVINGS:
+            break
+        j = active
+        h *= 0.5
+        nodes = h * (2 * np.arange(n) + 1)
+        n *= 2
+        f = _integrand(nodes, x[j], side, pole, s0[j], a[j], b[j], k0[j])
+        f *= nodes <= U[j, None]
+        refined = 0.5 * total[j] + h * f.sum(axis=1)
+        diff[j] = np.abs(refined - total[j])
+        total[j] = refined
+    converged[active] = False
+    # exp(E0) |total| / pi without overflow or underflow in between
+    with np.errstate(divide="ignore"):
+        log_size = e0 + np.log(np.abs(total) / math.pi)
+        log_error = e0 + np.log(error / math.pi)
+    return np.sign(total) * np.exp(log_size), np.exp(log_error), converged
+
+
+def _contour(x, side, upper, pole, atol, rtol):
+    """The contour integral at the points ``x`` (1-D) of one side; (value, error, converged).
+
+    One point takes a path set up in Python floats (numpy calls cost more
+    than the arithmetic there); many points are set up together in numpy.
+    """
+    if x.size == 1:
+        return tuple(np.array([v]) for v in _contour_at(float(x[0]), side, upper, pole, atol, rtol))
+    s0, g2, g3 = _saddle(x, side, upper, pole)
+    k0 = side.cgf(s0)
+    plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, np)
+    a, b, e0, log_tol, U, step = plan
+    # tails far below the smallest double: the best answer is 0
+    vertex = b / np.abs(s0) if pole else b
+    live = e0 + np.log(vertex) > _LOG_UNDERFLOW
+    value, error = np.zeros(x.shape), np.zeros(x.shape)
+    converged = np.ones(x.shape, dtype=bool)
+    if live.all():
+        value, error, converged = _integrate(
+            x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol
         )
-        converged[i] &= ok
+    elif live.any():
+        i = np.flatnonzero(live)
+        value[i], error[i], converged[i] = _integrate(
+            x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step[i], rtol
+        )
     return value, error, converged
 
 
-def _trapezoid(c, s0, a, b, U, w, h, d, sigma2, pole, atol, rtol):
-    """Trapezoidal rule on [0, U] with step halving until two levels agree.
-
-    The integrand is even in u and analytic in a strip around the real axis,
-    so the rule converges geometrically; the difference between successive
-    levels over-estimates the error of the finer one.
-    """
-    step = 0.5
-    n = int(np.ceil(np.max(U) / step))
-    nodes = step * np.arange(n + 1)
-    f = _contour_integrand(nodes, c, s0, a, b, w, h, d, sigma2, pole)
-    total = step * (f.sum(axis=1) - 0.5 * f[:, 0])
-    error = np.full(c.shape, np.inf)
-    active = np.arange(len(c))
-    for _ in range(_MAX_LEVELS):
-        step *= 0.5
-        nodes = step * (2 * np.arange(n) + 1)
-        n *= 2
-        i = active
-        f = _contour_integrand(nodes, c[i], s0[i], a[i], b[i], w, h, d, sigma2, pole)
-        refined = 0.5 * total[i] + step * f.sum(axis=1)
-        error[i] = np.abs(refined - total[i]) / np.pi
-        total[i] = refined
-        done = error[i] <= np.maximum(max(atol, _TINY), rtol * np.abs(refined) / np.pi)
-        active = i[~done]
-        if active.size == 0:
-            break
-    converged = np.ones(c.shape, dtype=bool)
-    converged[active] = False
-    return total / np.pi, error, converged
-
-
-def _probabilities(x, w, h, d, sigma, atol, rtol):
+def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     """``P(X > x)`` and ``P(X <= x)``, the smaller of the two computed directly.
 
-    Returns (sf, cdf, error, converged).  Points x >= 0 use X, points x < 0
-    the mirrored variable -X (``P(X <= x) = P(-X >= -x)`` for a continuous
-    law), so the contour always opens where ``exp(-s x)`` decays.
+    Returns (sf, cdf, error, converged) for the points ``x`` (1-D).  The law
+    is first scaled to ``max(|w|, sigma) = 1``.  Points x >= 0 use X, points
+    x < 0 the mirrored variable -X (``P(X <= x) = P(-X >= -x)`` for a
+    continuous law), so the contour always opens where ``exp(-s x)`` decays;
+    above the mean the upper tail is integrated, below it the lower one.
+    ``sides`` caches the two :class:`_Side` objects of a frozen law.
     """
-    sigma2 = sigma * sigma
-    err = np.zeros_like(x)
-    conv = np.ones(x.shape, dtype=bool)
+    m = max(-float(w[0]), float(w[-1]), sigma) if w.size else sigma
+    sigma = sigma / m
+    with np.errstate(over="ignore", under="ignore"):
+        x = x / m
     if w.size == 0:
         # no chi-square term: a normal law
-        return stats.norm.sf(x / sigma), stats.norm.cdf(x / sigma), err, conv
-    sf, cdf = np.empty_like(x), np.empty_like(x)
+        return stats.norm.sf(x), stats.norm.cdf(x), np.zeros(x.shape), np.ones(x.shape, bool)
+    if sides is None:
+        sides = {}
+    if x.size == 1:
+        x0 = float(x[0])
+        side = _side(sides, 1.0 if x0 >= 0 else -1.0, w / m, h, d, sigma * sigma)
+        p, error, ok = _tails_at(abs(x0), side, atol, rtol)
+        sf, cdf = p if x0 >= 0 else p[::-1]
+        return np.array([sf]), np.array([cdf]), np.array([error]), np.array([ok])
+    sf, cdf = np.empty(x.shape), np.empty(x.shape)
+    err = np.zeros(x.shape)
+    conv = np.ones(x.shape, dtype=bool)
     for sign, mask in ((1.0, x >= 0), (-1.0, x < 0)):
         if not mask.any():
             continue
-        ws, xs = sign * w, sign * x[mask]
+        side = _side(sides, sign, w / m, h, d, sigma * sigma)
+        xs = sign * x[mask]
+        # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
         up, low = np.zeros(xs.shape), np.ones(xs.shape)
         e, ok = np.zeros(xs.shape), np.ones(xs.shape, dtype=bool)
-        if np.any(ws > 0) or sigma2 > 0:
-            # with every weight positive and no normal term, P(X > 0) = 1
-            todo = xs > 0 if not (np.any(ws < 0) or sigma2 > 0) else np.ones(xs.shape, dtype=bool)
-            up[~todo], low[~todo] = 1.0, 0.0
-            if todo.any():
-                up[todo], low[todo], e[todo], ok[todo] = _contour(
-                    xs[todo], ws, h, d, sigma2, atol, rtol
-                )
-        # else: every weight <= 0 and no normal term, so X <= 0 <= xs
+        todo = np.isfinite(xs)
+        if side.top is None and not side.sigma2:
+            todo[:] = False
+        elif side.w[0] > 0 and not side.sigma2:
+            # a positive form: P(X <= 0) = 0, and far below the weights a closed form
+            near, tiny = _near_zero(xs, side)
+            zero = xs <= 0
+            up[zero], low[zero] = 1.0, 0.0
+            low[tiny], up[tiny] = near[tiny], 1.0 - near[tiny]
+            todo &= ~zero & ~tiny
+        upper = xs > side.mean
+        for is_upper, m_ in ((True, todo & upper), (False, todo & ~upper)):
+            if m_.any():
+                v, e[m_], ok[m_] = _contour(xs[m_], side, is_upper, True, atol, rtol)
+                v = np.clip(v if is_upper else -v, 0.0, 1.0)
+                up[m_], low[m_] = (v, 1.0 - v) if is_upper else (1.0 - v, v)
         if sign > 0:
             sf[mask], cdf[mask] = up, low
         else:
             cdf[mask], sf[mask] = up, low
         err[mask], conv[mask] = e, ok
     return sf, cdf, err, conv
+
+
+def _side(sides, sign, w, h, d, sigma2):
+    """The (cached) :class:`_Side` of X (sign 1) or -X (sign -1), w normalised."""
+    side = sides.get(sign)
+    if side is None:
+        side = _Side(w, h, d, sigma2) if sign > 0 else _Side.mirrored(w, h, d, sigma2)
+        sides[sign] = side
+    return side
+
+
+def _tails_at(x, side, atol, rtol):
+    """``((P(X > x), P(X <= x)), error, converged)`` at one point x >= 0 of a side."""
+    if side.top is None and not side.sigma2:
+        return (0.0, 1.0), 0.0, True
+    if side.w[0] > 0 and not side.sigma2:
+        if x == 0:
+            return (1.0, 0.0), 0.0, True
+        near, tiny = _near_zero(x, side)
+        if tiny:
+            return (1.0 - near, near), 0.0, True
+    if math.isinf(x):
+        return (0.0, 1.0), 0.0, True
+    upper = x > side.mean
+    v, error, ok = _contour_at(x, side, upper, True, atol, rtol)
+    v = min(max(v if upper else -v, 0.0), 1.0)
+    return ((v, 1.0 - v) if upper else (1.0 - v, v)), error, ok
+
+
+def _contour_at(x, side, upper, pole, atol, rtol):
+    """:func:`_contour` at one point: Python floats around the numpy integrand."""
+    s0, g2, g3 = _saddle_at(x, side, upper, pole)
+    k0 = side.cgf_at(s0)
+    a, b, e0, log_tol, U, step = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, _SCALAR)
+    if e0 + math.log(b / abs(s0) if pole else b) <= _LOG_UNDERFLOW:
+        return 0.0, 0.0, True
+    converged = U <= _U_MAX
+    h = 0.5 * step
+    n = math.ceil(min(U, _U_MAX) / h)
+    args = (np.array([x]), side, pole, np.array([s0]), np.array([a]), np.array([b]), np.array([k0]))
+    f = _integrand(h * np.arange(n + 1), *args)[0]
+    f[0] *= 0.5
+    total = h * float(f.sum())
+    diff = abs(total - 2.0 * h * float(f[::2].sum()))
+    tol = math.exp(min(log_tol, 700.0))
+    for level in range(_MAX_HALVINGS + 1):
+        if diff <= max(tol, rtol * abs(total)):
+            break
+        if level == _MAX_HALVINGS:
+            converged = False
+            break
+        h *= 0.5
+        f = _integrand(h * (2 * np.arange(n) + 1), *args)[0]
+        n *= 2
+        refined = 0.5 * total + h * float(f.sum())
+        diff, total = abs(refined - total), refined
+    # exp(E0) * total / pi without overflow or underflow in between
+    value = (
+        math.copysign(math.exp(min(e0 + math.log(abs(total) / math.pi), 1.0)), total)
+        if total
+        else 0.0
+    )
+    error = math.exp(min(e0 + math.log(diff / math.pi), 1.0)) if diff else 0.0
+    return value, error, converged
+
+
+def _near_zero(xs, side):
+    """``P(X <= x)`` of a positive form far below its weights, or None where not exact.
+
+    ``M(-t) = C t^{-k} (1 + sum (d - h)/(4 w t) + O(t^-2))`` as ``t -> inf``
+    with ``C = prod (2w)^{-h/2} e^{-sum d/2}``, so ``P(X <= x) = C x^k /
+    Gamma(k+1) (1 + O(x sum (h + d)/(4 w)))``: where the correction is below
+    the double precision the leading term is the answer (computed in logs:
+    ``imhof_cdf(1e-300, [5.0])`` is 8e-152, where a saddle point would
+    overflow).  Works on floats and arrays; returns a mask (or bool) too.
+    """
+    tiny = (xs > 0) & (xs * side.zero_slope <= 1e-17 * (side.k + 1.0))
+    with np.errstate(divide="ignore"):
+        return np.exp(side.k * np.log(np.maximum(xs, 1e-320)) + side.log_c0), tiny
 
 
 def _imhof_real_axis(x, w, h, d, sigma, atol):
@@ -638,48 +955,59 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
         real_axis = np.where(
             u == 0, 0.5 * (np.sum(w * (h + d)) - c), np.sin(theta) / (u * np.exp(log_rho))
         )
-    pos, neg = w[w > 0], w[w < 0]
-    upper = c > float(np.sum(w * (h + d)))
-    lo, hi = (0.0, 0.5 / pos.max()) if upper else ((0.5 / neg.min()) if neg.size else -np.inf, 0.0)
-    s0, a, b = _path(np.array([c]), w, h, d, 0.0, lo, hi, pole=True)
-    contour = _contour_integrand(u, np.array([c]), s0, a, b, w, h, d, 0.0, True)[0]
+    m = float(np.max(np.abs(w)))
+    side = _Side(w / m, h, d, 0.0)
+    x = np.array([c / m])
+    upper = bool(x[0] > side.mean)
+    s0, g2, g3 = _saddle(x, side, upper, True)
+    k0 = side.cgf(s0)
+    a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, np)
+    # the path and its integrand in u do not depend on the scale m
+    contour = _integrand(u, x, side, True, s0, a, b, k0)[0] * np.exp(e0[0])
     return real_axis, contour, ("upper" if upper else "lower")
 
 
-def _density(x, w, h, d, sigma, atol, rtol):
+def _density(x, w, h, d, sigma, atol, rtol, sides=None):
     """Density of ``sum w chi2(h, d) + N(0, sigma^2)`` at x (1-D array).
 
     ``f(x) = (1/pi) int_0^inf Im[M(s) e^{-sx} s'(u)] du`` on a hyperbola
-    through the saddle of ``K(s) - s x`` (no pole); x < 0 uses -X.
+    through the saddle of ``K(s) - s x`` (no pole), on the law scaled to
+    ``max(|w|, sigma) = 1``; x < 0 uses -X.
     """
-    sigma2 = sigma * sigma
-    out = np.zeros_like(x)
-    k = 0.5 * np.sum(h)
-    mixed = np.any(w > 0) and np.any(w < 0)
+    m = max(-float(w[0]), float(w[-1]), sigma)
+    w, sigma = w / m, sigma / m
+    with np.errstate(over="ignore", under="ignore"):
+        x = x / m
+    out = np.zeros(x.shape)
+    mixed = w[0] < 0 < w[-1]
+    if sides is None:
+        sides = {}
     for sign, mask in ((1.0, x > 0), (-1.0, x < 0), (1.0, x == 0)):
-        ws = sign * w
-        if not mask.any() or not (np.any(ws > 0) or sigma2 > 0):
+        if not mask.any():
             continue
-        if not np.any(x[mask]) and not sigma2:
+        side = _side(sides, sign, w, h, d, sigma * sigma)
+        if side.top is None and not side.sigma2:
+            continue
+        xs = sign * x[mask]
+        if not side.sigma2 and not xs.any():
             # x = 0: an end point of a one-signed support (never asked by the
             # base class), or inside a mixed one where the density is
             # finite only when k > 1
             if mixed:
-                out[mask] = (
-                    np.inf if k <= 1 else _density_core(x[mask], ws, h, d, sigma2, atol, rtol)
-                )
+                out[mask] = np.inf if side.k <= 1 else _density_core(xs, side, atol, rtol)
             continue
-        out[mask] = _density_core(sign * x[mask], ws, h, d, sigma2, atol, rtol)
-    return np.maximum(out, 0.0)
+        out[mask] = _density_core(xs, side, atol, rtol)
+    with np.errstate(over="ignore"):
+        return np.maximum(out, 0.0) / m
 
 
-def _density_core(c, w, h, d, sigma2, atol, rtol):
-    pos, neg = w[w > 0], w[w < 0]
-    s_max = 0.5 / pos.max() if pos.size else np.inf
-    s_min = 0.5 / neg.min() if neg.size else -np.inf
-    s0, a, b = _path(c, w, h, d, sigma2, s_min, s_max, pole=False)
-    value, _, _ = _integrate(c, s0, a, b, w, h, d, sigma2, s_max, False, atol, rtol)
-    return value
+def _density_core(x, side, atol, rtol):
+    out = np.empty(x.shape)
+    upper = x > side.mean
+    for is_upper, mask in ((True, upper), (False, ~upper)):
+        if mask.any():
+            out[mask] = _contour(x[mask], side, is_upper, False, atol, rtol)[0]
+    return out
 
 
 # ---------------------------------------------------------------------------
@@ -849,6 +1177,8 @@ class WeightedChiSquare(FrozenDistribution):
         self.weights, self.dof, self.noncentrality = w, h, d
         self.sigma, self.offset = float(sigma), offset
         self.atol, self.rtol = float(atol), float(rtol)
+        # the normalised terms of each tail, built on first use
+        self._sides, self._density_sides = {}, {}
         lower = offset if (sigma == 0 and np.all(w > 0)) else -np.inf
         upper = offset if (sigma == 0 and np.all(w < 0)) else np.inf
         self.support = (lower, upper)
@@ -888,6 +1218,7 @@ class WeightedChiSquare(FrozenDistribution):
             self.sigma,
             self.atol,
             self.rtol,
+            self._sides,
         )
 
     def _cdf(self, x):
@@ -910,6 +1241,7 @@ class WeightedChiSquare(FrozenDistribution):
             self.sigma,
             self.atol,
             self.rtol,
+            self._density_sides,
         )
         return out.reshape(x.shape)
 
