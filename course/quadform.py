@@ -46,6 +46,7 @@ successive halving of the step until two levels agree to the tolerance.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 
@@ -85,11 +86,21 @@ _MAX_HALVINGS = 6
 _MAX_NEWTON = 100
 # Truncation points beyond this (cosh(60) ~ 6e25) mean no convergence.
 _U_MAX = 60.0
-# Trapezoid step relative to the strip-width estimate (see _plan).
-_STEP_SAFETY = 1.0
+# Smallest opening a/b of the hyperbola (see _plan).
+_MIN_OPENING = 0.3
+# Coarse trapezoid step times log(1/rtol), and its largest value (see _plan).
+_STEP_CONSTANT = 2.5
 _MAX_STEP = 0.5
 # Below exp(-760) a probability is 0 in double precision.
 _LOG_UNDERFLOW = -760.0
+# Below x sum((h + d)/(4w)) = _NEAR_ZERO (k + 1) a positive form's CDF is
+# its leading term at 0 to double precision (see _near_zero).
+_NEAR_ZERO = 1e-17
+# Validated laws remembered by imhof_cdf and imhof_sf (see _law).
+_LAWS: dict = {}
+_LAWS_SIZE = 64
+# Relative tolerances below this cannot be met in double precision.
+_MIN_RTOL = 1e-15
 # Up to this many terms, one point's saddle is found in Python floats.
 _PYTHON_TERMS = 24
 
@@ -97,42 +108,95 @@ _PYTHON_TERMS = 24
 # ---------------------------------------------------------------------------
 # validation of the chi-square terms
 # ---------------------------------------------------------------------------
+def _real_array(value, name):
+    """``value`` as a new float array; None, complex and non-numeric values are refused."""
+    if value is None:
+        raise ValueError(f"{name} is None; pass a number or an array of numbers")
+    if getattr(value, "dtype", None) is not None and value.dtype.kind == "c":
+        raise ValueError(f"{name} is complex; pass real numbers")
+    try:
+        return np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be real numbers, got {type(value).__name__}: {exc}"
+        ) from None
+
+
+def _finite_vector(value, name, size=None):
+    """A finite 1-D float array (a scalar is repeated ``size`` times)."""
+    array = _real_array(value, name)
+    if array.ndim == 0 and size is not None:
+        array = np.full(size, float(array))
+    if array.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D array, got shape {array.shape}")
+    if size is not None and array.size != size:
+        raise ValueError(
+            f"{name} must have the same length as weights ({size}), got length {array.size}"
+        )
+    # one dot product tells a finite vector (the full check only when it overflows)
+    if not math.isfinite(float(array @ array)) and not np.isfinite(array).all():
+        raise ValueError(f"{name} contains NaN or inf; pass finite numbers")
+    return array
+
+
+def _finite_scalar(value, name):
+    """A finite Python float."""
+    if isinstance(value, (float, int)) and not isinstance(value, bool):
+        number = float(value)
+    else:
+        array = _real_array(value, name)
+        if array.ndim != 0:
+            raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+        number = float(array)
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite, got {number}")
+    return number
+
+
 def _terms(weights, dof, noncentrality, sigma=0.0):
     """Validate and normalise ``(weights, dof, noncentrality, sigma)``.
 
-    Zero weights are dropped (they contribute nothing) and equal weights are
-    merged: ``w chi2(h1, d1) + w chi2(h2, d2) = w chi2(h1 + h2, d1 + d2)``.
+    Zero weights are dropped (they contribute nothing), the weights are
+    sorted increasingly and equal ones merged: ``w chi2(h1, d1) + w chi2(h2,
+    d2) = w chi2(h1 + h2, d1 + d2)``.  ``dof`` may be any positive real (a
+    chi-square with ``h`` degrees of freedom is a Gamma(h/2, 2) variable).
     """
-    w = as_float_array(weights, "weights")
-    if w.ndim != 1 or w.size == 0:
-        raise ValueError(f"weights must be a non-empty 1-D array, got shape {w.shape}")
+    w = _finite_vector(weights, "weights")
     r = w.size
-    h = np.ones(r) if dof is None else as_float_array(dof, "dof")
-    d = np.zeros(r) if noncentrality is None else as_float_array(noncentrality, "noncentrality")
-    if h.ndim == 0:
-        h = np.full(r, float(h))
-    if d.ndim == 0:
-        d = np.full(r, float(d))
-    if h.shape != (r,) or d.shape != (r,):
-        raise ValueError(
-            f"dof and noncentrality must have the same length as weights ({r}), "
-            f"got shapes {h.shape} and {d.shape}"
-        )
-    if np.any(h <= 0):
-        raise ValueError("degrees of freedom must be positive")
-    if np.any(d < 0):
-        raise ValueError("noncentrality parameters must be non-negative (they are squared means)")
-    sigma = float(sigma)
-    if not math.isfinite(sigma) or sigma < 0:
+    if r == 0:
+        raise ValueError("weights is empty; pass at least one weight")
+    h = np.ones(r) if dof is None else _finite_vector(dof, "dof", r)
+    d = np.zeros(r) if noncentrality is None else _finite_vector(noncentrality, "noncentrality", r)
+    sigma = _finite_scalar(sigma, "sigma")
+    if sigma < 0:
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
         )
+    if r <= _PYTHON_TERMS:
+        # a few terms: checks, sorting and merging in Python floats are cheaper
+        columns = w.tolist(), h.tolist(), d.tolist()
+        _check_terms(min(columns[1]), min(columns[2]))
+        rows = sorted(t for t in zip(*columns) if t[0] != 0)
+        if not rows:
+            return np.zeros(0), np.zeros(0), np.zeros(0), sigma
+        tol = _MERGE_RTOL * max(-rows[0][0], rows[-1][0])
+        groups = [[rows[0]]]
+        for row in rows[1:]:
+            if row[0] - groups[-1][-1][0] > tol:
+                groups.append([row])
+            else:
+                groups[-1].append(row)
+        if len(groups) < len(rows):
+            rows = [_merge(group) for group in groups]
+        w, h, d = (np.array(column) for column in zip(*rows))
+        return w, h, d, sigma
+    _check_terms(h.min(), d.min())
     keep = w != 0
     w, h, d = w[keep], h[keep], d[keep]
+    order = np.argsort(w, kind="stable")
+    w, h, d = w[order], h[order], d[order]
     if w.size > 1:
-        order = np.argsort(w, kind="stable")
-        w, h, d = w[order], h[order], d[order]
-        scale = np.max(np.abs(w))
+        scale = max(-w[0], w[-1])
         breaks = np.flatnonzero(np.diff(w) > _MERGE_RTOL * scale) + 1
         if breaks.size < w.size - 1:
             groups = np.split(np.arange(w.size), breaks)
@@ -140,6 +204,69 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
             h = np.array([h[g].sum() for g in groups])
             d = np.array([d[g].sum() for g in groups])
     return w, h, d, sigma
+
+
+def _check_terms(smallest_dof, smallest_noncentrality):
+    if smallest_dof <= 0:
+        raise ValueError(f"dof (degrees of freedom) must be positive, got {smallest_dof:g}")
+    if smallest_noncentrality < 0:
+        raise ValueError(
+            f"noncentrality must be non-negative (squared means), got {smallest_noncentrality:g}"
+        )
+
+
+def _merge(group):
+    """One term from chi-square terms with (nearly) equal weights."""
+    h = math.fsum(row[1] for row in group)
+    w = math.fsum(row[0] * row[1] for row in group) / h
+    return w, h, math.fsum(row[2] for row in group)
+
+
+class _ScalarMath:
+    """The few functions :func:`_plan` needs, for Python floats (numpy has them for arrays)."""
+
+    log, exp, sqrt, abs = math.log, math.exp, math.sqrt, abs
+    maximum, minimum = max, min
+
+    @staticmethod
+    def where(condition, a, b):
+        return a if condition else b
+
+
+_SCALAR = _ScalarMath()
+
+
+def _term_constants(w, h, d):
+    """Per-term summands of the constants of :class:`_Side` (floats or arrays).
+
+    ``d/2``; ``h/2`` (k); ``w (h + d)`` (mean); ``2 w^2 (h + 2d)`` (variance);
+    ``-h/2 log|w| - d/2 [w > 0]`` (log D of the truncation bound);
+    ``d/(4w)``, ``(h + d)/(4w)`` and ``-h/2 log(2w)`` (positive weights only:
+    see :func:`_near_zero`).
+    """
+    positive = w > 0
+    log_w = np.log(np.abs(w)) if isinstance(w, np.ndarray) else math.log(abs(w))
+    quarter = 0.25 / w * positive
+    return (
+        0.5 * d,
+        0.5 * h,
+        w * (h + d),
+        2.0 * w * w * (h + 2.0 * d),
+        -0.5 * h * log_w - 0.5 * d * positive,
+        d * quarter,
+        (h + d) * quarter,
+        -0.5 * h * (log_w + math.log(2.0)) * positive,
+    )
+
+
+def _derivative_factors(w, h, d):
+    """Per-term factors of the derivatives of ``K`` (floats or arrays).
+
+    With ``t = 1/(1 - 2 w s)``: ``K' = sum t hw + t^2 dw``,
+    ``K'' = sum t^2 c2 + t^3 n2``, ``K''' = sum t^3 c3 + t^4 n3``.
+    """
+    hw, dw = h * w, d * w
+    return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
 # ---------------------------------------------------------------------------
@@ -158,53 +285,37 @@ class _Side:
     def __init__(self, w, h, d, sigma2):
         self.w, self.h, self.d, self.sigma2 = w, h, d, sigma2
         self.w2 = 2.0 * w
-        self.hw = h * w
-        self.dw = d * w
-        self.c2 = 2.0 * w * self.hw
-        self.c3 = 8.0 * w * w * self.hw
-        self.n2 = 4.0 * w * self.dw
-        self.n3 = 24.0 * w * w * self.dw
-        small = w.size <= _PYTHON_TERMS
-        # a few terms are summed faster by Python than by numpy calls
-        total = math.fsum if small else np.sum
-        wl, hl, dl = (w.tolist(), h.tolist(), d.tolist()) if small else (w, h, d)
+        self.minus_w2 = -self.w2
+        self.minus_half_h = -0.5 * h
         positive = w.size > 0 and w[-1] > 0
-        self.noncentral = bool(total(dl) > 0)
-        self.half_d_sum = 0.5 * float(total(dl))
-        self.k = 0.5 * float(total(hl))
-        self.mean = float(total(self.hw.tolist() if small else self.hw)) + float(
-            total(self.dw.tolist() if small else self.dw)
-        )
-        second = self.c2 + self.n2  # 2 w^2 (h + 2 d)
-        self.var = float(total(second.tolist() if small else second)) + sigma2
         self.s_max = 0.5 / float(w[-1]) if positive else math.inf
         self.s_min = 0.5 / float(w[0]) if w.size and w[0] < 0 else -math.inf
         # the largest weight's term: it dominates the far upper tail
         self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
-        # |M(s)| <= D (Re s)^-k for Re s >= 1/max(w) (see _plan)
-        if small:
-            log_d = -0.5 * math.fsum(hi * math.log(abs(wi)) for wi, hi in zip(wl, hl))
-            log_d -= 0.5 * math.fsum(di for wi, di in zip(wl, dl) if wi > 0)
-            d_over_w = math.fsum(0.25 * di / wi for wi, di in zip(wl, dl))
+        self.positive_form = bool(w.size and w[0] > 0 and not sigma2)
+        if w.size <= _PYTHON_TERMS:
+            # a few terms are summed faster by Python than by numpy calls
+            columns = [w.tolist(), h.tolist(), d.tolist()]
+            sums = [math.fsum(column) for column in zip(*map(_term_constants, *columns))]
+            self.rows = tuple(map(_derivative_factors, *columns))
+            self.cgf_rows = tuple((2.0 * wi, 0.5 * hi, 0.5 * di) for wi, hi, di in zip(*columns))
         else:
-            log_d = -0.5 * float(h @ np.log(np.abs(w))) - 0.5 * float(d @ (w > 0))
-            d_over_w = float(d @ (0.25 / w))
-        self.log_d = log_d
+            sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
+            self.rows = self.cgf_rows = None
+        half_d, self.k, self.mean, var, self.log_d, d_over_w, zero_slope, log_c = sums
+        self.half_d_sum = half_d
+        self.noncentral = half_d > 0
+        self.var = var + sigma2
         # for the bound on the lower-tail saddle of a positive form
-        self.d_over_w = d_over_w if self.noncentral and w[0] > 0 else 0.0
+        self.d_over_w = d_over_w if self.noncentral and w.size and w[0] > 0 else 0.0
         # P(X <= x) ~ C x^k / Gamma(k+1) near 0 for a positive form (see _near_zero)
-        if w.size and w[0] > 0:
-            self.zero_slope = float(
-                total(((h + d) * (0.25 / w)).tolist() if small else (h + d) / (4 * w))
-            )
-            log_two_w = np.log(self.w2)
-            self.log_c0 = -0.5 * float(total((h * log_two_w).tolist() if small else h * log_two_w))
-            self.log_c0 += -self.half_d_sum - math.lgamma(self.k + 1.0)
-        self.rows = self.cgf_rows = None
-        if small:
-            columns = (self.w2, self.hw, self.dw, self.c2, self.c3, self.n2, self.n3)
-            self.rows = tuple(zip(*(c.tolist() for c in columns)))
-            self.cgf_rows = tuple(zip(self.w2.tolist(), (0.5 * h).tolist(), (0.5 * d).tolist()))
+        self.zero_slope = zero_slope
+        self.log_c0 = log_c - half_d - math.lgamma(self.k + 1.0)
+
+    @functools.cached_property
+    def factors(self):
+        """Per-term factors of the derivatives of ``K`` (for the numpy version)."""
+        return _derivative_factors(self.w, self.h, self.d)
 
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
@@ -214,15 +325,16 @@ class _Side:
     # -- the cumulant generating function K(s) = log M(s) ---------------------
     def derivatives(self, s, x, pole):
         """``phi'``, ``phi''``, ``phi'''`` of ``phi(s) = K(s) - s x [- log|s|]``, s of shape (n,)."""
+        _, hw, dw, c2, c3, n2, n3 = self.factors
         t = 1.0 / (1.0 - np.multiply.outer(s, self.w2))
         t2 = t * t
-        g1 = t @ self.hw + (self.sigma2 * s - x)
-        g2 = t2 @ self.c2 + self.sigma2
-        g3 = (t2 * t) @ self.c3
+        g1 = t @ hw + (self.sigma2 * s - x)
+        g2 = t2 @ c2 + self.sigma2
+        g3 = (t2 * t) @ c3
         if self.noncentral:
-            g1 = g1 + t2 @ self.dw
-            g2 = g2 + (t2 * t) @ self.n2
-            g3 = g3 + (t2 * t2) @ self.n3
+            g1 = g1 + t2 @ dw
+            g2 = g2 + (t2 * t) @ n2
+            g3 = g3 + (t2 * t2) @ n3
         if pole:
             inv = 1.0 / s
             g1 = g1 - inv
@@ -268,17 +380,17 @@ class _Side:
         return value
 
     # -- where the saddle point lies ------------------------------------------
-    def bracket(self, x, upper):
+    def bracket(self, x, upper, xp=np):
         """Finite ``(lo, hi)`` holding the saddle of ``phi`` (with or without the pole) and a guess.
 
         Upper tail: ``(0, s_max)``; lower tail: ``(s_min, 0)``.  Infinite ends
         are replaced by bounds from ``K'`` (see the comments); the guess is the
         saddle of a Gaussian model of ``K``, or of the dominant term alone in
         the far upper tail, or of the behaviour at ``-inf`` far below a
-        positive form.  Works on floats and arrays alike.
+        positive form.  ``xp``: numpy (arrays) or :data:`_SCALAR` (floats).
         """
         dx = x - self.mean
-        root = np.sqrt(dx * dx + 4.0 * self.var)
+        root = xp.sqrt(dx * dx + 4.0 * self.var)
         if upper:
             # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
             guess = 2.0 / (root - dx)
@@ -287,30 +399,26 @@ class _Side:
                 hi = self.s_max + lo
                 w, h, d = self.top
                 # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-                t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * x)
-                guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
+                t = (h * w + xp.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * x)
+                guess = xp.where(t < 1.0, xp.minimum(guess, self.s_max * (1.0 - t)), guess)
             else:
                 # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
                 # beyond the root of sigma2 s^2 - (x - mean) s - 1
-                hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
-        else:
-            guess = -2.0 / (root + dx)
-            hi = 0.0 * x
-            if math.isfinite(self.s_min):
-                lo = self.s_min + hi
-            else:
-                # a positive form: K'(s) <= k/|s| + sum d/(4 w s^2) for s < 0, so
-                # phi' < 0 left of the root of that bound + 1/|s| = x; with a
-                # normal term also left of -sqrt((k + 1)/sigma2)
-                k1 = self.k + 1.0
-                with np.errstate(divide="ignore"):
-                    bound = (k1 + np.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * x)
-                if self.sigma2:
-                    bound = np.minimum(bound, math.sqrt(k1 / self.sigma2))
-                lo = -bound
-                # far below the weights the bound is the saddle itself
-                guess = np.where(x * self.k < 0.1 * self.mean, lo, guess)
-        return lo, hi, guess
+                hi = (dx + xp.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
+            return lo, hi, guess
+        guess = -2.0 / (root + dx)
+        hi = 0.0 * x
+        if math.isfinite(self.s_min):
+            return self.s_min + hi, hi, guess
+        # a positive form: K'(s) <= k/|s| + sum d/(4 w s^2) for s < 0, so phi' < 0
+        # left of the root of that bound + 1/|s| = x; with a normal term also
+        # left of -sqrt((k + 1)/sigma2)
+        k1 = self.k + 1.0
+        bound = (k1 + xp.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * xp.maximum(x, 1e-300))
+        if self.sigma2:
+            bound = xp.minimum(bound, math.sqrt(k1 / self.sigma2))
+        # far below the weights the bound is the saddle itself
+        return -bound, hi, xp.where(x * self.k < 0.1 * self.mean, -bound, guess)
 
 
 def _saddle(x, side, upper, pole):
@@ -341,7 +449,7 @@ def _saddle(x, side, upper, pole):
 
 def _saddle_at(x, side, upper, pole):
     """:func:`_saddle` for one point (Python floats: no numpy call per step)."""
-    lo, hi, guess = (float(v) for v in side.bracket(x, upper))
+    lo, hi, guess = side.bracket(x, upper, _SCALAR)
     width = hi - lo
     s = min(max(guess, lo + 1e-9 * width), hi - 1e-9 * width)
     for _ in range(_MAX_NEWTON):
@@ -370,18 +478,6 @@ def _bisect(lo, hi):
 # ---------------------------------------------------------------------------
 # the contour integral
 # ---------------------------------------------------------------------------
-class _ScalarMath:
-    """The few functions :func:`_plan` needs, for Python floats (numpy has them for arrays)."""
-
-    log, exp, sqrt, abs = math.log, math.exp, math.sqrt, abs
-    maximum, minimum = max, min
-
-    @staticmethod
-    def where(condition, a, b):
-        return a if condition else b
-
-
-_SCALAR = _ScalarMath()
 
 
 def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
@@ -404,15 +500,18 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     ``kappa D X^{-k-e} exp(-x X) / (x pi)`` for ``X >= 1``.
 
     Step: the trapezoidal rule on an integrand analytic in a strip of
-    half-width ``delta`` errs by about ``exp(-2 pi delta / step)``; near the
-    vertex ``u`` maps to ``s0 + i b u``, so ``delta`` is the distance from
-    ``s0`` to the nearest singularity (the pole, ``1/(2 w)``) over ``b``, and
-    a Gaussian ``exp(-u^2/2)`` errs by ``2 exp(-2 pi^2 / step^2)``.  The coarse
-    step aims at ``sqrt(rtol)``: the fine level (half the step) then reaches
-    about ``rtol`` and the difference of the two levels estimates it.
+    half-width ``delta`` around the real ``u`` axis errs by about ``exp(-2 pi
+    delta / step)``.  In the normalised variable ``u`` (the saddle has unit
+    width) ``delta`` is of order one, so the coarse step is
+    ``_STEP_CONSTANT / log(1/rtol)``: measured on Davies' 39 points, it is
+    small enough for the coarse level to meet ``rtol`` at most points (the
+    fine level, half the step, then agrees with it within ``rtol`` and is
+    accepted); elsewhere the step is halved.
     """
     b = 1.0 / xp.sqrt(g2)
-    ratio = xp.minimum(xp.maximum(xp.abs(g3) * b**3 / 3.0, 0.02), 0.5 if side.sigma2 else 1.0)
+    ratio = xp.minimum(
+        xp.maximum(xp.abs(g3) * b**3 / 3.0, _MIN_OPENING), 0.5 if side.sigma2 else 1.0
+    )
     a = ratio * b
     e0 = k0 - s0 * x
     vertex = b / xp.abs(s0) if pole else b
@@ -441,47 +540,51 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     U = xp.maximum(xp.log(y + xp.sqrt(y * y - 1.0)), 1.0)
     if side.sigma2:
         U = xp.maximum(U, xp.log(4.0 * xp.abs(s0) / b + 3.0))
-    # -- step -------------------------------------------------------------------
-    log_inv = -math.log(max(rtol, 1e-16))
-    gap = xp.abs(s0) / b if pole else 1e300
-    if (upper or not pole) and math.isfinite(side.s_max):
-        gap = xp.minimum(gap, (side.s_max - s0) / b)
-    if (not upper or not pole) and math.isfinite(side.s_min):
-        gap = xp.minimum(gap, (s0 - side.s_min) / b)
-    step = xp.minimum(_STEP_SAFETY * 2.0 * math.pi * gap / log_inv, _MAX_STEP)
+    # -- step (the same for every point: see the docstring) ----------------------
+    step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
     return a, b, e0, log_tol, U, step
 
 
-def _integrand(u, x, side, pole, s0, a, b, k0):
-    """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola, shape (points, nodes).
+@functools.lru_cache(maxsize=64)
+def _nodes(step, count, odd):
+    """``(u, cosh u - 1, sinh u, cosh u)`` at ``u = step j`` (j < count) or ``step (2j + 1)``."""
+    u = step * (2.0 * np.arange(count) + 1.0 if odd else np.arange(count))
+    cosh = np.cosh(u)
+    return u, cosh - 1.0, np.sinh(u), cosh
 
-    ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``; the
-    logarithm of ``1 - 2 w s`` is taken in real arithmetic (modulus and
-    angle: much faster than a complex log), ``Im(1 - 2 w s) = -2 w Im s``
-    keeps it off the cut.  ``E - E0`` is formed from the differences
-    ``s - s0`` so that no digits cancel when ``s0 x`` is large.
+
+def _integrand(nodes, x, side, pole, s0, a, b, k0):
+    """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola.
+
+    ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
+    ``nodes`` holds ``u``, ``cosh u - 1``, ``sinh u`` and ``cosh u``.  The
+    parameters are floats (one point: result of shape (nodes,)) or columns of
+    shape (points, 1) (result (points, nodes)).  The logarithm of ``1 - 2 w
+    s`` is taken in real arithmetic (modulus and angle: several times faster
+    than a complex log); ``Im(1 - 2 w s) = -2 w Im s`` keeps it off the cut.
+    ``E - E0`` is formed from the differences ``s - s0`` so that no digits
+    cancel when ``s0 x`` is large.
     """
-    cosh_m1 = np.cosh(u) - 1.0
-    sinh = np.sinh(u)
-    dre = a[:, None] * cosh_m1
-    im = b[:, None] * sinh
-    re = s0[:, None] + dre
+    _, cosh_m1, sinh, cosh = nodes
+    dre = a * cosh_m1
+    im = b * sinh
+    re = dre + s0
     zr = 1.0 - re[..., None] * side.w2
-    zi = -im[..., None] * side.w2
+    zi = im[..., None] * side.minus_w2
     modulus = np.hypot(zr, zi)
-    e_re = np.log(modulus) @ (-0.5 * side.h) - k0[:, None] - x[:, None] * dre
-    e_im = np.arctan2(zi, zr) @ (-0.5 * side.h) - x[:, None] * im
+    e_re = np.log(modulus) @ side.minus_half_h - (k0 + x * dre)
+    e_im = np.arctan2(zi, zr) @ side.minus_half_h - x * im
     if side.noncentral:
         inv2 = 0.5 / (modulus * modulus)
         e_re = e_re + (zr * inv2) @ side.d - side.half_d_sum
         e_im = e_im - (zi * inv2) @ side.d
     if side.sigma2:
-        # k0 holds sigma2 s0^2 / 2: add Re(sigma2 s^2 / 2) = that + sigma2 (re^2 - s0^2 - im^2) / 2
-        e_re = e_re + 0.5 * side.sigma2 * (dre * (re + s0[:, None]) - im * im + (s0 * s0)[:, None])
+        # k0 holds sigma2 s0^2 / 2; Re(sigma2 s^2 / 2) = that + sigma2 (re^2 - s0^2 - im^2) / 2
+        e_re = e_re + 0.5 * side.sigma2 * (dre * (re + s0) - im * im + s0 * s0)
         e_im = e_im + side.sigma2 * re * im
-    value = np.exp(e_re + 1j * e_im) * (a[:, None] * sinh + 1j * b[:, None] * (cosh_m1 + 1.0))
+    value = np.exp(e_re + 1j * e_im) * (a * sinh + 1j * (b * cosh))
     if pole:
-        value = value / (re + 1j * im)
+        value /= re + 1j * im
     return value.imag
 
 
@@ -489,29 +592,30 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     """``(1/pi) int_0^U Im[...] du`` by the trapezoidal rule; (value, error, converged).
 
     One evaluation at the fine step gives two levels (the coarse one from
-    every other node).  Their difference ``D`` bounds the coarse level's
-    error; the rule converges geometrically, so the fine level errs by about
-    ``D^2 / |I|`` (estimated as ``min(D, 10 D^2/|I|)``).  Points whose
-    estimate exceeds the tolerance get the step halved (new nodes only).
+    every other node).  Their difference, the error estimate, bounds the
+    coarse level's error and so (the rule converges geometrically) the fine
+    level's; points where it exceeds ``max(atol, rtol |I|)`` get the step
+    halved (new nodes only).
     Returns ``exp(E0)`` times the integral: ``P(X > x)`` on an upper path,
     ``-P(X <= x)`` on a lower one (the residue at the pole is 1), the density
     without the pole.
     """
-    np.zeros(x.shape)
     error = np.zeros(x.shape)
     converged = U <= _U_MAX
     U = np.minimum(U, _U_MAX)
     h = 0.5 * float(np.min(step))
     n = math.ceil(float(np.max(U)) / h)
-    nodes = h * np.arange(n + 1)
+    nodes = _nodes(h, n + 1, False)
     total = np.empty(x.shape)
     coarse = np.empty(x.shape)
     # chunks over x keep the (points, nodes, weights) work arrays small
     size = max(1, _CHUNK // ((n + 1) * max(side.w.size, 1)))
     for start in range(0, x.size, size):
         i = slice(start, start + size)
-        f = _integrand(nodes, x[i], side, pole, s0[i], a[i], b[i], k0[i])
-        f *= nodes <= U[i, None]
+        f = _integrand(
+            nodes, x[i, None], side, pole, s0[i, None], a[i, None], b[i, None], k0[i, None]
+        )
+        f *= nodes[0] <= U[i, None]
         f[:, 0] *= 0.5
         total[i] = h * f.sum(axis=1)
         coarse[i] = 2.0 * h * f[:, ::2].sum(axis=1)
@@ -528,10 +632,12 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
             break
         j = active
         h *= 0.5
-        nodes = h * (2 * np.arange(n) + 1)
+        nodes = _nodes(h, n, True)
         n *= 2
-        f = _integrand(nodes, x[j], side, pole, s0[j], a[j], b[j], k0[j])
-        f *= nodes <= U[j, None]
+        f = _integrand(
+            nodes, x[j, None], side, pole, s0[j, None], a[j, None], b[j, None], k0[j, None]
+        )
+        f *= nodes[0] <= U[j, None]
         refined = 0.5 * total[j] + h * f.sum(axis=1)
         diff[j] = np.abs(refined - total[j])
         total[j] = refined
@@ -582,28 +688,26 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     above the mean the upper tail is integrated, below it the lower one.
     ``sides`` caches the two :class:`_Side` objects of a frozen law.
     """
+    if sides is None:
+        sides = {}
+    if x.size == 1 and w.size:
+        return tuple(
+            np.array([v]) for v in _probability_at(float(x[0]), w, h, d, sigma, atol, rtol, sides)
+        )
     m = max(-float(w[0]), float(w[-1]), sigma) if w.size else sigma
-    sigma = sigma / m
+    sigma2 = (sigma / m) ** 2
     with np.errstate(over="ignore", under="ignore"):
         x = x / m
     if w.size == 0:
         # no chi-square term: a normal law
         return stats.norm.sf(x), stats.norm.cdf(x), np.zeros(x.shape), np.ones(x.shape, bool)
-    if sides is None:
-        sides = {}
-    if x.size == 1:
-        x0 = float(x[0])
-        side = _side(sides, 1.0 if x0 >= 0 else -1.0, w / m, h, d, sigma * sigma)
-        p, error, ok = _tails_at(abs(x0), side, atol, rtol)
-        sf, cdf = p if x0 >= 0 else p[::-1]
-        return np.array([sf]), np.array([cdf]), np.array([error]), np.array([ok])
     sf, cdf = np.empty(x.shape), np.empty(x.shape)
     err = np.zeros(x.shape)
     conv = np.ones(x.shape, dtype=bool)
     for sign, mask in ((1.0, x >= 0), (-1.0, x < 0)):
         if not mask.any():
             continue
-        side = _side(sides, sign, w / m, h, d, sigma * sigma)
+        side = _side(sides, sign, w, m, h, d, sigma2)
         xs = sign * x[mask]
         # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
         up, low = np.zeros(xs.shape), np.ones(xs.shape)
@@ -611,7 +715,7 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         todo = np.isfinite(xs)
         if side.top is None and not side.sigma2:
             todo[:] = False
-        elif side.w[0] > 0 and not side.sigma2:
+        elif side.positive_form:
             # a positive form: P(X <= 0) = 0, and far below the weights a closed form
             near, tiny = _near_zero(xs, side)
             zero = xs <= 0
@@ -632,10 +736,20 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     return sf, cdf, err, conv
 
 
-def _side(sides, sign, w, h, d, sigma2):
-    """The (cached) :class:`_Side` of X (sign 1) or -X (sign -1), w normalised."""
+def _probability_at(x, w, h, d, sigma, atol, rtol, sides):
+    """:func:`_probabilities` at one point, in Python floats: (sf, cdf, error, converged)."""
+    m = max(-float(w[0]), float(w[-1]), sigma)
+    x /= m  # Python floats overflow to inf quietly
+    side = _side(sides, 1.0 if x >= 0 else -1.0, w, m, h, d, (sigma / m) ** 2)
+    (up, low), error, ok = _tails_at(abs(x), side, atol, rtol)
+    return (up, low, error, ok) if x >= 0 else (low, up, error, ok)
+
+
+def _side(sides, sign, w, m, h, d, sigma2):
+    """The (cached) :class:`_Side` of X/m (sign 1) or -X/m (sign -1)."""
     side = sides.get(sign)
     if side is None:
+        w = w / m
         side = _Side(w, h, d, sigma2) if sign > 0 else _Side.mirrored(w, h, d, sigma2)
         sides[sign] = side
     return side
@@ -645,11 +759,11 @@ def _tails_at(x, side, atol, rtol):
     """``((P(X > x), P(X <= x)), error, converged)`` at one point x >= 0 of a side."""
     if side.top is None and not side.sigma2:
         return (0.0, 1.0), 0.0, True
-    if side.w[0] > 0 and not side.sigma2:
+    if side.positive_form:
         if x == 0:
             return (1.0, 0.0), 0.0, True
-        near, tiny = _near_zero(x, side)
-        if tiny:
+        if x * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0):
+            near = math.exp(side.k * math.log(x) + side.log_c0)
             return (1.0 - near, near), 0.0, True
     if math.isinf(x):
         return (0.0, 1.0), 0.0, True
@@ -669,11 +783,10 @@ def _contour_at(x, side, upper, pole, atol, rtol):
     converged = U <= _U_MAX
     h = 0.5 * step
     n = math.ceil(min(U, _U_MAX) / h)
-    args = (np.array([x]), side, pole, np.array([s0]), np.array([a]), np.array([b]), np.array([k0]))
-    f = _integrand(h * np.arange(n + 1), *args)[0]
+    f = _integrand(_nodes(h, n + 1, False), x, side, pole, s0, a, b, k0).tolist()
     f[0] *= 0.5
-    total = h * float(f.sum())
-    diff = abs(total - 2.0 * h * float(f[::2].sum()))
+    total = h * math.fsum(f)
+    diff = abs(total - 2.0 * h * math.fsum(f[::2]))
     tol = math.exp(min(log_tol, 700.0))
     for level in range(_MAX_HALVINGS + 1):
         if diff <= max(tol, rtol * abs(total)):
@@ -682,11 +795,11 @@ def _contour_at(x, side, upper, pole, atol, rtol):
             converged = False
             break
         h *= 0.5
-        f = _integrand(h * (2 * np.arange(n) + 1), *args)[0]
+        f = _integrand(_nodes(h, n, True), x, side, pole, s0, a, b, k0).tolist()
         n *= 2
-        refined = 0.5 * total + h * float(f.sum())
+        refined = 0.5 * total + h * math.fsum(f)
         diff, total = abs(refined - total), refined
-    # exp(E0) * total / pi without overflow or underflow in between
+    # exp(E0) total / pi without overflow or underflow in between
     value = (
         math.copysign(math.exp(min(e0 + math.log(abs(total) / math.pi), 1.0)), total)
         if total
@@ -697,16 +810,16 @@ def _contour_at(x, side, upper, pole, atol, rtol):
 
 
 def _near_zero(xs, side):
-    """``P(X <= x)`` of a positive form far below its weights, or None where not exact.
+    """``P(X <= x)`` of a positive form far below its weights, and where that is exact.
 
     ``M(-t) = C t^{-k} (1 + sum (d - h)/(4 w t) + O(t^-2))`` as ``t -> inf``
     with ``C = prod (2w)^{-h/2} e^{-sum d/2}``, so ``P(X <= x) = C x^k /
     Gamma(k+1) (1 + O(x sum (h + d)/(4 w)))``: where the correction is below
     the double precision the leading term is the answer (computed in logs:
     ``imhof_cdf(1e-300, [5.0])`` is 8e-152, where a saddle point would
-    overflow).  Works on floats and arrays; returns a mask (or bool) too.
+    overflow).  Returns the values and the mask where they hold.
     """
-    tiny = (xs > 0) & (xs * side.zero_slope <= 1e-17 * (side.k + 1.0))
+    tiny = (xs > 0) & (xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0))
     with np.errstate(divide="ignore"):
         return np.exp(side.k * np.log(np.maximum(xs, 1e-320)) + side.log_c0), tiny
 
@@ -766,26 +879,85 @@ def _imhof_real_axis(x, w, h, d, sigma, atol):
     return np.clip(out, 0.0, 1.0), err
 
 
-def _evaluate(c, weights, dof, noncentrality, sigma, offset, atol, rtol, method):
-    w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
-    c = as_float_array(c, "c")
-    shape = c.shape
-    x = np.ravel(c) - float(offset)
-    if not (atol >= 0 and rtol >= 0 and atol + rtol > 0):
-        raise ValueError("atol and rtol must be non-negative and not both zero")
+def _tolerances(atol, rtol):
+    """Validated ``(atol, rtol)``: non-negative, not both zero, and attainable in doubles."""
+    atol, rtol = _finite_scalar(atol, "atol"), _finite_scalar(rtol, "rtol")
+    if atol < 0 or rtol < 0 or atol + rtol == 0:
+        raise ValueError(f"atol and rtol must be >= 0 and not both 0, got {atol:g} and {rtol:g}")
+    if 0 < rtol < _MIN_RTOL and atol < _MIN_RTOL:
+        raise ValueError(
+            f"rtol = {rtol:g} cannot be met in double precision; pass rtol >= {_MIN_RTOL:g}"
+        )
+    return atol, rtol
+
+
+def _points(c):
+    """The points ``c`` as a 1-D float array and their shape; NaN refused, ±inf allowed."""
+    if isinstance(c, (float, int)) and not isinstance(c, bool):
+        x = np.array([float(c)])
+        shape = ()
+    else:
+        x = _real_array(c, "c")
+        shape = x.shape
+        x = x.ravel()
+    if np.isnan(x).any():
+        raise ValueError("c contains NaN; pass the points at which to evaluate the law")
+    return x, shape
+
+
+def _law(weights, dof, noncentrality, sigma):
+    """:func:`_terms` and a dict for their :class:`_Side` objects, remembered per input.
+
+    A loop of scalar calls on one law (a scan over c, a root search) then
+    validates and prepares the terms once.  The key holds the exact values
+    of the inputs (bytes of arrays), so equal inputs give equal results.
+    """
+    try:
+        key = tuple(map(_memo_key, (weights, dof, noncentrality, sigma)))
+        hash(key)
+    except TypeError:
+        return (*_terms(weights, dof, noncentrality, sigma), {})
+    law = _LAWS.get(key)
+    if law is None:
+        law = (*_terms(weights, dof, noncentrality, sigma), {})
+        if len(_LAWS) >= _LAWS_SIZE:
+            del _LAWS[next(iter(_LAWS))]
+        _LAWS[key] = law
+    return law
+
+
+def _memo_key(value):
+    """A hashable key of an input: numbers and sequences of numbers as they are, arrays by value."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.str, value.shape, value.tobytes()
+    if isinstance(value, (list, tuple)):
+        if all(type(v) in (float, int) for v in value):
+            return type(value).__name__, tuple(value)
+        raise TypeError("not a plain sequence of numbers")
+    if value is None or type(value) in (float, int):
+        return value
+    raise TypeError("not memoised")
+
+
+def _evaluate(c, weights, dof, noncentrality, sigma, atol, rtol, method):
+    w, h, d, sigma, sides = _law(weights, dof, noncentrality, sigma)
+    atol, rtol = _tolerances(atol, rtol)
+    if method == "contour" and w.size and isinstance(c, (float, int)) and not isinstance(c, bool):
+        # one point: Python floats all the way (numpy calls cost more than the work)
+        if math.isnan(c):
+            raise ValueError("c is NaN; pass the point at which to evaluate the law")
+        sf, cdf, err, ok = _probability_at(float(c), w, h, d, sigma, atol, rtol, sides)
+        if not ok:
+            _warn_unconverged(np.array([ok]), np.array([err]), stacklevel=4)
+        return sf, cdf, err
+    x, shape = _points(c)
     if w.size == 0 and sigma == 0:
-        # the form is the constant `offset`
+        # every weight is zero: the form is the constant 0
         sf = (x < 0).astype(float)
         return sf.reshape(shape), (1 - sf).reshape(shape), np.zeros(shape)
     if method == "contour":
-        sf, cdf, err, conv = _probabilities(x, w, h, d, sigma, atol, rtol)
-        if not conv.all():
-            warnings.warn(
-                f"imhof: requested accuracy not reached at {int((~conv).sum())} point(s) "
-                f"(largest error estimate {float(np.max(err[~conv])):.2g})",
-                RuntimeWarning,
-                stacklevel=3,
-            )
+        sf, cdf, err, conv = _probabilities(x, w, h, d, sigma, atol, rtol, sides)
+        _warn_unconverged(conv, err, stacklevel=4)
     elif method == "imhof":
         if w.size == 0:
             raise ValueError("method='imhof' needs at least one chi-square term")
@@ -871,7 +1043,7 @@ def imhof_cdf(
     mirrored form ``-Q``, so small tail probabilities keep their relative
     accuracy.  See the module docstring for the error control.
     """
-    _sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
+    _sf, cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, atol, rtol, method)
     return (_squeeze(cdf), _squeeze(err)) if full_output else _squeeze(cdf)
 
 
@@ -907,7 +1079,7 @@ def imhof_sf(
     whichever tail is smaller at ``c`` is the one integrated, so small
     upper-tail probabilities keep their relative accuracy.
     """
-    sf, _cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, 0.0, atol, rtol, method)
+    sf, _cdf, err = _evaluate(c, weights, dof, noncentrality, sigma, atol, rtol, method)
     return (_squeeze(sf), _squeeze(err)) if full_output else _squeeze(sf)
 
 
@@ -963,7 +1135,8 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     k0 = side.cgf(s0)
     a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, np)
     # the path and its integrand in u do not depend on the scale m
-    contour = _integrand(u, x, side, True, s0, a, b, k0)[0] * np.exp(e0[0])
+    nodes = (u, np.cosh(u) - 1.0, np.sinh(u), np.cosh(u))
+    contour = _integrand(nodes, x, side, True, s0, a, b, k0)[0] * np.exp(e0[0])
     return real_axis, contour, ("upper" if upper else "lower")
 
 
@@ -985,7 +1158,7 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
     for sign, mask in ((1.0, x > 0), (-1.0, x < 0), (1.0, x == 0)):
         if not mask.any():
             continue
-        side = _side(sides, sign, w, h, d, sigma * sigma)
+        side = _side(sides, sign, w, 1.0, h, d, sigma * sigma)
         if side.top is None and not side.sigma2:
             continue
         xs = sign * x[mask]
@@ -1223,12 +1396,12 @@ class WeightedChiSquare(FrozenDistribution):
 
     def _cdf(self, x):
         _sf, cdf, err, conv = self._both(x)
-        _warn_unconverged(conv, err)
+        _warn_unconverged(conv, err, stacklevel=5)
         return cdf.reshape(np.shape(x))
 
     def _sf(self, x):
         sf, _cdf, err, conv = self._both(x)
-        _warn_unconverged(conv, err)
+        _warn_unconverged(conv, err, stacklevel=5)
         return sf.reshape(np.shape(x))
 
     def _pdf(self, x):
@@ -1438,19 +1611,19 @@ def _reduce(A, mu, S):
     return w, h, d, sigma, offset, int(keep.sum())
 
 
-def _warn_unconverged(conv, err):
-    if not np.all(conv):
+def _warn_unconverged(conv, err, stacklevel=4):
+    if not conv.all():
         warnings.warn(
             f"imhof: requested accuracy not reached at {int(np.sum(~conv))} point(s) "
             f"(largest error estimate {float(np.max(err[~conv])):.2g})",
             RuntimeWarning,
-            stacklevel=4,
+            stacklevel=stacklevel,
         )
 
 
 def _squeeze(a):
-    """A 0-d result as a scalar, others unchanged."""
-    return a[()] if a.ndim == 0 else a
+    """A 0-d result as a scalar, others (and floats) unchanged."""
+    return a[()] if getattr(a, "ndim", None) == 0 else a
 
 
 def _readonly(a):
