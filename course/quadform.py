@@ -93,6 +93,8 @@ _STEP_CONSTANT = 2.5
 _MAX_STEP = 0.5
 # Below exp(-760) a probability is 0 in double precision.
 _LOG_UNDERFLOW = -760.0
+# Chi-square terms this small beside a normal term are dropped (see _normalised).
+_NEGLIGIBLE = 1e-17
 # Below x sum((h + d)/(4w)) = _NEAR_ZERO (k + 1) a positive form's CDF is
 # its leading term at 0 to double precision (see _near_zero).
 _NEAR_ZERO = 1e-17
@@ -133,8 +135,7 @@ def _finite_vector(value, name, size=None):
         raise ValueError(
             f"{name} must have the same length as weights ({size}), got length {array.size}"
         )
-    # one dot product tells a finite vector (the full check only when it overflows)
-    if not math.isfinite(float(array @ array)) and not np.isfinite(array).all():
+    if not np.isfinite(array).all():
         raise ValueError(f"{name} contains NaN or inf; pass finite numbers")
     return array
 
@@ -603,7 +604,7 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     error = np.zeros(x.shape)
     converged = U <= _U_MAX
     U = np.minimum(U, _U_MAX)
-    h = 0.5 * float(np.min(step))
+    h = 0.5 * step
     n = math.ceil(float(np.max(U)) / h)
     nodes = _nodes(h, n + 1, False)
     total = np.empty(x.shape)
@@ -657,9 +658,12 @@ def _contour(x, side, upper, pole, atol, rtol):
     """
     if x.size == 1:
         return tuple(np.array([v]) for v in _contour_at(float(x[0]), side, upper, pole, atol, rtol))
-    s0, g2, g3 = _saddle(x, side, upper, pole)
-    k0 = side.cgf(s0)
-    plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, np)
+    # far out (x near the largest double) intermediate squares overflow to inf
+    # harmlessly: those points end as tails below the smallest double
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        s0, g2, g3 = _saddle(x, side, upper, pole)
+        k0 = side.cgf(s0)
+        plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, np)
     a, b, e0, log_tol, U, step = plan
     # tails far below the smallest double: the best answer is 0
     vertex = b / np.abs(s0) if pole else b
@@ -673,7 +677,7 @@ def _contour(x, side, upper, pole, atol, rtol):
     elif live.any():
         i = np.flatnonzero(live)
         value[i], error[i], converged[i] = _integrate(
-            x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step[i], rtol
+            x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step, rtol
         )
     return value, error, converged
 
@@ -682,24 +686,22 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     """``P(X > x)`` and ``P(X <= x)``, the smaller of the two computed directly.
 
     Returns (sf, cdf, error, converged) for the points ``x`` (1-D).  The law
-    is first scaled to ``max(|w|, sigma) = 1``.  Points x >= 0 use X, points
-    x < 0 the mirrored variable -X (``P(X <= x) = P(-X >= -x)`` for a
-    continuous law), so the contour always opens where ``exp(-s x)`` decays;
-    above the mean the upper tail is integrated, below it the lower one.
-    ``sides`` caches the two :class:`_Side` objects of a frozen law.
+    is first scaled to ``max(|w|, sigma) = 1`` (:func:`_normalised`).  Points
+    x >= 0 use X, points x < 0 the mirrored variable -X (``P(X <= x) = P(-X
+    >= -x)`` for a continuous law), so the contour always opens where
+    ``exp(-s x)`` decays; above the mean the upper tail is integrated, below
+    it the lower one.  ``sides`` caches the normalised terms of a law.
     """
     if sides is None:
         sides = {}
-    if x.size == 1 and w.size:
+    if x.size == 1:
         return tuple(
             np.array([v]) for v in _probability_at(float(x[0]), w, h, d, sigma, atol, rtol, sides)
         )
-    m = max(-float(w[0]), float(w[-1]), sigma) if w.size else sigma
-    sigma2 = (sigma / m) ** 2
+    m, normal = _normalised(sides, w, h, d, sigma)
     with np.errstate(over="ignore", under="ignore"):
         x = x / m
-    if w.size == 0:
-        # no chi-square term: a normal law
+    if normal:
         return stats.norm.sf(x), stats.norm.cdf(x), np.zeros(x.shape), np.ones(x.shape, bool)
     sf, cdf = np.empty(x.shape), np.empty(x.shape)
     err = np.zeros(x.shape)
@@ -707,7 +709,7 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     for sign, mask in ((1.0, x >= 0), (-1.0, x < 0)):
         if not mask.any():
             continue
-        side = _side(sides, sign, w, m, h, d, sigma2)
+        side = _side(sides, sign)
         xs = sign * x[mask]
         # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
         up, low = np.zeros(xs.shape), np.ones(xs.shape)
@@ -738,18 +740,39 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
 
 def _probability_at(x, w, h, d, sigma, atol, rtol, sides):
     """:func:`_probabilities` at one point, in Python floats: (sf, cdf, error, converged)."""
-    m = max(-float(w[0]), float(w[-1]), sigma)
+    m, normal = _normalised(sides, w, h, d, sigma)
     x /= m  # Python floats overflow to inf quietly
-    side = _side(sides, 1.0 if x >= 0 else -1.0, w, m, h, d, (sigma / m) ** 2)
-    (up, low), error, ok = _tails_at(abs(x), side, atol, rtol)
+    if normal:
+        return float(stats.norm.sf(x)), float(stats.norm.cdf(x)), 0.0, True
+    (up, low), error, ok = _tails_at(abs(x), _side(sides, 1.0 if x >= 0 else -1.0), atol, rtol)
     return (up, low, error, ok) if x >= 0 else (low, up, error, ok)
 
 
-def _side(sides, sign, w, m, h, d, sigma2):
+def _normalised(sides, w, h, d, sigma):
+    """Scale ``m = max(|w|, sigma)`` of the law, and whether it is normal to double precision.
+
+    Stores the normalised terms in ``sides`` (built once per law).  Beside a
+    normal term, chi-square terms with ``|w| (h + d + 1) <= 1e-17 sigma``
+    move neither the mean, the spread nor (before both tails are far below
+    the smallest double) the tails: they are dropped, so that a weight of
+    1e-300 next to a unit normal term costs nothing.
+    """
+    terms = sides.get("terms")
+    if terms is None:
+        m = max(-float(w[0]), float(w[-1]), sigma) if w.size else sigma
+        w, sigma = w / m, sigma / m
+        if sigma and w.size:
+            keep = np.abs(w) * (h + d + 1.0) > _NEGLIGIBLE * sigma
+            w, h, d = w[keep], h[keep], d[keep]
+        terms = sides["terms"] = (m, w, h, d, sigma * sigma)
+    return terms[0], terms[1].size == 0
+
+
+def _side(sides, sign):
     """The (cached) :class:`_Side` of X/m (sign 1) or -X/m (sign -1)."""
     side = sides.get(sign)
     if side is None:
-        w = w / m
+        _, w, h, d, sigma2 = sides["terms"]
         side = _Side(w, h, d, sigma2) if sign > 0 else _Side.mirrored(w, h, d, sigma2)
         sides[sign] = side
     return side
@@ -769,7 +792,7 @@ def _tails_at(x, side, atol, rtol):
         return (0.0, 1.0), 0.0, True
     upper = x > side.mean
     v, error, ok = _contour_at(x, side, upper, True, atol, rtol)
-    v = min(max(v if upper else -v, 0.0), 1.0)
+    v = min(max(0.0, v if upper else -v), 1.0)
     return ((v, 1.0 - v) if upper else (1.0 - v, v)), error, ok
 
 
@@ -1147,18 +1170,20 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
     through the saddle of ``K(s) - s x`` (no pole), on the law scaled to
     ``max(|w|, sigma) = 1``; x < 0 uses -X.
     """
-    m = max(-float(w[0]), float(w[-1]), sigma)
-    w, sigma = w / m, sigma / m
-    with np.errstate(over="ignore", under="ignore"):
-        x = x / m
-    out = np.zeros(x.shape)
-    mixed = w[0] < 0 < w[-1]
     if sides is None:
         sides = {}
+    m, normal = _normalised(sides, w, h, d, sigma)
+    with np.errstate(over="ignore", under="ignore"):
+        x = x / m
+    if normal:
+        return stats.norm.pdf(x) / m
+    out = np.zeros(x.shape)
+    w = sides["terms"][1]
+    mixed = w[0] < 0 < w[-1]
     for sign, mask in ((1.0, x > 0), (-1.0, x < 0), (1.0, x == 0)):
         if not mask.any():
             continue
-        side = _side(sides, sign, w, 1.0, h, d, sigma * sigma)
+        side = _side(sides, sign)
         if side.top is None and not side.sigma2:
             continue
         xs = sign * x[mask]
@@ -1169,7 +1194,11 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
             if mixed:
                 out[mask] = np.inf if side.k <= 1 else _density_core(xs, side, atol, rtol)
             continue
-        out[mask] = _density_core(xs, side, atol, rtol)
+        finite = np.isfinite(xs)  # the density vanishes at +-inf
+        if finite.any():
+            value = np.zeros(xs.shape)
+            value[finite] = _density_core(xs[finite], side, atol, rtol)
+            out[mask] = value
     with np.errstate(over="ignore"):
         return np.maximum(out, 0.0) / m
 
@@ -1362,15 +1391,20 @@ class WeightedChiSquare(FrozenDistribution):
     # -- closed forms ------------------------------------------------------
     def cumulant(self, j: int) -> float:
         """The j-th cumulant ``2^{j-1} (j-1)! sum w^j (h + j delta^2)`` (+ normal, offset)."""
+        if isinstance(j, bool) or not isinstance(j, (int, np.integer)) or j < 1:
+            raise ValueError(f"cumulant order j must be a positive integer, got {j!r}")
         j = int(j)
-        if j < 1:
-            raise ValueError("cumulant order must be a positive integer")
         w, h, d = self.weights, self.dof, self.noncentrality
-        value = 2.0 ** (j - 1) * math.factorial(j - 1) * float(np.sum(w**j * (h + j * d)))
+        # on the normalised weights: a law with weights of 1e300 has an
+        # infinite variance in doubles, not an overflow warning
+        scale = float(np.max(np.abs(w), initial=0.0)) or 1.0
+        log_factor = (j - 1) * math.log(2.0) + math.lgamma(j) + j * math.log(scale)
+        with np.errstate(over="ignore", invalid="ignore"):
+            value = float(np.exp(log_factor) * (((w / scale) ** j) @ (h + j * d)))
         if j == 1:
             value += self.offset
         if j == 2:
-            value += self.sigma**2
+            value += self.sigma * self.sigma
         return value
 
     def mean(self) -> float:
@@ -1431,7 +1465,7 @@ class WeightedChiSquare(FrozenDistribution):
         return cdf
 
     def _rvs(self, size, rng):
-        shape = () if size is None else ((int(size),) if np.isscalar(size) else tuple(size))
+        shape = _sample_shape(size)
         out = np.full(shape, self.offset)
         for w, h, d in zip(self.weights, self.dof, self.noncentrality):
             draw = rng.noncentral_chisquare(h, d, shape) if d > 0 else rng.chisquare(h, shape)
@@ -1441,10 +1475,19 @@ class WeightedChiSquare(FrozenDistribution):
         return _squeeze(out)
 
     def _root(self, func, target, increasing):
-        # bracket from the approximate quantile outward in steps of the std
-        std = math.sqrt(max(self.var(), 0.0))
+        # bracket from a normal approximation outward in steps of the std
+        # (computed on the normalised law: the std of a law with weights of
+        # 1e300 is not a double)
+        scale = max(float(np.max(np.abs(self.weights), initial=0.0)), self.sigma)
+        w = self.weights / scale
+        std_n = math.sqrt(
+            float(2.0 * (w * w) @ (self.dof + 2.0 * self.noncentrality)) + (self.sigma / scale) ** 2
+        )
+        mean_n = float(w @ (self.dof + self.noncentrality))
+        z = stats.norm.ppf(target) if increasing else stats.norm.isf(target)
         lower, upper = self.support
-        guess = self._approx_quantile(target if increasing else 1.0 - target)
+        guess = min(max(self.offset + scale * (mean_n + std_n * z), lower), upper)
+        std = scale * std_n
         sign = 1.0 if increasing else -1.0
 
         def gap(x):
@@ -1464,19 +1507,26 @@ class WeightedChiSquare(FrozenDistribution):
             step *= 2
             right = min(right + step, upper)
         return optimize.brentq(
-            gap, left, right, xtol=1e-13 * max(1.0, std), rtol=8 * np.finfo(float).eps, maxiter=200
+            gap,
+            left,
+            right,
+            xtol=max(1e-13 * std, 1e-300),
+            rtol=8 * np.finfo(float).eps,
+            maxiter=200,
         )
 
-    def _approx_quantile(self, q):
-        c1, c2, _c3, _c4 = _ltz_parameters(
-            self.weights, self.dof, self.noncentrality, self.sigma, self.offset
-        )
-        lower, upper = self.support
-        guess = c1 + math.sqrt(2 * c2) * stats.norm.ppf(q)
-        return min(
-            max(guess, lower if np.isfinite(lower) else guess),
-            upper if np.isfinite(upper) else guess,
-        )
+
+def _sample_shape(size):
+    """The shape of a sample: None, a non-negative integer or a tuple of them."""
+    if size is None:
+        return ()
+    sizes = size if isinstance(size, tuple) else (size,)
+    for n in sizes:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(
+                f"size must be a non-negative integer or a tuple of them, got {size!r}"
+            )
+    return tuple(int(n) for n in sizes)
 
 
 class QuadraticForm(WeightedChiSquare):
@@ -1533,24 +1583,47 @@ class QuadraticForm(WeightedChiSquare):
         n = A.shape[0]
         if A.shape != (n, n):
             raise ValueError(f"A must be square (n x n), got shape {A.shape}")
-        scale = max(float(np.max(np.abs(A))), np.finfo(float).tiny)
-        asym = float(np.max(np.abs(A - A.T)))
-        if asym > 1e-10 * scale:
-            raise ValueError(
-                f"A is not symmetric (largest |A - A^T| = {asym:.3g}); x^T A x only depends on the "
-                "symmetric part, so pass (A + A.T) / 2"
-            )
+        if n == 0:
+            raise ValueError("A is empty (0 x 0); pass a square matrix of at least 1 x 1")
         mean = np.zeros(n) if mean is None else as_vector(mean, "mean", n)
-        cov = np.eye(n) if cov is None else as_covariance(cov, "cov", n, allow_singular=True)
+        cov = np.eye(n) if cov is None else as_matrix(cov, "cov", (n, n))
+        # x^T A x = alpha gamma^2 (x/gamma)^T (A/alpha) (x/gamma): the reduction
+        # works on unit-size matrices whatever the units (1e-300 or 1e300)
+        alpha = float(np.max(np.abs(A)))
+        gamma = max(math.sqrt(float(np.max(np.abs(cov)))), float(np.max(np.abs(mean))))
+        if alpha == 0 or gamma == 0:
+            raise ValueError(
+                "the quadratic form is constant (A = 0, or cov = 0 and mean = 0): "
+                "x^T A x = 0 with probability one"
+            )
+        A_n = A / alpha
+        asym = float(np.max(np.abs(A_n - A_n.T)))
+        if asym > 1e-10:
+            raise ValueError(
+                f"A is not symmetric (largest |A - A^T| = {asym * alpha:.3g}); x^T A x only "
+                "depends on the symmetric part, so pass (A + A.T) / 2"
+            )
+        cov_n = as_covariance(cov / gamma / gamma, "cov", n, allow_singular=True)
         self.A = _readonly(symmetrize(A))
         self.mean_vector = _readonly(mean)
         self.cov = _readonly(symmetrize(cov))
-        w, h, d, sigma, offset, rank = _reduce(self.A, self.mean_vector, self.cov)
+        self._normalised = (symmetrize(A_n), mean / gamma, symmetrize(cov_n))
+        w, h, d, sigma, offset, rank = _reduce(*self._normalised)
         self.rank = rank
+        log_scale = math.log(alpha) + 2.0 * math.log(gamma)
+        self._scale = math.exp(min(log_scale, 709.0))
         if w.size == 0 and sigma == 0:
             raise ValueError(
                 "the quadratic form is constant (A cov A = 0 and no linear term): "
-                f"x^T A x = {offset:.6g} with probability one"
+                f"x^T A x = {offset * self._scale:.6g} with probability one"
+            )
+        with np.errstate(over="ignore"):
+            w, sigma, offset = w * self._scale, sigma * self._scale, offset * self._scale
+        size = max(float(np.max(np.abs(w), initial=0.0)), sigma)
+        if not (1e-305 < size < math.inf and np.isfinite(w).all() and math.isfinite(offset)):
+            raise ValueError(
+                f"x^T A x is of order 1e{log_scale / math.log(10):.0f} (max|A| times the "
+                "square of the scale of x), beyond double precision; rescale A, mean or cov"
             )
         self._set_terms(w, h, d, sigma, offset, atol, rtol)
 
@@ -1559,19 +1632,22 @@ class QuadraticForm(WeightedChiSquare):
 
     def mean(self) -> float:
         """``tr(A cov) + mean^T A mean``."""
-        A, mu, S = self.A, self.mean_vector, self.cov
-        return float(np.sum(A * S) + mu @ A @ mu)
+        A, mu, S = self._normalised
+        return self._scale * float(np.sum(A * S) + mu @ A @ mu)
 
     def var(self) -> float:
         """``2 tr((A cov)^2) + 4 mean^T A cov A mean``."""
-        A, mu, S = self.A, self.mean_vector, self.cov
+        A, mu, S = self._normalised
         AS = A @ S
-        return float(2 * np.sum(AS * AS.T) + 4 * mu @ AS @ A @ mu)
+        return self._scale * self._scale * float(2 * np.sum(AS * AS.T) + 4 * mu @ AS @ A @ mu)
 
     def rvs_direct(self, size, random_state=None):
         """Draw ``x ~ N(mean, cov)`` and return ``x^T A x`` (slow; for checks)."""
         rng = as_generator(random_state)
-        size = int(size)
+        shape = _sample_shape(size)
+        if len(shape) != 1:
+            raise ValueError(f"size must be a non-negative integer, got {size!r}")
+        size = shape[0]
         eigenvalues, vectors = np.linalg.eigh(self.cov)
         root = vectors * np.sqrt(np.clip(eigenvalues, 0, None))
         x = self.mean_vector + rng.standard_normal((size, root.shape[1])) @ root.T
