@@ -400,7 +400,9 @@ class _Side:
                 hi = self.s_max + lo
                 w, h, d = self.top
                 # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-                t = (h * w + xp.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * x)
+                t = (h * w + xp.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (
+                    2.0 * xp.maximum(x, 1e-300)
+                )
                 guess = xp.where(t < 1.0, xp.minimum(guess, self.s_max * (1.0 - t)), guess)
             else:
                 # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
@@ -516,7 +518,7 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     a = ratio * b
     e0 = k0 - s0 * x
     vertex = b / xp.abs(s0) if pole else b
-    log_tol = math.log(rtol * math.sqrt(2.0 * math.pi)) + xp.log(vertex)
+    log_tol = (math.log(rtol * math.sqrt(2.0 * math.pi)) if rtol else -math.inf) + xp.log(vertex)
     if atol > 0:
         log_tol = xp.maximum(log_tol, math.log(atol * math.pi) - e0)
     # -- truncation -----------------------------------------------------------
@@ -1139,10 +1141,12 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     :func:`imhof_cdf`.
     """
     w, h, d, _ = _terms(weights, dof, noncentrality)
-    c = float(c)
+    c = _finite_scalar(c, "c")
     if c <= 0 or not np.any(w > 0):
-        raise ValueError("inversion_integrands needs c > 0 and at least one positive weight")
-    u = np.linspace(0.0, 10.0, 401) if u is None else as_float_array(u, "u")
+        raise ValueError(
+            f"inversion_integrands needs c > 0 and at least one positive weight, got c = {c:g}"
+        )
+    u = np.linspace(0.0, 10.0, 401) if u is None else _finite_vector(u, "u")
     with np.errstate(invalid="ignore", divide="ignore"):
         wu = np.multiply.outer(u, w)
         theta = 0.5 * np.sum(h * np.arctan(wu) + d * wu / (1 + wu**2), axis=-1) - 0.5 * c * u
@@ -1152,14 +1156,14 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
         )
     m = float(np.max(np.abs(w)))
     side = _Side(w / m, h, d, 0.0)
-    x = np.array([c / m])
-    upper = bool(x[0] > side.mean)
-    s0, g2, g3 = _saddle(x, side, upper, True)
-    k0 = side.cgf(s0)
-    a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, np)
+    x = c / m
+    upper = x > side.mean
+    s0, g2, g3 = _saddle_at(x, side, upper, True)
+    k0 = side.cgf_at(s0)
+    a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, _SCALAR)
     # the path and its integrand in u do not depend on the scale m
     nodes = (u, np.cosh(u) - 1.0, np.sinh(u), np.cosh(u))
-    contour = _integrand(nodes, x, side, True, s0, a, b, k0)[0] * np.exp(e0[0])
+    contour = _integrand(nodes, x, side, True, s0, a, b, k0) * math.exp(e0)
     return real_axis, contour, ("upper" if upper else "lower")
 
 
@@ -1232,8 +1236,18 @@ def _ltz_parameters(w, h, d, sigma, offset):
 
 
 def _ltz(x, w, h, d, sigma, offset):
-    """(sf, cdf) of the LTZ approximation; negative skewness uses -Q."""
-    c1, c2, c3, c4 = _ltz_parameters(w, h, d, sigma, offset)
+    """(sf, cdf) of the LTZ approximation; negative skewness uses -Q.
+
+    Computed on the law scaled to ``max(|w|, sigma) = 1`` (the cumulants of
+    weights of 1e300 overflow).
+    """
+    m = max(float(np.max(np.abs(w), initial=0.0)), sigma)
+    if m == 0:  # the constant offset
+        sf = (x < offset).astype(float)
+        return sf, 1 - sf
+    with np.errstate(over="ignore", under="ignore"):
+        x = (x - offset) / m
+    c1, c2, c3, c4 = _ltz_parameters(w / m, h, d, sigma / m, 0.0)
     if c2 <= 0:
         sf = (x < c1).astype(float)
         return sf, 1 - sf
@@ -1273,11 +1287,17 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     """Fast approximation of ``P(Q > c)`` (Liu, Tang & Zhang 2009).
 
     Matches the first four cumulants of ``Q`` (skewness exactly, kurtosis
-    as closely as possible) with a noncentral chi-square.  Typical absolute
-    errors are 1e-3 in the body and larger in relative terms in the far
-    tails; see the course benchmark for an honest comparison with
-    :func:`imhof_sf`.  Forms with negative skewness are approximated through
-    ``-Q``.
+    as closely as possible) with a noncentral chi-square; forms with negative
+    skewness are approximated through ``-Q``.  It is an approximation of the
+    *body* of the law, with no error control: use :func:`imhof_sf` (at
+    ``rtol=1e-4`` if speed matters) for anything that is reported.
+
+    Measured error (``tests/test_quadform.py``), where the exact ``P(Q <= c)``
+    lies in [0.01, 0.99]: at most 0.03 absolute for weights of one sign and
+    0.11 with weights of both signs (300 random laws of 1-5 terms, weights
+    0.1-5, dof 1-5, noncentrality 0-5; 0.02 on Davies' 13 cases).  In the
+    tails the relative error is unbounded: for ``0.6 chi2_1 + 0.3 chi2_1 +
+    0.1 chi2_1`` it gives ``P(Q <= 0.1) = 0`` where the law has 0.054.
 
     Parameters
     ----------
@@ -1317,7 +1337,14 @@ def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     Notes
     -----
     ``1 - `` :func:`liu_tang_zhang_sf`, computed from the complementary
-    noncentral chi-square function; Liu, Tang & Zhang (2009), (3)-(8).
+    noncentral chi-square function; Liu, Tang & Zhang (2009), (3)-(8).  Its
+    measured error is stated in :func:`liu_tang_zhang_sf`.
+
+    Examples
+    --------
+    >>> from course.quadform import imhof_cdf, liu_tang_zhang_cdf
+    >>> round(float(liu_tang_zhang_cdf(7.0, [6, 3, 1])), 3), round(float(imhof_cdf(7.0, [6, 3, 1])), 3)
+    (0.51, 0.494)
     """
     w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
     _, cdf = _ltz_at(c, "c", w, h, d, sigma, 0.0)
@@ -1611,7 +1638,7 @@ class QuadraticForm(WeightedChiSquare):
         w, h, d, sigma, offset, rank = _reduce(*self._normalised)
         self.rank = rank
         log_scale = math.log(alpha) + 2.0 * math.log(gamma)
-        self._scale = math.exp(min(log_scale, 709.0))
+        self._scale = math.exp(log_scale) if log_scale < 709.0 else math.inf
         if w.size == 0 and sigma == 0:
             raise ValueError(
                 "the quadratic form is constant (A cov A = 0 and no linear term): "
