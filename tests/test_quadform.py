@@ -571,7 +571,7 @@ def test_inversion_integrands_refuses_a_nan_point():
     # silently NaN arrays before
     with pytest.raises(ValueError, match="c must be finite"):
         inversion_integrands(np.nan, [1.0])
-    real_axis, contour, tail = inversion_integrands(20.0, [6.0, 3.0, 1.0])
+    _real_axis, contour, tail = inversion_integrands(20.0, [6.0, 3.0, 1.0])
     u = np.linspace(0.0, 10.0, 401)
     # the contour integral reproduces the tail probability (upper here)
     assert tail == "upper"
