@@ -86,10 +86,12 @@ _MAX_HALVINGS = 6
 _MAX_NEWTON = 100
 # Truncation points beyond this (cosh(60) ~ 6e25) mean no convergence.
 _U_MAX = 60.0
+# The vertex is accepted when |phi'| phi''^{-1/2} is below this (see _saddle).
+_SADDLE_TOL = 0.3
 # Smallest opening a/b of the hyperbola (see _plan).
 _MIN_OPENING = 0.3
 # Coarse trapezoid step times log(1/rtol), and its largest value (see _plan).
-_STEP_CONSTANT = 2.5
+_STEP_CONSTANT = 3.5
 _MAX_STEP = 0.5
 # Below exp(-760) a probability is 0 in double precision.
 _LOG_UNDERFLOW = -760.0
@@ -430,7 +432,7 @@ def _saddle(x, side, upper, pole):
     ``phi`` is convex on the bracket, so ``phi'`` increases: Newton steps
     safeguarded by bisection (in the logit of ``s`` over the far end, so that
     roots near either singular end are reached in a few steps).  The saddle
-    only has to be approximate, ``|phi'| phi''^{-1/2} < 0.05``: any vertex in the
+    only has to be approximate, ``|phi'| phi''^{-1/2} < 0.3``: any vertex in the
     interval gives the same integral.
     """
     lo, hi, guess = side.bracket(x, upper)
@@ -439,7 +441,7 @@ def _saddle(x, side, upper, pole):
     s = np.clip(guess, lo + 1e-9 * width, hi - 1e-9 * width)
     for _ in range(_MAX_NEWTON):
         g1, g2, g3 = side.derivatives(s, x, pole)
-        done = np.abs(g1) <= 0.05 * np.sqrt(g2)
+        done = np.abs(g1) <= _SADDLE_TOL * np.sqrt(g2)
         if done.all():
             break
         right = g1 > 0
@@ -457,7 +459,7 @@ def _saddle_at(x, side, upper, pole):
     s = min(max(guess, lo + 1e-9 * width), hi - 1e-9 * width)
     for _ in range(_MAX_NEWTON):
         g1, g2, g3 = side.derivatives_at(s, x, pole)
-        if abs(g1) <= 0.05 * math.sqrt(g2):
+        if abs(g1) <= _SADDLE_TOL * math.sqrt(g2):
             break
         if g1 > 0:
             hi = s
