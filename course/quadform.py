@@ -453,16 +453,21 @@ def _saddle(x, side, upper, pole):
     lo, hi = np.broadcast_to(lo, x.shape).copy(), np.broadcast_to(hi, x.shape).copy()
     width = hi - lo
     s = np.clip(guess, lo + 1e-9 * width, hi - 1e-9 * width)
+    g1, g2, g3 = side.derivatives(s, x, pole)
+    # Newton steps on the points not yet close enough (the others keep theirs)
+    active = np.flatnonzero(np.abs(g1) > _SADDLE_TOL * np.sqrt(g2))
     for _ in range(_MAX_NEWTON):
-        g1, g2, g3 = side.derivatives(s, x, pole)
-        done = np.abs(g1) <= _SADDLE_TOL * np.sqrt(g2)
-        if done.all():
+        if active.size == 0:
             break
-        right = g1 > 0
-        hi = np.where(right, s, hi)
-        lo = np.where(right, lo, s)
-        newton = s - g1 / g2
-        s = np.where(done, s, np.where((newton > lo) & (newton < hi), newton, _bisect(lo, hi)))
+        i = active
+        right = g1[i] > 0
+        hi[i] = np.where(right, s[i], hi[i])
+        lo[i] = np.where(right, lo[i], s[i])
+        newton = s[i] - g1[i] / g2[i]
+        inside = (newton > lo[i]) & (newton < hi[i])
+        s[i] = newton if inside.all() else np.where(inside, newton, _bisect(lo[i], hi[i]))
+        g1[i], g2[i], g3[i] = side.derivatives(s[i], x[i], pole)
+        active = i[np.abs(g1[i]) > _SADDLE_TOL * np.sqrt(g2[i])]
     return s, g2, g3
 
 
