@@ -310,6 +310,8 @@ class _Side:
         # the largest weight's term: it dominates the far upper tail
         self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
         self.positive_form = bool(w.size and w[0] > 0 and not sigma2)
+        # Im s beyond which every |1 - 2 w s| >= 1 (see _plan)
+        self.y_unit = 0.5 / float(np.min(np.abs(w))) if w.size else 0.0
         if w.size <= _PYTHON_TERMS:
             # a few terms are summed faster by Python than by numpy calls
             columns = [w.tolist(), h.tolist(), d.tolist()]
@@ -563,7 +565,19 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     y = 1.0 + xp.maximum(x_need - s0, 0.0) / a
     U = xp.maximum(xp.log(y + xp.sqrt(y * y - 1.0)), 1.0)
     if side.sigma2:
+        # the bound above needs Im s >= Re s; the normal factor gives another:
+        # with Y = Im s >= 4 (a + |s0|) and >= 1/(2 min|w|), 0 <= Re s <= 3Y/4, every
+        # |1 - 2 w s| >= 1 so |M| <= 1, |exp(sigma2 s^2/2)| <= exp(-7 sigma2 Y^2/32),
+        # and the tail beyond U is below exp(-c Y^2)/(c Y^2), c = 7 sigma2/32
         U = xp.maximum(U, xp.log(4.0 * xp.abs(s0) / b + 3.0))
+        c = 7.0 * side.sigma2 / 32.0
+        y_need = xp.maximum(xp.maximum(log_rhs + 2.0 - side.log_d, 1.0) / c, 0.0) ** 0.5
+        y_need = xp.maximum(xp.maximum(y_need, 4.0 * (a + xp.abs(s0))), side.y_unit)
+        # and Re s >= 0, so that |exp(-s x)| <= 1
+        q = 1.0 + xp.maximum(-s0, 0.0) / a
+        y_need = xp.maximum(y_need, b * xp.sqrt(q * q - 1.0))
+        ratio_y = y_need / b
+        U = xp.minimum(U, xp.log(ratio_y + xp.sqrt(ratio_y * ratio_y + 1.0)))
     # -- step (the same for every point: see the docstring) ----------------------
     step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
     return a, b, e0, log_tol, U, step

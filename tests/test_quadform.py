@@ -758,3 +758,16 @@ def test_bad_input_is_refused_naming_the_argument(name, call):
         call()
     message = str(info.value)
     assert name in message or name.rstrip("s") in message
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("rtol", [1e-4, 1e-10])
+def test_normal_term_at_zero_with_few_degrees_of_freedom(rtol):
+    # chi2_{1/2} + N(0, 1) at 0: the tail bound without the normal factor ran
+    # past its limit (a warning); P = E[Phi(-Y)], Y ~ chi2_{1/2}
+    from scipy import integrate
+
+    exact = integrate.quad(lambda y: stats.norm.cdf(-y) * stats.chi2.pdf(y, 0.5), 0, np.inf)[0]
+    assert imhof_cdf(0.0, [1.0], [0.5], sigma=1.0, rtol=rtol) == pytest.approx(
+        exact, rel=max(rtol, 1e-8)
+    )
