@@ -242,7 +242,7 @@ def _merge(group):
 class _ScalarMath:
     """The few functions :func:`_plan` needs, for Python floats (numpy has them for arrays)."""
 
-    log, exp, sqrt, abs = math.log, math.exp, math.sqrt, abs
+    log, exp, sqrt, sinh, abs = math.log, math.exp, math.sqrt, math.sinh, abs
     maximum, minimum = max, min
 
     @staticmethod
@@ -310,8 +310,10 @@ class _Side:
         # the largest weight's term: it dominates the far upper tail
         self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
         self.positive_form = bool(w.size and w[0] > 0 and not sigma2)
-        # Im s beyond which every |1 - 2 w s| >= 1 (see _plan)
+        # Im s beyond which every |1 - 2 w s| >= 1, and log prod (2|w|)^(-h/2):
+        # |M(s)| <= that Y^-k with Y = Im s (see _plan)
         self.y_unit = 0.5 / float(np.min(np.abs(w))) if w.size else 0.0
+        self.log_d_y = -0.5 * float(h @ np.log(2.0 * np.abs(w))) if w.size else 0.0
         if w.size <= _PYTHON_TERMS:
             # a few terms are summed faster by Python than by numpy calls
             columns = [w.tolist(), h.tolist(), d.tolist()]
@@ -516,14 +518,19 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     the absolute tolerance on that scaled integral; the truncation point
     ``U``; the trapezoid step of the coarse level.
 
-    Truncation (the analogue of Imhof's (1961) bound ``T_U``): for ``Re s = X
-    >= 1/max(w)`` every factor obeys ``|1 - 2 w s| >= |w| X``, so ``|M(s)| <=
-    D X^{-k}`` with ``D = prod |w|^{-h/2} exp(-sum_{w>0} d/2)`` (the
-    noncentral factors only help; the normal factor is at most one once ``Im
-    s >= Re s``).  With ``|s'(u)| <= kappa dX/du`` the neglected integral is
-    below ``kappa D int_X^inf t^{-k-e} exp(-x t) dt / pi`` (``e = 1`` with the
-    pole), which is below both ``kappa D X^{1-k-e} / ((k+e-1) pi)`` and
-    ``kappa D X^{-k-e} exp(-x X) / (x pi)`` for ``X >= 1``.
+    Truncation (the analogue of Imhof's (1961) bound ``T_U``), in ``Y = Im
+    s = b sinh u``: every factor obeys ``|1 - 2 w s| >= 2 |w| Y`` (its
+    imaginary part), so ``|M(s)| <= D Y^{-k}`` with ``D = prod (2|w|)^{-h/2}``
+    once the noncentral factors are at most one (``|1 - 2 w s| >= 1``, i.e.
+    ``Y >= 1/(2 min|w|)``) and the normal factor too (``Im s >= Re s``).
+    With ``|s'| <= sqrt(2) dY/du`` and ``|s| >= Y`` the neglected integral
+    is below ``sqrt(2) D int_Y^inf t^{-k-e} |exp(-s x)| dt / pi`` (``e = 1``
+    with the pole), which is below ``sqrt(2) D Y^{1-k-e} / ((k+e-1) pi)``
+    where ``Re s >= 0`` and, for ``x > 0`` (``Re s >= s0 - a + (a/b) Y``), below ``sqrt(2) D
+    Y^{-k-e} exp(-(s0 - a) x - (a/b) x Y) / ((a/b) x pi)`` for ``Y >= 1``.
+    (The older bound in ``Re s`` used ``|1 - 2 w s| >= |w| Re s``, true only
+    beyond ``1/w`` for *every* positive weight: with a small positive weight
+    of large noncentrality it truncated a live integrand.)
 
     Step: the trapezoidal rule on an integrand analytic in a strip of
     half-width ``delta`` around the real ``u`` axis errs by about ``exp(-2 pi
@@ -544,40 +551,38 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     log_tol = (math.log(rtol * math.sqrt(2.0 * math.pi)) if rtol else -math.inf) + xp.log(vertex)
     if atol > 0:
         log_tol = xp.maximum(log_tol, math.log(atol * math.pi) - e0)
-    # -- truncation -----------------------------------------------------------
+    # -- truncation (bounds in Y = Im s = b sinh u: see the docstring) ------------
     k_e = side.k + (1.0 if pole else 0.0)
-    # kappa = |s'| / (dX/du) <= sqrt(1 + (b/a)^2 coth(U)^2), and coth(1)^2 < 1.72
-    log_rhs = (
-        side.log_d
-        + 0.5 * xp.log(1.0 + 1.72 / (ratio * ratio))
-        - math.log(math.pi)
-        - e0
-        - (log_tol + math.log(0.01))
-    )
-    log_x_need = 700.0
+    log_tol_t = log_tol + math.log(0.01)
+    # |s'| <= sqrt(2) dY/du (a <= b) and |s| >= Y
+    log_rhs = side.log_d_y + math.log(1.42 / math.pi) - e0 - log_tol_t
+    # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
+    y_positive = xp.maximum(a - s0, 0.0) / ratio
+    log_y_need = 700.0
     if k_e > 1:
-        log_x_need = xp.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
-    x_safe = xp.maximum(x, 1e-300)
-    x_need = xp.minimum(xp.exp(log_x_need), xp.maximum(log_rhs - xp.log(x_safe), 0.0) / x_safe)
-    x_need = xp.maximum(x_need, 1.0)
-    if math.isfinite(side.s_max):
-        x_need = xp.maximum(x_need, 2.0 * side.s_max)
-    y = 1.0 + xp.maximum(x_need - s0, 0.0) / a
-    U = xp.maximum(xp.log(y + xp.sqrt(y * y - 1.0)), 1.0)
+        log_y_need = xp.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
+    algebraic = xp.maximum(xp.exp(log_y_need), y_positive)
+    # with x > 0, exp(-s x) decays like exp(-lam Y)
+    lam = xp.maximum(ratio * x, 1e-300)
+    decay = xp.maximum(log_rhs - xp.log(lam) + (a - s0) * x, 0.0) / lam
+    y_need = xp.maximum(xp.minimum(algebraic, decay), 1.0)
+    if side.noncentral:
+        y_need = xp.maximum(y_need, side.y_unit)
     if side.sigma2:
-        # the bound above needs Im s >= Re s; the normal factor gives another:
-        # with Y = Im s >= 4 (a + |s0|) and >= 1/(2 min|w|), 0 <= Re s <= 3Y/4, every
-        # |1 - 2 w s| >= 1 so |M| <= 1, |exp(sigma2 s^2/2)| <= exp(-7 sigma2 Y^2/32),
-        # and the tail beyond U is below exp(-c Y^2)/(c Y^2), c = 7 sigma2/32
-        U = xp.maximum(U, xp.log(4.0 * xp.abs(s0) / b + 3.0))
+        # the bounds above need Im s >= Re s (then |exp(sigma2 s^2/2)| <= 1); the
+        # normal factor gives another: with Y >= 4 (a + |s0|) and >= 1/(2 min|w|),
+        # and Re s >= 0, every |1 - 2 w s| >= 1 so |M| <= 1,
+        # |exp(sigma2 s^2/2)| <= exp(-7 sigma2 Y^2/32) and the tail beyond U is
+        # below exp(-c Y^2)/(c Y^2), c = 7 sigma2/32
+        y_need = xp.maximum(y_need, b * xp.sinh(xp.log(4.0 * xp.abs(s0) / b + 3.0)))
         c = 7.0 * side.sigma2 / 32.0
-        y_need = xp.maximum(xp.maximum(log_rhs + 2.0 - side.log_d, 1.0) / c, 0.0) ** 0.5
-        y_need = xp.maximum(xp.maximum(y_need, 4.0 * (a + xp.abs(s0))), side.y_unit)
-        # and Re s >= 0, so that |exp(-s x)| <= 1
+        y_normal = xp.maximum(xp.maximum(2.0 - e0 - log_tol_t, 1.0) / c, 0.0) ** 0.5
+        y_normal = xp.maximum(xp.maximum(y_normal, 4.0 * (a + xp.abs(s0))), side.y_unit)
         q = 1.0 + xp.maximum(-s0, 0.0) / a
-        y_need = xp.maximum(y_need, b * xp.sqrt(q * q - 1.0))
-        ratio_y = y_need / b
-        U = xp.minimum(U, xp.log(ratio_y + xp.sqrt(ratio_y * ratio_y + 1.0)))
+        y_normal = xp.maximum(y_normal, b * xp.sqrt(q * q - 1.0))
+        y_need = xp.minimum(y_need, y_normal)
+    ratio_y = y_need / b
+    U = xp.maximum(xp.log(ratio_y + xp.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
     # -- step (the same for every point: see the docstring) ----------------------
     step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
     return a, b, e0, log_tol, U, step
@@ -1608,14 +1613,17 @@ class WeightedChiSquare(FrozenDistribution):
                 break
             step *= 2
             right = min(right + step, upper)
-        return optimize.brentq(
-            gap,
-            left,
-            right,
-            xtol=max(1e-13 * std, 1e-300),
-            rtol=8 * np.finfo(float).eps,
-            maxiter=200,
+        eps = 8 * np.finfo(float).eps
+        root = optimize.brentq(
+            gap, left, right, xtol=max(1e-13 * std, 1e-300), rtol=eps, maxiter=200
         )
+        if abs(root) < 1e-3 * std:
+            # near 0 (a positive form far in its lower tail): refine to relative
+            # precision, not only to 1e-13 std (ppf(1e-8) of chi2_1 was 0)
+            a, b = max(root - 2e-13 * std, left), min(root + 2e-13 * std, right)
+            if gap(a) <= 0 <= gap(b):
+                root = optimize.brentq(gap, a, b, xtol=1e-300, rtol=eps, maxiter=400)
+        return root
 
 
 def _sample_shape(size):

@@ -771,3 +771,20 @@ def test_normal_term_at_zero_with_few_degrees_of_freedom(rtol):
     assert imhof_cdf(0.0, [1.0], [0.5], sigma=1.0, rtol=rtol) == pytest.approx(
         exact, rel=max(rtol, 1e-8)
     )
+
+
+@pytest.mark.filterwarnings("error")
+def test_small_positive_weight_with_large_noncentrality():
+    # found by a hypothesis hunt: the truncation bound in Re s assumed
+    # |1 - 2 w s| >= w Re s for every positive weight, which fails for a small
+    # one (2e-4 beside 18.5, noncentrality 8505): the integral was cut early
+    weights = [-27.835, -2.054, 2.1568e-4, 18.548]
+    nc = [0.0073, 0.2514, 8504.75, 0.11496]
+    law = WeightedChiSquare(weights, noncentrality=nc)
+    rng = np.random.default_rng(12)
+    draws = law.rvs(200_000, random_state=rng)
+    points = np.array([-80.0, 0.0, 65.9, 139.8])
+    for p, f in zip(law.cdf(points), (draws[:, None] <= points).mean(axis=0)):
+        lo, hi = binomial_band(p, draws.size, miss=1e-4 / points.size)
+        assert lo <= f <= hi
+    assert law.sf(139.8) == pytest.approx(imhof_sf(139.8, weights, 1, nc, rtol=1e-12), rel=1e-9)
