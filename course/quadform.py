@@ -104,6 +104,12 @@ _U_MAX = 60.0
 _SADDLE_TOL = 0.3
 # Smallest opening a/b of the hyperbola (see _plan).
 _MIN_OPENING = 0.3
+# Where the integrand on the path exceeds _BLOWUP times its vertex value, a
+# small positive weight's drift outgrows exp(-s x) on the right (a noncentral
+# term w chi2(h, d) grows like exp(d w s) for |s| << 1/w): such points take a
+# nearly vertical path, opening _SAFE_OPENING, where that factor stays bounded.
+_BLOWUP = 1e3
+_SAFE_OPENING = 0.02
 # Coarse trapezoid step times log(1/rtol), and its largest value (see _plan).
 _STEP_CONSTANT = 3.5
 _MAX_STEP = 0.5
@@ -508,7 +514,7 @@ def _bisect(lo, hi):
 # ---------------------------------------------------------------------------
 
 
-def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
+def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
     """Path, scale, truncation point and step of the contour integral at ``x``.
 
     ``xp`` is :data:`_SCALAR` for one point (floats) or ``numpy`` (arrays).
@@ -542,9 +548,12 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp):
     accepted); elsewhere the step is halved.
     """
     b = 1.0 / xp.sqrt(g2)
-    ratio = xp.minimum(
-        xp.maximum(xp.abs(g3) * b**3 / 3.0, _MIN_OPENING), 0.5 if side.sigma2 else 1.0
-    )
+    if opening is None:
+        ratio = xp.minimum(
+            xp.maximum(xp.abs(g3) * b**3 / 3.0, _MIN_OPENING), 0.5 if side.sigma2 else 1.0
+        )
+    else:
+        ratio = opening + 0.0 * b
     a = ratio * b
     e0 = k0 - s0 * x
     vertex = b / xp.abs(s0) if pole else b
@@ -625,9 +634,12 @@ def _integrand(nodes, x, side, pole, s0, a, b, k0):
         # k0 holds sigma2 s0^2 / 2; Re(sigma2 s^2 / 2) = that + sigma2 (re^2 - s0^2 - im^2) / 2
         e_re = e_re + 0.5 * side.sigma2 * (dre * (re + s0) - im * im + s0 * s0)
         e_im = e_im + side.sigma2 * re * im
-    value = np.exp(e_re + 1j * e_im) * (a * sinh + 1j * (b * cosh))
-    if pole:
-        value /= re + 1j * im
+    # where a drift outgrows exp(-s x) the values overflow: the callers see
+    # inf or nan (above _BLOWUP) and take a nearly vertical path instead
+    with np.errstate(over="ignore", invalid="ignore"):
+        value = np.exp(e_re + 1j * e_im) * (a * sinh + 1j * (b * cosh))
+        if pole:
+            value /= re + 1j * im
     return value.imag
 
 
@@ -651,6 +663,7 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     nodes = _nodes(h, n + 1, False)
     total = np.empty(x.shape)
     coarse = np.empty(x.shape)
+    blown = np.zeros(x.shape, dtype=bool)
     # chunks over x keep the (points, nodes, weights) work arrays small
     size = max(1, _CHUNK // ((n + 1) * max(side.w.size, 1)))
     for start in range(0, x.size, size):
@@ -659,11 +672,12 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
             nodes, x[i, None], side, pole, s0[i, None], a[i, None], b[i, None], k0[i, None]
         )
         f *= nodes[0] <= U[i, None]
+        blown[i] = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
         f[:, 0] *= 0.5
         total[i] = h * f.sum(axis=1)
         coarse[i] = 2.0 * h * f[:, ::2].sum(axis=1)
     tol = np.exp(log_tol)
-    active = np.arange(x.size)
+    active = np.flatnonzero(~blown)
     diff = np.abs(total - coarse)
     for level in range(_MAX_HALVINGS + 1):
         j = active
@@ -689,38 +703,44 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     with np.errstate(divide="ignore"):
         log_size = e0 + np.log(np.abs(total) / math.pi)
         log_error = e0 + np.log(error / math.pi)
-    return np.sign(total) * np.exp(log_size), np.exp(log_error), converged
+    return np.sign(total) * np.exp(log_size), np.exp(log_error), converged, blown
 
 
-def _contour(x, side, upper, pole, atol, rtol):
+def _contour(x, side, upper, pole, atol, rtol, opening=None):
     """The contour integral at the points ``x`` (1-D) of one side; (value, error, converged).
 
     One point takes a path set up in Python floats (numpy calls cost more
     than the arithmetic there); many points are set up together in numpy.
     """
-    if x.size == 1:
+    if x.size == 1 and opening is None:
         return tuple(np.array([v]) for v in _contour_at(float(x[0]), side, upper, pole, atol, rtol))
     # far out (x near the largest double) intermediate squares overflow to inf
     # harmlessly: those points end as tails below the smallest double
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         s0, g2, g3 = _saddle(x, side, upper, pole)
         k0 = side.cgf(s0)
-        plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, np)
+        plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, np, opening)
     a, b, e0, log_tol, U, step = plan
     # tails far below the smallest double: the best answer is 0
     vertex = b / np.abs(s0) if pole else b
     live = e0 + np.log(vertex) > _LOG_UNDERFLOW
     value, error = np.zeros(x.shape), np.zeros(x.shape)
     converged = np.ones(x.shape, dtype=bool)
-    if live.all():
-        value, error, converged = _integrate(
-            x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol
-        )
-    elif live.any():
+    blown = np.zeros(x.shape, dtype=bool)
+    if live.any():
         i = np.flatnonzero(live)
-        value[i], error[i], converged[i] = _integrate(
+        value[i], error[i], converged[i], blown[i] = _integrate(
             x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step, rtol
         )
+    if blown.any():
+        i = np.flatnonzero(blown)
+        if opening is None:
+            value[i], error[i], converged[i] = _contour(
+                x[i], side, upper, pole, atol, rtol, _SAFE_OPENING
+            )
+        else:
+            converged[i] = False
+            error[i] = np.inf
     return value, error, converged
 
 
@@ -838,17 +858,22 @@ def _tails_at(x, side, atol, rtol):
     return ((v, 1.0 - v) if upper else (1.0 - v, v)), error, ok
 
 
-def _contour_at(x, side, upper, pole, atol, rtol):
+def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
     """:func:`_contour` at one point: Python floats around the numpy integrand."""
     s0, g2, g3 = _saddle_at(x, side, upper, pole)
     k0 = side.cgf_at(s0)
-    a, b, e0, log_tol, U, step = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, _SCALAR)
+    plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, _SCALAR, opening)
+    a, b, e0, log_tol, U, step = plan
     if e0 + math.log(b / abs(s0) if pole else b) <= _LOG_UNDERFLOW:
         return 0.0, 0.0, True
     converged = U <= _U_MAX
     h = 0.5 * step
     n = math.ceil(min(U, _U_MAX) / h)
     f = _integrand(_nodes(h, n + 1, False), x, side, pole, s0, a, b, k0).tolist()
+    if not max(map(abs, f)) <= _BLOWUP * abs(f[0]):
+        if opening is None:
+            return _contour_at(x, side, upper, pole, atol, rtol, _SAFE_OPENING)
+        return 0.0, math.inf, False
     f[0] *= 0.5
     total = h * math.fsum(f)
     diff = abs(total - 2.0 * h * math.fsum(f[::2]))

@@ -788,3 +788,20 @@ def test_small_positive_weight_with_large_noncentrality():
         lo, hi = binomial_band(p, draws.size, miss=1e-4 / points.size)
         assert lo <= f <= hi
     assert law.sf(139.8) == pytest.approx(imhof_sf(139.8, weights, 1, nc, rtol=1e-12), rel=1e-9)
+
+
+@pytest.mark.filterwarnings("error")
+def test_drift_of_small_noncentral_weights_takes_a_vertical_path():
+    # found by a hypothesis hunt: below the drift d w of a small noncentral
+    # term, exp(d w s) outgrows exp(-s x) along a path opening to the right
+    # (values of 1e172 cancelling): such points take a nearly vertical path
+    weights, dof = [0.5, 5.105e-4, 5.646e-4, -6.819e-4], [1.0, 1.0, 1.0, 6.0]
+    nc = [0.0, 0.0, 0.0, 9749.0]
+    x = np.array([-3.0, -1.0, 0.0, 2.0])
+    vector = imhof_cdf(x, weights, dof, nc)
+    scalar = np.array([imhof_cdf(v, weights, dof, nc) for v in x])
+    assert np.allclose(vector, scalar, rtol=1e-9, atol=1e-14)
+    draws = WeightedChiSquare(weights, dof, nc).rvs(200_000, random_state=np.random.default_rng(3))
+    for p, f in zip(vector, (draws[:, None] <= x).mean(axis=0)):
+        lo, hi = binomial_band(p, draws.size, miss=1e-4 / x.size)
+        assert lo <= f <= hi
