@@ -316,10 +316,13 @@ class _Side:
         # the largest weight's term: it dominates the far upper tail
         self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
         self.positive_form = bool(w.size and w[0] > 0 and not sigma2)
-        # Im s beyond which every |1 - 2 w s| >= 1, and log prod (2|w|)^(-h/2):
-        # |M(s)| <= that Y^-k with Y = Im s (see _plan)
+        # Im s beyond which every |1 - 2 w s| >= 1, and log of D = prod
+        # (2|w|)^(-h/2) exp(-sum d/4): |M(s)| <= D Y^-k with Y = Im s, once
+        # every |1 - 2 w s| >= 2 (Y >= 2 y_unit) when noncentral (see _plan)
         self.y_unit = 0.5 / float(np.min(np.abs(w))) if w.size else 0.0
-        self.log_d_y = -0.5 * float(h @ np.log(2.0 * np.abs(w))) if w.size else 0.0
+        self.log_d_y = (
+            -0.5 * float(h @ np.log(2.0 * np.abs(w))) - 0.25 * float(d.sum()) if w.size else 0.0
+        )
         if w.size <= _PYTHON_TERMS:
             # a few terms are summed faster by Python than by numpy calls
             columns = [w.tolist(), h.tolist(), d.tolist()]
@@ -366,7 +369,7 @@ class _Side:
             inv = 1.0 / s
             g1 = g1 - inv
             g2 = g2 + inv * inv
-            g3 = g3 - 2.0 * inv**3
+            g3 = g3 - 2.0 * inv * inv * inv
         return g1, g2, g3
 
     def derivatives_at(self, s, x, pole):
@@ -385,7 +388,7 @@ class _Side:
             inv = 1.0 / s
             g1 -= inv
             g2 += inv * inv
-            g3 -= 2.0 * inv**3
+            g3 -= 2.0 * inv * inv * inv
         return g1, g2, g3
 
     def cgf(self, s):
@@ -503,7 +506,7 @@ def _bisect(lo, hi):
     """Midpoint of ``(lo, hi)`` in the logit of ``s / far end`` (or plain, across 0)."""
     far = np.where(np.abs(lo) > np.abs(hi), lo, hi)
     with np.errstate(divide="ignore", invalid="ignore"):
-        p = np.clip(np.stack([lo, hi]) / far, 1e-300, 1.0 - 1e-16)
+        p = np.clip(np.stack([lo, hi]) / far, 1e-16, 1.0 - 1e-16)
         y = np.log(p) - np.log1p(-p)
         mid = far / (1.0 + np.exp(-0.5 * (y[0] + y[1])))
     return np.where(lo * hi >= 0, mid, 0.5 * (lo + hi))
@@ -526,9 +529,10 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
 
     Truncation (the analogue of Imhof's (1961) bound ``T_U``), in ``Y = Im
     s = b sinh u``: every factor obeys ``|1 - 2 w s| >= 2 |w| Y`` (its
-    imaginary part), so ``|M(s)| <= D Y^{-k}`` with ``D = prod (2|w|)^{-h/2}``
-    once the noncentral factors are at most one (``|1 - 2 w s| >= 1``, i.e.
-    ``Y >= 1/(2 min|w|)``) and the normal factor too (``Im s >= Re s``).
+    imaginary part), so ``|M(s)| <= D Y^{-k}`` with ``D = prod (2|w|)^{-h/2}
+    exp(-sum d/4)`` once every noncentral factor ``exp(d/2 (Re(1/z) - 1))`` is
+    at most ``exp(-d/4)`` (``|z| = |1 - 2 w s| >= 2``, i.e. ``Y >= 1/min|w|``)
+    and the normal factor at most one (``Im s >= Re s``).
     With ``|s'| <= sqrt(2) dY/du`` and ``|s| >= Y`` the neglected integral
     is below ``sqrt(2) D int_Y^inf t^{-k-e} |exp(-s x)| dt / pi`` (``e = 1``
     with the pole), which is below ``sqrt(2) D Y^{1-k-e} / ((k+e-1) pi)``
@@ -576,7 +580,7 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
     decay = xp.maximum(log_rhs - xp.log(lam) + (a - s0) * x, 0.0) / lam
     y_need = xp.maximum(xp.minimum(algebraic, decay), 1.0)
     if side.noncentral:
-        y_need = xp.maximum(y_need, side.y_unit)
+        y_need = xp.maximum(y_need, 2.0 * side.y_unit)
     if side.sigma2:
         # the bounds above need Im s >= Re s (then |exp(sigma2 s^2/2)| <= 1); the
         # normal factor gives another: with Y >= 4 (a + |s0|) and >= 1/(2 min|w|),
@@ -634,12 +638,12 @@ def _integrand(nodes, x, side, pole, s0, a, b, k0):
         # k0 holds sigma2 s0^2 / 2; Re(sigma2 s^2 / 2) = that + sigma2 (re^2 - s0^2 - im^2) / 2
         e_re = e_re + 0.5 * side.sigma2 * (dre * (re + s0) - im * im + s0 * s0)
         e_im = e_im + side.sigma2 * re * im
-    # where a drift outgrows exp(-s x) the values overflow: the callers see
-    # inf or nan (above _BLOWUP) and take a nearly vertical path instead
-    with np.errstate(over="ignore", invalid="ignore"):
-        value = np.exp(e_re + 1j * e_im) * (a * sinh + 1j * (b * cosh))
-        if pole:
-            value /= re + 1j * im
+    # where a drift outgrows exp(-s x) the values are huge (capped below the
+    # overflow): the callers see them above _BLOWUP and take a nearly
+    # vertical path instead
+    value = np.exp(np.minimum(e_re, 600.0) + 1j * e_im) * (a * sinh + 1j * (b * cosh))
+    if pole:
+        value /= re + 1j * im
     return value.imag
 
 

@@ -805,3 +805,29 @@ def test_drift_of_small_noncentral_weights_takes_a_vertical_path():
     for p, f in zip(vector, (draws[:, None] <= x).mean(axis=0)):
         lo, hi = binomial_band(p, draws.size, miss=1e-4 / x.size)
         assert lo <= f <= hi
+
+
+@pytest.mark.filterwarnings("error")
+def test_tiny_weight_beside_noncentral_terms_far_below_the_mean():
+    # found by hypothesis hunts: a bisection step toward the pole jumped from
+    # s = -67 to -1e-140 (OverflowError in a cube), and an all-central bound
+    # needed a truncation point beyond its limit for chi2_1 - chi2_1(148) at 0
+    w, nc = [2.0, 2.3971e-4], [4.0, 1.0]
+    assert imhof_cdf(1.0, w, 1, nc) == pytest.approx(imhof_cdf([1.0, 1.0], w, 1, nc)[0], rel=1e-9)
+    exact = integrate_cdf_of_difference(148.0)
+    assert imhof_sf(0.0, [1.0, -1.0], 1, [0.0, 148.0], rtol=1e-6) == pytest.approx(exact, rel=1e-5)
+
+
+def integrate_cdf_of_difference(nc):
+    """P(chi2_1 > Y) for Y ~ chi2_1(nc), by one-dimensional quadrature."""
+    from scipy import integrate
+
+    mean, sd = 1 + nc, math.sqrt(2 * (1 + 2 * nc))
+    return integrate.quad(
+        lambda y: stats.chi2.sf(y, 1) * stats.ncx2.pdf(y, 1, nc),
+        max(mean - 12 * sd, 0),
+        mean + 12 * sd,
+        epsabs=0,
+        epsrel=1e-12,
+        limit=500,
+    )[0]
