@@ -67,7 +67,7 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize, stats
 
-from .distributions import FrozenDistribution, as_generator
+from .distributions import _NO_STATE, FrozenDistribution, _rng_argument
 from .linalg import as_covariance, as_float_array, as_matrix, as_vector, symmetrize
 
 __all__ = [
@@ -1621,7 +1621,7 @@ class WeightedChiSquare(FrozenDistribution):
         )
         mean_n = float(w @ (self.dof + self.noncentrality))
         z = stats.norm.ppf(target) if increasing else stats.norm.isf(target)
-        lower, upper = self.support
+        lower, upper = self.support()
         guess = min(max(self.offset + scale * (mean_n + std_n * z), lower), upper)
         std = scale * std_n
         sign = 1.0 if increasing else -1.0
@@ -1792,9 +1792,9 @@ class QuadraticForm(WeightedChiSquare):
         AS = A @ S
         return self._scale * self._scale * float(2 * np.sum(AS * AS.T) + 4 * mu @ AS @ A @ mu)
 
-    def rvs_direct(self, size, random_state=None):
+    def rvs_direct(self, size, random_state=_NO_STATE, *, rng=None):
         """Draw ``x ~ N(mean, cov)`` and return ``x^T A x`` (slow; for checks)."""
-        rng = as_generator(random_state)
+        rng = _rng_argument(rng, random_state, "QuadraticForm.rvs_direct")
         shape = _sample_shape(size)
         if len(shape) != 1:
             raise ValueError(f"size must be a non-negative integer, got {size!r}")

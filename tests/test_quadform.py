@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import binomial_band
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.linalg import LinAlgError
@@ -130,12 +131,6 @@ DAVIES_PUBLISHED = {
     ((30, 1), (1, 20), (0, 0)): [0.004925, 0.573251, 0.896501],
     ((30, 1), (1, 30), (0, 0)): [0.017101, 0.566488, 0.871323],
 }
-
-
-def binomial_band(p, n, miss=1e-6):
-    """Interval holding the empirical frequency of an event of probability p."""
-    lo, hi = stats.binom.interval(1 - miss, n, p)
-    return lo / n, hi / n
 
 
 # ---------------------------------------------------------------------------
@@ -286,12 +281,12 @@ def test_mixed_form_against_monte_carlo():
     nc = np.array([0.0, 2.0, 0.0, 4.0, 1.0])
     law = WeightedChiSquare(weights, dof, nc, sigma=0.6)
     n = 200_000
-    draws = law.rvs(n, random_state=rng)
+    draws = law.rvs(n, rng=rng)
     points = np.quantile(draws, [0.001, 0.02, 0.3, 0.5, 0.8, 0.99, 0.9995])
     cdf = law.cdf(points)
     empirical = (draws[:, None] <= points).mean(axis=0)
     for p, f in zip(cdf, empirical):
-        lo, hi = binomial_band(p, n, miss=1e-4 / len(points))
+        lo, hi = binomial_band(n, p, miss=1e-4 / len(points))
         assert lo <= f <= hi
 
 
@@ -305,12 +300,12 @@ def test_quadratic_form_against_direct_simulation():
     S = L @ L.T / n + 0.1 * np.eye(n)
     mu = rng.normal(size=n)
     form = QuadraticForm(A, mu, S)
-    draws = form.rvs_direct(100_000, random_state=rng)
+    draws = form.rvs_direct(100_000, rng=rng)
     points = np.quantile(draws, [0.005, 0.1, 0.5, 0.9, 0.995])
     cdf = form.cdf(points)
     empirical = (draws[:, None] <= points).mean(axis=0)
     for p, f in zip(cdf, empirical):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / len(points))
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / len(points))
         assert lo <= f <= hi
 
 
@@ -323,11 +318,11 @@ def test_quadratic_form_singular_covariance_against_simulation():
     mu = np.array([1.0, -0.5, 2.0, 0.3])
     form = QuadraticForm(A, mu, S)
     assert form.rank == 2
-    draws = form.rvs_direct(100_000, random_state=rng)
+    draws = form.rvs_direct(100_000, rng=rng)
     assert abs(draws.mean() - form.mean()) < 5 * math.sqrt(form.var() / draws.size)
     points = np.quantile(draws, [0.01, 0.3, 0.7, 0.99])
     for p, f in zip(form.cdf(points), (draws[:, None] <= points).mean(axis=0)):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / len(points))
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / len(points))
         assert lo <= f <= hi
 
 
@@ -399,10 +394,10 @@ def test_quantiles_invert_the_distribution_function():
 
 def test_rvs_is_reproducible_and_has_the_right_moments():
     law = WeightedChiSquare([1.0, -0.5], [2, 3], [1.0, 0.0], sigma=0.2, offset=1.0)
-    a = law.rvs(1000, random_state=np.random.default_rng(1))
-    b = law.rvs(1000, random_state=np.random.default_rng(1))
+    a = law.rvs(1000, rng=np.random.default_rng(1))
+    b = law.rvs(1000, rng=np.random.default_rng(1))
     assert np.array_equal(a, b)
-    big = law.rvs(200_000, random_state=np.random.default_rng(2))
+    big = law.rvs(200_000, rng=np.random.default_rng(2))
     assert abs(big.mean() - law.mean()) < 5 * law.std() / math.sqrt(big.size)
 
 
@@ -610,9 +605,9 @@ def test_many_weights_take_the_numpy_path_and_agree(monkeypatch):
     python_path = imhof_cdf(x, w, dof, nc)
     assert np.allclose(numpy_path, python_path, rtol=1e-10, atol=1e-14)
     law = WeightedChiSquare(w, dof, nc)
-    draws = law.rvs(100_000, random_state=rng)
+    draws = law.rvs(100_000, rng=rng)
     for p, f in zip(numpy_path, (draws[:, None] <= x).mean(axis=0)):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / x.size)
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / x.size)
         assert lo <= f <= hi
 
 
@@ -690,10 +685,10 @@ def test_property_agrees_with_monte_carlo(law):
     weights, dof, nc, sigma = _law_terms(law)
     wcs = WeightedChiSquare(weights, dof, nc, sigma=sigma)
     rng = np.random.default_rng(abs(hash(repr(law))) % 2**32)
-    draws = wcs.rvs(40_000, random_state=rng)
+    draws = wcs.rvs(40_000, rng=rng)
     points = np.quantile(draws, [0.05, 0.5, 0.95])
     for p, f in zip(wcs.cdf(points), (draws[:, None] <= points).mean(axis=0)):
-        lo, hi = binomial_band(p, draws.size, miss=1e-6)
+        lo, hi = binomial_band(draws.size, p, miss=1e-6)
         assert lo <= f <= hi
 
 
@@ -782,10 +777,10 @@ def test_small_positive_weight_with_large_noncentrality():
     nc = [0.0073, 0.2514, 8504.75, 0.11496]
     law = WeightedChiSquare(weights, noncentrality=nc)
     rng = np.random.default_rng(12)
-    draws = law.rvs(200_000, random_state=rng)
+    draws = law.rvs(200_000, rng=rng)
     points = np.array([-80.0, 0.0, 65.9, 139.8])
     for p, f in zip(law.cdf(points), (draws[:, None] <= points).mean(axis=0)):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / points.size)
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / points.size)
         assert lo <= f <= hi
     assert law.sf(139.8) == pytest.approx(imhof_sf(139.8, weights, 1, nc, rtol=1e-12), rel=1e-9)
 
@@ -801,9 +796,9 @@ def test_drift_of_small_noncentral_weights_takes_a_vertical_path():
     vector = imhof_cdf(x, weights, dof, nc)
     scalar = np.array([imhof_cdf(v, weights, dof, nc) for v in x])
     assert np.allclose(vector, scalar, rtol=1e-9, atol=1e-14)
-    draws = WeightedChiSquare(weights, dof, nc).rvs(200_000, random_state=np.random.default_rng(3))
+    draws = WeightedChiSquare(weights, dof, nc).rvs(200_000, rng=np.random.default_rng(3))
     for p, f in zip(vector, (draws[:, None] <= x).mean(axis=0)):
-        lo, hi = binomial_band(p, draws.size, miss=1e-4 / x.size)
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / x.size)
         assert lo <= f <= hi
 
 
