@@ -222,10 +222,10 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
         scale = max(-w[0], w[-1])
         breaks = np.flatnonzero(np.diff(w) > _MERGE_RTOL * scale) + 1
         if breaks.size < w.size - 1:
-            groups = np.split(np.arange(w.size), breaks)
-            w = np.array([np.average(w[g], weights=h[g]) for g in groups])
-            h = np.array([h[g].sum() for g in groups])
-            d = np.array([d[g].sum() for g in groups])
+            members = np.split(np.arange(w.size), breaks)
+            w = np.array([np.average(w[g], weights=h[g]) for g in members])
+            h = np.array([h[g].sum() for g in members])
+            d = np.array([d[g].sum() for g in members])
     return w, h, d, sigma
 
 
@@ -323,6 +323,9 @@ class _Side:
         self.log_d_y = (
             -0.5 * float(h @ np.log(2.0 * np.abs(w))) - 0.25 * float(d.sum()) if w.size else 0.0
         )
+        # per-term rows for the Python-float versions of derivatives and cgf
+        self.rows: tuple | None = None
+        self.cgf_rows: tuple | None = None
         if w.size <= _PYTHON_TERMS:
             # a few terms are summed faster by Python than by numpy calls
             columns = [w.tolist(), h.tolist(), d.tolist()]
@@ -331,7 +334,6 @@ class _Side:
             self.cgf_rows = tuple((2.0 * wi, 0.5 * hi, 0.5 * di) for wi, hi, di in zip(*columns))
         else:
             sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
-            self.rows = self.cgf_rows = None
         half_d, self.k, self.mean, var, self.log_d, d_over_w, zero_slope, log_c = sums
         self.half_d_sum = half_d
         self.noncentral = half_d > 0
