@@ -61,13 +61,17 @@ def load_baseline():
     package.mkdir()
     (package / "__init__.py").write_text("")
     for name in BASELINE_MODULES:
-        source = subprocess.run(
+        shown = subprocess.run(
             ["git", "-C", str(ROOT), "show", f"{BASELINE_REVISION}:course/{name}.py"],
             capture_output=True,
             text=True,
-            check=True,
-        ).stdout
-        (package / f"{name}.py").write_text(source)
+        )
+        if shown.returncode != 0:
+            sys.exit(
+                f"cannot load the baseline from git history ({shown.stderr.strip()}); "
+                "run the benchmark in a full clone (git fetch --unshallow)"
+            )
+        (package / f"{name}.py").write_text(shown.stdout)
     sys.path.insert(0, str(folder))
     return importlib.import_module("quadform_baseline.quadform")
 
