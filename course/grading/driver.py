@@ -16,10 +16,12 @@ import os
 import sys
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from course.grading.isolation import Isolation, detect
 from course.grading.reports import (
     Summary,
     append_result,
@@ -29,12 +31,28 @@ from course.grading.reports import (
 )
 from course.grading.session import AssignmentGrader
 
-__all__ = ["GradeOptions", "Summary", "find_submissions", "grade"]
+__all__ = ["GradeOptions", "Summary", "available_cpus", "find_submissions", "grade"]
+
+
+def available_cpus() -> int:
+    """The CPUs this process may actually run on: its affinity mask, capped by a cgroup CPU
+    quota (containers), at least 1. ``os.cpu_count()`` counts the machine's cores instead."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    try:
+        quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
+        if quota != "max":
+            cpus = min(cpus, max(1, int(-(-int(quota) // int(period)))))
+    except (OSError, ValueError):
+        pass
+    return max(1, cpus)
 
 
 @dataclass
 class GradeOptions:
-    jobs: int = field(default_factory=lambda: os.cpu_count() or 1)
+    jobs: int = field(default_factory=available_cpus)
     timeout: float | None = None  # overrides every question's time limit
     memory_mb: int = 1024
     mode: str = "auto"
@@ -42,6 +60,16 @@ class GradeOptions:
     progress: bool = True
     ready_timeout: float = 60.0
     student_budget: float | None = None  # wall-clock seconds for one student, all attempts
+    unsafe_no_isolation: bool = False  # grade even where the kernel offers no file-system walls
+    namespaces: bool = True  # use bubblewrap when installed
+    landlock: bool = True  # use Landlock when the kernel has it
+    announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
+
+    def isolation(self) -> Isolation:
+        """The sandbox layers (raises IsolationError where none walls off the file system)."""
+        return detect(
+            namespaces=self.namespaces, landlock=self.landlock, unsafe=self.unsafe_no_isolation
+        )
 
 
 def find_submissions(folder: Path, assignment: str) -> list[tuple[str, Path | None, str | None]]:
@@ -94,6 +122,8 @@ def grade(
         results_path.unlink()
     lock = threading.Lock()
     with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
+        if options.announce is not None:
+            options.announce(grader.sandbox.isolation.describe())
         todo = find_submissions(submissions, grader.name)
         previous = read_results(results_path)
         rows: dict[str, dict] = {}

@@ -79,11 +79,15 @@ class AssignmentGrader:
             if self.solution_dir.parent.name == "solutions"
             else self.solution_dir
         )
+        #: question -> the forbidden functions it names (reports of others are ignored)
+        self.forbid = {q.id: frozenset(q.forbid) for q in self.questions}
         self.sandbox = Sandbox(
             mode=self.options.mode,
             limits=Limits(memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5),
             preload=self.checks.preload,
             deny_read=[solutions_root, *deny_read],
+            forbid=[name for names in self.forbid.values() for name in names],
+            isolation=self.options.isolation(),
         )
 
     def close(self) -> None:
@@ -236,11 +240,11 @@ class StudentSession:
                 continue
             limit = self.g.timeout_for(cell.question)
             try:
-                reply = self.child.request(
+                reply = self._request(
+                    cell.question,
                     Op.RUN,
                     min(limit, max(0.1, self.deadline - time.monotonic())),
                     source=cell.source,
-                    question=cell.question,
                 )
             except ChildTimeout:
                 self._cell_failed(
@@ -256,8 +260,6 @@ class StudentSession:
                     f"{cell.label} stopped the process: {exc.cause}",
                 )
                 return False
-            if cell.question:
-                self.hits.setdefault(cell.question, set()).update(reply.get("tripwire") or [])
             if reply.get("status") == ReplyStatus.ERROR:
                 err = reply.get("error") or {}
                 self.cell_errors[i] = err
@@ -279,6 +281,19 @@ class StudentSession:
             )
         self._drop_child()
 
+    def _request(self, question: str | None, op: Op, timeout: float, **fields) -> dict:
+        """One request to the child; forbidden calls it reported meanwhile count against
+        ``question`` (they reached the parent as they happened, see course.grading.tripwire)."""
+        child = self.child
+        try:
+            return child.request(op, timeout, **fields)
+        finally:
+            called = child.take_events()
+            forbidden = self.g.forbid.get(question, frozenset()) if question else frozenset()
+            hits = [name for name in called if name in forbidden]
+            if hits:
+                self.hits.setdefault(question, set()).update(hits)
+
     def _drop_child(self) -> None:
         if self.child is not None:
             self.child.close()
@@ -293,7 +308,6 @@ class StudentSession:
                 "student_id": self.sid,
                 "assignment": self.g.name,
                 "data": {k: encode(v) for k, v in self.data.items()},
-                "forbid": {q.id: list(q.forbid) for q in self.g.questions if q.forbid},
             }
             self.child = self.g.sandbox.start(init, self.g.options.ready_timeout)
             if not self._run_cells():
@@ -357,7 +371,7 @@ class StudentSession:
     def _grade_value(self, q) -> dict:
         g = self.g
         try:
-            reply = self.child.request(Op.VALUE, 30, name=q.target)
+            reply = self._request(q.id, Op.VALUE, 30, name=q.target)
         except (ChildTimeout, ChildDied) as exc:
             self._drop_child()
             return g._question_result(
@@ -425,11 +439,11 @@ class StudentSession:
                 continue
             limit = g.timeout_for(q.id)
             try:
-                reply = self.child.request(
+                reply = self._request(
+                    q.id,
                     Op.CALL,
                     limit,
                     name=q.target,
-                    question=q.id,
                     args=encode(case.args),
                     kwargs=encode(case.kwargs),
                 )
@@ -447,8 +461,6 @@ class StudentSession:
                 results.append({"label": label, "ok": False, "message": exc.cause})
                 self._drop_child()
                 continue
-            if reply.get("tripwire"):
-                self.hits.setdefault(q.id, set()).update(reply["tripwire"])
             rstatus = reply.get("status")
             if rstatus == ReplyStatus.UNDEFINED:
                 return self._missing(q, f"no function {q.target}")
