@@ -11,6 +11,7 @@ costs only the question it happened in: the child is killed, a fresh one re-runs
 from __future__ import annotations
 
 import re
+import threading
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -81,17 +82,33 @@ class AssignmentGrader:
         )
         #: question -> the forbidden functions it names (reports of others are ignored)
         self.forbid = {q.id: frozenset(q.forbid) for q in self.questions}
-        self.sandbox = Sandbox(
-            mode=self.options.mode,
-            limits=Limits(memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5),
-            preload=self.checks.preload,
-            deny_read=[solutions_root, *deny_read],
-            forbid=[name for names in self.forbid.values() for name in names],
-            isolation=self.options.isolation(),
-        )
+        self._deny_read = [solutions_root, *deny_read]
+        self.isolation = self.options.isolation()  # refuses early where nothing walls files off
+        self._sandbox: Sandbox | None = None
+        self._sandbox_lock = threading.Lock()
+
+    @property
+    def sandbox(self) -> Sandbox:
+        """The sandbox (its warm fork server starts on first use)."""
+        with self._sandbox_lock:
+            if self._sandbox is None:
+                self._sandbox = Sandbox(
+                    mode=self.options.mode,
+                    limits=Limits(
+                        memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5
+                    ),
+                    preload=self.checks.preload,
+                    deny_read=self._deny_read,
+                    forbid=[name for names in self.forbid.values() for name in names],
+                    isolation=self.isolation,
+                )
+            return self._sandbox
 
     def close(self) -> None:
-        self.sandbox.close()
+        with self._sandbox_lock:
+            if self._sandbox is not None:
+                self._sandbox.close()
+                self._sandbox = None
 
     def __enter__(self):
         return self
@@ -137,11 +154,20 @@ class AssignmentGrader:
             "cases": cases or [],
         }
 
-    def grade_one(self, sid: str, path: Path | None, problem: str | None = None) -> dict:
-        """Grade one submission; never raises (a grader failure is recorded in the row)."""
+    def grade_one(
+        self,
+        sid: str,
+        path: Path | None,
+        problem: str | None = None,
+        refused: bool = False,
+        raw: bytes | None = None,
+    ) -> dict:
+        """Grade one submission (its notebook at ``path``, or its bytes ``raw``); never raises
+        (a grader failure is recorded in the row). ``wall_seconds`` says how long it took."""
+        start = time.monotonic()
         row = self._row(sid)
         try:
-            self._grade(row, sid, path, problem)
+            self._grade(row, sid, path, problem, refused, raw)
         except Exception as exc:  # a bug or sandbox failure must not abort the batch
             for q in self.questions:
                 row["questions"].setdefault(
@@ -159,11 +185,22 @@ class AssignmentGrader:
         ]
         if row["status"] == SubmissionStatus.OK and abnormal:
             row["status"] = "; ".join(abnormal)
+        row["wall_seconds"] = round(time.monotonic() - start, 3)
         return row
 
-    def _grade(self, row: dict, sid: str, path: Path | None, problem: str | None) -> None:
-        if problem and path is None:
-            row["status"] = SubmissionStatus.INVALID_NOTEBOOK
+    def _grade(
+        self,
+        row: dict,
+        sid: str,
+        path: Path | None,
+        problem: str | None,
+        refused: bool = False,
+        raw: bytes | None = None,
+    ) -> None:
+        if problem and path is None and raw is None:
+            row["status"] = (
+                SubmissionStatus.REFUSED if refused else SubmissionStatus.INVALID_NOTEBOOK
+            )
             row["notes"].append(problem[0].upper() + problem[1:] + ".")
             for q in self.questions:
                 row["questions"][q.id] = self._question_result(q, GradeStatus.NOT_ANSWERED, problem)
@@ -171,7 +208,7 @@ class AssignmentGrader:
         if problem:
             row["notes"].append(problem[0].upper() + problem[1:] + ".")
         try:
-            nb = read_submission(path)
+            nb = read_submission(raw if raw is not None else path)
         except SubmissionError as exc:
             row["status"] = SubmissionStatus.INVALID_NOTEBOOK
             row["notes"].append(f"The submission could not be read: {exc}.")
