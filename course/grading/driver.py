@@ -246,8 +246,9 @@ def grade(
 
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
-            if options.announce is not None and pending:
-                options.announce(grader.sandbox.isolation.describe())
+            if options.announce is not None:
+                iso = grader.sandbox.isolation if pending else grader.isolation
+                options.announce(iso.describe())
             results = _grade_locally(grader, pending, options.jobs)
         for row in results:
             finish(row)
