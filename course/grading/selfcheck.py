@@ -26,7 +26,6 @@ from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestio
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]
 
-_REPO_ROOT = Path(__file__).resolve().parents[2]
 
 #: Set by the grading runner (sandboxed child) before any student code runs.
 _GRADING = None
@@ -63,7 +62,8 @@ def _locate(name: str, path) -> tuple[str, Path]:
     cwd = Path.cwd()
     for folder in [cwd, *cwd.parents]:
         candidates += [folder, folder / name, folder / "exercises" / name]
-    candidates.append(_REPO_ROOT / "exercises" / name)
+    if os.environ.get("COURSE_DIR"):  # never the package's own location (site-packages)
+        candidates.append(Path(os.environ["COURSE_DIR"]) / "exercises" / name)
     for folder in candidates:
         spec_file = folder / CHECKS_FILE
         if spec_file.is_file():
