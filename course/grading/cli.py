@@ -105,6 +105,7 @@ def _grade(args) -> int:
         regrade=args.regrade,
         progress=not args.no_progress,
         unsafe_no_isolation=args.unsafe_no_isolation,
+        cluster=args.cluster,
         announce=lambda text: print(text, file=sys.stderr),
     )
     try:
@@ -112,6 +113,11 @@ def _grade(args) -> int:
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
+    except RuntimeError as exc:
+        if args.cluster and "distributed" in str(exc):
+            print(f"course grade: {exc}", file=sys.stderr)
+            return 2
+        raise
     print(summary.text())
     return 0
 
@@ -176,6 +182,12 @@ def add_commands(subparsers) -> None:
         help="ignore previous results in OUT and grade everyone again",
     )
     p_gr.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p_gr.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="grade on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786), one "
+        "task per student; needs the [cluster] extra",
+    )
     p_gr.add_argument(
         "--unsafe-no-isolation",
         action="store_true",

@@ -20,6 +20,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from course.grading.isolation import Isolation, detect
 from course.grading.reports import (
@@ -71,7 +72,7 @@ class GradeOptions:
     namespaces: bool = True  # use bubblewrap when installed
     landlock: bool = True  # use Landlock when the kernel has it
     announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
-    cluster: str | None = None  # address of a Dask scheduler: one task per student there
+    cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""
