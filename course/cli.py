@@ -90,12 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_open.add_argument("--no-browser", action="store_true", help="do not launch a browser")
     p_open.set_defaults(func=_open)
 
-    try:
-        from course.grading import cli as exercise_cli
-    except ImportError:
-        exercise_cli = None
-    if exercise_cli is not None:
-        exercise_cli.add_commands(sub)
+    from course.grading import cli as grading_cli
+
+    grading_cli.add_commands(sub)
     return parser
 
 

@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
 
 
-def _venv(tmp: Path) -> Path:
+def _venv(tmp: Path) -> tuple[Path, str]:
     venv = tmp / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     purelib = subprocess.run(
@@ -36,11 +36,11 @@ def _venv(tmp: Path) -> Path:
         check=True,
     ).stdout.strip()
     (Path(purelib) / "_test_deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
-    return venv
+    return venv, purelib
 
 
 def test_non_editable_install_grades_from_a_course_folder(tmp_path):
-    venv = _venv(tmp_path)
+    venv, purelib = _venv(tmp_path)
     python = venv / "bin" / "python"
     source = tmp_path / "src"
     shutil.copytree(
@@ -50,7 +50,8 @@ def test_non_editable_install_grades_from_a_course_folder(tmp_path):
     )
     install = subprocess.run(
         [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps"]
-        + ["--prefix", str(venv), str(source)],
+        # --target, not --prefix: pip must not touch the running environment's own install
+        + ["--target", purelib, str(source)],
         capture_output=True,
         text=True,
         timeout=300,

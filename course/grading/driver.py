@@ -161,12 +161,8 @@ def find_submissions(folder: Path, assignment: str, private_dir: Path | None = N
         if preferred.is_file():
             found[sid] = Submission(sid, preferred)
         elif notebooks:
-            note = (
-                None
-                if len(notebooks) == 1
-                else f"several notebooks in the folder; graded {notebooks[0].name}"
-            )
-            found[sid] = Submission(sid, notebooks[0], note)
+            several = f"several notebooks in the folder; graded {notebooks[0].name}"
+            found[sid] = Submission(sid, notebooks[0], several if len(notebooks) > 1 else None)
         else:
             found[sid] = Submission(sid, None, "no notebook (.ipynb) in the submission folder")
     return [found[k] for k in sorted(found)]

@@ -99,7 +99,7 @@ def strip_markers(
     """Return the released source (stubs for SOLUTION regions, HIDDEN TESTS regions removed)
     and the number of solution regions; raise :class:`MarkerError` on malformed markers."""
     out: list[str] = []
-    state = None  # None | ("solution", indent, line, stubs) | ("hidden", line)
+    state: Any = None  # None | ("solution", indent, line, stubs) | ("hidden", line)
     regions = 0
     lines = source.split("\n")
     for n, line in enumerate(lines, 1):
@@ -277,7 +277,7 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                 raise MarkerError(
                     f"{where}: second answer cell for {question} (first: cell {seen_answers[question]})"
                 )
-            seen_answers[question] = index
+            seen_answers[str(question)] = index
         if role == CellRole.SETUP:
             if not _STUDENT_ID_LINE.search(released):
                 raise MarkerError(

@@ -113,7 +113,9 @@ class _Trusted:
 
 
 _MISSING = object()
-_TRUSTED = contextlib.nullcontext()  # replaced by a _Trusted snapshot before student code runs
+_TRUSTED: typing.Any = (
+    contextlib.nullcontext()
+)  # replaced by a _Trusted snapshot before student code runs
 
 
 class CappedWriter:
@@ -224,7 +226,7 @@ def make_shell():
         return None
 
     for magic in ("matplotlib", "pylab"):
-        shell.register_magic_function(_noop_magic, "line", magic)
+        shell.register_magic_function(_noop_magic, "line", magic)  # type: ignore[arg-type]
     return shell
 
 
@@ -291,7 +293,7 @@ class RequestLoop:
     def __init__(self, req_fd: int, resp_fd: int):
         self.requests = os.fdopen(req_fd, "rb", buffering=1 << 16)
         self.resp_fd = resp_fd
-        self.shell = None
+        self.shell: typing.Any = None  # the IPython shell, made before student code
         self.refused = False  # set by the audit hook when it refuses an event
 
     def note_refusal(self) -> None:
@@ -320,7 +322,7 @@ class RequestLoop:
         except BaseException as exc:  # run_cell normally catches everything itself
             error = exc
         sys.stdout.flush()
-        reply = {"status": _OK if error is None else _ERROR}
+        reply: dict = {"status": _OK if error is None else _ERROR}
         if error is not None:
             reply["error"] = _error_info(error)
         return reply

@@ -364,8 +364,8 @@ class Sandbox:
         # never mounted nor allowed, should a Python folder contain one of them
         self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]
         self._lock = threading.Lock()
-        self._server = None
-        self._sock = None
+        self._server: subprocess.Popen | None = None
+        self._sock: socket.socket | None = None
         self._rundir = os.path.realpath(tempfile.mkdtemp(prefix="course-grade-run-"))
         self._children = os.path.join(self._rundir, "children")
         os.mkdir(self._children)
@@ -428,9 +428,9 @@ class Sandbox:
         log.close()
         child_sock.close()
         self._sock = parent_sock
-        self._sock.settimeout(120)
+        parent_sock.settimeout(120)
         try:
-            reply = json.loads(self._sock.recv(65536) or b"null")
+            reply = json.loads(parent_sock.recv(65536) or b"null")
         except (OSError, ValueError):
             reply = None
         if not reply or reply.get("status") != ReplyStatus.READY:
@@ -448,6 +448,8 @@ class Sandbox:
             return ""
 
     def _server_call(self, message: dict, fds=()) -> tuple[dict, list[int]]:
+        if self._sock is None:
+            raise SandboxError("the fork server is not running")
         data = json.dumps(message).encode()
         if fds:
             socket.send_fds(self._sock, [data], list(fds))

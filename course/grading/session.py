@@ -25,7 +25,7 @@ from course.grading.notebook import (
     read_submission,
 )
 from course.grading.release import checks_digest, load_assignment
-from course.grading.sandbox import ChildDied, ChildTimeout, Limits, Sandbox
+from course.grading.sandbox import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -249,10 +249,12 @@ class StudentSession:
         self.sid = sid
         self.plan = plan
         self.skipped: set[int] = set()
-        self.hard: dict[str, tuple[str, str]] = {}  # question -> (status, message) from its cells
+        self.hard: dict[
+            str, tuple[GradeStatus, str]
+        ] = {}  # question -> (status, message) from its cells
         self.cell_errors: dict[int, dict] = {}
         self.hits: dict[str, set] = {}
-        self.child = None
+        self.child: ChildHandle | None = None
         self.deadline = time.monotonic() + grader.budget()
         self.data = {key: grader.checks.data_for(key, sid) for key in grader.checks.data_keys()}
 
@@ -266,7 +268,7 @@ class StudentSession:
         return self.clean(f"{err.get('type', 'Error')}: {err.get('message', '')}".rstrip(": "))
 
     # -- child lifecycle ------------------------------------------------------------------
-    def _failure_status(self, cause: str) -> str:
+    def _failure_status(self, cause: str) -> GradeStatus:
         if "memory" in cause or "MemoryError" in cause:
             return GradeStatus.MEMORY
         return GradeStatus.CRASH
@@ -307,7 +309,7 @@ class StudentSession:
                     )
         return True
 
-    def _cell_failed(self, i: int, status: str, message: str) -> None:
+    def _cell_failed(self, i: int, status: GradeStatus, message: str) -> None:
         self.skipped.add(i)
         cell = self.plan.cells[i]
         if cell.question:
@@ -322,13 +324,14 @@ class StudentSession:
         """One request to the child; forbidden calls it reported meanwhile count against
         ``question`` (they reached the parent as they happened, see course.grading.tripwire)."""
         child = self.child
+        assert child is not None, "ensure_child() first"
         try:
             return child.request(op, timeout, **fields)
         finally:
             called = child.take_events()
             forbidden = self.g.forbid.get(question, frozenset()) if question else frozenset()
             hits = [name for name in called if name in forbidden]
-            if hits:
+            if hits and question:
                 self.hits.setdefault(question, set()).update(hits)
 
     def _drop_child(self) -> None:
@@ -548,7 +551,7 @@ class StudentSession:
             if passed == len(results):
                 status = GradeStatus.PASS
             elif (
-                all(r["message"].startswith("raised ") for r in results if not r["ok"])
+                all(str(r["message"]).startswith("raised ") for r in results if not r["ok"])
                 and passed == 0
             ):
                 status = GradeStatus.ERROR
