@@ -70,6 +70,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples: course open | course release 01_least_squares | "
         "course grade 01_least_squares submissions/ --out grading-output/",
     )
+    from course import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p_open = sub.add_parser(
@@ -90,9 +93,12 @@ def build_parser() -> argparse.ArgumentParser:
     p_open.add_argument("--no-browser", action="store_true", help="do not launch a browser")
     p_open.set_defaults(func=_open)
 
-    from course.grading import cli as grading_cli
-
-    grading_cli.add_commands(sub)
+    try:
+        from course.grading import cli as grading_cli
+    except ImportError:  # the library without its grader: `course open` only
+        pass
+    else:
+        grading_cli.add_commands(sub)
     return parser
 
 
