@@ -435,6 +435,7 @@ class TestResult:
         alternative = _check_alternative(self.alternative)
         set_(self, "null", as_law(self.null, "null"))
         statistic = _plain_number(self.statistic)
+        values: tuple[Any, ...]
         if isinstance(statistic, tuple):
             if alternative != "two-sided" or len(statistic) != 2:
                 raise ValueError(

@@ -382,6 +382,7 @@ def as_covariance_stack(
     >>> as_covariance_stack(np.stack([np.eye(2), 2 * np.eye(2)]), "P", 2).shape
     (2, 2, 2)
     """
+    allow_singular = as_flag(allow_singular, "allow_singular")
     stack = as_float_array(value, name, min_ndim=2, empty=False)
     m = stack.shape[-1]
     if stack.shape[-2] != m or (size is not None and m != size):

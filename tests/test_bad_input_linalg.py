@@ -70,6 +70,17 @@ TABLE = {
         size=2,
         allow_singular=flag(False),
     ),
+    "as_covariance_stack": case(
+        validation.as_covariance_stack,
+        value=Arg(
+            np.stack([S, 2 * S]),
+            dict(covariance(np.stack([S, 2 * S]), min_ndim=2).bad),
+            names=("y",),
+        ),
+        name="y",
+        size=2,
+        allow_singular=flag(False),
+    ),
     "as_std": case(
         validation.as_std,
         value=value_named_y(0.2, {**REAL_BAD, "zero": 0.0, "1e300": 1e300, "1e-300": 1e-300}),
