@@ -816,13 +816,13 @@ def as_callable(value: Any, name: str, *, optional: bool = False) -> Any:
     >>> as_callable(3.0, "f")
     Traceback (most recent call last):
     ...
-    course.validation.InputTypeError: f must be a function (callable), got float 3.0
+    course.validation.InputTypeError: f must be callable (a function), got float 3.0
     """
     if value is None and optional:
         return None
     if not callable(value):
         raise InputTypeError(
-            f"{name} must be a function (callable), got {type(value).__name__} {value!r}"
+            f"{name} must be callable (a function), got {type(value).__name__} {value!r}"
         )
     return value
 

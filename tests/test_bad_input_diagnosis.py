@@ -183,11 +183,11 @@ TABLE = {
         structure=obj(STRUCTURE),
         alarms=alarms_arg(["T1", "T2", "T3"]),
         no_fault=Arg("NF", {"unknown": "F9", "number": 3.0}),
-        max_size=count(2, none_ok=True),
+        max_size=count(2, minimum=0, none_ok=True),
     ),
     "linear_decision_structure": case(
         dg.linear_decision_structure,
-        U=regressors(),
+        U=matrix(U, shaped=False),  # columns no mode or test names are allowed
         modes=mapping(MODES).but(out_of_range={"NF": (), "F1": (7,)}),
         tests=mapping({"T1": (0,), "T3": (2,)}).but(out_of_range={"T1": (9,)}),
         rtol=positive(1e-9),
@@ -206,7 +206,7 @@ TABLE = {
     # -- prediction errors ---------------------------------------------------------
     "least_squares_residual": case(
         dg.least_squares_residual,
-        Phi=regressors(),
+        Phi=matrix(U, shaped=False),  # any number of regressors
         y=records(),
         rcond=positive(1e-9, none_ok=True),
     ),
@@ -250,10 +250,10 @@ TABLE = {
         dg.nonlinear_prediction_error,
         y=array(predict([2.0, 1.4]), ndims="any"),
         predict=function(predict),
-        nominal=vector([2.0, 1.0]),
+        nominal=vector([2.0, 1.0], shaped=False),  # predict reads theta[0] and theta[1]
         free=free((1,), 2),
         theta_init=vector([1.2], none_ok=True),
-        bounds=Arg(None, {"reversed": [(2.0, 0.0)], "NaN": [(np.nan, 2.0)], "text": "ab"}),
+        bounds=Arg(None, {"reversed": (2.0, 0.0), "NaN": (np.nan, 2.0), "text": "ab"}),
     ),
     # -- parameter estimates ---------------------------------------------------
     "estimate_parameters": case(
@@ -297,19 +297,19 @@ TABLE = {
     "normal_log_likelihood": case(
         dg.normal_log_likelihood,
         theta=array(4.0, ndims="any"),
-        z=array([3.0, 5.0], ndims="any"),
+        z=array([3.0, 5.0], ndims="any", shaped=False),
         sigma=scale(1.0),
     ),
     "normal_likelihood": case(
         dg.normal_likelihood,
         theta=array(4.0, ndims="any"),
-        z=array([3.0, 5.0], ndims="any"),
+        z=array([3.0, 5.0], ndims="any", shaped=False),
         sigma=scale(1.0),
     ),
     "maximum_likelihood": case(
         dg.maximum_likelihood,
         log_likelihood=function(poisson_log_likelihood),
-        nominal=vector([0.0]),
+        nominal=vector([0.0], shaped=False),  # the function reads theta[0] only
         free=Arg(None, {"out of range": [1], "repeated": [0, 0], "fraction": [0.5], "text": "0"}),
         theta_init=vector([0.1], none_ok=True),
         bounds=Arg(None, {"reversed": [(2.0, 0.0)], "NaN": [(np.nan, 2.0)], "text": "ab"}),
@@ -358,7 +358,7 @@ TABLE = {
     ),
     "neyman_pearson_test": case(
         dg.neyman_pearson_test,
-        z=vector([3.0, 5.0]),
+        z=array([3.0, 5.0], ndims=(0, 1), shaped=False),  # a scalar is one observation
         theta0=array(0.0, ndims=(0, 1)),
         theta1=array(1.0, ndims=(0, 1)).but(equal_to_theta0=0.0),
         sigma=scale(1.0),

@@ -226,7 +226,7 @@ def windowed_chi2_test(
             )
         if (nis < 0).any():
             raise ValueError(
-                "result holds NIS values, which are never negative (NaN marks undefined samples)"
+                "result holds NIS values, which must be non-negative (NaN marks undefined samples)"
             )
         p = (
             1
