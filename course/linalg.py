@@ -52,6 +52,7 @@ from course.validation import (
     as_count,
     as_covariance,
     as_finite,
+    as_flag,
     as_float_array,
     as_matrix,
     as_positive,
@@ -177,19 +178,29 @@ def cholesky_lower(matrix: np.ndarray, name: str = "matrix") -> np.ndarray:
 
 
 def _checked_cholesky(cov: np.ndarray, name: str) -> np.ndarray:
-    """Cholesky factors of a finite square stack: symmetric, PD, not numerically singular."""
+    """Cholesky factors of a finite square stack: symmetric, PD, not numerically singular.
+
+    The factorisation runs on the correlation matrices ``D^{-1/2} S D^{-1/2}``
+    (``D`` the variances), the same verdict as :func:`course.validation.as_covariance`
+    at any scale; ``L = D^{1/2} L_C``.
+    """
     scale = np.max(np.abs(cov), axis=(-2, -1), keepdims=True)
     if np.any(np.abs(cov - np.swapaxes(cov, -1, -2)) > SYMMETRY_RTOL * scale):
         raise ValueError(f"{name} is not symmetric; a covariance matrix must equal its transpose")
+    variances = np.diagonal(cov, axis1=-2, axis2=-1)
+    not_pd = LinAlgError(
+        f"{name} is not positive definite (Cholesky factorisation failed); "
+        "check that it is a valid covariance matrix"
+    )
+    if np.any(variances <= 0):
+        raise not_pd
+    std = np.sqrt(variances)
     try:
-        L = np.linalg.cholesky(cov)
+        L = np.linalg.cholesky(cov / std[..., :, None] / std[..., None, :])
     except LinAlgError:
-        raise LinAlgError(
-            f"{name} is not positive definite (Cholesky factorisation failed); "
-            "check that it is a valid covariance matrix"
-        ) from None
-    _refuse_singular_pivots(L, np.diagonal(cov, axis1=-2, axis2=-1), name)
-    return L
+        raise not_pd from None
+    _refuse_singular_pivots(L, np.ones(variances.shape), name)
+    return std[..., :, None] * L
 
 
 def cholesky_factor(S, name: str = "S") -> np.ndarray:
@@ -527,13 +538,33 @@ def qr_solve(A: np.ndarray, b: np.ndarray, *, full: bool = False) -> QRSolution:
     >>> np.round(sol.x, 12) + 0.0
     array([12.,  3.])
     """
-    A = np.asarray(A, dtype=float)
+    A, b = _system(A, b)
+    full = as_flag(full, "full")
     n = A.shape[1]
+    if A.shape[0] < n:
+        raise ValueError(
+            f"A has more columns ({n}) than rows ({A.shape[0]}): least squares by QR needs m >= n "
+            "(use lstsq_min_norm for an underdetermined system)"
+        )
     Q, R_full = sla.qr(A, mode="full" if full else "economic", check_finite=False)
     R = np.triu(R_full[:n, :n])
     x = sla.solve_triangular(R, Q[:, :n].T @ b, lower=False, check_finite=False)
     R_inv = sla.solve_triangular(R, np.eye(n), lower=False, check_finite=False)
     return QRSolution(x=x, R_inv=R_inv, Q=Q, R=R)
+
+
+def _system(A, b, *, empty_columns: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """A finite ``(m, n)`` matrix and a right-hand side ``(m,)`` or ``(m, k)``."""
+    A = as_float_array(A, "A", ndim=2)
+    if A.shape[0] == 0 or (A.shape[1] == 0 and not empty_columns):
+        raise ValueError(f"A is empty (shape {A.shape}); pass at least one row and column")
+    b = as_float_array(b, "b", empty=False)
+    if b.ndim not in (1, 2) or b.shape[0] != A.shape[0]:
+        raise ValueError(
+            f"b must have shape ({A.shape[0]},) or ({A.shape[0]}, k), one row per row of A, "
+            f"got {b.shape}"
+        )
+    return A, b
 
 
 class MinNormSolution(NamedTuple):
@@ -573,9 +604,10 @@ def lstsq_min_norm(A: np.ndarray, b: np.ndarray, rtol: float | None = None) -> M
     >>> sol.rank, np.round(sol.residual, 12) + 0.0
     (1, array([0., 0., 1.]))
     """
-    A = np.asarray(A, dtype=float)
-    b = np.asarray(b, dtype=float)
+    A, b = _system(A, b, empty_columns=True)
     m, n = A.shape
+    if rtol is not None:
+        rtol = as_positive(rtol, "rtol", what="the relative rank tolerance")
     if n == 0:
         return MinNormSolution(np.zeros((0,) + b.shape[1:]), b.copy(), 0)
     left, s, right_t = np.linalg.svd(A, full_matrices=False)

@@ -3,9 +3,7 @@
 See tests/bad_input.py.  The checks of ``course.validation`` refuse a bad
 *value* with a message that names the argument they were given (``"y"``
 below); the building blocks of ``course.linalg`` refuse bad arrays like every
-other public function.  The least-squares solvers of ``course.linalg``
-(``qr_solve``, ``lstsq_min_norm``, ``covariance_factor``) are being rewritten
-for issue 15 item 1; their cases are expected to fail until that work lands.
+other public function.
 """
 
 import numpy as np
@@ -189,10 +187,12 @@ TABLE = {
     "check_full_column_rank": case(
         linalg.check_full_column_rank, A=matrix(A, shaped=False), name="A"
     ),
-    "qr_solve": case(linalg.qr_solve, A=matrix(A), b=array(B, ndims=(1, 2)), full=flag(False)),
+    "qr_solve": case(
+        linalg.qr_solve, A=matrix(A, shaped=False), b=array(B, ndims=(1, 2)), full=flag(False)
+    ),
     "lstsq_min_norm": case(
         linalg.lstsq_min_norm,
-        A=matrix(A),
+        A=matrix(A, shaped=False),
         b=array(B, ndims=(1, 2)),
         rtol=positive(1e-12, none_ok=True),
     ),
@@ -204,15 +204,9 @@ EXEMPT = {
     "MinNormSolution": "a named tuple the library returns",
 }
 
-#: The least-squares solvers are the lsq engineer's (issue 15 item 1).
-XFAIL = {
-    "qr_solve": "least-squares solvers are rewritten for issue 15 item 1 (lsq)",
-    "lstsq_min_norm": "least-squares solvers are rewritten for issue 15 item 1 (lsq)",
-}
-
 (
     test_every_public_callable_has_cases,
     test_valid_call,
     test_bad_input_is_refused,
     test_extreme_input,
-) = module_tests(("course.validation", "course.linalg"), TABLE, EXEMPT, XFAIL)
+) = module_tests(("course.validation", "course.linalg"), TABLE, EXEMPT)
