@@ -53,7 +53,7 @@ def unit(value):
     return array(value).but(not_unit=2 * np.asarray(value, float))
 
 
-def test_options(alternative="two-sided"):
+def options_of_a_test(alternative="two-sided"):
     return {
         "null": moments().but(other_length=mm.residual_moments(TRUE, FILT, N + 2)),
         "alpha": probability(0.05),
@@ -141,12 +141,12 @@ TABLE = {
         direction=Arg(None, {"not unit": [2.0], "NaN": [np.nan]}),
         full=flag(False),
     ),
-    "mean_test": case(mm.mean_test, residuals=residuals(), j=section(), **test_options()),
+    "mean_test": case(mm.mean_test, residuals=residuals(), j=section(), **options_of_a_test()),
     "covariance_test": case(
         mm.covariance_test,
         residuals=residuals(),
         j=section(2),
-        **test_options(),
+        **options_of_a_test(),
         gamma=Arg(None, {"out of range": 1, "fraction": 0.5, "text": "a"}),
     ),
     "correlation_test": case(
@@ -154,7 +154,7 @@ TABLE = {
         residuals=residuals(),
         j=section(1),
         k=section(3),
-        **test_options("greater"),
+        **options_of_a_test("greater"),
         gamma=Arg(None, {"out of range": 1, "fraction": 0.5, "text": "a"}),
     ),
     "power": case(
