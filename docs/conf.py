@@ -43,15 +43,16 @@ include_patterns = [
 ]
 exclude_patterns = [
     "docs/_build/**",
-    "docs/_templates/**",
     "docs/_ext/**",
     "**/.ipynb_checkpoints/**",
     "solutions/**",
-    ".*/**",
+    # Not ".*/**": Sphinx also matches that against "./course.css" when copying static files.
+    ".git/**",
+    ".cache/**",
+    ".venv*/**",
     "build/**",
     "dist/**",
 ]
-templates_path = [str(DOCS / "_templates")]  # absolute: the source folder is the root
 # Module docstrings list their sources as citations and cite them in running text ("[F],
 # eq. 4") rather than as reST citation references; that is not an error.
 suppress_warnings = ["ref.citation"]
@@ -77,9 +78,10 @@ course_site_notebooks = ["notebooks/*.ipynb"]
 # The JupyterLite app (OUT/lite); COURSE_DOCS_LITE=0 skips it (course docs --no-lite).
 course_site_lite = os.environ.get("COURSE_DOCS_LITE", "1") != "0"
 
-# -- API reference (autosummary + numpydoc) ---------------------------------------------------
-autosummary_generate = True
-autosummary_imported_members = True
+# -- API reference (autosummary tables + numpydoc) -------------------------------------------
+# One page per public namespace (course_site writes them): a module reads as a chapter, and
+# the site stays small enough to check every page in a browser within CI's budget.
+autosummary_generate = False
 autodoc_typehints = "none"  # numpydoc's Parameters section carries the types
 autodoc_member_order = "bysource"
 numpydoc_show_class_members = False
@@ -92,8 +94,9 @@ mathjax_path = "mathjax/tex-chtml.js"
 # -- HTML ----------------------------------------------------------------------------------------
 html_theme = "sphinx_book_theme"
 html_title = project
-html_static_path = ["_static"]
+html_static_path = [str(DOCS / "_static")]
 html_css_files = ["course.css"]
+html_favicon = str(DOCS / "_static" / "favicon.svg")  # else browsers ask for /favicon.ico
 html_theme_options = {
     "use_download_button": True,
     "use_fullscreen_button": False,
@@ -101,5 +104,6 @@ html_theme_options = {
     "home_page_in_toc": True,
     "navigation_with_keys": False,
 }
+html_context = {"default_mode": "auto"}  # an empty mode makes the theme log a console error
 html_last_updated_fmt = None
-html_copy_source = False
+html_copy_source = True  # the download button offers the .ipynb and .md sources

@@ -3,8 +3,8 @@
 What it adds to a plain Sphinx + myst-nb + numpydoc build:
 
 * **API pages from the public names.** One page per public namespace (every name in
-  ``course.__all__``, plus the submodules of ``course.plotting``) listing that namespace's
-  ``__all__`` with autosummary, one page per object. Only public names are used, so moving a
+  ``course.__all__``, plus the submodules of ``course.plotting``) documenting that namespace's
+  ``__all__``. Only public names are used, so moving a
   function between private submodules (a module becoming a package) changes no page.
 * **Teaching map.** Every code cell of every notebook on the site is parsed (``ast``) for the
   ``course`` names it uses; each public object's docstring then gets a "See also" entry naming
@@ -78,10 +78,23 @@ def _write_if_changed(path: Path, text: str) -> None:
         path.write_text(text, encoding="utf-8")
 
 
+def _directive(module_name: str, name: str) -> str:
+    obj = getattr(importlib.import_module(module_name), name)
+    if isinstance(obj, type):
+        return f".. autoclass:: {name}\n   :members:\n   :show-inheritance:\n"
+    if callable(obj):
+        return f".. autofunction:: {name}\n"
+    return f".. autodata:: {name}\n   :no-value:\n"
+
+
 def write_api_pages(srcdir: Path) -> dict[str, list[str]]:
-    """Write ``docs/api/modules/<module>.rst`` for every public namespace; drop stale pages."""
+    """Write ``docs/api/modules/<module>.rst`` for every public namespace; drop stale pages.
+
+    A page shows the module's docstring, a summary table of its ``__all__`` and then every
+    public object, documented under its public name (``course.diagnosis.glr_test``), wherever
+    it is defined.
+    """
     modules_dir = srcdir / API_DIR / "modules"
-    generated_dir = srcdir / API_DIR / "generated"
     api: dict[str, list[str]] = {}
     for module_name in public_namespaces():
         members = public_members(module_name)
@@ -98,22 +111,16 @@ def write_api_pages(srcdir: Path) -> dict[str, list[str]]:
             "",
         ]
         if members:
-            lines += [
-                ".. autosummary::",
-                "   :toctree: ../generated",
-                "   :nosignatures:",
-                "",
-            ]
+            lines += [".. rubric:: Contents", "", ".. autosummary::", "   :nosignatures:", ""]
             lines += [f"   {name}" for name in members]
             lines.append("")
+            lines += [_directive(module_name, name) for name in members]
         _write_if_changed(modules_dir / f"{module_name}.rst", "\n".join(lines))
-    wanted_pages = {f"{m}.rst" for m in api}
-    wanted_stubs = {f"{m}.{name}.rst" for m, names in api.items() for name in names}
-    for folder, wanted in ((modules_dir, wanted_pages), (generated_dir, wanted_stubs)):
-        if folder.is_dir():
-            for page in folder.glob("*.rst"):
-                if page.name not in wanted:
-                    page.unlink()  # a name that left the API must not leave a broken page
+    wanted = {f"{m}.rst" for m in api}
+    if modules_dir.is_dir():
+        for page in modules_dir.glob("*.rst"):
+            if page.name not in wanted:
+                page.unlink()  # a namespace that left the API must not leave a broken page
     return api
 
 
@@ -136,44 +143,49 @@ def _code_cells(notebook: Path) -> list[str]:
     return cells
 
 
-def dotted_names_used(source: str) -> set[str]:
-    """Dotted ``course...`` names a piece of code refers to, with import aliases resolved."""
-    try:
-        tree = ast.parse(source)
-    except SyntaxError:
-        return set()
+def dotted_names_used(cells: list[str]) -> set[str]:
+    """Dotted ``course...`` names the code cells of a notebook refer to.
+
+    Import aliases carry over from cell to cell (``from course import lsq`` in the first cell,
+    ``lsq.w_tests(...)`` in a later one), as in a kernel; a cell that does not parse is skipped.
+    """
     aliases: dict[str, str] = {}
     used: set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            for alias in node.names:
-                if alias.name == "course" or alias.name.startswith("course."):
-                    if alias.asname:
-                        aliases[alias.asname] = alias.name
-                    else:
-                        aliases["course"] = "course"
-        elif (
-            isinstance(node, ast.ImportFrom)
-            and node.level == 0
-            and node.module
-            and (node.module == "course" or node.module.startswith("course."))
-        ):
-            for alias in node.names:
-                full = f"{node.module}.{alias.name}"
-                aliases[alias.asname or alias.name] = full
-                used.add(full)
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Attribute):
-            chain = []
-            current: ast.AST = node
-            while isinstance(current, ast.Attribute):
-                chain.append(current.attr)
-                current = current.value
-            if isinstance(current, ast.Name) and current.id in aliases:
-                base = aliases[current.id]
-                parts = list(reversed(chain))
-                for i in range(1, len(parts) + 1):
-                    used.add(".".join([base, *parts[:i]]))
+    for source in cells:
+        try:
+            tree = ast.parse(source)
+        except SyntaxError:
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    if alias.name == "course" or alias.name.startswith("course."):
+                        # "import course.lsq" binds "course"; "import course.lsq as l" binds "l"
+                        if alias.asname:
+                            aliases[alias.asname] = alias.name
+                        else:
+                            aliases["course"] = "course"
+            elif (
+                isinstance(node, ast.ImportFrom)
+                and node.level == 0
+                and node.module
+                and (node.module == "course" or node.module.startswith("course."))
+            ):
+                for alias in node.names:
+                    full = f"{node.module}.{alias.name}"
+                    aliases[alias.asname or alias.name] = full
+                    used.add(full)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute):
+                chain = []
+                current: ast.AST = node
+                while isinstance(current, ast.Attribute):
+                    chain.append(current.attr)
+                    current = current.value
+                if isinstance(current, ast.Name) and current.id in aliases:
+                    parts = list(reversed(chain))
+                    for i in range(1, len(parts) + 1):
+                        used.add(".".join([aliases[current.id], *parts[:i]]))
     return used
 
 
@@ -208,9 +220,7 @@ def teaching_map(notebooks: dict[str, Path], api: dict[str, list[str]]) -> dict[
                 by_id.setdefault(id(obj), []).append(f"{module_name}.{name}")
     taught: dict[str, list[str]] = {}
     for docname in sorted(notebooks):
-        used: set[str] = set()
-        for cell in _code_cells(notebooks[docname]):
-            used |= dotted_names_used(cell)
+        used = dotted_names_used(_code_cells(notebooks[docname]))
         for dotted in sorted(used):
             obj = _resolve(dotted)
             for public in by_id.get(id(obj), []) if obj is not None else []:
@@ -293,7 +303,7 @@ def outdated_by_teaching_map(app, env, added, changed, removed) -> list[str]:
     stale = set()
     for name in set(old) | set(new):
         if old.get(name) != new.get(name):
-            stale.add(f"{API_DIR}/generated/{name}")
+            stale.add(f"{API_DIR}/modules/{name.rsplit('.', 1)[0]}")
             stale.update(old.get(name, []))
             stale.update(new.get(name, []))
     return sorted(stale & set(env.found_docs))
