@@ -5,7 +5,7 @@
 ``course docs OUT_DIR``
     build the course website (notebooks, API reference, guides) into OUT_DIR.
 ``course release`` and ``course grade``
-    the instructors' exercise commands (see :mod:`course.exercises`).
+    the instructors' exercise commands (see :mod:`course.grading`).
 
 ``python -m course`` is the same command.
 """
@@ -123,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_docs.set_defaults(func=_docs)
 
     try:
-        from course.exercises import cli as exercise_cli
+        from course.grading import cli as exercise_cli
     except ImportError:
         exercise_cli = None
     if exercise_cli is not None:
