@@ -111,6 +111,10 @@ def build_site(
         "html",
         "-W",
         "--keep-going",
+        # Write every page: reading stays incremental (only changed sources are parsed and
+        # only changed notebooks run), but a page that links to an object that moved would
+        # otherwise keep its old link.
+        "-a",
         "-j",
         str(jobs),
         "-c",

@@ -87,18 +87,58 @@ def _directive(module_name: str, name: str) -> str:
     return f".. autodata:: {name}\n   :no-value:\n"
 
 
+def home_namespaces(api: dict[str, list[str]]) -> dict[int, str]:
+    """id(object) -> the one namespace that documents it.
+
+    A name several namespaces export (``course.filters.AlarmStatistics`` is
+    ``course.nis.AlarmStatistics``) is documented once, where it is defined (the namespace its
+    ``__module__`` lies in), else in the first namespace that exports it; the others point
+    there.
+    """
+    homes: dict[int, str] = {}
+    for module_name, members in api.items():
+        module = importlib.import_module(module_name)
+        for name in members:
+            obj = getattr(module, name)
+            if not _is_documentable(obj):
+                continue
+            defined_in = getattr(obj, "__module__", "") or ""
+            current = homes.get(id(obj))
+            if current is None or (
+                not _within(defined_in, current) and _within(defined_in, module_name)
+            ):
+                homes[id(obj)] = module_name
+    return homes
+
+
+def _within(module: str, namespace: str) -> bool:
+    return module == namespace or module.startswith(namespace + ".")
+
+
+def _is_documentable(obj) -> bool:
+    # Constants (numbers, strings, tables) are documented wherever they are exported.
+    return isinstance(obj, type) or callable(obj)
+
+
 def write_api_pages(srcdir: Path) -> dict[str, list[str]]:
     """Write ``docs/api/modules/<module>.rst`` for every public namespace; drop stale pages.
 
     A page shows the module's docstring, a summary table of its ``__all__`` and then every
     public object, documented under its public name (``course.diagnosis.glr_test``), wherever
-    it is defined.
+    it is defined. Names re-exported from another namespace link to that namespace's entry.
     """
     modules_dir = srcdir / API_DIR / "modules"
-    api: dict[str, list[str]] = {}
-    for module_name in public_namespaces():
-        members = public_members(module_name)
-        api[module_name] = members
+    api = {module_name: public_members(module_name) for module_name in public_namespaces()}
+    homes = home_namespaces(api)
+    for module_name, members in api.items():
+        module = importlib.import_module(module_name)
+        own, reexported = [], []
+        for name in members:
+            home = homes.get(id(getattr(module, name)), module_name)
+            if home == module_name:
+                own.append(name)
+            else:
+                reexported.append((name, home))
         title = f"``{module_name}``"
         lines = [
             title,
@@ -110,11 +150,18 @@ def write_api_pages(srcdir: Path) -> dict[str, list[str]]:
             f".. currentmodule:: {module_name}",
             "",
         ]
-        if members:
+        if own:
             lines += [".. rubric:: Contents", "", ".. autosummary::", "   :nosignatures:", ""]
-            lines += [f"   {name}" for name in members]
+            lines += [f"   {name}" for name in own]
             lines.append("")
-            lines += [_directive(module_name, name) for name in members]
+        if reexported:
+            lines += [".. rubric:: Also exported here", ""]
+            lines += [
+                f"* ``{module_name}.{name}`` is :py:obj:`{home}.{name}`"
+                for name, home in reexported
+            ]
+            lines.append("")
+        lines += [_directive(module_name, name) for name in own]
         _write_if_changed(modules_dir / f"{module_name}.rst", "\n".join(lines))
     wanted = {f"{m}.rst" for m in api}
     if modules_dir.is_dir():
@@ -209,14 +256,17 @@ def teaching_map(notebooks: dict[str, Path], api: dict[str, list[str]]) -> dict[
     """Public object name -> docnames of the notebooks that use it (learning-path order).
 
     Objects are matched by identity, so a notebook that imports a name from a private
-    submodule still counts for the public name the API documents.
+    submodule, or from another namespace that re-exports it, counts for the one public name
+    the API documents it under.
     """
+    homes = home_namespaces(api)
     by_id: dict[int, list[str]] = {}
     for module_name, members in api.items():
         module = importlib.import_module(module_name)
         for name in members:
             obj = getattr(module, name, None)
-            if obj is not None and not isinstance(obj, (int, float, str, tuple, dict, list)):
+            # Only the name the API documents the object under (a re-export points there).
+            if _is_documentable(obj) and homes.get(id(obj)) == module_name:
                 by_id.setdefault(id(obj), []).append(f"{module_name}.{name}")
     taught: dict[str, list[str]] = {}
     for docname in sorted(notebooks):
@@ -281,13 +331,9 @@ def on_config_inited(app, config) -> None:
     api = write_api_pages(Path(app.srcdir))
     app.course_api = api
     app.course_taught = teaching_map(_notebook_docs(app), api)
-    untaught = sorted(
-        f"{m}.{n}" for m, names in api.items() for n in names if f"{m}.{n}" not in app.course_taught
-    )
     logger.info(
-        "[course-site] teaching map: %d public objects used by a notebook, %d not",
-        sum(len(v) for v in api.values()) - len(untaught),
-        len(untaught),
+        "[course-site] teaching map: %d public objects are used by a notebook",
+        len(app.course_taught),
     )
 
 
