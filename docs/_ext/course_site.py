@@ -183,10 +183,7 @@ def _code_cells(notebook: Path) -> list[str]:
         if cell.get("cell_type") != "code":
             continue
         source = cell.get("source", "")
-        source = "".join(source) if isinstance(source, list) else source
-        # IPython magics and shell escapes are not Python.
-        lines = [ln for ln in source.splitlines() if not ln.lstrip().startswith(("%", "!"))]
-        cells.append("\n".join(lines))
+        cells.append("".join(source) if isinstance(source, list) else source)
     return cells
 
 
@@ -199,8 +196,10 @@ def dotted_names_used(cells: list[str]) -> set[str]:
     aliases: dict[str, str] = {}
     used: set[str] = set()
     for source in cells:
+        # IPython magics and shell escapes are not Python.
+        lines = [ln for ln in source.splitlines() if not ln.lstrip().startswith(("%", "!"))]
         try:
-            tree = ast.parse(source)
+            tree = ast.parse("\n".join(lines))
         except SyntaxError:
             continue
         for node in ast.walk(tree):
