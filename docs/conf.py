@@ -75,6 +75,7 @@ nb_ipywidgets_js: dict = {}
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "substitution"]
 myst_heading_anchors = 3
 course_site_notebooks = ["notebooks/*.ipynb"]
+course_site_assignments = ["exercises/*/*.ipynb"]  # in the teaching map too
 # The JupyterLite app (OUT/lite); COURSE_DOCS_LITE=0 skips it (course docs --no-lite).
 course_site_lite = os.environ.get("COURSE_DOCS_LITE", "1") != "0"
 

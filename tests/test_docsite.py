@@ -100,18 +100,31 @@ def test_shapes_in_types_are_escaped_but_not_inside_literals():
 def test_see_also_names_the_notebook_after_numpydoc():
     from types import SimpleNamespace
 
-    App = SimpleNamespace(
-        course_taught={"course.lsq.fit": ["notebooks/01_least_squares_validation"]}
+    app = SimpleNamespace(
+        srcdir=str(ROOT),
+        config=SimpleNamespace(course_site_assignments=["exercises/*/*.ipynb"]),
+        course_taught={
+            "course.lsq.fit": [
+                "notebooks/01_least_squares_validation",
+                "exercises/01_least_squares/01_least_squares",
+            ]
+        },
     )
-
     with_box = ["Text.", "", ".. seealso::", "", "    :obj:`w_tests`", "        W-tests.", ""]
-    course_site.add_notebook_see_also(App, "function", "course.lsq.fit", None, {}, with_box)
-    assert with_box[4] == "    :doc:`/notebooks/01_least_squares_validation`"
+    course_site.add_notebook_see_also(app, "function", "course.lsq.fit", None, {}, with_box)
+    assert with_box[4:10] == [
+        "    :doc:`/notebooks/01_least_squares_validation`",
+        "        Notebook that uses it.",
+        "",
+        "    :doc:`/exercises/01_least_squares/01_least_squares`",
+        "        Assignment that uses it.",
+        "",
+    ]
     without = ["Text."]
-    course_site.add_notebook_see_also(App, "function", "course.lsq.fit", None, {}, without)
+    course_site.add_notebook_see_also(app, "function", "course.lsq.fit", None, {}, without)
     assert ".. seealso::" in without
     untouched = ["Text."]
-    course_site.add_notebook_see_also(App, "function", "course.lsq.mdb", None, {}, untouched)
+    course_site.add_notebook_see_also(app, "function", "course.lsq.mdb", None, {}, untouched)
     assert untouched == ["Text."]
 
 

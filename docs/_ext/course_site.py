@@ -317,10 +317,11 @@ class _OptionalGlobFilter(std_logging.Filter):
 # --------------------------------------------------------------------------------------------
 
 
-def _notebook_docs(app) -> dict[str, Path]:
+def _notebook_docs(app, setting: str = "course_site_notebooks") -> dict[str, Path]:
+    """Docname -> path of the teaching notebooks (or of the assignments)."""
     srcdir = Path(app.srcdir)
     found = {}
-    for pattern in app.config.course_site_notebooks:
+    for pattern in getattr(app.config, setting):
         for path in sorted(srcdir.glob(pattern)):
             found[str(path.relative_to(srcdir).with_suffix("").as_posix())] = path
     return found
@@ -329,7 +330,8 @@ def _notebook_docs(app) -> dict[str, Path]:
 def on_config_inited(app, config) -> None:
     api = write_api_pages(Path(app.srcdir))
     app.course_api = api
-    app.course_taught = teaching_map(_notebook_docs(app), api)
+    pages = {**_notebook_docs(app), **_notebook_docs(app, "course_site_assignments")}
+    app.course_taught = teaching_map(pages, api)
     logger.info(
         "[course-site] teaching map: %d public objects are used by a notebook",
         len(app.course_taught),
@@ -359,9 +361,11 @@ def add_notebook_see_also(app, what, name, obj, options, lines) -> None:
     docnames = getattr(app, "course_taught", {}).get(name)
     if not docnames:
         return
+    assignments = set(_notebook_docs(app, "course_site_assignments"))
     entries = []
     for docname in docnames:
-        entries += [f"    :doc:`/{docname}`", "        Notebook that uses it.", ""]
+        role = "Assignment that uses it." if docname in assignments else "Notebook that uses it."
+        entries += [f"    :doc:`/{docname}`", f"        {role}", ""]
     if ".. seealso::" in lines:
         at = lines.index(".. seealso::") + 2  # after the directive and its blank line
         lines[at:at] = entries
@@ -370,15 +374,19 @@ def add_notebook_see_also(app, what, name, obj, options, lines) -> None:
 
 
 def add_notebook_links(app, doctree) -> None:
-    """On a notebook page: a link to run it in JupyterLite, and the API it uses."""
+    """On a notebook page: a link to run it in JupyterLite, and the API it uses.
+
+    Assignment pages get the list of the API only: students run them where they hand them in.
+    """
     docname = app.env.docname
-    if docname not in _notebook_docs(app):
+    teaching = docname in _notebook_docs(app)
+    if not teaching and docname not in _notebook_docs(app, "course_site_assignments"):
         return
     sections = list(doctree.findall(nodes.section))
     if not sections:
         return
     first = sections[0]
-    if app.config.course_site_lite:
+    if teaching and app.config.course_site_lite:
         depth = docname.count("/")
         lite = "../" * depth + f"lite/lab/index.html?path={Path(docname).name}.ipynb"
         para = nodes.paragraph(classes=["course-launch"])
@@ -472,6 +480,7 @@ def write_entry_page(app, exception) -> None:
 
 def setup(app):
     app.add_config_value("course_site_notebooks", ["notebooks/*.ipynb"], "env")
+    app.add_config_value("course_site_assignments", ["exercises/*/*.ipynb"], "env")
     app.add_config_value("course_site_lite", True, "env")
     app.add_config_value("course_site_optional_globs", [], "env")
     std_logging.getLogger("sphinx.sphinx.directives.other").addFilter(_OptionalGlobFilter(app))
