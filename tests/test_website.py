@@ -311,7 +311,7 @@ def test_screenshots_of_landing_and_notebook_page(server, browser, artifacts):
     assert "Learning path" in page.inner_text("body")
     page.screenshot(path=str(artifacts / "landing.png"))
     page.goto(server + "notebooks/01_least_squares_validation.html", wait_until="networkidle")
-    page.wait_for_selector("mjx-container")
+    page.wait_for_selector("mjx-container", state="attached")  # typeset (some sit in folded toc)
     page.screenshot(path=str(artifacts / "notebook-01.png"))
     page.close()
     for name in ("landing.png", "notebook-01.png"):
