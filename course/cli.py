@@ -126,11 +126,11 @@ def build_parser() -> argparse.ArgumentParser:
     p_docs.set_defaults(func=_docs)
 
     try:
-        from course.grading import cli as exercise_cli
+        from course.grading import cli as grading_cli
     except ImportError:  # the library without its grader: `course open` only
         pass
     else:
-        exercise_cli.add_commands(sub)
+        grading_cli.add_commands(sub)
     return parser
 
 
