@@ -143,6 +143,13 @@ class _Links(HTMLParser):
             self.hrefs.append(attrs.get("href") or attrs.get("src"))
 
 
+def _parsed(cache: dict[Path, _Links], path: Path) -> _Links:
+    """Each page parsed once (a module page is large and linked to many times)."""
+    if path not in cache:
+        cache[path] = _parse(path)
+    return cache[path]
+
+
 def _parse(path: Path) -> _Links:
     parser = _Links()
     parser.feed(path.read_text(encoding="utf-8", errors="replace"))
@@ -236,7 +243,7 @@ def test_every_internal_link_resolves(site):
     broken = []
     for rel in _html_pages(out):
         page = out / rel
-        links = parsed.setdefault(page, _parse(page))
+        links = _parsed(parsed, page)
         for href in links.hrefs:
             url, fragment = urldefrag(href)
             if urlparse(href).scheme or href.startswith(("//", "mailto:", "javascript:")):
@@ -248,7 +255,7 @@ def test_every_internal_link_resolves(site):
                 broken.append(f"{rel}: {href}")
                 continue
             if fragment and target.suffix == ".html":
-                ids = parsed.setdefault(target, _parse(target)).ids
+                ids = _parsed(parsed, target).ids
                 if fragment not in ids:
                     broken.append(f"{rel}: {href} (no #{fragment})")
     assert not broken, f"{len(broken)} broken internal links: {broken[:30]}"
