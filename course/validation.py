@@ -97,7 +97,7 @@ __all__ = [
     "check_alpha",
 ]
 
-#: Relative tolerance for "symmetric": |Q - Q^T| <= SYMMETRY_RTOL * max|Q|.
+#: Relative tolerance for "symmetric": ``|Q - Q^T| <= SYMMETRY_RTOL * max|Q|``.
 SYMMETRY_RTOL = 1e-10
 
 #: Relative tolerance for "numerically singular", per dimension of the matrix: a
