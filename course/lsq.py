@@ -240,12 +240,10 @@ class LeastSquaresFit:
     def _w_parts(self):
         """Numerators, squared denominators and weights of Baarda's w_i (see :func:`w_tests`)."""
         cov = self._covariance
-        # One whitening solve with n + 1 right-hand sides: L^{-T} [ẽ, Q1].
-        M = cov.whiten_transpose(np.column_stack([self._e_w, self._Q1]))
-        numerator = M[:, 0]  # c_i^T Qyy^{-1} ê
+        numerator = cov.whiten_transpose(self._e_w)  # c_i^T Qyy^{-1} ê
         weight = cov.inverse_diagonal()  # c_i^T Qyy^{-1} c_i
         # c_i^T Qyy^{-1} Qee Qyy^{-1} c_i = |L^{-1} c_i|² - |Q1^T L^{-1} c_i|²
-        denom2 = weight - _row_norms_squared(M[:, 1:])
+        denom2 = weight - _row_norms_squared(cov.whiten_transpose(self._Q1))
         return _readonly(numerator), _readonly(denom2), _readonly(weight)
 
     @property
@@ -378,7 +376,9 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
         )
     covariance = covariance_factor(Qyy, "Qyy", m)
     y_w = covariance.whiten(y)
-    Q1, R = sla.qr(covariance.whiten(A), mode="economic", overwrite_a=True, check_finite=False)
+    # LAPACK works column-major: a Fortran-ordered input halves the QR's time at m = 1e5.
+    A_w = np.asfortranarray(covariance.whiten(A))
+    Q1, R = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
     rcond, _ = lapack.dtrcon(R, norm="1", uplo="U")
     if not rcond > _RCOND_CHECK:
         check_full_column_rank(A, "A")  # names the dependent columns, if any
@@ -517,7 +517,7 @@ def _standard_deviation_hint(fit: LeastSquaresFit, T: float, alpha: float, null)
         return ""
     sigma = cov.variances  # read as standard deviations
     # The refit costs one more O(m n²) QR, paid only when the test is already surprising.
-    A_w = fit.A / sigma[:, None]
+    A_w = np.asfortranarray(fit.A / sigma[:, None])
     y_w = fit.y / sigma
     Q1, _ = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
     e_w = y_w - Q1 @ (Q1.T @ y_w)
@@ -863,7 +863,7 @@ def data_snooping(
         max_removals = _whole_number(max_removals, "max_removals", minimum=0, or_none=True)
     first = fit(A, y, Qyy)
     model = _OutlierModel(first)
-    kept = list(range(first.m))
+    kept = np.arange(first.m)
     removed: list[int] = []
     rounds: list[WTestResult] = []
     round_indices: list[tuple] = []
@@ -871,25 +871,25 @@ def data_snooping(
         if first.redundancy - len(removed) == 0:
             reason = "no redundancy left"
             break
-        wt = model.w_tests(np.array(kept), alpha)
+        wt = model.w_tests(kept, alpha)
         rounds.append(wt)
-        round_indices.append(tuple(kept))
+        round_indices.append(tuple(kept.tolist()))
         if not wt.any_reject:
             reason = "no observation rejected"
             break
         if max_removals is not None and len(removed) >= max_removals:
             reason = "max_removals reached"
             break
-        worst = kept.pop(wt.largest)
+        worst = int(kept[wt.largest])
+        kept = np.delete(kept, wt.largest)
         removed.append(worst)
         model.remove(worst)
     current = first
     if removed:
-        index = np.array(kept)
-        current = fit(first.A[index], first.y[index], first._covariance.take(index))
+        current = fit(first.A[kept], first.y[kept], first._covariance.take(kept))
     return SnoopingResult(
         removed=tuple(removed),
-        kept=tuple(kept),
+        kept=tuple(kept.tolist()),
         rounds=tuple(rounds),
         round_indices=tuple(round_indices),
         fit=current,
@@ -908,7 +908,11 @@ class _OutlierModel:
 
     def __init__(self, first: LeastSquaresFit):
         self._covariance = first._covariance
-        self._basis = [first._Q1]  # orthonormal blocks spanning the whitened design
+        # Orthonormal columns spanning the whitened design and the outlier columns added so
+        # far, in a column-major buffer that grows by doubling (columns contiguous for BLAS).
+        self._n = first.n
+        self._basis = np.empty((first.m, 2 * first.n + 8), order="F")
+        self._basis[:, : first.n] = first._Q1
         numerator, denom2, weight = first._w_parts
         self._e_w = first._e_w.copy()
         self._numerator = numerator.copy()
@@ -917,16 +921,21 @@ class _OutlierModel:
 
     def remove(self, i: int) -> None:
         v = self._covariance.whiten_unit(i)  # the outlier column L^{-1} c_i
+        basis = self._basis[:, : self._n]
         for _ in range(2):  # classical Gram-Schmidt, twice: orthogonal to working precision
-            for block in self._basis:
-                v -= block @ (block.T @ v)
+            v -= basis @ (basis.T @ v)
         q = v / np.linalg.norm(v)
         coefficient = float(q @ self._e_w)  # = w_i of the round that removed i
         self._e_w -= coefficient * q
         Lt_q = self._covariance.whiten_transpose(q)
         self._numerator -= coefficient * Lt_q
         self._denom2 -= Lt_q * Lt_q
-        self._basis.append(q[:, None])
+        if self._n == self._basis.shape[1]:
+            grown = np.empty((self._basis.shape[0], 2 * self._n), order="F")
+            grown[:, : self._n] = self._basis
+            self._basis = grown
+        self._basis[:, self._n] = q
+        self._n += 1
 
     def w_tests(self, index: np.ndarray, alpha: float) -> WTestResult:
         return _w_test_result(
