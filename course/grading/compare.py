@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from course.exercises.codec import Band
+from course.grading.codec import Band
 
 __all__ = ["Verdict", "binomial_band", "compare", "describe"]
 

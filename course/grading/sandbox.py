@@ -3,14 +3,14 @@
 Each submission runs in its OWN process (never the grader's), started in one of two ways:
 
 ``fork`` (default on Linux)
-    A warm *fork server* (``python -m course.exercises.sandbox``) imports numpy, scipy,
+    A warm *fork server* (``python -m course.grading.forkserver``) imports numpy, scipy,
     matplotlib, IPython and the course library once; each child is ``os.fork()``-ed from it and
     starts in milliseconds. The server never runs student code.
 ``spawn``
-    ``python -m course.exercises.runner`` per submission: slower (every child imports the
+    ``python -m course.grading.runner`` per submission: slower (every child imports the
     scientific stack), works wherever ``subprocess`` works.
 
-Either way the child (see :mod:`course.exercises.runner`) lives in its own session/process
+Either way the child (see :mod:`course.grading.runner`) lives in its own session/process
 group, in a fresh ``tempfile.mkdtemp`` directory, with a scrubbed environment (PATH, HOME=its
 temp dir, LANG, MPLBACKEND=Agg, thread counts; no PYTHON* variables but PYTHONPATH when needed),
 stdin from /dev/null and stdout/stderr in a capped file in its temp dir. Before student code it
@@ -21,7 +21,7 @@ files; ``RLIMIT_NPROC`` = 0 when seccomp is unavailable), then installs
   (fork, exec, system, spawn, subprocess), ctypes, sockets, signals to other processes,
   raising limits, writes outside its temp dir, and reads of the grader's own folders
   (solutions, submissions, output);
-- a seccomp-BPF filter (:mod:`course.exercises.seccomp`, Linux x86-64/aarch64) in which the
+- a seccomp-BPF filter (:mod:`course.grading.isolation.seccomp`, Linux x86-64/aarch64) in which the
   kernel refuses fork/clone of processes, exec, ptrace, kill of other processes and raising
   limits — this still holds when the audit hook is bypassed and when grading as root, where
   ``RLIMIT_NPROC`` is not enforced.
@@ -73,7 +73,17 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["ChildDied", "ChildTimeout", "Limits", "Sandbox", "SandboxError", "describe_exit"]
+from course.grading.vocabulary import Op, ReplyStatus
+
+__all__ = [
+    "ChildDied",
+    "ChildHandle",
+    "ChildTimeout",
+    "Limits",
+    "Sandbox",
+    "SandboxError",
+    "describe_exit",
+]
 
 _PACKAGE_PARENT = str(Path(__file__).resolve().parents[2])
 MAX_REPLY_BYTES = 64_000_000
@@ -159,8 +169,8 @@ def _scrubbed_env(extra: dict | None = None) -> dict:
     return env
 
 
-class Child:
-    """Parent-side handle of one sandboxed child."""
+class ChildHandle:
+    """The grader's (parent's) handle on one sandboxed child: requests, kill, exit status."""
 
     def __init__(
         self, sandbox: Sandbox, pid: int, tmpdir: str, req_w: int, resp_r: int, popen=None
@@ -274,7 +284,7 @@ class Child:
         """Stop the child (politely, then SIGKILL) and delete its temp dir."""
         if self.alive:
             with contextlib.suppress(ChildTimeout, ChildDied):
-                self._send({"op": "exit"}, time.monotonic() + 0.5)
+                self._send({"op": Op.EXIT}, time.monotonic() + 0.5)
             self.kill()
         if self.popen is not None:
             with contextlib.suppress(subprocess.TimeoutExpired):
@@ -300,7 +310,7 @@ class Sandbox:
             raise ValueError(f"unknown sandbox mode {mode!r}")
         self.mode = mode
         self.limits = limits or Limits()
-        from course.exercises.runner import PRELOAD
+        from course.grading.runner import PRELOAD
 
         self.preload = tuple(dict.fromkeys(PRELOAD + tuple(preload)))
         self.deny_read = [str(Path(p).resolve()) for p in deny_read]
@@ -319,7 +329,7 @@ class Sandbox:
             [
                 sys.executable,
                 "-m",
-                "course.exercises.sandbox",
+                "course.grading.forkserver",
                 str(child_sock.fileno()),
                 json.dumps(self.preload),
             ],
@@ -339,7 +349,7 @@ class Sandbox:
             reply = json.loads(self._sock.recv(65536) or b"null")
         except (OSError, ValueError):
             reply = None
-        if not reply or reply.get("status") != "ready":
+        if not reply or reply.get("status") != ReplyStatus.READY:
             self.close()
             raise SandboxError(
                 "the fork server did not start; see " + os.path.join(self._rundir, "forkserver.log")
@@ -357,7 +367,7 @@ class Sandbox:
         return json.loads(reply)
 
     # -- children -------------------------------------------------------------------------
-    def start(self, init: dict, ready_timeout: float = 60.0) -> Child:
+    def start(self, init: dict, ready_timeout: float = 60.0) -> ChildHandle:
         """Start a child, send it ``init`` and wait until it is ready for student code."""
         tmpdir = tempfile.mkdtemp(prefix="course-grade-")
         req_r, req_w = os.pipe()
@@ -371,13 +381,13 @@ class Sandbox:
                     if self._server is None or self._server.poll() is not None:
                         self._start_server()
                     reply = self._server_call(
-                        {"op": "spawn", "tmpdir": tmpdir}, fds=(req_r, resp_w)
+                        {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w)
                     )
                 pid = int(reply["pid"])
             else:
                 log = open(os.path.join(tmpdir, "startup.txt"), "wb")
                 popen = subprocess.Popen(
-                    [sys.executable, "-m", "course.exercises.runner", str(req_r), str(resp_w)],
+                    [sys.executable, "-m", "course.grading.runner", str(req_r), str(resp_w)],
                     pass_fds=(req_r, resp_w),
                     cwd=tmpdir,
                     env=_scrubbed_env({"MPLCONFIGDIR": os.path.join(self._rundir, "matplotlib")}),
@@ -391,10 +401,10 @@ class Sandbox:
         finally:
             os.close(req_r)
             os.close(resp_w)
-        child = Child(self, pid, tmpdir, req_w, resp_r, popen)
+        child = ChildHandle(self, pid, tmpdir, req_w, resp_r, popen)
         init = dict(init, limits=self.limits.as_dict(), deny_read=self.deny_read)
         try:
-            reply = child.request("init", ready_timeout, **init)
+            reply = child.request(Op.INIT, ready_timeout, **init)
         except (ChildTimeout, ChildDied) as exc:
             out = child.output()
             child.close()
@@ -402,7 +412,7 @@ class Sandbox:
         child.info = {"seccomp": bool(reply.get("seccomp"))}
         return child
 
-    def _exit_status(self, child: Child):
+    def _exit_status(self, child: ChildHandle):
         if child.popen is not None:
             try:
                 return child.popen.wait(timeout=5)
@@ -410,7 +420,7 @@ class Sandbox:
                 return None
         with self._lock:
             try:
-                reply = self._server_call({"op": "status", "pid": child.pid})
+                reply = self._server_call({"op": Op.STATUS, "pid": child.pid})
             except (OSError, SandboxError, ValueError):
                 return None
         status = reply.get("status")
@@ -438,84 +448,3 @@ class Sandbox:
 
     def __exit__(self, *exc):
         self.close()
-
-
-# --------------------------------------------------------------------------------------
-# the fork server process
-# --------------------------------------------------------------------------------------
-def _server_main(sock_fd: int, preload_json: str) -> None:
-    from course.exercises import runner, seccomp
-
-    seccomp.die_with_parent()
-    if os.getppid() == 1:  # the grader is already gone
-        return
-    sock = socket.socket(fileno=sock_fd)
-    runner.preload(json.loads(preload_json))
-    statuses: dict[int, int] = {}
-
-    def reap():
-        while True:
-            try:
-                pid, status = os.waitpid(-1, os.WNOHANG)
-            except ChildProcessError:
-                return
-            if pid == 0:
-                return
-            statuses[pid] = status
-            if len(statuses) > 10000:
-                statuses.pop(next(iter(statuses)))
-
-    sock.send(json.dumps({"status": "ready"}).encode())
-    while True:
-        try:
-            msg, fds, _flags, _addr = socket.recv_fds(sock, 65536, 4)
-        except OSError:
-            break
-        if not msg:
-            break
-        reap()
-        req = json.loads(msg)
-        if req["op"] == "spawn":
-            req_r, resp_w = fds
-            pid = os.fork()
-            if pid == 0:  # the child: never returns
-                try:
-                    os.setsid()
-                    keep = {0, 1, 2, req_r, resp_w}
-                    for fd in (
-                        map(int, os.listdir("/proc/self/fd"))
-                        if os.path.isdir("/proc/self/fd")
-                        else []
-                    ):
-                        if fd not in keep:
-                            with contextlib.suppress(OSError):
-                                os.close(fd)
-                    if not os.path.isdir("/proc/self/fd"):
-                        sock.close()
-                    runner.child_main(req_r, resp_w, req["tmpdir"])
-                finally:
-                    os._exit(5)
-            for fd in fds:
-                os.close(fd)
-            sock.send(json.dumps({"pid": pid}).encode())
-        elif req["op"] == "status":
-            pid = int(req["pid"])
-            deadline = time.monotonic() + 5
-            while pid not in statuses and time.monotonic() < deadline:
-                try:
-                    got, status = os.waitpid(pid, os.WNOHANG)
-                except ChildProcessError:
-                    break
-                if got == pid:
-                    statuses[pid] = status
-                    break
-                time.sleep(0.01)
-            sock.send(json.dumps({"status": statuses.pop(pid, None)}).encode())
-        else:
-            for fd in fds:
-                os.close(fd)
-            sock.send(b'{"error": "unknown op"}')
-
-
-if __name__ == "__main__":
-    _server_main(int(sys.argv[1]), sys.argv[2])

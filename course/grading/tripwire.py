@@ -2,8 +2,8 @@
 
 A question may forbid functions (``"course.lsq.wls"``, ...) that would answer it outright.
 :func:`wrap_forbidden` swaps such a function for a wrapper that reports calls made from the
-student's notebook; what a report means (a warning in :mod:`course.exercises.selfcheck`, a hit
-against the running question in :mod:`course.exercises.runner`) is up to the caller.
+student's notebook; what a report means (a warning in :mod:`course.grading.selfcheck`, a hit
+against the running question in :mod:`course.grading.runner`) is up to the caller.
 """
 
 from __future__ import annotations

@@ -10,8 +10,8 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 def _release(args) -> int:
-    from course.exercises.notebook import MarkerError
-    from course.exercises.release import find_solutions, release
+    from course.grading.notebook import MarkerError
+    from course.grading.release import find_solutions, release
 
     solutions = Path(args.solutions)
     exercises = Path(args.exercises)
@@ -50,7 +50,7 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.exercises.grader import GradeOptions, grade
+    from course.grading.driver import GradeOptions, grade
 
     solutions = Path(args.solutions)
     name = Path(args.assignment).name

@@ -1,7 +1,7 @@
 """The sandboxed child that runs ONE student's notebook for the grader.
 
-It is started either by forking from the warm fork server (:mod:`course.exercises.sandbox`) or
-as ``python -m course.exercises.runner REQ_FD RESP_FD`` (spawn mode). Either way it:
+It is started either by forking from the warm fork server (:mod:`course.grading.sandbox`) or
+as ``python -m course.grading.runner REQ_FD RESP_FD`` (spawn mode). Either way it:
 
 1. moves into its fresh temporary directory, scrubs its environment, sends its own stdout and
    stderr to a capped file there, and reads the ``init`` request from the grader;
@@ -10,7 +10,7 @@ as ``python -m course.exercises.runner REQ_FD RESP_FD`` (spawn mode). Either way
    audit hook and the seccomp filter (both irreversible) — only then does student code run;
 3. answers requests, one JSON line each, on its dedicated response pipe: ``run`` a cell (IPython
    semantics, magics work), ``value`` of a variable, ``call`` a function with arguments. Values
-   travel as plain data (:mod:`course.exercises.codec`), never pickle.
+   travel as plain data (:mod:`course.grading.codec`), never pickle.
 
 Nothing here decides a score: the trusted parent compares values with references it computes
 itself, so a child that lies can only misreport its own answers.
@@ -22,7 +22,6 @@ import base64  # noqa: F401  (imported before student code, used by the codec)
 import contextlib
 import json
 import os
-import resource
 import signal
 import sys
 import typing
@@ -30,29 +29,34 @@ from builtins import (  # bound now, so a student patching builtins cannot break
     BaseException,
     Exception,
     NotImplementedError,
-    bytes,
     callable,
     dict,
     getattr,
     int,
-    isinstance,
     len,
     list,
     set,
     sorted,
     str,
-    tuple,
     type,
 )
 
-from course.exercises import codec
-from course.exercises.tripwire import wrap_forbidden
+from course.grading import codec
+from course.grading.isolation.audit import make_audit_hook
+from course.grading.isolation.limits import set_limits
+from course.grading.tripwire import wrap_forbidden
+from course.grading.vocabulary import Op, ReplyStatus
 
 _dumps = json.dumps
 _loads = json.loads
 _write = os.write
 _encode = codec.encode
 _decode = codec.decode
+
+# plain strings (not enum members) in replies: nothing student code patches can change them
+_OK, _ERROR, _READY = ReplyStatus.OK.value, ReplyStatus.ERROR.value, ReplyStatus.READY.value
+_UNDEFINED, _STUB = ReplyStatus.UNDEFINED.value, ReplyStatus.STUB.value
+_NOT_CALLABLE, _UNENCODABLE = ReplyStatus.NOT_CALLABLE.value, ReplyStatus.UNENCODABLE.value
 
 OUTPUT_FILE = "output.txt"
 MAX_RESPONSE_BYTES = 64_000_000
@@ -68,7 +72,7 @@ _PROTECTED_MODULES = (
     "binascii",
     "math",
     "numpy",
-    "course.exercises.codec",
+    "course.grading.codec",
 )
 
 
@@ -213,156 +217,6 @@ def enter_sandbox_dir(tmpdir: str) -> None:
     )  # over-long files fail with EFBIG instead of killing us
 
 
-def _vm_size() -> int:
-    try:
-        with open("/proc/self/statm") as f:
-            return int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError):
-        return 0
-
-
-def set_limits(limits: dict) -> None:
-    """Apply resource limits; the memory limit is a budget on top of what is already mapped."""
-
-    def lim(res, value):
-        value = int(value)
-        with contextlib.suppress(ValueError, OSError):
-            resource.setrlimit(res, (value, value))
-
-    if limits.get("memory_mb"):
-        lim(resource.RLIMIT_AS, _vm_size() + int(limits["memory_mb"]) * 1024 * 1024)
-    if limits.get("cpu_seconds"):
-        lim(resource.RLIMIT_CPU, max(1, int(limits["cpu_seconds"])))
-    if limits.get("file_mb"):
-        lim(resource.RLIMIT_FSIZE, int(limits["file_mb"]) * 1024 * 1024)
-    lim(resource.RLIMIT_CORE, 0)
-    if limits.get("nproc") is not None:
-        lim(resource.RLIMIT_NPROC, limits["nproc"])
-
-
-_BLOCKED_EVENTS = frozenset(
-    {
-        "os.system",
-        "os.exec",
-        "os.posix_spawn",
-        "os.spawn",
-        "os.fork",
-        "os.forkpty",
-        "os.vfork",
-        "subprocess.Popen",
-        "pty.spawn",
-        "os.startfile",
-        "webbrowser.open",
-        "ctypes.dlopen",
-        "ctypes.dlsym",
-        "ctypes.call_function",
-        "ctypes.cdata",
-        "socket.__new__",
-        "socket.connect",
-        "socket.bind",
-        "socket.sendto",
-        "socket.sendmsg",
-        "resource.setrlimit",
-        "resource.prlimit",
-        "signal.pthread_kill",
-        "sys.remote_exec",
-    }
-)
-_PATH_EVENTS = {
-    "os.remove": (0,),
-    "os.rename": (0, 1),
-    "os.rmdir": (0,),
-    "os.mkdir": (0,),
-    "os.chmod": (0,),
-    "os.chown": (0,),
-    "os.link": (0, 1),
-    "os.symlink": (1,),
-    "os.truncate": (0,),
-    "os.utime": (0,),
-    "shutil.rmtree": (0,),
-    "os.mkfifo": (0,),
-    "os.mknod": (0,),
-    "os.setxattr": (0,),
-    "os.removexattr": (0,),
-    "os.chflags": (0,),
-    "os.lchmod": (0,),
-    "os.lchflags": (0,),
-    "shutil.copyfile": (1,),
-    "shutil.copytree": (1,),
-    "shutil.move": (1,),
-    "shutil.chown": (0,),
-}
-
-
-def make_audit_hook(tmpdir: str, deny_read=()):
-    """The audit hook: refuse process creation, native code loading, sockets, signals to other
-    processes, raising limits, any write outside ``tmpdir`` and reads under ``deny_read``."""
-    realpath, fspath, sep = os.path.realpath, os.fspath, os.sep
-    root = realpath(tmpdir)
-    allowed_write = (root + sep,)
-    denied = tuple(realpath(p) for p in deny_read)
-    write_flags = os.O_WRONLY | os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_TRUNC
-    me = os.getpid()
-    blocked, path_events = _BLOCKED_EVENTS, _PATH_EVENTS
-
-    def resolve(path):
-        if isinstance(path, int):
-            return None
-        path = fspath(path)
-        if isinstance(path, bytes):
-            path = path.decode("utf-8", "surrogateescape")
-        return realpath(path)
-
-    def writable(full):
-        return full is None or full == root or full.startswith(allowed_write) or full == "/dev/null"
-
-    proc_self = (f"/proc/{me}", "/proc/self", "/proc/thread-self")
-
-    def readable(full):
-        if full is None:
-            return True
-        if full.startswith("/proc/"):
-            # other processes' memory, environment and files (e.g. the grader's) are off limits
-            part = full[6:].split(sep, 1)[0]
-            if part.isdigit() and not full.startswith(proc_self):
-                return False
-        return not any(full == d or full.startswith(d + sep) for d in denied)
-
-    def hook(event, args):
-        if event in blocked:
-            raise PermissionError(f"not allowed while grading: {event}")
-        if event == "open":
-            full = resolve(args[0]) if args[0] is not None else None
-            flags = args[2] if len(args) > 2 and isinstance(args[2], int) else 0
-            mode = args[1] if isinstance(args[1], str) else ""
-            if (flags & write_flags or any(c in mode for c in "wax+")) and not writable(full):
-                raise PermissionError(
-                    f"not allowed while grading: writing {args[0]!r} (outside the temporary folder)"
-                )
-            if not readable(full):
-                raise PermissionError(f"not allowed while grading: reading {args[0]!r}")
-        elif event in path_events:
-            for i in path_events[event]:
-                if (
-                    i < len(args)
-                    and not isinstance(args[i], int)
-                    and not writable(resolve(args[i]))
-                ):
-                    raise PermissionError(f"not allowed while grading: {event} {args[i]!r}")
-        elif event in ("os.kill", "os.killpg"):
-            if not (event == "os.kill" and args and args[0] == me):
-                raise PermissionError(f"not allowed while grading: {event}")
-        elif (
-            event in ("os.listdir", "os.scandir")
-            and args
-            and args[0] is not None
-            and not readable(resolve(args[0]))
-        ):
-            raise PermissionError("not allowed while grading: listing a protected folder")
-
-    return hook
-
-
 def install_tripwires(forbid: dict, user_ns: dict) -> None:
     """Wrap each forbidden function once, for the whole run: a call made from notebook code
     while a question that forbids it is running is recorded against that question."""
@@ -409,7 +263,7 @@ PRELOAD = (
     "course.results",
     "course.linalg",
     "course.lsq",
-    "course.exercises.selfcheck",
+    "course.grading.selfcheck",
 )
 
 
@@ -437,7 +291,9 @@ def _error_info(exc) -> dict:
     return {"type": type(exc).__name__, "message": message[:500]}
 
 
-class Child:
+class RequestLoop:
+    """The child's side of the protocol: answers the grader's requests, one JSON line each."""
+
     def __init__(self, req_fd: int, resp_fd: int):
         self.requests = os.fdopen(req_fd, "rb", buffering=1 << 16)
         self.resp_fd = resp_fd
@@ -474,7 +330,7 @@ class Child:
         finally:
             _STATE.question = None
         sys.stdout.flush()
-        reply = {"status": "ok" if error is None else "error", "tripwire": self._hits(question)}
+        reply = {"status": _OK if error is None else _ERROR, "tripwire": self._hits(question)}
         if error is not None:
             reply["error"] = _error_info(error)
         return reply
@@ -483,47 +339,47 @@ class Child:
         ns = self.shell.user_ns
         name = req["name"]
         if name not in ns:
-            return {"status": "undefined"}
+            return {"status": _UNDEFINED}
         value = ns[name]
         if value is Ellipsis:
-            return {"status": "stub"}
+            return {"status": _STUB}
         try:
             with _TRUSTED:
-                return {"status": "ok", "value": _encode(value)}
+                return {"status": _OK, "value": _encode(value)}
         except BaseException as exc:
-            return {"status": "unencodable", "error": _error_info(exc)}
+            return {"status": _UNENCODABLE, "error": _error_info(exc)}
 
     def op_call(self, req):
         ns = self.shell.user_ns
         question = req.get("question")
         func = ns.get(req["name"])
         if func is None and req["name"] not in ns:
-            return {"status": "undefined"}
+            return {"status": _UNDEFINED}
         if not callable(func):
-            return {"status": "notcallable", "error": {"type": type(func).__name__, "message": ""}}
+            return {"status": _NOT_CALLABLE, "error": {"type": type(func).__name__, "message": ""}}
         try:
             with _TRUSTED:
                 args = _decode(req["args"], False)
                 kwargs = _decode(req["kwargs"], False)
         except BaseException as exc:
-            return {"status": "error", "error": _error_info(exc)}
+            return {"status": _ERROR, "error": _error_info(exc)}
         _STATE.question = question
         try:
             out = func(*args, **kwargs)
         except NotImplementedError:
-            return {"status": "stub", "tripwire": self._hits(question)}
+            return {"status": _STUB, "tripwire": self._hits(question)}
         except BaseException as exc:  # includes SystemExit and KeyboardInterrupt from student code
-            return {"status": "error", "error": _error_info(exc), "tripwire": self._hits(question)}
+            return {"status": _ERROR, "error": _error_info(exc), "tripwire": self._hits(question)}
         finally:
             _STATE.question = None
         hits = self._hits(question)
         if out is Ellipsis:
-            return {"status": "stub", "tripwire": hits}
+            return {"status": _STUB, "tripwire": hits}
         try:
             with _TRUSTED:
-                return {"status": "ok", "value": _encode(out), "tripwire": hits}
+                return {"status": _OK, "value": _encode(out), "tripwire": hits}
         except BaseException as exc:
-            return {"status": "unencodable", "error": _error_info(exc), "tripwire": hits}
+            return {"status": _UNENCODABLE, "error": _error_info(exc), "tripwire": hits}
 
     def serve(self) -> None:
         while True:
@@ -531,17 +387,17 @@ class Child:
                 req = self.receive()
             except BaseException:
                 return
-            if req is None or req.get("op") == "exit":
+            if req is None or req.get("op") == Op.EXIT.value:
                 return
             op = getattr(self, "op_" + str(req.get("op")), None)
             try:
                 reply = (
                     op(req)
                     if op is not None
-                    else {"status": "error", "error": {"type": "Protocol", "message": "unknown op"}}
+                    else {"status": _ERROR, "error": {"type": "Protocol", "message": "unknown op"}}
                 )
             except BaseException as exc:
-                reply = {"status": "error", "error": _error_info(exc)}
+                reply = {"status": _ERROR, "error": _error_info(exc)}
             reply["id"] = req.get("id")
             reply["nonce"] = req.get("nonce")
             try:
@@ -552,7 +408,7 @@ class Child:
                         {
                             "id": req.get("id"),
                             "nonce": req.get("nonce"),
-                            "status": "error",
+                            "status": _ERROR,
                             "error": {"type": "Protocol", "message": "reply could not be encoded"},
                         }
                     )
@@ -565,12 +421,13 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
     code = 0
     try:
         enter_sandbox_dir(tmpdir)
-        child = Child(req_fd, resp_fd)
+        child = RequestLoop(req_fd, resp_fd)
         init = child.receive()
-        if not init or init.get("op") != "init":
+        if not init or init.get("op") != Op.INIT.value:
             os._exit(3)
         limits = init.get("limits", {})
-        from course.exercises import seccomp, selfcheck
+        from course.grading import selfcheck
+        from course.grading.isolation import seccomp
 
         use_seccomp = bool(limits.get("seccomp", True)) and seccomp.available()
         if not use_seccomp:
@@ -597,7 +454,7 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
             {
                 "id": init.get("id"),
                 "nonce": init.get("nonce"),
-                "status": "ready",
+                "status": _READY,
                 "seccomp": bool(secure),
                 "pid": os.getpid(),
             }
@@ -616,7 +473,7 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
 
 
 def main(argv=None) -> None:
-    """Spawn mode: ``python -m course.exercises.runner REQ_FD RESP_FD`` (cwd: its temp dir)."""
+    """Spawn mode: ``python -m course.grading.runner REQ_FD RESP_FD`` (cwd: its temp dir)."""
     argv = sys.argv[1:] if argv is None else argv
     req_fd, resp_fd = int(argv[0]), int(argv[1])
     preload()

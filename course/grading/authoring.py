@@ -1,6 +1,6 @@
 """Helpers to write solution notebooks with the cell metadata and stable ids the grader needs.
 
-Use them in a generator script (see ``course/exercises/AUTHORING.md``)::
+Use them in a generator script (see ``docs/instructors/authoring.md``)::
 
     nb = new_assignment_notebook("01_example", [
         md("# Example"), setup_cell("01_example"), code("import numpy as np"),
@@ -28,7 +28,7 @@ __all__ = [
 
 SETUP_TEMPLATE = """\
 STUDENT_ID = "{student_id}"   # <- your student ID, exactly as registered
-from course.exercises import Assignment
+from course.grading import Assignment
 check = Assignment.load("{name}", student_id=STUDENT_ID)"""
 
 

@@ -9,15 +9,22 @@ deterministic for a given solution, library version and platform.
 from __future__ import annotations
 
 import hashlib
-import json
 from pathlib import Path
 
 import nbformat
 
-from course.exercises.codec import encode
-from course.exercises.compare import signature
-from course.exercises.notebook import Release, make_release
-from course.exercises.spec import DEMO_STUDENT_ID, Checks, load_checks
+from course.grading.checks import Checks, load_checks
+from course.grading.codec import encode
+from course.grading.compare import signature
+from course.grading.notebook import Release, make_release
+from course.grading.vocabulary import (
+    CHECKS_FILE,
+    DEMO_STUDENT_ID,
+    PUBLIC_FORMAT,
+    PublicCase,
+    PublicQuestion,
+    PublicSpec,
+)
 
 __all__ = [
     "FORMAT",
@@ -29,8 +36,7 @@ __all__ = [
     "release_files",
 ]
 
-FORMAT = 1
-CHECKS_FILE = "checks.json"
+FORMAT = PUBLIC_FORMAT
 
 
 def find_solutions(solutions_dir: Path) -> list[str]:
@@ -56,59 +62,52 @@ def load_assignment(solution_dir: Path) -> tuple[Checks, Release]:
     return checks, rel
 
 
-def public_spec(checks: Checks) -> dict:
+def public_spec(checks: Checks) -> PublicSpec:
     """The public part of the checks: what the self-check needs, with expected values precomputed."""
     questions = []
     for q in checks.questions.values():
-        entry = {
-            "id": q.id,
-            "kind": q.kind,
-            "target": q.target,
-            "points": q.points,
-            "hint": q.hint,
-            "rtol": q.rtol,
-            "atol": q.atol,
-            "partial": q.partial,
-            "forbid": list(q.forbid),
-            "data": q.data,
-            "properties": q.properties,
-            "public": q.public,
-            "cases": [],
-            "hidden_cases": 0,
-        }
+        entry = PublicQuestion(
+            id=q.id,
+            kind=q.kind,
+            target=q.target,
+            points=q.points,
+            hint=q.hint,
+            rtol=q.rtol,
+            atol=q.atol,
+            partial=q.partial,
+            forbid=list(q.forbid),
+            data=q.data,
+            properties=q.properties,
+            public=q.public,
+        )
         if q.kind == "function":
             for case in q.public_cases:
-                entry["cases"].append(
-                    {
-                        "label": case.label,
-                        "args": encode(case.args),
-                        "kwargs": encode(case.kwargs),
-                        "expected": encode(q.expected(case)),
-                    }
+                entry.cases.append(
+                    PublicCase(
+                        label=case.label,
+                        args=encode(case.args),
+                        kwargs=encode(case.kwargs),
+                        expected=encode(q.expected(case)),
+                    )
                 )
-            entry["hidden_cases"] = len(q.hidden_cases)
+            entry.hidden_cases = len(q.hidden_cases)
         else:
             data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
             value = q.expected(data=data)
             if q.public:
-                entry["cases"].append({"label": q.target, "expected": encode(value)})
+                entry.cases.append(PublicCase(label=q.target, expected=encode(value)))
             else:
-                entry["signature"] = signature(value)
-                entry["hidden_cases"] = 1
+                entry.signature = signature(value)
+                entry.hidden_cases = 1
         questions.append(entry)
-    return {
-        "format": FORMAT,
-        "assignment": checks.name,
-        "title": checks.title,
-        "max_points": checks.max_points,
-        "data_file": "data.py" if checks.data_module is not None else None,
-        "data_keys": checks.data_keys(),
-        "questions": questions,
-    }
-
-
-def _spec_text(spec: dict) -> str:
-    return json.dumps(spec, sort_keys=True, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+    return PublicSpec(
+        assignment=checks.name,
+        title=checks.title,
+        max_points=checks.max_points,
+        data_file="data.py" if checks.data_module is not None else None,
+        data_keys=checks.data_keys(),
+        questions=questions,
+    )
 
 
 def release_files(solution_dir: Path) -> dict[str, bytes]:
@@ -118,7 +117,7 @@ def release_files(solution_dir: Path) -> dict[str, bytes]:
     checks, rel = load_assignment(solution_dir)
     files = {
         f"{name}.ipynb": rel.text().encode("utf-8"),
-        CHECKS_FILE: _spec_text(public_spec(checks)).encode("utf-8"),
+        CHECKS_FILE: public_spec(checks).text().encode("utf-8"),
     }
     if checks.data_module is not None:
         data_file = solution_dir / "data.py"

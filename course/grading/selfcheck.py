@@ -7,7 +7,7 @@ code, and says how many hidden cases run at grading. ``check("q1", value)`` chec
 value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
 
 In the grader's sandbox the same setup cell returns a silent stand-in (no checks run in the
-student's process); see :mod:`course.exercises.runner`.
+student's process); see :mod:`course.grading.runner`.
 """
 
 from __future__ import annotations
@@ -19,13 +19,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from course.exercises.codec import decode, encode
-from course.exercises.compare import check_signature, compare, describe
-from course.exercises.tripwire import wrap_forbidden
+from course.grading.codec import decode, encode
+from course.grading.compare import check_signature, compare, describe
+from course.grading.tripwire import wrap_forbidden
+from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]
 
-PLACEHOLDER_ID = "replace-with-your-student-id"
 _REPO_ROOT = Path(__file__).resolve().parents[2]
 
 #: Set by the grading runner (sandboxed child) before any student code runs.
@@ -65,7 +65,7 @@ def _locate(name: str, path) -> tuple[str, Path]:
         candidates += [folder, folder / name, folder / "exercises" / name]
     candidates.append(_REPO_ROOT / "exercises" / name)
     for folder in candidates:
-        spec_file = folder / "checks.json"
+        spec_file = folder / CHECKS_FILE
         if spec_file.is_file():
             try:
                 if json.loads(spec_file.read_text("utf-8")).get("assignment") == name:
@@ -83,12 +83,12 @@ def _locate(name: str, path) -> tuple[str, Path]:
 class Assignment:
     """The self-check of one assignment (see the module docstring)."""
 
-    def __init__(self, spec: dict, folder: Path, student_id: str | None, data_module=None):
+    def __init__(self, spec: PublicSpec, folder: Path, student_id: str | None, data_module=None):
         self.spec = spec
-        self.name = spec["assignment"]
+        self.name = spec.assignment
         self.folder = folder
         self.student_id = None if student_id is None else str(student_id).strip()
-        self._questions = {q["id"]: q for q in spec["questions"]}
+        self._questions: dict[str, PublicQuestion] = {q.id: q for q in spec.questions}
         self._data_module = data_module
         self._data_cache: dict[str, Any] = {}
 
@@ -100,34 +100,33 @@ class Assignment:
             return _GradingStandIn(_GRADING)
         kind, folder = _locate(name, path)
         if kind == "json":
-            spec = json.loads((folder / "checks.json").read_text("utf-8"))
-            return cls(spec, folder, student_id)
-        from course.exercises.release import public_spec
-        from course.exercises.spec import load_checks
+            return cls(PublicSpec.read(folder), folder, student_id)
+        from course.grading.checks import load_checks
+        from course.grading.release import public_spec
 
         checks = load_checks(folder)
-        spec = json.loads(json.dumps(public_spec(checks)))
+        spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
         return cls(spec, folder, student_id, data_module=checks.data_module)
 
     # -- data ---------------------------------------------------------------------------
     def _data_mod(self):
         if self._data_module is None:
-            if not self.spec.get("data_file"):
+            if not self.spec.data_file:
                 raise KeyError(f"assignment {self.name} has no per-student data")
-            from course.exercises.spec import load_data_module
+            from course.grading.checks import load_data_module
 
-            self._data_module = load_data_module(self.folder / self.spec["data_file"], self.name)
+            self._data_module = load_data_module(self.folder / self.spec.data_file, self.name)
         return self._data_module
 
     def data(self, key: str):
         """Your personal data set ``key`` (generated from your STUDENT_ID)."""
-        if key not in self.spec.get("data_keys", []):
+        if key not in self.spec.data_keys:
             raise KeyError(
-                f"assignment {self.name} has no data set {key!r}; known: {self.spec.get('data_keys', [])}"
+                f"assignment {self.name} has no data set {key!r}; known: {self.spec.data_keys}"
             )
         self._require_id()
         if key not in self._data_cache:
-            from course.exercises.spec import student_rng
+            from course.grading.checks import student_rng
 
             func = getattr(self._data_mod(), key)
             self._data_cache[key] = encode(func(student_rng(self.name, key, self.student_id)))
@@ -163,19 +162,17 @@ class Assignment:
             )
             return
         q = self._questions[qid]
-        points = f"{q['points']:g} point{'s' if q['points'] != 1 else ''}"
-        print(
-            f"{qid} ({points}): {'function' if q['kind'] == 'function' else 'variable'} {q['target']}"
-        )
-        if q["kind"] == "function":
-            self._check_function(q, value if explicit else ns.get(q["target"], _MISSING))
+        points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
+        print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")
+        if q.kind == "function":
+            self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
         else:
-            self._check_value(q, value if explicit else ns.get(q["target"], _MISSING))
+            self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
 
     def _fail(self, q, message: str) -> None:
         print("  FAIL")
-        if q["hint"]:
-            print(f"      Hint: {q['hint']}")
+        if q.hint:
+            print(f"      Hint: {q.hint}")
         print(f"      {message}")
 
     def _not_answered(self, q, why: str) -> None:
@@ -183,17 +180,17 @@ class Assignment:
 
     def _check_value(self, q, got) -> None:
         if got is _MISSING:
-            return self._not_answered(q, f"no variable {q['target']} (run your answer cell first)")
+            return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
-            return self._not_answered(q, f"{q['target']} is still ...")
+            return self._not_answered(q, f"{q.target} is still ...")
         try:
             got = decode(encode(got))
         except TypeError as exc:
-            print(f"  FAIL: {q['target']} must be plain numbers/arrays/bools/strings ({exc})")
+            print(f"  FAIL: {q.target} must be plain numbers/arrays/bools/strings ({exc})")
             return
-        if q["cases"]:
-            expected = decode(q["cases"][0]["expected"])
-            verdict = compare(expected, got, q["rtol"], q["atol"])
+        if q.cases:
+            expected = decode(q.cases[0].expected)
+            verdict = compare(expected, got, q.rtol, q.atol)
             if verdict.ok:
                 print("  PASS")
             else:
@@ -201,55 +198,51 @@ class Assignment:
             return
         # private value (per-student or not public): type/shape, then public properties
         results = []
-        verdict = check_signature(q["signature"], got)
-        results.append(
-            (f"type and shape ({_sig_text(q['signature'])})", verdict.ok, verdict.message)
-        )
-        if verdict.ok and q.get("properties"):
+        verdict = check_signature(q.signature, got)
+        results.append((f"type and shape ({_sig_text(q.signature)})", verdict.ok, verdict.message))
+        if verdict.ok and q.properties:
             try:
-                data = self.data(q["data"]) if q.get("data") else None
-                for text, ok in getattr(self._data_mod(), q["properties"])(data, got):
+                data = self.data(q.data) if q.data else None
+                for text, ok in getattr(self._data_mod(), q.properties)(data, got):
                     results.append((str(text), bool(ok), ""))
             except Exception as exc:  # a property function must not break the self-check
                 results.append(
                     ("properties", False, f"could not evaluate: {type(exc).__name__}: {exc}")
                 )
         failed = [r for r in results if not r[1]]
-        if failed and q["hint"]:
-            print(f"  Hint: {q['hint']}")
+        if failed and q.hint:
+            print(f"  Hint: {q.hint}")
         for text, ok, message in results:
             print(
                 f"  {'PASS' if ok else 'FAIL'}: {text}" + (f"\n      {message}" if message else "")
             )
-        who = f" for your ID {self.student_id!r}" if q.get("data") else ""
+        who = f" for your ID {self.student_id!r}" if q.data else ""
         print(
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
     def _check_function(self, q, func) -> None:
         if func is _MISSING:
-            return self._not_answered(q, f"no function {q['target']} (run your answer cell first)")
+            return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
-            print(f"  FAIL: {q['target']} is {describe(func)}, not a function")
+            print(f"  FAIL: {q.target} is {describe(func)}, not a function")
             return
         passed, hint_shown, forbidden = 0, False, set()
-        for case in q["cases"]:
-            args, kwargs = decode(case["args"]), decode(case["kwargs"])
+        for case in q.cases:
+            args, kwargs = decode(case.args), decode(case.kwargs)
             try:
-                with _tripwires(q["forbid"], forbidden):
+                with _tripwires(q.forbid, forbidden):
                     got = func(*args, **kwargs)
             except NotImplementedError:
-                return self._not_answered(q, f"{q['target']} raises NotImplementedError")
+                return self._not_answered(q, f"{q.target} raises NotImplementedError")
             except Exception as exc:
                 message = f"your function raised {type(exc).__name__}: {str(exc)[:200]}"
                 verdict = None
             else:
                 if got is Ellipsis:
-                    return self._not_answered(q, f"{q['target']} returns ...")
+                    return self._not_answered(q, f"{q.target} returns ...")
                 try:
-                    verdict = compare(
-                        decode(case["expected"]), decode(encode(got)), q["rtol"], q["atol"]
-                    )
+                    verdict = compare(decode(case.expected), decode(encode(got)), q.rtol, q.atol)
                     message = verdict.message
                 except TypeError as exc:
                     verdict, message = (
@@ -258,15 +251,15 @@ class Assignment:
                     )
             if verdict is not None and verdict.ok:
                 passed += 1
-                print(f"  PASS: {case['label']}")
+                print(f"  PASS: {case.label}")
                 continue
-            print(f"  FAIL: {case['label']}")
-            if q["hint"] and not hint_shown:
-                print(f"      Hint: {q['hint']}")
+            print(f"  FAIL: {case.label}")
+            if q.hint and not hint_shown:
+                print(f"      Hint: {q.hint}")
                 hint_shown = True
             print(f"      {message}")
-        n = len(q["cases"])
-        hidden = q["hidden_cases"]
+        n = len(q.cases)
+        hidden = q.hidden_cases
         more = (
             f"; {hidden} hidden case{'s' if hidden != 1 else ''} run{'s' if hidden == 1 else ''} at grading"
             if hidden

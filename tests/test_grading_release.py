@@ -13,7 +13,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from course.exercises.authoring import (
+from course.grading.authoring import (
     answer_cell,
     check_cell,
     code,
@@ -21,10 +21,10 @@ from course.exercises.authoring import (
     new_assignment_notebook,
     setup_cell,
 )
-from course.exercises.grader import GradeOptions, grade
-from course.exercises.notebook import MarkerError, make_release, strip_markers
-from course.exercises.release import find_solutions, release_files
-from course.exercises.spec import load_checks
+from course.grading.checks import load_checks
+from course.grading.driver import GradeOptions, grade
+from course.grading.notebook import MarkerError, make_release, strip_markers
+from course.grading.release import find_solutions, release_files
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
@@ -46,7 +46,7 @@ def _close(a, b, path="") -> None:
         if set(a) == {"__ndarray__"}:
             import numpy as np
 
-            from course.exercises.codec import decode
+            from course.grading.codec import decode
 
             x, y = decode(a), decode(b)
             assert x.dtype == y.dtype and x.shape == y.shape, path
@@ -96,7 +96,7 @@ def test_release_leaks_no_solution(name):
         if cell.cell_type == "code":
             assert cell.outputs == [] and cell.execution_count is None
             compile(
-                __import__("course.exercises.notebook", fromlist=["x"]).python_source(cell.source),
+                __import__("course.grading.notebook", fromlist=["x"]).python_source(cell.source),
                 "<c>",
                 "exec",
             )
@@ -268,7 +268,7 @@ def test_cli_release_fails_clearly_on_unclosed_marker(tmp_path):
         sol / "00_bad.ipynb",
     )
     (sol / "checks.py").write_text(
-        "from course.exercises.spec import Checks\nCHECKS = Checks('00_bad')\n"
+        "from course.grading.checks import Checks\nCHECKS = Checks('00_bad')\n"
         "@CHECKS.value('q1', var='x', points=1)\ndef q1():\n    return 1\n"
     )
     proc = subprocess.run(

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from course.exercises.grader import GradeOptions, grade
+from course.grading.driver import GradeOptions, grade
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
@@ -137,7 +137,7 @@ def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
             "builtins.round = lambda *a: 0\n"
             'json.dumps = lambda *a, **k: \'{"status": "ok"}\'\n'
             "json.loads = lambda *a, **k: {}\n"
-            "import course.exercises.codec as codec\n"
+            "import course.grading.codec as codec\n"
             "codec.encode = lambda v: [12.0, 3.0]\n"
             "x_hat_day1 = np.array([0.0, 0.0])"
         ),

@@ -12,7 +12,7 @@ Installed in the child right before student code runs, it makes the KERNEL refus
 This is the layer that still holds when the Python audit hook is bypassed (for instance through
 ``_posixsubprocess`` or ctypes) and when the grader runs as root, where ``RLIMIT_NPROC`` is not
 enforced. It is a deny-list, not a full sandbox: file access and the network are left to the
-audit hook and the resource limits (see :mod:`course.exercises.sandbox`).
+audit hook and the resource limits (see :mod:`course.grading.sandbox`).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 A ``checks.py`` creates one :class:`Checks` object (conventionally ``CHECKS``) and registers
 questions on it with the :meth:`Checks.value` and :meth:`Checks.function` decorators. The
 decorated function is the trusted REFERENCE: it runs in the grader (and in ``course release``
-for the public cases), never in a student's process. See ``course/exercises/AUTHORING.md``.
+for the public cases), never in a student's process. See ``docs/instructors/authoring.md``.
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from course.exercises.codec import Band, decode, encode
-from course.exercises.compare import binomial_band
+from course.grading.codec import Band, decode, encode
+from course.grading.compare import binomial_band
+from course.grading.vocabulary import DEMO_STUDENT_ID
 
 __all__ = [
     "DEMO_STUDENT_ID",
@@ -34,8 +35,6 @@ __all__ = [
     "student_rng",
 ]
 
-#: The student ID the public self-check and ``course release`` use where one is needed.
-DEMO_STUDENT_ID = "demo"
 
 _QID = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")

@@ -21,6 +21,8 @@ from typing import Any
 
 import nbformat
 
+from course.grading.vocabulary import PLACEHOLDER_ID, CellOrigin, CellRole
+
 __all__ = [
     "MarkerError",
     "Plan",
@@ -43,10 +45,8 @@ STUB_PREFIX = "### STUB"
 _MARKER_WORDS = re.compile(r"(BEGIN|END)\s+(SOLUTION|HIDDEN\s+TESTS)", re.IGNORECASE)
 _CHECK_SOURCE = re.compile(r"""^\s*check\(\s*["']([A-Za-z][A-Za-z0-9_]*)["']\s*\)\s*$""")
 _STUDENT_ID_LINE = re.compile(r"^STUDENT_ID\s*=.*$", re.MULTILINE)
-_ROLES = ("setup", "answer", "check", "context")
-PLACEHOLDER_LINE = (
-    'STUDENT_ID = "replace-with-your-student-id"   # <- your student ID, exactly as registered'
-)
+_ROLES = (CellRole.SETUP, CellRole.ANSWER, CellRole.CHECK, CellRole.CONTEXT)
+PLACEHOLDER_LINE = f'STUDENT_ID = "{PLACEHOLDER_ID}"   # <- your student ID, exactly as registered'
 MAX_NOTEBOOK_BYTES = 50_000_000
 
 
@@ -109,7 +109,7 @@ def strip_markers(
                 if not allow_solution:
                     raise MarkerError(
                         f"{where}, line {n}: a SOLUTION region outside an answer cell; "
-                        "tag the cell as an answer (course.exercises.authoring.answer_cell)"
+                        "tag the cell as an answer (course.grading.authoring.answer_cell)"
                     )
                 indent = line[: len(line) - len(line.lstrip())]
                 state = ("solution", indent, n, [])
@@ -168,7 +168,7 @@ class ReleaseCell:
     index: int
     id: str
     cell_type: str
-    role: str
+    role: CellRole
     question: str | None
     source: str
     solution_source: str
@@ -185,10 +185,10 @@ class Release:
 
     @property
     def setup(self) -> ReleaseCell:
-        return next(c for c in self.cells if c.role == "setup")
+        return next(c for c in self.cells if c.role == CellRole.SETUP)
 
     def answer(self, qid: str) -> ReleaseCell:
-        return next(c for c in self.cells if c.role == "answer" and c.question == qid)
+        return next(c for c in self.cells if c.role == CellRole.ANSWER and c.question == qid)
 
     def text(self) -> str:
         return nbformat.writes(self.notebook) + "\n"
@@ -200,7 +200,7 @@ _VALID_ID = re.compile(r"^[a-zA-Z0-9-_]{1,64}$")
 def make_release(solution_nb, name: str, questions: dict | None = None) -> Release:
     """Build the student release of a solution notebook (see the module docstring).
 
-    ``questions`` maps question id -> :class:`~course.exercises.spec.Question`; when given, every
+    ``questions`` maps question id -> :class:`~course.grading.checks.Question`; when given, every
     question must have exactly one answer cell (and vice versa) and its variable or function
     must be defined there.
     """
@@ -230,11 +230,11 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                 else nbformat.v4.new_raw_cell(src)
             )
             new["id"] = cid
-            new["metadata"] = {"course": {"role": "text"}}
+            new["metadata"] = {"course": {"role": str(CellRole.TEXT)}}
             if cell.get("attachments"):
                 new["attachments"] = cell["attachments"]
             cells_out.append(new)
-            release_cells.append(ReleaseCell(index, cid, ctype, "text", None, src, src))
+            release_cells.append(ReleaseCell(index, cid, ctype, CellRole.TEXT, None, src, src))
             continue
         if ctype != "code":
             raise MarkerError(f"{where}: unknown cell type {ctype!r}")
@@ -243,25 +243,28 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
         if role is None:
             m = _CHECK_SOURCE.match(src)
             if first_code and _STUDENT_ID_LINE.search(src):
-                role = "setup"
+                role = CellRole.SETUP
             elif m:
-                role, question = "check", m.group(1)
+                role, question = CellRole.CHECK, m.group(1)
             else:
-                role = "context"
+                role = CellRole.CONTEXT
         if role not in _ROLES:
             raise MarkerError(f"{where}: unknown role {role!r} (use one of {', '.join(_ROLES)})")
-        if role == "setup" and not first_code:
+        role = CellRole(role)
+        if role == CellRole.SETUP and not first_code:
             raise MarkerError(f"{where}: the setup cell must be the first code cell")
-        if first_code and role != "setup":
+        if first_code and role != CellRole.SETUP:
             raise MarkerError(
                 f"{where}: the first code cell must be the setup cell with STUDENT_ID "
-                "(course.exercises.authoring.setup_cell)"
+                "(course.grading.authoring.setup_cell)"
             )
         first_code = False
-        if role in ("answer", "check") and not question:
+        if role in (CellRole.ANSWER, CellRole.CHECK) and not question:
             raise MarkerError(f"{where}: an {role} cell needs metadata course.question")
-        released, regions = strip_markers(src, where, question, allow_solution=(role == "answer"))
-        if role == "answer":
+        released, regions = strip_markers(
+            src, where, question, allow_solution=(role == CellRole.ANSWER)
+        )
+        if role == CellRole.ANSWER:
             if regions == 0:
                 raise MarkerError(
                     f"{where}: answer cell for {question} has no '{BEGIN_SOLUTION}' region"
@@ -271,7 +274,7 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                     f"{where}: second answer cell for {question} (first: cell {seen_answers[question]})"
                 )
             seen_answers[question] = index
-        if role == "setup":
+        if role == CellRole.SETUP:
             if not _STUDENT_ID_LINE.search(released):
                 raise MarkerError(
                     f"{where}: the setup cell must assign STUDENT_ID on a line of its own"
@@ -284,7 +287,9 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                 raise MarkerError(f"{where}: the {what} cell is not valid Python ({problem})")
         new = nbformat.v4.new_code_cell(released)
         new["id"] = cid
-        new["metadata"] = {"course": {"role": role, **({"question": question} if question else {})}}
+        new["metadata"] = {
+            "course": {"role": str(role), **({"question": question} if question else {})}
+        }
         cells_out.append(new)
         release_cells.append(ReleaseCell(index, cid, "code", role, question, released, src))
     if first_code:
@@ -294,7 +299,7 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
         for qid, q in questions.items():
             if qid not in seen_answers:
                 raise MarkerError(f"{where_nb}: question {qid} (checks.py) has no answer cell")
-            cell = next(c for c in release_cells if c.role == "answer" and c.question == qid)
+            cell = next(c for c in release_cells if c.role == CellRole.ANSWER and c.question == qid)
             defined = _defined_names(cell.solution_source)
             if q.target not in defined:
                 what = "define function" if q.kind == "function" else "assign variable"
@@ -367,7 +372,7 @@ class PlanCell:
 
     source: str
     question: str | None
-    origin: str  # "setup" | "context" | "answer" | "extra"
+    origin: CellOrigin
     label: str
 
 
@@ -421,7 +426,7 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
     by_id = release.by_id()
     code_cells = [c for c in release.cells if c.cell_type == "code"]
     slots: dict[Any, list] = {c.index: [] for c in code_cells}
-    answer_slot = {c.question: c.index for c in code_cells if c.role == "answer"}
+    answer_slot = {c.question: c.index for c in code_cells if c.role == CellRole.ANSWER}
     used_ids = set()
     anchor = release.setup.index
     n_extra = 0
@@ -435,9 +440,9 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
         if cid in by_id and cid not in used_ids and by_id[cid].cell_type == "code":
             match = by_id[cid]
             used_ids.add(cid)
-        elif meta.get("role") == "answer" and meta.get("question") in answer_slot:
+        elif meta.get("role") == CellRole.ANSWER and meta.get("question") in answer_slot:
             match = next(c for c in code_cells if c.index == answer_slot[meta["question"]])
-        elif meta.get("role") in ("setup", "context", "check"):
+        elif meta.get("role") in (CellRole.SETUP, CellRole.CONTEXT, CellRole.CHECK):
             plan.notes.append(
                 f"Ignored a copy of a protected cell (notebook cell {pos + 1}); protected cells run as released."
             )
@@ -445,36 +450,38 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
         if match is None:
             n_extra += 1
             slots[anchor].append(
-                PlanCell(src, None, "extra", f"your added cell at position {pos + 1}")
+                PlanCell(src, None, CellOrigin.EXTRA, f"your added cell at position {pos + 1}")
             )
             continue
-        if match.role == "answer":
+        if match.role == CellRole.ANSWER:
             slots[match.index].append(
-                PlanCell(src, match.question, "answer", f"answer cell of {match.question}")
+                PlanCell(src, match.question, CellOrigin.ANSWER, f"answer cell of {match.question}")
             )
             plan.answered.add(match.question)
-        elif match.role == "setup":
+        elif match.role == CellRole.SETUP:
             plan.notebook_student_id = student_id_in(src)
             if _normalise(_STUDENT_ID_LINE.sub("", src)) != _normalise(
                 _STUDENT_ID_LINE.sub("", match.source)
             ):
                 plan.notes.append("The setup cell was edited; the released version was used.")
-        elif match.role == "context" and _normalise(src) != _normalise(match.source):
+        elif match.role == CellRole.CONTEXT and _normalise(src) != _normalise(match.source):
             plan.notes.append(
                 f"Protected cell {match.id!r} was edited; the released version was used."
             )
         anchor = match.index
 
     for cell in code_cells:
-        if cell.role == "setup":
+        if cell.role == CellRole.SETUP:
             plan.cells.append(
-                PlanCell(setup_source(release, student_id), None, "setup", "setup cell")
+                PlanCell(setup_source(release, student_id), None, CellOrigin.SETUP, "setup cell")
             )
             plan.cells.extend(slots[cell.index])
-        elif cell.role == "context":
-            plan.cells.append(PlanCell(cell.source, None, "context", f"protected cell {cell.id!r}"))
+        elif cell.role == CellRole.CONTEXT:
+            plan.cells.append(
+                PlanCell(cell.source, None, CellOrigin.CONTEXT, f"protected cell {cell.id!r}")
+            )
             plan.cells.extend(slots[cell.index])
-        elif cell.role == "check":
+        elif cell.role == CellRole.CHECK:
             plan.cells.extend(slots[cell.index])
         else:
             q = cell.question
