@@ -395,7 +395,8 @@ class _DenseFactor(CovarianceFactor):
         return out
 
     def diagonal(self):
-        return np.diag(self._source).copy()
+        # ndarray and scipy.sparse (a sparse matrix without a usable band) alike
+        return np.array(self._source.diagonal())
 
     def inverse_diagonal(self):
         # diag(Q^{-1}) = squared column norms of L^{-1}: one triangular inversion

@@ -237,7 +237,7 @@ class LeastSquaresFit:
         return _readonly(1.0 - np.einsum("ij,ij->i", self._G, LtQ1))
 
     @cached_property
-    def _w_parts(self):
+    def _w_parts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Numerators, squared denominators and weights of Baarda's w_i (see :func:`w_tests`)."""
         cov = self._covariance
         numerator = cov.whiten_transpose(self._e_w)  # c_i^T Qyy^{-1} ê
@@ -515,7 +515,7 @@ def _standard_deviation_hint(fit: LeastSquaresFit, T: float, alpha: float, null)
     low, high = float(null.ppf(alpha)), float(null.isf(alpha))
     if low <= T <= high:
         return ""
-    sigma = cov.variances  # read as standard deviations
+    sigma = cov.diagonal()  # the given variances, read as standard deviations
     # The refit costs one more O(m n²) QR, paid only when the test is already surprising.
     A_w = np.asfortranarray(fit.A / sigma[:, None])
     y_w = fit.y / sigma

@@ -665,12 +665,8 @@ def test_sparse_covariances_equal_their_dense_form():
         [np.full(m - 1, 0.45), np.full(m, 1.0), np.full(m - 1, 0.45)], [-1, 0, 1], format="csc"
     )
     diagonal = sp.diags(rng.uniform(0.5, 2.0, m))
-    for Q in (
-        _block_diagonal_covariance(rng, 10),
-        tridiagonal,
-        diagonal,
-        sp.csr_array(tridiagonal),
-    ):
+    full = sp.csr_array(random_spd(rng, m))  # no band to exploit: factored densely
+    for Q in (_block_diagonal_covariance(rng, 10), tridiagonal, diagonal, full):
         f = lsq.fit(A, y, Q)
         dense = Q.toarray()
         _assert_same_fit(f, lsq.fit(A, y, dense))
