@@ -1,7 +1,9 @@
 """Least-squares residuals and the tests built on them.
 
-This module follows Chapter 10 "Validation" of the course's source text
-(``seeds/lsq_validation_chapter10.txt``): the model of observation equations
+This module follows Chapter 10 "Validation" of Tiberius, van der Marel,
+Reudink and van Leijen (2021), *Surveying and Mapping*, TU Delft Open
+Textbook (full reference in the course bibliography, docs/bibliography.md):
+the model of observation equations
 
 .. math:: E(\\underline{y}) = A x, \\qquad D(\\underline{y}) = Q_{yy},
 
@@ -21,7 +23,8 @@ w_tests
 data_snooping
     Remove the most suspicious observation and refit, until nothing is rejected.
 noncentrality, mdb
-    Non-centrality of a test with given power, and the minimal detectable bias.
+    Non-centrality of a test with given power (:func:`course.chi2.noncentrality`,
+    re-exported here), and the minimal detectable bias.
 confidence_band
     Fitted values at new design rows with their confidence half-widths.
 load_sea_level
@@ -52,25 +55,32 @@ import warnings
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from importlib import resources
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy import linalg as sla
-from scipy import optimize, stats
+from scipy import stats
 from scipy.linalg import lapack
 
-from .linalg import (
+from course.chi2 import noncentrality, residual_norm_law
+from course.linalg import (
     CovarianceFactor,
-    as_float_array,
-    as_matrix,
-    check_alpha,
     check_full_column_rank,
     covariance_factor,
+    readonly,
     symmetrize,
 )
-from .results import TestResult, format_number
+from course.results import TestResult, decide, format_number
+from course.validation import (
+    as_count,
+    as_float_array,
+    as_index,
+    as_matrix,
+    as_probability,
+)
 
 __all__ = [
+    "ConfidenceBand",
     "LeastSquaresFit",
     "SnoopingResult",
     "WTestResult",
@@ -93,20 +103,13 @@ _UNTESTABLE_RTOL = 1e-10
 _TIE_RTOL = 1e-10
 
 
-@lru_cache(maxsize=64)
-def _chi2(dof: int):
-    # Freezing a scipy distribution costs ~1 ms; Monte Carlo loops reuse it.
-    return stats.chi2(dof)
-
-
 @lru_cache(maxsize=1)
 def _standard_normal():
+    # Freezing a scipy distribution costs ~1 ms; Monte Carlo loops reuse it.
     return stats.norm()
 
 
-def _readonly(array: np.ndarray) -> np.ndarray:
-    array.setflags(write=False)
-    return array
+_readonly = readonly
 
 
 def _format_vector(values, digits: int = 5, limit: int = 6) -> str:
@@ -404,17 +407,6 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     )
 
 
-def _whole_number(value, name: str, minimum: int, or_none: bool = False) -> int:
-    """``value`` as an int, refusing bools, fractions and non-numbers with a clear message."""
-    ok = not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
-    if not ok or not float(value).is_integer() or value < minimum:
-        kind = "a positive" if minimum == 1 else "a non-negative"
-        raise ValueError(
-            f"{name} must be {kind} integer{' or None' if or_none else ''}, got {value!r}"
-        )
-    return int(value)
-
-
 def _check_fit(value) -> LeastSquaresFit:
     if not isinstance(value, LeastSquaresFit):
         raise TypeError(
@@ -482,27 +474,32 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     (a likelihood ratio of the two readings with a free common scale, above
     1/10; it is 1 when all values are equal). With equal values the slip
     looks exactly like a wrong variance factor, so the warning names both.
+
+    Examples
+    --------
+    The chapter's second day of line fitting: the line is rejected.
+
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(4), np.arange(1, 5)])
+    >>> result = overall_model_test(fit(A, [28, 20, 16, 36]), alpha=0.01)
+    >>> round(result.statistic, 6), round(result.critical_value, 4), result.reject
+    (216.0, 9.2103, True)
     """
     fit = _check_fit(fit)
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     _require_redundancy(fit, "overall model test")
     dof = fit.redundancy
     T = fit.squared_norm
-    null = _chi2(dof)
-    critical = float(null.isf(alpha))
+    null = residual_norm_law(dof)
     hint = _standard_deviation_hint(fit, T, alpha, null)
     if hint:
         warnings.warn(hint, UserWarning, stacklevel=2)
-    return TestResult(
-        name="overall model test",
-        statistic=T,
-        alpha=alpha,
-        critical_value=critical,
-        pvalue=float(null.sf(T)),
-        reject=critical < T,
-        null=null,
+    return TestResult.from_null(
+        "overall model test",
+        T,
+        null,
+        alpha,
         dof=dof,
-        alternative="greater",
         details={"variance factor T/(m-n)": T / dof},
     )
 
@@ -600,21 +597,13 @@ class WTestResult:
                 f"observation {i} cannot be tested: it has no redundancy (its residual is "
                 "always zero), so an outlier in it is invisible"
             )
-        crit = self.critical_value
-        return TestResult(
-            name=f"w-test, observation {i}",
-            statistic=float(self.w[i]),
-            alpha=self.alpha,
-            critical_value=(-crit, crit),
-            pvalue=float(self.pvalues[i]),
-            reject=bool(self.reject[i]),
-            null=self.null,
-            alternative="two-sided",
+        return TestResult.from_null(
+            f"w-test, observation {i}", float(self.w[i]), self.null, self.alpha, "two-sided"
         )
 
     def tests(self) -> list[TestResult]:
         """One :class:`~course.results.TestResult` per testable observation."""
-        return [self.test(i) for i in np.flatnonzero(self.testable)]
+        return [self.test(int(i)) for i in np.flatnonzero(self.testable)]
 
     def summary(self) -> str:
         """One line: largest |w|, threshold and the rejected observations."""
@@ -669,16 +658,17 @@ def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
     w = np.full(m, np.nan)
     w[testable] = numerator[testable] / np.sqrt(denom2[testable])
     null = _standard_normal()
-    critical = float(null.isf(alpha / 2))
-    abs_w = np.abs(w)
+    decision = decide(null, w[testable], alpha, "two-sided")
+    critical = decision.critical_value.upper
     pvalues = np.full(m, np.nan)
-    pvalues[testable] = 2 * null.sf(abs_w[testable])
+    pvalues[testable] = decision.pvalue
     reject = np.zeros(m, dtype=bool)
-    reject[testable] = abs_w[testable] > critical
+    reject[testable] = decision.reject
     largest = 0
     if np.any(testable):
         # The first of the largest: |w| equal up to rounding count as a tie (with redundancy
         # 1 all testable |w_i| are equal), so the choice does not depend on round-off.
+        abs_w = np.abs(w)
         largest = int(np.flatnonzero(abs_w >= (1 - _TIE_RTOL) * np.nanmax(abs_w))[0])
     return WTestResult(
         w=_readonly(w),
@@ -736,9 +726,20 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     and the diagonal of ``Q_yy^{-1}`` (O(m n) for diagonal Qyy).
     Reference: W. Baarda (1968), *A testing procedure for use in geodetic
     networks*, Netherlands Geodetic Commission.
+
+    Examples
+    --------
+    A line observed with sigma = 0.1 and an outlier of 0.6 at observation 6:
+
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
+    >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
+    >>> wt = w_tests(fit(A, y, 0.01 * np.eye(10)), alpha=0.01)
+    >>> wt.largest, wt.rejected, round(float(wt.w[6]), 2)
+    (6, [6], 4.83)
     """
     fit = _check_fit(fit)
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     _require_redundancy(fit, "w-test")
     return _w_test_result(*fit._w_parts, alpha)
 
@@ -857,10 +858,19 @@ def data_snooping(
     ``fit`` is computed once, on the kept observations. (Only the cut-off
     for untestable observations, a generalised redundancy below 1e-10, is
     measured in the full model's weights ``(Q_yy^{-1})_jj``.)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
+    >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
+    >>> result = data_snooping(A, y, 0.01 * np.eye(10), alpha=0.01)
+    >>> result.removed, result.stop_reason
+    ((6,), 'no observation rejected')
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     if max_removals is not None:
-        max_removals = _whole_number(max_removals, "max_removals", minimum=0, or_none=True)
+        max_removals = as_count(max_removals, "max_removals", minimum=0)
     first = fit(A, y, Qyy)
     model = _OutlierModel(first)
     kept = np.arange(first.m)
@@ -946,55 +956,6 @@ class _OutlierModel:
 # ---------------------------------------------------------------------------
 # reliability
 # ---------------------------------------------------------------------------
-def noncentrality(alpha: float, power: float, dof: int = 1) -> float:
-    """Non-centrality λ0 at which a chi-square test has the given power.
-
-    Parameters
-    ----------
-    alpha : float
-        Level of significance of the test, in (0, 1).
-    power : float
-        Required detection probability ``γ = 1 - β``, with ``alpha < power < 1``.
-    dof : int
-        Degrees of freedom of the test (1 for the w-test).
-
-    Returns
-    -------
-    float
-        λ0 solving ``ncx2.sf(chi2.isf(alpha, dof), dof, λ0) = power``.
-
-    Notes
-    -----
-    Under an alternative with bias the test statistic follows a non-central
-    ``chi2(dof, λ)``; the power grows with λ, and λ0 is found with
-    ``scipy.optimize.brentq``. For ``dof = 1`` the test ``w² > chi2_α(1)`` is
-    the two-sided w-test, whose power is
-    ``Φ(√λ - z_{α/2}) + Φ(-√λ - z_{α/2})``; dropping the (tiny) second term
-    gives the familiar approximation ``√λ0 ≈ z_{α/2} + z_{1-γ}`` with
-    ``z_{1-γ} = Φ^{-1}(γ)`` (e.g. 17.07 for α = 0.001, γ = 0.80), which
-    slightly overstates the exact λ0. Reference: Baarda (1968); Teunissen,
-    *Testing theory* (2000), ch. 4. (The non-centrality a given fault
-    *produces* in a test is :func:`course.diagnosis.fault_noncentrality`.)
-    """
-    alpha = check_alpha(alpha)
-    power = check_alpha(power, "power")
-    dof = _whole_number(dof, "dof", minimum=1)
-    if power <= alpha:
-        raise ValueError(
-            f"power ({power!r}) must exceed alpha ({alpha!r}): even without a bias the test "
-            "rejects with probability alpha"
-        )
-    critical = stats.chi2.isf(alpha, dof)
-
-    def gap(lam):
-        return stats.ncx2.sf(critical, dof, lam) - power
-
-    upper = 1.0
-    while gap(upper) < 0:
-        upper *= 2.0
-    return float(optimize.brentq(gap, 0.0, upper, xtol=1e-13, rtol=4 * np.finfo(float).eps))
-
-
 def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.ndarray:
     """Minimal detectable bias of every observation (internal reliability).
 
@@ -1025,6 +986,13 @@ def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.n
     with ``λ0 = noncentrality(alpha, power, 1)``; for diagonal Qyy this is
     ``σ_i sqrt(λ0 / r_i)`` with ``r_i`` the redundancy number. Beyond the
     chapter; reference: Baarda (1968).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(4), np.arange(1, 5)])
+    >>> mdb(fit(A, [14, 20, 20, 24])).round(2)
+    array([7.54, 4.94, 4.94, 7.54])
     """
     fit = _check_fit(fit)
     _require_redundancy(fit, "minimal detectable bias")
@@ -1038,7 +1006,16 @@ def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.n
 # ---------------------------------------------------------------------------
 # confidence band
 # ---------------------------------------------------------------------------
-def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
+class ConfidenceBand(NamedTuple):
+    """Result of :func:`confidence_band` (unpacks as ``y_new_hat, half_width``)."""
+
+    y_new_hat: np.ndarray
+    """``A_new x̂``, ``(k,)``."""
+    half_width: np.ndarray
+    """Half-widths of the confidence intervals, ``(k,)``."""
+
+
+def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> ConfidenceBand:
     """Fitted values at new design rows and their confidence half-widths.
 
     Parameters
@@ -1052,10 +1029,9 @@ def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
 
     Returns
     -------
-    y_new_hat : ndarray, shape (k,)
-        ``A_new x̂``.
-    half_width : ndarray, shape (k,)
-        ``norm.isf((1 - level) / 2) * σ``, with ``σ² = diag(A_new Q_x̂x̂ A_new^T)``.
+    ConfidenceBand
+        ``y_new_hat = A_new x̂`` and ``half_width = norm.isf((1 - level) / 2) * σ``,
+        with ``σ² = diag(A_new Q_x̂x̂ A_new^T)``, each of shape ``(k,)``.
 
     Notes
     -----
@@ -1066,9 +1042,19 @@ def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
     For day 1 of the line-fitting example ``σ_ŷ2 ≈ 0.55`` and the half-width
     is ≈ 1.07. The variance is evaluated as ``||R^{-T} a||²`` by a
     triangular solve.
+
+    Examples
+    --------
+    Day 1 of the chapter: the fitted value at t = 2 and its 95 % half-width.
+
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(4), np.arange(1, 5)])
+    >>> band = confidence_band(fit(A, [14, 20, 20, 24]), [[1.0, 2.0]])
+    >>> round(float(band.y_new_hat[0]), 6), round(float(band.half_width[0]), 2)
+    (18.0, 1.07)
     """
     fit = _check_fit(fit)
-    level = check_alpha(level, "level")
+    level = as_probability(level, "level")
     A_new = as_float_array(A_new, "A_new")
     if A_new.ndim != 2 or A_new.shape[1] != fit.n:
         raise ValueError(
@@ -1078,7 +1064,7 @@ def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
     y_new = A_new @ fit.x_hat
     G = sla.solve_triangular(fit._R, A_new.T, trans="T", lower=False, check_finite=False)
     sigma = np.sqrt(np.sum(G * G, axis=0))
-    return y_new, stats.norm.isf((1.0 - level) / 2) * sigma
+    return ConfidenceBand(y_new, stats.norm.isf((1.0 - level) / 2) * sigma)
 
 
 # ---------------------------------------------------------------------------
@@ -1105,15 +1091,17 @@ def load_sea_level(case: int):
     -----
     Data: TU Delft MUDE open course book, "overall model test" notebook,
     CC BY 4.0 (see ``course/data/sea_level_mude/README.md``).
+
+    Examples
+    --------
+    >>> t, y = load_sea_level(1)
+    >>> t.size, y.size
+    (20, 20)
     """
-    if (
-        isinstance(case, bool)
-        or not isinstance(case, (int, np.integer))
-        or case not in (0, 1, 2, 3)
-    ):
-        raise ValueError(f"case must be 0, 1, 2 or 3, got {case!r}")
-    source = resources.files("course").joinpath(
-        "data", "sea_level_mude", f"Dataset_{int(case)}.txt"
-    )
+    try:
+        case = as_index(case, "case", 4)
+    except ValueError:
+        raise ValueError(f"case must be 0, 1, 2 or 3, got {case!r}") from None
+    source = resources.files("course") / "data" / "sea_level_mude" / f"Dataset_{case}.txt"
     y = np.loadtxt(io.StringIO(source.read_text(encoding="utf-8")))
     return np.arange(1.0, y.size + 1.0), y
