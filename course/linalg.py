@@ -794,7 +794,11 @@ def covariance_factor(value, name: str, size: int) -> CovarianceFactor:
         return _DiagonalFactor(np.ones(m), "identity", None)
     if sparse.issparse(value):
         return _sparse_factor(value, name, m)
-    if np.ndim(value) == 1:
+    try:
+        ndim = np.ndim(value)
+    except ValueError:  # ragged nested lists: as_matrix below says what is wrong
+        ndim = 2
+    if ndim == 1:
         variances = as_float_array(value, name)
         if variances.shape[0] != m:
             raise ValueError(
@@ -808,7 +812,7 @@ def covariance_factor(value, name: str, size: int) -> CovarianceFactor:
                 f"{name}[{bad[0]}] = {float(variances[bad[0]])!r} ({bad.size} non-positive entries)"
             )
         return _DiagonalFactor(variances, "variances", variances)
-    if np.ndim(value) == 0:
+    if ndim == 0:
         raise ValueError(
             f"{name} must be an (m, m) = ({m}, {m}) covariance matrix or a 1-D array of the "
             f"m variances, got a scalar; for equal variances s2 pass s2 * np.eye({m}), or "
