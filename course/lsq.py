@@ -883,7 +883,8 @@ def data_snooping(
         if first.redundancy - len(removed) == 0:
             reason = "no redundancy left"
             break
-        wt = model.w_tests(kept, alpha)
+        # Round 1 tests the fit itself; later rounds read the downdated model.
+        wt = model.w_tests(kept, alpha) if removed else w_tests(first, alpha)
         rounds.append(wt)
         round_indices.append(tuple(kept.tolist()))
         if not wt.any_reject:
