@@ -12,6 +12,7 @@ finish; a rerun skips students already graded with the same checks and library v
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import threading
@@ -20,6 +21,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from course.grading.identity import resolve_identities
 from course.grading.reports import (
     Summary,
     append_result,
@@ -27,6 +29,8 @@ from course.grading.reports import (
     read_results,
     write_csv,
 )
+from course.grading.roster import Roster, write_canvas_csv, write_moodle_csv
+from course.grading.secret import Secret, public_key_id
 from course.grading.session import AssignmentGrader
 
 __all__ = ["GradeOptions", "Summary", "find_submissions", "grade"]
@@ -42,6 +46,10 @@ class GradeOptions:
     progress: bool = True
     ready_timeout: float = 60.0
     student_budget: float | None = None  # wall-clock seconds for one student, all attempts
+    secret: Secret | None = None  # the instructor's key of personal data (None: public data)
+    roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
+    missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
+    lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
 
 
 def find_submissions(folder: Path, assignment: str) -> list[tuple[str, Path | None, str | None]]:
@@ -94,7 +102,13 @@ def grade(
         results_path.unlink()
     lock = threading.Lock()
     with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
-        todo = find_submissions(submissions, grader.name)
+        identity = resolve_identities(
+            find_submissions(submissions, grader.name),
+            grader.name,
+            options.roster.ids if options.roster is not None else None,
+            grader.data_key,
+        )
+        todo = identity.entries
         previous = read_results(results_path)
         rows: dict[str, dict] = {}
         pending = []
@@ -104,14 +118,18 @@ def grade(
                 old
                 and old.get("checks_sha256") == grader.digest
                 and old.get("version") == grader.version
+                and old.get("data_key", public_key_id) == grader.data_key
             ):
                 rows[sid] = old
             else:
                 pending.append((sid, path, problem))
         resumed = len(rows)
 
+        paths = {sid: path for sid, path, _ in todo}
+
         def finish(row: dict) -> None:
             with lock:
+                row["file"] = _file_record(paths.get(row["student"]), submissions)
                 append_result(row, results_path)
                 (out / "feedback" / f"{row['student']}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
@@ -151,7 +169,7 @@ def grade(
         qids = [q.id for q in grader.questions]
         final = [rows[sid] for sid, _, _ in todo]
         write_csv(final, qids, out / "grades.csv")
-        return Summary(
+        summary = Summary(
             final,
             qids,
             {q.id: q.points for q in grader.questions},
@@ -160,3 +178,35 @@ def grade(
             time.monotonic() - start,
             out,
         )
+        summary.flags = identity.flags
+        if options.roster is not None:
+            _class_files(summary, grader, options, out)
+        return summary
+
+
+def _file_record(path: Path | None, submissions: Path) -> dict | None:
+    """The graded file and its sha256: the receipt ``check.submit()`` printed matches it."""
+    if path is None:
+        return None
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        digest = None
+    name = (
+        path.relative_to(submissions).as_posix() if path.is_relative_to(submissions) else path.name
+    )
+    return {"name": name, "sha256": digest}
+
+
+def _class_files(summary: Summary, grader, options: GradeOptions, out: Path) -> None:
+    """Missing and unknown submissions against the roster, and the LMS grade files."""
+    roster = options.roster
+    by_id = {row["student"]: row for row in summary.rows}
+    summary.missing = [s.id for s in roster.students if s.id not in by_id]
+    known = set(roster.ids)
+    summary.unknown = sorted(sid for sid in by_id if sid not in known)
+    column = options.lms_column or grader.checks.title
+    write_canvas_csv(
+        by_id, roster, column, grader.checks.max_points, out / "canvas.csv", options.missing_as_zero
+    )
+    write_moodle_csv(by_id, roster, column, out / "moodle.csv", options.missing_as_zero)
