@@ -169,7 +169,8 @@ def public_corpus(root: Path, releases: dict[str, dict[str, bytes]]) -> str:
 
 def needles_for(solution_dir: Path, secret: Secret | None = None, public: str = "") -> list[Needle]:
     """Everything of one assignment that a student distribution must not contain; needles
-    found in ``public`` (:func:`public_corpus`) are left out, except the secret."""
+    found in ``public`` (:func:`public_corpus`) are left out, except the secret and whole
+    multi-line solutions."""
     from course.grading.release import load_assignment
 
     solution_dir = Path(solution_dir)
@@ -214,7 +215,12 @@ def needles_for(solution_dir: Path, secret: Secret | None = None, public: str = 
                     for line in _distinctive_lines(body):
                         out.append(Needle("generator", f"{name} data.{node.name}", line))
     unique = {(n.kind, n.where, n.text): n for n in out}
-    return [n for n in unique.values() if n.kind == "secret" or n.text not in public]
+    # a whole multi-line solution is never public: in a teaching notebook it is a leak
+    return [
+        n
+        for n in unique.values()
+        if n.kind == "secret" or (n.kind == "solution" and "\n" in n.text) or n.text not in public
+    ]
 
 
 # --------------------------------------------------------------------------------------
@@ -283,15 +289,16 @@ def scan(roots: Iterable[Path], needles: list[Needle]) -> list[Hit]:
     found_in: dict[bytes, list[Needle]] = {}  # the same bytes (a file and its archived copy) once
     for root in roots:
         root = Path(root)
+        prefix = "" if root.is_file() else f"{root.name}/"
         for name, data in _files(root):
             for label, text in _texts(name, data):
                 found = _INSTRUCTOR_PATH.search(label)
                 if found:
                     needle = Needle("file name", "the instructor's files", found.group(2))
-                    hits.append(Hit(needle, f"{root.name}/{label}"))
+                    hits.append(Hit(needle, prefix + label))
                 key = hashlib.sha256(text.encode("utf-8", errors="replace")).digest()
                 if key not in found_in:
                     flat = _norm(text)
                     found_in[key] = [n for n in needles if n.text in flat]
-                hits.extend(Hit(n, f"{root.name}/{label}") for n in found_in[key])
+                hits.extend(Hit(n, prefix + label) for n in found_in[key])
     return hits
