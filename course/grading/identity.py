@@ -117,6 +117,11 @@ def resolve_identities(
             )
         elif name_id is not None and (not roster or name_id in roster):
             sid = name_id
+            if not _is_bare(name_id, roster):
+                out.flags.append(
+                    f"{shown}: no student ID in the notebook; graded under its file name "
+                    f"{name_id!r} (rename it to <ID>.ipynb and grade again if that is wrong)"
+                )
         else:
             in_name = sorted({r for r in roster if any(_contains(n, r) for n in names)})
             if len(in_name) == 1:

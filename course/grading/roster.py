@@ -219,7 +219,7 @@ def write_canvas_csv(
     ``SIS User ID`` (our student ID); a blank score leaves Canvas's grade unchanged."""
     table = [
         ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", column],
-        ["Points Possible", "", "", "", "", _points(max_points)],
+        ["    Points Possible", "", "", "", "", _points(max_points)],  # as Canvas exports it
     ]
     for s in roster.students:
         table.append(
