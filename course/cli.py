@@ -2,8 +2,10 @@
 
 ``course open``
     start Jupyter on the course notebooks (the course's main entry point).
-``course release`` and ``course grade``
-    the instructors' exercise commands (see :mod:`course.grading`).
+``course release``, ``course grade``, ``course export``, ``course secret``
+    the instructors' exercise commands (see :mod:`course.grading`);
+``course submit``
+    write a student's notebook as the file to upload.
 
 ``python -m course`` is the same command.
 """

@@ -1,4 +1,5 @@
-"""The ``course release`` and ``course grade`` subcommands (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``export`` and ``secret``, and the
+students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 

@@ -106,8 +106,13 @@ def export(
     secret: Secret | None = None,
     roster: Roster | None = None,
     check_leaks: bool = True,
+    releases: dict[str, dict[str, bytes]] | None = None,
 ) -> ExportResult:
-    """Build the student distribution into ``dest`` (see the module docstring)."""
+    """Build the student distribution into ``dest`` (see the module docstring).
+
+    ``releases`` are the assignments' release files when already at hand (``{name:
+    release_files(...)}``, e.g. for several editions in a row); by default they are made here.
+    """
     dest, root = Path(dest).absolute(), Path(root).resolve()
     _check_destination(dest)
     if (secret is None) != (roster is None):
@@ -119,7 +124,8 @@ def export(
         if not (root / needed).exists():
             raise ExportError(f"{root} is not the course's repository (no {needed})")
     names = find_solutions(root / "solutions")
-    releases = {name: release_files(root / "solutions" / name) for name in names}
+    if releases is None or sorted(releases) != names:
+        releases = {name: release_files(root / "solutions" / name) for name in names}
     staging = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
     try:
         result = _build(staging, dest, root, names, releases, secret, roster)

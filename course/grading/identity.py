@@ -75,12 +75,15 @@ def _contains(name: str, sid: str) -> bool:
     return re.search(rf"(?<![A-Za-z0-9]){re.escape(sid)}(?![A-Za-z0-9])", name) is not None
 
 
-def _is_bare(name_id: str, roster: set) -> bool:
-    """Whether a name is a bare ID (an instructor's deliberate naming) rather than a name
-    with extra text: on the roster if there is one, else a single token."""
-    if roster:
-        return name_id in roster
-    return re.fullmatch(r"[A-Za-z0-9.@]+", name_id) is not None
+def _trusted_name(name_id: str, roster: set) -> bool:
+    """Whether a name is taken as the ID against the notebook's: a roster ID when there is a
+    roster, else any well-formed ID (the instructor's renaming is deliberate)."""
+    return name_id in roster if roster else True
+
+
+def _looks_bare(name_id: str) -> bool:
+    """A single token (``98765``, ``s123``, ``jane.doe``): no sign of a name with extra text."""
+    return re.fullmatch(r"[A-Za-z0-9.@-]+", name_id) is not None
 
 
 def resolve_identities(
@@ -88,9 +91,9 @@ def resolve_identities(
 ) -> Identity:
     """Decide the student ID of every ``(name, path, problem)`` from the submissions folder.
 
-    The notebook's declared ID wins when the name contains it; a bare ID as the name (the
-    instructor's renaming) wins over a different declared ID; otherwise the declared ID wins
-    over a name with extra text. Without a declared ID the name is used, or the one roster
+    The notebook's declared ID wins when the name contains it; a name that is an ID (on the
+    roster, when there is one) wins over a different declared ID (the instructor's renaming);
+    otherwise the declared ID wins over a name with extra text. Without a declared ID the name is used, or the one roster
     ID it contains. Every disagreement and guess is flagged.
     """
     roster = set(roster_ids or ())
@@ -103,7 +106,7 @@ def resolve_identities(
         declared, sub = _declared(path)
         if declared is not None and any(_contains(n, declared) for n in names):
             sid = declared
-        elif declared is not None and name_id is not None and _is_bare(name_id, roster):
+        elif declared is not None and name_id is not None and _trusted_name(name_id, roster):
             sid = name_id
             out.flags.append(
                 f"{shown}: the notebook says STUDENT_ID {declared!r}; graded as {name_id!r} "
@@ -117,7 +120,7 @@ def resolve_identities(
             )
         elif name_id is not None and (not roster or name_id in roster):
             sid = name_id
-            if not _is_bare(name_id, roster):
+            if name_id not in roster and not _looks_bare(name_id):
                 out.flags.append(
                     f"{shown}: no student ID in the notebook; graded under its file name "
                     f"{name_id!r} (rename it to <ID>.ipynb and grade again if that is wrong)"
@@ -133,8 +136,8 @@ def resolve_identities(
             else:
                 sid = name_id or name
                 out.flags.append(
-                    f"{shown}: no student ID in the notebook, and the file name is not a "
-                    f"{'roster ID' if roster else 'bare ID'}; graded as {sid!r} "
+                    f"{shown}: no student ID in the notebook, and the file name is not "
+                    f"{'a roster ID' if roster else 'an ID'}; graded as {sid!r} "
                     "(rename it to <ID>.ipynb and grade again)"
                 )
         if data_key is not None and sub.get("data_key") not in (None, data_key):
