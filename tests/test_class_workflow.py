@@ -303,3 +303,25 @@ def test_names_resolved_without_a_roster(tmp_path):
         "Roe_Ann_33333_01_least_squares.ipynb: no student ID in the notebook; graded under" in flags
     )
     assert "22222" not in flags and "11111" not in flags
+
+
+def test_submitting_section_in_a_real_kernel(tmp_path):
+    """The released notebook, run top to bottom in a Jupyter kernel as a student would (with
+    unanswered questions), ends by writing the file to upload."""
+    from nbclient import NotebookClient
+
+    folder = tmp_path / NAME
+    shutil.copytree(EXERCISE, folder)
+    path = folder / f"{NAME}.ipynb"
+    nb = nbformat.read(path, as_version=4)
+    setup = next(c for c in nb.cells if c.get("id") == "setup")
+    setup.source = setup.source.replace("replace-with-your-student-id", "s123")
+    nbformat.write(nb, path)  # saved, as submit() asks
+    NotebookClient(
+        nb, timeout=120, allow_errors=True, resources={"metadata": {"path": str(folder)}}
+    ).execute()
+    last = "".join(o.get("text", "") for o in nb.cells[-1].outputs)
+    written = folder / f"s123_{NAME}.ipynb"
+    assert f"wrote {written}" in last and "not answered in the saved notebook: q1" in last, last
+    meta = json.loads(written.read_text())["metadata"]["course"]["submission"]
+    assert meta["student_id"] == "s123" and meta["source"] == path.name
