@@ -45,8 +45,9 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     through ``U1``; the best it can do is the orthogonal projection of
     ``f U2``, and ``sqrt(T)`` is the length of the perpendicular.  When
     ``U2`` is parallel to ``U1`` the perpendicular vanishes: the fault is
-    invisible (test_quantities_lecture_sv.txt, the geometric slide of
-    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``).
+    invisible (the LiU lecture on test quantities, the geometric slide of
+    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``; full reference in
+    the course bibliography, docs/bibliography.md).
 
     Returns
     -------
@@ -60,7 +61,7 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     along = float(e1 @ a)
     perp_vec = a - along * e1
     perp = float(np.linalg.norm(perp_vec))
-    ortho = perp > 1e-12 * max(np.linalg.norm(a), 1.0)
+    ortho = perp > 1e-12 * max(float(np.linalg.norm(a)), 1.0)
     point = np.array([along, perp])
     n1 = float(np.linalg.norm(u1))
     reach = max(abs(along), n1, perp, 1.0) * 1.25
