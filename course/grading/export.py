@@ -194,8 +194,10 @@ def _build(staging, dest, root, names, releases, secret, roster) -> ExportResult
         "summary": project.get("description", ""),
         "requires_python": project.get("requires-python", ">=3.10"),
         "dependencies": dependencies,
-        "license": (project.get("license") or {}).get("text", ""),
+        "license": _license(project.get("license")),
     }
+    if (root / "LICENSE").is_file():
+        shutil.copyfile(root / "LICENSE", folder / "LICENSE")
     (folder / "pyproject.toml").write_text(_pyproject(meta), encoding="utf-8")
     zip_path = staging / f"{folder.name}.zip"
     _write_zip(folder, zip_path)
@@ -270,13 +272,20 @@ Every file here, archives included, was scanned for those before the export fini
 """
 
 
+def _license(value) -> str:
+    """The SPDX expression of ``[project].license`` (a string, or the older ``{text = ...}``)."""
+    if isinstance(value, dict):
+        return str(value.get("text", ""))
+    return str(value or "")
+
+
 def _toml_list(items) -> str:
     return "[" + ", ".join(json.dumps(i) for i in items) + "]"
 
 
 def _pyproject(meta: dict) -> str:
     return f"""[build-system]
-requires = ["setuptools>=68"]
+requires = ["setuptools>=77"]
 build-backend = "setuptools.build_meta"
 
 [project]
@@ -285,7 +294,8 @@ version = {json.dumps(meta["version"])}
 description = {json.dumps(meta["summary"])}
 readme = "README.md"
 requires-python = {json.dumps(meta["requires_python"])}
-license = {{ text = {json.dumps(meta["license"])} }}
+license = {json.dumps(meta["license"])}
+license-files = ["LICENSE"]
 dependencies = {_toml_list(meta["dependencies"])}
 
 [project.scripts]
@@ -301,11 +311,12 @@ course = ["data/**/*", "materials/**/*"]
 
 def _core_metadata(meta: dict, readme: str) -> str:
     lines = [
-        "Metadata-Version: 2.1",
+        "Metadata-Version: 2.4",
         f"Name: {meta['name']}",
         f"Version: {meta['version']}",
         f"Summary: {meta['summary']}",
-        f"License: {meta['license']}",
+        f"License-Expression: {meta['license']}",
+        "License-File: LICENSE",
         f"Requires-Python: {meta['requires_python']}",
         *(f"Requires-Dist: {d}" for d in meta["dependencies"]),
         "Description-Content-Type: text/markdown",
@@ -350,6 +361,8 @@ def _write_wheel(folder: Path, out: Path, meta: dict, readme: str) -> Path:
         ),
         (f"{dist_info}/entry_points.txt", b"[console_scripts]\ncourse = course.cli:main\n"),
     ]
+    if (folder / "LICENSE").is_file():  # PEP 639: license files under dist-info/licenses/
+        files.append((f"{dist_info}/licenses/LICENSE", (folder / "LICENSE").read_bytes()))
     record = io.StringIO()
     for rel, data in files:
         digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
