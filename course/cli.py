@@ -75,6 +75,7 @@ def _jupyter_command(app: str):
 
 
 def _open(args) -> int:
+    target: Path | None
     if args.path:
         target = Path(args.path).resolve()
     else:
@@ -155,11 +156,11 @@ def build_parser() -> argparse.ArgumentParser:
     p_open.set_defaults(func=_open)
 
     try:
-        from course.grading import cli as exercise_cli
+        from course.grading import cli as grading_cli
     except ImportError:  # the library without its grader: `course open` only
         pass
     else:
-        exercise_cli.add_commands(sub)
+        grading_cli.add_commands(sub)
     return parser
 
 

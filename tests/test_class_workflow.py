@@ -17,7 +17,7 @@ import pytest
 from course.cli import main as course_main
 from course.grading import Assignment
 from course.grading.checks import load_checks, load_data_module, student_rng
-from course.grading.driver import GradeOptions, grade
+from course.grading.driver import GradeOptions, Submission, grade
 from course.grading.identity import resolve_identities
 from course.grading.personal import PERSONAL_FILE, PersonalData, build_personal_data
 from course.grading.roster import RosterError, read_roster
@@ -278,7 +278,7 @@ def test_names_resolved_without_a_roster(tmp_path):
         cell["id"], cell["metadata"] = "setup", {"course": {"role": "setup"}}
         nb.cells = [cell]
         nbformat.write(nb, tmp_path / name)
-        return (Path(name).stem, tmp_path / name, None)
+        return Submission(Path(name).stem, tmp_path / name)
 
     entries = [
         saved("98765.ipynb", "98765"),
@@ -289,7 +289,7 @@ def test_names_resolved_without_a_roster(tmp_path):
         saved("late_44444.ipynb", "44444"),
     ]
     identity = resolve_identities(entries, NAME)
-    assert [e[0] for e in identity.entries] == [
+    assert [e.student for e in identity.entries] == [
         "11111",
         "22222",
         "44444",

@@ -81,7 +81,7 @@ def _project_metadata(root: Path) -> dict:
         import tomllib
     except ModuleNotFoundError:  # Python 3.10
         try:
-            import tomli as tomllib  # type: ignore[no-redef]
+            import tomli as tomllib
         except ModuleNotFoundError:
             raise ExportError("course export needs Python 3.11 or the tomli package") from None
     return tomllib.loads((root / "pyproject.toml").read_text("utf-8"))["project"]

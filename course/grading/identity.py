@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 from course.grading.notebook import MAX_NOTEBOOK_BYTES
 from course.grading.submit import saved_student_id
@@ -28,7 +29,8 @@ __all__ = ["Identity", "resolve_identities"]
 
 @dataclass
 class Identity:
-    """The resolved submissions ``(student_id, path, problem)`` and the console's flags."""
+    """The resolved submissions (:class:`~course.grading.driver.Submission`, each with the
+    student ID decided here) and the console's flags."""
 
     entries: list = field(default_factory=list)
     flags: list = field(default_factory=list)
@@ -46,9 +48,9 @@ def _declared(path: Path | None) -> tuple[str | None, dict]:
         return None, {}
     if not isinstance(nb, dict):
         return None, {}
-    meta = nb.get("metadata") if isinstance(nb.get("metadata"), dict) else {}
-    course_meta = meta.get("course") if isinstance(meta.get("course"), dict) else {}
-    sub = course_meta.get("submission") if isinstance(course_meta.get("submission"), dict) else {}
+    meta: dict = nb["metadata"] if isinstance(nb.get("metadata"), dict) else {}
+    course_meta: dict = meta["course"] if isinstance(meta.get("course"), dict) else {}
+    sub: dict = course_meta["submission"] if isinstance(course_meta.get("submission"), dict) else {}
     sid = sub.get("student_id")
     if not (isinstance(sid, str) and is_student_id(sid)):
         try:
@@ -89,7 +91,7 @@ def _looks_bare(name_id: str) -> bool:
 def resolve_identities(
     entries: list, assignment: str, roster_ids=None, data_key: str | None = None
 ) -> Identity:
-    """Decide the student ID of every ``(name, path, problem)`` from the submissions folder.
+    """Decide the student ID of every submission (``.student`` is its name in the folder).
 
     The notebook's declared ID wins when the name contains it; a name that is an ID (on the
     roster, when there is one) wins over a different declared ID (the instructor's renaming);
@@ -98,12 +100,16 @@ def resolve_identities(
     """
     roster = set(roster_ids or ())
     out = Identity()
-    claimed: dict[str, list[tuple[str, Path | None, str | None, dict]]] = {}
-    for name, path, problem in entries:
+    claimed: dict[str, list[tuple[str, Any, dict]]] = {}
+    for sub in entries:
+        name, path = sub.student, sub.path
+        if path is None:  # refused or empty: nothing to read, the name stays
+            claimed.setdefault(name, []).append((name, sub, {}))
+            continue
         shown = path.name if path is not None and path.stem == name else name
         names = [name] + ([path.stem] if path is not None and path.stem != name else [])
         name_id = next((c for c in (_name_id(n, assignment) for n in names) if c), None)
-        declared, sub = _declared(path)
+        declared, meta = _declared(path)
         if declared is not None and any(_contains(n, declared) for n in names):
             sid = declared
         elif declared is not None and name_id is not None and _trusted_name(name_id, roster):
@@ -140,21 +146,20 @@ def resolve_identities(
                     f"{'a roster ID' if roster else 'an ID'}; graded as {sid!r} "
                     "(rename it to <ID>.ipynb and grade again)"
                 )
-        if data_key is not None and sub.get("data_key") not in (None, data_key):
+        if data_key is not None and meta.get("data_key") not in (None, data_key):
             out.mismatched_keys.append(shown)
-        claimed.setdefault(sid, []).append((shown, path, problem, sub))
+        claimed.setdefault(sid, []).append((shown, sub, meta))
     for sid in sorted(claimed):
         files = claimed[sid]
         if len(files) > 1:
             # the most recently written submission counts; the others are reported
-            files.sort(key=lambda f: (str(f[3].get("written", "")), f[0]))
+            files.sort(key=lambda f: (str(f[2].get("written", "")), f[0]))
             out.flags.append(
                 f"{len(files)} submissions claim the ID {sid!r}: "
                 + ", ".join(f[0] for f in files)
                 + f"; graded {files[-1][0]} (the latest written)"
             )
-        shown, path, problem, _ = files[-1]
-        out.entries.append((sid, path, problem))
+        out.entries.append(replace(files[-1][1], student=sid))
     if out.mismatched_keys:
         out.flags.append(
             f"{len(out.mismatched_keys)} submission(s) were worked on personal data issued with "

@@ -66,7 +66,8 @@ def _norm(text: str) -> str:
 
 
 def _solution_regions(source: str) -> list[str]:
-    regions, current = [], None
+    regions: list[str] = []
+    current: list[str] | None = None
     for line in source.split("\n"):
         stripped = line.strip()
         if stripped == BEGIN_SOLUTION:

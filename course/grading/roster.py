@@ -24,6 +24,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from course.grading.reports import csv_text
 from course.grading.vocabulary import STUDENT_ID_RULE, is_student_id
 
 __all__ = [
@@ -183,12 +184,6 @@ def read_roster(path: str | Path) -> Roster:
 # --------------------------------------------------------------------------------------
 # LMS grade files
 # --------------------------------------------------------------------------------------
-def _safe(text: str) -> str:
-    """A cell a spreadsheet will not run as a formula."""
-    text = str(text)
-    return "'" + text if text[:1] in ("=", "+", "-", "@", "\t", "\r") else text
-
-
 def _points(x) -> str:
     return f"{round(float(x), 2):g}"
 
@@ -197,7 +192,7 @@ def _write(rows: list[list[str]], path: Path) -> None:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\r\n")
     for row in rows:
-        writer.writerow([_safe(c) for c in row])
+        writer.writerow([csv_text(c) for c in row])
     path.write_text(buf.getvalue(), encoding="utf-8")
 
 

@@ -102,8 +102,8 @@ def make_submission(
         nb = read_submission(notebook)
     except SubmissionError as exc:
         raise Refused(f"{notebook} cannot be read: {exc}") from None
-    meta = nb.setdefault("metadata", {}) if isinstance(nb.get("metadata"), dict) else {}
-    course_meta = meta.get("course") if isinstance(meta.get("course"), dict) else {}
+    meta: dict = nb["metadata"] if isinstance(nb.get("metadata"), dict) else {}
+    course_meta: dict = meta["course"] if isinstance(meta.get("course"), dict) else {}
     name = assignment or course_meta.get("assignment")
     if not name:
         raise Refused(
