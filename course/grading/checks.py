@@ -22,6 +22,7 @@ import numpy as np
 
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
+from course.grading.secret import Secret
 from course.grading.vocabulary import DEMO_STUDENT_ID
 
 __all__ = [
@@ -41,13 +42,20 @@ _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _NAME = re.compile(r"^[0-9A-Za-z][0-9A-Za-z_.-]*$")
 
 
-def student_rng(assignment: str, key: str, student_id: str) -> np.random.Generator:
+def student_rng(
+    assignment: str, key: str, student_id: str, secret: Secret | None = None
+) -> np.random.Generator:
     """The random generator of one student's data set ``key`` of ``assignment``.
 
-    Seeded with the first 128 bits of ``sha256(assignment NUL key NUL student_id)`` (surrounding
-    whitespace of the ID ignored), so it is the same on every machine and in every process;
-    Python's ``hash`` is salted per process and is never used.
+    Without ``secret`` (self-learners): seeded with the first 128 bits of
+    ``sha256(assignment NUL key NUL student_id)``, so anyone with the ID rebuilds the data.
+    With the instructor's :class:`~course.grading.secret.Secret`: seeded with
+    ``HMAC-SHA256(secret, ...)``, which nothing in the student distribution determines.
+    Surrounding whitespace of the ID is ignored; the seed is the same on every machine and in
+    every process (Python's ``hash`` is salted per process and is never used).
     """
+    if secret is not None:
+        return np.random.default_rng(secret.seed(assignment, key, student_id))
     text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode()
     seed = int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
     return np.random.default_rng(seed)
@@ -280,10 +288,11 @@ class Checks:
     def data_keys(self) -> list[str]:
         return sorted({q.data for q in self.questions.values() if q.data is not None})
 
-    def data_for(self, key: str, student_id: str) -> Any:
-        """The per-student data set ``key`` for ``student_id`` (plain data)."""
+    def data_for(self, key: str, student_id: str, secret: Secret | None = None) -> Any:
+        """The per-student data set ``key`` for ``student_id`` (plain data), drawn with the
+        instructor's ``secret`` when one is given (see :func:`student_rng`)."""
         func = getattr(self.data_module, key)
-        return decode(encode(func(student_rng(self.name, key, student_id))))
+        return decode(encode(func(student_rng(self.name, key, student_id, secret))))
 
     def validate(self) -> None:
         """Check the question set for authoring mistakes (raises ValueError)."""

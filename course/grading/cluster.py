@@ -35,6 +35,7 @@ _WORKER_OPTIONS = (
     "unsafe_no_isolation",
     "namespaces",
     "landlock",
+    "secret",  # a graded class's key: workers draw the same personal data
 )
 
 # -- worker side ---------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ finish; a rerun skips students already graded with the same checks and library v
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import threading
@@ -22,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from course.grading.identity import resolve_identities
 from course.grading.isolation import Isolation, detect
 from course.grading.reports import (
     Summary,
@@ -30,6 +32,8 @@ from course.grading.reports import (
     read_results,
     write_csv,
 )
+from course.grading.roster import Roster, write_canvas_csv, write_moodle_csv
+from course.grading.secret import Secret, public_key_id
 from course.grading.session import AssignmentGrader
 
 __all__ = [
@@ -73,6 +77,10 @@ class GradeOptions:
     landlock: bool = True  # use Landlock when the kernel has it
     announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
     cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
+    secret: Secret | None = None  # the instructor's key of personal data (None: public data)
+    roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
+    missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
+    lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""
@@ -199,7 +207,13 @@ def grade(
         results_path.unlink()
     lock = threading.Lock()
     with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
-        todo = find_submissions(submissions, grader.name, private_dir=solution_dir)
+        identity = resolve_identities(
+            find_submissions(submissions, grader.name, private_dir=solution_dir),
+            grader.name,
+            options.roster.ids if options.roster is not None else None,
+            grader.data_key,
+        )
+        todo = identity.entries
         previous = read_results(results_path)
         rows: dict[str, dict] = {}
         pending = []
@@ -209,14 +223,18 @@ def grade(
                 old
                 and old.get("checks_sha256") == grader.digest
                 and old.get("version") == grader.version
+                and old.get("data_key", public_key_id) == grader.data_key
             ):
                 rows[sub.student] = old
             else:
                 pending.append(sub)
         resumed = len(rows)
 
+        paths = {sub.student: sub.path for sub in todo}
+
         def finish(row: dict) -> None:
             with lock:
+                row["file"] = _file_record(paths.get(row["student"]), submissions)
                 append_result(row, results_path)
                 (out / "feedback" / f"{row['student']}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
@@ -260,7 +278,7 @@ def grade(
         qids = [q.id for q in grader.questions]
         final = [rows[sub.student] for sub in todo]
         write_csv(final, qids, out / "grades.csv")
-        return Summary(
+        summary = Summary(
             final,
             qids,
             {q.id: q.points for q in grader.questions},
@@ -269,3 +287,36 @@ def grade(
             time.monotonic() - start,
             out,
         )
+        summary.flags = identity.flags
+        if options.roster is not None:
+            _class_files(summary, grader, options, out)
+        return summary
+
+
+def _file_record(path: Path | None, submissions: Path) -> dict | None:
+    """The graded file and its sha256: the receipt ``check.submit()`` printed matches it."""
+    if path is None:
+        return None
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        digest = None
+    name = (
+        path.relative_to(submissions).as_posix() if path.is_relative_to(submissions) else path.name
+    )
+    return {"name": name, "sha256": digest}
+
+
+def _class_files(summary: Summary, grader, options: GradeOptions, out: Path) -> None:
+    """Missing and unknown submissions against the roster, and the LMS grade files."""
+    roster = options.roster
+    assert roster is not None
+    by_id = {row["student"]: row for row in summary.rows}
+    summary.missing = [s.id for s in roster.students if s.id not in by_id]
+    known = set(roster.ids)
+    summary.unknown = sorted(sid for sid in by_id if sid not in known)
+    column = options.lms_column or grader.checks.title
+    write_canvas_csv(
+        by_id, roster, column, grader.checks.max_points, out / "canvas.csv", options.missing_as_zero
+    )
+    write_moodle_csv(by_id, roster, column, out / "moodle.csv", options.missing_as_zero)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = [
@@ -109,6 +109,29 @@ class Summary:
     resumed: int
     seconds: float
     out: Path
+    flags: list = field(default_factory=list)  # doubts about who submitted what (identity)
+    missing: list | None = None  # roster IDs without a submission (None: no roster)
+    unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
+
+    def class_text(self) -> str:
+        """The identity flags and the roster's missing and unknown submissions."""
+        lines = []
+        if self.flags:
+            lines.append(f"Check these {len(self.flags)} submission name(s):")
+            lines += [f"  - {flag}" for flag in self.flags]
+        if self.missing is not None:
+            lines.append(
+                f"Roster: {len(self.missing)} missing"
+                + (
+                    f" ({', '.join(self.missing[:20])}{' …' if len(self.missing) > 20 else ''})"
+                    if self.missing
+                    else ""
+                )
+                + f", {len(self.unknown)} not on the roster"
+                + (f" ({', '.join(self.unknown)})" if self.unknown else "")
+                + "; LMS files: canvas.csv, moodle.csv"
+            )
+        return "\n".join(lines)
 
     def text(self) -> str:
         n = len(self.rows)
@@ -117,7 +140,7 @@ class Summary:
             f"in {self.seconds:.1f} s; results in {self.out}"
         ]
         if not n:
-            return lines[0]
+            return "\n".join([lines[0], self.class_text()]).rstrip()
         lines.append(f"{'question':<10}{'max':>6}{'mean':>8}{'full marks':>12}")
         for qid in self.question_ids:
             pts = [r["questions"][qid]["points"] for r in self.rows if qid in r["questions"]]
@@ -151,7 +174,8 @@ class Summary:
                 + ", ".join(f"{r['student']} ({float(r['wall_seconds']):.1f} s)" for r in slow)
                 + f"; median {median:.2f} s per student"
             )
-        return "\n".join(lines)
+        extra = self.class_text()
+        return "\n".join(lines + ([extra] if extra else []))
 
 
 def slowest(rows: list[dict], n: int = 3) -> list[dict]:

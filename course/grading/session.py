@@ -26,6 +26,7 @@ from course.grading.notebook import (
 )
 from course.grading.release import checks_digest, load_assignment
 from course.grading.sandbox import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
+from course.grading.secret import public_key_id
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -64,6 +65,9 @@ class AssignmentGrader:
         self.checks, self.release = load_assignment(self.solution_dir)
         self.name = self.checks.name
         self.digest = checks_digest(self.solution_dir, self.checks.files)
+        # personal data are drawn with the instructor's secret when the class has one
+        self.secret = getattr(self.options, "secret", None)
+        self.data_key = self.secret.key_id if self.secret is not None else public_key_id
         self.version = _version()
         self.questions = list(self.checks.questions.values())
         # references that do not depend on the student: computed once, here, in the parent
@@ -138,6 +142,7 @@ class AssignmentGrader:
             "assignment": self.name,
             "checks_sha256": self.digest,
             "version": self.version,
+            "data_key": self.data_key,
             "questions": {},
             "notes": [],
             "total": 0.0,
@@ -256,7 +261,10 @@ class StudentSession:
         self.hits: dict[str, set] = {}
         self.child: ChildHandle | None = None
         self.deadline = time.monotonic() + grader.budget()
-        self.data = {key: grader.checks.data_for(key, sid) for key in grader.checks.data_keys()}
+        self.data = {
+            key: grader.checks.data_for(key, sid, grader.secret)
+            for key in grader.checks.data_keys()
+        }
 
     # -- messages -------------------------------------------------------------------------
     def clean(self, text: str) -> str:
