@@ -127,7 +127,7 @@ def plot_estimate(
     fault_time=None,
     color=None,
     xlabel="t [samples]",
-    ylabel=None,
+    ylabel="estimate",
 ):
     """An estimate with its ``± nsigma`` standard-deviation band and, optionally, the truth.
 
@@ -147,8 +147,8 @@ def plot_estimate(
     color : int, str or Pair, optional
         Colour pair of this estimate: give each filter its own, so that two
         estimates on one axes stay apart.
-    xlabel, ylabel : str, optional
-        Axis labels.
+    xlabel, ylabel : str
+        Axis labels (give the quantity and its unit).
 
     Returns
     -------
@@ -178,8 +178,7 @@ def plot_estimate(
         ax.plot(t, truth, color="k", lw=1, ls="--", label=truth_label)
     _fault(ax, fault_time)
     ax.set_xlabel(xlabel)
-    if ylabel:
-        ax.set_ylabel(ylabel)
+    ax.set_ylabel(ylabel)
     legend_outside(ax)
     return ax
 

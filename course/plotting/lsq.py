@@ -11,7 +11,16 @@ from __future__ import annotations
 import numpy as np
 
 from . import _checks, axes_or_new
-from .style import REJECT, legend_outside, pair, shade_tail, styled, theory_grid, threshold_line
+from .style import (
+    REJECT,
+    THEORY_POINTS,
+    legend_outside,
+    pair,
+    shade_tail,
+    styled,
+    theory_grid,
+    threshold_line,
+)
 
 __all__ = [
     "line_design",
@@ -535,7 +544,7 @@ def plot_chi2_histogram(T, dof, ax=None, alpha=None, bins=40, noncentrality=None
         color=pair(0).light,
         label=f"simulated $T$ ({T.size} records)",
     )
-    grid = theory_grid(0.0, upper)[1:]
+    grid = theory_grid(0.0, upper, THEORY_POINTS + 1)[1:]  # the density may be infinite at 0
     density = stats.chi2.pdf(grid, dof)
     if alpha is not None:
         k = stats.chi2.isf(alpha, dof)

@@ -137,7 +137,7 @@ def plot_extreme_laws(law_min, law_max, samples=None, ax=None, bins=80, threshol
 
 
 @styled
-def plot_cdf_errors(x, errors, ax=None, xlabel="x"):
+def plot_cdf_errors(x, errors, ax=None, xlabel="point at which the CDFs are compared"):
     """Curves of ``approximate CDF - exact CDF``, one per label.
 
     Parameters
