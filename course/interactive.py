@@ -65,7 +65,7 @@ def _axes(axes, n, **kwargs):
     from .plotting.style import context
 
     with context():
-        _, new = plt.subplots(1, n, figsize=(5.2 * n, 3.6), **kwargs)
+        _, new = plt.subplots(1, n, figsize=(6.4 * n, 3.8), **kwargs)
     return list(np.atleast_1d(new))
 
 
@@ -146,7 +146,8 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
     -------
     dict
         ``T``, ``critical`` (of the overall model test), ``omt_reject``,
-        ``w_reject`` (indices), ``omt_power`` and ``w_power`` (the
+        ``w_reject`` (indices), ``w`` (the w-statistic of the observation
+        with the outlier), ``omt_power`` and ``w_power`` (the
         probabilities that each test detects an outlier of this size).
 
     Notes
@@ -205,7 +206,7 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
     )
     ax_T.set_xlabel("overall model test statistic $T$")
     ax_T.set_ylabel("density")
-    legend_outside(ax_T, where="below")
+    legend_outside(ax_T)
     from .plotting.lsq import plot_w_tests
 
     plot_w_tests(wt, ax=ax_w)
@@ -215,6 +216,7 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
         "critical": float(omt.critical_value),
         "omt_reject": bool(omt.reject),
         "w_reject": tuple(int(i) for i in wt.rejected),
+        "w": float(wt.w[index]),
         "omt_power": omt_power,
         "w_power": w_power,
     }

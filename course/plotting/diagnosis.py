@@ -447,6 +447,7 @@ def plot_power_curves(
     theory_sizes=None,
     colors: Mapping[str, object] | None = None,
     n_records: int | None = None,
+    linestyles: Mapping[str, str] | None = None,
 ):
     """Alarm probability against fault size: theory as lines, Monte Carlo as dots.
 
@@ -470,6 +471,9 @@ def plot_power_curves(
         colour across the course); by order otherwise.
     n_records : int, optional
         Records per Monte Carlo point: draws 95 % binomial error bars.
+    linestyles : mapping of str to str, optional
+        Line style of each label: two tests against one fault share the
+        fault's colour and differ by line style.
 
     Returns
     -------
@@ -490,7 +494,13 @@ def plot_power_curves(
                 f"theory[{label!r}] has {values.size} values for {xs.size} sizes"
                 + ("" if theory_sizes is not None else " (pass theory_sizes for a fine grid)")
             )
-        ax.plot(xs, values, color=_colour(colors.get(label), i).dark, label=f"{label} (theory)")
+        ax.plot(
+            xs,
+            values,
+            color=_colour(colors.get(label), i).dark,
+            ls=(linestyles or {}).get(label, "-"),
+            label=f"{label} (theory)",
+        )
     if simulated:
         keys = list(theory)
         for label, values in simulated.items():

@@ -588,8 +588,10 @@ def plot_w_tests(w_result, ax=None, index=None, xlabel="observation"):
     colors = np.where(reject, REJECT.dark, pair(0).dark)
     k = w_result.critical_value
     top = max(1.15 * np.nanmax(np.abs(w)), 1.5 * k)
-    ax.axhspan(k, top, color=REJECT.light, alpha=0.35, lw=0, label="critical region")
-    ax.axhspan(-top, -k, color=REJECT.light, alpha=0.35, lw=0)
+    if any(other.has_data() for other in ax.get_shared_y_axes().get_siblings(ax)):
+        top = max(top, *np.abs(ax.get_ylim()))  # never cut the bars of a panel sharing the axis
+    ax.axhspan(k, 10 * top, color=REJECT.light, alpha=0.35, lw=0, label="critical region")
+    ax.axhspan(-10 * top, -k, color=REJECT.light, alpha=0.35, lw=0)
     ax.bar(x, np.nan_to_num(w), color=colors, width=0.7, zorder=3)
     ax.bar([np.nan], [0], color=REJECT.dark, label="rejected")
     ax.bar([np.nan], [0], color=pair(0).dark, label="accepted")
