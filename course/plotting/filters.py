@@ -135,7 +135,7 @@ def plot_estimate(
     ----------
     t, estimate, std : (N,) array_like
         Time, estimate (e.g. ``x_filt[:, 0]``) and its standard deviation
-        (``sqrt(P_filt[:, 0, 0])``).
+        (``sqrt(P_filt[:, 0, 0])``); NaN where the estimate is undefined.
     truth : (N,) array_like, optional
     nsigma : float
         Half width of the band in standard deviations.
@@ -156,8 +156,9 @@ def plot_estimate(
         The axes drawn on.
     """
     t = _time(t)
-    estimate = _series("estimate", estimate, t)
-    std = _series("std", std, t)
+    # NaN marks an undefined estimate (e.g. the diffuse start of recursive least squares)
+    estimate = _series("estimate", estimate, t, allow_nan=True)
+    std = _series("std", std, t, allow_nan=True)
     if np.any(std < 0):
         raise ValueError("std must be >= 0 (standard deviations)")
     nsigma = _checks.scalar("nsigma", nsigma, positive=True)

@@ -151,14 +151,14 @@ def plot_records_matrix(residuals, j=None, output=0, ax=None, max_records=60):
         if not isinstance(j, (int, np.integer)) or isinstance(j, bool) or not 0 <= j < N:
             raise ValueError(f"j must be a time index 0..{N - 1}, got {j!r}")
         ax.add_patch(Rectangle((j - 0.5, -0.5), 1, M, fill=False, ec="k", lw=2))
-        ax.annotate(
+        ax.text(
+            j + 0.8 if j < 0.7 * N else j - 0.8,
+            0.93 * M,
             rf"cross-record section $\varphi_{{{j}}}$",
-            xy=(j, -0.5),
-            xytext=(j, -0.08 * M),
-            ha="center",
-            va="bottom",
-            annotation_clip=False,
-            arrowprops=dict(arrowstyle="-|>", color="k"),
+            ha="left" if j < 0.7 * N else "right",
+            va="center",
+            fontsize="small",
+            bbox=dict(boxstyle="round", fc="white", ec="k", lw=0.8),
         )
     ax.grid(False)
     ax.set_xlabel("time step $t$ (along a record: correlated)")
@@ -389,7 +389,7 @@ def plot_power_curves(M_values, powers, alpha=None, ax=None, simulated=None, n_e
         values = _checks.array(f"powers[{label!r}]", values, what="power values")
         _checks.same_length(f"powers[{label!r}]", values, "M_values", M_values)
         colours = pair(_TESTS.get(label, index))
-        ax.plot(M_values, values, color=colours.dark, label=f"{label} (exact)")
+        ax.plot(M_values, values, "o-", ms=3, color=colours.dark, label=f"{label} (exact)")
     for index, (label, points) in enumerate((simulated or {}).items()):
         Ms, rates = zip(*points)
         rates = _checks.array(f"simulated[{label!r}]", rates, what="rejection rates")
