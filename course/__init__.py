@@ -32,14 +32,15 @@ _SUBMODULES = {
     "quadform",
     "mismatched",
     "plotting",
-    "exercises",
+    "grading",
 }
+_DEPRECATED = {"exercises"}  # old name of course.grading, kept for one release
 
 __all__ = sorted(_SUBMODULES) + ["__version__"]
 
 
 def __getattr__(name):
-    if name in _SUBMODULES:
+    if name in _SUBMODULES or name in _DEPRECATED:
         module = import_module(f"{__name__}.{name}")
         globals()[name] = module
         return module

@@ -3,7 +3,7 @@
 ``course open``
     start Jupyter on the course notebooks (the course's main entry point).
 ``course release`` and ``course grade``
-    the instructors' exercise commands (see :mod:`course.exercises`).
+    the instructors' exercise commands (see :mod:`course.grading`).
 
 ``python -m course`` is the same command.
 """
@@ -91,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_open.set_defaults(func=_open)
 
     try:
-        from course.exercises import cli as exercise_cli
+        from course.grading import cli as exercise_cli
     except ImportError:
         exercise_cli = None
     if exercise_cli is not None:

@@ -2,7 +2,7 @@
 
 Only data generators and harmless property checks live here; the references are in checks.py,
 which is never released. ``rng`` is seeded from the student's ID by the course
-(``course.exercises.student_rng``), so everyone gets their own survey.
+(``course.grading.student_rng``), so everyone gets their own survey.
 """
 
 import numpy as np

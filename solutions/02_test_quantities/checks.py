@@ -7,7 +7,7 @@ are sent to the student's function only at grading time.
 import numpy as np
 
 from course import diagnosis as dg
-from course.exercises.spec import Checks, binomial_band
+from course.grading.checks import Checks, binomial_band
 
 from . import data
 

@@ -2,7 +2,7 @@
 
 Only the data generator and harmless property checks live here; the references are in
 checks.py, which is never released. ``rng`` is seeded from the student's ID by the course
-(``course.exercises.student_rng``), so everyone gets their own record.
+(``course.grading.student_rng``), so everyone gets their own record.
 """
 
 import numpy as np

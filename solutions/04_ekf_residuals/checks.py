@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import filters as kf
-from course.exercises.spec import Band, Checks, binomial_band
+from course.grading.checks import Band, Checks, binomial_band
 
 from . import data
 

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import stats
 
 from course import nis
-from course.exercises.spec import Checks, binomial_band
+from course.grading.checks import Checks, binomial_band
 
 from . import data
 

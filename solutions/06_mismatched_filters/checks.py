@@ -7,7 +7,7 @@ are sent to the student's function only at grading time.
 import numpy as np
 
 from course import filters, mismatched
-from course.exercises.spec import Checks
+from course.grading.checks import Checks
 from course.quadform import WeightedChiSquare
 
 from . import data

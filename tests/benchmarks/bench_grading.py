@@ -2,7 +2,7 @@
 
 Run:  python tests/benchmarks/bench_grading.py [--n 40] [--jobs N]
 
-Ours: ``course.exercises.grader.grade`` on N submissions of 01_least_squares (each student's
+Ours: ``course.grading.driver.grade`` on N submissions of 01_least_squares (each student's
 cells run in a sandboxed child forked from a warm server; students in parallel, default one per
 core). Baseline, the way ``nbgrader autograde`` executes notebooks: one fresh Jupyter kernel per
 notebook (nbclient, like nbconvert's ExecutePreprocessor), cells run top to bottom including the
@@ -45,7 +45,7 @@ def make_submissions(folder: Path, n: int) -> None:
 
 
 def run_ours(subs: Path, out: Path, jobs: int) -> float:
-    from course.exercises.grader import GradeOptions, grade
+    from course.grading.driver import GradeOptions, grade
 
     start = time.perf_counter()
     summary = grade(ROOT / "solutions" / NAME, subs, out, GradeOptions(jobs=jobs, progress=False))

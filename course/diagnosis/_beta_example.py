@@ -1,0 +1,157 @@
+"""The lecture's example: a first-order system whose parameter beta drifts slowly."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from course.distributions import as_generator
+from course.filters._models import NonlinearModel, _batch_shape
+from course.linalg import (
+    as_float_array,
+)
+from course.nis._windowed import _finite_float, _variance
+
+
+# ---------------------------------------------------------------------------
+# the lecture's example: a first-order system with a drifting parameter
+# ---------------------------------------------------------------------------
+def beta_drift_model(
+    Ts=0.1, q_beta=1e-4, q_x=1e-4, r=1e-2, x0_mean=(1.0, 0.0), x0_cov=None
+) -> NonlinearModel:
+    """The EKF model of the lecture's example, state ``z = (beta, x)``.
+
+    ``beta_{t+1} = beta_t + w1_t``,
+    ``x_{t+1} = x_t - Ts beta_t x_t + Ts u_t + w2_t``,
+    ``y_t = x_t + e_t``, with ``w ~ N(0, diag(q_beta, q_x))``, ``e ~ N(0, r)``.
+
+    Parameters
+    ----------
+    Ts : float
+        Sampling interval.
+    q_beta : float
+        Variance of the random-walk step of ``beta``; ``0`` gives the filter
+        that takes ``beta`` as an unknown constant.
+    q_x, r : float
+        Process- and measurement-noise variances.
+    x0_mean : (2,) array_like
+        Prior mean of ``(beta_0, x_0)``.
+    x0_cov : (2, 2) array_like, optional
+        Prior covariance; ``diag(0.25, 0.01)`` by default.
+
+    Returns
+    -------
+    NonlinearModel
+        With exact Jacobians
+        ``dg/dz = [[1, 0], [-Ts x, 1 - Ts beta]]`` and ``dh/dz = [0, 1]``.
+
+    Notes
+    -----
+    test_quantities_lecture_sv.txt, "Exempel på EKF som residualgenerator":
+    to detect a sensor fault ``f`` in ``y = x + f`` while ``beta`` varies
+    slowly, augment the state with ``beta`` modelled as a random walk.
+    """
+    Ts = _finite_float(Ts, "Ts")
+    if Ts <= 0:
+        raise ValueError(f"Ts must be a positive sampling interval, got {Ts!r}")
+    q_beta, q_x = _variance(q_beta, "q_beta"), _variance(q_x, "q_x")
+    r = _variance(r, "r", positive=True)
+
+    def g(z, u):
+        beta, x = z[..., 0], z[..., 1]
+        return np.stack([beta, x - Ts * beta * x + Ts * u[..., 0]], axis=-1)
+
+    def h(z):
+        return z[..., 1:2]
+
+    def jac_g(z, u):
+        beta, x = z[..., 0], z[..., 1]
+        J = np.zeros(np.shape(z)[:-1] + (2, 2))
+        J[..., 0, 0] = 1.0
+        J[..., 1, 0] = -Ts * x
+        J[..., 1, 1] = 1.0 - Ts * beta
+        return J
+
+    H = np.array([[0.0, 1.0]])
+
+    def jac_h(z):
+        return np.broadcast_to(H, np.shape(z)[:-1] + (1, 2))
+
+    if x0_cov is None:
+        x0_cov = np.diag([0.25, 0.01])
+    return NonlinearModel(
+        g,
+        h,
+        np.diag([float(q_beta), float(q_x)]),
+        [[float(r)]],
+        x0_mean,
+        x0_cov,
+        jac_g=jac_g,
+        jac_h=jac_h,
+        n_inputs=1,
+    )
+
+
+def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=None, batch=None):
+    """Simulate the lecture's system for a given ``beta`` trajectory and sensor fault.
+
+    ``x_{t+1} = x_t - Ts beta_t x_t + Ts u_t + w_t``, ``y_t = x_t + f_t + e_t``.
+
+    Parameters
+    ----------
+    beta : (N,) or (*batch, N) array_like
+        The true (e.g. slowly drifting) parameter.
+    u : (N,) or (*batch, N) array_like
+        Input.
+    rng : numpy.random.Generator
+    Ts, q_x, r : float
+        Sampling interval, process- and measurement-noise variances.
+    x0 : float
+        Initial state.
+    fault : (N,) or (*batch, N) array_like, optional
+        Additive sensor fault ``f_t`` (zero by default).
+    batch : int or tuple, optional
+        Number of independent runs.
+
+    Returns
+    -------
+    states : (*batch, N, 2) ndarray
+        ``(beta_t, x_t)``, the layout of :func:`beta_drift_model`.
+    outputs : (*batch, N, 1) ndarray
+        ``y_t``.
+
+    Notes
+    -----
+    The lecture's example (test_quantities_lecture_sv.txt, "Exempel på EKF
+    som residualgenerator"): ``x(t+1) = x(t) - Ts beta(t) x(t) + Ts u(t)``,
+    ``y(t) = x(t) + f(t)``, the forward-Euler discretisation of
+    ``dx/dt = -beta x + u``, here with process noise ``w ~ N(0, q_x)`` and
+    measurement noise ``e ~ N(0, r)``.  Unlike :func:`beta_drift_model`,
+    ``beta`` is a given trajectory (a ramp, a sine, ...), not a random walk.
+    """
+    rng = as_generator(rng)
+    beta = as_float_array(beta, "beta")
+    u = as_float_array(u, "u")
+    N = beta.shape[-1]
+    if beta.ndim < 1 or u.ndim < 1 or u.shape[-1] != N:
+        raise ValueError(
+            f"beta and u must be (N,) or (batch, N) with equal N, got {beta.shape}, {u.shape}"
+        )
+    f = np.zeros(N) if fault is None else as_float_array(fault, "fault")
+    if f.shape[-1] != N:
+        raise ValueError(f"fault must have N = {N} samples, got shape {f.shape}")
+    shape = np.broadcast_shapes(_batch_shape(batch), beta.shape[:-1], u.shape[:-1], f.shape[:-1])
+    Ts, x0 = _finite_float(Ts, "Ts"), _finite_float(x0, "x0")
+    q_x, r = _variance(q_x, "q_x"), _variance(r, "r")
+    # time-major (N, *batch) so that every step touches contiguous memory
+    w = np.sqrt(q_x) * rng.standard_normal((N,) + shape)
+    e = np.sqrt(r) * rng.standard_normal((N,) + shape)
+    beta_t = np.moveaxis(np.broadcast_to(beta, shape + (N,)), -1, 0)
+    u_t = np.moveaxis(np.broadcast_to(u, shape + (N,)), -1, 0)
+    x = np.empty((N,) + shape)
+    xt = np.full(shape, float(x0))
+    for t in range(N):
+        x[t] = xt
+        xt = xt - Ts * beta_t[t] * xt + Ts * u_t[t] + w[t]
+    x = np.moveaxis(x, 0, -1)
+    states = np.stack([np.broadcast_to(beta, x.shape), x], axis=-1)
+    return states, (x + f + np.moveaxis(e, 0, -1))[..., None]

@@ -1,0 +1,721 @@
+"""Test quantities from the likelihood: ML, GLR, Neyman-Pearson, Bayes ranking of faults."""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import linalg as sla
+from scipy import optimize, special, stats
+
+from course.diagnosis._common import (
+    _check_dof,
+    _check_sigma,
+    _indices,
+    _model,
+    _void_test_message,
+)
+from course.diagnosis._prediction_error import prediction_error
+from course.distributions import FrozenDistribution
+from course.linalg import (
+    as_float_array,
+    as_matrix,
+    as_vector,
+    check_alpha,
+    cholesky_lower,
+)
+from course.results import TestResult, format_number
+
+
+# ---------------------------------------------------------------------------
+# likelihood
+# ---------------------------------------------------------------------------
+def normal_log_likelihood(theta, z, sigma: float = 1.0) -> Any:
+    """``log L(theta | z)`` for independent ``z_i ~ N(theta, sigma^2)``.
+
+    Parameters
+    ----------
+    theta : float or array_like
+        Parameter value(s); an array gives the log-likelihood on a grid.
+    z : float or array_like
+        The observations.
+    sigma : float, default 1
+
+    Returns
+    -------
+    float or numpy.ndarray, shaped like ``theta``
+
+    Notes
+    -----
+    ``L(theta | z) = f(z | theta) = prod_i (2 pi sigma^2)^{-1/2}
+    exp(-(z_i - theta)^2 / (2 sigma^2))`` (lecture, slides
+    "Likelihood-funktionen, normalfördelning": independence makes the joint
+    density the product).  Working with the logarithm avoids underflow for
+    many observations.
+    """
+    sigma = _check_sigma(sigma)
+    z = np.atleast_1d(as_float_array(z, "z")).ravel()
+    theta = as_float_array(theta, "theta")
+    sq = (
+        np.sum((z[..., :] - theta[..., None]) ** 2, axis=-1)
+        if theta.ndim
+        else np.sum((z - theta) ** 2)
+    )
+    value = -0.5 * z.size * np.log(2 * np.pi * sigma**2) - sq / (2 * sigma**2)
+    return float(value) if np.ndim(value) == 0 else value
+
+
+def normal_likelihood(theta, z, sigma: float = 1.0) -> Any:
+    """``L(theta | z) = f(z | theta)`` for independent ``z_i ~ N(theta, sigma^2)``.
+
+    Parameters
+    ----------
+    theta : float or array_like
+        Parameter value(s); an array gives the likelihood on a grid.
+    z : float or array_like
+        The observations.
+    sigma : float, default 1
+
+    Returns
+    -------
+    float or numpy.ndarray, shaped like ``theta``
+
+    Notes
+    -----
+    ``L(theta | z) = prod_i (2 pi sigma^2)^{-1/2} exp(-(z_i - theta)^2 /
+    (2 sigma^2))`` (lecture, slides "Likelihood-funktionen,
+    normalfördelning"), computed as the exponential of
+    :func:`normal_log_likelihood`.  For ``z = (3, 5)`` and ``sigma = 1`` the
+    maximum is ``L(4) = e^{-1} / (2 pi)``.  Underflows to 0 for long records:
+    use the log-likelihood there.
+    """
+    value = np.exp(normal_log_likelihood(theta, z, sigma))
+    return float(value) if np.ndim(value) == 0 else value
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class MLResult:
+    """Result of :func:`maximum_likelihood`.
+
+    Attributes
+    ----------
+    theta : numpy.ndarray
+        Maximiser (full vector, nominal values in fixed places).
+    log_likelihood : float
+        The maximum of ``log L``.
+    success : bool
+    message : str
+    """
+
+    theta: np.ndarray
+    log_likelihood: float
+    success: bool
+    message: str
+
+    def __repr__(self) -> str:
+        return (
+            f"MLResult(theta=[{', '.join(format_number(float(v)) for v in self.theta)}], "
+            f"log_likelihood={format_number(self.log_likelihood)}, success={self.success})"
+        )
+
+
+def maximum_likelihood(
+    log_likelihood: Callable,
+    nominal,
+    free: Sequence[int] | None = None,
+    *,
+    theta_init=None,
+    bounds=None,
+    method: str | None = None,
+) -> MLResult:
+    """Maximise ``log L(theta | z)`` over ``Theta_0`` numerically.
+
+    Parameters
+    ----------
+    log_likelihood : callable
+        ``log_likelihood(theta) -> float`` for a full parameter vector (the
+        data are bound inside, e.g. with a lambda).
+    nominal : array_like, shape (p,)
+        Values of the parameters not in ``free``; also the default start.
+    free : sequence of int, optional
+        Parameters to maximise over; all of them by default.
+    theta_init : array_like, optional
+        Start for the free parameters.
+    bounds : sequence of (low, high), optional
+        Bounds of the free parameters.
+    method : str, optional
+        :func:`scipy.optimize.minimize` method (BFGS, or L-BFGS-B with bounds).
+
+    Returns
+    -------
+    MLResult
+
+    Notes
+    -----
+    ``theta_ML = argmax L(theta | z)`` (lecture, slide "Teststorheter
+    baserade på likelihood-funktionen, forts.").  The optimiser minimises
+    ``-log L``; it is local, so start it near the answer (a moment
+    estimate, or a grid search) when the likelihood has several modes.
+    """
+    nominal = as_vector(nominal, "nominal")
+    p = nominal.size
+    free = list(range(p)) if free is None else _indices(free, p)
+
+    def full(theta_free):
+        theta = nominal.copy()
+        theta[free] = theta_free
+        return theta
+
+    if not free:
+        value = float(log_likelihood(nominal.copy()))
+        return MLResult(
+            theta=nominal.copy(), log_likelihood=value, success=True, message="no free parameters"
+        )
+    start = nominal[free] if theta_init is None else as_vector(theta_init, "theta_init", len(free))
+
+    def objective(theta_free):
+        value = float(log_likelihood(full(theta_free)))
+        return np.inf if np.isnan(value) else -value
+
+    sol = optimize.minimize(
+        objective,
+        start,
+        method=method,
+        bounds=bounds,
+        options={"gtol": 1e-10} if method in (None, "BFGS") and bounds is None else None,
+    )
+    # BFGS often reports a precision loss at an optimum it cannot improve;
+    # a polish by Nelder-Mead from there makes the answer trustworthy.
+    if not sol.success and bounds is None:
+        sol = optimize.minimize(
+            objective,
+            sol.x,
+            method="Nelder-Mead",
+            options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 20000},
+        )
+    return MLResult(
+        theta=full(sol.x),
+        log_likelihood=float(-sol.fun),
+        success=bool(sol.success),
+        message=str(sol.message),
+    )
+
+
+class LogLikelihoodLaw(FrozenDistribution):
+    """Law of ``c - chi2(dof) / 2``: the maximised Gaussian log-likelihood under H0.
+
+    Parameters
+    ----------
+    dof : int
+    c : float
+        The log-likelihood of a perfect fit, ``-(N/2) log(2 pi sigma^2)``.
+    """
+
+    def __init__(self, dof: int, c: float):
+        self.dof = _check_dof(dof)
+        self.c = float(c)
+        self.support = (-np.inf, self.c)
+
+    def _cdf(self, x):
+        return stats.chi2.sf(2 * (self.c - x), self.dof)
+
+    def _sf(self, x):
+        return stats.chi2.cdf(2 * (self.c - x), self.dof)
+
+    def _pdf(self, x):
+        return 2 * stats.chi2.pdf(2 * (self.c - x), self.dof)
+
+    def _rvs(self, size, rng):
+        return self.c - 0.5 * rng.chisquare(self.dof, size=size)
+
+    def ppf(self, q):
+        return self.c - 0.5 * stats.chi2.isf(q, self.dof)
+
+    def isf(self, q):
+        return self.c - 0.5 * stats.chi2.ppf(q, self.dof)
+
+    def mean(self):
+        return self.c - 0.5 * self.dof
+
+    def var(self):
+        return 0.5 * self.dof
+
+    def __repr__(self) -> str:
+        return f"c - chi2({self.dof})/2 with c = {format_number(self.c)}"
+
+
+def likelihood_test(
+    y,
+    U,
+    nominal,
+    free: Sequence[int] = (),
+    *,
+    sigma: float,
+    alpha: float = 0.05,
+    name: str = "maximum-likelihood test",
+) -> TestResult:
+    """The lecture's likelihood test quantity ``T = max over Theta_0 of L``, reject when small.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+    U, nominal, free
+        As in :func:`prediction_error`; the model is ``y = U theta + v``,
+        ``v ~ N(0, sigma^2 I)``.
+    sigma : float
+    alpha : float
+
+    Returns
+    -------
+    TestResult
+        ``statistic = log max L`` (the log of the lecture's ``T``, which
+        underflows for long records), ``alternative="less"``: H0 is
+        rejected when the best achievable likelihood is *below* the
+        critical value.
+
+    Notes
+    -----
+    For this model ``max over Theta_0 of log L = -(N/2) log(2 pi sigma^2) -
+    T_pe / (2 sigma^2)`` with ``T_pe`` the prediction error of
+    :func:`prediction_error`: the likelihood test and the prediction-error
+    test make the same decisions.  The null law is ``c - chi2(N - rank)/2``
+    (lecture, "Teststorheter baserade på likelihood-funktionen, forts.":
+    "H0 is rejected when T(z) is below a threshold").
+    """
+    alpha = check_alpha(alpha)
+    sigma = _check_sigma(sigma)
+    y = as_vector(y, "y")
+    fit = prediction_error(y, U, nominal, free)
+    if fit.dof < 1:
+        raise ValueError(_void_test_message(f"N = rank = {fit.rank}"))
+    c = -0.5 * y.size * np.log(2 * np.pi * sigma**2)
+    stat = c - fit.statistic / (2 * sigma**2)
+    null = LogLikelihoodLaw(fit.dof, c)
+    crit = float(null.ppf(alpha))
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=float(null.cdf(stat)),
+        reject=stat < crit,
+        null=null,
+        dof=fit.dof,
+        alternative="less",
+        details={"prediction error T": fit.statistic},
+    )
+
+
+def glr_test(
+    log_likelihood: Callable,
+    nominal,
+    free0: Sequence[int] = (),
+    free1: Sequence[int] | None = None,
+    *,
+    alpha: float = 0.05,
+    theta_init=None,
+    bounds=None,
+    name: str = "generalised likelihood ratio test",
+) -> TestResult:
+    """Generalised likelihood ratio test, calibrated by Wilks' theorem.
+
+    Parameters
+    ----------
+    log_likelihood : callable
+        ``log_likelihood(theta) -> float`` for a full parameter vector.
+    nominal : array_like, shape (p,)
+        Values of the parameters fixed under H0.
+    free0 : sequence of int, default ()
+        Parameters free under H0.
+    free1 : sequence of int, optional
+        Parameters free under H1 (a superset of ``free0``); all by default.
+    alpha : float
+    theta_init : array_like, shape (p,), optional
+        Start of both maximisations (``nominal`` by default).
+    bounds : sequence of (low, high) for all p parameters, optional
+
+    Returns
+    -------
+    TestResult
+        ``statistic = 2 (max_{Theta_1} log L - max_{Theta_0} log L)``,
+        ``null = chi2(|free1| - |free0|)``.
+
+    Notes
+    -----
+    ``Lambda = max_{Theta_0} L / max_{Theta_1} L`` and ``-2 log Lambda`` is
+    asymptotically ``chi2(dim Theta_1 - dim Theta_0)`` under H0 (Wilks
+    1938) when the hypotheses are nested, the true parameter is an
+    *interior* point, the model is identifiable with a non-singular Fisher
+    information, and the sample is large.  It fails, for example, when the
+    null value lies on the boundary (a fault size restricted to be >= 0
+    gives a 50:50 mixture of 0 and chi2(1)), or when a parameter is
+    meaningless under H0 (the onset time of a fault of size 0).  For a
+    linear-Gaussian model with known variance the law is exact:
+    :func:`linear_glr_test`.  The lecture mentions generalised
+    Neyman-Pearson results for composite hypotheses (slide
+    "Neyman-Pearson lemma, likelihood-kvot").
+    """
+    alpha = check_alpha(alpha)
+    nominal = as_vector(nominal, "nominal")
+    p = nominal.size
+    free0 = _indices(free0, p, "free0")
+    free1 = list(range(p)) if free1 is None else _indices(free1, p, "free1")
+    if not set(free0) < set(free1):
+        raise ValueError(
+            f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)"
+        )
+    start = nominal if theta_init is None else as_vector(theta_init, "theta_init", p)
+    base = nominal.copy()
+    # Under H1 the parameters outside free1 keep their nominal values.
+    fit1 = maximum_likelihood(
+        log_likelihood,
+        np.where(np.isin(np.arange(p), free1), start, base),
+        free1,
+        bounds=None if bounds is None else [bounds[j] for j in free1],
+    )
+    init0 = np.where(np.isin(np.arange(p), free0), start, base)
+    fit0 = maximum_likelihood(
+        log_likelihood, init0, free0, bounds=None if bounds is None else [bounds[j] for j in free0]
+    )
+    stat = max(2.0 * (fit1.log_likelihood - fit0.log_likelihood), 0.0)
+    dof = len(free1) - len(free0)
+    crit = stats.chi2.isf(alpha, dof)
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=stats.chi2.sf(stat, dof),
+        reject=stat > crit,
+        null=stats.chi2(dof),
+        dof=dof,
+        alternative="greater",
+        details={
+            "max log L under H0": fit0.log_likelihood,
+            "max log L under H1": fit1.log_likelihood,
+            "calibration": "Wilks (asymptotic)",
+            "converged": fit0.success and fit1.success,
+        },
+    )
+
+
+def linear_glr_test(
+    y,
+    U,
+    nominal,
+    free0: Sequence[int] = (),
+    free1: Sequence[int] | None = None,
+    *,
+    sigma: float,
+    alpha: float = 0.05,
+    name: str = "generalised likelihood ratio test (linear)",
+) -> TestResult:
+    """Exact GLR test of nested parameter sets in ``y = U theta + v``, known ``sigma``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+    U, nominal
+        As in :func:`prediction_error`.
+    free0 : sequence of int
+        Free parameters under H0.
+    free1 : sequence of int, optional
+        Free parameters under H1 (superset of ``free0``); all by default.
+    sigma, alpha, name
+
+    Returns
+    -------
+    TestResult
+        ``statistic = (T0 - T1) / sigma^2`` with ``Ti`` the prediction
+        errors under the two hypotheses, ``null = chi2(rank1 - rank0)``.
+
+    Notes
+    -----
+    ``-2 log Lambda = (T0 - T1) / sigma^2`` for Gaussian noise of known
+    variance, and ``T0 - T1 = ||(P1 - P0) y||^2`` with ``P1 - P0`` the
+    projection on the part of range(U_free1) orthogonal to range(U_free0):
+    exactly ``sigma^2 chi2(rank1 - rank0)`` under H0, for every ``N``.
+    Wilks' theorem is exact here.
+    """
+    alpha = check_alpha(alpha)
+    sigma = _check_sigma(sigma)
+    U, nominal = _model(U, nominal)
+    p = U.shape[1]
+    free0 = _indices(free0, p, "free0")
+    free1 = list(range(p)) if free1 is None else _indices(free1, p, "free1")
+    if not set(free0) < set(free1):
+        raise ValueError(
+            f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)"
+        )
+    y = as_vector(y, "y", U.shape[0])
+    fit0 = prediction_error(y, U, nominal, free0)
+    fit1 = prediction_error(y, U, nominal, free1)
+    dof = fit1.rank - fit0.rank
+    if dof < 1:
+        raise ValueError(
+            "the extra parameters of H1 add no new regressor direction (rank did not grow), so the "
+            "two hypotheses fit every record equally well; the test is void"
+        )
+    stat = max(fit0.statistic - fit1.statistic, 0.0) / sigma**2
+    crit = stats.chi2.isf(alpha, dof)
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=stats.chi2.sf(stat, dof),
+        reject=stat > crit,
+        null=stats.chi2(dof),
+        dof=dof,
+        alternative="greater",
+        details={"T0": fit0.statistic, "T1": fit1.statistic},
+    )
+
+
+def neyman_pearson_test(
+    z,
+    theta0,
+    theta1,
+    *,
+    sigma: float = 1.0,
+    regressors=None,
+    alpha: float = 0.05,
+    name: str = "Neyman-Pearson test",
+) -> TestResult:
+    """Most powerful test of two simple hypotheses on a Gaussian mean.
+
+    Parameters
+    ----------
+    z : array_like, shape (N,)
+        Observations, ``z = regressors @ theta + v``, ``v ~ N(0, sigma^2 I)``.
+    theta0, theta1 : float or array_like
+        The parameter under H0 and under H1.
+    sigma : float, default 1
+    regressors : array_like, shape (N, p), optional
+        A column of ones by default: ``z_i ~ N(theta, sigma^2)``.
+    alpha : float
+
+    Returns
+    -------
+    TestResult
+        ``statistic = log f(z | theta1) - log f(z | theta0)``, reject when
+        large; details hold the power ``P(reject | theta1)``.
+
+    Notes
+    -----
+    Neyman-Pearson lemma (lecture, slide "Neyman-Pearson lemma,
+    likelihood-kvot"): for ``H0: theta = theta0`` against
+    ``H1: theta = theta1`` no test of level ``alpha`` has more power than
+    the one rejecting for large ``f(z|theta1) / f(z|theta0)``.  Here
+    ``log Lambda = (||z - m0||^2 - ||z - m1||^2) / (2 sigma^2)`` with
+    ``mi = regressors @ theta_i`` is linear in ``z``: with
+    ``d = ||m1 - m0|| / sigma`` it is ``N(-d^2/2, d^2)`` under H0 and
+    ``N(d^2/2, d^2)`` under H1, so threshold and power are exact:
+    ``power = Phi(d - z_alpha)``.
+    """
+    alpha = check_alpha(alpha)
+    sigma = _check_sigma(sigma)
+    z = np.atleast_1d(as_float_array(z, "z"))
+    if z.ndim != 1:
+        raise ValueError(f"z must be a 1-D vector of observations, got shape {z.shape}")
+    N = z.size
+    A = (
+        np.ones((N, 1))
+        if regressors is None
+        else as_matrix(regressors, "regressors", shape=(N, None))
+    )
+    t0 = np.atleast_1d(as_float_array(theta0, "theta0"))
+    t1 = np.atleast_1d(as_float_array(theta1, "theta1"))
+    if t0.shape != (A.shape[1],) or t1.shape != (A.shape[1],):
+        raise ValueError(
+            f"theta0 and theta1 must have {A.shape[1]} element(s), got {t0.shape} and {t1.shape}"
+        )
+    m0, m1 = A @ t0, A @ t1
+    d = float(np.linalg.norm(m1 - m0) / sigma)
+    if d == 0:
+        raise ValueError(
+            "theta0 and theta1 give the same distribution of z: the hypotheses cannot be told apart"
+        )
+    stat = float((np.sum((z - m0) ** 2) - np.sum((z - m1) ** 2)) / (2 * sigma**2))
+    null = stats.norm(loc=-(d**2) / 2, scale=d)
+    crit = float(null.isf(alpha))
+    power = float(stats.norm.sf(crit, loc=d**2 / 2, scale=d))
+    return TestResult(
+        name=name,
+        statistic=stat,
+        alpha=alpha,
+        critical_value=crit,
+        pvalue=float(null.sf(stat)),
+        reject=stat > crit,
+        null=null,
+        alternative="greater",
+        details={"power": power, "separation d": d},
+    )
+
+
+def mode_log_likelihoods(
+    y,
+    U,
+    nominal,
+    modes: Mapping[str, Sequence[int]],
+    *,
+    sigma: float,
+    prior_std: float | None = None,
+) -> dict:
+    """``log P(y | F)`` for every fault mode of ``y = U theta + v``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+    U, nominal
+        As in :func:`prediction_error`.
+    modes : mapping of str to sequence of int
+        The parameters that may deviate in each mode (``()`` for NF).
+    sigma : float
+    prior_std : float, optional
+        If given, the deviating parameters of a mode have the prior
+        ``N(nominal, prior_std^2)`` and the *marginal* likelihood
+        ``int f(y | theta) p(theta | F) dtheta`` is returned (the proper
+        Bayesian evidence).  Otherwise the maximised likelihood
+        ``max over Theta_F of L(theta | y)`` of the lecture.
+
+    Returns
+    -------
+    dict of str to float
+
+    Notes
+    -----
+    The lecture (slide "Likelihood och Bayes") uses ``max L`` as
+    ``P(z | F_i)``.  Because ``Theta_NF`` lies in the closure of every
+    ``Theta_Fi``, ``max over Theta_Fi of L >= L(nominal)`` for every record:
+    with maximised likelihoods a fault mode always looks at least as likely
+    as NF, and only the priors can favour NF.  The marginal likelihood
+    charges a mode for its free parameter (an Occam factor) and prefers NF
+    when the data do not need the fault.  Under ``F`` with the prior above,
+    ``y ~ N(U nominal, sigma^2 I + prior_std^2 U_F U_F^T)``.
+    """
+    sigma = _check_sigma(sigma)
+    U, nominal = _model(U, nominal)
+    y = as_vector(y, "y", U.shape[0])
+    N = y.size
+    out = {}
+    for mode, faulty in modes.items():
+        faulty = _indices(faulty, U.shape[1], f"parameters of mode {mode!r}")
+        if prior_std is None or not faulty:
+            T = prediction_error(y, U, nominal, faulty).statistic
+            out[str(mode)] = float(-0.5 * N * np.log(2 * np.pi * sigma**2) - T / (2 * sigma**2))
+        else:
+            tau = _check_sigma(prior_std)
+            Uf = U[:, faulty]
+            cov = sigma**2 * np.eye(N) + tau**2 * (Uf @ Uf.T)
+            L = cholesky_lower(cov, "marginal covariance")
+            w = sla.solve_triangular(L, y - U @ nominal, lower=True)
+            out[str(mode)] = float(
+                -0.5 * N * np.log(2 * np.pi) - np.sum(np.log(np.diag(L))) - 0.5 * w @ w
+            )
+    return out
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class FaultRanking:
+    """Fault modes ranked by posterior probability (see :func:`bayes_ranking`).
+
+    Attributes
+    ----------
+    modes : tuple of str
+        Most probable first.
+    posterior, prior, log_likelihood : tuple of float
+        In the order of ``modes``.
+    """
+
+    modes: tuple
+    posterior: tuple
+    prior: tuple
+    log_likelihood: tuple
+
+    def as_dict(self) -> dict:
+        """``{mode: posterior}``."""
+        return dict(zip(self.modes, self.posterior))
+
+    def to_text(self, digits: int = 4) -> str:
+        """The ranking as aligned plain text, numbers rounded to ``digits`` significant digits."""
+        width = max(len(m) for m in self.modes)
+        lines = [f"{'mode'.ljust(width)}  {'prior':>8}  {'posterior':>10}"]
+        for m, pr, po in zip(self.modes, self.prior, self.posterior):
+            lines.append(
+                f"{m.ljust(width)}  {format_number(pr, digits):>8}  {format_number(po, digits):>10}"
+            )
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"FaultRanking(\n{self.to_text()}\n)"
+
+    def _repr_html_(self) -> str:
+        rows = "".join(
+            f"<tr><th style='text-align:left'>{html.escape(m)}</th><td>{format_number(pr, 4)}</td>"
+            f"<td>{format_number(po, 4)}</td></tr>"
+            for m, pr, po in zip(self.modes, self.prior, self.posterior)
+        )
+        return (
+            "<table><caption>fault modes ranked by posterior probability</caption>"
+            f"<tr><th>mode</th><th>prior</th><th>posterior</th></tr>{rows}</table>"
+        )
+
+
+def bayes_ranking(
+    log_likelihoods: Mapping[str, float], priors: Mapping[str, float]
+) -> FaultRanking:
+    """Rank fault modes by ``P(F | z)`` from ``log P(z | F)`` and priors ``P(F)``.
+
+    Parameters
+    ----------
+    log_likelihoods : mapping of str to float
+        ``log P(z | F)`` per mode, e.g. from :func:`mode_log_likelihoods`.
+    priors : mapping of str to float
+        Prior probabilities of the same modes, positive and summing to 1.
+
+    Returns
+    -------
+    FaultRanking
+
+    Notes
+    -----
+    Bayes' rule ``P(F_i | z) = P(z | F_i) P(F_i) / sum_j P(z | F_j) P(F_j)``
+    (lecture, slide "Likelihood och Bayes"), computed with log-sum-exp so
+    that tiny likelihoods do not underflow.
+    """
+    modes = list(log_likelihoods)
+    if set(modes) != set(priors):
+        raise ValueError(
+            f"log_likelihoods and priors must name the same modes, got {sorted(modes)} and {sorted(priors)}"
+        )
+    if not modes:
+        raise ValueError("at least one mode is needed")
+    logl = np.array([float(log_likelihoods[m]) for m in modes])
+    prior = np.array([float(priors[m]) for m in modes])
+    if np.any(np.isnan(logl)) or np.any(logl == np.inf):
+        raise ValueError("log-likelihoods must be finite numbers or -inf")
+    if np.any(~np.isfinite(prior)) or np.any(prior <= 0):
+        raise ValueError("priors must be positive probabilities")
+    if abs(prior.sum() - 1.0) > 1e-9:
+        raise ValueError(
+            f"priors must sum to 1, they sum to {prior.sum():.6g}; normalise them first"
+        )
+    if np.all(logl == -np.inf):
+        raise ValueError(
+            "every mode has likelihood 0 (log-likelihood -inf): the data are impossible under all "
+            "modes, so Bayes' rule cannot rank them; check the model or the noise level"
+        )
+    log_post = logl + np.log(prior)
+    log_post = log_post - special.logsumexp(log_post)
+    post = np.exp(log_post)
+    order = sorted(range(len(modes)), key=lambda i: (-post[i], i))
+    return FaultRanking(
+        modes=tuple(modes[i] for i in order),
+        posterior=tuple(float(post[i]) for i in order),
+        prior=tuple(float(prior[i]) for i in order),
+        log_likelihood=tuple(float(logl[i]) for i in order),
+    )

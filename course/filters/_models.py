@@ -1,0 +1,507 @@
+"""State-space models: the linear Gaussian model, the nonlinear model and their simulation."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from course.distributions import as_generator
+from course.filters._stacked import _T, _batch_major, _readonly, _time_major
+from course.linalg import (
+    as_covariance,
+    as_float_array,
+    as_matrix,
+    as_vector,
+    psd_sqrt,
+    symmetrize,
+)
+
+
+def _batch_shape(batch) -> tuple:
+    if batch is None:
+        return ()
+    if isinstance(batch, (int, np.integer)):
+        batch = (int(batch),)
+    batch = tuple(int(b) for b in batch)
+    if any(b < 1 for b in batch):
+        raise ValueError(f"batch sizes must be positive integers, got {batch}")
+    return batch
+
+
+def _check_steps(N) -> int:
+    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+        raise ValueError(f"N (the number of samples) must be a positive integer, got {N!r}")
+    return int(N)
+
+
+def _as_signal(value, name: str, width: int, N: int | None = None) -> np.ndarray:
+    """A signal of shape ``(*batch, N, width)``; ``(N,)`` is accepted when width is 1."""
+    array = as_float_array(value, name)
+    if array.ndim == 1:
+        if width != 1:
+            raise ValueError(
+                f"{name} has shape {array.shape} but the model has {width} channels; "
+                f"pass an array of shape (N, {width}) or (batch, N, {width})"
+            )
+        array = array[:, None]
+    if array.ndim < 2 or array.shape[-1] != width:
+        raise ValueError(
+            f"{name} must have shape (N, {width}) or (batch, N, {width}), got {array.shape}"
+        )
+    if N is not None and array.shape[-2] != N:
+        raise ValueError(f"{name} must have N = {N} samples along axis -2, got {array.shape[-2]}")
+    if array.shape[-2] < 1:
+        raise ValueError(f"{name} has no samples")
+    return array
+
+
+def _noise(rng, sqrt_cov: np.ndarray, mean: np.ndarray, shape: tuple) -> np.ndarray:
+    """Draws of N(mean, sqrt_cov^2) with shape ``shape + (dim,)``."""
+    z = rng.standard_normal(shape + (sqrt_cov.shape[0],))
+    return mean + z @ sqrt_cov.T
+
+
+def _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean):
+    """Checked ``Q``, ``G`` (identity by default), ``x0_cov``, ``w_mean``, ``v_mean`` of a model
+    with ``n`` states and ``p`` outputs (defaults: ``x0_cov = I``, zero means)."""
+    Q = as_matrix(Q, "Q")
+    q = Q.shape[0]
+    if G is None:
+        if Q.shape != (n, n):
+            raise ValueError(
+                f"Q has shape {Q.shape} but without G it must be n x n = ({n}, {n}); "
+                "pass G (n x q) to say how a q-dimensional noise enters the state"
+            )
+        G = np.eye(n)
+    else:
+        G = as_matrix(G, "G", shape=(n, None))
+        if G.shape[1] != q:
+            raise ValueError(
+                f"G has {G.shape[1]} columns but Q is {Q.shape[0]} x {Q.shape[1]}; "
+                "G must be n x q where Q is q x q"
+            )
+    Q = as_covariance(Q, "Q", q, allow_singular=True)
+    x0_cov = (
+        np.eye(n) if x0_cov is None else as_covariance(x0_cov, "x0_cov", n, allow_singular=True)
+    )
+    w_mean = np.zeros(q) if w_mean is None else as_vector(w_mean, "w_mean", q)
+    v_mean = np.zeros(p) if v_mean is None else as_vector(v_mean, "v_mean", p)
+    return Q, G, x0_cov, w_mean, v_mean
+
+
+def _model_inputs(model, u, N: int):
+    """``u`` checked against a Linear/NonlinearModel: None or ``(*batch, N, m)``."""
+    if model.n_inputs == 0:
+        if u is not None:
+            raise ValueError(f"this model has no input ({model._no_input}) but u was passed")
+        return None
+    if u is None:
+        raise ValueError(f"this model has {model.n_inputs} input(s): pass u of shape (N, m)")
+    return _as_signal(u, "u", model.n_inputs, N)
+
+
+def _model_records(model, y, u):
+    """Measurements and inputs checked against ``model``, and their common batch shape.
+
+    ``y`` is broadcast to that batch shape; ``u`` is returned as given.
+    """
+    y = _as_signal(y, "y", model.n_outputs)
+    N = y.shape[-2]
+    batch = y.shape[:-2]
+    u = _model_inputs(model, u, N)
+    if u is not None:
+        batch = np.broadcast_shapes(batch, u.shape[:-2])
+        y = np.broadcast_to(y, batch + y.shape[-2:])
+    return y, u, N, batch
+
+
+def _simulation_draws(model, N, rng, batch, u):
+    """Inputs and random draws of a Linear/NonlinearModel's ``simulate``.
+
+    Returns ``N``, the batch shape, the inputs (time-major, broadcast to the
+    batch; None without inputs), the first states ``(*batch, n)`` and the
+    process noise as it enters the state ``G w_t`` and measurement noise,
+    time-major ``(N, *batch, d)`` (contiguous per step).
+    """
+    N = _check_steps(N)
+    rng = as_generator(rng)
+    shape = _batch_shape(batch)
+    u = _model_inputs(model, u, N)
+    if u is not None:
+        shape = np.broadcast_shapes(shape, u.shape[:-2])
+        u = _time_major(np.broadcast_to(u, shape + u.shape[-2:]))
+    x0 = _noise(rng, psd_sqrt(model.x0_cov), model.x0_mean, shape)
+    Gw = _noise(rng, psd_sqrt(model.Q), model.w_mean, (N,) + shape) @ model.G.T
+    v = _noise(rng, psd_sqrt(model.R), model.v_mean, (N,) + shape)
+    return N, shape, u, x0, Gw, v
+
+
+# ---------------------------------------------------------------------------
+# the linear model
+# ---------------------------------------------------------------------------
+class LinearModel:
+    """Time-invariant linear Gaussian state-space model.
+
+    ``x_{t+1} = F x_t + B u_t + G w_t``, ``y_t = H x_t + v_t`` with
+    ``w_t ~ N(w_mean, Q)``, ``v_t ~ N(v_mean, R)`` independent and white, and
+    ``x_0 ~ N(x0_mean, x0_cov)``.
+
+    Parameters
+    ----------
+    F : (n, n) array_like
+        State transition matrix.
+    H : (p, n) array_like
+        Output matrix.
+    Q : (q, q) array_like
+        Process-noise covariance, symmetric positive semi-definite (a zero
+        matrix is allowed: a constant parameter has no process noise).
+    R : (p, p) array_like
+        Measurement-noise covariance, symmetric positive definite.
+    G : (n, q) array_like, optional
+        How the process noise enters the state; the identity by default (then
+        ``Q`` must be ``n x n``).
+    x0_mean : (n,) array_like, optional
+        Prior mean of the first state; zeros by default.
+    x0_cov : (n, n) array_like, optional
+        Prior covariance of the first state (positive semi-definite); the
+        identity by default.
+    w_mean : (q,) array_like, optional
+        Mean of the process noise; zeros by default.
+    v_mean : (p,) array_like, optional
+        Mean of the measurement noise; zeros by default.
+    B : (n, m) array_like, optional
+        Input matrix; without it the model has no input.
+
+    Attributes
+    ----------
+    F, H, Q, R, G, B, x0_mean, x0_cov, w_mean, v_mean : numpy.ndarray
+        Read-only validated copies (``B`` is ``(n, 0)`` without input).
+    n_states, n_outputs, n_noise, n_inputs : int
+        ``n``, ``p``, ``q`` and ``m``.
+    GQG : numpy.ndarray
+        ``G Q G^T``, the process-noise covariance as it enters the state.
+
+    Raises
+    ------
+    ValueError
+        Wrong shapes, NaN/inf, non-symmetric covariances.
+    numpy.linalg.LinAlgError
+        ``R`` not positive definite, ``Q`` or ``x0_cov`` not positive
+        semi-definite.
+
+    Notes
+    -----
+    The linear special case of the lecture's state-space model
+    ``x(t+1) = g(x(t), u(t)) + G w(t)``, ``y(t) = h(x(t)) + v(t)``
+    (test_quantities_lecture_sv.txt, slide "Extended Kalman Filter") with
+    ``g = F x + B u``, ``h = H x``; the noise means ``w_mean``, ``v_mean``
+    are those of Baram (1980), eqs. (2.1)-(2.2)
+    (mismatched_filters_baram.txt), where a filter may be driven by a model
+    other than the one that made the data.  ``R`` must be positive definite
+    so that every innovation covariance ``S = H P H^T + R`` is.
+    """
+
+    _no_input = "B was not given"  # completes "this model has no input (...)"
+
+    def __init__(
+        self, F, H, Q, R, G=None, x0_mean=None, x0_cov=None, w_mean=None, v_mean=None, B=None
+    ):
+        F = as_matrix(F, "F")
+        n = F.shape[0]
+        if F.shape != (n, n):
+            raise ValueError(f"F must be square (n x n), got shape {F.shape}")
+        H = as_matrix(H, "H", shape=(None, n))
+        p = H.shape[0]
+        if p < 1:
+            raise ValueError("H must have at least one row (one output)")
+        Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
+        q = Q.shape[0]
+        R = as_covariance(R, "R", p)
+        x0_mean = np.zeros(n) if x0_mean is None else as_vector(x0_mean, "x0_mean", n)
+        B = np.zeros((n, 0)) if B is None else as_matrix(B, "B", shape=(n, None))
+
+        self.F, self.H, self.Q, self.R, self.G, self.B = (_readonly(a) for a in (F, H, Q, R, G, B))
+        self.x0_mean, self.x0_cov = _readonly(x0_mean), _readonly(x0_cov)
+        self.w_mean, self.v_mean = _readonly(w_mean), _readonly(v_mean)
+        self.n_states, self.n_outputs, self.n_noise, self.n_inputs = n, p, q, B.shape[1]
+        self.GQG = _readonly(symmetrize(G @ Q @ G.T))
+
+    def __repr__(self) -> str:
+        return (
+            f"LinearModel(n_states={self.n_states}, n_outputs={self.n_outputs}, "
+            f"n_noise={self.n_noise}, n_inputs={self.n_inputs})"
+        )
+
+    def simulate(self, N, rng, batch=None, u=None):
+        """Draw state and output sequences from the model.
+
+        Parameters
+        ----------
+        N : int
+            Number of samples ``t = 0, ..., N-1``.
+        rng : numpy.random.Generator
+            Source of randomness.
+        batch : int or tuple of int, optional
+            Number of independent runs (a leading batch dimension).
+        u : array_like, optional
+            Input, ``(N, m)`` shared by all runs or ``(*batch, N, m)``;
+            required when the model has an input.
+
+        Returns
+        -------
+        states : numpy.ndarray
+            ``(*batch, N, n)``, ``states[..., t, :] = x_t``.
+        outputs : numpy.ndarray
+            ``(*batch, N, p)``.
+        """
+        N, shape, u, x, drive, v = _simulation_draws(self, N, rng, batch, u)
+        if u is not None:
+            drive = drive + u @ self.B.T
+        states = np.empty((N,) + shape + (self.n_states,))
+        for t in range(N):
+            states[t] = x
+            x = x @ self.F.T + drive[t]
+        outputs = states @ self.H.T + v
+        nb = len(shape)
+        return _batch_major(states, nb), _batch_major(outputs, nb)
+
+
+# ---------------------------------------------------------------------------
+# nonlinear models and the extended Kalman filter
+# ---------------------------------------------------------------------------
+_FD_SCALE = np.finfo(float).eps ** (1.0 / 3.0)
+
+
+def numerical_jacobian(f, x, step=None) -> np.ndarray:
+    """Central-difference Jacobian of ``f`` at ``x``, vectorised over a batch.
+
+    Parameters
+    ----------
+    f : callable
+        Maps ``(..., n)`` to ``(..., k)`` and broadcasts over leading axes.
+    x : (..., n) ndarray
+        Points of linearisation (a batch of them).
+    step : float, optional
+        Relative step; ``eps^(1/3)`` by default, the step that balances the
+        O(h^2) truncation error against the O(eps/h) rounding error.
+
+    Returns
+    -------
+    (..., k, n) ndarray
+        ``J[..., i, j] = d f_i / d x_j``.
+
+    Notes
+    -----
+    ``J[:, j] = (f(x + h_j e_j) - f(x - h_j e_j)) / (2 h_j)`` with
+    ``h_j = step * max(1, |x_j|)``.  All ``2 n`` perturbed points of every
+    batch member are evaluated in one call of ``f`` (an extra axis of size
+    ``n`` before the last), so the cost is one vectorised call.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.shape[-1]
+    h = (_FD_SCALE if step is None else float(step)) * np.maximum(1.0, np.abs(x))
+    # the step actually taken, (x + h) - x, is what must be divided by
+    offsets = np.eye(n) * h[..., None, :]
+    xp = x[..., None, :] + offsets
+    xm = x[..., None, :] - offsets
+    dx = np.diagonal(xp - xm, axis1=-2, axis2=-1)
+    diff = np.asarray(f(xp)) - np.asarray(f(xm))  # (..., n, k)
+    return _T(diff / dx[..., :, None])
+
+
+def _check_model(model) -> None:
+    if not isinstance(model, LinearModel):
+        raise TypeError(f"model must be a LinearModel, got {type(model).__name__}")
+
+
+class NonlinearModel:
+    """Nonlinear state-space model with additive Gaussian noise.
+
+    ``x_{t+1} = g(x_t, u_t) + G w_t``, ``y_t = h(x_t) + v_t``, with
+    ``w_t ~ N(w_mean, Q)``, ``v_t ~ N(v_mean, R)`` and
+    ``x_0 ~ N(x0_mean, x0_cov)``.
+
+    Parameters
+    ----------
+    g : callable
+        ``g(x, u)`` with ``x`` of shape ``(..., n)`` and ``u`` of shape
+        ``(..., m)`` (``None`` when the model has no input); returns
+        ``(..., n)``.  It must broadcast over leading axes, so write it with
+        ``x[..., i]`` rather than ``x[i]``.
+    h : callable
+        ``h(x)`` returning ``(..., p)``.
+    Q : (q, q) array_like
+        Process-noise covariance (positive semi-definite).
+    R : (p, p) array_like
+        Measurement-noise covariance (positive definite).
+    x0_mean : (n,) array_like
+        Prior mean of the first state; it fixes ``n``.
+    x0_cov : (n, n) array_like, optional
+        Prior covariance; the identity by default.
+    G : (n, q) array_like, optional
+        Noise input matrix; identity by default.
+    jac_g : callable, optional
+        ``jac_g(x, u)`` returning ``(..., n, n)``; central differences by
+        default (:func:`numerical_jacobian`).
+    jac_h : callable, optional
+        ``jac_h(x)`` returning ``(..., p, n)``; central differences by default.
+    w_mean, v_mean : array_like, optional
+        Noise means; zeros by default.
+    n_inputs : int
+        ``m``, the dimension of ``u`` (0: no input).
+
+    Raises
+    ------
+    ValueError
+        When shapes disagree; ``g``, ``h`` and the Jacobians are called once
+        at ``x0_mean`` to check the shapes they return (and a function that
+        fails there is reported with the shape it was called with).
+
+    Notes
+    -----
+    The model of the lecture's EKF slide (test_quantities_lecture_sv.txt,
+    "Extended Kalman Filter"), ``x(t+1) = g(x(t), u(t), w(t))``,
+    ``y(t) = h(x(t)) + e(t)``, restricted to additive process noise, so that
+    ``G_t = dg/dw = G`` is constant.  The Jacobians ``F_t = dg/dx`` and
+    ``H_t = dh/dx`` are the user's or central differences
+    (:func:`numerical_jacobian`).
+    """
+
+    _no_input = "n_inputs = 0"
+
+    def __init__(
+        self,
+        g,
+        h,
+        Q,
+        R,
+        x0_mean,
+        x0_cov=None,
+        G=None,
+        jac_g=None,
+        jac_h=None,
+        w_mean=None,
+        v_mean=None,
+        n_inputs=0,
+    ):
+        for name, fun in (("g", g), ("h", h), ("jac_g", jac_g), ("jac_h", jac_h)):
+            if fun is not None and not callable(fun):
+                raise ValueError(f"{name} must be callable, got {type(fun).__name__}")
+        x0_mean = as_vector(x0_mean, "x0_mean")
+        n = x0_mean.shape[0]
+        R = as_matrix(R, "R")
+        p = R.shape[0]
+        R = as_covariance(R, "R", p)
+        Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
+        q = Q.shape[0]
+        if (
+            isinstance(n_inputs, bool)
+            or not isinstance(n_inputs, (int, np.integer))
+            or n_inputs < 0
+        ):
+            raise ValueError(f"n_inputs must be a non-negative integer, got {n_inputs!r}")
+
+        self.g, self.h, self.jac_g, self.jac_h = g, h, jac_g, jac_h
+        self.Q, self.R, self.G = _readonly(Q), _readonly(R), _readonly(G)
+        self.x0_mean, self.x0_cov = _readonly(x0_mean), _readonly(x0_cov)
+        self.w_mean, self.v_mean = _readonly(w_mean), _readonly(v_mean)
+        self.n_states, self.n_outputs, self.n_noise, self.n_inputs = n, p, q, int(n_inputs)
+        self.GQG = _readonly(symmetrize(G @ Q @ G.T))
+        self.Gw = _readonly(G @ w_mean)
+        self._check_functions()
+
+    def _check_functions(self):
+        n, p = self.n_states, self.n_outputs
+        u0 = np.zeros(self.n_inputs) if self.n_inputs else None
+        for name, value, shape in (
+            ("g(x0_mean, u)", lambda: self.g(self.x0_mean, u0), (n,)),
+            ("h(x0_mean)", lambda: self.h(self.x0_mean), (p,)),
+            ("jacobian_g(x0_mean, u)", lambda: self.jacobian_g(self.x0_mean, u0), (n, n)),
+            ("jacobian_h(x0_mean)", lambda: self.jacobian_h(self.x0_mean), (p, n)),
+        ):
+            try:
+                got = np.shape(value())
+            except Exception as exc:
+                raise ValueError(
+                    f"{name} raised {type(exc).__name__}: {exc}. The functions are called with "
+                    f"x of shape (..., {n}) (a batch of states) and must index it as x[..., i]"
+                ) from exc
+            if got != shape:
+                raise ValueError(
+                    f"{name} returned shape {got}, expected {shape} "
+                    f"(n_states = {n} from x0_mean, n_outputs = {p} from R)"
+                )
+
+    def __repr__(self) -> str:
+        return (
+            f"NonlinearModel(n_states={self.n_states}, n_outputs={self.n_outputs}, "
+            f"n_noise={self.n_noise}, n_inputs={self.n_inputs})"
+        )
+
+    @classmethod
+    def from_linear(cls, model: LinearModel, numerical_jacobians: bool = False) -> NonlinearModel:
+        """The linear model written as a nonlinear one (``g = F x + B u``, ``h = H x``).
+
+        With ``numerical_jacobians=False`` the exact Jacobians ``F`` and ``H``
+        are supplied, so the EKF reproduces the Kalman filter to rounding.
+        """
+        _check_model(model)
+        F, H, B = model.F, model.H, model.B
+        has_u = model.n_inputs > 0
+
+        def g(x, u):
+            out = x @ F.T
+            return out + u @ B.T if has_u else out
+
+        def h(x):
+            return x @ H.T
+
+        jac_g = jac_h = None
+        if not numerical_jacobians:
+
+            def jac_g(x, u):
+                return np.broadcast_to(F, np.shape(x)[:-1] + F.shape)
+
+            def jac_h(x):
+                return np.broadcast_to(H, np.shape(x)[:-1] + H.shape)
+
+        return cls(
+            g,
+            h,
+            model.Q,
+            model.R,
+            model.x0_mean,
+            model.x0_cov,
+            G=model.G,
+            jac_g=jac_g,
+            jac_h=jac_h,
+            w_mean=model.w_mean,
+            v_mean=model.v_mean,
+            n_inputs=model.n_inputs,
+        )
+
+    def jacobian_g(self, x, u=None) -> np.ndarray:
+        """``dg/dx`` at ``(x, u)``: the user's ``jac_g`` or central differences."""
+        if self.jac_g is not None:
+            return np.asarray(self.jac_g(x, u), dtype=float)
+        if u is None:
+            return numerical_jacobian(lambda z: self.g(z, None), x)
+        u = np.asarray(u)[..., None, :]  # one copy per perturbed point
+        return numerical_jacobian(lambda z: self.g(z, u), x)
+
+    def jacobian_h(self, x) -> np.ndarray:
+        """``dh/dx`` at ``x``: the user's ``jac_h`` or central differences."""
+        if self.jac_h is not None:
+            return np.asarray(self.jac_h(x), dtype=float)
+        return numerical_jacobian(self.h, x)
+
+    def simulate(self, N, rng, batch=None, u=None):
+        """Draw state and output sequences; see :meth:`LinearModel.simulate`."""
+        # g always sees u with the same batch shape as x
+        N, shape, u, x, w, v = _simulation_draws(self, N, rng, batch, u)
+        states = np.empty((N,) + shape + (self.n_states,))
+        for t in range(N):
+            states[t] = x
+            x = self.g(x, None if u is None else u[t]) + w[t]
+        outputs = self.h(states) + v
+        nb = len(shape)
+        return _batch_major(states, nb), _batch_major(outputs, nb)

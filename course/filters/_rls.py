@@ -1,0 +1,207 @@
+"""Recursive least squares as the Kalman filter of a random-walk parameter."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.linalg import LinAlgError
+from scipy import linalg as sla
+
+from course.filters._steps import kf_update
+from course.linalg import (
+    as_covariance,
+    as_float_array,
+    as_matrix,
+    as_vector,
+    symmetrize,
+)
+from course.nis._windowed import _variance
+
+
+# ---------------------------------------------------------------------------
+# recursive least squares as a Kalman filter
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True, repr=False, eq=False)
+class RLSResult:
+    """Output of :func:`recursive_least_squares`.
+
+    Attributes
+    ----------
+    theta : (*batch, N, k)
+        ``thetahat(t|t)``, the estimate from samples ``0..t``; NaN before
+        ``first``.
+    P : (N, k, k)
+        Its covariance (shared by the batch); NaN before ``first``.
+    eps : (*batch, N)
+        Innovations ``y_t - phi_t^T thetahat(t-1|t-1)``; NaN up to and
+        including ``first`` with the diffuse start (no prediction exists).
+    S : (N,)
+        Innovation variances (NaN where ``eps`` is).
+    first : int
+        First sample with an estimate: 0 with a prior, ``k0 - 1`` with the
+        diffuse start, where ``k0`` is the number of rows that first give
+        ``Phi`` full column rank.
+    """
+
+    theta: np.ndarray
+    P: np.ndarray
+    eps: np.ndarray
+    S: np.ndarray
+    first: int
+
+    def __repr__(self) -> str:
+        return (
+            f"RLSResult(n_steps={self.theta.shape[-2]}, n_params={self.theta.shape[-1]}, "
+            f"first={self.first})"
+        )
+
+    @property
+    def batch_shape(self) -> tuple:
+        """Shape of the batch of records (``()`` for one record)."""
+        return self.eps.shape[:-1]
+
+    @property
+    def n_outputs(self) -> int:
+        """Number of outputs per sample: 1 (RLS has one output)."""
+        return 1
+
+    @property
+    def innovations(self) -> np.ndarray:
+        """Alias of ``eps`` (as in :class:`FilterResult`)."""
+        return self.eps
+
+    def normalized_innovations(self) -> np.ndarray:
+        """``eps_t / sqrt(S_t)``, ``(*batch, N)``: independent N(0, 1) under the model.
+
+        NaN where ``eps`` is (the diffuse start).  The scalar-output case of
+        :meth:`FilterResult.normalized_innovations` (without its trailing
+        output axis: RLS has one output).
+        """
+        return self.eps / np.sqrt(self.S)
+
+    def nis(self) -> np.ndarray:
+        """Normalised innovations squared ``eps_t^2 / S_t``, ``(*batch, N)``.
+
+        Independent ``chi2(1)`` over time under the model, so
+        :func:`windowed_nis` of an ``RLSResult`` is ``chi2(L)`` with a full
+        window (threshold :func:`windowed_nis_threshold` with ``n_outputs=1``).
+        """
+        z = self.normalized_innovations()
+        return z * z
+
+
+def _first_full_rank(Phi: np.ndarray) -> int:
+    """Smallest k0 with rank(Phi[:k0]) = k (rank only grows with rows: bisect)."""
+    N, k = Phi.shape
+    if k > N or np.linalg.matrix_rank(Phi) < k:
+        raise LinAlgError(
+            "Phi never reaches full column rank: the data do not excite every parameter, "
+            "so least squares has no unique solution; give a proper prior P0 (and theta0) "
+            "or more exciting regressors"
+        )
+    lo, hi = k, N
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if np.linalg.matrix_rank(Phi[:mid]) == k:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSResult:
+    """Recursive least squares: a Kalman filter for a random-walk parameter.
+
+    Model: ``theta_{t+1} = theta_t + w_t``, ``w_t ~ N(0, q)``;
+    ``y_t = phi_t^T theta_t + e_t``, ``e_t ~ N(0, r)``.
+
+    Parameters
+    ----------
+    Phi : (N, k) array_like
+        Regressors, one row ``phi_t^T`` per sample.
+    y : array_like
+        ``(N,)`` or ``(*batch, N)`` outputs (a batch shares ``Phi``).  Records
+        stored as the columns of an ``(N, M)`` array (``course.diagnosis``'s
+        layout) go in as ``Y.T``.  A known part of the prediction, e.g. the
+        fixed parameters' contribution under H0, is subtracted beforehand:
+        ``y - offset``.
+    r : float
+        Measurement-noise variance (> 0).
+    q : float or (k, k) array_like, optional
+        Process-noise covariance of the parameter (``q * I`` for a scalar);
+        zero by default: a constant parameter.
+    theta0, P0 : array_like, optional
+        Prior mean and covariance of ``theta_0``.  Without ``P0`` the start
+        is *diffuse* (no prior information): the first ``k0`` samples that
+        make ``Phi`` full column rank are solved by least squares (QR), and
+        the recursion runs from there.  With ``q > 0`` the parameter is
+        treated as constant during those first ``k0`` samples.
+
+    Returns
+    -------
+    RLSResult
+
+    Notes
+    -----
+    The lecture's recursive linear regression (test_quantities_lecture_sv.txt,
+    "Linjär regression - rekursiv lösare"): describe the parameter as a random
+    walk and apply a standard Kalman filter; RLS is the special case
+    ``q = 0``.  Each step is :func:`kf_update` with ``H = phi_t^T``, then
+    ``P <- P + q``.  With ``q = 0`` and the diffuse start,
+    ``thetahat(t|t)`` equals the batch least-squares estimate from samples
+    ``0..t`` and ``P(t|t) = r (Phi_t^T Phi_t)^{-1}``, exactly in exact
+    arithmetic; with a prior it equals the regularised estimate minimising
+    ``||y - Phi theta||^2 / r + (theta - theta0)^T P0^{-1} (theta - theta0)``.
+    The covariances do not depend on the data, so a batch shares them.  The
+    normalised innovations are independent ``N(0, 1)`` while the model holds,
+    which makes :func:`windowed_nis` of the result a recursive test quantity
+    (chapter 2, "recursive computation").
+    """
+    Phi = as_matrix(Phi, "Phi")
+    N, k = Phi.shape
+    y = as_float_array(y, "y")
+    if y.ndim < 1 or y.shape[-1] != N:
+        raise ValueError(
+            f"y must have shape (N,) or (batch, N) with N = {N} (the rows of Phi), got {y.shape}"
+        )
+    r = _variance(r, "r (the measurement-noise variance)", positive=True)
+    if q is None:
+        Qw = np.zeros((k, k))
+    elif np.ndim(q) == 0:
+        Qw = _variance(q, "q") * np.eye(k)
+    else:
+        Qw = as_covariance(q, "q", k, allow_singular=True)
+    batch = y.shape[:-1]
+    R = np.array([[r]])
+    theta = np.full(batch + (N, k), np.nan)
+    P_all = np.full((N, k, k), np.nan)
+    eps = np.full(batch + (N,), np.nan)
+    S_all = np.full(N, np.nan)
+
+    if P0 is None:
+        if theta0 is not None:
+            raise ValueError("theta0 without P0: give its covariance P0 as well (or neither)")
+        k0 = _first_full_rank(Phi)
+        first = k0 - 1
+        Qr, Rr = np.linalg.qr(Phi[:k0])
+        # least squares on the first k0 rows, all runs at once (QR, no normal equations)
+        rhs = np.moveaxis(y[..., :k0], -1, 0).reshape(k0, -1)
+        coef = sla.solve_triangular(Rr, Qr.T @ rhs, lower=False, check_finite=False)
+        x = np.moveaxis(coef.reshape((k,) + batch), 0, -1)
+        Ri = sla.solve_triangular(Rr, np.eye(k), lower=False, check_finite=False)
+        P = symmetrize(r * (Ri @ Ri.T))  # r (Phi^T Phi)^{-1}
+        theta[..., first, :] = x
+        P_all[first] = P
+        P = P + Qw
+        start = k0
+    else:
+        x = np.zeros(k) if theta0 is None else as_vector(theta0, "theta0", k)
+        P = as_covariance(P0, "P0", k, allow_singular=True)
+        x = np.broadcast_to(x, batch + (k,))
+        first = start = 0
+    for t in range(start, N):
+        x, P, e, S, _ = kf_update(x, P, y[..., t, None], Phi[t][None, :], R)
+        theta[..., t, :], P_all[t], eps[..., t], S_all[t] = x, P, e[..., 0], S[0, 0]
+        P = P + Qw
+    return RLSResult(theta=theta, P=P_all, eps=eps, S=S_all, first=first)

@@ -1,0 +1,222 @@
+"""One step of the (extended) Kalman filter: measurement update and time update."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.linalg import LinAlgError
+
+from course.filters._stacked import _T, _mm, _mv
+from course.linalg import (
+    symmetrize,
+)
+
+
+# ---------------------------------------------------------------------------
+# pure filter steps
+# ---------------------------------------------------------------------------
+def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
+    """Measurement update of the Kalman filter (one step, any batch shape).
+
+    Parameters
+    ----------
+    x_pred : (..., n) ndarray
+        Predicted state ``xhat(t|t-1)``.
+    P_pred : (..., n, n) ndarray
+        Its covariance ``P(t|t-1)``.
+    y : (..., p) ndarray
+        Measurement ``y_t``.
+    H : (..., p, n) ndarray
+        Output matrix (the Jacobian of ``h`` for the EKF).
+    R : (..., p, p) ndarray
+        Measurement-noise covariance.
+    v_mean : (p,) ndarray, optional
+        Measurement-noise mean.
+
+    Returns
+    -------
+    x_filt, P_filt, eps, S, K : ndarray
+        Updated estimate and covariance, innovation ``eps = y - H x_pred -
+        v_mean``, its covariance ``S``, and the gain ``K``.
+
+    Notes
+    -----
+    ``S = H P H^T + R``, ``K = P H^T S^{-1}`` (computed by a linear solve with
+    ``S``, never an inverse), ``x_filt = x_pred + K eps`` and the Joseph form
+    ``P_filt = (I - K H) P (I - K H)^T + K R K^T``, which stays symmetric and
+    positive semi-definite under rounding and equals ``(I - K H) P`` in exact
+    arithmetic; see the measurement update on the lecture's EKF slide
+    (test_quantities_lecture_sv.txt, "Extended Kalman Filter").  Inputs are
+    never modified; broadcasting lets ``P`` be shared by a batch of ``x``.
+    """
+    x_pred, P_pred, y, H, R = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y, H, R))
+    _check_update_shapes(x_pred, P_pred, y, H, R)
+    y_hat = _mv(H, x_pred)
+    if v_mean is not None:
+        y_hat = y_hat + v_mean
+    return _update_core(x_pred, P_pred, y - y_hat, H, R)
+
+
+def _check_update_shapes(x_pred, P_pred, y, H, R) -> None:
+    """Shape check of one measurement update; names the offending argument."""
+    n = x_pred.shape[-1] if x_pred.ndim else 0
+    p = y.shape[-1] if y.ndim else 0
+    problems = []
+    if x_pred.ndim < 1:
+        problems.append(f"x_pred must be (..., n), got shape {x_pred.shape}")
+    if P_pred.ndim < 2 or P_pred.shape[-2:] != (n, n):
+        problems.append(f"P_pred must be (..., {n}, {n}) for n = {n} states, got {P_pred.shape}")
+    if y.ndim < 1:
+        problems.append(f"y must be (..., p), got shape {y.shape}")
+    if H.ndim < 2 or H.shape[-2:] != (p, n):
+        problems.append(f"H must be (..., p, n) = (..., {p}, {n}), got {H.shape}")
+    if R.ndim < 2 or R.shape[-2:] != (p, p):
+        problems.append(f"R must be (..., {p}, {p}) for p = {p} outputs, got {R.shape}")
+    if problems:
+        raise ValueError("measurement update: " + "; ".join(problems))
+
+
+def _check_predict_shapes(x_filt, P_filt, F, GQG) -> None:
+    n = x_filt.shape[-1] if x_filt.ndim else 0
+    problems = []
+    if x_filt.ndim < 1:
+        problems.append(f"x_filt must be (..., n), got shape {x_filt.shape}")
+    for name, a in (("P_filt", P_filt), ("F", F), ("GQG", GQG)):
+        if a.ndim < 2 or a.shape[-2:] != (n, n):
+            problems.append(f"{name} must be (..., {n}, {n}) for n = {n} states, got {a.shape}")
+    if problems:
+        raise ValueError("time update: " + "; ".join(problems))
+
+
+def _update_core(x_pred, P_pred, eps, H, R):
+    """Shared by the linear and extended filters: gain, estimate, Joseph update."""
+    PHt = _mm(P_pred, _T(H))
+    S = symmetrize(_mm(H, PHt) + R)
+    if S.shape[-1] == 1:
+        # one output: the solve with a 1 x 1 S is a division
+        if np.any(S <= 0):
+            raise LinAlgError(
+                "the innovation variance S = H P H^T + R is not positive; "
+                "R must be positive definite"
+            )
+        K = PHt / S
+    else:
+        # the Cholesky factorisation is the positive-definiteness check a plain
+        # solve would skip (an indefinite S solves without complaint)
+        try:
+            np.linalg.cholesky(S)
+        except LinAlgError:
+            raise LinAlgError(
+                "the innovation covariance S = H P H^T + R is not positive definite; "
+                "R must be positive definite and P positive semi-definite"
+            ) from None
+        K = _T(np.linalg.solve(S, _T(PHt)))
+    x_filt = x_pred + _mv(K, eps)
+    I_KH = np.eye(P_pred.shape[-1]) - _mm(K, H)
+    P_filt = symmetrize(_mm(_mm(I_KH, P_pred), _T(I_KH)) + _mm(_mm(K, R), _T(K)))
+    return x_filt, P_filt, eps, S, K
+
+
+def kf_predict(x_filt, P_filt, F, GQG, offset=None):
+    """Time update of the Kalman filter (one step, any batch shape).
+
+    Parameters
+    ----------
+    x_filt : (..., n) ndarray
+        Filtered state ``xhat(t|t)``.
+    P_filt : (..., n, n) ndarray
+        Its covariance.
+    F : (..., n, n) ndarray
+        Transition matrix (the Jacobian of ``g`` for the EKF).
+    GQG : (..., n, n) ndarray
+        ``G Q G^T``.
+    offset : (..., n) ndarray, optional
+        Known additive term, ``B u_t + G w_mean``.
+
+    Returns
+    -------
+    x_pred, P_pred : ndarray
+        ``xhat(t+1|t) = F xhat(t|t) + offset`` and
+        ``P(t+1|t) = F P(t|t) F^T + G Q G^T`` (symmetrised).
+
+    Notes
+    -----
+    The time update of the lecture's EKF slide with constant ``G``
+    (test_quantities_lecture_sv.txt, "Extended Kalman Filter").
+    """
+    x_filt, P_filt, F, GQG = (np.asarray(a, dtype=float) for a in (x_filt, P_filt, F, GQG))
+    _check_predict_shapes(x_filt, P_filt, F, GQG)
+    x_pred = _mv(F, x_filt)
+    if offset is not None:
+        x_pred = x_pred + offset
+    P_pred = symmetrize(_mm(_mm(F, P_filt), _T(F)) + GQG)
+    return x_pred, P_pred
+
+
+def ekf_update(model, x_pred, P_pred, y):
+    """Measurement update of the extended Kalman filter (one step, any batch shape).
+
+    Parameters
+    ----------
+    model : NonlinearModel
+        Supplies ``h``, its Jacobian, ``R`` and ``v_mean``.
+    x_pred : (..., n) ndarray
+        Predicted state ``xhat(t|t-1)``.
+    P_pred : (..., n, n) ndarray
+        Its covariance ``P(t|t-1)``.
+    y : (..., p) ndarray
+        Measurement ``y_t``.
+
+    Returns
+    -------
+    x_filt, P_filt, eps, S, K : ndarray
+        As :func:`kf_update`, with ``eps = y - h(x_pred) - v_mean`` and
+        ``H = dh/dx`` at ``x_pred``.
+
+    Notes
+    -----
+    Lecture (test_quantities_lecture_sv.txt, "Extended Kalman Filter"):
+    ``H_t = dh/dx`` at ``xhat(t|t-1)``,
+    ``K_t = P(t|t-1) H_t^T (H_t P(t|t-1) H_t^T + R_t)^{-1}``,
+    ``xhat(t|t) = xhat(t|t-1) + K_t (y_t - h(xhat(t|t-1)))``.  The lecture's
+    ``P(t|t) = P(t|t-1) - K_t H_t P(t|t-1)`` is replaced by the equivalent
+    Joseph form (see :func:`kf_update`).
+    """
+    x_pred, P_pred, y = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y))
+    H = model.jacobian_h(x_pred)
+    _check_update_shapes(x_pred, P_pred, y, H, model.R)
+    eps = y - model.h(x_pred) - model.v_mean
+    return _update_core(x_pred, P_pred, eps, H, model.R)
+
+
+def ekf_predict(model, x_filt, P_filt, u=None):
+    """Time update of the extended Kalman filter (one step, any batch shape).
+
+    Parameters
+    ----------
+    model : NonlinearModel
+        Supplies ``g``, its Jacobian, ``G Q G^T`` and ``G w_mean``.
+    x_filt : (..., n) ndarray
+        Filtered state ``xhat(t|t)``.
+    P_filt : (..., n, n) ndarray
+        Its covariance ``P(t|t)``.
+    u : (..., m) ndarray, optional
+        Input ``u_t`` (required when the model has inputs).
+
+    Returns
+    -------
+    x_pred, P_pred : ndarray
+        ``xhat(t+1|t)`` and ``P(t+1|t)``.
+
+    Notes
+    -----
+    ``xhat(t+1|t) = g(xhat(t|t), u_t) + G w_mean`` and
+    ``P(t+1|t) = F_t P(t|t) F_t^T + G Q G^T`` with ``F_t = dg/dx`` at
+    ``xhat(t|t)`` (test_quantities_lecture_sv.txt, slide "Extended Kalman
+    Filter", time update; its ``G_t = dg/dw`` is the constant ``G`` here
+    because the noise enters additively).
+    """
+    x_filt, P_filt = np.asarray(x_filt, dtype=float), np.asarray(P_filt, dtype=float)
+    F = model.jacobian_g(x_filt, u)
+    _check_predict_shapes(x_filt, P_filt, F, model.GQG)
+    x_pred = model.g(x_filt, u) + model.Gw
+    return x_pred, symmetrize(_mm(_mm(F, P_filt), _T(F)) + model.GQG)

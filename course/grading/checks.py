@@ -1,0 +1,354 @@
+"""The authoring vocabulary of ``solutions/<name>/checks.py``: questions, cases, references.
+
+A ``checks.py`` creates one :class:`Checks` object (conventionally ``CHECKS``) and registers
+questions on it with the :meth:`Checks.value` and :meth:`Checks.function` decorators. The
+decorated function is the trusted REFERENCE: it runs in the grader (and in ``course release``
+for the public cases), never in a student's process. See ``docs/instructors/authoring.md``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import re
+import sys
+import types
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from course.grading.codec import Band, decode, encode
+from course.grading.compare import binomial_band
+from course.grading.vocabulary import DEMO_STUDENT_ID
+
+__all__ = [
+    "DEMO_STUDENT_ID",
+    "Band",
+    "Case",
+    "Checks",
+    "Question",
+    "binomial_band",
+    "load_checks",
+    "student_rng",
+]
+
+
+_QID = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
+_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_NAME = re.compile(r"^[0-9A-Za-z][0-9A-Za-z_.-]*$")
+
+
+def student_rng(assignment: str, key: str, student_id: str) -> np.random.Generator:
+    """The random generator of one student's data set ``key`` of ``assignment``.
+
+    Seeded with the first 128 bits of ``sha256(assignment NUL key NUL student_id)`` (surrounding
+    whitespace of the ID ignored), so it is the same on every machine and in every process;
+    Python's ``hash`` is salted per process and is never used.
+    """
+    text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode()
+    seed = int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
+    return np.random.default_rng(seed)
+
+
+@dataclass
+class Case:
+    """Arguments of one call of a student's function, public or hidden."""
+
+    args: tuple
+    kwargs: dict
+    label: str
+    hidden: bool
+
+
+@dataclass
+class Question:
+    """One graded question (built by :meth:`Checks.value` or :meth:`Checks.function`)."""
+
+    id: str
+    kind: str  # "value" or "function"
+    target: str  # the variable or function name the student defines
+    points: float
+    hint: str
+    reference: Callable
+    rtol: float = 1e-7
+    atol: float = 1e-9
+    data: str | None = None
+    public: bool = True
+    properties: str | None = None
+    forbid: tuple = ()
+    timeout: float | None = None
+    partial: bool = True
+    cases: list = field(default_factory=list)
+
+    def case(
+        self, *args, label: str | None = None, hidden: bool = False, kwargs: dict | None = None
+    ) -> Case:
+        """Add a call of the student's function with these arguments (function questions only)."""
+        if self.kind != "function":
+            raise ValueError(
+                f"{self.id}: cases belong to function questions; a value question has one value"
+            )
+        kwargs = dict(kwargs or {})
+        try:
+            encode(args), encode(kwargs)
+        except TypeError as exc:
+            raise ValueError(f"{self.id}: case arguments must be plain data ({exc})") from None
+        n_kind = sum(1 for c in self.cases if c.hidden == hidden) + 1
+        label = label or f"{'hidden' if hidden else 'public'} case {n_kind}"
+        case = Case(tuple(args), kwargs, str(label), bool(hidden))
+        self.cases.append(case)
+        return case
+
+    @property
+    def public_cases(self) -> list:
+        return [c for c in self.cases if not c.hidden]
+
+    @property
+    def hidden_cases(self) -> list:
+        return [c for c in self.cases if c.hidden]
+
+    def expected(self, case: Case | None = None, data: Any = None) -> Any:
+        """The reference value (normalised through the plain-data codec)."""
+        if self.kind == "function":
+            value = self.reference(*decode(encode(case.args)), **decode(encode(case.kwargs)))
+        elif self.data is not None:
+            value = self.reference(data)
+        else:
+            value = self.reference()
+        return decode(encode(value))
+
+
+class Checks:
+    """The questions of one assignment.
+
+    Parameters
+    ----------
+    name : str
+        The assignment name; must match the folder ``solutions/<name>/``.
+    title : str, optional
+        Shown in feedback.
+    data : module, optional
+        The assignment's public ``data.py`` module (``from . import data``), whose functions
+        ``key(rng)`` make per-student data sets.
+    timeout : float
+        Default time limit in seconds for each answer cell and each call of a student's function.
+    preload : list of str
+        Modules imported once before any student code runs (speed only).
+    files : list of str
+        Extra files of ``solutions/<name>/`` copied verbatim into the release (public!).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        title: str = "",
+        data: types.ModuleType | None = None,
+        timeout: float = 10.0,
+        preload=(),
+        files=(),
+    ):
+        if not _NAME.match(str(name)):
+            raise ValueError(f"assignment name {name!r}: use letters, digits, '_', '-', '.'")
+        self.name = str(name)
+        self.title = title or self.name
+        self.data_module = data
+        self.timeout = float(timeout)
+        self.preload = tuple(preload)
+        self.files = tuple(files)
+        self.questions: dict[str, Question] = {}
+
+    # -- decorators --------------------------------------------------------------------
+    def _register(self, question: Question) -> Question:
+        if not _QID.match(question.id):
+            raise ValueError(
+                f"question id {question.id!r}: start with a letter; letters, digits, '_'"
+            )
+        if question.id in self.questions:
+            raise ValueError(f"question {question.id!r} is defined twice")
+        if not _IDENT.match(question.target):
+            raise ValueError(f"{question.id}: {question.target!r} is not a Python name")
+        if not question.points > 0:
+            raise ValueError(f"{question.id}: points must be positive")
+        if question.rtol < 0 or question.atol < 0:
+            raise ValueError(f"{question.id}: tolerances must be non-negative")
+        for name in question.forbid:
+            if "." not in name:
+                raise ValueError(
+                    f"{question.id}: forbid entries are dotted names such as 'course.lsq.w_tests', got {name!r}"
+                )
+        if question.data is not None and (
+            self.data_module is None or not callable(getattr(self.data_module, question.data, None))
+        ):
+            raise ValueError(
+                f"{question.id}: data={question.data!r} needs a function {question.data}(rng) in data.py "
+                "and Checks(..., data=data)"
+            )
+        if question.properties is not None and (
+            self.data_module is None
+            or not callable(getattr(self.data_module, question.properties, None))
+        ):
+            raise ValueError(
+                f"{question.id}: properties={question.properties!r} is not a function in data.py"
+            )
+        self.questions[question.id] = question
+        return question
+
+    def value(
+        self,
+        qid: str,
+        *,
+        var: str,
+        points: float,
+        hint: str = "",
+        rtol: float = 1e-7,
+        atol: float = 1e-9,
+        data: str | None = None,
+        public: bool = True,
+        properties: str | None = None,
+        forbid=(),
+        timeout: float | None = None,
+        partial: bool = True,
+    ):
+        """Register a question whose answer is the variable ``var``; decorate its reference."""
+
+        def decorator(reference):
+            return self._register(
+                Question(
+                    id=qid,
+                    kind="value",
+                    target=var,
+                    points=float(points),
+                    hint=hint,
+                    reference=reference,
+                    rtol=float(rtol),
+                    atol=float(atol),
+                    data=data,
+                    public=bool(public) and data is None,
+                    properties=properties,
+                    forbid=tuple(forbid),
+                    timeout=timeout,
+                    partial=partial,
+                )
+            )
+
+        return decorator
+
+    def function(
+        self,
+        qid: str,
+        *,
+        func: str,
+        points: float,
+        hint: str = "",
+        rtol: float = 1e-7,
+        atol: float = 1e-9,
+        forbid=(),
+        timeout: float | None = None,
+        partial: bool = True,
+    ):
+        """Register a question whose answer is the function ``func``; decorate its reference."""
+
+        def decorator(reference):
+            return self._register(
+                Question(
+                    id=qid,
+                    kind="function",
+                    target=func,
+                    points=float(points),
+                    hint=hint,
+                    reference=reference,
+                    rtol=float(rtol),
+                    atol=float(atol),
+                    forbid=tuple(forbid),
+                    timeout=timeout,
+                    partial=partial,
+                )
+            )
+
+        return decorator
+
+    # -- helpers -----------------------------------------------------------------------
+    @property
+    def max_points(self) -> float:
+        return float(sum(q.points for q in self.questions.values()))
+
+    def data_keys(self) -> list[str]:
+        return sorted({q.data for q in self.questions.values() if q.data is not None})
+
+    def data_for(self, key: str, student_id: str) -> Any:
+        """The per-student data set ``key`` for ``student_id`` (plain data)."""
+        func = getattr(self.data_module, key)
+        return decode(encode(func(student_rng(self.name, key, student_id))))
+
+    def validate(self) -> None:
+        """Check the question set for authoring mistakes (raises ValueError)."""
+        if not self.questions:
+            raise ValueError(f"{self.name}: checks.py defines no questions")
+        for q in self.questions.values():
+            if q.kind == "function" and not q.public_cases:
+                raise ValueError(
+                    f"{q.id}: a function question needs at least one public case (q.case(...))"
+                )
+
+
+def _safe_module_name(path: Path) -> str:
+    digest = hashlib.sha256(str(path.resolve()).encode()).hexdigest()[:12]
+    return f"_course_assignment_{re.sub(r'[^0-9A-Za-z_]', '_', path.name)}_{digest}"
+
+
+def load_checks(solution_dir: str | Path) -> Checks:
+    """Import ``solution_dir/checks.py`` (as part of a private package, so ``from . import data``
+    works) and return its :class:`Checks` object."""
+    solution_dir = Path(solution_dir).resolve()
+    checks_file = solution_dir / "checks.py"
+    if not checks_file.is_file():
+        raise FileNotFoundError(f"{checks_file} does not exist: every assignment needs a checks.py")
+    pkg_name = _safe_module_name(solution_dir)
+    for mod in [m for m in sys.modules if m == pkg_name or m.startswith(pkg_name + ".")]:
+        del sys.modules[mod]
+    package = types.ModuleType(pkg_name)
+    package.__path__ = [str(solution_dir)]
+    package.__package__ = pkg_name
+    sys.modules[pkg_name] = package
+    spec = importlib.util.spec_from_file_location(f"{pkg_name}.checks", checks_file)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    _exec_without_bytecode(spec, module)
+    found = [v for v in vars(module).values() if isinstance(v, Checks)]
+    chosen = getattr(module, "CHECKS", None)
+    if not isinstance(chosen, Checks):
+        if len(found) != 1:
+            raise ValueError(
+                f"{checks_file}: define exactly one Checks object (conventionally CHECKS)"
+            )
+        chosen = found[0]
+    if chosen.name != solution_dir.name:
+        raise ValueError(
+            f"{checks_file}: Checks name {chosen.name!r} differs from the folder name {solution_dir.name!r}"
+        )
+    chosen.validate()
+    chosen.solution_dir = solution_dir
+    return chosen
+
+
+def load_data_module(path: str | Path, assignment: str) -> types.ModuleType:
+    """Import a public ``data.py`` file under a private name (used by the self-check)."""
+    path = Path(path).resolve()
+    name = f"_course_data_{re.sub(r'[^0-9A-Za-z_]', '_', assignment)}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    _exec_without_bytecode(spec, module)
+    return module
+
+
+def _exec_without_bytecode(spec, module) -> None:
+    """Execute a module without leaving __pycache__ folders in solutions/ or exercises/."""
+    previous = sys.dont_write_bytecode
+    sys.dont_write_bytecode = True
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        sys.dont_write_bytecode = previous

@@ -1,0 +1,532 @@
+"""Notebook handling: solution markers, the student release, and the grading plan.
+
+The solution notebook's code cells have roles (``metadata.course.role``):
+
+``setup``    the first code cell: ``STUDENT_ID = "..."`` and ``check = Assignment.load(...)``
+``answer``   a student's answer to ``metadata.course.question``; holds SOLUTION regions
+``check``    ``check("q1")``: the self-check (skipped at grading)
+``context``  any other code cell (protected: the release version runs at grading)
+
+:func:`make_release` turns it into the student notebook; :func:`build_plan` matches a
+submitted notebook against the release and lists what the grader runs, in which order.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import nbformat
+
+from course.grading.vocabulary import PLACEHOLDER_ID, CellOrigin, CellRole
+
+__all__ = [
+    "MarkerError",
+    "Plan",
+    "PlanCell",
+    "Release",
+    "ReleaseCell",
+    "SubmissionError",
+    "build_plan",
+    "forbidden_mentions",
+    "make_release",
+    "read_submission",
+    "student_id_in",
+]
+
+BEGIN_SOLUTION = "### BEGIN SOLUTION"
+END_SOLUTION = "### END SOLUTION"
+BEGIN_HIDDEN = "### BEGIN HIDDEN TESTS"
+END_HIDDEN = "### END HIDDEN TESTS"
+STUB_PREFIX = "### STUB"
+_MARKER_WORDS = re.compile(r"(BEGIN|END)\s+(SOLUTION|HIDDEN\s+TESTS)", re.IGNORECASE)
+_CHECK_SOURCE = re.compile(r"""^\s*check\(\s*["']([A-Za-z][A-Za-z0-9_]*)["']\s*\)\s*$""")
+_STUDENT_ID_LINE = re.compile(r"^STUDENT_ID\s*=.*$", re.MULTILINE)
+_ROLES = (CellRole.SETUP, CellRole.ANSWER, CellRole.CHECK, CellRole.CONTEXT)
+PLACEHOLDER_LINE = f'STUDENT_ID = "{PLACEHOLDER_ID}"   # <- your student ID, exactly as registered'
+MAX_NOTEBOOK_BYTES = 50_000_000
+
+
+class MarkerError(ValueError):
+    """The solution notebook has a malformed or misplaced marker (release refuses it)."""
+
+
+class SubmissionError(ValueError):
+    """A submitted notebook cannot be read at all."""
+
+
+def _source(cell) -> str:
+    src = cell.get("source", "")
+    if isinstance(src, list):
+        src = "".join(s for s in src if isinstance(s, str))
+    return src if isinstance(src, str) else ""
+
+
+def _course_meta(cell) -> dict:
+    meta = cell.get("metadata")
+    course = meta.get("course") if isinstance(meta, dict) else None
+    return course if isinstance(course, dict) else {}
+
+
+def python_source(source: str) -> str:
+    """Cell source with IPython syntax (magics, ``!cmd``) turned into plain Python."""
+    from IPython.core.inputtransformer2 import TransformerManager
+
+    return TransformerManager().transform_cell(source)
+
+
+def _compiles(source: str) -> str | None:
+    try:
+        compile(python_source(source), "<cell>", "exec")
+    except SyntaxError as exc:
+        return f"line {exc.lineno}: {exc.msg}"
+    return None
+
+
+# --------------------------------------------------------------------------------------
+# release
+# --------------------------------------------------------------------------------------
+def strip_markers(
+    source: str, where: str, question: str | None, allow_solution: bool
+) -> tuple[str, int]:
+    """Return the released source (stubs for SOLUTION regions, HIDDEN TESTS regions removed)
+    and the number of solution regions; raise :class:`MarkerError` on malformed markers."""
+    out: list[str] = []
+    state = None  # None | ("solution", indent, line, stubs) | ("hidden", line)
+    regions = 0
+    lines = source.split("\n")
+    for n, line in enumerate(lines, 1):
+        stripped = line.strip()
+        if stripped in (BEGIN_SOLUTION, END_SOLUTION, BEGIN_HIDDEN, END_HIDDEN):
+            if stripped == BEGIN_SOLUTION:
+                if state is not None:
+                    raise MarkerError(
+                        f"{where}, line {n}: '{BEGIN_SOLUTION}' inside an open region (line {state[2] if state[0] == 'solution' else state[1]}); close it first"
+                    )
+                if not allow_solution:
+                    raise MarkerError(
+                        f"{where}, line {n}: a SOLUTION region outside an answer cell; "
+                        "tag the cell as an answer (course.grading.authoring.answer_cell)"
+                    )
+                indent = line[: len(line) - len(line.lstrip())]
+                state = ("solution", indent, n, [])
+            elif stripped == END_SOLUTION:
+                if state is None or state[0] != "solution":
+                    raise MarkerError(
+                        f"{where}, line {n}: '{END_SOLUTION}' without a matching '{BEGIN_SOLUTION}'"
+                    )
+                _, indent, _, stubs = state
+                if stubs:
+                    out.extend(stubs)
+                else:
+                    out.append(f"{indent}# YOUR CODE HERE")
+                    out.append(f'{indent}raise NotImplementedError("{question}: not answered yet")')
+                regions += 1
+                state = None
+            elif stripped == BEGIN_HIDDEN:
+                if state is not None:
+                    raise MarkerError(
+                        f"{where}, line {n}: '{BEGIN_HIDDEN}' inside an open region; close it first"
+                    )
+                state = ("hidden", n)
+            else:
+                if state is None or state[0] != "hidden":
+                    raise MarkerError(
+                        f"{where}, line {n}: '{END_HIDDEN}' without a matching '{BEGIN_HIDDEN}'"
+                    )
+                state = None
+            continue
+        if _MARKER_WORDS.search(line) and stripped.startswith("#"):
+            raise MarkerError(
+                f"{where}, line {n}: malformed marker {stripped!r}; write exactly "
+                f"'{BEGIN_SOLUTION}', '{END_SOLUTION}', '{BEGIN_HIDDEN}' or '{END_HIDDEN}'"
+            )
+        if state is None:
+            if stripped.startswith(STUB_PREFIX):
+                raise MarkerError(
+                    f"{where}, line {n}: '{STUB_PREFIX}' lines belong inside a SOLUTION region"
+                )
+            out.append(line)
+        elif state[0] == "solution" and stripped.startswith(STUB_PREFIX):
+            indent = line[: len(line) - len(line.lstrip())]
+            state[3].append(indent + stripped[len(STUB_PREFIX) :].lstrip())
+        # hidden regions are dropped
+    if state is not None:
+        kind = BEGIN_SOLUTION if state[0] == "solution" else BEGIN_HIDDEN
+        line_no = state[2] if state[0] == "solution" else state[1]
+        raise MarkerError(f"{where}, line {line_no}: '{kind}' is never closed")
+    return "\n".join(out), regions
+
+
+@dataclass
+class ReleaseCell:
+    """One cell of a release: its role, question, and the released (student) source."""
+
+    index: int
+    id: str
+    cell_type: str
+    role: CellRole
+    question: str | None
+    source: str
+    solution_source: str
+
+
+@dataclass
+class Release:
+    name: str
+    notebook: Any  # nbformat.NotebookNode
+    cells: list
+
+    def by_id(self) -> dict:
+        return {c.id: c for c in self.cells}
+
+    @property
+    def setup(self) -> ReleaseCell:
+        return next(c for c in self.cells if c.role == CellRole.SETUP)
+
+    def answer(self, qid: str) -> ReleaseCell:
+        return next(c for c in self.cells if c.role == CellRole.ANSWER and c.question == qid)
+
+    def text(self) -> str:
+        return nbformat.writes(self.notebook) + "\n"
+
+
+_VALID_ID = re.compile(r"^[a-zA-Z0-9-_]{1,64}$")
+
+
+def make_release(solution_nb, name: str, questions: dict | None = None) -> Release:
+    """Build the student release of a solution notebook (see the module docstring).
+
+    ``questions`` maps question id -> :class:`~course.grading.checks.Question`; when given, every
+    question must have exactly one answer cell (and vice versa) and its variable or function
+    must be defined there.
+    """
+    where_nb = f"{name}.ipynb"
+    cells_out = []
+    release_cells = []
+    seen_ids = set()
+    seen_answers: dict[str, int] = {}
+    first_code = True
+    for index, cell in enumerate(solution_nb.cells):
+        ctype = cell.get("cell_type")
+        cid = cell.get("id") or f"cell-{index}"
+        if not _VALID_ID.match(cid):
+            raise MarkerError(f"{where_nb}, cell {index}: id {cid!r} is not a valid cell id")
+        if cid in seen_ids:
+            raise MarkerError(f"{where_nb}, cell {index}: duplicate cell id {cid!r}")
+        seen_ids.add(cid)
+        src = _source(cell)
+        meta = _course_meta(cell)
+        where = f"{where_nb}, cell {index} (id {cid!r})"
+        if ctype == "markdown" or ctype == "raw":
+            if _MARKER_WORDS.search(src):
+                raise MarkerError(f"{where}: markers are only supported in code cells")
+            new = (
+                nbformat.v4.new_markdown_cell(src)
+                if ctype == "markdown"
+                else nbformat.v4.new_raw_cell(src)
+            )
+            new["id"] = cid
+            new["metadata"] = {"course": {"role": str(CellRole.TEXT)}}
+            if cell.get("attachments"):
+                new["attachments"] = cell["attachments"]
+            cells_out.append(new)
+            release_cells.append(ReleaseCell(index, cid, ctype, CellRole.TEXT, None, src, src))
+            continue
+        if ctype != "code":
+            raise MarkerError(f"{where}: unknown cell type {ctype!r}")
+        role = meta.get("role")
+        question = meta.get("question")
+        if role is None:
+            m = _CHECK_SOURCE.match(src)
+            if first_code and _STUDENT_ID_LINE.search(src):
+                role = CellRole.SETUP
+            elif m:
+                role, question = CellRole.CHECK, m.group(1)
+            else:
+                role = CellRole.CONTEXT
+        if role not in _ROLES:
+            raise MarkerError(f"{where}: unknown role {role!r} (use one of {', '.join(_ROLES)})")
+        role = CellRole(role)
+        if role == CellRole.SETUP and not first_code:
+            raise MarkerError(f"{where}: the setup cell must be the first code cell")
+        if first_code and role != CellRole.SETUP:
+            raise MarkerError(
+                f"{where}: the first code cell must be the setup cell with STUDENT_ID "
+                "(course.grading.authoring.setup_cell)"
+            )
+        first_code = False
+        if role in (CellRole.ANSWER, CellRole.CHECK) and not question:
+            raise MarkerError(f"{where}: an {role} cell needs metadata course.question")
+        released, regions = strip_markers(
+            src, where, question, allow_solution=(role == CellRole.ANSWER)
+        )
+        if role == CellRole.ANSWER:
+            if regions == 0:
+                raise MarkerError(
+                    f"{where}: answer cell for {question} has no '{BEGIN_SOLUTION}' region"
+                )
+            if question in seen_answers:
+                raise MarkerError(
+                    f"{where}: second answer cell for {question} (first: cell {seen_answers[question]})"
+                )
+            seen_answers[question] = index
+        if role == CellRole.SETUP:
+            if not _STUDENT_ID_LINE.search(released):
+                raise MarkerError(
+                    f"{where}: the setup cell must assign STUDENT_ID on a line of its own"
+                )
+            # the solution may carry a real ID (e.g. "demo"); students always get the placeholder
+            released = _STUDENT_ID_LINE.sub(lambda _m: PLACEHOLDER_LINE, released, count=1)
+        for text, what in ((src, "solution"), (released, "released")):
+            problem = _compiles(text)
+            if problem:
+                raise MarkerError(f"{where}: the {what} cell is not valid Python ({problem})")
+        new = nbformat.v4.new_code_cell(released)
+        new["id"] = cid
+        new["metadata"] = {
+            "course": {"role": str(role), **({"question": question} if question else {})}
+        }
+        cells_out.append(new)
+        release_cells.append(ReleaseCell(index, cid, "code", role, question, released, src))
+    if first_code:
+        raise MarkerError(f"{where_nb}: no code cells (the first code cell must be the setup cell)")
+
+    if questions is not None:
+        for qid, q in questions.items():
+            if qid not in seen_answers:
+                raise MarkerError(f"{where_nb}: question {qid} (checks.py) has no answer cell")
+            cell = next(c for c in release_cells if c.role == CellRole.ANSWER and c.question == qid)
+            defined = _defined_names(cell.solution_source)
+            if q.target not in defined:
+                what = "define function" if q.kind == "function" else "assign variable"
+                raise MarkerError(f"{where_nb}: the answer cell of {qid} must {what} {q.target!r}")
+        for qid in seen_answers:
+            if qid not in questions:
+                raise MarkerError(
+                    f"{where_nb}: answer cell for {qid!r}, which checks.py does not define"
+                )
+
+    nb = nbformat.v4.new_notebook()
+    nb["cells"] = cells_out
+    nb["metadata"] = {
+        "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
+        "language_info": {"name": "python"},
+        "course": {"assignment": name},
+    }
+    nb["nbformat"], nb["nbformat_minor"] = 4, 5
+    nbformat.validate(nb)
+    return Release(name, nb, release_cells)
+
+
+def _defined_names(source: str) -> set:
+    try:
+        tree = ast.parse(python_source(source))
+    except SyntaxError:
+        return set()
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.alias):
+            names.add((node.asname or node.name).split(".")[0])
+    return names
+
+
+# --------------------------------------------------------------------------------------
+# submissions
+# --------------------------------------------------------------------------------------
+def read_submission(path) -> dict:
+    """Read a submitted notebook leniently (no schema validation); :class:`SubmissionError`
+    when it is not a JSON notebook at all."""
+    try:
+        raw = open(path, "rb").read(MAX_NOTEBOOK_BYTES + 1)
+    except OSError as exc:
+        raise SubmissionError(f"cannot read the notebook ({exc.strerror})") from None
+    if len(raw) > MAX_NOTEBOOK_BYTES:
+        raise SubmissionError(f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB")
+    if not raw.strip():
+        raise SubmissionError("the notebook file is empty")
+    try:
+        nb = json.loads(raw.decode("utf-8", errors="replace"))
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise SubmissionError(
+            f"the notebook is not valid JSON ({getattr(exc, 'msg', 'too deeply nested')}"
+            f"{f' at line {exc.lineno}' if hasattr(exc, 'lineno') else ''})"
+        ) from None
+    if not isinstance(nb, dict) or not isinstance(nb.get("cells", None), list):
+        raise SubmissionError(
+            "the file is JSON but not a Jupyter notebook (no 'cells' list; nbformat 4 expected)"
+        )
+    return nb
+
+
+@dataclass
+class PlanCell:
+    """One cell the grader runs: its source, the question it belongs to, a label for messages."""
+
+    source: str
+    question: str | None
+    origin: CellOrigin
+    label: str
+
+
+@dataclass
+class Plan:
+    cells: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    answered: set = field(default_factory=set)  # questions with at least one answer cell
+    answer_sources: dict = field(default_factory=dict)  # question -> source of its slot
+    notebook_student_id: str | None = None
+
+
+def student_id_in(source: str) -> str | None:
+    """The literal string assigned to STUDENT_ID in ``source`` (None if absent or not literal)."""
+    try:
+        tree = ast.parse(python_source(source))
+    except (SyntaxError, ValueError):
+        return None
+    for node in tree.body:
+        if (
+            isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == "STUDENT_ID" for t in node.targets)
+            and isinstance(node.value, ast.Constant)
+            and isinstance(node.value.value, str)
+        ):
+            return node.value.value
+    return None
+
+
+def _normalise(source: str) -> str:
+    return "\n".join(line.rstrip() for line in source.strip().split("\n"))
+
+
+def setup_source(release: Release, student_id: str) -> str:
+    return _STUDENT_ID_LINE.sub(
+        lambda _m: f"STUDENT_ID = {json.dumps(student_id)}", release.setup.source, count=1
+    )
+
+
+def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
+    """Match a submitted notebook against the release and list the cells to run, in order.
+
+    Protected cells (setup, context) always run in their RELEASE version, at their release
+    position, even when the student deleted or edited them (edits are noted). Answer cells are
+    matched by cell id, then by ``metadata.course``; every copy runs, in the student's order, at
+    the question's position. Cells the student added run right after the matched cell that
+    precedes them in the student's notebook (answers they follow count as part of that answer).
+    Check cells and copies of protected cells are not run.
+    """
+    plan = Plan()
+    by_id = release.by_id()
+    code_cells = [c for c in release.cells if c.cell_type == "code"]
+    slots: dict[Any, list] = {c.index: [] for c in code_cells}
+    answer_slot = {c.question: c.index for c in code_cells if c.role == CellRole.ANSWER}
+    used_ids = set()
+    anchor = release.setup.index
+    n_extra = 0
+    for pos, cell in enumerate(nb.get("cells", [])):
+        if not isinstance(cell, dict) or cell.get("cell_type") != "code":
+            continue
+        src = _source(cell)
+        cid = cell.get("id") if isinstance(cell.get("id"), str) else None
+        meta = _course_meta(cell)
+        match = None
+        if cid in by_id and cid not in used_ids and by_id[cid].cell_type == "code":
+            match = by_id[cid]
+            used_ids.add(cid)
+        elif meta.get("role") == CellRole.ANSWER and meta.get("question") in answer_slot:
+            match = next(c for c in code_cells if c.index == answer_slot[meta["question"]])
+        elif meta.get("role") in (CellRole.SETUP, CellRole.CONTEXT, CellRole.CHECK):
+            plan.notes.append(
+                f"Ignored a copy of a protected cell (notebook cell {pos + 1}); protected cells run as released."
+            )
+            continue
+        if match is None:
+            n_extra += 1
+            slots[anchor].append(
+                PlanCell(src, None, CellOrigin.EXTRA, f"your added cell at position {pos + 1}")
+            )
+            continue
+        if match.role == CellRole.ANSWER:
+            slots[match.index].append(
+                PlanCell(src, match.question, CellOrigin.ANSWER, f"answer cell of {match.question}")
+            )
+            plan.answered.add(match.question)
+        elif match.role == CellRole.SETUP:
+            plan.notebook_student_id = student_id_in(src)
+            if _normalise(_STUDENT_ID_LINE.sub("", src)) != _normalise(
+                _STUDENT_ID_LINE.sub("", match.source)
+            ):
+                plan.notes.append("The setup cell was edited; the released version was used.")
+        elif match.role == CellRole.CONTEXT and _normalise(src) != _normalise(match.source):
+            plan.notes.append(
+                f"Protected cell {match.id!r} was edited; the released version was used."
+            )
+        anchor = match.index
+
+    for cell in code_cells:
+        if cell.role == CellRole.SETUP:
+            plan.cells.append(
+                PlanCell(setup_source(release, student_id), None, CellOrigin.SETUP, "setup cell")
+            )
+            plan.cells.extend(slots[cell.index])
+        elif cell.role == CellRole.CONTEXT:
+            plan.cells.append(
+                PlanCell(cell.source, None, CellOrigin.CONTEXT, f"protected cell {cell.id!r}")
+            )
+            plan.cells.extend(slots[cell.index])
+        elif cell.role == CellRole.CHECK:
+            plan.cells.extend(slots[cell.index])
+        else:
+            q = cell.question
+            for item in slots[cell.index]:
+                plan.cells.append(PlanCell(item.source, q, item.origin, item.label))
+            plan.answer_sources[q] = "\n\n".join(item.source for item in slots[cell.index])
+            if q not in plan.answered:
+                plan.notes.append(
+                    f"No answer cell for {q} was found (deleted?); {q} counts as not answered."
+                )
+    return plan
+
+
+def forbidden_mentions(source: str, forbid) -> list[str]:
+    """Dotted names in ``forbid`` whose last component the source uses as an attribute, imports,
+    or names in a string (``getattr(m, "name")``). Unparsable source falls back to a regex."""
+    hits = []
+    try:
+        tree = ast.parse(python_source(source))
+    except (SyntaxError, ValueError):
+        tree = None
+    for dotted in forbid:
+        last = dotted.rsplit(".", 1)[-1]
+        found = False
+        if tree is None:
+            found = (
+                re.search(rf"(\.|import\s+|import\s.*,\s*)\b{re.escape(last)}\b", source)
+                is not None
+            )
+        else:
+            for node in ast.walk(tree):
+                if (
+                    (isinstance(node, ast.Attribute) and node.attr == last)
+                    or (
+                        isinstance(node, ast.ImportFrom) and any(a.name == last for a in node.names)
+                    )
+                    or (
+                        isinstance(node, ast.Import)
+                        and any(a.name == dotted or a.name.endswith("." + last) for a in node.names)
+                    )
+                    or (isinstance(node, ast.Constant) and node.value == last)
+                ):
+                    found = True
+                if found:
+                    break
+        if found:
+            hits.append(dotted)
+    return hits

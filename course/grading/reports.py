@@ -1,0 +1,149 @@
+"""What ``course grade`` writes and prints: feedback, the grades table, the results log and the
+console summary.
+
+``OUT/feedback/<student>.md``
+    points, status, message and hint per question (no hidden inputs, no test code);
+``OUT/grades.csv``
+    student, one column per question, total, max, status;
+``OUT/results.jsonl``
+    one JSON row per student, appended as students finish (:func:`read_results` reads it back,
+    so a rerun resumes).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["Summary", "append_result", "feedback_markdown", "read_results", "write_csv"]
+
+
+def _fmt_points(x: float) -> str:
+    return f"{round(float(x), 2):g}"
+
+
+def feedback_markdown(row: dict, checks) -> str:
+    """The student's feedback: per question points, status, message and hint."""
+    lines = [f"# {checks.title}: feedback for {row['student']}", ""]
+    lines.append(
+        f"**Total: {_fmt_points(row['total'])} / {_fmt_points(row['max'])}**"
+        + ("" if row["status"] == "ok" else f"  (status: {row['status']})")
+    )
+    lines += ["", "| question | points | status |", "|---|---|---|"]
+    for qid, r in row["questions"].items():
+        lines.append(
+            f"| {qid} | {_fmt_points(r['points'])} / {_fmt_points(r['max'])} | {r['status']} |"
+        )
+    for qid, r in row["questions"].items():
+        q = checks.questions.get(qid)
+        lines += [
+            "",
+            f"## {qid}: {_fmt_points(r['points'])} / {_fmt_points(r['max'])} ({r['status']})",
+        ]
+        if r["message"]:
+            lines.append("")
+            lines.append(r["message"])
+        if r["cases"] and len(r["cases"]) > 1 and r["status"] != "not answered":
+            lines.append("")
+            for case in r["cases"]:
+                lines.append(
+                    f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
+                    + (f": {case['message']}" if case["message"] and not case["ok"] else "")
+                )
+        if q is not None and q.hint and r["points"] < r["max"]:
+            lines += ["", f"Hint: {q.hint}"]
+    if row["notes"]:
+        lines += ["", "## Notes", ""] + [f"- {n}" for n in row["notes"]]
+    lines.append("")
+    lines.append(
+        f"<sub>{row['assignment']} · checks {row['checks_sha256'][:12]} · course {row['version']}</sub>"
+    )
+    return "\n".join(lines) + "\n"
+
+
+def write_csv(rows: list[dict], question_ids: list[str], path: Path) -> None:
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["student", *question_ids, "total", "max", "status"])
+    for row in sorted(rows, key=lambda r: r["student"]):
+        writer.writerow(
+            [
+                row["student"],
+                *(_fmt_points(row["questions"].get(q, {}).get("points", 0)) for q in question_ids),
+                _fmt_points(row["total"]),
+                _fmt_points(row["max"]),
+                row["status"],
+            ]
+        )
+    path.write_text(buf.getvalue(), encoding="utf-8")
+
+
+@dataclass
+class Summary:
+    rows: list
+    question_ids: list
+    max_points: dict
+    graded: int
+    resumed: int
+    seconds: float
+    out: Path
+
+    def text(self) -> str:
+        n = len(self.rows)
+        lines = [
+            f"Graded {self.graded} submission(s), {self.resumed} already graded (resumed), "
+            f"in {self.seconds:.1f} s; results in {self.out}"
+        ]
+        if not n:
+            return lines[0]
+        lines.append(f"{'question':<10}{'max':>6}{'mean':>8}{'full marks':>12}")
+        for qid in self.question_ids:
+            pts = [r["questions"][qid]["points"] for r in self.rows if qid in r["questions"]]
+            full = sum(
+                1
+                for r in self.rows
+                if qid in r["questions"]
+                and r["questions"][qid]["points"] >= r["questions"][qid]["max"]
+            )
+            mean = sum(pts) / len(pts) if pts else 0.0
+            lines.append(
+                f"{qid:<10}{_fmt_points(self.max_points[qid]):>6}{mean:>8.2f}{100 * full / n:>11.0f}%"
+            )
+        total = sum(r["total"] for r in self.rows) / n
+        lines.append(f"{'total':<10}{_fmt_points(sum(self.max_points.values())):>6}{total:>8.2f}")
+        statuses: dict[str, int] = {}
+        for r in self.rows:
+            statuses[r["status"]] = statuses.get(r["status"], 0) + 1
+        lines.append(
+            "status: "
+            + ", ".join(
+                f"{k} ({v})" for k, v in sorted(statuses.items(), key=lambda kv: (-kv[1], kv[0]))
+            )
+        )
+        return "\n".join(lines)
+
+
+def read_results(path: Path) -> dict[str, dict]:
+    """The rows of ``results.jsonl`` by student (the last row of a student wins)."""
+    rows: dict[str, dict] = {}
+    if not path.is_file():
+        return rows
+    with open(path, encoding="utf-8") as f:
+        for line in f:
+            try:
+                row = json.loads(line)
+            except ValueError:
+                continue  # e.g. a line cut short by an interrupted run
+            if isinstance(row, dict) and "student" in row:
+                rows[row["student"]] = row
+    return rows
+
+
+def append_result(row: dict, path: Path) -> None:
+    """Append one row to ``results.jsonl`` (and flush, so an interrupted run keeps it)."""
+    with open(path, "a", encoding="utf-8") as f:
+        f.write(json.dumps(row, sort_keys=True, ensure_ascii=False) + "\n")
+        f.flush()

@@ -1,0 +1,484 @@
+"""The sandboxed child that runs ONE student's notebook for the grader.
+
+It is started either by forking from the warm fork server (:mod:`course.grading.sandbox`) or
+as ``python -m course.grading.runner REQ_FD RESP_FD`` (spawn mode). Either way it:
+
+1. moves into its fresh temporary directory, scrubs its environment, sends its own stdout and
+   stderr to a capped file there, and reads the ``init`` request from the grader;
+2. sets resource limits (memory, CPU time, file size, no core files), turns on the silent
+   grading stand-in for ``check``, installs the forbidden-function tripwires, then installs the
+   audit hook and the seccomp filter (both irreversible) — only then does student code run;
+3. answers requests, one JSON line each, on its dedicated response pipe: ``run`` a cell (IPython
+   semantics, magics work), ``value`` of a variable, ``call`` a function with arguments. Values
+   travel as plain data (:mod:`course.grading.codec`), never pickle.
+
+Nothing here decides a score: the trusted parent compares values with references it computes
+itself, so a child that lies can only misreport its own answers.
+"""
+
+from __future__ import annotations
+
+import base64  # noqa: F401  (imported before student code, used by the codec)
+import contextlib
+import json
+import os
+import signal
+import sys
+import typing
+from builtins import (  # bound now, so a student patching builtins cannot break the protocol
+    BaseException,
+    Exception,
+    NotImplementedError,
+    callable,
+    dict,
+    getattr,
+    int,
+    len,
+    list,
+    set,
+    sorted,
+    str,
+    type,
+)
+
+from course.grading import codec
+from course.grading.isolation.audit import make_audit_hook
+from course.grading.isolation.limits import set_limits
+from course.grading.tripwire import wrap_forbidden
+from course.grading.vocabulary import Op, ReplyStatus
+
+_dumps = json.dumps
+_loads = json.loads
+_write = os.write
+_encode = codec.encode
+_decode = codec.decode
+
+# plain strings (not enum members) in replies: nothing student code patches can change them
+_OK, _ERROR, _READY = ReplyStatus.OK.value, ReplyStatus.ERROR.value, ReplyStatus.READY.value
+_UNDEFINED, _STUB = ReplyStatus.UNDEFINED.value, ReplyStatus.STUB.value
+_NOT_CALLABLE, _UNENCODABLE = ReplyStatus.NOT_CALLABLE.value, ReplyStatus.UNENCODABLE.value
+
+OUTPUT_FILE = "output.txt"
+MAX_RESPONSE_BYTES = 64_000_000
+
+
+_PROTECTED_MODULES = (
+    "builtins",
+    "json",
+    "json.decoder",
+    "json.encoder",
+    "json.scanner",
+    "base64",
+    "binascii",
+    "math",
+    "numpy",
+    "course.grading.codec",
+)
+
+
+class _Trusted:
+    """Snapshot of the modules the protocol relies on, taken before student code runs.
+
+    While the runner encodes or decodes, it puts the snapshot's objects back (and afterwards
+    restores whatever the student had patched), so patching ``json.dumps``, ``numpy.asarray``
+    or ``builtins.len`` breaks only the student's own code, not the channel.
+    """
+
+    def __init__(self):
+        self.snapshots = [
+            (vars(sys.modules[name]), dict(vars(sys.modules[name])))
+            for name in _PROTECTED_MODULES
+            if name in sys.modules
+        ]
+        self._changes = []
+
+    def __enter__(self):
+        changes = []
+        for live, snap in self.snapshots:
+            for key, value in snap.items():
+                current = live.get(key, _MISSING)
+                if current is not value:
+                    changes.append((live, key, current))
+                    live[key] = value
+        self._changes.append(changes)
+        return self
+
+    def __exit__(self, *exc):
+        for live, key, value in reversed(self._changes.pop()):
+            if value is _MISSING:
+                live.pop(key, None)
+            else:
+                live[key] = value
+        return False
+
+
+_MISSING = object()
+_TRUSTED = contextlib.nullcontext()  # replaced by a _Trusted snapshot before student code runs
+
+
+class _State:
+    question = None
+    hits: typing.ClassVar[dict] = {}
+    forbid: typing.ClassVar[dict] = {}
+
+
+_STATE = _State()
+
+
+class CappedWriter:
+    """A text stream that keeps the first ``limit`` characters and silently drops the rest."""
+
+    def __init__(self, fd: int, limit: int):
+        self._fd = fd
+        self._left = limit
+        self.dropped = 0
+        self.encoding = "utf-8"
+        self.errors = "replace"
+
+    def write(self, text) -> int:
+        text = str(text)
+        if self._left > 0:
+            chunk = text[: self._left]
+            self._left -= len(chunk)
+            try:
+                _write(self._fd, chunk.encode("utf-8", "replace"))
+            except OSError:
+                self._left = 0
+        self.dropped += max(0, len(text) - max(self._left, 0))
+        return len(text)
+
+    def writelines(self, lines) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+    def fileno(self) -> int:
+        return self._fd
+
+    @property
+    def closed(self) -> bool:
+        return False
+
+    def writable(self) -> bool:
+        return True
+
+    def readable(self) -> bool:
+        return False
+
+
+# --------------------------------------------------------------------------------------
+# process setup (trusted: runs before any student code)
+# --------------------------------------------------------------------------------------
+def child_environment(tmpdir: str) -> dict:
+    """The scrubbed environment of a grading child."""
+    env = {
+        "PATH": "/usr/bin:/bin",
+        "HOME": tmpdir,
+        "TMPDIR": tmpdir,
+        "LANG": "C.UTF-8",
+        "LC_ALL": "C.UTF-8",
+        "MPLBACKEND": "Agg",
+        "MPLCONFIGDIR": os.path.join(tmpdir, ".matplotlib"),
+        "IPYTHONDIR": os.path.join(tmpdir, ".ipython"),
+        "OPENBLAS_NUM_THREADS": "1",
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "PYTHONHASHSEED": "0",
+    }
+    return env
+
+
+def enter_sandbox_dir(tmpdir: str) -> None:
+    """chdir into the temp dir, replace the environment, point fds 0/1/2 at /dev/null and the
+    capped output file."""
+    os.chdir(tmpdir)
+    os.umask(0o077)
+    os.environ.clear()
+    os.environ.update(child_environment(tmpdir))
+    devnull = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(devnull, 0)
+    os.close(devnull)
+    out = os.open(os.path.join(tmpdir, OUTPUT_FILE), os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.dup2(out, 1)
+    os.dup2(out, 2)
+    os.close(out)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+    signal.signal(
+        signal.SIGXFSZ, signal.SIG_IGN
+    )  # over-long files fail with EFBIG instead of killing us
+
+
+def install_tripwires(forbid: dict, user_ns: dict) -> None:
+    """Wrap each forbidden function once, for the whole run: a call made from notebook code
+    while a question that forbids it is running is recorded against that question."""
+
+    def record(name):
+        q = _STATE.question
+        if q is not None and name in _STATE.forbid.get(q, ()):
+            _STATE.hits.setdefault(q, set()).add(name)
+
+    for dotted in sorted({name for names in forbid.values() for name in names}):
+        wrap_forbidden(dotted, record, user_ns)
+
+
+def make_shell():
+    """A plain IPython shell (no history database, no colours): IPython semantics for cells."""
+    from IPython.core.interactiveshell import InteractiveShell
+    from traitlets.config import Config
+
+    config = Config()
+    config.HistoryManager.enabled = False
+    config.InteractiveShell.colors = "NoColor"
+    config.InteractiveShell.autocall = 0
+    config.InteractiveShell.xmode = "Plain"
+    shell = InteractiveShell.instance(config=config)
+
+    def _noop_magic(line="", cell=None):
+        return None
+
+    for magic in ("matplotlib", "pylab"):
+        shell.register_magic_function(_noop_magic, "line", magic)
+    return shell
+
+
+PRELOAD = (
+    "numpy",
+    "scipy",
+    "scipy.linalg",
+    "scipy.stats",
+    "scipy.optimize",
+    "matplotlib",
+    "matplotlib.pyplot",
+    "IPython.core.interactiveshell",
+    "course",
+    "course.results",
+    "course.linalg",
+    "course.lsq",
+    "course.grading.selfcheck",
+)
+
+
+def preload(modules=PRELOAD) -> list:
+    """Import modules now (trusted, before limits and the hook); returns those that failed."""
+    import importlib
+
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    failed = []
+    for name in modules:
+        try:
+            importlib.import_module(name)
+        except Exception:
+            failed.append(name)
+    return failed
+
+
+# --------------------------------------------------------------------------------------
+# the request loop
+# --------------------------------------------------------------------------------------
+def _error_info(exc) -> dict:
+    message = str(exc)
+    return {"type": type(exc).__name__, "message": message[:500]}
+
+
+class RequestLoop:
+    """The child's side of the protocol: answers the grader's requests, one JSON line each."""
+
+    def __init__(self, req_fd: int, resp_fd: int):
+        self.requests = os.fdopen(req_fd, "rb", buffering=1 << 16)
+        self.resp_fd = resp_fd
+        self.shell = None
+
+    def send(self, obj: dict) -> None:
+        with _TRUSTED:
+            data = (_dumps(obj, allow_nan=False, separators=(",", ":")) + "\n").encode("utf-8")
+        view = memoryview(data)
+        while view:
+            n = _write(self.resp_fd, view)
+            view = view[n:]
+
+    def receive(self):
+        line = self.requests.readline(MAX_RESPONSE_BYTES)
+        if not line:
+            return None
+        with _TRUSTED:
+            return _loads(line)
+
+    # -- operations ---------------------------------------------------------------------
+    def _hits(self, question):
+        hits = _STATE.hits.pop(question, set()) if question else set()
+        return sorted(hits)
+
+    def op_run(self, req):
+        question = req.get("question")
+        _STATE.question = question
+        try:
+            result = self.shell.run_cell(req["source"], store_history=False, silent=False)
+            error = result.error_before_exec or result.error_in_exec
+        except BaseException as exc:  # run_cell normally catches everything itself
+            error = exc
+        finally:
+            _STATE.question = None
+        sys.stdout.flush()
+        reply = {"status": _OK if error is None else _ERROR, "tripwire": self._hits(question)}
+        if error is not None:
+            reply["error"] = _error_info(error)
+        return reply
+
+    def op_value(self, req):
+        ns = self.shell.user_ns
+        name = req["name"]
+        if name not in ns:
+            return {"status": _UNDEFINED}
+        value = ns[name]
+        if value is Ellipsis:
+            return {"status": _STUB}
+        try:
+            with _TRUSTED:
+                return {"status": _OK, "value": _encode(value)}
+        except BaseException as exc:
+            return {"status": _UNENCODABLE, "error": _error_info(exc)}
+
+    def op_call(self, req):
+        ns = self.shell.user_ns
+        question = req.get("question")
+        func = ns.get(req["name"])
+        if func is None and req["name"] not in ns:
+            return {"status": _UNDEFINED}
+        if not callable(func):
+            return {"status": _NOT_CALLABLE, "error": {"type": type(func).__name__, "message": ""}}
+        try:
+            with _TRUSTED:
+                args = _decode(req["args"], False)
+                kwargs = _decode(req["kwargs"], False)
+        except BaseException as exc:
+            return {"status": _ERROR, "error": _error_info(exc)}
+        _STATE.question = question
+        try:
+            out = func(*args, **kwargs)
+        except NotImplementedError:
+            return {"status": _STUB, "tripwire": self._hits(question)}
+        except BaseException as exc:  # includes SystemExit and KeyboardInterrupt from student code
+            return {"status": _ERROR, "error": _error_info(exc), "tripwire": self._hits(question)}
+        finally:
+            _STATE.question = None
+        hits = self._hits(question)
+        if out is Ellipsis:
+            return {"status": _STUB, "tripwire": hits}
+        try:
+            with _TRUSTED:
+                return {"status": _OK, "value": _encode(out), "tripwire": hits}
+        except BaseException as exc:
+            return {"status": _UNENCODABLE, "error": _error_info(exc), "tripwire": hits}
+
+    def serve(self) -> None:
+        while True:
+            try:
+                req = self.receive()
+            except BaseException:
+                return
+            if req is None or req.get("op") == Op.EXIT.value:
+                return
+            op = getattr(self, "op_" + str(req.get("op")), None)
+            try:
+                reply = (
+                    op(req)
+                    if op is not None
+                    else {"status": _ERROR, "error": {"type": "Protocol", "message": "unknown op"}}
+                )
+            except BaseException as exc:
+                reply = {"status": _ERROR, "error": _error_info(exc)}
+            reply["id"] = req.get("id")
+            reply["nonce"] = req.get("nonce")
+            try:
+                self.send(reply)
+            except BaseException:
+                try:
+                    self.send(
+                        {
+                            "id": req.get("id"),
+                            "nonce": req.get("nonce"),
+                            "status": _ERROR,
+                            "error": {"type": "Protocol", "message": "reply could not be encoded"},
+                        }
+                    )
+                except BaseException:
+                    return
+
+
+def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
+    """Everything the child does after it exists (both modes); never returns normally."""
+    code = 0
+    try:
+        enter_sandbox_dir(tmpdir)
+        child = RequestLoop(req_fd, resp_fd)
+        init = child.receive()
+        if not init or init.get("op") != Op.INIT.value:
+            os._exit(3)
+        limits = init.get("limits", {})
+        from course.grading import selfcheck
+        from course.grading.isolation import seccomp
+
+        use_seccomp = bool(limits.get("seccomp", True)) and seccomp.available()
+        if not use_seccomp:
+            limits = dict(limits, nproc=0)  # only a backstop for non-root users
+        set_limits(limits)
+        sys.dont_write_bytecode = True
+        child.shell = shell or make_shell()
+        user_ns = child.shell.user_ns
+        selfcheck._GRADING = {"student_id": init["student_id"], "data": init.get("data", {})}
+        _STATE.forbid = {q: set(v) for q, v in init.get("forbid", {}).items()}
+        install_tripwires(init.get("forbid", {}), user_ns)
+        cap = int(limits.get("output_chars", 1_000_000))
+        sys.stdout = CappedWriter(1, cap)
+        sys.stderr = CappedWriter(2, cap // 4)
+        import warnings
+
+        warnings.simplefilter("default")
+        global _TRUSTED
+        _TRUSTED = _Trusted()
+        seccomp.die_with_parent()
+        secure = seccomp.install() if use_seccomp else False  # uses ctypes: before the hook
+        sys.addaudithook(make_audit_hook(tmpdir, init.get("deny_read", ())))
+        child.send(
+            {
+                "id": init.get("id"),
+                "nonce": init.get("nonce"),
+                "status": _READY,
+                "seccomp": bool(secure),
+                "pid": os.getpid(),
+            }
+        )
+        child.serve()
+    except BaseException:
+        code = 4
+        try:
+            import traceback
+
+            os.write(2, traceback.format_exc().encode("utf-8", "replace"))
+        except BaseException:
+            pass
+    finally:
+        os._exit(code)
+
+
+def main(argv=None) -> None:
+    """Spawn mode: ``python -m course.grading.runner REQ_FD RESP_FD`` (cwd: its temp dir)."""
+    argv = sys.argv[1:] if argv is None else argv
+    req_fd, resp_fd = int(argv[0]), int(argv[1])
+    preload()
+    child_main(req_fd, resp_fd, os.getcwd())
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,306 @@
+"""The student's self-check: ``check = Assignment.load(name, student_id=STUDENT_ID)``.
+
+``check("q1")`` finds the answer (variable or function) in the notebook, runs the PUBLIC cases
+shipped in ``checks.json`` and prints, per case, pass or fail: on failure the hint first, then a
+compact expected-vs-got line (shape, largest error and where, the tolerance). It never shows test
+code, and says how many hidden cases run at grading. ``check("q1", value)`` checks an explicit
+value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
+
+In the grader's sandbox the same setup cell returns a silent stand-in (no checks run in the
+student's process); see :mod:`course.grading.runner`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from course.grading.codec import decode, encode
+from course.grading.compare import check_signature, compare, describe
+from course.grading.tripwire import wrap_forbidden
+from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
+
+__all__ = ["PLACEHOLDER_ID", "Assignment"]
+
+_REPO_ROOT = Path(__file__).resolve().parents[2]
+
+#: Set by the grading runner (sandboxed child) before any student code runs.
+_GRADING = None
+
+
+class _GradingStandIn:
+    """What ``Assignment.load`` returns inside the grader: silent ``check``, grader's data."""
+
+    def __init__(self, context):
+        self._context = context
+
+    def __call__(self, *args, **kwargs):
+        return None
+
+    def data(self, key: str):
+        if key not in self._context["data"]:
+            raise KeyError(f"no data set {key!r} in this assignment")
+        return decode(self._context["data"][key])
+
+    def all(self):
+        return None
+
+    def __repr__(self):
+        return "<self-check disabled while grading>"
+
+
+def _locate(name: str, path) -> tuple[str, Path]:
+    candidates = []
+    if path:
+        candidates += [Path(path), Path(path) / name]
+    env = os.environ.get("COURSE_EXERCISES")
+    if env:
+        candidates += [Path(env) / name, Path(env)]
+    cwd = Path.cwd()
+    for folder in [cwd, *cwd.parents]:
+        candidates += [folder, folder / name, folder / "exercises" / name]
+    candidates.append(_REPO_ROOT / "exercises" / name)
+    for folder in candidates:
+        spec_file = folder / CHECKS_FILE
+        if spec_file.is_file():
+            try:
+                if json.loads(spec_file.read_text("utf-8")).get("assignment") == name:
+                    return "json", folder
+            except (OSError, ValueError):
+                continue
+        if folder.name == name and (folder / "checks.py").is_file():
+            return "solution", folder
+    raise FileNotFoundError(
+        f"Cannot find the checks of assignment {name!r}. Open the notebook from its folder "
+        f"(exercises/{name}/, which holds checks.json) or pass path=... to Assignment.load."
+    )
+
+
+class Assignment:
+    """The self-check of one assignment (see the module docstring)."""
+
+    def __init__(self, spec: PublicSpec, folder: Path, student_id: str | None, data_module=None):
+        self.spec = spec
+        self.name = spec.assignment
+        self.folder = folder
+        self.student_id = None if student_id is None else str(student_id).strip()
+        self._questions: dict[str, PublicQuestion] = {q.id: q for q in spec.questions}
+        self._data_module = data_module
+        self._data_cache: dict[str, Any] = {}
+
+    @classmethod
+    def load(cls, name: str, student_id: str | None = None, path=None):
+        """The self-check of assignment ``name`` (searches ``checks.json`` from the current folder
+        upwards, then the course's ``exercises/``; in ``solutions/<name>/`` it reads checks.py)."""
+        if _GRADING is not None:
+            return _GradingStandIn(_GRADING)
+        kind, folder = _locate(name, path)
+        if kind == "json":
+            return cls(PublicSpec.read(folder), folder, student_id)
+        from course.grading.checks import load_checks
+        from course.grading.release import public_spec
+
+        checks = load_checks(folder)
+        spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
+        return cls(spec, folder, student_id, data_module=checks.data_module)
+
+    # -- data ---------------------------------------------------------------------------
+    def _data_mod(self):
+        if self._data_module is None:
+            if not self.spec.data_file:
+                raise KeyError(f"assignment {self.name} has no per-student data")
+            from course.grading.checks import load_data_module
+
+            self._data_module = load_data_module(self.folder / self.spec.data_file, self.name)
+        return self._data_module
+
+    def data(self, key: str):
+        """Your personal data set ``key`` (generated from your STUDENT_ID)."""
+        if key not in self.spec.data_keys:
+            raise KeyError(
+                f"assignment {self.name} has no data set {key!r}; known: {self.spec.data_keys}"
+            )
+        self._require_id()
+        if key not in self._data_cache:
+            from course.grading.checks import student_rng
+
+            func = getattr(self._data_mod(), key)
+            self._data_cache[key] = encode(func(student_rng(self.name, key, self.student_id)))
+        return decode(self._data_cache[key])
+
+    def _require_id(self):
+        if not self.student_id or self.student_id == PLACEHOLDER_ID:
+            raise ValueError(
+                "Set STUDENT_ID in the first cell to your student ID, then re-run that cell."
+            )
+
+    # -- checking -----------------------------------------------------------------------
+    def __repr__(self):
+        return f"<self-check of {self.name}: {len(self._questions)} questions; call check('q1')>"
+
+    def all(self, namespace: dict | None = None) -> None:
+        """Self-check every question in turn."""
+        ns = namespace if namespace is not None else sys._getframe(1).f_globals
+        for qid in self._questions:
+            self._check(qid, ns, None, False)
+            print()
+
+    def __call__(self, qid: str, *value) -> None:
+        """Self-check question ``qid``; pass ``value`` to check it instead of the notebook's."""
+        if len(value) > 1:
+            raise TypeError("check(question) or check(question, value)")
+        self._check(qid, sys._getframe(1).f_globals, value[0] if value else None, bool(value))
+
+    def _check(self, qid, ns, value, explicit) -> None:
+        if qid not in self._questions:
+            print(
+                f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
+            )
+            return
+        q = self._questions[qid]
+        points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
+        print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")
+        if q.kind == "function":
+            self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
+        else:
+            self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
+
+    def _fail(self, q, message: str) -> None:
+        print("  FAIL")
+        if q.hint:
+            print(f"      Hint: {q.hint}")
+        print(f"      {message}")
+
+    def _not_answered(self, q, why: str) -> None:
+        print(f"  not answered yet: {why}")
+
+    def _check_value(self, q, got) -> None:
+        if got is _MISSING:
+            return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
+        if got is Ellipsis:
+            return self._not_answered(q, f"{q.target} is still ...")
+        try:
+            got = decode(encode(got))
+        except TypeError as exc:
+            print(f"  FAIL: {q.target} must be plain numbers/arrays/bools/strings ({exc})")
+            return
+        if q.cases:
+            expected = decode(q.cases[0].expected)
+            verdict = compare(expected, got, q.rtol, q.atol)
+            if verdict.ok:
+                print("  PASS")
+            else:
+                self._fail(q, verdict.message)
+            return
+        # private value (per-student or not public): type/shape, then public properties
+        results = []
+        verdict = check_signature(q.signature, got)
+        results.append((f"type and shape ({_sig_text(q.signature)})", verdict.ok, verdict.message))
+        if verdict.ok and q.properties:
+            try:
+                data = self.data(q.data) if q.data else None
+                for text, ok in getattr(self._data_mod(), q.properties)(data, got):
+                    results.append((str(text), bool(ok), ""))
+            except Exception as exc:  # a property function must not break the self-check
+                results.append(
+                    ("properties", False, f"could not evaluate: {type(exc).__name__}: {exc}")
+                )
+        failed = [r for r in results if not r[1]]
+        if failed and q.hint:
+            print(f"  Hint: {q.hint}")
+        for text, ok, message in results:
+            print(
+                f"  {'PASS' if ok else 'FAIL'}: {text}" + (f"\n      {message}" if message else "")
+            )
+        who = f" for your ID {self.student_id!r}" if q.data else ""
+        print(
+            f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
+        )
+
+    def _check_function(self, q, func) -> None:
+        if func is _MISSING:
+            return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
+        if not callable(func):
+            print(f"  FAIL: {q.target} is {describe(func)}, not a function")
+            return
+        passed, hint_shown, forbidden = 0, False, set()
+        for case in q.cases:
+            args, kwargs = decode(case.args), decode(case.kwargs)
+            try:
+                with _tripwires(q.forbid, forbidden):
+                    got = func(*args, **kwargs)
+            except NotImplementedError:
+                return self._not_answered(q, f"{q.target} raises NotImplementedError")
+            except Exception as exc:
+                message = f"your function raised {type(exc).__name__}: {str(exc)[:200]}"
+                verdict = None
+            else:
+                if got is Ellipsis:
+                    return self._not_answered(q, f"{q.target} returns ...")
+                try:
+                    verdict = compare(decode(case.expected), decode(encode(got)), q.rtol, q.atol)
+                    message = verdict.message
+                except TypeError as exc:
+                    verdict, message = (
+                        None,
+                        f"returned {describe(got)}, which is not plain data ({exc})",
+                    )
+            if verdict is not None and verdict.ok:
+                passed += 1
+                print(f"  PASS: {case.label}")
+                continue
+            print(f"  FAIL: {case.label}")
+            if q.hint and not hint_shown:
+                print(f"      Hint: {q.hint}")
+                hint_shown = True
+            print(f"      {message}")
+        n = len(q.cases)
+        hidden = q.hidden_cases
+        more = (
+            f"; {hidden} hidden case{'s' if hidden != 1 else ''} run{'s' if hidden == 1 else ''} at grading"
+            if hidden
+            else ""
+        )
+        print(f"  {passed} of {n} public case{'s pass' if n != 1 else ' passes'}{more}.")
+        if forbidden:
+            print(
+                f"  Warning: your function calls {', '.join(sorted(forbidden))}, which this question "
+                "forbids: it would score 0 at grading. Use numpy primitives instead."
+            )
+
+
+class _Missing:
+    def __repr__(self):
+        return "<missing>"
+
+
+_MISSING = _Missing()
+
+
+def _sig_text(sig) -> str:
+    if "kind" in sig:
+        return f"{sig['kind']}" + (f", shape {tuple(sig['shape'])}" if sig["shape"] else " scalar")
+    if "sequence" in sig:
+        return f"sequence of {len(sig['sequence'])}"
+    if "dict" in sig:
+        return f"dict with keys {sorted(sig['dict'])}"
+    return next(iter(sig))
+
+
+@contextlib.contextmanager
+def _tripwires(forbid, hits: set):
+    """Temporarily wrap forbidden library functions to notice calls from the notebook."""
+    restore = []
+    try:
+        for dotted in forbid:
+            wrapped = wrap_forbidden(dotted, hits.add)
+            if wrapped is not None:
+                restore.append(wrapped)
+        yield
+    finally:
+        for module, attr, original in reversed(restore):
+            setattr(module, attr, original)

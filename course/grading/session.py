@@ -1,0 +1,510 @@
+"""Grading one submission: the trusted parent's side of one student's session.
+
+:class:`AssignmentGrader` holds what does not depend on the student (the checks, the release,
+references computed once, the sandbox); :class:`StudentSession` runs one student's plan in a
+sandboxed child (:mod:`course.grading.sandbox`), asks the child for values and function
+results and compares them with references computed here, in the parent. A timeout or crash
+costs only the question it happened in: the child is killed, a fresh one re-runs the cells
+(skipping the bad one) and grading continues.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from course.grading.codec import EncodingError, decode, encode
+from course.grading.compare import compare
+from course.grading.notebook import (
+    SubmissionError,
+    build_plan,
+    forbidden_mentions,
+    read_submission,
+)
+from course.grading.release import checks_digest, load_assignment
+from course.grading.sandbox import ChildDied, ChildTimeout, Limits, Sandbox
+from course.grading.vocabulary import (
+    ABNORMAL,
+    PLACEHOLDER_ID,
+    CellOrigin,
+    GradeStatus,
+    Op,
+    ReplyStatus,
+    SubmissionStatus,
+)
+
+if TYPE_CHECKING:
+    from course.grading.driver import GradeOptions
+
+__all__ = ["AssignmentGrader", "StudentSession"]
+
+
+def _version() -> str:
+    import course
+
+    return str(getattr(course, "__version__", "unknown"))
+
+
+_HEX = re.compile(r"0x[0-9a-fA-F]{6,}")
+
+
+class AssignmentGrader:
+    """Grades submissions of one assignment (thread-safe: one :meth:`grade_one` per thread)."""
+
+    def __init__(self, solution_dir: Path, options: GradeOptions | None = None, deny_read=()):
+        if options is None:
+            from course.grading.driver import GradeOptions
+
+            options = GradeOptions()
+        self.options = options
+        self.solution_dir = Path(solution_dir).resolve()
+        self.checks, self.release = load_assignment(self.solution_dir)
+        self.name = self.checks.name
+        self.digest = checks_digest(self.solution_dir, self.checks.files)
+        self.version = _version()
+        self.questions = list(self.checks.questions.values())
+        # references that do not depend on the student: computed once, here, in the parent
+        self.case_expected = {
+            q.id: [q.expected(case) for case in q.public_cases + q.hidden_cases]
+            for q in self.questions
+            if q.kind == "function"
+        }
+        self.value_expected = {
+            q.id: q.expected() for q in self.questions if q.kind == "value" and q.data is None
+        }
+        solutions_root = (
+            self.solution_dir.parent
+            if self.solution_dir.parent.name == "solutions"
+            else self.solution_dir
+        )
+        self.sandbox = Sandbox(
+            mode=self.options.mode,
+            limits=Limits(memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5),
+            preload=self.checks.preload,
+            deny_read=[solutions_root, *deny_read],
+        )
+
+    def close(self) -> None:
+        self.sandbox.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- limits ---------------------------------------------------------------------------
+    def timeout_for(self, qid: str | None) -> float:
+        if self.options.timeout is not None:
+            return float(self.options.timeout)
+        q = self.checks.questions.get(qid) if qid else None
+        if q is not None and q.timeout is not None:
+            return float(q.timeout)
+        return self.checks.timeout
+
+    def budget(self) -> float:
+        if self.options.student_budget is not None:
+            return float(self.options.student_budget)
+        per_q = sum(self.timeout_for(q.id) * (1 + len(q.cases)) for q in self.questions)
+        return max(60.0, 2.0 * per_q + 30.0)
+
+    # -- one student ----------------------------------------------------------------------
+    def _row(self, sid: str) -> dict:
+        return {
+            "student": sid,
+            "assignment": self.name,
+            "checks_sha256": self.digest,
+            "version": self.version,
+            "questions": {},
+            "notes": [],
+            "total": 0.0,
+            "max": self.checks.max_points,
+            "status": SubmissionStatus.OK,
+        }
+
+    def _question_result(self, q, status, message="", points=0.0, cases=None) -> dict:
+        return {
+            "points": round(float(points), 4),
+            "max": q.points,
+            "status": status,
+            "message": message,
+            "cases": cases or [],
+        }
+
+    def grade_one(self, sid: str, path: Path | None, problem: str | None = None) -> dict:
+        """Grade one submission; never raises (a grader failure is recorded in the row)."""
+        row = self._row(sid)
+        try:
+            self._grade(row, sid, path, problem)
+        except Exception as exc:  # a bug or sandbox failure must not abort the batch
+            for q in self.questions:
+                row["questions"].setdefault(
+                    q.id, self._question_result(q, GradeStatus.GRADER_ERROR, "not graded")
+                )
+            row["notes"].append(
+                f"The grader failed on this submission ({type(exc).__name__}: {exc}); please tell your instructor."
+            )
+            row["status"] = SubmissionStatus.GRADER_ERROR
+        row["total"] = round(sum(r["points"] for r in row["questions"].values()), 4)
+        abnormal = [
+            f"{qid}: {r['status']}"
+            for qid, r in row["questions"].items()
+            if r["status"] in ABNORMAL
+        ]
+        if row["status"] == SubmissionStatus.OK and abnormal:
+            row["status"] = "; ".join(abnormal)
+        return row
+
+    def _grade(self, row: dict, sid: str, path: Path | None, problem: str | None) -> None:
+        if problem and path is None:
+            row["status"] = SubmissionStatus.INVALID_NOTEBOOK
+            row["notes"].append(problem[0].upper() + problem[1:] + ".")
+            for q in self.questions:
+                row["questions"][q.id] = self._question_result(q, GradeStatus.NOT_ANSWERED, problem)
+            return
+        if problem:
+            row["notes"].append(problem[0].upper() + problem[1:] + ".")
+        try:
+            nb = read_submission(path)
+        except SubmissionError as exc:
+            row["status"] = SubmissionStatus.INVALID_NOTEBOOK
+            row["notes"].append(f"The submission could not be read: {exc}.")
+            for q in self.questions:
+                row["questions"][q.id] = self._question_result(
+                    q, GradeStatus.NOT_ANSWERED, "not graded: the notebook could not be read"
+                )
+            return
+        plan = build_plan(self.release, nb, sid)
+        row["notes"].extend(plan.notes)
+        nb_id = plan.notebook_student_id
+        if nb_id is not None and nb_id.strip() == PLACEHOLDER_ID:
+            row["notes"].append(
+                f"STUDENT_ID was not set in the notebook; graded as {sid!r} (the submission's name)."
+            )
+        elif nb_id is not None and nb_id.strip() != sid:
+            row["notes"].append(
+                f"STUDENT_ID in the notebook is {nb_id!r}, but the submission is named {sid!r}: "
+                f"graded as {sid!r}, with the data of {sid!r}."
+            )
+        if not plan.answered and not any(c.origin == CellOrigin.EXTRA for c in plan.cells):
+            for q in self.questions:
+                row["questions"][q.id] = self._question_result(
+                    q, GradeStatus.NOT_ANSWERED, "no answer cell found"
+                )
+            if not nb.get("cells"):
+                row["notes"].append("The notebook is empty.")
+            return
+        StudentSession(self, row, sid, plan).run()
+
+
+class StudentSession:
+    """Runs one student's plan, with restarts after timeouts and crashes."""
+
+    def __init__(self, grader: AssignmentGrader, row: dict, sid: str, plan):
+        self.g = grader
+        self.row = row
+        self.sid = sid
+        self.plan = plan
+        self.skipped: set[int] = set()
+        self.hard: dict[str, tuple[str, str]] = {}  # question -> (status, message) from its cells
+        self.cell_errors: dict[int, dict] = {}
+        self.hits: dict[str, set] = {}
+        self.child = None
+        self.deadline = time.monotonic() + grader.budget()
+        self.data = {key: grader.checks.data_for(key, sid) for key in grader.checks.data_keys()}
+
+    # -- messages -------------------------------------------------------------------------
+    def clean(self, text: str) -> str:
+        if self.child is not None:
+            text = text.replace(self.child.tmpdir, "<tmp>")
+        return _HEX.sub("0x…", str(text))[:400]
+
+    def _err_text(self, err: dict) -> str:
+        return self.clean(f"{err.get('type', 'Error')}: {err.get('message', '')}".rstrip(": "))
+
+    # -- child lifecycle ------------------------------------------------------------------
+    def _failure_status(self, cause: str) -> str:
+        if "memory" in cause or "MemoryError" in cause:
+            return GradeStatus.MEMORY
+        return GradeStatus.CRASH
+
+    def _run_cells(self) -> bool:
+        for i, cell in enumerate(self.plan.cells):
+            if i in self.skipped:
+                continue
+            limit = self.g.timeout_for(cell.question)
+            try:
+                reply = self.child.request(
+                    Op.RUN,
+                    min(limit, max(0.1, self.deadline - time.monotonic())),
+                    source=cell.source,
+                    question=cell.question,
+                )
+            except ChildTimeout:
+                self._cell_failed(
+                    i,
+                    GradeStatus.TIMEOUT,
+                    f"{cell.label} did not finish within {limit:g} s and was stopped",
+                )
+                return False
+            except ChildDied as exc:
+                self._cell_failed(
+                    i,
+                    self._failure_status(exc.cause),
+                    f"{cell.label} stopped the process: {exc.cause}",
+                )
+                return False
+            if cell.question:
+                self.hits.setdefault(cell.question, set()).update(reply.get("tripwire") or [])
+            if reply.get("status") == ReplyStatus.ERROR:
+                err = reply.get("error") or {}
+                self.cell_errors[i] = err
+                if cell.question and err.get("type") == "MemoryError":
+                    self.hard.setdefault(
+                        cell.question,
+                        (GradeStatus.MEMORY, f"{cell.label} ran out of memory (MemoryError)"),
+                    )
+        return True
+
+    def _cell_failed(self, i: int, status: str, message: str) -> None:
+        self.skipped.add(i)
+        cell = self.plan.cells[i]
+        if cell.question:
+            self.hard.setdefault(cell.question, (status, message))
+        else:
+            self.row["notes"].append(
+                f"{message[0].upper() + message[1:]}; it was skipped ({status})."
+            )
+        self._drop_child()
+
+    def _drop_child(self) -> None:
+        if self.child is not None:
+            self.child.close()
+            self.child = None
+
+    def ensure_child(self) -> bool:
+        """A live child that has run every (non-skipped) cell; False when out of time."""
+        while self.child is None:
+            if time.monotonic() > self.deadline:
+                return False
+            init = {
+                "student_id": self.sid,
+                "assignment": self.g.name,
+                "data": {k: encode(v) for k, v in self.data.items()},
+                "forbid": {q.id: list(q.forbid) for q in self.g.questions if q.forbid},
+            }
+            self.child = self.g.sandbox.start(init, self.g.options.ready_timeout)
+            if not self._run_cells():
+                self._drop_child()
+        return True
+
+    # -- grading ----------------------------------------------------------------------------
+    def run(self) -> None:
+        try:
+            for q in self.g.questions:
+                self.row["questions"][q.id] = self._grade_question(q)
+        finally:
+            self._drop_child()
+
+    def _answer_cell_error(self, qid: str):
+        errors = [
+            self.cell_errors[i]
+            for i, c in enumerate(self.plan.cells)
+            if c.question == qid and c.origin == CellOrigin.ANSWER and i in self.cell_errors
+        ]
+        return errors[-1] if errors else None
+
+    def _grade_question(self, q) -> dict:
+        g = self.g
+        if q.id not in self.plan.answered:
+            return g._question_result(
+                q, GradeStatus.NOT_ANSWERED, "no answer cell found (deleted?)"
+            )
+        static = forbidden_mentions(self.plan.answer_sources.get(q.id, ""), q.forbid)
+        if static:
+            return g._question_result(
+                q,
+                GradeStatus.FORBIDDEN,
+                f"the answer uses {', '.join(static)}, which this question forbids",
+            )
+        if not self.ensure_child():
+            return g._question_result(
+                q, GradeStatus.SKIPPED, "not graded: the time budget for this submission ran out"
+            )
+        if q.id in self.hard:
+            status, message = self.hard[q.id]
+            return g._question_result(q, status, message)
+        if self.hits.get(q.id):
+            return g._question_result(
+                q,
+                GradeStatus.FORBIDDEN,
+                f"the answer calls {', '.join(sorted(self.hits[q.id]))}, which this question forbids",
+            )
+        if q.kind == "value":
+            return self._grade_value(q)
+        return self._grade_function(q)
+
+    def _missing(self, q, what: str) -> dict:
+        err = self._answer_cell_error(q.id)
+        if err is None or err.get("type") == "NotImplementedError":
+            return self.g._question_result(q, GradeStatus.NOT_ANSWERED, what)
+        return self.g._question_result(
+            q, GradeStatus.ERROR, f"your answer cell raised {self._err_text(err)}"
+        )
+
+    def _grade_value(self, q) -> dict:
+        g = self.g
+        try:
+            reply = self.child.request(Op.VALUE, 30, name=q.target)
+        except (ChildTimeout, ChildDied) as exc:
+            self._drop_child()
+            return g._question_result(
+                q,
+                GradeStatus.CRASH,
+                f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})",
+            )
+        status = reply.get("status")
+        if status == ReplyStatus.UNDEFINED:
+            return self._missing(q, f"no variable {q.target}")
+        if status == ReplyStatus.STUB:
+            return g._question_result(q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ...")
+        if status != ReplyStatus.OK:
+            return g._question_result(
+                q,
+                GradeStatus.ERROR,
+                f"{q.target} must be plain data (numbers, arrays, bools, strings): "
+                f"{self._err_text(reply.get('error') or {})}",
+            )
+        try:
+            got = decode(reply.get("value"), allow_band=False)
+        except (EncodingError, TypeError, ValueError, KeyError):
+            return g._question_result(q, GradeStatus.ERROR, f"{q.target} could not be read")
+        if q.data is not None:
+            expected = q.expected(data=self.data[q.data])
+        else:
+            expected = g.value_expected[q.id]
+        verdict = compare(expected, got, q.rtol, q.atol, reveal=q.public)
+        case = {"label": q.target, "ok": verdict.ok, "message": verdict.message}
+        if verdict.ok:
+            return g._question_result(q, GradeStatus.PASS, "", q.points, [case])
+        message = verdict.message
+        err = self._answer_cell_error(q.id)
+        if err is not None:
+            message += f" (your answer cell also raised {self._err_text(err)})"
+        return g._question_result(q, GradeStatus.FAIL, message, 0.0, [case])
+
+    def _grade_function(self, q) -> dict:
+        g = self.g
+        cases = q.public_cases + q.hidden_cases
+        expected = g.case_expected[q.id]
+        results = []
+        status = None
+        first_message = ""
+        n_hidden = 0
+        for case, exp in zip(cases, expected):
+            if case.hidden:
+                n_hidden += 1
+                label = f"hidden case {n_hidden}"
+            else:
+                label = case.label
+            if status in (
+                GradeStatus.TIMEOUT,
+                GradeStatus.CRASH,
+                GradeStatus.MEMORY,
+                GradeStatus.NOT_ANSWERED,
+                GradeStatus.SKIPPED,
+            ):
+                results.append({"label": label, "ok": False, "message": "not run"})
+                continue
+            if self.child is None and not self.ensure_child():
+                status = GradeStatus.SKIPPED
+                first_message = first_message or "the time budget for this submission ran out"
+                results.append({"label": label, "ok": False, "message": "not run"})
+                continue
+            limit = g.timeout_for(q.id)
+            try:
+                reply = self.child.request(
+                    Op.CALL,
+                    limit,
+                    name=q.target,
+                    question=q.id,
+                    args=encode(case.args),
+                    kwargs=encode(case.kwargs),
+                )
+            except ChildTimeout:
+                status = GradeStatus.TIMEOUT
+                first_message = (
+                    f"{q.target} did not return within {limit:g} s on {label} and was stopped"
+                )
+                results.append({"label": label, "ok": False, "message": "timeout"})
+                self._drop_child()
+                continue
+            except ChildDied as exc:
+                status = self._failure_status(exc.cause)
+                first_message = f"calling {q.target} on {label} stopped the process: {exc.cause}"
+                results.append({"label": label, "ok": False, "message": exc.cause})
+                self._drop_child()
+                continue
+            if reply.get("tripwire"):
+                self.hits.setdefault(q.id, set()).update(reply["tripwire"])
+            rstatus = reply.get("status")
+            if rstatus == ReplyStatus.UNDEFINED:
+                return self._missing(q, f"no function {q.target}")
+            if rstatus == ReplyStatus.STUB:
+                status = GradeStatus.NOT_ANSWERED
+                first_message = f"{q.target} raises NotImplementedError"
+                results.append({"label": label, "ok": False, "message": "not answered"})
+                continue
+            if rstatus == ReplyStatus.NOT_CALLABLE:
+                return g._question_result(q, GradeStatus.ERROR, f"{q.target} is not a function")
+            if rstatus == ReplyStatus.ERROR:
+                err = reply.get("error") or {}
+                text = f"raised {self._err_text(err)}"
+                if err.get("type") == "MemoryError":
+                    status = GradeStatus.MEMORY
+                results.append({"label": label, "ok": False, "message": text})
+                first_message = first_message or f"{label}: {text}"
+                continue
+            if rstatus != ReplyStatus.OK:
+                text = f"returned something that is not plain data ({self._err_text(reply.get('error') or {})})"
+                results.append({"label": label, "ok": False, "message": text})
+                first_message = first_message or f"{label}: {text}"
+                continue
+            try:
+                got = decode(reply.get("value"), allow_band=False)
+            except (EncodingError, TypeError, ValueError, KeyError):
+                results.append({"label": label, "ok": False, "message": "unreadable result"})
+                continue
+            verdict = compare(exp, got, q.rtol, q.atol, reveal=not case.hidden)
+            results.append({"label": label, "ok": verdict.ok, "message": verdict.message})
+            if not verdict.ok:
+                first_message = first_message or f"{label}: {verdict.message}"
+        if self.hits.get(q.id):
+            return g._question_result(
+                q,
+                GradeStatus.FORBIDDEN,
+                f"the answer calls {', '.join(sorted(self.hits[q.id]))}, "
+                "which this question forbids",
+                0.0,
+                results,
+            )
+        passed = sum(1 for r in results if r["ok"])
+        if status == GradeStatus.NOT_ANSWERED and passed == 0:
+            return g._question_result(q, GradeStatus.NOT_ANSWERED, first_message, 0.0, results)
+        fraction = passed / len(results) if q.partial else float(passed == len(results))
+        points = q.points * fraction
+        if status is None:
+            if passed == len(results):
+                status = GradeStatus.PASS
+            elif (
+                all(r["message"].startswith("raised ") for r in results if not r["ok"])
+                and passed == 0
+            ):
+                status = GradeStatus.ERROR
+            else:
+                status = GradeStatus.PARTIAL if points > 0 else GradeStatus.FAIL
+        return g._question_result(
+            q, status, "" if passed == len(results) else first_message, points, results
+        )

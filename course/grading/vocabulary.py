@@ -1,0 +1,296 @@
+"""The words every part of the grading package shares, defined once.
+
+Cell roles of a solution notebook, the placeholder and demo student IDs, the operations of the
+parent-child protocol, the statuses of replies, questions and submissions, and
+:class:`PublicSpec`, the content of the ``checks.json`` a release ships to students.
+
+The enums are ``str`` subclasses, so a status is written to JSON and CSV as its plain value
+(``"not answered"``) and a row read back from ``results.jsonl`` compares equal to the enum.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "ABNORMAL",
+    "CHECKS_FILE",
+    "DEMO_STUDENT_ID",
+    "PLACEHOLDER_ID",
+    "PUBLIC_FORMAT",
+    "CellOrigin",
+    "CellRole",
+    "GradeStatus",
+    "Op",
+    "PublicCase",
+    "PublicQuestion",
+    "PublicSpec",
+    "ReplyStatus",
+    "SubmissionStatus",
+]
+
+
+class _Word(str, enum.Enum):
+    """A string enum that prints as its value (also under ``format`` and f-strings)."""
+
+    def __str__(self) -> str:
+        return str(self.value)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self.value), spec)
+
+
+#: The value of ``STUDENT_ID`` in a released notebook, until the student sets it.
+PLACEHOLDER_ID = "replace-with-your-student-id"
+
+#: The student ID the public self-check and ``course release`` use where one is needed.
+DEMO_STUDENT_ID = "demo"
+
+#: The public file of a release, and the version of its format.
+CHECKS_FILE = "checks.json"
+PUBLIC_FORMAT = 1
+
+
+class CellRole(_Word):
+    """The role of a cell of a solution notebook (``metadata.course.role``)."""
+
+    SETUP = "setup"  # the first code cell: STUDENT_ID and the self-check
+    ANSWER = "answer"  # a student's answer to metadata.course.question
+    CHECK = "check"  # check("q1"): skipped at grading
+    CONTEXT = "context"  # any other code cell: runs as released
+    TEXT = "text"  # markdown and raw cells
+
+
+class CellOrigin(_Word):
+    """Where a cell the grader runs comes from."""
+
+    SETUP = "setup"
+    CONTEXT = "context"
+    ANSWER = "answer"
+    EXTRA = "extra"  # a cell the student added
+
+
+class Op(_Word):
+    """Operations of the protocol between the grader and its processes."""
+
+    INIT = "init"  # parent -> child: student ID, data, limits; reply: ready
+    RUN = "run"  # run one cell
+    VALUE = "value"  # the value of a variable
+    CALL = "call"  # call a function with plain-data arguments
+    EXIT = "exit"  # stop politely
+    SPAWN = "spawn"  # parent -> fork server: fork a child
+    STATUS = "status"  # parent -> fork server: exit status of a child
+
+
+class ReplyStatus(_Word):
+    """The status a child puts in its reply to one request."""
+
+    OK = "ok"
+    ERROR = "error"
+    READY = "ready"
+    UNDEFINED = "undefined"  # no such variable or function
+    STUB = "stub"  # still ``...`` or raising NotImplementedError
+    NOT_CALLABLE = "notcallable"
+    UNENCODABLE = "unencodable"  # not plain data
+
+
+class GradeStatus(_Word):
+    """The status of one graded question."""
+
+    PASS = "pass"
+    FAIL = "fail"
+    PARTIAL = "partial"
+    ERROR = "error"
+    NOT_ANSWERED = "not answered"
+    TIMEOUT = "timeout"
+    CRASH = "crash"
+    MEMORY = "memory"
+    FORBIDDEN = "forbidden"
+    GRADER_ERROR = "grader error"
+    SKIPPED = "skipped"
+
+
+#: Question statuses that the submission's status lists (``"q1: timeout; q3: forbidden"``).
+ABNORMAL = frozenset(
+    {
+        GradeStatus.TIMEOUT,
+        GradeStatus.CRASH,
+        GradeStatus.MEMORY,
+        GradeStatus.FORBIDDEN,
+        GradeStatus.GRADER_ERROR,
+        GradeStatus.SKIPPED,
+    }
+)
+
+
+class SubmissionStatus(_Word):
+    """The fixed statuses of a whole submission (otherwise it lists its abnormal questions)."""
+
+    OK = "ok"
+    INVALID_NOTEBOOK = "invalid notebook"
+    REFUSED = "refused"  # e.g. a symbolic link among the submissions
+    GRADER_ERROR = "grader error"
+
+
+# --------------------------------------------------------------------------------------
+# checks.json
+# --------------------------------------------------------------------------------------
+@dataclass
+class PublicCase:
+    """One public case: the encoded arguments (function questions) and expected value."""
+
+    label: str
+    expected: Any
+    args: Any = None
+    kwargs: Any = None
+
+    def to_dict(self) -> dict:
+        out: dict = {"label": self.label}
+        if self.args is not None:
+            out["args"] = self.args
+            out["kwargs"] = self.kwargs
+        out["expected"] = self.expected
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PublicCase:
+        return cls(d["label"], d["expected"], d.get("args"), d.get("kwargs"))
+
+
+@dataclass
+class PublicQuestion:
+    """What a student's self-check knows of one question (no reference code, no hidden case)."""
+
+    id: str
+    kind: str  # "value" or "function"
+    target: str
+    points: float
+    hint: str = ""
+    rtol: float = 1e-7
+    atol: float = 1e-9
+    partial: bool = True
+    forbid: list = field(default_factory=list)
+    data: str | None = None
+    properties: str | None = None
+    public: bool = True
+    cases: list[PublicCase] = field(default_factory=list)
+    hidden_cases: int = 0
+    signature: dict | None = None  # type and shape of a value that is not shipped
+
+    def to_dict(self) -> dict:
+        out = {
+            "id": self.id,
+            "kind": self.kind,
+            "target": self.target,
+            "points": self.points,
+            "hint": self.hint,
+            "rtol": self.rtol,
+            "atol": self.atol,
+            "partial": self.partial,
+            "forbid": list(self.forbid),
+            "data": self.data,
+            "properties": self.properties,
+            "public": self.public,
+            "cases": [c.to_dict() for c in self.cases],
+            "hidden_cases": self.hidden_cases,
+        }
+        if self.signature is not None:
+            out["signature"] = self.signature
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PublicQuestion:
+        return cls(
+            id=d["id"],
+            kind=d["kind"],
+            target=d["target"],
+            points=d["points"],
+            hint=d.get("hint", ""),
+            rtol=d.get("rtol", 1e-7),
+            atol=d.get("atol", 1e-9),
+            partial=d.get("partial", True),
+            forbid=list(d.get("forbid", [])),
+            data=d.get("data"),
+            properties=d.get("properties"),
+            public=d.get("public", True),
+            cases=[PublicCase.from_dict(c) for c in d.get("cases", [])],
+            hidden_cases=int(d.get("hidden_cases", 0)),
+            signature=d.get("signature"),
+        )
+
+
+@dataclass
+class PublicSpec:
+    """The content of ``exercises/<name>/checks.json``: public cases with precomputed expected
+    values (plain data from :mod:`course.grading.codec`, never code).
+
+    Built by :func:`course.grading.release.public_spec`, read by the student's self-check.
+    """
+
+    assignment: str
+    title: str
+    max_points: float
+    questions: list[PublicQuestion]
+    data_file: str | None = None
+    data_keys: list = field(default_factory=list)
+    format: int = PUBLIC_FORMAT
+
+    def to_dict(self) -> dict:
+        return {
+            "format": self.format,
+            "assignment": self.assignment,
+            "title": self.title,
+            "max_points": self.max_points,
+            "data_file": self.data_file,
+            "data_keys": list(self.data_keys),
+            "questions": [q.to_dict() for q in self.questions],
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PublicSpec:
+        if not isinstance(d, dict) or "assignment" not in d:
+            raise ValueError("not a checks.json of a released assignment")
+        if d.get("format", PUBLIC_FORMAT) > PUBLIC_FORMAT:
+            raise ValueError(
+                f"checks.json format {d['format']} is newer than this course package "
+                f"understands ({PUBLIC_FORMAT}); upgrade the course package"
+            )
+        return cls(
+            assignment=d["assignment"],
+            title=d.get("title", d["assignment"]),
+            max_points=d.get("max_points", 0.0),
+            questions=[PublicQuestion.from_dict(q) for q in d.get("questions", [])],
+            data_file=d.get("data_file"),
+            data_keys=list(d.get("data_keys", [])),
+            format=d.get("format", PUBLIC_FORMAT),
+        )
+
+    def text(self) -> str:
+        """The file's exact text (sorted keys, so a release is byte-for-byte deterministic)."""
+        return (
+            json.dumps(
+                self.to_dict(), sort_keys=True, indent=1, ensure_ascii=False, allow_nan=False
+            )
+            + "\n"
+        )
+
+    @classmethod
+    def loads(cls, text: str) -> PublicSpec:
+        return cls.from_dict(json.loads(text))
+
+    def write(self, folder: Path) -> Path:
+        path = Path(folder) / CHECKS_FILE
+        path.write_text(self.text(), encoding="utf-8")
+        return path
+
+    @classmethod
+    def read(cls, folder: Path) -> PublicSpec:
+        """Read ``folder/checks.json`` (ValueError when it is not a release's checks.json)."""
+        return cls.loads((Path(folder) / CHECKS_FILE).read_text("utf-8"))
+
+    def question(self, qid: str) -> PublicQuestion:
+        return next(q for q in self.questions if q.id == qid)

@@ -1,0 +1,278 @@
+"""Units of the exercise system: plain-data codec, comparisons and their messages, per-student
+seeds, the student's self-check output, the sandbox layers (seccomp, spawn mode)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from course.grading.checks import load_checks, student_rng
+from course.grading.codec import Band, EncodingError, decode, encode, loads
+from course.grading.compare import binomial_band, check_signature, compare, signature
+from course.grading.selfcheck import Assignment
+
+ROOT = Path(__file__).resolve().parents[1]
+NAME = "01_least_squares"
+EXERCISE_DIR = ROOT / "exercises" / NAME
+
+
+# -- codec --------------------------------------------------------------------------------
+def test_codec_round_trip_without_pickle():
+    value = {
+        "a": np.arange(6.0).reshape(2, 3),
+        "b": (1, 2.5, True, None, "s"),
+        "c": [np.int64(3), np.float32(1.5)],
+        "d": float("nan"),
+        "e": np.array([True, False]),
+        "f": 1 + 2j,
+        "g": Band(0.1, 0.2),
+    }
+    back = loads(json.dumps(encode(value), allow_nan=False))
+    assert np.array_equal(back["a"], value["a"]) and back["a"].flags.writeable
+    assert back["b"] == (1, 2.5, True, None, "s")
+    assert back["c"] == [3, 1.5] and type(back["c"][0]) is int
+    assert np.isnan(back["d"]) and back["e"].dtype == bool and back["f"] == 1 + 2j
+    assert back["g"] == Band(0.1, 0.2)
+    text = json.dumps(encode(value))
+    assert "pickle" not in text and "__reduce__" not in text
+
+
+def test_codec_refuses_objects_and_student_bands():
+    for bad in (np.array([object()]), {1: 2}, object(), {"__x": 1}):
+        with pytest.raises(EncodingError):
+            encode(bad)
+    with pytest.raises(EncodingError):
+        decode({"__pickle__": "x"})
+    with pytest.raises(EncodingError):
+        decode({"__band__": [0, 1]}, allow_band=False)
+
+
+# -- comparisons ----------------------------------------------------------------------------
+def test_compare_reports_shape_largest_error_and_tolerance():
+    exp = np.array([1.0, 2.0, 3.0])
+    assert compare(exp, exp + 1e-12).ok
+    v = compare(exp, np.array([1.0, 2.0]))
+    assert not v.ok and "expected shape (3,), got shape (2,)" in v.message
+    v = compare(exp, np.array([1.0, 2.5, 3.1]), rtol=1e-6, atol=1e-8)
+    assert "2 of 3 elements wrong" in v.message and "largest error 0.5 at [1]" in v.message
+    assert "expected 2, got 2.5" in v.message and "tolerance" in v.message
+    hidden = compare(exp, np.array([1.0, 2.5, 3.1]), reveal=False)
+    assert "expected 2" not in hidden.message and "largest error 0.5" in hidden.message
+    assert "got NaN at [0]" in compare(exp, np.array([np.nan, 2, 3])).message
+
+
+def test_compare_exact_kinds_and_containers():
+    assert compare(True, np.bool_(True)).ok and not compare(True, 1.0).ok
+    assert compare(3, 3.0).ok and not compare(3, 4).ok
+    assert compare("a", "a").ok and not compare("a", "b").ok
+    assert compare((1.0, True), [1.0, True]).ok
+    v = compare((1.0, 2.0, False), (1.0, 2.1, False))
+    assert not v.ok and v.message.startswith("item [1]")
+    assert not compare({"x": 1.0}, {"y": 1.0}).ok
+    assert "expected a float, got a string" in compare(1.0, "1.0").message
+
+
+def test_binomial_band_has_the_promised_coverage():
+    band = binomial_band(20000, 0.05, miss=1e-4)
+    assert band.lo < 0.05 < band.hi
+    from scipy.stats import binom
+
+    inside = binom.cdf(band.hi * 20000, 20000, 0.05) - binom.cdf(band.lo * 20000 - 1, 20000, 0.05)
+    assert inside >= 1 - 1e-4
+    # the typical mistake of q8 (chi2 with m instead of m - n degrees of freedom) lands far outside
+    from scipy.stats import chi2
+
+    wrong_rate = chi2.sf(chi2.isf(0.05, 4), 2)
+    assert not compare(band, wrong_rate).ok
+    assert "outside the accepted" in compare(band, 0.2).message
+
+
+def test_signature_checks_type_and_shape_only():
+    sig = signature((np.zeros(3), 1.5, True))
+    assert check_signature(sig, (np.ones(3), -2.0, False)).ok
+    assert not check_signature(sig, (np.ones(2), -2.0, False)).ok
+    assert not check_signature(signature(1.0), np.nan).ok
+
+
+# -- per-student data ---------------------------------------------------------------------
+def test_student_rng_is_a_stable_hash_of_the_id():
+    a = student_rng(NAME, "survey", "s123").standard_normal(3)
+    assert np.array_equal(a, student_rng(NAME, "survey", " s123 ").standard_normal(3))
+    assert not np.array_equal(a, student_rng(NAME, "survey", "s124").standard_normal(3))
+    code = "from course.grading.checks import student_rng; print(student_rng('a', 'b', 'c').integers(1 << 62))"
+    outs = {
+        subprocess.run(
+            [sys.executable, "-c", code],
+            capture_output=True,
+            text=True,
+            env={"PYTHONHASHSEED": seed, "PATH": "/usr/bin:/bin"},
+            cwd=ROOT,
+        ).stdout
+        for seed in ("1", "2")
+    }
+    assert len(outs) == 1 and outs.pop().strip().isdigit()
+
+
+def test_per_student_values_are_not_shipped():
+    checks = load_checks(ROOT / "solutions" / NAME)
+    spec = (EXERCISE_DIR / "checks.json").read_text()
+    demo = checks.questions["q6"].expected(data=checks.data_for("survey", "demo"))
+    assert repr(demo)[:8] not in spec
+    assert json.loads(spec)["questions"][5]["signature"] == {"kind": "float", "shape": []}
+
+
+# -- the student's self-check ---------------------------------------------------------------
+@pytest.fixture()
+def check(monkeypatch):
+    monkeypatch.chdir(EXERCISE_DIR)
+    return Assignment.load(NAME, student_id="s123")
+
+
+def test_self_check_pass_fail_hint_first(check, capsys):
+    check("q1", np.array([12.0, 3.0]))
+    assert "PASS" in capsys.readouterr().out
+    check("q2", np.array([6.0, -4.0, -10.0, 9.0]))
+    out = capsys.readouterr().out
+    assert "FAIL" in out and out.index("Hint:") < out.index("largest error")
+    assert "at [3]" in out and "tolerance" in out
+
+
+def test_self_check_function_and_stub(check, capsys):
+    def overall_model_test_stat(A, y, Qyy, alpha):
+        raise NotImplementedError
+
+    check("q3", overall_model_test_stat)
+    assert "not answered yet" in capsys.readouterr().out
+    from course import lsq
+
+    def good(A, y, Qyy, alpha):
+        r = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)
+        return r.statistic, r.critical_value, r.reject
+
+    check("q3", good)
+    out = capsys.readouterr().out
+    assert "2 of 2 public cases pass; 3 hidden cases run at grading." in out
+    assert "forbids" in out  # the self-check warns about the library call
+
+    def wrong_dof(A, y, Qyy, alpha):
+        T, c, _ = good(A, y, Qyy, alpha)
+        return T, c + 1.0, False
+
+    check("q3", wrong_dof)
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "item [1]" in out and "def " not in out
+
+
+def test_self_check_finds_answers_in_the_caller_namespace(check, capsys):
+    x_hat_day1 = ...  # noqa: F841  (a stub)
+    check("q1")
+    assert "not answered yet" in capsys.readouterr().out
+
+
+def test_self_check_per_student_question(check, capsys):
+    mine = check.data("survey")
+    assert mine["A"].shape == (12, 2)
+    check("q6", 12.5)
+    out = capsys.readouterr().out
+    assert "PASS: type and shape" in out and "checked at grading" in out and "'s123'" in out
+    check("q6", -1.0)
+    out = capsys.readouterr().out
+    assert "FAIL: T is a non-negative number" in out and "Hint:" in out
+    unset = Assignment.load(NAME, student_id="replace-with-your-student-id", path=EXERCISE_DIR)
+    with pytest.raises(ValueError, match="Set STUDENT_ID"):
+        unset.data("survey")
+
+
+def test_self_check_matches_grader_data():
+    checks = load_checks(ROOT / "solutions" / NAME)
+    student = Assignment.load(NAME, student_id="s9", path=EXERCISE_DIR).data("survey")
+    grader = checks.data_for("survey", "s9")
+    for key in grader:
+        assert np.array_equal(np.asarray(student[key]), np.asarray(grader[key]))
+
+
+# -- sandbox layers -------------------------------------------------------------------------
+def test_seccomp_blocks_fork_but_not_threads():
+    from course.grading.isolation import seccomp
+
+    if not seccomp.available():
+        pytest.skip("seccomp filter not available on this platform")
+    code = textwrap.dedent("""
+        import os, threading
+        from course.grading.isolation import seccomp
+        assert seccomp.install()
+        t = threading.Thread(target=lambda: None); t.start(); t.join()
+        import _posixsubprocess  # the audit hook does not see this path; the kernel does
+        try:
+            os.fork()
+            print("forked")
+        except OSError as exc:
+            print("blocked", exc.errno)
+        try:
+            os.kill(1, 0)
+        except OSError:
+            print("kill blocked")
+    """)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=60
+    )
+    assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
+
+
+def test_spawn_mode_grades_like_fork_mode(tmp_path):
+    from course.grading.driver import GradeOptions, grade
+
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    (subs / "s1.ipynb").write_bytes((ROOT / "solutions" / NAME / f"{NAME}.ipynb").read_bytes())
+    grade(
+        ROOT / "solutions" / NAME,
+        subs,
+        tmp_path / "out",
+        GradeOptions(jobs=1, mode="spawn", progress=False),
+    )
+    row = json.loads((tmp_path / "out" / "results.jsonl").read_text())
+    assert row["total"] == row["max"] == 14.0, row
+
+
+def test_old_package_name_still_works_for_one_release():
+    # student notebooks handed out before the rename import course.exercises, and instructors'
+    # checks.py files import course.exercises.spec: both keep working, with a warning
+    code = textwrap.dedent(
+        """
+        import warnings
+        warnings.simplefilter("error", DeprecationWarning)
+        try:
+            import course.exercises
+        except DeprecationWarning as w:
+            print("warned:", "course.grading" in str(w))
+        warnings.simplefilter("ignore", DeprecationWarning)
+        from course.exercises import Assignment, Checks
+        from course.exercises.spec import Checks as C2, student_rng
+        from course.exercises.grader import GradeOptions, Grader, grade, feedback_markdown
+        import course.grading as g
+        from course.grading.session import AssignmentGrader
+        print(Assignment is g.Assignment, Checks is C2, Grader is AssignmentGrader)
+        print(grade is __import__("course.grading.driver", fromlist=["x"]).grade)
+        """
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert out == ["warned:", "True", "True", "True", "True", "True"]
+
+
+def test_public_spec_round_trips_the_committed_checks_json():
+    from course.grading.vocabulary import PublicSpec
+
+    for folder in sorted((ROOT / "exercises").iterdir()):
+        text = (folder / "checks.json").read_text("utf-8")
+        spec = PublicSpec.loads(text)
+        assert spec.assignment == folder.name and spec.questions
+        assert spec.text() == text
