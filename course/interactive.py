@@ -318,7 +318,7 @@ def ekf_view(
     seed=20240504,
     window=10,
     alpha=0.001,
-    t_fault=130,
+    t_fault=150,
     axes=None,
 ):
     """The lecture's EKF residual generator with a chosen random-walk variance and fault.
