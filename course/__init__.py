@@ -1,28 +1,108 @@
 """Validating models with residuals: the library behind the course.
 
 Importing :mod:`course` is free of side effects: no plotting backend is
-chosen, no random state is touched and nothing is printed.  The topic
-modules are imported lazily on first attribute access, so ``import course``
-stays fast and ``course.lsq`` still works.
+chosen, no random state is touched and nothing is printed.  The modules are
+imported lazily on first attribute access, so ``import course`` stays fast
+and ``course.lsq`` still works.
 
 Modules
 -------
-results
-    The shared result vocabulary (:class:`~course.results.TestResult`).
-linalg
-    Input validation and factorisation helpers shared by every module.
-distributions
-    A small base class for frozen distributions with the scipy interface.
+Topics (one per module of the course):
+
 lsq
-    Least-squares residuals, the overall model test, w-tests, data snooping.
+    Least-squares residuals, the overall model test, w-tests, data snooping,
+    minimal detectable bias, the confidence band (module 1).
+diagnosis
+    Test quantities for fault diagnosis: decision structures, prediction
+    errors, parameter estimates, likelihoods, the lecture's dynamic examples
+    (modules 2 and 3).
+filters
+    State-space models, Kalman and extended Kalman filters, the Riccati
+    recursion, recursive least squares (module 4).
+nis
+    The NIS chain (NIS, windows, thresholds, alarms), the NIS matrix and the
+    exact laws of its extreme eigenvalues (modules 4 and 5).
+quadform
+    Quadratic forms in normal variables and their exact laws (Imhof's method).
+mismatched
+    Mismatched-filter tests over many records (module 6).
+
+Shared pieces (one home each):
+
+results
+    The result vocabulary (:class:`~course.results.TestResult`), the
+    :class:`~course.results.Law` protocol and the one decision path.
+validation
+    Every input check, with one rule per kind of input.
+linalg
+    Cholesky factors and whitening, QR and rank-revealing least squares, the
+    one rank rule, read-only arrays.
+chi2
+    The chi-square law of a squared residual norm: threshold, power,
+    non-centrality.
+distributions
+    The base of the course's frozen laws (scipy's interface).
+plotting
+    Figures in the course's style (matplotlib is imported only there).
+grading
+    Releasing and grading the auto-graded assignments.
+
+Conventions
+-----------
+Written once here; every public function follows them.
+
+Argument order
+    A *test* or *test quantity* takes the data it judges first, then the
+    hypothesis it judges them against, then options: ``nis_test(innovations,
+    S)``, ``prediction_error(y, U, nominal, free)``, ``mean_test(residuals,
+    j, null)`` (as :mod:`scipy.stats` tests do).  A *fit* or *filter* takes
+    the model first, then the data: ``lsq.fit(A, y)``,
+    ``least_squares_residual(Phi, y)``, ``recursive_least_squares(Phi, y)``,
+    ``kalman_filter(model, y)`` (as :func:`numpy.linalg.lstsq` does).  A
+    *threshold* function takes the parameters of the null law first and
+    ``alpha`` after them, and returns a float for a one-sided test and a
+    :class:`~course.results.CriticalValues` ``(lower, upper)`` pair for a
+    two-sided one: ``residual_threshold(dof, alpha)``,
+    ``windowed_nis_threshold(window, alpha)``, ``nis_critical_values(m, K,
+    alpha)``.
+Batch axis
+    Independent records (Monte Carlo runs, experiments) lead: ``(M, N)`` or
+    ``(M, N, p)`` for ``M`` records of ``N`` samples; parameter vectors of a
+    power curve are rows, ``(K, p)``.
+Keyword-only parameters
+    Scale parameters (``sigma``, variances ``r``, ``q``, a sampling interval
+    ``Ts``) are keyword-only, so a number can never land in the wrong one.
+Randomness
+    Anything random takes ``rng=``: a :class:`numpy.random.Generator` or a
+    seed for one; the global numpy state is never used.
+Results
+    Tests return a :class:`~course.results.TestResult` built by the one
+    decision path (:meth:`~course.results.TestResult.from_null`); other
+    multi-valued results are named objects (dataclasses or named tuples that
+    unpack like the tuples of earlier releases).
+Laws
+    Null laws are frozen, scipy-compatible distributions: ``cdf``, ``sf``,
+    ``ppf``, ``isf``, ``rvs(size, rng=)``, ``support()``, ``median()``,
+    ``logcdf``, ``logsf``, ``mean``, ``var``, ``interval``, ``expect``.
+Input checks
+    :mod:`course.validation`: bad input raises ``ValueError`` or
+    ``numpy.linalg.LinAlgError`` naming the argument and what to do; a count
+    is an integer (a whole float such as ``1e4`` counts as one).
+Changes
+    A change to a public call keeps the old form working for one release
+    with a :class:`DeprecationWarning` that says what to write instead
+    (CHANGELOG.md lists them).
 """
 
 from importlib import import_module
 
-__version__ = "0.1.0"
+#: The one place the version is written (pyproject.toml reads it from here).
+__version__ = "0.2.0.dev0"
 
 _SUBMODULES = {
     "results",
+    "validation",
+    "chi2",
     "linalg",
     "distributions",
     "lsq",

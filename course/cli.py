@@ -70,6 +70,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples: course open | course release 01_least_squares | "
         "course grade 01_least_squares submissions/ --out grading-output/",
     )
+    from course import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p_open = sub.add_parser(
@@ -92,9 +95,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     try:
         from course.grading import cli as exercise_cli
-    except ImportError:
-        exercise_cli = None
-    if exercise_cli is not None:
+    except ImportError:  # the library without its grader: `course open` only
+        pass
+    else:
         exercise_cli.add_commands(sub)
     return parser
 

@@ -1,7 +1,9 @@
 """Least-squares residuals and the tests built on them.
 
-This module follows Chapter 10 "Validation" of the course's source text
-(``seeds/lsq_validation_chapter10.txt``): the model of observation equations
+This module follows Chapter 10 "Validation" of Tiberius, van der Marel,
+Reudink and van Leijen (2021), *Surveying and Mapping*, TU Delft Open
+Textbook (full reference in the course bibliography, docs/bibliography.md):
+the model of observation equations
 
 .. math:: E(\\underline{y}) = A x, \\qquad D(\\underline{y}) = Q_{yy},
 
@@ -21,7 +23,8 @@ w_tests
 data_snooping
     Remove the most suspicious observation and refit, until nothing is rejected.
 noncentrality, mdb
-    Non-centrality of a test with given power, and the minimal detectable bias.
+    Non-centrality of a test with given power (:func:`course.chi2.noncentrality`,
+    re-exported here), and the minimal detectable bias.
 confidence_band
     Fitted values at new design rows with their confidence half-widths.
 load_sea_level
@@ -45,25 +48,33 @@ import io
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy import linalg as sla
-from scipy import optimize, stats
+from scipy import stats
 
-from .linalg import (
-    as_covariance,
-    as_float_array,
-    as_matrix,
-    check_alpha,
+from course.chi2 import noncentrality, residual_norm_law
+from course.linalg import (
     check_full_column_rank,
     cholesky_lower,
+    qr_solve,
+    readonly,
     symmetrize,
     whiten,
 )
-from .results import TestResult, format_number
+from course.results import TestResult, decide, format_number
+from course.validation import (
+    as_count,
+    as_covariance,
+    as_float_array,
+    as_index,
+    as_matrix,
+    as_probability,
+)
 
 __all__ = [
+    "ConfidenceBand",
     "LeastSquaresFit",
     "SnoopingResult",
     "WTestResult",
@@ -83,20 +94,13 @@ __all__ = [
 _UNTESTABLE_RTOL = 1e-10
 
 
-@lru_cache(maxsize=64)
-def _chi2(dof: int):
-    # Freezing a scipy distribution costs ~1 ms; Monte Carlo loops reuse it.
-    return stats.chi2(dof)
-
-
 @lru_cache(maxsize=1)
 def _standard_normal():
+    # Freezing a scipy distribution costs ~1 ms; Monte Carlo loops reuse it.
     return stats.norm()
 
 
-def _readonly(array: np.ndarray) -> np.ndarray:
-    array.setflags(write=False)
-    return array
+_readonly = readonly
 
 
 def _format_vector(values, digits: int = 5, limit: int = 6) -> str:
@@ -306,12 +310,10 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
 
     A_w = whiten(L, A)
     y_w = whiten(L, y)
-    Q, R_full = sla.qr(A_w, mode="full", check_finite=False)
-    R = np.triu(R_full[:n, :n])
+    solution = qr_solve(A_w, y_w, full=True)
+    Q, R, x_hat = solution.Q, solution.R, solution.x
     Q1, Q2 = Q[:, :n], Q[:, n:]
-    x_hat = sla.solve_triangular(R, Q1.T @ y_w, lower=False, check_finite=False)
-    R_inv = sla.solve_triangular(R, np.eye(n), lower=False, check_finite=False)
-    Qxx = symmetrize(R_inv @ R_inv.T)
+    Qxx = symmetrize(solution.R_inv @ solution.R_inv.T)
 
     y_hat = A @ x_hat
     e_hat = y - y_hat
@@ -340,17 +342,6 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
         n=int(n),
         _factors=factors,
     )
-
-
-def _whole_number(value, name: str, minimum: int, or_none: bool = False) -> int:
-    """``value`` as an int, refusing bools, fractions and non-numbers with a clear message."""
-    ok = not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
-    if not ok or not float(value).is_integer() or value < minimum:
-        kind = "a positive" if minimum == 1 else "a non-negative"
-        raise ValueError(
-            f"{name} must be {kind} integer{' or None' if or_none else ''}, got {value!r}"
-        )
-    return int(value)
 
 
 def _check_fit(value) -> LeastSquaresFit:
@@ -407,24 +398,28 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     quantity ``T / (m - 1) = σ̂² / σ²`` (Section 10.1.4), which is why
     ``T / (m - n)`` is reported as the (a-posteriori) variance factor. T is
     evaluated as ``||Q2^T L^{-1} y||²``, the same number without ``Qyy^{-1}``.
+
+    Examples
+    --------
+    The chapter's second day of line fitting: the line is rejected.
+
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(4), np.arange(1, 5)])
+    >>> result = overall_model_test(fit(A, [28, 20, 16, 36]), alpha=0.01)
+    >>> round(result.statistic, 6), round(result.critical_value, 4), result.reject
+    (216.0, 9.2103, True)
     """
     fit = _check_fit(fit)
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     _require_redundancy(fit, "overall model test")
     dof = fit.redundancy
     T = fit.squared_norm
-    null = _chi2(dof)
-    critical = float(null.isf(alpha))
-    return TestResult(
-        name="overall model test",
-        statistic=T,
-        alpha=alpha,
-        critical_value=critical,
-        pvalue=float(null.sf(T)),
-        reject=critical < T,
-        null=null,
+    return TestResult.from_null(
+        "overall model test",
+        T,
+        residual_norm_law(dof),
+        alpha,
         dof=dof,
-        alternative="greater",
         details={"variance factor T/(m-n)": T / dof},
     )
 
@@ -487,21 +482,13 @@ class WTestResult:
                 f"observation {i} cannot be tested: it has no redundancy (its residual is "
                 "always zero), so an outlier in it is invisible"
             )
-        crit = self.critical_value
-        return TestResult(
-            name=f"w-test, observation {i}",
-            statistic=float(self.w[i]),
-            alpha=self.alpha,
-            critical_value=(-crit, crit),
-            pvalue=float(self.pvalues[i]),
-            reject=bool(self.reject[i]),
-            null=self.null,
-            alternative="two-sided",
+        return TestResult.from_null(
+            f"w-test, observation {i}", float(self.w[i]), self.null, self.alpha, "two-sided"
         )
 
     def tests(self) -> list[TestResult]:
         """One :class:`~course.results.TestResult` per testable observation."""
-        return [self.test(i) for i in np.flatnonzero(self.testable)]
+        return [self.test(int(i)) for i in np.flatnonzero(self.testable)]
 
     def summary(self) -> str:
         """One line: largest |w|, threshold and the rejected observations."""
@@ -597,20 +584,32 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     ``z = Q2^T L^{-1} y``, so both come from one triangular solve.
     Reference: W. Baarda (1968), *A testing procedure for use in geodetic
     networks*, Netherlands Geodetic Commission.
+
+    Examples
+    --------
+    A line observed with sigma = 0.1 and an outlier of 0.6 at observation 6:
+
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
+    >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
+    >>> wt = w_tests(fit(A, y, 0.01 * np.eye(10)), alpha=0.01)
+    >>> wt.largest, wt.rejected, round(float(wt.w[6]), 2)
+    (6, [6], 4.83)
     """
     fit = _check_fit(fit)
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     _require_redundancy(fit, "w-test")
     numerator, denom2, testable = _w_quantities(fit)
     w = np.full(fit.m, np.nan)
     w[testable] = numerator[testable] / np.sqrt(denom2[testable])
     null = _standard_normal()
-    critical = float(null.isf(alpha / 2))
-    abs_w = np.abs(w)
+    decision = decide(null, w[testable], alpha, "two-sided")
+    critical = decision.critical_value.upper
     pvalues = np.full(fit.m, np.nan)
-    pvalues[testable] = 2 * null.sf(abs_w[testable])
+    pvalues[testable] = decision.pvalue
     reject = np.zeros(fit.m, dtype=bool)
-    reject[testable] = abs_w[testable] > critical
+    reject[testable] = decision.reject
+    abs_w = np.abs(w)
     largest = int(np.nanargmax(abs_w)) if np.any(testable) else 0
     return WTestResult(
         w=_readonly(w),
@@ -724,10 +723,19 @@ def data_snooping(
     redundancy 1 all testable ``|w_i|`` are equal, so a rejection there
     cannot tell which observation is wrong: the removal is then arbitrary
     (the first largest), which is why practitioners want redundancy to spare.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
+    >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
+    >>> result = data_snooping(A, y, 0.01 * np.eye(10), alpha=0.01)
+    >>> result.removed, result.stop_reason
+    ((6,), 'no observation rejected')
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     if max_removals is not None:
-        max_removals = _whole_number(max_removals, "max_removals", minimum=0, or_none=True)
+        max_removals = as_count(max_removals, "max_removals", minimum=0)
     current = fit(A, y, Qyy)
     A_all, y_all, Q_all = current.A, current.y, current.Qyy
     kept = list(range(current.m))
@@ -765,55 +773,6 @@ def data_snooping(
 # ---------------------------------------------------------------------------
 # reliability
 # ---------------------------------------------------------------------------
-def noncentrality(alpha: float, power: float, dof: int = 1) -> float:
-    """Non-centrality λ0 at which a chi-square test has the given power.
-
-    Parameters
-    ----------
-    alpha : float
-        Level of significance of the test, in (0, 1).
-    power : float
-        Required detection probability ``γ = 1 - β``, with ``alpha < power < 1``.
-    dof : int
-        Degrees of freedom of the test (1 for the w-test).
-
-    Returns
-    -------
-    float
-        λ0 solving ``ncx2.sf(chi2.isf(alpha, dof), dof, λ0) = power``.
-
-    Notes
-    -----
-    Under an alternative with bias the test statistic follows a non-central
-    ``chi2(dof, λ)``; the power grows with λ, and λ0 is found with
-    ``scipy.optimize.brentq``. For ``dof = 1`` the test ``w² > chi2_α(1)`` is
-    the two-sided w-test, whose power is
-    ``Φ(√λ - z_{α/2}) + Φ(-√λ - z_{α/2})``; dropping the (tiny) second term
-    gives the familiar approximation ``√λ0 ≈ z_{α/2} + z_{1-γ}`` with
-    ``z_{1-γ} = Φ^{-1}(γ)`` (e.g. 17.07 for α = 0.001, γ = 0.80), which
-    slightly overstates the exact λ0. Reference: Baarda (1968); Teunissen,
-    *Testing theory* (2000), ch. 4. (The non-centrality a given fault
-    *produces* in a test is :func:`course.diagnosis.fault_noncentrality`.)
-    """
-    alpha = check_alpha(alpha)
-    power = check_alpha(power, "power")
-    dof = _whole_number(dof, "dof", minimum=1)
-    if power <= alpha:
-        raise ValueError(
-            f"power ({power!r}) must exceed alpha ({alpha!r}): even without a bias the test "
-            "rejects with probability alpha"
-        )
-    critical = stats.chi2.isf(alpha, dof)
-
-    def gap(lam):
-        return stats.ncx2.sf(critical, dof, lam) - power
-
-    upper = 1.0
-    while gap(upper) < 0:
-        upper *= 2.0
-    return float(optimize.brentq(gap, 0.0, upper, xtol=1e-13, rtol=4 * np.finfo(float).eps))
-
-
 def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.ndarray:
     """Minimal detectable bias of every observation (internal reliability).
 
@@ -844,6 +803,13 @@ def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.n
     with ``λ0 = noncentrality(alpha, power, 1)``; for diagonal Qyy this is
     ``σ_i sqrt(λ0 / r_i)`` with ``r_i`` the redundancy number. Beyond the
     chapter; reference: Baarda (1968).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(4), np.arange(1, 5)])
+    >>> mdb(fit(A, [14, 20, 20, 24])).round(2)
+    array([7.54, 4.94, 4.94, 7.54])
     """
     fit = _check_fit(fit)
     _require_redundancy(fit, "minimal detectable bias")
@@ -857,7 +823,16 @@ def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.n
 # ---------------------------------------------------------------------------
 # confidence band
 # ---------------------------------------------------------------------------
-def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
+class ConfidenceBand(NamedTuple):
+    """Result of :func:`confidence_band` (unpacks as ``y_new_hat, half_width``)."""
+
+    y_new_hat: np.ndarray
+    """``A_new x̂``, ``(k,)``."""
+    half_width: np.ndarray
+    """Half-widths of the confidence intervals, ``(k,)``."""
+
+
+def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> ConfidenceBand:
     """Fitted values at new design rows and their confidence half-widths.
 
     Parameters
@@ -871,10 +846,9 @@ def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
 
     Returns
     -------
-    y_new_hat : ndarray, shape (k,)
-        ``A_new x̂``.
-    half_width : ndarray, shape (k,)
-        ``norm.isf((1 - level) / 2) * σ``, with ``σ² = diag(A_new Q_x̂x̂ A_new^T)``.
+    ConfidenceBand
+        ``y_new_hat = A_new x̂`` and ``half_width = norm.isf((1 - level) / 2) * σ``,
+        with ``σ² = diag(A_new Q_x̂x̂ A_new^T)``, each of shape ``(k,)``.
 
     Notes
     -----
@@ -885,9 +859,19 @@ def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
     For day 1 of the line-fitting example ``σ_ŷ2 ≈ 0.55`` and the half-width
     is ≈ 1.07. The variance is evaluated as ``||R^{-T} a||²`` by a
     triangular solve.
+
+    Examples
+    --------
+    Day 1 of the chapter: the fitted value at t = 2 and its 95 % half-width.
+
+    >>> import numpy as np
+    >>> A = np.column_stack([np.ones(4), np.arange(1, 5)])
+    >>> band = confidence_band(fit(A, [14, 20, 20, 24]), [[1.0, 2.0]])
+    >>> round(float(band.y_new_hat[0]), 6), round(float(band.half_width[0]), 2)
+    (18.0, 1.07)
     """
     fit = _check_fit(fit)
-    level = check_alpha(level, "level")
+    level = as_probability(level, "level")
     A_new = as_float_array(A_new, "A_new")
     if A_new.ndim != 2 or A_new.shape[1] != fit.n:
         raise ValueError(
@@ -897,7 +881,7 @@ def confidence_band(fit: LeastSquaresFit, A_new, level: float = 0.95):
     y_new = A_new @ fit.x_hat
     G = sla.solve_triangular(fit._factors.R, A_new.T, trans="T", lower=False, check_finite=False)
     sigma = np.sqrt(np.sum(G * G, axis=0))
-    return y_new, stats.norm.isf((1.0 - level) / 2) * sigma
+    return ConfidenceBand(y_new, stats.norm.isf((1.0 - level) / 2) * sigma)
 
 
 # ---------------------------------------------------------------------------
@@ -924,15 +908,17 @@ def load_sea_level(case: int):
     -----
     Data: TU Delft MUDE open course book, "overall model test" notebook,
     CC BY 4.0 (see ``course/data/sea_level_mude/README.md``).
+
+    Examples
+    --------
+    >>> t, y = load_sea_level(1)
+    >>> t.size, y.size
+    (20, 20)
     """
-    if (
-        isinstance(case, bool)
-        or not isinstance(case, (int, np.integer))
-        or case not in (0, 1, 2, 3)
-    ):
-        raise ValueError(f"case must be 0, 1, 2 or 3, got {case!r}")
-    source = resources.files("course").joinpath(
-        "data", "sea_level_mude", f"Dataset_{int(case)}.txt"
-    )
+    try:
+        case = as_index(case, "case", 4)
+    except ValueError:
+        raise ValueError(f"case must be 0, 1, 2 or 3, got {case!r}") from None
+    source = resources.files("course") / "data" / "sea_level_mude" / f"Dataset_{case}.txt"
     y = np.loadtxt(io.StringIO(source.read_text(encoding="utf-8")))
     return np.arange(1.0, y.size + 1.0), y

@@ -52,7 +52,7 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize, stats
 
-from .distributions import FrozenDistribution, as_generator
+from .distributions import _NO_STATE, FrozenDistribution, _rng_argument
 from .linalg import as_covariance, as_float_array, as_matrix, as_vector, symmetrize
 
 __all__ = [
@@ -926,7 +926,7 @@ class WeightedChiSquare(FrozenDistribution):
         return cdf
 
     def _rvs(self, size, rng):
-        shape = () if size is None else ((int(size),) if np.isscalar(size) else tuple(size))
+        shape = () if size is None else ((int(size),) if np.ndim(size) == 0 else tuple(size))
         out = np.full(shape, self.offset)
         for w, h, d in zip(self.weights, self.dof, self.noncentrality):
             draw = rng.noncentral_chisquare(h, d, shape) if d > 0 else rng.chisquare(h, shape)
@@ -938,7 +938,7 @@ class WeightedChiSquare(FrozenDistribution):
     def _root(self, func, target, increasing):
         # bracket from the approximate quantile outward in steps of the std
         std = math.sqrt(max(self.var(), 0.0))
-        lower, upper = self.support
+        lower, upper = self.support()
         guess = self._approx_quantile(target if increasing else 1.0 - target)
         sign = 1.0 if increasing else -1.0
 
@@ -966,7 +966,7 @@ class WeightedChiSquare(FrozenDistribution):
         c1, c2, _c3, _c4 = _ltz_parameters(
             self.weights, self.dof, self.noncentrality, self.sigma, self.offset
         )
-        lower, upper = self.support
+        lower, upper = self.support()
         guess = c1 + math.sqrt(2 * c2) * stats.norm.ppf(q)
         return min(
             max(guess, lower if np.isfinite(lower) else guess),
@@ -1063,9 +1063,9 @@ class QuadraticForm(WeightedChiSquare):
         AS = A @ S
         return float(2 * np.sum(AS * AS.T) + 4 * mu @ AS @ A @ mu)
 
-    def rvs_direct(self, size, random_state=None):
+    def rvs_direct(self, size, random_state=_NO_STATE, *, rng=None):
         """Draw ``x ~ N(mean, cov)`` and return ``x^T A x`` (slow; for checks)."""
-        rng = as_generator(random_state)
+        rng = _rng_argument(rng, random_state, "QuadraticForm.rvs_direct")
         size = int(size)
         eigenvalues, vectors = np.linalg.eigh(self.cov)
         root = vectors * np.sqrt(np.clip(eigenvalues, 0, None))

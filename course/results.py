@@ -18,11 +18,35 @@ them all:
     the decision, ``True`` when H0 is rejected,
 ``null``
     the distribution of the statistic under H0, a frozen scipy-style object
-    with ``cdf``, ``sf``, ``ppf``, ``isf`` and ``rvs``.
+    with ``cdf``, ``sf``, ``ppf``, ``isf`` and ``rvs`` (the :class:`Law`
+    protocol).
 
 All numbers are stored as plain Python ``float``/``int``/``bool``, so what is
 printed never shows numpy scalar reprs, and the ``repr`` is short and
 deterministic (no addresses, no timestamps).
+
+One decision path
+-----------------
+Critical value, p-value and decision always come from the frozen null law,
+by :func:`decide` (for arrays of statistics too) or
+:meth:`TestResult.from_null`:
+
+=============  ==========================  ==============================  ===================
+alternative    critical value              p-value                         reject H0 when
+=============  ==========================  ==============================  ===================
+``greater``    ``null.isf(alpha)``         ``null.sf(T)``                  ``T > critical``
+``less``       ``null.ppf(alpha)``         ``null.cdf(T)``                 ``T < critical``
+``two-sided``  ``(null.ppf(alpha/2),       ``min(1, 2 min(null.cdf(T),     ``T`` outside the pair
+               null.isf(alpha/2))``        null.sf(T)))``
+=============  ==========================  ==============================  ===================
+
+A two-sided test may also decide on a *pair* of statistics ``(low, high)``
+(the smallest and largest eigenvalue of the NIS matrix): the lower tail is
+then judged on ``low`` and the upper tail on ``high``, with a
+:class:`course.distributions.TailPair` as the null law.  For continuous
+laws ``reject == (pvalue < alpha)`` up to rounding, and
+:meth:`TestResult.power` gives the probability of the same critical region
+under any other law.
 """
 
 from __future__ import annotations
@@ -31,16 +55,194 @@ import html
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
 __all__ = [
+    "ALTERNATIVES",
+    "CriticalValues",
+    "Decision",
+    "Law",
     "TestResult",
     "as_plain",
+    "critical_value",
+    "decide",
     "describe_distribution",
     "format_number",
+    "rejection_probability",
 ]
+
+ALTERNATIVES = ("greater", "less", "two-sided")
+_ALTERNATIVES = ALTERNATIVES
+
+
+@runtime_checkable
+class Law(Protocol):
+    """A frozen univariate law, as scipy.stats' frozen distributions are.
+
+    What the decision path needs: ``cdf``, ``sf`` and their inverses
+    ``ppf``, ``isf``; what simulation needs: ``rvs``.  Every frozen
+    ``scipy.stats`` distribution and every
+    :class:`course.distributions.FrozenDistribution` satisfies it.
+    """
+
+    def cdf(self, x: Any) -> Any: ...
+
+    def sf(self, x: Any) -> Any: ...
+
+    def ppf(self, q: Any) -> Any: ...
+
+    def isf(self, q: Any) -> Any: ...
+
+    def rvs(self, *args: Any, **kwargs: Any) -> Any: ...
+
+
+class CriticalValues(NamedTuple):
+    """The two thresholds of a two-sided test: reject outside ``[lower, upper]``."""
+
+    lower: float
+    upper: float
+
+
+class Decision(NamedTuple):
+    """Result of :func:`decide`."""
+
+    critical_value: Any
+    """A float, or a :class:`CriticalValues` pair for a two-sided test."""
+    pvalue: Any
+    """A float, or an array shaped like the statistic."""
+    reject: Any
+    """A bool, or a boolean array shaped like the statistic."""
+
+
+def _check_alternative(alternative: str) -> str:
+    if alternative not in ALTERNATIVES:
+        raise ValueError(f"alternative must be one of {ALTERNATIVES}, got {alternative!r}")
+    return alternative
+
+
+def critical_value(null: Law, alpha: float, alternative: str = "greater") -> Any:
+    """The threshold(s) of a level-``alpha`` test from its null law.
+
+    Parameters
+    ----------
+    null : Law
+        Law of the statistic under H0.
+    alpha : float
+        Level of significance, in (0, 1).
+    alternative : {"greater", "less", "two-sided"}
+
+    Returns
+    -------
+    float or CriticalValues
+        ``null.isf(alpha)``, ``null.ppf(alpha)`` or the pair
+        ``(null.ppf(alpha/2), null.isf(alpha/2))``.
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> round(critical_value(stats.chi2(2), 0.01), 4)
+    9.2103
+    >>> critical_value(stats.norm(), 0.05, "two-sided")  # doctest: +ELLIPSIS
+    CriticalValues(lower=-1.959..., upper=1.959...)
+    """
+    from course.validation import as_probability
+
+    alpha = as_probability(alpha)
+    alternative = _check_alternative(alternative)
+    if alternative == "greater":
+        return float(null.isf(alpha))
+    if alternative == "less":
+        return float(null.ppf(alpha))
+    return CriticalValues(float(null.ppf(alpha / 2)), float(null.isf(alpha / 2)))
+
+
+def _tails(statistic: Any, alternative: str):
+    """The statistic judged in the lower and in the upper tail."""
+    if alternative == "two-sided" and isinstance(statistic, tuple):
+        if len(statistic) != 2:
+            raise ValueError(
+                "a two-sided test on several statistics takes a pair (low, high), "
+                f"got {len(statistic)} values"
+            )
+        return np.asarray(statistic[0], dtype=float), np.asarray(statistic[1], dtype=float)
+    value = np.asarray(statistic, dtype=float)
+    return value, value
+
+
+def _scalar_or_array(value: Any) -> Any:
+    value = np.asarray(value)
+    return value.item() if value.ndim == 0 else value
+
+
+def decide(null: Law, statistic: Any, alpha: float, alternative: str = "greater") -> Decision:
+    """Critical value, p-value and decision of a test, from its frozen null law.
+
+    The course's one decision path: every test computes these three numbers
+    here (see the table in the module docstring).
+
+    Parameters
+    ----------
+    null : Law
+        Law of the statistic under H0.
+    statistic : float, array_like or pair
+        The observed statistic; an array (or list) gives one decision per
+        entry; for a two-sided test, a *tuple* ``(low, high)`` judges ``low``
+        against the lower tail and ``high`` against the upper one.
+    alpha : float
+        Level of significance, in (0, 1).
+    alternative : {"greater", "less", "two-sided"}
+
+    Returns
+    -------
+    Decision
+        ``(critical_value, pvalue, reject)``.
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> d = decide(stats.chi2(2), 216.0, 0.01)
+    >>> round(d.critical_value, 4), d.reject
+    (9.2103, True)
+    >>> d = decide(stats.norm(), [0.5, -3.0], 0.05, "two-sided")
+    >>> d.reject
+    array([False,  True])
+    """
+    alternative = _check_alternative(alternative)
+    critical = critical_value(null, alpha, alternative)
+    low, high = _tails(statistic, alternative)
+    if alternative == "greater":
+        pvalue, reject = null.sf(high), high > critical
+    elif alternative == "less":
+        pvalue, reject = null.cdf(low), low < critical
+    else:
+        tails = np.minimum(np.asarray(null.cdf(low), float), np.asarray(null.sf(high), float))
+        pvalue = np.minimum(1.0, 2.0 * tails)
+        reject = (low < critical.lower) | (high > critical.upper)
+    return Decision(critical, _scalar_or_array(pvalue), _scalar_or_array(reject))
+
+
+def rejection_probability(law: Law, critical: Any, alternative: str = "greater") -> float:
+    """Probability that a statistic with law ``law`` falls in the critical region.
+
+    Under the null law this is the level; under an alternative it is the
+    power.  For a two-sided region it is ``law.cdf(lower) + law.sf(upper)``.
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> round(rejection_probability(stats.norm(loc=3), 1.6449, "greater"), 4)
+    0.9123
+    """
+    alternative = _check_alternative(alternative)
+    if alternative == "greater":
+        return float(law.sf(critical))
+    if alternative == "less":
+        return float(law.cdf(critical))
+    lower, upper = critical
+    return float(law.cdf(lower) + law.sf(upper))
+
 
 _ALTERNATIVES = ("greater", "less", "two-sided")
 
@@ -50,13 +252,26 @@ def as_plain(value: Any) -> Any:
 
     Arrays are returned unchanged: only scalars are converted, so that a
     result prints ``6.0`` and never ``np.float64(6.0)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> as_plain((np.float64(6.0), np.int64(2)))
+    (6.0, 2)
     """
     # numpy scalars first: np.float64 subclasses float and would slip through.
     if isinstance(value, np.generic) or (isinstance(value, np.ndarray) and value.ndim == 0):
         return value.item()
     if isinstance(value, (tuple, list)):
-        return type(value)(as_plain(v) for v in value)
+        return _same_sequence_type(value, [as_plain(v) for v in value])
     return value
+
+
+def _same_sequence_type(template: Any, items: list) -> Any:
+    """``items`` as a list, tuple or named tuple like ``template``."""
+    if hasattr(template, "_fields"):  # a NamedTuple keeps its field names
+        return type(template)(*items)
+    return type(template)(items)
 
 
 def format_number(value: Any, digits: int = 5) -> str:
@@ -65,6 +280,11 @@ def format_number(value: Any, digits: int = 5) -> str:
     Integers (and floats that are whole numbers of modest size) print
     without a decimal point; other floats use ``digits`` significant digits;
     tuples print as ``(a, b)``.
+
+    Examples
+    --------
+    >>> format_number(6.0), format_number(0.0497870684), format_number((74.2219, 129.5612), 4)
+    ('6', '0.049787', '(74.22, 129.6)')
     """
     value = as_plain(value)
     if isinstance(value, bool) or value is None:
@@ -83,7 +303,14 @@ def format_number(value: Any, digits: int = 5) -> str:
 
 
 def describe_distribution(dist: Any) -> str:
-    """A short, deterministic name for a frozen distribution, e.g. ``chi2(2)``."""
+    """A short, deterministic name for a frozen distribution, e.g. ``chi2(2)``.
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> describe_distribution(stats.chi2(3, scale=0.04))
+    'chi2(3, scale=0.04)'
+    """
     if dist is None:
         return "None"
     inner = getattr(dist, "dist", None)
@@ -115,7 +342,7 @@ class TestResult:
         Probability under H0 of a statistic at least as extreme as observed.
     reject : bool
         ``True`` when H0 is rejected at level ``alpha``.
-    null : frozen distribution
+    null : Law
         Law of the statistic under H0 (scipy.stats frozen or course-defined).
     dof : int or float, optional
         Degrees of freedom of the null law, where it has them.
@@ -126,8 +353,19 @@ class TestResult:
 
     Notes
     -----
-    The class sets ``__test__ = False`` so that pytest does not mistake it
-    for a test class when a test module imports it.
+    Build one with :meth:`from_null`, which computes the critical value,
+    p-value and decision from ``null`` (the course's one decision path,
+    :func:`decide`).  The class sets ``__test__ = False`` so that pytest
+    does not mistake it for a test class when a test module imports it.
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> r = TestResult.from_null("overall model test", 6.0, stats.chi2(2), 0.01, dof=2)
+    >>> r
+    TestResult('overall model test', statistic=6, dof=2, alpha=0.01, critical_value=9.2103, pvalue=0.04979, reject=False, null=chi2(2))
+    >>> round(r.power(stats.ncx2(2, 10.0)), 4)
+    0.6148
     """
 
     __test__ = False
@@ -138,7 +376,7 @@ class TestResult:
     critical_value: Any
     pvalue: float
     reject: bool
-    null: Any
+    null: Law
     dof: Any = None
     alternative: str = "greater"
     details: Mapping[str, Any] = field(default_factory=dict)
@@ -158,6 +396,78 @@ class TestResult:
         set_(self, "reject", bool(self.reject))
         set_(self, "dof", as_plain(self.dof))
         set_(self, "details", {key: as_plain(value) for key, value in self.details.items()})
+
+    @classmethod
+    def from_null(
+        cls,
+        name: str,
+        statistic: Any,
+        null: Law,
+        alpha: float,
+        alternative: str = "greater",
+        *,
+        dof: Any = None,
+        details: Mapping[str, Any] | None = None,
+    ) -> TestResult:
+        """The result of testing ``statistic`` against its null law ``null``.
+
+        Parameters
+        ----------
+        name : str
+            What was tested.
+        statistic : float or pair of float
+            Observed test quantity (a pair ``(low, high)`` for a two-sided
+            test on two statistics, see :func:`decide`).
+        null : Law
+            Law of the statistic under H0.
+        alpha : float
+            Level of significance.
+        alternative : {"greater", "less", "two-sided"}
+            Which tail(s) form the critical region.
+        dof : int, optional
+            Degrees of freedom, shown with the result.
+        details : mapping, optional
+            Extra, test-specific values.
+
+        Returns
+        -------
+        TestResult
+            With ``critical_value``, ``pvalue`` and ``reject`` from :func:`decide`.
+
+        Examples
+        --------
+        >>> from scipy import stats
+        >>> TestResult.from_null("w-test", 2.5, stats.norm(), 0.05, "two-sided").summary()
+        'w-test: statistic = 2.5, critical region outside [-1.96, 1.96] (alpha = 0.05), p = 0.01242: reject H0'
+        """
+        decision = decide(null, statistic, alpha, alternative)
+        return cls(
+            name=name,
+            statistic=statistic,
+            alpha=alpha,
+            critical_value=decision.critical_value,
+            pvalue=decision.pvalue,
+            reject=decision.reject,
+            null=null,
+            dof=dof,
+            alternative=alternative,
+            details=dict(details or {}),
+        )
+
+    def power(self, alternative_law: Law) -> float:
+        """Probability that this test rejects when the statistic has ``alternative_law``.
+
+        The critical region is this result's; under ``null`` the answer is
+        ``alpha`` (for a continuous law).
+
+        Examples
+        --------
+        >>> from scipy import stats
+        >>> r = TestResult.from_null("z-test", 0.3, stats.norm(), 0.05)
+        >>> round(r.power(stats.norm(loc=2.0)), 4)
+        0.6388
+        """
+        return rejection_probability(alternative_law, self.critical_value, self.alternative)
 
     # -- presentation -----------------------------------------------------
     def _fields(self):
@@ -208,7 +518,8 @@ class TestResult:
 def _plain_number(value):
     value = as_plain(value)
     if isinstance(value, (tuple, list)):
-        return tuple(float(v) for v in value)
+        items = [float(v) for v in value]
+        return _same_sequence_type(value, items) if isinstance(value, tuple) else tuple(items)
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         return float(value)
     return value

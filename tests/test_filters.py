@@ -425,16 +425,16 @@ def test_windowed_sum_against_naive():
 
 
 def test_windowed_nis_threshold_and_windowed_test():
-    assert kf.windowed_nis_threshold(0.01, 10) == pytest.approx(23.209251, abs=1e-6)
-    assert kf.windowed_nis_threshold(0.05, 5, n_outputs=2) == pytest.approx(18.307038, abs=1e-6)
+    assert kf.windowed_nis_threshold(10, 0.01) == pytest.approx(23.209251, abs=1e-6)
+    assert kf.windowed_nis_threshold(5, 0.05, n_outputs=2) == pytest.approx(18.307038, abs=1e-6)
     with pytest.raises(ValueError, match=r"window .*positive integer"):
-        kf.windowed_nis_threshold(0.05, 0)
-    with pytest.raises(ValueError, match=r"window .*positive integer"):
-        kf.windowed_nis_threshold(0.05, 2.5)
+        kf.windowed_nis_threshold(0, 0.05)
+    with pytest.raises(ValueError, match=r"window .*must be an integer"):
+        kf.windowed_nis_threshold(2.5, 0.05)
     with pytest.raises(ValueError, match=r"n_outputs .*positive integer"):
-        kf.windowed_nis_threshold(0.05, 10, n_outputs=0)
+        kf.windowed_nis_threshold(10, 0.05, n_outputs=0)
     with pytest.raises(ValueError, match="alpha"):
-        kf.windowed_nis_threshold(10, 0.05)  # the old (window, alpha) order is refused
+        kf.windowed_nis_threshold(10, 1.5)
     nis = np.arange(1.0, 11.0)  # windowed sum over the last 4: 7+8+9+10 = 34
     res = kf.windowed_chi2_test(nis, window=4, alpha=0.05)
     assert isinstance(res, TestResult)
@@ -457,7 +457,7 @@ def test_windowed_test_on_filter_result_and_false_alarm_rate():
     _, y = m.simulate(N, np.random.default_rng(14), batch=runs, u=u)
     res = kf.kalman_filter(m, y, u=u)
     T = kf.windowed_nis(res, L)
-    thr = kf.windowed_nis_threshold(alpha, L)
+    thr = kf.windowed_nis_threshold(L, alpha)
     # one sample per run: independent Bernoulli(alpha) trials
     alarms = int(np.sum(T[:, -1] > thr))
     lo, hi = stats.binom.interval(1 - MISS, runs, alpha)
@@ -537,7 +537,7 @@ def test_diffuse_rls_windowed_nis_is_chi2_after_the_start():
     start = rec.first + 1  # first sample with an innovation
     assert np.all(np.isnan(W[:, : start + L - 1])) and np.all(np.isfinite(W[:, start + L - 1 :]))
     lo, hi = stats.binom.interval(1 - MISS, M, alpha)
-    thr = kf.windowed_nis_threshold(alpha, L)
+    thr = kf.windowed_nis_threshold(L, alpha)
     for t in (start + L - 1, N - 1):
         assert lo <= np.sum(W[:, t] > thr) <= hi
     one = kf.recursive_least_squares(Phi, Y[0], r=0.09)
@@ -555,7 +555,7 @@ def test_residual_evaluation_input_errors():
         kf.windowed_chi2_test(-nis, 3)
     with pytest.raises(ValueError, match="one record"):
         kf.windowed_chi2_test(np.ones((2, 10)), 3)
-    with pytest.raises(ValueError, match="integer sample index"):
+    with pytest.raises(ValueError, match=r"t .* must be an integer"):
         kf.windowed_chi2_test(nis, 3, t=4.5)
     with pytest.raises(TypeError, match="FilterResult or an RLSResult"):
         kf.windowed_nis(nis, 3)
@@ -563,7 +563,7 @@ def test_residual_evaluation_input_errors():
         kf.alarm_statistics(np.ones((2, 3)), np.nan)
     with pytest.raises(ValueError, match="threshold must be a real number"):
         kf.alarm_statistics(np.ones((2, 3)), "high")
-    with pytest.raises(ValueError, match="fault_time must be an integer"):
+    with pytest.raises(ValueError, match=r"fault_time .* must be an integer"):
         kf.alarm_statistics(np.ones((2, 3)), 1.0, fault_time=1.5)
 
 
@@ -572,7 +572,7 @@ def test_lecture_model_input_errors():
         kf.beta_drift_model(q_beta="slow")
     with pytest.raises(ValueError, match="r must be positive"):
         kf.beta_drift_model(r=0.0)
-    with pytest.raises(ValueError, match="Ts must be a positive"):
+    with pytest.raises(ValueError, match=r"Ts .* must be positive"):
         kf.beta_drift_model(Ts=0.0)
     with pytest.raises(ValueError, match="q_x must be non-negative"):
         kf.simulate_beta_system(np.ones(5), np.ones(5), np.random.default_rng(0), q_x=-1.0)
@@ -611,7 +611,7 @@ def test_drifting_beta_false_alarms_only_without_random_walk():
     _, y = kf.simulate_beta_system(
         beta, u, np.random.default_rng(15), Ts=0.1, q_x=1e-4, r=2.5e-3, x0=0.5, batch=runs
     )
-    thr = kf.windowed_nis_threshold(alpha, L)
+    thr = kf.windowed_nis_threshold(L, alpha)
     rates = {}
     for q_beta in (1e-4, 0.0):
         model = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
@@ -639,7 +639,7 @@ def test_sensor_fault_is_detected():
     model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
     res = kf.extended_kalman_filter(model, y, u, store_covariances=False)
     a = kf.alarm_statistics(
-        kf.windowed_nis(res, L), kf.windowed_nis_threshold(alpha, L), fault_time=tf
+        kf.windowed_nis(res, L), kf.windowed_nis_threshold(L, alpha), fault_time=tf
     )
     assert a.detection_probability > 0.99
     assert a.median_delay <= 3

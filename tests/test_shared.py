@@ -267,8 +267,8 @@ def test_frozen_distribution_input_checks_and_rvs():
         d.ppf(1.5)
     with pytest.raises(ValueError, match="x contains NaN"):
         d.cdf(np.nan)
-    a = d.rvs(size=5, random_state=np.random.default_rng(3))
-    b = d.rvs(size=5, random_state=np.random.default_rng(3))
+    a = d.rvs(size=5, rng=np.random.default_rng(3))
+    b = d.rvs(size=5, rng=np.random.default_rng(3))
     np.testing.assert_array_equal(a, b)
     g = np.random.default_rng(1)
     assert as_generator(g) is g
@@ -361,3 +361,120 @@ def test_course_open_uses_this_interpreters_jupyter(monkeypatch, tmp_path, capsy
     monkeypatch.setattr(cli, "_jupyter_command", lambda app: None)
     assert cli.main(["open"]) == 2
     assert "is not installed" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------
+# the decision path, laws and the linear-algebra home (release 0.2)
+# ---------------------------------------------------------------------------
+def test_decide_for_every_alternative_and_for_arrays():
+    from course.results import CriticalValues, decide
+
+    law = stats.chi2(3)
+    d = decide(law, 10.0, 0.05, "greater")
+    assert d.critical_value == pytest.approx(law.isf(0.05)) and d.reject
+    assert d.pvalue == pytest.approx(law.sf(10.0))
+    d = decide(law, 0.1, 0.05, "less")
+    assert d.critical_value == pytest.approx(law.ppf(0.05)) and d.reject
+    d = decide(law, np.array([0.01, 3.0, 20.0]), 0.05, "two-sided")
+    assert isinstance(d.critical_value, CriticalValues)
+    np.testing.assert_array_equal(d.reject, [True, False, True])
+    np.testing.assert_allclose(d.pvalue[1], 2 * min(law.cdf(3.0), law.sf(3.0)))
+    with pytest.raises(ValueError, match="alternative"):
+        decide(law, 1.0, 0.05, "both")
+
+
+def test_tail_pair_judges_each_tail_on_its_own_statistic():
+    from course.distributions import TailPair
+    from course.results import Law, TestResult
+
+    pair = TailPair(stats.norm(-1), stats.norm(1))
+    assert isinstance(pair, Law)
+    r = TestResult.from_null("pair", (-1.5, 3.5), pair, 0.05, "two-sided")
+    assert r.reject and r.critical_value == pytest.approx((-1 - 1.959964, 1 + 1.959964), rel=1e-6)
+    assert r.pvalue == pytest.approx(2 * stats.norm(1).sf(3.5))
+    assert r.power(pair) == pytest.approx(0.05)
+    with pytest.raises(NotImplementedError, match="joint sampler"):
+        pair.rvs(3)
+
+
+def test_frozen_distribution_scipy_methods():
+    law = stats.chi2(4)
+
+    class Chi2(FrozenDistribution):
+        def _cdf(self, x):
+            return law.cdf(x)
+
+        def _sf(self, x):
+            return law.sf(x)
+
+        def _rvs(self, size, rng):
+            return law.rvs(size, random_state=rng)
+
+    mine = Chi2()
+    assert mine.support() == (0.0, np.inf)
+    assert mine.median() == pytest.approx(law.median(), rel=1e-10)
+    assert mine.logsf(30.0) == pytest.approx(law.logsf(30.0), rel=1e-8)
+    assert mine.logcdf(1.0) == pytest.approx(law.logcdf(1.0), rel=1e-8)
+    assert mine.expect(lambda x: x**2) == pytest.approx(law.expect(lambda x: x**2), rel=1e-5)
+    assert mine.expect(lb=2.0, ub=6.0, conditional=True) == pytest.approx(
+        law.expect(lb=2.0, ub=6.0, conditional=True), rel=1e-5
+    )
+    # quantiles are remembered: the same object, no second root search
+    assert mine.isf(0.05) == mine.isf(0.05) == pytest.approx(law.isf(0.05), rel=1e-10)
+
+
+def test_linalg_home_of_least_squares_and_rank():
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((20, 3))
+    b = rng.standard_normal((20, 2))
+    sol = cl.qr_solve(A, b)
+    np.testing.assert_allclose(sol.x, np.linalg.lstsq(A, b, rcond=None)[0], rtol=1e-12)
+    np.testing.assert_allclose(sol.R_inv @ sol.R_inv.T, np.linalg.inv(A.T @ A), rtol=1e-10)
+    assert cl.qr_solve(A, b[:, 0], full=True).Q.shape == (20, 20)
+    deficient = np.column_stack([A, A[:, 0] + A[:, 1]])
+    assert cl.matrix_rank(deficient) == 3 == np.linalg.matrix_rank(deficient)
+    mn = cl.lstsq_min_norm(deficient, b[:, 0])
+    np.testing.assert_allclose(mn.x, np.linalg.pinv(deficient) @ b[:, 0], atol=1e-12)
+    assert mn.rank == 3 and cl.column_rank_deficiency(deficient) in ([0], [1], [3])
+
+
+def test_stacked_cholesky_and_whitening():
+    rng = np.random.default_rng(4)
+    B = rng.standard_normal((5, 3, 3))
+    S = B @ np.swapaxes(B, -1, -2) + np.eye(3)
+    v = rng.standard_normal((5, 3))
+    L = cl.cholesky_factor(S)
+    expected = np.einsum("ki,kij,kj->k", v, np.linalg.inv(S), v)
+    np.testing.assert_allclose(cl.whitened_squared_norms(L, v), expected, rtol=1e-10)
+    shared = np.broadcast_to(S[0], (7, 3, 3))  # a broadcast view is factored once
+    assert cl.cholesky_factor(shared).shape == (1, 3, 3)
+    with pytest.raises(LinAlgError, match="S is not positive definite"):
+        cl.cholesky_factor(-S)
+    with pytest.raises(ValueError, match="not symmetric"):
+        cl.cholesky_factor(S + np.triu(np.ones(3), 1))
+    m = cl.readonly(np.zeros(3))
+    with pytest.raises(ValueError):
+        m[0] = 1.0
+
+
+def test_version_is_written_once_and_shown_by_the_command(capsys):
+    import importlib.metadata
+
+    import course
+    from course import cli
+
+    assert importlib.metadata.version("residual-validation-course") == course.__version__
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"course {course.__version__}"
+
+
+def test_package_data_comes_from_importlib_resources():
+    from importlib import resources
+
+    from course import lsq
+
+    text = resources.files("course").joinpath("data", "sea_level_mude", "Dataset_0.txt").read_text()
+    t, y = lsq.load_sea_level(0)
+    assert y.size == len(text.split()) == t.size == 20

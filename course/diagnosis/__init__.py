@@ -1,8 +1,8 @@
 """Test quantities for fault diagnosis: prediction errors, estimates, likelihoods.
 
-This package follows the lecture on test quantities
-(``seeds/test_quantities_lecture_sv.txt``, Swedish; English digest in
-``seeds/README.md``).  Its one idea: a *test quantity* is a measure of how
+This package follows a Linköping University fault-diagnosis lecture on test
+quantities ("the LiU lecture", Swedish slides; full reference in the course
+bibliography, docs/bibliography.md).  Its one idea: a *test quantity* is a measure of how
 well the model *under the null hypothesis* of a test explains the data.  It
 is zero (or small) when that model can be true and large otherwise.
 
@@ -31,7 +31,7 @@ Likelihood (``_likelihood``)
     :func:`neyman_pearson_test`, :func:`mode_log_likelihoods`,
     :class:`FaultRanking`, :func:`bayes_ranking`.
 Monte Carlo (``_monte_carlo``)
-    :func:`simulate_linear_regression`, :func:`linear_test_statistics`,
+    :func:`simulate_regression_records`, :func:`linear_test_statistics`,
     :class:`IsolationResult`, :func:`isolation_monte_carlo`.
 The lecture's dynamic examples (``_beta_example``, ``_observer``)
     :func:`beta_drift_model`, :func:`simulate_beta_system` (the first-order
@@ -49,8 +49,14 @@ signals ``u_i(t)``, ``nominal`` is the fault-free parameter vector and a set
 of parameter indices ``free`` describes the parameter set of a null
 hypothesis, ``Theta_0 = {theta : theta_j = nominal_j for every j not in
 free}``.  Data may be one record ``y`` of shape ``(N,)`` or ``M`` records at
-once as the columns of an ``(N, M)`` array; statistics then come back as
-length-``M`` arrays, which is what makes the Monte Carlo studies fast.
+once as the rows of an ``(M, N)`` array (records leading, as everywhere in
+the course); statistics then come back as length-``M`` arrays, which is what
+makes the Monte Carlo studies fast.  Records as the *columns* of an
+``(N, M)`` array, the layout of earlier releases, still work with a
+DeprecationWarning.  The test-quantity functions take the data first and the
+hypothesis ``(U, nominal, free)`` after it, as the statistical tests of
+:mod:`scipy.stats` do; :func:`least_squares_residual`, a fit, takes the
+regressors first, as :func:`course.lsq.fit` does.
 """
 
 from course.diagnosis._beta_example import beta_drift_model, simulate_beta_system
@@ -73,6 +79,7 @@ from course.diagnosis._monte_carlo import (
     isolation_monte_carlo,
     linear_test_statistics,
     simulate_linear_regression,
+    simulate_regression_records,
 )
 from course.diagnosis._observer import ObserverResult, observer_residuals
 from course.diagnosis._parameter_estimates import (
@@ -143,4 +150,5 @@ __all__ = [
     "residual_threshold",
     "simulate_beta_system",
     "simulate_linear_regression",
+    "simulate_regression_records",
 ]

@@ -1,22 +1,30 @@
-"""The lecture's example: a first-order system whose parameter beta drifts slowly."""
+"""The lecture's example: a first-order system whose parameter beta drifts slowly.
+
+Source: the LiU lecture on test quantities (Linköping University, Swedish
+slides; full reference in the course bibliography, docs/bibliography.md),
+slide "Exempel på EKF som residualgenerator".
+"""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from course.distributions import as_generator
-from course.filters._models import NonlinearModel, _batch_shape
-from course.linalg import (
-    as_float_array,
-)
-from course.nis._windowed import _finite_float, _variance
+from course import _deprecation
+from course.filters._models import NonlinearModel, Simulation, _batch_shape
+from course.validation import as_finite, as_float_array, as_generator, as_positive, as_variance
 
 
-# ---------------------------------------------------------------------------
-# the lecture's example: a first-order system with a drifting parameter
-# ---------------------------------------------------------------------------
+@_deprecation.keyword_only("Ts", "q_beta", "q_x", "r", "x0_mean", "x0_cov")
 def beta_drift_model(
-    Ts=0.1, q_beta=1e-4, q_x=1e-4, r=1e-2, x0_mean=(1.0, 0.0), x0_cov=None
+    *,
+    Ts: float = 0.1,
+    q_beta: float = 1e-4,
+    q_x: float = 1e-4,
+    r: float = 1e-2,
+    x0_mean: Any = (1.0, 0.0),
+    x0_cov: Any = None,
 ) -> NonlinearModel:
     """The EKF model of the lecture's example, state ``z = (beta, x)``.
 
@@ -27,7 +35,7 @@ def beta_drift_model(
     Parameters
     ----------
     Ts : float
-        Sampling interval.
+        Sampling interval (all parameters are keyword-only).
     q_beta : float
         Variance of the random-walk step of ``beta``; ``0`` gives the filter
         that takes ``beta`` as an unknown constant.
@@ -46,15 +54,19 @@ def beta_drift_model(
 
     Notes
     -----
-    test_quantities_lecture_sv.txt, "Exempel på EKF som residualgenerator":
-    to detect a sensor fault ``f`` in ``y = x + f`` while ``beta`` varies
-    slowly, augment the state with ``beta`` modelled as a random walk.
+    LiU lecture, "Exempel på EKF som residualgenerator": to detect a sensor
+    fault ``f`` in ``y = x + f`` while ``beta`` varies slowly, augment the
+    state with ``beta`` modelled as a random walk.
+
+    Examples
+    --------
+    >>> model = beta_drift_model(Ts=0.1, r=2.5e-3)
+    >>> model.n_states, model.n_outputs, model.n_inputs
+    (2, 1, 1)
     """
-    Ts = _finite_float(Ts, "Ts")
-    if Ts <= 0:
-        raise ValueError(f"Ts must be a positive sampling interval, got {Ts!r}")
-    q_beta, q_x = _variance(q_beta, "q_beta"), _variance(q_x, "q_x")
-    r = _variance(r, "r", positive=True)
+    Ts = as_positive(Ts, "Ts", what="the sampling interval")
+    q_beta, q_x = as_variance(q_beta, "q_beta"), as_variance(q_x, "q_x")
+    r = as_variance(r, "r", positive=True)
 
     def g(z, u):
         beta, x = z[..., 0], z[..., 1]
@@ -91,7 +103,19 @@ def beta_drift_model(
     )
 
 
-def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=None, batch=None):
+@_deprecation.keyword_only("Ts", "q_x", "r", "x0", "fault", "batch")
+def simulate_beta_system(
+    beta: Any,
+    u: Any,
+    rng: Any,
+    *,
+    Ts: float = 0.1,
+    q_x: float = 1e-4,
+    r: float = 1e-2,
+    x0: float = 0.0,
+    fault: Any = None,
+    batch: Any = None,
+) -> Simulation:
     """Simulate the lecture's system for a given ``beta`` trajectory and sensor fault.
 
     ``x_{t+1} = x_t - Ts beta_t x_t + Ts u_t + w_t``, ``y_t = x_t + f_t + e_t``.
@@ -121,12 +145,21 @@ def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=N
 
     Notes
     -----
-    The lecture's example (test_quantities_lecture_sv.txt, "Exempel på EKF
+    The lecture's example (LiU lecture, "Exempel på EKF
     som residualgenerator"): ``x(t+1) = x(t) - Ts beta(t) x(t) + Ts u(t)``,
     ``y(t) = x(t) + f(t)``, the forward-Euler discretisation of
     ``dx/dt = -beta x + u``, here with process noise ``w ~ N(0, q_x)`` and
     measurement noise ``e ~ N(0, r)``.  Unlike :func:`beta_drift_model`,
     ``beta`` is a given trajectory (a ramp, a sine, ...), not a random walk.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(100)
+    >>> states, y = simulate_beta_system(0.8 + 0.002 * t, np.ones(100), np.random.default_rng(0),
+    ...                                  fault=np.where(t >= 60, 0.2, 0.0), batch=3)
+    >>> states.shape, y.shape
+    ((3, 100, 2), (3, 100, 1))
     """
     rng = as_generator(rng)
     beta = as_float_array(beta, "beta")
@@ -140,8 +173,8 @@ def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=N
     if f.shape[-1] != N:
         raise ValueError(f"fault must have N = {N} samples, got shape {f.shape}")
     shape = np.broadcast_shapes(_batch_shape(batch), beta.shape[:-1], u.shape[:-1], f.shape[:-1])
-    Ts, x0 = _finite_float(Ts, "Ts"), _finite_float(x0, "x0")
-    q_x, r = _variance(q_x, "q_x"), _variance(r, "r")
+    Ts, x0 = as_finite(Ts, "Ts"), as_finite(x0, "x0")
+    q_x, r = as_variance(q_x, "q_x"), as_variance(r, "r")
     # time-major (N, *batch) so that every step touches contiguous memory
     w = np.sqrt(q_x) * rng.standard_normal((N,) + shape)
     e = np.sqrt(r) * rng.standard_normal((N,) + shape)
@@ -154,4 +187,4 @@ def simulate_beta_system(beta, u, rng, Ts=0.1, q_x=1e-4, r=1e-2, x0=0.0, fault=N
         xt = xt - Ts * beta_t[t] * xt + Ts * u_t[t] + w[t]
     x = np.moveaxis(x, 0, -1)
     states = np.stack([np.broadcast_to(beta, x.shape), x], axis=-1)
-    return states, (x + f + np.moveaxis(e, 0, -1))[..., None]
+    return Simulation(states, (x + f + np.moveaxis(e, 0, -1))[..., None])

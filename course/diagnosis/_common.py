@@ -1,116 +1,101 @@
-"""Input checks and rank-revealing helpers shared by the diagnosis modules."""
+"""Input checks shared by the diagnosis modules: the regression model and record layouts."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
-from scipy import stats
 
-from course.linalg import (
-    as_float_array,
-    as_matrix,
-    as_vector,
-)
+from course import _deprecation
+from course.validation import as_float_array, as_indices, as_matrix, as_positive, as_vector
 
 
-def _range_basis(Phi: np.ndarray, rcond: float | None = None):
-    """Orthonormal basis of range(Phi) from the SVD, with its rank decision."""
-    N, p = Phi.shape
-    if p == 0 or N == 0:
-        return np.zeros((N, 0))
-    left, s, _ = np.linalg.svd(Phi, full_matrices=False)
-    rank = _numerical_rank(s, N, p, rcond)
-    return left[:, :rank]
+def _records(y: Any, N: int | None, name: str = "y") -> tuple[np.ndarray, str]:
+    """Data as columns ``(N, M)`` for the computation, and the layout to answer in.
 
-
-def _numerical_rank(s, N, p, rcond):
-    if s.size == 0 or s[0] == 0.0:
-        return 0
-    tol = (max(N, p) * np.finfo(float).eps if rcond is None else float(rcond)) * s[0]
-    return int(np.sum(s > tol))
-
-
-def _data(y, N: int | None, name: str = "y") -> np.ndarray:
-    y = as_float_array(y, name)
-    if y.ndim not in (1, 2):
+    ``y`` is one record ``(N,)`` or ``M`` records as the rows of an
+    ``(M, N)`` array (records leading, the course's batch convention).  The
+    layout of earlier releases, records as the *columns* of an ``(N, M)``
+    array, is recognised when the first axis has the ``N`` samples and the
+    second does not, and still works with a DeprecationWarning (answers then
+    come back in that layout too).  A square ``(N, N)`` array is read as
+    records leading.
+    """
+    Y = as_float_array(y, name)
+    if Y.ndim not in (1, 2):
         raise ValueError(
-            f"{name} must be one record of shape (N,) or M records as columns of an (N, M) "
-            f"array, got shape {y.shape}"
+            f"{name} must be one record of shape (N,) or M records as the rows of an (M, N) "
+            f"array, got shape {Y.shape}"
         )
-    if N is not None and y.shape[0] != N:
-        raise ValueError(
-            f"shape mismatch: {name} has {y.shape[0]} samples but the regressors have {N} rows; "
-            "one regressor row per sample is needed"
+    if Y.ndim == 1:
+        if N is not None and Y.shape[0] != N:
+            raise ValueError(
+                f"shape mismatch: {name} has {Y.shape[0]} samples but the regressors have {N} "
+                "rows; one regressor row per sample is needed"
+            )
+        return Y, "one"
+    if N is None or Y.shape[1] == N:
+        return Y.T, "rows"
+    if Y.shape[0] == N:
+        _deprecation.warn(
+            f"{name} of shape (N, M) = {Y.shape} holds the records as columns; the course's "
+            f"layout is records leading: pass {name}.T, of shape (M, N) = {Y.shape[::-1]}",
+            stacklevel=4,
         )
-    return y
+        return Y, "columns"
+    raise ValueError(
+        f"shape mismatch: {name} has shape {Y.shape} but the regressors have {N} rows; pass "
+        f"M records of N = {N} samples as an (M, {N}) array"
+    )
 
 
-def _indices(free, p: int, what: str = "free") -> list:
-    if free is None:
-        return []
-    if isinstance(free, (int, np.integer)):
-        free = [free]
-    out = []
-    for j in free:
-        if isinstance(j, bool) or not isinstance(j, (int, np.integer)):
-            raise ValueError(f"{what} must be parameter indices (integers), got {j!r}")
-        if not 0 <= int(j) < p:
-            raise ValueError(f"{what} index {j} out of range for {p} parameters (0..{p - 1})")
-        out.append(int(j))
-    if len(set(out)) != len(out):
-        raise ValueError(f"{what} contains repeated indices: {out}")
-    return sorted(out)
+def _answer(columns: np.ndarray, layout: str) -> np.ndarray:
+    """A per-record array computed as columns ``(d, M)``, in the caller's layout."""
+    return columns.T if layout == "rows" else columns
 
 
-def _model(U, nominal):
+def _parameter_vectors(theta: Any, p: int, name: str = "theta") -> tuple[np.ndarray, bool]:
+    """Parameter vector(s) as columns ``(p, K)`` (or ``(p,)``), and whether there were several.
+
+    ``theta`` is ``(p,)`` or ``K`` vectors as the rows of ``(K, p)``; the old
+    ``(p, K)`` layout (vectors as columns) works with a DeprecationWarning.
+    """
+    theta = as_float_array(theta, name)
+    if theta.ndim == 1:
+        if theta.shape[0] != p:
+            raise ValueError(f"{name} must have shape ({p},) or (K, {p}), got {theta.shape}")
+        return theta, False
+    if theta.ndim == 2 and theta.shape[1] == p:
+        return theta.T, True
+    if theta.ndim == 2 and theta.shape[0] == p:
+        _deprecation.warn(
+            f"{name} of shape (p, K) = {theta.shape} holds the parameter vectors as columns; "
+            f"pass them as rows, {name}.T of shape (K, p) = {theta.shape[::-1]}",
+            stacklevel=4,
+        )
+        return theta, True
+    raise ValueError(f"{name} must have shape ({p},) or (K, {p}), got {theta.shape}")
+
+
+def _indices(free: Any, p: int, what: str = "free") -> list[int]:
+    return as_indices(free, what, p)
+
+
+def _model(U: Any, nominal: Any) -> tuple[np.ndarray, np.ndarray]:
     U = as_matrix(U, "U")
     nominal = as_vector(nominal, "nominal", U.shape[1])
     return U, nominal
 
 
-def _split(U, nominal, free):
+def _split(U: np.ndarray, nominal: np.ndarray, free: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """Regressors of the free parameters and the known part of the prediction."""
     p = U.shape[1]
     fixed = [j for j in range(p) if j not in free]
     return U[:, free], U[:, fixed] @ nominal[fixed]
 
 
-def _count(value, name: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
-
-
-def _check_sigma(sigma) -> float:
-    try:
-        value = float(sigma)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"sigma must be a positive number (the noise standard deviation), got {sigma!r}"
-        ) from None
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(
-            f"sigma must be a positive, finite noise standard deviation, got {sigma!r}"
-        )
-    return value
-
-
-def _scaled_chi2(dof, sigma):
-    return stats.chi2(dof) if sigma == 1.0 else stats.chi2(dof, scale=sigma**2)
-
-
-def _check_dof(dof) -> int:
-    if (
-        isinstance(dof, bool)
-        or not isinstance(dof, (int, float, np.integer, np.floating))
-        or not np.isfinite(dof)
-        or int(dof) != dof
-        or dof < 1
-    ):
-        raise ValueError(
-            f"dof must be a positive integer, got {dof!r}; with no residual degrees of freedom "
-            "the model under H0 fits any data exactly and the test is void"
-        )
-    return int(dof)
+def _check_sigma(sigma: Any, name: str = "sigma") -> float:
+    return as_positive(sigma, name, what="the noise standard deviation")
 
 
 def _void_test_message(dof_what: str) -> str:

@@ -5,58 +5,99 @@ from __future__ import annotations
 import html
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from course.diagnosis._common import _check_sigma, _count, _data
+from course import _deprecation
+from course.diagnosis._common import _check_sigma, _records
 from course.diagnosis._prediction_error import prediction_error
 from course.diagnosis._structures import DecisionStructure, diagnosis_matrix
-from course.distributions import as_generator
-from course.linalg import (
-    as_matrix,
-    as_vector,
-)
+from course.validation import as_count, as_generator, as_matrix, as_vector
 
 
-# ---------------------------------------------------------------------------
-# Monte Carlo
-# ---------------------------------------------------------------------------
-def simulate_linear_regression(U, theta, *, sigma: float, n_records: int, rng) -> np.ndarray:
-    """``M`` records of ``y = U theta + v``, ``v ~ N(0, sigma^2 I)``, as columns.
+def simulate_regression_records(
+    U: Any, theta: Any, *, sigma: float, n_records: int, rng: Any
+) -> np.ndarray:
+    """``n_records`` records of ``y = U theta + v``, ``v ~ N(0, sigma^2 I)``, as rows.
 
     Parameters
     ----------
     U : array_like, shape (N, p)
+        Regressors, one column per parameter.
     theta : array_like, shape (p,)
+        True parameter vector.
     sigma : float
+        Noise standard deviation.
     n_records : int
+        Number of independent records ``M``.
     rng : numpy.random.Generator
+        Source of randomness (or a seed).
 
     Returns
     -------
-    numpy.ndarray, shape (N, n_records)
+    numpy.ndarray, shape (n_records, N)
+        One record per row (records leading, the course's batch layout):
+        every test quantity of this package takes it as it is.
 
     Notes
     -----
     The lecture's static fault model ``y(t) = theta_1 u1(t) + theta_2 u2(t)
-    + theta_3 u3(t) + v(t)`` (test_quantities_lecture_sv.txt, "Teststorheten
-    är ett modellvalideringsmått") with white Gaussian noise; records as
-    columns so every test quantity is one matrix operation for all of them.
+    + theta_3 u3(t) + v(t)`` (LiU lecture, "Teststorheten är ett
+    modellvalideringsmått") with white Gaussian noise.  The noise is drawn
+    in the order of the deprecated :func:`simulate_linear_regression`, so a
+    seeded study gives the same records (transposed).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(5), np.arange(5.0)])
+    >>> Y = simulate_regression_records(U, [1.0, 0.5], sigma=0.1, n_records=3, rng=0)
+    >>> Y.shape
+    (3, 5)
     """
     U = as_matrix(U, "U")
     theta = as_vector(theta, "theta", U.shape[1])
     sigma = _check_sigma(sigma)
-    rng = as_generator(rng)
-    n_records = _count(n_records, "n_records")
-    return (U @ theta)[:, None] + sigma * rng.standard_normal((U.shape[0], n_records))
+    generator = as_generator(rng)
+    n_records = as_count(n_records, "n_records", what="the number of records")
+    noise = generator.standard_normal((U.shape[0], n_records)).T
+    return np.ascontiguousarray(U @ theta + sigma * noise)
 
 
-def linear_test_statistics(Y, U, nominal, tests: Sequence[Sequence[int]]) -> np.ndarray:
+def simulate_linear_regression(
+    U: Any, theta: Any, *, sigma: float, n_records: int, rng: Any
+) -> np.ndarray:
+    """Deprecated: records as the *columns* of an ``(N, n_records)`` array.
+
+    Use :func:`simulate_regression_records`, which returns the same records
+    as rows (the course's records-leading layout); this function returns its
+    transpose and warns.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", DeprecationWarning)
+    ...     simulate_linear_regression([[1.0], [2.0]], [1.0], sigma=1, n_records=4, rng=0).shape
+    (2, 4)
+    """
+    _deprecation.warn(
+        "simulate_linear_regression returns records as columns; use "
+        "simulate_regression_records, which returns them as rows (its transpose)"
+    )
+    return simulate_regression_records(U, theta, sigma=sigma, n_records=n_records, rng=rng).T
+
+
+def linear_test_statistics(
+    Y: Any, U: Any, nominal: Any, tests: Sequence[Sequence[int]]
+) -> np.ndarray:
     """Prediction errors of several tests on many records: ``(M, n_tests)``.
 
     Parameters
     ----------
-    Y : array_like, shape (N, M)
+    Y : array_like, shape (M, N) or (N,)
+        ``M`` records as rows (one record gives one row of output).
     U, nominal
         As in :func:`prediction_error`.
     tests : sequence of sequences of int
@@ -72,10 +113,18 @@ def linear_test_statistics(Y, U, nominal, tests: Sequence[Sequence[int]]) -> np.
     Column ``k`` is ``min over Theta_0^k of ||y - U theta||^2``
     (:func:`prediction_error`), computed for all ``M`` records with one
     SVD of the free regressors per test.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.eye(3)
+    >>> linear_test_statistics([[2.0, 1.0, 1.0]], U, [1, 1, 1], [(0,), (1,)])
+    array([[0., 1.]])
     """
-    Y = _data(Y, None, "Y")
-    Y = Y[:, None] if Y.ndim == 1 else Y
-    return np.column_stack([prediction_error(Y, U, nominal, free).statistic for free in tests])
+    U = as_matrix(U, "U")
+    columns, _ = _records(Y, U.shape[0], "Y")
+    rows = columns.T if columns.ndim == 2 else columns[None, :]
+    return np.column_stack([prediction_error(rows, U, nominal, free).statistic for free in tests])
 
 
 @dataclass(frozen=True, repr=False, eq=False)
@@ -183,6 +232,26 @@ def isolation_monte_carlo(
     single-fault diagnoses of :func:`diagnosis_matrix`; and "exact" is
     ``P(D = {F} | F)``.  Each is a binomial proportion over ``n_records``
     records, with standard error at most ``0.5 / sqrt(n_records)``.
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(20), np.linspace(0, 1, 20), np.cos(np.arange(20.0))])
+    >>> theta = {"NF": [1, 1, 1], "F1": [2, 1, 1], "F2": [1, 2, 1], "F3": [1, 1, 2]}
+    >>> def simulate(mode, n, rng):
+    ...     return simulate_regression_records(U, theta[mode], sigma=0.1, n_records=n, rng=rng)
+    >>> def statistics(Y):
+    ...     return linear_test_statistics(Y, U, [1, 1, 1], [(0,), (1,), (2,)])
+    >>> from course.chi2 import residual_threshold
+    >>> J = [residual_threshold(19, 0.01, sigma=0.1)] * 3
+    >>> iso = isolation_monte_carlo(ds, simulate, statistics, J, n_records=500, rng=0)
+    >>> iso.exact.round(1)  # NF alone is never the diagnosis: no alarm rules nothing out
+    array([0., 1., 1., 1.])
     """
     if not isinstance(structure, DecisionStructure):
         raise ValueError("structure must be a DecisionStructure")
@@ -194,7 +263,7 @@ def isolation_monte_carlo(
         if modes is None
         else tuple(structure.modes[structure.mode_index(m)] for m in modes)
     )
-    n_records = _count(n_records, "n_records")
+    n_records = as_count(n_records, "n_records", what="records per mode")
     alarm_rate = np.empty((len(modes), n_tests))
     membership = np.empty((len(modes), len(structure.modes)))
     exact = np.empty(len(modes))

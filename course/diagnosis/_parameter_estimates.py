@@ -1,4 +1,9 @@
-"""Test quantities from parameter estimates: estimate, compare with nominal, power."""
+"""Test quantities from parameter estimates: estimate, compare with nominal, power.
+
+Source: the LiU lecture on test quantities (Linköping University, Swedish
+slides; full reference in the course bibliography, docs/bibliography.md),
+slide "Teststorheter baserade på parameterskattningar".
+"""
 
 from __future__ import annotations
 
@@ -7,26 +12,24 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import linalg as sla
 from scipy import stats
 
-from course.diagnosis._common import _check_sigma, _data, _indices, _model, _split
-from course.linalg import (
-    as_covariance,
-    as_float_array,
-    as_vector,
-    check_alpha,
-    check_full_column_rank,
-    cholesky_lower,
-    solve_spd,
-    symmetrize,
+from course.chi2 import chi2_power, residual_norm_law
+from course.diagnosis._common import (
+    _answer,
+    _check_sigma,
+    _indices,
+    _model,
+    _parameter_vectors,
+    _records,
+    _split,
 )
+from course.linalg import check_full_column_rank, cholesky_lower, qr_solve, solve_spd, symmetrize
+from course.linalg import whiten as _whiten
 from course.results import TestResult, format_number
+from course.validation import as_covariance, as_float_array, as_probability, as_vector
 
 
-# ---------------------------------------------------------------------------
-# parameter estimates
-# ---------------------------------------------------------------------------
 @dataclass(frozen=True, repr=False, eq=False)
 class ParameterEstimate:
     """Least-squares estimate of some parameters with the others at nominal.
@@ -34,8 +37,8 @@ class ParameterEstimate:
     Attributes
     ----------
     theta : numpy.ndarray
-        Full parameter vector ``(p,)`` or ``(p, M)``: estimates at
-        ``indices``, nominal values elsewhere.
+        Full parameter vector ``(p,)``, or one per record ``(M, p)``:
+        estimates at ``indices``, nominal values elsewhere.
     indices : tuple of int
         The estimated parameters.
     covariance : numpy.ndarray
@@ -56,17 +59,37 @@ class ParameterEstimate:
         if self.theta.ndim == 1:
             est = ", ".join(format_number(float(self.theta[j])) for j in self.indices)
             return f"ParameterEstimate(indices={self.indices}, estimate=[{est}])"
-        return f"ParameterEstimate(indices={self.indices}, records={self.theta.shape[1]})"
+        return f"ParameterEstimate(indices={self.indices}, records={self.theta.shape[0]})"
+
+
+def _check_estimate(U: np.ndarray, estimate: Any) -> list[int]:
+    est = _indices(estimate, U.shape[1], "estimate")
+    if not est:
+        raise ValueError("estimate must name at least one parameter")
+    return est
+
+
+def _estimate_columns(Y, U, nominal, est, sigma):
+    """Estimates as columns ``(p, M)`` (or ``(p,)``) and their covariance."""
+    Phi, known = _split(U, nominal, est)
+    check_full_column_rank(Phi, "the regressors of the estimated parameters")
+    target = Y - (known[:, None] if Y.ndim == 2 else known)
+    solution = qr_solve(Phi, target)
+    cov = sigma**2 * symmetrize(solution.R_inv @ solution.R_inv.T)
+    theta = np.repeat(nominal[:, None], Y.shape[1], axis=1) if Y.ndim == 2 else nominal.copy()
+    theta[est] = solution.x
+    return theta, cov
 
 
 def estimate_parameters(
-    y, U, nominal, estimate: Sequence[int], *, sigma: float
+    y: Any, U: Any, nominal: Any, estimate: Sequence[int], *, sigma: float
 ) -> ParameterEstimate:
     """Estimate the parameters ``estimate`` by least squares, the rest at nominal.
 
     Parameters
     ----------
-    y : array_like, shape (N,) or (N, M)
+    y : array_like, shape (N,) or (M, N)
+        One record, or ``M`` records as rows.
     U, nominal
         As in :func:`prediction_error`.
     estimate : sequence of int
@@ -87,31 +110,33 @@ def estimate_parameters(
     Notes
     -----
     ``theta_hat = R^{-1} Q^T (y - U_fixed nominal_fixed)`` from the thin QR
-    factorisation ``U_est = Q R``, and ``Cov = sigma^2 R^{-1} R^{-T}``
-    (``= sigma^2 (Phi^T Phi)^{-1}`` without forming ``Phi^T Phi``).  The
-    lecture's warning (slide "Teststorheter baserade på
-    parameterskattningar"): this needs excitation.
+    factorisation ``U_est = Q R`` (:func:`course.linalg.qr_solve`), and
+    ``Cov = sigma^2 R^{-1} R^{-T}`` (``= sigma^2 (Phi^T Phi)^{-1}`` without
+    forming ``Phi^T Phi``).  The lecture's warning (slide "Teststorheter
+    baserade på parameterskattningar"): this needs excitation.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(4), np.arange(4.0)])
+    >>> est = estimate_parameters([1.0, 3.0, 5.0, 7.0], U, [0.0, 0.0], [0, 1], sigma=1.0)
+    >>> est.theta.round(12) + 0.0, est.std.round(4)
+    (array([1., 2.]), array([0.8367, 0.4472]))
     """
     U, nominal = _model(U, nominal)
     sigma = _check_sigma(sigma)
-    est = _indices(estimate, U.shape[1], "estimate")
-    if not est:
-        raise ValueError("estimate must name at least one parameter")
-    Y = _data(y, U.shape[0])
-    Phi, known = _split(U, nominal, est)
-    check_full_column_rank(Phi, "the regressors of the estimated parameters")
-    Q, R = np.linalg.qr(Phi)
-    target = Y - (known[:, None] if Y.ndim == 2 else known)
-    theta_est = sla.solve_triangular(R, Q.T @ target, lower=False)
-    R_inv = sla.solve_triangular(R, np.eye(len(est)), lower=False)
-    cov = sigma**2 * symmetrize(R_inv @ R_inv.T)
-    theta = np.repeat(nominal[:, None], Y.shape[1], axis=1) if Y.ndim == 2 else nominal.copy()
-    theta[est] = theta_est
-    return ParameterEstimate(theta=theta, indices=tuple(est), covariance=cov)
+    est = _check_estimate(U, estimate)
+    Y, layout = _records(y, U.shape[0])
+    theta, cov = _estimate_columns(Y, U, nominal, est, sigma)
+    return ParameterEstimate(theta=_answer(theta, layout), indices=tuple(est), covariance=cov)
 
 
 def parameter_estimate_test(
-    estimate, covariance, nominal, alpha: float = 0.05, name: str = "parameter-estimate test"
+    estimate: Any,
+    covariance: Any,
+    nominal: Any,
+    alpha: float = 0.05,
+    name: str = "parameter-estimate test",
 ) -> TestResult:
     """Test ``H0: theta = nominal`` from an estimate and its covariance.
 
@@ -124,7 +149,9 @@ def parameter_estimate_test(
     nominal : float or array_like, shape (k,)
         The fault-free value(s).
     alpha : float, default 0.05
+        Level of significance.
     name : str
+        Name shown in the result.
 
     Returns
     -------
@@ -143,8 +170,14 @@ def parameter_estimate_test(
     and ``P(T > s z_{alpha/2}) = alpha``: the covariance turns a false-alarm
     rate into a threshold.  The Wald form is the same idea for a vector
     (a quadratic form in a Gaussian vector, ``chi2(k)``).
+
+    Examples
+    --------
+    >>> r = parameter_estimate_test(1.3, 0.01, 1.0)
+    >>> round(r.statistic, 12), round(r.critical_value, 4), r.reject
+    (0.3, 0.196, True)
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     est = np.atleast_1d(as_float_array(estimate, "estimate"))
     if est.ndim != 1:
         raise ValueError(
@@ -159,41 +192,24 @@ def parameter_estimate_test(
     diff = est - nom
     if k == 1:
         std = float(np.sqrt(cov[0, 0]))
-        null = stats.halfnorm(scale=std)
         stat = abs(float(diff[0]))
-        crit = std * stats.norm.isf(alpha / 2)
-        return TestResult(
-            name=name,
-            statistic=stat,
-            alpha=alpha,
-            critical_value=crit,
-            pvalue=stats.halfnorm.sf(stat / std),
-            reject=stat > crit,
-            null=null,
-            alternative="greater",
+        return TestResult.from_null(
+            name,
+            stat,
+            stats.halfnorm(scale=std),
+            alpha,
             details={"estimate": float(est[0]), "std": std, "z": stat / std},
         )
     wald = float(diff @ solve_spd(cov, diff, "covariance"))
-    crit = stats.chi2.isf(alpha, k)
-    return TestResult(
-        name=name,
-        statistic=wald,
-        alpha=alpha,
-        critical_value=crit,
-        pvalue=stats.chi2.sf(wald, k),
-        reject=wald > crit,
-        null=stats.chi2(k),
-        dof=k,
-        alternative="greater",
-    )
+    return TestResult.from_null(name, wald, residual_norm_law(k), alpha, dof=k)
 
 
 def regression_parameter_test(
-    y,
-    U,
-    nominal,
+    y: Any,
+    U: Any,
+    nominal: Any,
     estimate: Sequence[int],
-    test,
+    test: Any,
     *,
     sigma: float,
     alpha: float = 0.05,
@@ -204,6 +220,7 @@ def regression_parameter_test(
     Parameters
     ----------
     y : array_like, shape (N,)
+        One record.
     U, nominal
         As in :func:`prediction_error`.
     estimate : sequence of int
@@ -212,8 +229,11 @@ def regression_parameter_test(
     test : int or sequence of int
         Parameter(s) compared with nominal; a subset of ``estimate``.
     sigma : float
+        Noise standard deviation.
     alpha : float
+        Level of significance.
     name : str, optional
+        Name shown in the result.
 
     Returns
     -------
@@ -225,9 +245,17 @@ def regression_parameter_test(
     The lecture's ``T1 = |theta_hat_2 - 1|`` with ``(theta_hat_1,
     theta_hat_2) = argmin sum (y - theta_1 u1 - theta_2 u2 - u3)^2``: the
     fault in ``theta_1`` is decoupled because ``theta_1`` is estimated too.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(6), np.arange(6.0)])
+    >>> y = U @ [0.0, 1.0] + np.array([0.1, -0.1, 0.0, 0.1, -0.1, 0.0])
+    >>> regression_parameter_test(y, U, [0.0, 1.0], [0, 1], 1, sigma=0.1).reject
+    False
     """
     U, nominal = _model(U, nominal)
-    est = _indices(estimate, U.shape[1], "estimate")
+    est = _check_estimate(U, estimate)
     tested = _indices(test, U.shape[1], "test")
     if not tested or not set(tested) <= set(est):
         raise ValueError(f"test {tested} must be a non-empty subset of estimate {est}")
@@ -241,7 +269,14 @@ def regression_parameter_test(
 
 
 def parameter_estimate_power(
-    U, nominal, estimate: Sequence[int], test, theta, *, sigma: float, alpha: float = 0.05
+    U: Any,
+    nominal: Any,
+    estimate: Sequence[int],
+    test: Any,
+    theta: Any,
+    *,
+    sigma: float,
+    alpha: float = 0.05,
 ) -> Any:
     """Alarm probability of :func:`regression_parameter_test` when the truth is ``theta``.
 
@@ -249,8 +284,8 @@ def parameter_estimate_power(
     ----------
     U, nominal, estimate, test, sigma, alpha
         As in :func:`regression_parameter_test`.
-    theta : array_like, shape (p,) or (p, K)
-        True parameter vector(s).
+    theta : array_like, shape (p,) or (K, p)
+        True parameter vector(s), one per row.
 
     Returns
     -------
@@ -265,35 +300,34 @@ def parameter_estimate_power(
     ``b`` and standard deviation ``s`` of the tested estimate, the power of
     the two-sided test is ``Phi((b - c)/s) + Phi((-b - c)/s)`` with
     ``c = s z_{alpha/2}``; for several tested parameters the Wald statistic
-    is ``chi2'(k, b^T C^{-1} b)``.
+    is ``chi2'(k, b^T C^{-1} b)`` (:func:`course.chi2.chi2_power`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(6), np.arange(6.0)])
+    >>> parameter_estimate_power(U, [0, 1], [0, 1], 1, [[0, 1.0], [0, 1.05]], sigma=0.1).round(3)
+    array([0.05 , 0.552])
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     U, nominal = _model(U, nominal)
     sigma = _check_sigma(sigma)
     p = U.shape[1]
-    est = _indices(estimate, p, "estimate")
+    est = _check_estimate(U, estimate)
     tested = _indices(test, p, "test")
     if not tested or not set(tested) <= set(est):
         raise ValueError(f"test {tested} must be a non-empty subset of estimate {est}")
-    theta = as_float_array(theta, "theta")
-    if theta.ndim not in (1, 2) or theta.shape[0] != p:
-        raise ValueError(f"theta must have shape ({p},) or ({p}, K), got {theta.shape}")
+    theta, several = _parameter_vectors(theta, p)
     # The mean of the estimate is the noise-free fit to U theta.
-    mean = estimate_parameters(U @ theta, U, nominal, est, sigma=sigma)
-    shift = mean.theta[tested] - (nominal[tested][:, None] if theta.ndim == 2 else nominal[tested])
+    mean, cov_all = _estimate_columns(U @ theta, U, nominal, est, sigma)
+    shift = mean[tested] - (nominal[tested][:, None] if several else nominal[tested])
     pos = [est.index(j) for j in tested]
-    cov = mean.covariance[np.ix_(pos, pos)]
+    cov = cov_all[np.ix_(pos, pos)]
     if len(tested) == 1:
         s = float(np.sqrt(cov[0, 0]))
         c = stats.norm.isf(alpha / 2)
         b = shift[0] / s
-        power = stats.norm.sf(c - b) + stats.norm.cdf(-c - b)
-    else:
-        L = cholesky_lower(cov, "covariance")
-        lam = np.sum(sla.solve_triangular(L, shift, lower=True) ** 2, axis=0)
-        k = len(tested)
-        power = np.where(
-            lam > 0, stats.ncx2.sf(stats.chi2.isf(alpha, k), k, np.maximum(lam, 1e-300)), alpha
-        )
-    power = np.asarray(power)
-    return float(power) if power.ndim == 0 else power
+        power = np.asarray(stats.norm.sf(c - b) + stats.norm.cdf(-c - b))
+        return float(power) if power.ndim == 0 else power
+    lam = np.sum(_whiten(cholesky_lower(cov, "covariance"), shift) ** 2, axis=0)
+    return chi2_power(len(tested), lam, alpha)

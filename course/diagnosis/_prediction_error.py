@@ -1,4 +1,9 @@
-"""Test quantities from prediction errors: linear regressions and general models."""
+"""Test quantities from prediction errors: linear regressions and general models.
+
+Source: the LiU lecture on test quantities (Linköping University, Swedish
+slides; full reference in the course bibliography, docs/bibliography.md),
+slides "Teststorhet baserad på prediktionsfelen" and "Linjär regression".
+"""
 
 from __future__ import annotations
 
@@ -7,32 +12,26 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
 
+from course import _deprecation
+from course.chi2 import chi2_power, residual_norm_law
+from course.chi2 import residual_threshold as residual_threshold
 from course.diagnosis._common import (
-    _check_dof,
+    _answer,
     _check_sigma,
-    _data,
     _indices,
     _model,
-    _numerical_rank,
-    _range_basis,
-    _scaled_chi2,
+    _parameter_vectors,
+    _records,
     _split,
     _void_test_message,
 )
-from course.linalg import (
-    as_float_array,
-    as_matrix,
-    as_vector,
-    check_alpha,
-)
+from course.linalg import lstsq_min_norm, range_basis
 from course.results import TestResult, format_number
+from course.validation import as_float_array, as_matrix, as_probability, as_vector
 
 
-# ---------------------------------------------------------------------------
-# prediction errors: linear regression
-# ---------------------------------------------------------------------------
 @dataclass(frozen=True, repr=False, eq=False)
 class RegressionFit:
     """Least-squares fit of a linear regression that may lack excitation.
@@ -40,11 +39,12 @@ class RegressionFit:
     Attributes
     ----------
     theta : numpy.ndarray
-        A minimising parameter vector, ``(p,)`` or ``(p, M)``: the unique one
-        when ``rank == p``, else the one of smallest norm (any other differs
-        by a null-space vector of the regressors and fits equally well).
+        A minimising parameter vector, ``(p,)``, or one per record, ``(M, p)``:
+        the unique one when ``rank == p``, else the one of smallest norm (any
+        other differs by a null-space vector of the regressors and fits
+        equally well).
     residual : numpy.ndarray
-        ``Y - Phi theta`` (unique even when theta is not), ``(N,)`` or ``(N, M)``.
+        ``y - Phi theta`` (unique even when theta is not), ``(N,)`` or ``(M, N)``.
     statistic : float or numpy.ndarray
         ``T = ||residual||^2``, one per record.
     rank : int
@@ -79,18 +79,31 @@ class RegressionFit:
         )
 
 
-def least_squares_residual(y, Phi, rcond: float | None = None) -> RegressionFit:
+def _swapped_regression_arguments(Phi: Any, y: Any) -> bool:
+    """True for a call in the old order ``(y, Phi)``: y first, the regressors second."""
+    a, b = np.shape(Phi), np.shape(y)
+    if len(a) == 1 and len(b) == 2:
+        return True
+    if len(a) == 2 and len(b) == 2:
+        new_fits = b[-1] == a[0]
+        old_fits = a[0] == b[0]
+        return old_fits and not new_fits
+    return False
+
+
+def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> RegressionFit:
     """``min over theta of ||y - Phi theta||^2``, correct also without excitation.
 
     Parameters
     ----------
-    y : array_like, shape (N,) or (N, M)
-        One record, or ``M`` records as columns.
     Phi : array_like, shape (N, p)
         Regressor matrix; it may be rank deficient and ``p`` may be 0.
+    y : array_like, shape (N,) or (M, N)
+        One record, or ``M`` records as rows.
     rcond : float, optional
         Singular values below ``rcond * s_max`` count as zero; by default
-        ``max(N, p) * eps`` (numpy's ``matrix_rank`` rule).
+        ``max(N, p) * eps`` (the course's rank rule,
+        :func:`course.linalg.rank_tolerance`).
 
     Returns
     -------
@@ -102,36 +115,49 @@ def least_squares_residual(y, Phi, rcond: float | None = None) -> RegressionFit:
     lecture's projection form, slide "Linjär regression;
     minstakvadrat-metoden").  Forming ``Phi^T Phi`` squares the condition
     number and fails when the regressors lack excitation, so the projection
-    is computed from the thin SVD ``Phi = W S V^T``: with ``W_r`` the left
-    singular vectors of the ``r`` non-negligible singular values,
-    ``residual = y - W_r (W_r^T y)``, which is the orthogonal projection of
-    ``y`` on the complement of range(Phi) whatever the rank; and
-    ``theta = V_r S_r^{-1} W_r^T y`` is the minimum-norm minimiser.  Every
+    is computed from the thin SVD (:func:`course.linalg.lstsq_min_norm`):
+    ``residual = y - W_r (W_r^T y)`` with ``W_r`` the left singular vectors
+    of the ``r`` non-negligible singular values, the orthogonal projection of
+    ``y`` on the complement of range(Phi) whatever the rank, and
+    ``theta = V_r S_r^{-1} W_r^T y``, the minimum-norm minimiser.  Every
     minimiser gives the same residual (slide "Excitation": there is always
     one shortest distance from a point to a subspace).
+
+    The order ``least_squares_residual(y, Phi)`` of earlier releases still
+    works, with a DeprecationWarning; the regressors come first, as in
+    :func:`course.lsq.fit` and :func:`course.filters.recursive_least_squares`.
+
+    Examples
+    --------
+    Two identical regressors (no excitation to tell them apart):
+
+    >>> import numpy as np
+    >>> Phi = np.column_stack([np.ones(4), np.ones(4)])
+    >>> fit = least_squares_residual(Phi, [1.0, 2.0, 3.0, 4.0])
+    >>> fit.rank, fit.unique, round(fit.statistic, 10)
+    (1, False, 5.0)
     """
+    if _swapped_regression_arguments(Phi, y):
+        _deprecation.warn("least_squares_residual(y, Phi) is now least_squares_residual(Phi, y)")
+        Phi, y = y, Phi
     Phi = as_matrix(Phi, "Phi")
     N, p = Phi.shape
-    Y = _data(y, N)
-    if p == 0:
-        theta = np.zeros((0,) + Y.shape[1:])
-        return _fit_result(theta, Y.copy(), 0, N, 0)
-    left, s, right_t = np.linalg.svd(Phi, full_matrices=False)
-    rank = _numerical_rank(s, N, p, rcond)
-    W, V = left[:, :rank], right_t[:rank].T
-    coords = W.T @ Y
-    residual = Y - W @ coords
-    scaled = coords / (s[:rank, None] if Y.ndim == 2 else s[:rank])
-    theta = V @ scaled
-    return _fit_result(theta, residual, rank, N, p)
+    Y, layout = _records(y, N)
+    theta, residual, rank = _lstsq_columns(Phi, Y, rcond)
+    return _fit_result(theta, residual, rank, N, p, layout)
 
 
-def _fit_result(theta, residual, rank, N, p) -> RegressionFit:
+def _lstsq_columns(Phi: np.ndarray, Y: np.ndarray, rcond: float | None):
+    solution = lstsq_min_norm(Phi, Y, rcond)
+    return solution.x, solution.residual, solution.rank
+
+
+def _fit_result(theta, residual, rank, N, p, layout) -> RegressionFit:
     stat = np.sum(residual**2, axis=0)
     stat = float(stat) if residual.ndim == 1 else stat
     return RegressionFit(
-        theta=theta,
-        residual=residual,
+        theta=_answer(theta, layout),
+        residual=_answer(residual, layout),
         statistic=stat,
         rank=int(rank),
         dof=int(N - rank),
@@ -140,14 +166,14 @@ def _fit_result(theta, residual, rank, N, p) -> RegressionFit:
 
 
 def prediction_error(
-    y, U, nominal, free: Sequence[int] = (), rcond: float | None = None
+    y: Any, U: Any, nominal: Any, free: Sequence[int] = (), rcond: float | None = None
 ) -> RegressionFit:
     """Prediction-error test quantity ``T = min over theta in Theta_0 of ||y - U theta||^2``.
 
     Parameters
     ----------
-    y : array_like, shape (N,) or (N, M)
-        Measurements (``M`` records as columns for a Monte Carlo study).
+    y : array_like, shape (N,) or (M, N)
+        Measurements (``M`` records as rows for a Monte Carlo study).
     U : array_like, shape (N, p)
         The signals ``u_i(t)`` of ``y(t) = sum_i theta_i u_i(t) + v(t)``.
     nominal : array_like, shape (p,)
@@ -163,15 +189,17 @@ def prediction_error(
     -------
     RegressionFit
         ``theta`` is the full parameter vector (nominal values in the fixed
-        places), ``statistic`` is ``T``.
+        places; ``(M, p)`` for ``M`` records), ``statistic`` is ``T``.
 
     Notes
     -----
     ``V(theta, z) = sum_t (y(t) - yhat(t|theta))^2`` and
-    ``T(z) = min over theta in Theta_0 of V(theta, z)`` (lecture, slide
+    ``T(z) = min over theta in Theta_0 of V(theta, z)`` (LiU lecture, slide
     "Teststorhet baserad på prediktionsfelen").  With the fixed parameters
     moved to the left, ``y - U_fixed nominal_fixed = U_free theta_free + v``
-    is a linear regression in the free parameters.
+    is a linear regression in the free parameters.  Records given as the
+    columns of an ``(N, M)`` array (the layout of earlier releases) still
+    work, with a DeprecationWarning.
 
     Examples
     --------
@@ -185,58 +213,20 @@ def prediction_error(
     """
     U, nominal = _model(U, nominal)
     free = _indices(free, U.shape[1])
-    Y = _data(y, U.shape[0])
+    Y, layout = _records(y, U.shape[0])
     Phi, known = _split(U, nominal, free)
     target = Y - (known[:, None] if Y.ndim == 2 else known)
-    fit = least_squares_residual(target, Phi, rcond=rcond)
+    theta_free, residual, rank = _lstsq_columns(Phi, target, rcond)
     theta = np.repeat(nominal[:, None], Y.shape[1], axis=1) if Y.ndim == 2 else nominal.copy()
-    theta[free] = fit.theta
-    return RegressionFit(
-        theta=theta,
-        residual=fit.residual,
-        statistic=fit.statistic,
-        rank=fit.rank,
-        dof=fit.dof,
-        n_parameters=len(free),
-    )
-
-
-def residual_threshold(alpha: float, dof: int, sigma: float = 1.0) -> float:
-    """Threshold ``J`` on ``T = ||residual||^2`` with false-alarm rate ``alpha``.
-
-    Parameters
-    ----------
-    alpha : float
-        False-alarm probability ``P(T > J | H0)``.
-    dof : int
-        Residual degrees of freedom ``N - rank``.
-    sigma : float, default 1
-        Noise standard deviation.
-
-    Returns
-    -------
-    float
-        ``J = sigma^2 * chi2.isf(alpha, dof)``.
-
-    Notes
-    -----
-    Under H0 the residual is ``(I - P) v`` with ``v ~ N(0, sigma^2 I)`` and
-    ``I - P`` an orthogonal projection of rank ``N - rank(Phi)``, so
-    ``T / sigma^2 ~ chi2(N - rank)`` (Cochran's theorem).  The lecture
-    leaves threshold selection to the next lecture (last slide).  The
-    argument order follows ``scipy.stats.chi2.isf(alpha, dof)``; for a
-    windowed sum of normalised innovations use
-    :func:`course.filters.windowed_nis_threshold`.
-    """
-    alpha = check_alpha(alpha)
-    dof = _check_dof(dof)
-    return float(_check_sigma(sigma) ** 2 * stats.chi2.isf(alpha, dof))
+    theta[free] = theta_free
+    fit = _fit_result(theta, residual, rank, U.shape[0], len(free), layout)
+    return fit
 
 
 def prediction_error_test(
-    y,
-    U,
-    nominal,
+    y: Any,
+    U: Any,
+    nominal: Any,
     free: Sequence[int] = (),
     *,
     sigma: float,
@@ -273,48 +263,53 @@ def prediction_error_test(
 
     Notes
     -----
-    See :func:`residual_threshold` for the null law and :func:`prediction_error`
-    for ``T``.
+    See :func:`course.chi2.residual_norm_law` for the null law and
+    :func:`prediction_error` for ``T``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(5), np.arange(5.0)])
+    >>> y = np.array([0.1, 1.0, 1.9, 3.2, 3.9])
+    >>> prediction_error_test(y, U, [0.0, 1.0], free=[0], sigma=0.1).reject
+    False
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     sigma = _check_sigma(sigma)
     y = as_vector(y, "y")
     fit = prediction_error(y, U, nominal, free, rcond=rcond)
     if fit.dof < 1:
         raise ValueError(_void_test_message(f"N = rank = {fit.rank}"))
-    null = _scaled_chi2(fit.dof, sigma)
-    crit = sigma**2 * stats.chi2.isf(alpha, fit.dof)
     stat = fit.statistic
-    return TestResult(
-        name=name,
-        statistic=stat,
-        alpha=alpha,
-        critical_value=crit,
-        pvalue=stats.chi2.sf(stat / sigma**2, fit.dof),
-        reject=stat > crit,
-        null=null,
+    return TestResult.from_null(
+        name,
+        stat,
+        residual_norm_law(fit.dof, sigma=sigma),
+        alpha,
         dof=fit.dof,
-        alternative="greater",
         details={"T/sigma^2": stat / sigma**2, "rank": fit.rank},
     )
 
 
-def fault_noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1.0) -> Any:
+@_deprecation.keyword_only("sigma")
+def fault_noncentrality(
+    U: Any, nominal: Any, free: Sequence[int], theta: Any, *, sigma: float = 1.0
+) -> Any:
     """Non-centrality of a test's ``T / sigma^2`` when the data come from ``theta``.
 
     Parameters
     ----------
     U, nominal, free
         The test, as in :func:`prediction_error`.
-    theta : array_like, shape (p,) or (p, K)
-        True parameter vector(s).
-    sigma : float
-        Noise standard deviation.
+    theta : array_like, shape (p,) or (K, p)
+        True parameter vector(s), one per row.
+    sigma : float, default 1
+        Noise standard deviation (keyword-only).
 
     Returns
     -------
     float or numpy.ndarray
-        ``lambda = ||(I - P)(U (theta - nominal))||^2 / sigma^2``, one per column.
+        ``lambda = ||(I - P)(U (theta - nominal))||^2 / sigma^2``, one per vector.
 
     Notes
     -----
@@ -323,26 +318,35 @@ def fault_noncentrality(U, nominal, free: Sequence[int], theta, sigma: float = 1
     vector, so ``T / sigma^2`` is non-central chi-square with this
     non-centrality.  The free parameters' deviations are annihilated by
     ``I - P``: the test is blind to them, which is the decoupling.  (Not to
-    be confused with :func:`course.lsq.noncentrality`, the non-centrality a
+    be confused with :func:`course.chi2.noncentrality`, the non-centrality a
     test *needs* for a given power.)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.eye(3)
+    >>> fault_noncentrality(U, [1, 1, 1], [0], [[5.0, 1, 1], [1, 2.0, 1]], sigma=0.5)
+    array([0., 4.])
     """
     U, nominal = _model(U, nominal)
     sigma = _check_sigma(sigma)
     free = _indices(free, U.shape[1])
-    theta = as_float_array(theta, "theta")
-    if theta.ndim not in (1, 2) or theta.shape[0] != U.shape[1]:
-        raise ValueError(
-            f"theta must have shape ({U.shape[1]},) or ({U.shape[1]}, K), got {theta.shape}"
-        )
-    shift = U @ (theta - (nominal[:, None] if theta.ndim == 2 else nominal))
-    basis = _range_basis(U[:, free])
+    theta, several = _parameter_vectors(theta, U.shape[1])
+    shift = U @ (theta - (nominal[:, None] if several else nominal))
+    basis = range_basis(U[:, free])
     leftover = shift - basis @ (basis.T @ shift)
     lam = np.sum(leftover**2, axis=0) / sigma**2
-    return float(lam) if theta.ndim == 1 else lam
+    return lam if several else float(lam)
 
 
 def prediction_error_power(
-    U, nominal, free: Sequence[int], theta, *, sigma: float, alpha: float = 0.05
+    U: Any,
+    nominal: Any,
+    free: Sequence[int],
+    theta: Any,
+    *,
+    sigma: float,
+    alpha: float = 0.05,
 ) -> Any:
     """Probability that the prediction-error test alarms when the truth is ``theta``.
 
@@ -350,8 +354,8 @@ def prediction_error_power(
     ----------
     U, nominal, free
         The test, as in :func:`prediction_error`.
-    theta : array_like, shape (p,) or (p, K)
-        True parameter vector(s), e.g. a fault of growing size.
+    theta : array_like, shape (p,) or (K, p)
+        True parameter vector(s), one per row (e.g. a fault of growing size).
     sigma : float
         Noise standard deviation.
     alpha : float
@@ -360,26 +364,33 @@ def prediction_error_power(
     Returns
     -------
     float or numpy.ndarray
-        ``P(T > J)`` with ``J`` the threshold of :func:`residual_threshold`;
-        equal to ``alpha`` when the fault is invisible to the test.
+        ``P(T > J)`` with ``J`` the threshold of
+        :func:`course.chi2.residual_threshold`; equal to ``alpha`` when the
+        fault is invisible to the test.
 
     Notes
     -----
     ``T / sigma^2 ~ chi2'(N - rank, lambda)`` (non-central chi-square, see
     :func:`fault_noncentrality`), so the power is
-    ``ncx2.sf(chi2.isf(alpha, dof), dof, lambda)``: the answer to the
-    lecture's closing question "how good is a test?".
+    :func:`course.chi2.chi2_power`: the answer to the lecture's closing
+    question "how good is a test?".
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> U = np.column_stack([np.ones(20), np.linspace(0, 1, 20)])
+    >>> prediction_error_power(U, [1, 1], [0], [[1, 1.0], [1, 1.5]], sigma=0.3).round(3)
+    array([0.05 , 0.203])
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     U, nominal = _model(U, nominal)
     free = _indices(free, U.shape[1])
-    lam = np.asarray(fault_noncentrality(U, nominal, free, theta, sigma))
-    dof = U.shape[0] - _range_basis(U[:, free]).shape[1]
+    theta, several = _parameter_vectors(theta, U.shape[1])
+    lam = fault_noncentrality(U, nominal, free, theta.T if several else theta, sigma=sigma)
+    dof = U.shape[0] - range_basis(U[:, free]).shape[1]
     if dof < 1:
         raise ValueError(_void_test_message(f"N - rank = {dof}"))
-    crit = stats.chi2.isf(alpha, dof)
-    power = np.where(lam > 0, stats.ncx2.sf(crit, dof, np.maximum(lam, 1e-300)), alpha)
-    return float(power) if power.ndim == 0 else power
+    return chi2_power(dof, lam, alpha)
 
 
 # ---------------------------------------------------------------------------
@@ -455,11 +466,21 @@ def nonlinear_prediction_error(
 
     Notes
     -----
-    The general form of the lecture's prediction-error test quantity (slide
-    "Minimering av V(θ, z)": general optimisation, system identification).
-    The minimisation is local (trust-region reflective): for a criterion
-    with several minima, start from several ``theta_init`` and keep the
-    smallest ``T``.
+    The general form of the lecture's prediction-error test quantity (LiU
+    lecture, slide "Minimering av V(θ, z)": general optimisation, system
+    identification).  The minimisation is local (trust-region reflective):
+    for a criterion with several minima, start from several ``theta_init``
+    and keep the smallest ``T``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u = np.linspace(0.0, 3.0, 40)
+    >>> def predict(theta):
+    ...     return theta[0] * (1.0 - np.exp(-theta[1] * u))
+    >>> fit = nonlinear_prediction_error(predict([2.0, 1.4]), predict, [2.0, 1.0], free=[1])
+    >>> round(float(fit.theta[1]), 6), round(fit.statistic, 12)
+    (1.4, 0.0)
     """
     nominal = as_vector(nominal, "nominal")
     p = nominal.size

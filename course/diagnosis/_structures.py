@@ -1,4 +1,9 @@
-"""Decision structures: which tests may alarm in which fault modes, and the diagnoses."""
+"""Decision structures: which tests may alarm in which fault modes, and the diagnoses.
+
+Source: the LiU lecture on test quantities (Linköping University, Swedish
+slides; full reference in the course bibliography, docs/bibliography.md),
+slide "Teststorheten är ett modellvalideringsmått".
+"""
 
 from __future__ import annotations
 
@@ -9,11 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from course.diagnosis._common import _indices, _range_basis
-from course.linalg import (
-    as_matrix,
-)
+from course.diagnosis._common import _indices
+from course.linalg import range_basis, readonly
 from course.results import TestResult
+from course.validation import as_count, as_index, as_matrix
 
 _ZERO_MARKS = {"0", "o", "O", "-", ""}
 _X_MARKS = {"x", "X", "1"}
@@ -74,7 +78,7 @@ class DecisionStructure:
 
     Notes
     -----
-    The decision structure of the lecture (test_quantities_lecture_sv.txt,
+    The decision structure of the LiU lecture (slide
     "Teststorheten är ett modellvalideringsmått"): the row
     ``(0, 0, X, X)`` of a test over ``(NF, F1, F2, F3)`` means
     ``H0: Fp in {NF, F1}`` against ``H1: Fp in {F2, F3}``, and the model
@@ -110,7 +114,7 @@ class DecisionStructure:
             else:
                 modes = [f"F{k + 1}" for k in range(n_modes)]
         tests, modes = _names(tests, "tests", n_tests), _names(modes, "modes", n_modes)
-        matrix.setflags(write=False)
+        readonly(matrix)
         self._sensitivity = matrix
         self._tests = tests
         self._modes = modes
@@ -285,9 +289,7 @@ def _names(names, what, size) -> tuple:
 
 def _lookup(key, names, what) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
-        if not 0 <= int(key) < len(names):
-            raise ValueError(f"{what} index {key} out of range 0..{len(names) - 1}")
-        return int(key)
+        return as_index(key, what, len(names))
     try:
         return names.index(str(key))
     except ValueError:
@@ -357,7 +359,7 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
     every mode with a 0 in row ``T``.  Under the single-fault assumption the
     diagnoses are the intersection, over the alarmed tests, of the sets of
     modes with an X (the lecture's decision structure,
-    test_quantities_lecture_sv.txt, "Teststorheten är ett
+    LiU lecture, slide "Teststorheten är ett
     modellvalideringsmått").
 
     *Multiple faults.*  If several faults may be present at once, a mode
@@ -370,6 +372,18 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
     diagnosis is also consistent.  This needs the further assumption that
     a combination of faults can only make a test alarm if one of its
     members can.  See :func:`multiple_fault_diagnoses`.
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> diagnoses(ds, ["T2", "T3"])
+    ('F1',)
+    >>> diagnoses(ds, [])
+    ('NF', 'F1', 'F2', 'F3')
     """
     if not isinstance(structure, DecisionStructure):
         raise ValueError(
@@ -403,6 +417,17 @@ def diagnosis_matrix(
     Mode ``j`` is inconsistent with pattern ``m`` exactly when some alarmed
     test has a 0 for ``j``: ``any_k alarm[m, k] and not X[k, j]``, one
     boolean matrix product for all patterns.
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> diagnosis_matrix(ds, [[False, True, True], [True, True, True]])
+    array([[False,  True, False, False],
+           [False, False, False, False]])
     """
     alarms = np.asarray(alarms)
     if alarms.ndim != 2 or alarms.shape[1] != len(structure.tests):
@@ -453,6 +478,16 @@ def multiple_fault_diagnoses(
     candidate sets by increasing size and keeping those with no diagnosed
     subset gives the minimal ones (fine for the handful of faults of a
     course example; large systems need Reiter's HS-tree or similar).
+
+    Examples
+    --------
+    >>> ds = DecisionStructure.from_text('''
+    ...        NF F1 F2 F3
+    ...     T1  0  0  X  X
+    ...     T2  0  X  0  X
+    ...     T3  0  X  X  0''')
+    >>> multiple_fault_diagnoses(ds, ["T1", "T2", "T3"])
+    [('F1', 'F2'), ('F1', 'F3'), ('F2', 'F3')]
     """
     alarm = _alarm_vector(structure, alarms)
     faults = [j for j, m in enumerate(structure.modes) if m != no_fault]
@@ -460,7 +495,7 @@ def multiple_fault_diagnoses(
     conflicts = [frozenset(j for j in faults if S[k, j]) for k in np.flatnonzero(alarm)]
     if any(not c for c in conflicts):
         return []
-    limit = len(faults) if max_size is None else int(max_size)
+    limit = len(faults) if max_size is None else as_count(max_size, "max_size", minimum=0)
     found: list[frozenset] = []
     for size in range(limit + 1):
         for candidate in itertools.combinations(faults, size):
@@ -502,13 +537,26 @@ def linear_decision_structure(
     free columns, so a fault ``U_F d`` is seen exactly when
     ``(I - P) U_F != 0``; the lecture's "F2 is detected when U2 is not
     parallel to U1" is the case of one free column.
+
+    Examples
+    --------
+    With U2 parallel to U1, the test that leaves theta_1 free cannot see F2:
+
+    >>> import numpy as np
+    >>> u = np.linspace(1.0, 2.0, 10)
+    >>> U = np.column_stack([u, -0.7 * u, np.cos(np.arange(10.0))])
+    >>> modes = {"NF": (), "F1": (0,), "F2": (1,), "F3": (2,)}
+    >>> print(linear_decision_structure(U, modes, {"T1": (0,), "T3": (2,)}))
+        NF  F1  F2  F3
+    T1   0   0   0   X
+    T3   0   X   X   0
     """
     U = as_matrix(U, "U")
     p = U.shape[1]
     matrix = np.zeros((len(tests), len(modes)), dtype=bool)
     for k, free in enumerate(tests.values()):
         free = _indices(free, p, "test free parameters")
-        basis = _range_basis(U[:, free])
+        basis = range_basis(U[:, free])
         for j, faulty in enumerate(modes.values()):
             faulty = _indices(faulty, p, "mode parameters")
             if not faulty:

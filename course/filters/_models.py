@@ -1,36 +1,49 @@
-"""State-space models: the linear Gaussian model, the nonlinear model and their simulation."""
+"""State-space models: the linear Gaussian model, the nonlinear model and their simulation.
+
+Sources: the LiU lecture on test quantities (slide "Extended Kalman Filter")
+and Y. Baram (1980), "Model validation using mismatched filters", eqs.
+(2.1)-(2.2); full references in the course bibliography, docs/bibliography.md.
+"""
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
-from course.distributions import as_generator
-from course.filters._stacked import _T, _batch_major, _readonly, _time_major
-from course.linalg import (
+from course.filters._stacked import _T, _batch_major, _time_major
+from course.linalg import psd_sqrt, readonly, symmetrize
+from course.validation import (
+    as_count,
     as_covariance,
     as_float_array,
+    as_generator,
     as_matrix,
     as_vector,
-    psd_sqrt,
-    symmetrize,
 )
 
+_readonly = readonly
 
-def _batch_shape(batch) -> tuple:
+
+class Simulation(NamedTuple):
+    """State and output sequences drawn from a model (unpacks as ``states, outputs``)."""
+
+    states: np.ndarray
+    """``(*batch, N, n)``, ``states[..., t, :] = x_t``."""
+    outputs: np.ndarray
+    """``(*batch, N, p)``."""
+
+
+def _batch_shape(batch: Any) -> tuple:
     if batch is None:
         return ()
-    if isinstance(batch, (int, np.integer)):
-        batch = (int(batch),)
-    batch = tuple(int(b) for b in batch)
-    if any(b < 1 for b in batch):
-        raise ValueError(f"batch sizes must be positive integers, got {batch}")
-    return batch
+    if np.ndim(batch) == 0:
+        batch = (batch,)
+    return tuple(as_count(b, "batch", what="the number of independent runs") for b in batch)
 
 
-def _check_steps(N) -> int:
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ValueError(f"N (the number of samples) must be a positive integer, got {N!r}")
-    return int(N)
+def _check_steps(N: Any) -> int:
+    return as_count(N, "N", what="the number of samples")
 
 
 def _as_signal(value, name: str, width: int, N: int | None = None) -> np.ndarray:
@@ -192,11 +205,10 @@ class LinearModel:
     -----
     The linear special case of the lecture's state-space model
     ``x(t+1) = g(x(t), u(t)) + G w(t)``, ``y(t) = h(x(t)) + v(t)``
-    (test_quantities_lecture_sv.txt, slide "Extended Kalman Filter") with
+    (LiU lecture, slide "Extended Kalman Filter") with
     ``g = F x + B u``, ``h = H x``; the noise means ``w_mean``, ``v_mean``
-    are those of Baram (1980), eqs. (2.1)-(2.2)
-    (mismatched_filters_baram.txt), where a filter may be driven by a model
-    other than the one that made the data.  ``R`` must be positive definite
+    are those of Baram (1980), eqs. (2.1)-(2.2), where a filter may be
+    driven by a model other than the one that made the data.  ``R`` must be positive definite
     so that every innovation covariance ``S = H P H^T + R`` is.
     """
 
@@ -248,10 +260,18 @@ class LinearModel:
 
         Returns
         -------
-        states : numpy.ndarray
-            ``(*batch, N, n)``, ``states[..., t, :] = x_t``.
-        outputs : numpy.ndarray
-            ``(*batch, N, p)``.
+        Simulation
+            ``states`` ``(*batch, N, n)`` with ``states[..., t, :] = x_t``
+            and ``outputs`` ``(*batch, N, p)``; unpacks as
+            ``states, outputs = model.simulate(...)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> model = LinearModel(F=[[1.0]], H=[[1.0]], Q=[[0.1]], R=[[1.0]])
+        >>> sim = model.simulate(50, np.random.default_rng(0), batch=3)
+        >>> sim.states.shape, sim.outputs.shape
+        ((3, 50, 1), (3, 50, 1))
         """
         N, shape, u, x, drive, v = _simulation_draws(self, N, rng, batch, u)
         if u is not None:
@@ -262,7 +282,7 @@ class LinearModel:
             x = x @ self.F.T + drive[t]
         outputs = states @ self.H.T + v
         nb = len(shape)
-        return _batch_major(states, nb), _batch_major(outputs, nb)
+        return Simulation(_batch_major(states, nb), _batch_major(outputs, nb))
 
 
 # ---------------------------------------------------------------------------
@@ -295,6 +315,13 @@ def numerical_jacobian(f, x, step=None) -> np.ndarray:
     ``h_j = step * max(1, |x_j|)``.  All ``2 n`` perturbed points of every
     batch member are evaluated in one call of ``f`` (an extra axis of size
     ``n`` before the last), so the cost is one vectorised call.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> numerical_jacobian(lambda x: np.stack([x[..., 0] * x[..., 1], x[..., 1]], -1), [2.0, 3.0]).round(8)
+    array([[3., 2.],
+           [0., 1.]])
     """
     x = np.asarray(x, dtype=float)
     n = x.shape[-1]
@@ -358,7 +385,7 @@ class NonlinearModel:
 
     Notes
     -----
-    The model of the lecture's EKF slide (test_quantities_lecture_sv.txt,
+    The model of the lecture's EKF slide (LiU lecture,
     "Extended Kalman Filter"), ``x(t+1) = g(x(t), u(t), w(t))``,
     ``y(t) = h(x(t)) + e(t)``, restricted to additive process noise, so that
     ``G_t = dg/dw = G`` is constant.  The Jacobians ``F_t = dg/dx`` and
@@ -393,12 +420,7 @@ class NonlinearModel:
         R = as_covariance(R, "R", p)
         Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
         q = Q.shape[0]
-        if (
-            isinstance(n_inputs, bool)
-            or not isinstance(n_inputs, (int, np.integer))
-            or n_inputs < 0
-        ):
-            raise ValueError(f"n_inputs must be a non-negative integer, got {n_inputs!r}")
+        n_inputs = as_count(n_inputs, "n_inputs", minimum=0, what="the dimension of u")
 
         self.g, self.h, self.jac_g, self.jac_h = g, h, jac_g, jac_h
         self.Q, self.R, self.G = _readonly(Q), _readonly(R), _readonly(G)
@@ -504,4 +526,4 @@ class NonlinearModel:
             x = self.g(x, None if u is None else u[t]) + w[t]
         outputs = self.h(states) + v
         nb = len(shape)
-        return _batch_major(states, nb), _batch_major(outputs, nb)
+        return Simulation(_batch_major(states, nb), _batch_major(outputs, nb))

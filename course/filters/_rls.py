@@ -1,27 +1,25 @@
-"""Recursive least squares as the Kalman filter of a random-walk parameter."""
+"""Recursive least squares as the Kalman filter of a random-walk parameter.
+
+Source: the LiU lecture on test quantities, slide "Linjär regression -
+rekursiv lösare" (full reference in the course bibliography,
+docs/bibliography.md).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.linalg import LinAlgError
-from scipy import linalg as sla
 
+from course import _deprecation
 from course.filters._steps import kf_update
-from course.linalg import (
-    as_covariance,
-    as_float_array,
-    as_matrix,
-    as_vector,
-    symmetrize,
-)
-from course.nis._windowed import _variance
+from course.linalg import matrix_rank, qr_solve, symmetrize
+from course.nis import _statistics as _nis_home
+from course.validation import as_covariance, as_float_array, as_matrix, as_variance, as_vector
 
 
-# ---------------------------------------------------------------------------
-# recursive least squares as a Kalman filter
-# ---------------------------------------------------------------------------
 @dataclass(frozen=True, repr=False, eq=False)
 class RLSResult:
     """Output of :func:`recursive_least_squares`.
@@ -78,7 +76,7 @@ class RLSResult:
         :meth:`FilterResult.normalized_innovations` (without its trailing
         output axis: RLS has one output).
         """
-        return self.eps / np.sqrt(self.S)
+        return _nis_home._normalized(self.eps[..., None], self.S[:, None, None])[..., 0]
 
     def nis(self) -> np.ndarray:
         """Normalised innovations squared ``eps_t^2 / S_t``, ``(*batch, N)``.
@@ -87,14 +85,13 @@ class RLSResult:
         :func:`windowed_nis` of an ``RLSResult`` is ``chi2(L)`` with a full
         window (threshold :func:`windowed_nis_threshold` with ``n_outputs=1``).
         """
-        z = self.normalized_innovations()
-        return z * z
+        return _nis_home._nis(self.eps[..., None], self.S[:, None, None])
 
 
 def _first_full_rank(Phi: np.ndarray) -> int:
     """Smallest k0 with rank(Phi[:k0]) = k (rank only grows with rows: bisect)."""
     N, k = Phi.shape
-    if k > N or np.linalg.matrix_rank(Phi) < k:
+    if k > N or matrix_rank(Phi) < k:
         raise LinAlgError(
             "Phi never reaches full column rank: the data do not excite every parameter, "
             "so least squares has no unique solution; give a proper prior P0 (and theta0) "
@@ -103,14 +100,23 @@ def _first_full_rank(Phi: np.ndarray) -> int:
     lo, hi = k, N
     while lo < hi:
         mid = (lo + hi) // 2
-        if np.linalg.matrix_rank(Phi[:mid]) == k:
+        if matrix_rank(Phi[:mid]) == k:
             hi = mid
         else:
             lo = mid + 1
     return lo
 
 
-def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSResult:
+@_deprecation.keyword_only("r", "q", "theta0", "P0")
+def recursive_least_squares(
+    Phi: Any,
+    y: Any,
+    *,
+    r: float = 1.0,
+    q: Any = None,
+    theta0: Any = None,
+    P0: Any = None,
+) -> RLSResult:
     """Recursive least squares: a Kalman filter for a random-walk parameter.
 
     Model: ``theta_{t+1} = theta_t + w_t``, ``w_t ~ N(0, q)``;
@@ -121,13 +127,13 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
     Phi : (N, k) array_like
         Regressors, one row ``phi_t^T`` per sample.
     y : array_like
-        ``(N,)`` or ``(*batch, N)`` outputs (a batch shares ``Phi``).  Records
-        stored as the columns of an ``(N, M)`` array (``course.diagnosis``'s
-        layout) go in as ``Y.T``.  A known part of the prediction, e.g. the
-        fixed parameters' contribution under H0, is subtracted beforehand:
+        ``(N,)`` or ``(*batch, N)`` outputs (records leading; a batch shares
+        ``Phi``).  A known part of the prediction, e.g. the fixed
+        parameters' contribution under H0, is subtracted beforehand:
         ``y - offset``.
     r : float
-        Measurement-noise variance (> 0).
+        Measurement-noise variance (> 0).  ``r``, ``q``, ``theta0`` and
+        ``P0`` are keyword-only.
     q : float or (k, k) array_like, optional
         Process-noise covariance of the parameter (``q * I`` for a scalar);
         zero by default: a constant parameter.
@@ -144,7 +150,7 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
 
     Notes
     -----
-    The lecture's recursive linear regression (test_quantities_lecture_sv.txt,
+    The lecture's recursive linear regression (LiU lecture,
     "Linjär regression - rekursiv lösare"): describe the parameter as a random
     walk and apply a standard Kalman filter; RLS is the special case
     ``q = 0``.  Each step is :func:`kf_update` with ``H = phi_t^T``, then
@@ -157,6 +163,18 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
     normalised innovations are independent ``N(0, 1)`` while the model holds,
     which makes :func:`windowed_nis` of the result a recursive test quantity
     (chapter 2, "recursive computation").
+
+    Examples
+    --------
+    With a constant parameter (q = 0) and the diffuse start, the last estimate
+    is the batch least-squares estimate:
+
+    >>> import numpy as np
+    >>> Phi = np.column_stack([np.ones(30), np.linspace(0.0, 1.0, 30)])
+    >>> y = Phi @ [1.0, -2.0] + 0.1 * np.random.default_rng(0).standard_normal(30)
+    >>> rls = recursive_least_squares(Phi, y, r=0.01)
+    >>> bool(np.allclose(rls.theta[-1], np.linalg.lstsq(Phi, y, rcond=None)[0]))
+    True
     """
     Phi = as_matrix(Phi, "Phi")
     N, k = Phi.shape
@@ -165,11 +183,11 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
         raise ValueError(
             f"y must have shape (N,) or (batch, N) with N = {N} (the rows of Phi), got {y.shape}"
         )
-    r = _variance(r, "r (the measurement-noise variance)", positive=True)
+    r = as_variance(r, "r", positive=True, what="the measurement-noise variance")
     if q is None:
         Qw = np.zeros((k, k))
     elif np.ndim(q) == 0:
-        Qw = _variance(q, "q") * np.eye(k)
+        Qw = as_variance(q, "q") * np.eye(k)
     else:
         Qw = as_covariance(q, "q", k, allow_singular=True)
     batch = y.shape[:-1]
@@ -184,12 +202,11 @@ def recursive_least_squares(Phi, y, r=1.0, q=None, theta0=None, P0=None) -> RLSR
             raise ValueError("theta0 without P0: give its covariance P0 as well (or neither)")
         k0 = _first_full_rank(Phi)
         first = k0 - 1
-        Qr, Rr = np.linalg.qr(Phi[:k0])
         # least squares on the first k0 rows, all runs at once (QR, no normal equations)
         rhs = np.moveaxis(y[..., :k0], -1, 0).reshape(k0, -1)
-        coef = sla.solve_triangular(Rr, Qr.T @ rhs, lower=False, check_finite=False)
-        x = np.moveaxis(coef.reshape((k,) + batch), 0, -1)
-        Ri = sla.solve_triangular(Rr, np.eye(k), lower=False, check_finite=False)
+        start_fit = qr_solve(Phi[:k0], rhs)
+        x = np.moveaxis(start_fit.x.reshape((k,) + batch), 0, -1)
+        Ri = start_fit.R_inv
         P = symmetrize(r * (Ri @ Ri.T))  # r (Phi^T Phi)^{-1}
         theta[..., first, :] = x
         P_all[first] = P

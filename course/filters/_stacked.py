@@ -50,8 +50,3 @@ def _batch_major(a: np.ndarray, n_batch: int) -> np.ndarray:
     A view, not a copy: reordering memory would cost more than the filter.
     """
     return np.moveaxis(a, 0, n_batch)
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)
-    return a

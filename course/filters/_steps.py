@@ -1,19 +1,44 @@
-"""One step of the (extended) Kalman filter: measurement update and time update."""
+"""One step of the (extended) Kalman filter: measurement update and time update.
+
+Source: the LiU lecture on test quantities, slide "Extended Kalman Filter"
+(full reference in the course bibliography, docs/bibliography.md).
+"""
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numpy.linalg import LinAlgError
 
 from course.filters._stacked import _T, _mm, _mv
-from course.linalg import (
-    symmetrize,
-)
+from course.linalg import symmetrize
 
 
-# ---------------------------------------------------------------------------
-# pure filter steps
-# ---------------------------------------------------------------------------
+class MeasurementUpdate(NamedTuple):
+    """Result of a measurement update (unpacks as ``x_filt, P_filt, eps, S, K``)."""
+
+    x_filt: np.ndarray
+    """``xhat(t|t)``, ``(..., n)``."""
+    P_filt: np.ndarray
+    """``P(t|t)``, ``(..., n, n)``."""
+    eps: np.ndarray
+    """The innovation ``y_t - yhat(t|t-1)``, ``(..., p)``."""
+    S: np.ndarray
+    """Its covariance, ``(..., p, p)``."""
+    K: np.ndarray
+    """The measurement-update gain, ``(..., n, p)``."""
+
+
+class TimeUpdate(NamedTuple):
+    """Result of a time update (unpacks as ``x_pred, P_pred``)."""
+
+    x_pred: np.ndarray
+    """``xhat(t+1|t)``, ``(..., n)``."""
+    P_pred: np.ndarray
+    """``P(t+1|t)``, ``(..., n, n)``."""
+
+
 def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     """Measurement update of the Kalman filter (one step, any batch shape).
 
@@ -34,9 +59,10 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
 
     Returns
     -------
-    x_filt, P_filt, eps, S, K : ndarray
-        Updated estimate and covariance, innovation ``eps = y - H x_pred -
-        v_mean``, its covariance ``S``, and the gain ``K``.
+    MeasurementUpdate
+        ``(x_filt, P_filt, eps, S, K)``: updated estimate and covariance,
+        innovation ``eps = y - H x_pred - v_mean``, its covariance ``S``, and
+        the gain ``K``.
 
     Notes
     -----
@@ -45,8 +71,15 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     ``P_filt = (I - K H) P (I - K H)^T + K R K^T``, which stays symmetric and
     positive semi-definite under rounding and equals ``(I - K H) P`` in exact
     arithmetic; see the measurement update on the lecture's EKF slide
-    (test_quantities_lecture_sv.txt, "Extended Kalman Filter").  Inputs are
+    (LiU lecture, "Extended Kalman Filter").  Inputs are
     never modified; broadcasting lets ``P`` be shared by a batch of ``x``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> step = kf_update([0.0], [[1.0]], [2.0], [[1.0]], [[1.0]])
+    >>> step.x_filt, step.S, step.K
+    (array([1.]), array([[2.]]), array([[0.5]]))
     """
     x_pred, P_pred, y, H, R = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y, H, R))
     _check_update_shapes(x_pred, P_pred, y, H, R)
@@ -113,7 +146,7 @@ def _update_core(x_pred, P_pred, eps, H, R):
     x_filt = x_pred + _mv(K, eps)
     I_KH = np.eye(P_pred.shape[-1]) - _mm(K, H)
     P_filt = symmetrize(_mm(_mm(I_KH, P_pred), _T(I_KH)) + _mm(_mm(K, R), _T(K)))
-    return x_filt, P_filt, eps, S, K
+    return MeasurementUpdate(x_filt, P_filt, eps, S, K)
 
 
 def kf_predict(x_filt, P_filt, F, GQG, offset=None):
@@ -134,14 +167,20 @@ def kf_predict(x_filt, P_filt, F, GQG, offset=None):
 
     Returns
     -------
-    x_pred, P_pred : ndarray
-        ``xhat(t+1|t) = F xhat(t|t) + offset`` and
-        ``P(t+1|t) = F P(t|t) F^T + G Q G^T`` (symmetrised).
+    TimeUpdate
+        ``x_pred = xhat(t+1|t) = F xhat(t|t) + offset`` and
+        ``P_pred = P(t+1|t) = F P(t|t) F^T + G Q G^T`` (symmetrised).
 
     Notes
     -----
     The time update of the lecture's EKF slide with constant ``G``
-    (test_quantities_lecture_sv.txt, "Extended Kalman Filter").
+    (LiU lecture, "Extended Kalman Filter").
+
+    Examples
+    --------
+    >>> step = kf_predict([1.0], [[1.0]], [[2.0]], [[0.5]])
+    >>> step.x_pred, step.P_pred
+    (array([2.]), array([[4.5]]))
     """
     x_filt, P_filt, F, GQG = (np.asarray(a, dtype=float) for a in (x_filt, P_filt, F, GQG))
     _check_predict_shapes(x_filt, P_filt, F, GQG)
@@ -149,7 +188,7 @@ def kf_predict(x_filt, P_filt, F, GQG, offset=None):
     if offset is not None:
         x_pred = x_pred + offset
     P_pred = symmetrize(_mm(_mm(F, P_filt), _T(F)) + GQG)
-    return x_pred, P_pred
+    return TimeUpdate(x_pred, P_pred)
 
 
 def ekf_update(model, x_pred, P_pred, y):
@@ -168,18 +207,27 @@ def ekf_update(model, x_pred, P_pred, y):
 
     Returns
     -------
-    x_filt, P_filt, eps, S, K : ndarray
+    MeasurementUpdate
         As :func:`kf_update`, with ``eps = y - h(x_pred) - v_mean`` and
         ``H = dh/dx`` at ``x_pred``.
 
     Notes
     -----
-    Lecture (test_quantities_lecture_sv.txt, "Extended Kalman Filter"):
+    Lecture (LiU lecture, "Extended Kalman Filter"):
     ``H_t = dh/dx`` at ``xhat(t|t-1)``,
     ``K_t = P(t|t-1) H_t^T (H_t P(t|t-1) H_t^T + R_t)^{-1}``,
     ``xhat(t|t) = xhat(t|t-1) + K_t (y_t - h(xhat(t|t-1)))``.  The lecture's
     ``P(t|t) = P(t|t-1) - K_t H_t P(t|t-1)`` is replaced by the equivalent
     Joseph form (see :func:`kf_update`).
+
+    Examples
+    --------
+    >>> from course.filters import NonlinearModel
+    >>> model = NonlinearModel(g=lambda x, u: x, h=lambda x: x**2, Q=[[0.0]], R=[[1.0]],
+    ...                        x0_mean=[2.0])
+    >>> step = ekf_update(model, [2.0], [[1.0]], [5.0])
+    >>> step.eps, step.S          # y - h(x) and H P H^T + R with H = 2x = 4
+    (array([1.]), array([[17.]]))
     """
     x_pred, P_pred, y = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y))
     H = model.jacobian_h(x_pred)
@@ -204,19 +252,28 @@ def ekf_predict(model, x_filt, P_filt, u=None):
 
     Returns
     -------
-    x_pred, P_pred : ndarray
+    TimeUpdate
         ``xhat(t+1|t)`` and ``P(t+1|t)``.
 
     Notes
     -----
     ``xhat(t+1|t) = g(xhat(t|t), u_t) + G w_mean`` and
     ``P(t+1|t) = F_t P(t|t) F_t^T + G Q G^T`` with ``F_t = dg/dx`` at
-    ``xhat(t|t)`` (test_quantities_lecture_sv.txt, slide "Extended Kalman
+    ``xhat(t|t)`` (LiU lecture, slide "Extended Kalman
     Filter", time update; its ``G_t = dg/dw`` is the constant ``G`` here
     because the noise enters additively).
+
+    Examples
+    --------
+    >>> from course.filters import NonlinearModel
+    >>> model = NonlinearModel(g=lambda x, u: 0.5 * x**2, h=lambda x: x, Q=[[0.1]], R=[[1.0]],
+    ...                        x0_mean=[2.0])
+    >>> step = ekf_predict(model, [2.0], [[1.0]])
+    >>> step.x_pred, step.P_pred.round(6)  # g(x) and F P F^T + Q with F = x = 2
+    (array([2.]), array([[4.1]]))
     """
     x_filt, P_filt = np.asarray(x_filt, dtype=float), np.asarray(P_filt, dtype=float)
     F = model.jacobian_g(x_filt, u)
     _check_predict_shapes(x_filt, P_filt, F, model.GQG)
     x_pred = model.g(x_filt, u) + model.Gw
-    return x_pred, symmetrize(_mm(_mm(F, P_filt), _T(F)) + model.GQG)
+    return TimeUpdate(x_pred, symmetrize(_mm(_mm(F, P_filt), _T(F)) + model.GQG))

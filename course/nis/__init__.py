@@ -39,8 +39,8 @@ Tests and thresholds (``_consistency_tests``)
 References
 ----------
 .. [F] R. Forsling, "Matrix-Valued Statistics for Detecting Complex Model
-   Errors in State Estimation", poster (the course's source document
-   ``nis_matrix_wishart_forsling.txt``), eqs. (2)-(4).
+   Errors in State Estimation", poster, eqs. (2)-(4) (full reference in the
+   course bibliography, docs/bibliography.md).
 .. [C14] M. Chiani, "Distribution of the largest eigenvalue for real Wishart
    and Gaussian random matrices and a simple approximation for the
    Tracy-Widom distribution", J. Multivariate Anal. 129 (2014) 69-81.
@@ -63,6 +63,7 @@ from course.nis._consistency_tests import (
 )
 from course.nis._laws import (
     TW1_GAMMA,
+    EigenvaluePair,
     ExtremeEigenvalue,
     TracyWidomApproximation,
     extreme_eigenvalue,
@@ -83,6 +84,7 @@ from course.nis._windowed import (
 __all__ = [
     "TW1_GAMMA",
     "AlarmStatistics",
+    "EigenvaluePair",
     "ExtremeEigenvalue",
     "TracyWidomApproximation",
     "alarm_statistics",

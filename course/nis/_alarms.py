@@ -1,4 +1,10 @@
-"""Alarms of a thresholded statistic over many runs: empirical thresholds, false alarms, delays."""
+"""Alarms of a thresholded statistic over many runs: empirical thresholds, false alarms, delays.
+
+The last link of the NIS chain: the LiU lecture on test quantities leaves
+threshold selection and the quality of a test to its next lecture (last
+slide; full reference in the course bibliography, docs/bibliography.md);
+these are their Monte Carlo estimates.
+"""
 
 from __future__ import annotations
 
@@ -6,11 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from course.linalg import (
-    check_alpha,
-)
-from course.nis._windowed import _finite_float
 from course.results import format_number
+from course.validation import as_finite, as_index, as_probability
 
 
 def empirical_threshold(null_statistic, alpha) -> float:
@@ -36,8 +39,15 @@ def empirical_threshold(null_statistic, alpha) -> float:
     ``F_hat`` the empirical distribution function of the simulated values
     (numpy's linear-interpolation quantile).  Its accuracy is that of a
     Monte Carlo quantile: simulate many more than ``1 / alpha`` values.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> null = np.random.default_rng(0).chisquare(4, size=200_000)
+    >>> round(empirical_threshold(null, 0.05), 1)   # chi2.isf(0.05, 4) = 9.49
+    9.5
     """
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     try:
         values = np.asarray(null_statistic, dtype=float)
     except (TypeError, ValueError):
@@ -132,8 +142,16 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     delay of run ``i`` is ``min{t >= fault_time : a_{i,t}} - fault_time``.
     The lecture leaves the choice of threshold and the quality of a test
     (false alarms, detection) to the next lecture
-    (test_quantities_lecture_sv.txt, last slide); these are its Monte Carlo
+    (LiU lecture, last slide); these are its Monte Carlo
     estimates.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> T = np.array([[0.1, 2.0, 0.3, 5.0, 6.0], [0.2, 0.1, 0.2, 0.4, 7.0]])
+    >>> stats = alarm_statistics(T, 1.0, fault_time=3)
+    >>> stats.false_alarm_rate, stats.detection_probability, stats.delays
+    (0.16666666666666666, 1.0, array([0., 1.]))
     """
     try:
         T = np.array(statistic, dtype=float)
@@ -147,13 +165,9 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     if np.isinf(T).any():
         raise ValueError("statistic contains inf; only NaN (undefined samples) is allowed")
     _n_runs, N = T.shape
-    threshold = _finite_float(threshold, "threshold")
+    threshold = as_finite(threshold, "threshold")
     if fault_time is not None:
-        if isinstance(fault_time, bool) or not isinstance(fault_time, (int, np.integer)):
-            raise ValueError(f"fault_time must be an integer sample index, got {fault_time!r}")
-        fault_time = int(fault_time)
-        if not 0 <= fault_time < N:
-            raise ValueError(f"fault_time must lie in [0, {N - 1}], got {fault_time}")
+        fault_time = as_index(fault_time, "fault_time", N, what="the first faulty sample")
     end = N if fault_time is None else fault_time
     with np.errstate(invalid="ignore"):
         alarms = threshold < T  # NaN compares False

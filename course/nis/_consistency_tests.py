@@ -1,24 +1,32 @@
-"""Consistency tests of one record: the time-averaged NIS test and the NIS-matrix test."""
+"""Consistency tests of one record: the time-averaged NIS test and the NIS-matrix test.
+
+Sources: R. Forsling, poster "Matrix-Valued Statistics for Detecting Complex
+Model Errors in State Estimation", eqs. (3)-(4) ([F]); Bar-Shalom, Li and
+Kirubarajan (2001), Sec. 5.4 ([BS]); full references in the course
+bibliography, docs/bibliography.md.
+"""
 
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 import numpy as np
-from scipy import stats
 
-from course.linalg import (
-    check_alpha,
+from course.chi2 import residual_norm_law
+from course.distributions import TailPair
+from course.linalg import whiten_vectors
+from course.nis._laws import (
+    extreme_eigenvalue,
+    prob_eigenvalues_within,
+    simulate_extreme_eigenvalues,
 )
-from course.nis._laws import extreme_eigenvalue, prob_eigenvalues_within
-from course.nis._statistics import _check_dims, _check_int, _innovations_and_factor, _whiten
-from course.results import TestResult
+from course.nis._statistics import _check_dims, _innovations_and_factor
+from course.results import CriticalValues, TestResult, critical_value
+from course.validation import as_count, as_probability
 
 
-# ---------------------------------------------------------------------------
-# tests and thresholds
-# ---------------------------------------------------------------------------
-def nis_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
+def nis_critical_values(m: Any, K: Any, alpha: float = 0.05) -> CriticalValues:
     """Two-sided thresholds for the NIS sum ``K * eps_bar ~ chi2(m K)``.
 
     Parameters
@@ -30,32 +38,48 @@ def nis_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
 
     Returns
     -------
-    (lower, upper) : tuple of float
-        ``chi2_{mK}.ppf(alpha/2)`` and ``chi2_{mK}.isf(alpha/2)``; divide by
-        ``K`` for thresholds on the average ``eps_bar``.
+    CriticalValues
+        ``(lower, upper) = (chi2_{mK}.ppf(alpha/2), chi2_{mK}.isf(alpha/2))``;
+        divide by ``K`` for thresholds on the average ``eps_bar``.
 
     Notes
     -----
     [F], eq. (4), with the ``1/K`` of the definition restored:
     ``K eps_bar ~ chi2(mK)``.
+
+    Examples
+    --------
+    >>> lower, upper = nis_critical_values(2, 50)
+    >>> round(lower, 2), round(upper, 2)
+    (74.22, 129.56)
     """
-    m, K = (
-        _check_int(m, "m", 1, "the innovation dimension"),
-        _check_int(K, "K", 1, "the number of time steps"),
+    m = as_count(m, "m", what="the innovation dimension")
+    K = as_count(K, "K", what="the number of time steps")
+    return critical_value(residual_norm_law(m * K), alpha, "two-sided")
+
+
+@functools.lru_cache(maxsize=64)
+def _eigenvalue_null(m: int, K: int) -> TailPair:
+    """The null law of the NIS-matrix test, shared (with its cached quantiles) by all calls."""
+    return TailPair(
+        extreme_eigenvalue(m, K, "min"),
+        extreme_eigenvalue(m, K, "max"),
+        joint_rvs=lambda size, rng: tuple(simulate_extreme_eigenvalues(m, K, size, rng=rng)),
     )
-    alpha = check_alpha(alpha)
-    law = stats.chi2(m * K)
-    return float(law.ppf(alpha / 2)), float(law.isf(alpha / 2))
 
 
 @functools.lru_cache(maxsize=256)
-def _matrix_thresholds(m: int, K: int, alpha: float) -> tuple[float, float]:
-    lower = float(extreme_eigenvalue(m, K, "min").ppf(alpha / 2))
-    upper = float(extreme_eigenvalue(m, K, "max").isf(alpha / 2))
-    return lower, upper
+def _matrix_thresholds(m: int, K: int, alpha: float) -> CriticalValues:
+    return critical_value(_eigenvalue_null(m, K), alpha, "two-sided")
 
 
-def nis_matrix_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
+@functools.lru_cache(maxsize=256)
+def _exact_false_alarm_rate(m: int, K: int, alpha: float) -> float:
+    lower, upper = _matrix_thresholds(m, K, alpha)
+    return 1.0 - prob_eigenvalues_within(m, K, lower, upper)
+
+
+def nis_matrix_critical_values(m: Any, K: Any, alpha: float = 0.05) -> CriticalValues:
     """Thresholds of the NIS-matrix test: ``(lower for lambda_min, upper for lambda_max)``.
 
     Parameters
@@ -67,25 +91,29 @@ def nis_matrix_critical_values(m, K, alpha=0.05) -> tuple[float, float]:
 
     Returns
     -------
-    (lower, upper) : tuple of float
-        ``P(lambda_min < lower) = alpha/2`` and ``P(lambda_max > upper) =
-        alpha/2`` under H0.
+    CriticalValues
+        ``(lower, upper)`` with ``P(lambda_min < lower) = alpha/2`` and
+        ``P(lambda_max > upper) = alpha/2`` under H0.
 
     Notes
     -----
     Quantiles (``ppf``/``isf``) of the exact laws of :func:`extreme_eigenvalue`
     ([C14]).  The false-alarm rate of "reject when either is outside" is at
     most ``alpha`` (Bonferroni; both together are rare); its exact value is
-    ``1 - prob_eigenvalues_within(m, K, lower, upper)`` ([C17]).
+    ``1 - prob_eigenvalues_within(m, K, lower, upper)`` ([C17]).  Cached: a
+    study that tests many records of one size pays the root searches once.
+
+    Examples
+    --------
+    >>> lower, upper = nis_matrix_critical_values(2, 50)
+    >>> round(lower, 3), round(upper, 3)
+    (0.553, 1.585)
     """
     m, K = _check_dims(m, K)
-    alpha = check_alpha(alpha)
-    # Cached: a study that tests many records of one size pays the root
-    # searches once.
-    return _matrix_thresholds(m, K, alpha)
+    return _matrix_thresholds(m, K, as_probability(alpha))
 
 
-def _single_record(innovations, S):
+def _single_record(innovations: Any, S: Any):
     eps, L = _innovations_and_factor(innovations, S)
     if eps.ndim != 2:
         raise ValueError(
@@ -96,7 +124,7 @@ def _single_record(innovations, S):
     return eps, L
 
 
-def nis_test(innovations, S, alpha=0.05) -> TestResult:
+def nis_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
     """Two-sided chi-square test of the time-averaged NIS.
 
     Parameters
@@ -122,30 +150,31 @@ def nis_test(innovations, S, alpha=0.05) -> TestResult:
     states).  This is Bar-Shalom's time-average NIS test ([BS], Sec. 5.4.2).
     Too small a statistic (the filter's ``S`` too large: a pessimistic
     filter) is rejected as well as too large.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eps = np.random.default_rng(0).standard_normal((50, 2))
+    >>> result = nis_test(eps, np.eye(2))
+    >>> [round(c, 2) for c in result.critical_value], result.dof
+    ([74.22, 129.56], 100)
     """
     eps, L = _single_record(innovations, S)
-    alpha = check_alpha(alpha)
     K, m = eps.shape
-    z = _whiten(L, eps)
+    z = whiten_vectors(L, eps)
     total = float(np.sum(z * z))
-    law = stats.chi2(m * K)
-    lower, upper = nis_critical_values(m, K, alpha)
-    pvalue = min(1.0, 2 * min(float(law.cdf(total)), float(law.sf(total))))
-    return TestResult(
-        name="time-averaged NIS test",
-        statistic=total,
-        alpha=alpha,
-        critical_value=(lower, upper),
-        pvalue=pvalue,
-        reject=bool(total < lower or total > upper),
-        null=law,
+    return TestResult.from_null(
+        "time-averaged NIS test",
+        total,
+        residual_norm_law(m * K),
+        alpha,
+        "two-sided",
         dof=m * K,
-        alternative="two-sided",
         details={"average NIS": total / K, "m": m, "K": K},
     )
 
 
-def nis_matrix_test(innovations, S, alpha=0.05) -> TestResult:
+def nis_matrix_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
     """Test the NIS matrix through its smallest and largest eigenvalues.
 
     Parameters
@@ -167,8 +196,10 @@ def nis_matrix_test(innovations, S, alpha=0.05) -> TestResult:
         ``lambda_min < lower`` or ``lambda_max > upper``, i.e. when some
         eigenvalue leaves ``[lower, upper]``.
         ``pvalue = min(1, 2 min(F_min(lambda_min), 1 - F_max(lambda_max)))``
-        (Bonferroni), so ``reject == (pvalue <= alpha)``.  ``null`` is the
-        pair of exact laws; ``details["exact false-alarm rate"]`` is
+        (Bonferroni), so ``reject == (pvalue <= alpha)``.  ``null`` is a
+        :class:`course.distributions.TailPair` of the two exact laws (it
+        unpacks as ``law_min, law_max``, and draws the eigenvalue pair
+        jointly); ``details["exact false-alarm rate"]`` is
         ``1 - P(all eigenvalues in [lower, upper])`` (slightly below
         ``alpha``), from :func:`prob_eigenvalues_within`.
 
@@ -179,37 +210,39 @@ def nis_matrix_test(innovations, S, alpha=0.05) -> TestResult:
     in *some* direction pushes ``lambda_max`` up; too large in some
     direction pulls ``lambda_min`` down, even when the trace (the NIS) is
     unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eps = np.random.default_rng(0).standard_normal((50, 2))
+    >>> r = nis_matrix_test(eps, np.eye(2))
+    >>> r.null
+    TailPair(lower=ExtremeEigenvalue(m=2, K=50, which='min'), upper=ExtremeEigenvalue(m=2, K=50, which='max'))
     """
     eps, L = _single_record(innovations, S)
-    alpha = check_alpha(alpha)
+    alpha = as_probability(alpha)
     K, m = eps.shape
     _check_dims(m, K)
-    z = _whiten(L, eps)
+    z = whiten_vectors(L, eps)
     values = np.linalg.eigvalsh(z.T @ z / K)
     lmin, lmax = float(values[0]), float(values[-1])
-    law_min, law_max = extreme_eigenvalue(m, K, "min"), extreme_eigenvalue(m, K, "max")
-    lower, upper = _matrix_thresholds(m, K, alpha)
-    pvalue = min(1.0, 2 * min(float(law_min.cdf(lmin)), float(law_max.sf(lmax))))
-    return TestResult(
-        name="NIS-matrix eigenvalue test",
-        statistic=(lmin, lmax),
-        alpha=alpha,
-        critical_value=(lower, upper),
-        pvalue=pvalue,
-        reject=bool(lmin < lower or lmax > upper),
-        null=(law_min, law_max),
+    return TestResult.from_null(
+        "NIS-matrix eigenvalue test",
+        (lmin, lmax),
+        _eigenvalue_null(m, K),
+        alpha,
+        "two-sided",
         dof=K,
-        alternative="two-sided",
         details={
             "trace (average NIS)": float(np.sum(values)),
             "m": m,
             "K": K,
-            "exact false-alarm rate": 1.0 - prob_eigenvalues_within(m, K, lower, upper),
+            "exact false-alarm rate": _exact_false_alarm_rate(m, K, alpha),
         },
     )
 
 
-def consistency_interval(dof, count, alpha=0.05) -> tuple[float, float]:
+def consistency_interval(dof: Any, count: Any, alpha: float = 0.05) -> CriticalValues:
     """Two-sided interval for an average of ``count`` independent ``chi2(dof)`` values.
 
     Bar-Shalom's consistency bounds ([BS], Sec. 5.4.2): the **time-averaged**
@@ -229,7 +262,7 @@ def consistency_interval(dof, count, alpha=0.05) -> tuple[float, float]:
 
     Returns
     -------
-    (lower, upper) : tuple of float
+    CriticalValues
         ``chi2_{dof*count}.ppf(alpha/2) / count`` and
         ``chi2_{dof*count}.isf(alpha/2) / count``.
 
@@ -237,9 +270,14 @@ def consistency_interval(dof, count, alpha=0.05) -> tuple[float, float]:
     -----
     [BS], Sec. 5.4.2: a sum of ``count`` independent ``chi2(dof)`` values is
     ``chi2(dof * count)``.
+
+    Examples
+    --------
+    >>> lo, hi = consistency_interval(2, 100)
+    >>> round(lo, 4), round(hi, 4)
+    (1.6273, 2.4106)
     """
-    dof = _check_int(dof, "dof", 1, "degrees of freedom of each value")
-    count = _check_int(count, "count", 1, "the number of values averaged")
-    alpha = check_alpha(alpha)
-    law = stats.chi2(dof * count)
-    return float(law.ppf(alpha / 2)) / count, float(law.isf(alpha / 2)) / count
+    dof = as_count(dof, "dof", what="degrees of freedom of each value")
+    count = as_count(count, "count", what="the number of values averaged")
+    lower, upper = critical_value(residual_norm_law(dof * count), alpha, "two-sided")
+    return CriticalValues(lower / count, upper / count)

@@ -1,11 +1,18 @@
-"""Exact and approximate laws of the extreme eigenvalues of the NIS matrix under H0."""
+"""Exact and approximate laws of the extreme eigenvalues of the NIS matrix under H0.
+
+References ([C14], [C17], [J]) are listed in :mod:`course.nis`; the course's
+own sources are in the course bibliography, docs/bibliography.md.
+"""
 
 from __future__ import annotations
+
+import numbers
+from typing import Any
 
 import numpy as np
 from scipy import stats
 
-from course.distributions import FrozenDistribution, as_generator
+from course.distributions import _NO_STATE, FrozenDistribution, _rng_argument
 from course.nis._pfaffians import (
     _augment,
     _bordered,
@@ -14,7 +21,8 @@ from course.nis._pfaffians import (
     _pfaffian,
     _skew_blocks,
 )
-from course.nis._statistics import _check_dims, _check_which
+from course.nis._statistics import EigenvaluePair, _check_dims, _check_which
+from course.validation import as_count
 
 #: Chiani's shifted-gamma fit of the Tracy-Widom law TW1 ([C14], Table 1):
 #: TW1 ~ Gamma(shape=k, scale=theta) - alpha.
@@ -82,7 +90,7 @@ class ExtremeEigenvalue(FrozenDistribution):
     on ``log F`` against ``log x``, started at the Tracy-Widom quantile.
     """
 
-    support = (0.0, np.inf)
+    _bounds = (0.0, np.inf)
 
     def __init__(self, m, K, which="max"):
         self.m, self.K = _check_dims(m, K)
@@ -166,7 +174,7 @@ class ExtremeEigenvalue(FrozenDistribution):
         return self._density(t, J, g).reshape(np.shape(x))
 
     def _rvs(self, size, rng):
-        lmin, lmax = simulate_extreme_eigenvalues(self.m, self.K, size, rng)
+        lmin, lmax = simulate_extreme_eigenvalues(self.m, self.K, size, rng=rng)
         return lmax if self.which == "max" else lmin
 
     # -- public overrides ---------------------------------------------------------
@@ -391,7 +399,8 @@ def extreme_eigenvalue(m, K, which="max", method="exact"):
     -------
     FrozenDistribution
         With ``cdf``, ``sf``, ``pdf``, ``ppf``, ``isf``, ``mean``, ``var``,
-        ``interval`` and ``rvs(size, random_state)``.
+        ``interval``, ``support()``, ``median``, ``logcdf``, ``logsf``,
+        ``expect`` and ``rvs(size, rng=...)``.
 
     Raises
     ------
@@ -441,6 +450,14 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
     -----
     [C17], Theorem 1: the same Pfaffian as :class:`ExtremeEigenvalue` with
     the entries integrated over ``[K lower/2, K upper/2]``.
+
+    Examples
+    --------
+    The exact false-alarm rate of the NIS-matrix test at its thresholds:
+
+    >>> lower, upper = 0.5530, 1.5848        # nis_matrix_critical_values(2, 50)
+    >>> round(1 - prob_eigenvalues_within(2, 50, lower, upper), 3)
+    0.05
     """
     m, K = _check_dims(m, K)
     lower, upper = float(lower), float(upper)
@@ -451,7 +468,15 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
     return float(np.clip(_pfaffian(_augment(J, g))[0] / law._pf_full, 0.0, 1.0))
 
 
-def simulate_extreme_eigenvalues(m, K, size=None, random_state=None, chunk: int = 100_000):
+def simulate_extreme_eigenvalues(
+    m: Any,
+    K: Any,
+    size: Any = None,
+    random_state: Any = _NO_STATE,
+    *,
+    rng: Any = None,
+    chunk: int = 100_000,
+) -> EigenvaluePair:
     """Monte Carlo draws of ``(lambda_min, lambda_max)`` of ``W/K``, ``W ~ W_m(K, I)``.
 
     Uses Bartlett's decomposition ``W = L L^T`` with ``L`` lower triangular,
@@ -464,26 +489,35 @@ def simulate_extreme_eigenvalues(m, K, size=None, random_state=None, chunk: int 
     m, K : int
     size : int or tuple of int, optional
         Shape of the output arrays.
-    random_state : numpy.random.Generator or seed
+    random_state
+        Deprecated name of ``rng``.
+    rng : numpy.random.Generator or seed
+        Source of randomness (keyword-only).
     chunk : int
         Draws generated per batch (bounds the memory).
 
     Returns
     -------
-    lmin, lmax : numpy.ndarray
-        Floats when ``size`` is None.
+    EigenvaluePair
+        ``(lmin, lmax)``: arrays of shape ``size``, floats when ``size`` is None.
 
     Notes
     -----
     Bartlett's decomposition of ``W ~ W_m(K, I)``: the squared diagonal of
     its lower Cholesky factor is independent ``chi2(K - i)`` and the
     entries below the diagonal are independent ``N(0, 1)``.
+
+    Examples
+    --------
+    >>> draws = simulate_extreme_eigenvalues(2, 50, size=1000, rng=0)
+    >>> bool((draws.lmin <= draws.lmax).all()), draws.lmax.shape
+    (True, (1000,))
     """
     m, K = _check_dims(m, K)
-    rng = as_generator(random_state)
-    shape = () if size is None else tuple(int(n) for n in np.atleast_1d(size))
-    if any(n < 0 for n in shape):
-        raise ValueError(f"size must contain non-negative integers, got {size!r}")
+    rng = _rng_argument(rng, random_state, "simulate_extreme_eigenvalues")
+    sizes = (size,) if isinstance(size, (numbers.Number, np.generic)) else size
+    shape = () if size is None else tuple(as_count(n, "size", minimum=0) for n in sizes)
+    chunk = as_count(chunk, "chunk")
     total = int(np.prod(shape)) if shape else 1
     lmin, lmax = np.empty(total), np.empty(total)
     below = np.tril_indices(m, -1)
@@ -496,5 +530,5 @@ def simulate_extreme_eigenvalues(m, K, size=None, random_state=None, chunk: int 
         values = np.linalg.eigvalsh(L @ np.swapaxes(L, -1, -2)) / K
         lmin[start : start + n], lmax[start : start + n] = values[:, 0], values[:, -1]
     if not shape:
-        return float(lmin[0]), float(lmax[0])
-    return lmin.reshape(shape), lmax.reshape(shape)
+        return EigenvaluePair(float(lmin[0]), float(lmax[0]))
+    return EigenvaluePair(lmin.reshape(shape), lmax.reshape(shape))

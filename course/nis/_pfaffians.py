@@ -71,13 +71,13 @@ def _pfaffian(A: np.ndarray) -> np.ndarray:
     factorisation), O(n^3) per matrix; ``Pf(A)^2 = det(A)``.
     """
     A = np.array(A, dtype=float)
-    n = A.shape[-1]
-    batch = A.shape[:-2]
+    n: int = A.shape[-1]
+    batch: tuple[int, ...] = A.shape[:-2]
     if n % 2:
         return np.zeros(batch)
     A = A.reshape((-1, n, n))
-    rows = np.arange(A.shape[0])
-    pf = np.ones(A.shape[0])
+    rows = np.arange(len(A))
+    pf = np.ones(len(A))
     for k in range(0, n - 1, 2):
         pivot = k + 1 + np.argmax(np.abs(A[:, k + 1 :, k]), axis=1)
         swap = pivot != k + 1

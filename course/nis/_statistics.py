@@ -1,39 +1,39 @@
-"""The NIS, the NEES and the NIS matrix of whitened innovations."""
+"""The NIS, the NEES and the NIS matrix of whitened innovations.
+
+The one home of the normalised innovation squared: :func:`nis` for arrays a
+user passes, and :func:`_nis` (no input checks, undefined samples allowed)
+for the filter results of :mod:`course.filters`, whose ``nis()`` methods
+delegate here.  Source: R. Forsling, poster "Matrix-Valued Statistics for
+Detecting Complex Model Errors in State Estimation", eqs. (2)-(4) (full
+reference in the course bibliography, docs/bibliography.md).
+"""
 
 from __future__ import annotations
 
-import numbers
+from typing import Any, NamedTuple
 
 import numpy as np
-from numpy.linalg import LinAlgError
 
-from course.linalg import (
-    as_float_array,
-)
-
-_SYMMETRY_RTOL = 1e-10
+from course.linalg import cholesky_factor, whiten_vectors, whitened_squared_norms
+from course.validation import as_count, as_float_array
 
 
-# ---------------------------------------------------------------------------
-# input checks
-# ---------------------------------------------------------------------------
-def _check_int(value, name: str, minimum: int, what: str) -> int:
-    if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} ({what}) must be an integer, got {value!r}")
-    if not isinstance(value, numbers.Integral):
-        if isinstance(value, numbers.Real) and float(value).is_integer():
-            value = int(value)
-        else:
-            raise ValueError(f"{name} ({what}) must be an integer, got {value!r}")
-    value = int(value)
-    if value < minimum:
-        raise ValueError(f"{name} ({what}) must be at least {minimum}, got {value}")
-    return value
+class EigenvaluePair(NamedTuple):
+    """The smallest and largest eigenvalue (unpacks as ``lmin, lmax``)."""
+
+    lmin: Any
+    """Smallest eigenvalue(s)."""
+    lmax: Any
+    """Largest eigenvalue(s)."""
 
 
-def _check_dims(m, K) -> tuple[int, int]:
-    m = _check_int(m, "m", 1, "the innovation dimension")
-    K = _check_int(K, "K", 1, "the number of time steps")
+def _check_int(value: Any, name: str, minimum: int, what: str) -> int:
+    return as_count(value, name, minimum=minimum, what=what)
+
+
+def _check_dims(m: Any, K: Any) -> tuple[int, int]:
+    m = as_count(m, "m", what="the innovation dimension")
+    K = as_count(K, "K", what="the number of time steps")
     if m > K:
         raise ValueError(
             f"K = {K} < m = {m}: a sum of K < m outer products is singular, so its smallest "
@@ -42,7 +42,7 @@ def _check_dims(m, K) -> tuple[int, int]:
     return m, K
 
 
-def _check_which(which) -> str:
+def _check_which(which: Any) -> str:
     if which not in ("max", "min"):
         raise ValueError(f'which must be "max" or "min", got {which!r}')
     return which
@@ -57,50 +57,50 @@ def _innovations_and_factor(innovations, S, name_eps="innovations", name_S="S"):
             f"axis), got shape {eps.shape}; for a scalar output pass {name_eps}[:, None]"
         )
     m = eps.shape[-1]
-    if isinstance(S, np.ndarray) and S.ndim > 2:
-        # A covariance shared by all runs often arrives as a broadcast view
-        # (stride 0, e.g. a Kalman filter's S): factor each distinct matrix once.
+    shape = np.shape(S)
+    if len(shape) < 2 or tuple(shape[-2:]) != (m, m):
+        raise ValueError(
+            f"{name_S} must have shape ({m}, {m}) or (..., K, {m}, {m}) to match {name_eps} of "
+            f"shape {eps.shape}, got {shape}"
+        )
+    try:
+        np.broadcast_shapes(tuple(shape[:-2]), eps.shape[:-1])
+    except ValueError:
+        raise ValueError(
+            f"{name_S} of shape {shape} does not broadcast against {name_eps} of shape "
+            f"{eps.shape}: give one ({m}, {m}) matrix or one per time step, (K, {m}, {m})"
+        ) from None
+    return eps, cholesky_factor(S, name_S)
+
+
+def _whiten(L: np.ndarray, eps: np.ndarray) -> np.ndarray:
+    """Forward substitution ``L z = eps`` over stacks (no inverse is formed)."""
+    return whiten_vectors(L, eps)
+
+
+def _normalized(eps: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """``L_t^{-1} eps_t`` for a filter's own arrays (trusted; NaN marks undefined samples).
+
+    ``S`` may be a broadcast view shared by a batch: each distinct matrix is
+    factored once.  With one output the whitening is a division, through
+    which NaN passes.
+    """
+    if S.shape[-1] == 1:
+        return eps / np.sqrt(S[..., 0])
+    if S.ndim > 2:
         S = S[
             tuple(
                 slice(0, 1) if stride == 0 and size > 1 else slice(None)
                 for stride, size in zip(S.strides[:-2], S.shape[:-2])
             )
         ]
-    cov = as_float_array(S, name_S)
-    if cov.ndim < 2 or cov.shape[-2:] != (m, m):
-        raise ValueError(
-            f"{name_S} must have shape ({m}, {m}) or (..., K, {m}, {m}) to match {name_eps} of "
-            f"shape {eps.shape}, got {cov.shape}"
-        )
-    try:
-        np.broadcast_shapes(cov.shape[:-2], eps.shape[:-1])
-    except ValueError:
-        raise ValueError(
-            f"{name_S} of shape {cov.shape} does not broadcast against {name_eps} of shape "
-            f"{eps.shape}: give one ({m}, {m}) matrix or one per time step, (K, {m}, {m})"
-        ) from None
-    scale = np.max(np.abs(cov), axis=(-2, -1), keepdims=True)
-    if np.any(np.abs(cov - np.swapaxes(cov, -1, -2)) > _SYMMETRY_RTOL * scale):
-        raise ValueError(f"{name_S} is not symmetric; a covariance matrix must equal its transpose")
-    try:
-        L = np.linalg.cholesky(cov)
-    except LinAlgError:
-        raise LinAlgError(
-            f"{name_S} is not positive definite (Cholesky factorisation failed); "
-            "check that it is a valid innovation covariance"
-        ) from None
-    return eps, L
+    return whiten_vectors(np.linalg.cholesky(S), eps)
 
 
-def _whiten(L: np.ndarray, eps: np.ndarray) -> np.ndarray:
-    """Forward substitution ``L z = eps`` over stacks (no inverse is formed)."""
-    m = eps.shape[-1]
-    shape = np.broadcast_shapes(L.shape[:-2], eps.shape[:-1]) + (m,)
-    z = np.empty(shape)
-    for i in range(m):
-        acc = eps[..., i] - np.einsum("...j,...j->...", L[..., i, :i], z[..., :i])
-        z[..., i] = acc / L[..., i, i]
-    return z
+def _nis(eps: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """``eps_t^T S_t^{-1} eps_t`` for a filter's own arrays (see :func:`_normalized`)."""
+    z = _normalized(eps, S)
+    return np.einsum("...i,...i->...", z, z)
 
 
 # ---------------------------------------------------------------------------
@@ -135,10 +135,15 @@ def nis(innovations, S) -> np.ndarray:
     With ``S_k = B_k B_k^T`` (lower Cholesky factor),
     ``eps_k^T S_k^{-1} eps_k = |B_k^{-1} eps_k|^2``; the whitened vector is
     found by forward substitution, never with an inverse ([F], eq. 4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nis([[1.0, 2.0], [2.0, 0.0]], np.diag([1.0, 4.0]))
+    array([2., 4.])
     """
     eps, L = _innovations_and_factor(innovations, S)
-    z = _whiten(L, eps)
-    return np.einsum("...i,...i->...", z, z)
+    return whitened_squared_norms(L, eps)
 
 
 def nees(errors, P) -> np.ndarray:
@@ -161,10 +166,15 @@ def nees(errors, P) -> np.ndarray:
     -----
     ``e_k^T P_k^{-1} e_k = |B_k^{-1} e_k|^2`` with ``P_k = B_k B_k^T``
     (Cholesky, forward substitution; no inverse is formed).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nees([[0.5, 0.0]], np.diag([0.25, 1.0]))
+    array([1.])
     """
     eps, L = _innovations_and_factor(errors, P, "errors", "P")
-    z = _whiten(L, eps)
-    return np.einsum("...i,...i->...", z, z)
+    return whitened_squared_norms(L, eps)
 
 
 def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
@@ -191,6 +201,14 @@ def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
     [F], eq. (3).  Under H0, ``K * Pi ~ W_m(K, I)``: the poster states
     ``Pi ~ W_m(K, I)``, which forgets its own ``1/K``; ``Pi`` itself has mean
     ``I``.  Its trace is the time-averaged NIS ([F], eq. 4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eps = np.array([[1.0, 0.0], [0.0, 2.0]])
+    >>> nis_matrix(eps, np.eye(2))
+    array([[0.5, 0. ],
+           [0. , 2. ]])
     """
     eps, L = _innovations_and_factor(innovations, S)
     z = _whiten(L, eps)
@@ -206,7 +224,7 @@ def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
     return views.sum(axis=-1) / window
 
 
-def nis_matrix_eigenvalues(innovations, S) -> tuple[np.ndarray, np.ndarray]:
+def nis_matrix_eigenvalues(innovations: Any, S: Any) -> EigenvaluePair:
     """Smallest and largest eigenvalue of the NIS matrix over all steps.
 
     Works on stacks (a leading batch of Monte Carlo runs), so a detection
@@ -220,12 +238,21 @@ def nis_matrix_eigenvalues(innovations, S) -> tuple[np.ndarray, np.ndarray]:
 
     Returns
     -------
-    lmin, lmax : numpy.ndarray, shape (...)
+    EigenvaluePair
+        ``(lmin, lmax)``, arrays of shape ``(...)``.
 
     Notes
     -----
     Under H0 they follow :func:`extreme_eigenvalue` ``(m, K, "min")`` and
     ``(m, K, "max")``: ``K Pi ~ W_m(K, I)`` ([F], eq. 3, ``1/K`` restored).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eps = np.array([[1.0, 0.0], [0.0, 2.0]])
+    >>> lmin, lmax = nis_matrix_eigenvalues(eps, np.eye(2))
+    >>> float(lmin), float(lmax)
+    (0.5, 2.0)
     """
     values = np.linalg.eigvalsh(nis_matrix(innovations, S))
-    return values[..., 0], values[..., -1]
+    return EigenvaluePair(values[..., 0], values[..., -1])

@@ -1,20 +1,27 @@
-"""Windowed NIS: moving window sums of normalised innovations squared, thresholds, one-record test."""
+"""Windowed NIS: moving window sums of normalised innovations squared, thresholds, one-record test.
+
+The window is the discrete form of the LiU lecture's windowed test quantity
+``T(t) = int_{t-L}^{t} r(tau)^2 dtau`` (slide "Mer generella dynamiska
+fall"; full reference in the course bibliography, docs/bibliography.md).
+"""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
-from scipy import stats
 
-from course.linalg import (
-    check_alpha,
-)
+from course import _deprecation
+from course.chi2 import residual_norm_law
 from course.results import TestResult
+from course.validation import as_count, as_index, as_probability
 
 
-# ---------------------------------------------------------------------------
-# residual evaluation
-# ---------------------------------------------------------------------------
-def windowed_sum(values, window) -> np.ndarray:
+def _window(window: Any) -> int:
+    return as_count(window, "window", what="the number of samples L in the window")
+
+
+def windowed_sum(values: Any, window: Any) -> np.ndarray:
     """Moving sum over the last axis: ``out[..., t] = sum(values[..., t-L+1 : t+1])``.
 
     Parameters
@@ -39,8 +46,13 @@ def windowed_sum(values, window) -> np.ndarray:
     ``out_t = C_t - C_{t-L}``, in ``O(N)`` for any ``L``; NaN samples enter
     the cumulative sum as 0 and are tracked by a cumulative count.  This is
     the discrete form of the lecture's windowed test quantity
-    ``T(t) = int_{t-L}^{t} r(tau)^2 dtau`` (test_quantities_lecture_sv.txt,
-    "Mer generella dynamiska fall").
+    ``T(t) = int_{t-L}^{t} r(tau)^2 dtau`` (LiU lecture, "Mer generella
+    dynamiska fall").
+
+    Examples
+    --------
+    >>> windowed_sum([1.0, 2.0, 3.0, float("nan"), 5.0, 6.0], 2)
+    array([nan,  3.,  5., nan, nan, 11.])
     """
     try:
         values = np.asarray(values, dtype=float)
@@ -48,8 +60,7 @@ def windowed_sum(values, window) -> np.ndarray:
         raise ValueError("values must be a numeric array of shape (..., N)") from None
     if values.ndim < 1:
         raise ValueError("values must have at least one axis (the time axis, last)")
-    if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
-        raise ValueError(f"window must be a positive integer, got {window!r}")
+    window = _window(window)
     N = values.shape[-1]
     if window > N:
         raise ValueError(f"window = {window} is longer than the record (N = {N})")
@@ -72,7 +83,7 @@ def _is_filter_output(result) -> bool:
     )
 
 
-def windowed_nis(result, window) -> np.ndarray:
+def windowed_nis(result: Any, window: Any) -> np.ndarray:
     """Windowed sum of the normalised innovations squared.
 
     Parameters
@@ -96,7 +107,16 @@ def windowed_nis(result, window) -> np.ndarray:
     :class:`RLSResult`); for the EKF this holds approximately.  The
     threshold is :func:`windowed_nis_threshold`.  It is the normalised,
     discrete form of the lecture's ``T = int (y - h(xhat))^2`` over a window
-    (test_quantities_lecture_sv.txt, "Mer generella dynamiska fall").
+    (LiU lecture, "Mer generella dynamiska fall").
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from course.filters import LinearModel, kalman_filter
+    >>> model = LinearModel(F=[[1.0]], H=[[1.0]], Q=[[0.01]], R=[[1.0]])
+    >>> _, y = model.simulate(100, np.random.default_rng(0), batch=5)
+    >>> windowed_nis(kalman_filter(model, y), 20).shape
+    (5, 100)
     """
     if not _is_filter_output(result):
         raise TypeError(
@@ -106,42 +126,19 @@ def windowed_nis(result, window) -> np.ndarray:
     return windowed_sum(result.nis(), window)
 
 
-def _finite_float(value, name: str) -> float:
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not np.isfinite(out):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return out
-
-
-def _variance(value, name: str, positive: bool = False) -> float:
-    out = _finite_float(value, name)
-    if out < 0 or (positive and out == 0):
-        kind = "positive" if positive else "non-negative"
-        raise ValueError(f"{name} must be {kind} (it is a variance), got {value!r}")
-    return out
-
-
-def _positive_int(value, name: str, meaning: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} ({meaning}) must be a positive integer, got {value!r}")
-    return int(value)
-
-
-def windowed_nis_threshold(alpha, window, n_outputs=1) -> float:
+@_deprecation.alpha_first("windowed_nis_threshold(window, alpha, n_outputs=...)", "n_outputs")
+def windowed_nis_threshold(window: Any, alpha: Any = 0.05, *, n_outputs: Any = 1) -> float:
     """Threshold of the windowed NIS for a per-sample false-alarm probability ``alpha``.
 
     Parameters
     ----------
-    alpha : float
-        False-alarm probability ``P(T_t > threshold | H0)`` at each ``t``
-        with a full window.
     window : int
         Window length ``L`` of :func:`windowed_nis`.
+    alpha : float, default 0.05
+        False-alarm probability ``P(T_t > threshold | H0)`` at each ``t``
+        with a full window.
     n_outputs : int, default 1
-        Number of outputs ``p`` per sample (1 for :class:`RLSResult`).
+        Number of outputs ``p`` per sample (1 for an RLS result); keyword-only.
 
     Returns
     -------
@@ -152,16 +149,25 @@ def windowed_nis_threshold(alpha, window, n_outputs=1) -> float:
     -----
     Under H0 the normalised innovations of the correct (linear Gaussian)
     filter are independent ``N(0, I_p)``, so the window sum of ``L``
-    NIS values is ``chi2(L p)`` (see :func:`windowed_chi2_test`).  The
-    argument order follows ``scipy.stats.chi2.isf(alpha, dof)``.
+    NIS values is ``chi2(L p)`` (see :func:`windowed_chi2_test`), the law of
+    :func:`course.chi2.residual_norm_law`.  The order
+    ``(alpha, window, n_outputs)`` of earlier releases still works, with a
+    DeprecationWarning.
+
+    Examples
+    --------
+    >>> round(windowed_nis_threshold(20, 0.001), 4)
+    45.3147
     """
-    alpha = check_alpha(alpha)
-    window = _positive_int(window, "window", "the number of samples L in the window")
-    n_outputs = _positive_int(n_outputs, "n_outputs", "the number of outputs p per sample")
-    return float(stats.chi2.isf(alpha, window * n_outputs))
+    alpha = as_probability(alpha)
+    window = _window(window)
+    n_outputs = as_count(n_outputs, "n_outputs", what="the number of outputs p per sample")
+    return float(residual_norm_law(window * n_outputs).isf(alpha))
 
 
-def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
+def windowed_chi2_test(
+    result: Any, window: Any, alpha: float = 0.05, t: Any = -1, n_outputs: Any = None
+) -> TestResult:
     """Test H0 "the filter's model holds" on the window of ``L`` samples ending at ``t``.
 
     Parameters
@@ -192,9 +198,16 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
     independently over time and the window sum is ``chi2(L p)``.  The lecture
     builds the observer test quantity the same way, as the square of the
     residual summed (integrated) over a window.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nis_values = np.random.default_rng(1).chisquare(2, size=50)
+    >>> windowed_chi2_test(nis_values, 10, n_outputs=2).dof
+    20
     """
-    alpha = check_alpha(alpha)
-    window = _positive_int(window, "window", "the number of samples L in the window")
+    alpha = as_probability(alpha)
+    window = _window(window)
     if _is_filter_output(result):
         if result.batch_shape:
             raise ValueError(
@@ -224,14 +237,12 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
         p = (
             1
             if n_outputs is None
-            else _positive_int(n_outputs, "n_outputs", "the number of outputs p per sample")
+            else as_count(n_outputs, "n_outputs", what="the number of outputs p per sample")
         )
     T = windowed_sum(nis, window)
     N = nis.shape[-1]
-    if isinstance(t, bool) or not isinstance(t, (int, np.integer)):
-        raise ValueError(f"t must be an integer sample index, got {t!r}")
-    t_index = int(t) + N if int(t) < 0 else int(t)
-    if not window - 1 <= t_index < N:
+    t_index = as_index(t, "t", N, negative=True, what="the last sample of the window")
+    if not window - 1 <= t_index:
         raise ValueError(
             f"t = {t} does not end a full window: it must lie in [{window - 1}, {N - 1}]"
         )
@@ -240,18 +251,12 @@ def windowed_chi2_test(result, window, alpha=0.05, t=-1, n_outputs=None):
             f"the window ending at t = {t_index} contains undefined (NaN) samples, e.g. the "
             "diffuse start of recursive least squares; test a later window"
         )
-    dof = int(window) * p
-    statistic = float(T[t_index])
-    null = stats.chi2(dof)
-    critical = float(null.isf(alpha))
-    return TestResult(
-        name=f"windowed NIS test (L = {int(window)}, t = {t_index})",
-        statistic=statistic,
-        alpha=alpha,
-        critical_value=critical,
-        pvalue=float(null.sf(statistic)),
-        reject=statistic > critical,
-        null=null,
+    dof = window * p
+    return TestResult.from_null(
+        f"windowed NIS test (L = {window}, t = {t_index})",
+        float(T[t_index]),
+        residual_norm_law(dof),
+        alpha,
         dof=dof,
-        details={"window": int(window), "t": t_index},
+        details={"window": window, "t": t_index},
     )

@@ -69,8 +69,9 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     through ``U1``; the best it can do is the orthogonal projection of
     ``f U2``, and ``sqrt(T)`` is the length of the perpendicular.  When
     ``U2`` is parallel to ``U1`` the perpendicular vanishes: the fault is
-    invisible (the lecture's geometric slide of
-    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``).
+    invisible (the LiU lecture on test quantities, the geometric slide of
+    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``; full reference in
+    the course bibliography, docs/bibliography.md).
     """
     u1 = _checks.array("U1", U1, what="signal samples")
     u2 = _checks.array("U2", U2, what="signal samples")
@@ -84,7 +85,7 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     a = fault * u2
     along = float(e1 @ a)
     perp = float(np.linalg.norm(a - along * e1))
-    ortho = perp > 1e-12 * max(np.linalg.norm(a), 1.0)
+    ortho = perp > 1e-12 * max(float(np.linalg.norm(a)), 1.0)
     reach = max(abs(along), n1, perp, 1.0) * 1.25
     free, faulty, best = pair(0), pair("F2"), pair(2)
     ax.plot(

@@ -120,7 +120,7 @@ q3.case(np.arange(5.0), np.array([1.0, 0, 2, 0, 1]), np.ones(5), np.zeros(5), hi
     "dof = N - rank(Phi). Return (T, dof).",
 )
 def q4(Phi, Y):
-    fit = dg.least_squares_residual(Y, Phi)
+    fit = dg.least_squares_residual(Phi, Y)
     return (float(fit.statistic), int(fit.dof))
 
 
@@ -157,13 +157,13 @@ def q5():
     "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
 )
 def q6():
-    J = dg.residual_threshold(0.01, N - 1, SIGMA)
+    J = dg.residual_threshold(N - 1, 0.01, sigma=SIGMA)
     power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
     return (J, power)
 
 
 def _three_statistics(d):
-    return dg.linear_test_statistics(d["y"][:, None], d["U"], NOMINAL, [(0,), (1,), (2,)])[0]
+    return dg.linear_test_statistics(d["y"], d["U"], NOMINAL, [(0,), (1,), (2,)])[0]
 
 
 @CHECKS.value(
@@ -192,7 +192,7 @@ def q7(d):
 )
 def q8(d):
     N_d = d["y"].size
-    alarms = _three_statistics(d) > dg.residual_threshold(d["alpha"], N_d - 1, d["sigma"])
+    alarms = _three_statistics(d) > dg.residual_threshold(N_d - 1, d["alpha"], sigma=d["sigma"])
     return list(dg.diagnoses(dg.DecisionStructure(LECTURE, modes=MODES), alarms))
 
 
@@ -202,7 +202,7 @@ def q8(d):
     points=2,
     timeout=30,
     hint="Simulate n_runs records y = U theta + sigma * noise (rng = np.random.default_rng(seed); "
-    "all runs at once as columns of an (N, n_runs) array), compute T1 for each, and return the "
+    "all runs at once as the rows of an (n_runs, N) array), compute T1 for each, and return the "
     "fraction above the threshold of q6 at this alpha. It should match the power formula.",
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):

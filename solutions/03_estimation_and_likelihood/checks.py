@@ -109,7 +109,7 @@ def q3():
     "z_i; return one value per theta (an array shaped like theta).",
 )
 def q4(theta, z, sigma):
-    return np.asarray(dg.normal_likelihood(np.asarray(theta, dtype=float), z, sigma))
+    return np.asarray(dg.normal_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma))
 
 
 q4.case(np.linspace(-2.0, 6.0, 9), np.array([2.0]), 1.0, label="z = 2")

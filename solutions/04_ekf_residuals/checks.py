@@ -162,7 +162,7 @@ def q5(d):
     res = kf.extended_kalman_filter(model, d["y"], d["u"])
     T = kf.windowed_nis(res, d["window"])
     with np.errstate(invalid="ignore"):
-        alarms = np.flatnonzero(kf.windowed_nis_threshold(d["alpha"], d["window"]) < T)
+        alarms = np.flatnonzero(kf.windowed_nis_threshold(d["window"], d["alpha"]) < T)
     return int(alarms[0]) if alarms.size else -1
 
 
@@ -185,7 +185,7 @@ def _run_false_alarm_probability(a, q, r, N, L, alpha, n_ref=200_000, seed=20240
     _, y = model.simulate(int(N), np.random.default_rng(seed), batch=n_ref)
     T = kf.windowed_nis(kf.kalman_filter(model, y), int(L))
     return kf.alarm_statistics(
-        T, kf.windowed_nis_threshold(alpha, int(L))
+        T, kf.windowed_nis_threshold(int(L), alpha)
     ).run_false_alarm_probability
 
 
@@ -224,11 +224,11 @@ q6.case(1.0, 0.01, 0.5, 30, 5, 0.01, 20000, 7, hidden=True)
     public=False,
     hint="Run kf.extended_kalman_filter with kf.beta_drift_model(..., q_beta=0.0, ...) and "
     "with q_beta=1e-4 on the same (y7, u7); count the samples t < t_fault7 where "
-    "kf.windowed_nis(result, 10) exceeds kf.windowed_nis_threshold(0.001, 10). "
+    "kf.windowed_nis(result, 10) exceeds kf.windowed_nis_threshold(10, 0.001). "
     "Return (count_constant, count_random_walk) as ints.",
 )
 def q7():
-    thr = kf.windowed_nis_threshold(0.001, 10)
+    thr = kf.windowed_nis_threshold(10, 0.001)
     counts = []
     for q_beta in (0.0, 1e-4):
         model = kf.beta_drift_model(Ts=TS, q_beta=q_beta, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))

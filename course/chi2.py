@@ -1,0 +1,205 @@
+"""Chi-square tests of a squared residual norm: null law, threshold, power, non-centrality.
+
+Every module of the course ends in the same test: a squared norm of
+residuals ``T`` (the overall model test's ``ê^T Qyy^{-1} ê``, a prediction
+error ``||(I - P) y||^2``, a window of NIS values, a Wald statistic) is
+``sigma^2 chi2(dof)`` under H0 and ``sigma^2 chi2'(dof, lambda)`` (non-central)
+when a fault shifts its mean.  This module is the one home of that idea:
+
+:func:`residual_norm_law`
+    The null law ``sigma^2 chi2(dof)``, frozen once and cached.
+:func:`residual_threshold`
+    Its upper ``alpha``-quantile, the threshold of a level-``alpha`` test.
+:func:`chi2_power`
+    ``P(T > threshold)`` when ``T / sigma^2 ~ chi2'(dof, lambda)``.
+:func:`noncentrality`
+    The ``lambda`` at which the test reaches a given power (the inverse of
+    :func:`chi2_power`), for minimal detectable biases.
+
+Conventions: the law's parameters come first, ``alpha`` after them, scale
+parameters (``sigma``) are keyword-only.
+
+Examples
+--------
+The threshold of the chapter's overall model test, m - n = 2, alpha = 1 %:
+
+>>> round(residual_threshold(2, 0.01), 4)
+9.2103
+>>> round(chi2_power(1, 17.07, 0.001), 3)
+0.8
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from scipy import optimize, stats
+
+from course import _deprecation
+from course.validation import as_count, as_positive, as_probability
+
+__all__ = ["chi2_power", "noncentrality", "residual_norm_law", "residual_threshold"]
+
+
+@lru_cache(maxsize=256)
+def _frozen_chi2(dof: int, scale: float) -> Any:
+    # Freezing a scipy distribution costs ~1 ms; Monte Carlo loops reuse it.
+    return stats.chi2(dof) if scale == 1.0 else stats.chi2(dof, scale=scale)
+
+
+def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
+    """Null law of a squared residual norm: ``sigma^2 chi2(dof)`` (frozen scipy law).
+
+    Parameters
+    ----------
+    dof : int
+        Residual degrees of freedom (observations minus estimated parameters).
+    sigma : float, default 1
+        Noise standard deviation (1 when the residuals are already normalised).
+
+    Returns
+    -------
+    scipy.stats frozen distribution
+        ``chi2(dof)``, or ``chi2(dof, scale=sigma**2)``; cached, so repeated
+        calls in a Monte Carlo loop cost nothing.
+
+    Notes
+    -----
+    Cochran's theorem: a Gaussian vector ``v ~ N(0, sigma^2 I)`` projected
+    on a subspace of dimension ``dof`` has ``|P v|^2 / sigma^2 ~ chi2(dof)``.
+
+    Examples
+    --------
+    >>> float(residual_norm_law(3).mean())
+    3.0
+    >>> round(float(residual_norm_law(3, sigma=2.0).mean()), 12)
+    12.0
+    """
+    dof = as_count(dof, "dof", what="the residual degrees of freedom")
+    sigma = as_positive(sigma, "sigma", what="the noise standard deviation")
+    return _frozen_chi2(dof, sigma**2)
+
+
+@_deprecation.alpha_first("residual_threshold(dof, alpha, sigma=...)", keyword="sigma")
+def residual_threshold(dof: Any, alpha: Any = 0.05, *, sigma: Any = 1.0) -> float:
+    """Threshold ``J`` on ``T = ||residual||^2`` with false-alarm rate ``alpha``.
+
+    Parameters
+    ----------
+    dof : int
+        Residual degrees of freedom ``N - rank``.
+    alpha : float, default 0.05
+        False-alarm probability ``P(T > J | H0)``.
+    sigma : float, default 1
+        Noise standard deviation (keyword-only).
+
+    Returns
+    -------
+    float
+        ``J = sigma^2 * chi2.isf(alpha, dof)``.
+
+    Notes
+    -----
+    Under H0 the residual is ``(I - P) v`` with ``v ~ N(0, sigma^2 I)`` and
+    ``I - P`` an orthogonal projection of rank ``N - rank(Phi)``, so
+    ``T / sigma^2 ~ chi2(N - rank)`` (Cochran's theorem).  The order
+    ``(alpha, dof, sigma)`` of earlier releases still works, with a
+    DeprecationWarning.
+
+    Examples
+    --------
+    >>> round(residual_threshold(49, 0.05, sigma=0.2), 5)
+    2.65355
+    """
+    alpha = as_probability(alpha)
+    return float(residual_norm_law(dof, sigma=sigma).isf(alpha))
+
+
+def chi2_power(dof: Any, noncentrality: Any, alpha: Any = 0.05) -> Any:
+    """Power of the level-``alpha`` chi-square test when ``T ~ chi2'(dof, lambda)``.
+
+    Parameters
+    ----------
+    dof : int
+        Degrees of freedom of the test.
+    noncentrality : float or array_like
+        ``lambda >= 0`` (0: no fault, the power is ``alpha``).
+    alpha : float, default 0.05
+        Level of the test.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``ncx2.sf(chi2.isf(alpha, dof), dof, lambda)``, shaped like ``noncentrality``.
+
+    Examples
+    --------
+    >>> chi2_power(2, [0.0, 10.0], 0.01).round(4)
+    array([0.01  , 0.6148])
+    """
+    dof = as_count(dof, "dof")
+    alpha = as_probability(alpha)
+    lam = np.asarray(noncentrality, dtype=float)
+    if np.any(~np.isfinite(lam)) or np.any(lam < 0):
+        raise ValueError("noncentrality must be finite and non-negative")
+    critical = residual_norm_law(dof).isf(alpha)
+    # ncx2 at lambda = 0 is the central law; scipy wants lambda > 0.
+    power = np.where(lam > 0, stats.ncx2.sf(critical, dof, np.maximum(lam, 1e-300)), alpha)
+    return float(power) if power.ndim == 0 else power
+
+
+def noncentrality(alpha: Any, power: Any, dof: Any = 1) -> float:
+    """Non-centrality λ0 at which a chi-square test has the given power.
+
+    Parameters
+    ----------
+    alpha : float
+        Level of significance of the test, in (0, 1).
+    power : float
+        Required detection probability ``γ = 1 - β``, with ``alpha < power < 1``.
+    dof : int
+        Degrees of freedom of the test (1 for the w-test).
+
+    Returns
+    -------
+    float
+        λ0 solving ``chi2_power(dof, λ0, alpha) = power``.
+
+    Notes
+    -----
+    Under an alternative with bias the test statistic follows a non-central
+    ``chi2(dof, λ)``; the power grows with λ, and λ0 is found with
+    ``scipy.optimize.brentq``. For ``dof = 1`` the test ``w² > chi2_α(1)`` is
+    the two-sided w-test, whose power is
+    ``Φ(√λ - z_{α/2}) + Φ(-√λ - z_{α/2})``; dropping the (tiny) second term
+    gives the familiar approximation ``√λ0 ≈ z_{α/2} + z_{1-γ}`` with
+    ``z_{1-γ} = Φ^{-1}(γ)`` (e.g. 17.07 for α = 0.001, γ = 0.80), which
+    slightly overstates the exact λ0. Reference: W. Baarda (1968), *A testing
+    procedure for use in geodetic networks*; P. J. G. Teunissen (2000),
+    *Testing theory*, ch. 4. (The non-centrality a given fault *produces* in
+    a test is :func:`course.diagnosis.fault_noncentrality`.)
+
+    Examples
+    --------
+    >>> round(noncentrality(0.001, 0.80), 2)
+    17.07
+    """
+    alpha = as_probability(alpha)
+    power = as_probability(power, "power")
+    dof = as_count(dof, "dof")
+    if power <= alpha:
+        raise ValueError(
+            f"power ({power!r}) must exceed alpha ({alpha!r}): even without a bias the test "
+            "rejects with probability alpha"
+        )
+    critical = residual_norm_law(dof).isf(alpha)
+
+    def gap(lam: float) -> float:
+        return float(stats.ncx2.sf(critical, dof, lam)) - power
+
+    upper = 1.0
+    while gap(upper) < 0:
+        upper *= 2.0
+    return float(optimize.brentq(gap, 0.0, upper, xtol=1e-13, rtol=4 * np.finfo(float).eps))

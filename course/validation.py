@@ -1,0 +1,518 @@
+"""Input validation: the one place where the course decides what it accepts.
+
+Every public function checks its arguments with these helpers, so the same
+mistake gets the same message everywhere.  A message names the argument,
+says what was wrong and what to do.  Nothing a user typed is silently
+changed: values are converted only when the conversion is exact.
+
+The rules
+---------
+Arrays (:func:`as_float_array`, :func:`as_vector`, :func:`as_matrix`)
+    Converted to a float64 *copy* (the caller's array is never aliased or
+    modified).  ``None``, strings, complex numbers, ragged sequences, NaN and
+    inf are refused with :class:`ValueError`.
+Covariances (:func:`as_covariance`)
+    Square, symmetric to a relative tolerance ``1e-10`` and positive
+    definite (or semi-definite with ``allow_singular=True``); an indefinite
+    matrix raises :class:`numpy.linalg.LinAlgError`.
+Counts and indices (:func:`as_count`, :func:`as_index`, :func:`as_indices`)
+    **One rule for every integer argument**: Python and NumPy integers are
+    accepted, and so is a float whose value is exactly an integer (``10.0``,
+    ``1e4``, the result of ``N / 2`` for even ``N``): converting it changes
+    nothing.  A fraction (``2.5``), NaN, inf, ``True``/``False``, strings and
+    ``None`` are refused, as are values below the stated minimum.  (NumPy
+    refuses every float as a size; the course accepts whole floats because
+    ``1e4`` is how people write ten thousand, and refuses everything that
+    would have to be rounded.)
+Numbers (:func:`as_finite`, :func:`as_positive`, :func:`as_variance`, :func:`as_probability`)
+    Real, finite scalars (a 0-d array counts as a scalar); positive,
+    non-negative (a variance) or strictly inside (0, 1) (a level of
+    significance or a power) where the name says so.
+Randomness (:func:`as_generator`)
+    A :class:`numpy.random.Generator`, or a seed (``int``/``None``) for a new
+    one; legacy ``RandomState`` objects are refused so that no code path
+    touches numpy's global random state.
+
+Examples
+--------
+>>> from course.validation import as_count, as_probability
+>>> as_count(1e4, "n_records")
+10000
+>>> as_count(2.5, "n_records")
+Traceback (most recent call last):
+...
+ValueError: n_records must be an integer, got 2.5 (a fraction cannot be a count or an index)
+>>> as_probability(0.05, "alpha")
+0.05
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+from numpy.linalg import LinAlgError
+
+__all__ = [
+    "SYMMETRY_RTOL",
+    "as_count",
+    "as_covariance",
+    "as_finite",
+    "as_float_array",
+    "as_generator",
+    "as_index",
+    "as_indices",
+    "as_matrix",
+    "as_positive",
+    "as_probability",
+    "as_variance",
+    "as_vector",
+    "check_alpha",
+]
+
+#: Relative tolerance for "symmetric": |Q - Q^T| <= SYMMETRY_RTOL * max|Q|.
+SYMMETRY_RTOL = 1e-10
+
+
+# ---------------------------------------------------------------------------
+# arrays
+# ---------------------------------------------------------------------------
+def as_float_array(value: Any, name: str, ndim: int | None = None) -> np.ndarray:
+    """Return ``value`` as a float64 copy, refusing NaN, inf and a wrong ndim.
+
+    Parameters
+    ----------
+    value : array_like
+        What the user passed.
+    name : str
+        The argument's name, used in error messages.
+    ndim : int, optional
+        Required number of dimensions.
+
+    Returns
+    -------
+    numpy.ndarray
+        A new float64 array (never a view of ``value``).
+
+    Raises
+    ------
+    ValueError
+        If the value is None, complex or not numeric, has the wrong number of
+        dimensions, or contains NaN or inf.
+
+    Examples
+    --------
+    >>> as_float_array([1, 2], "y")
+    array([1., 2.])
+    >>> as_float_array([1, float("nan")], "y")
+    Traceback (most recent call last):
+    ...
+    ValueError: y contains NaN or inf (1 entries, first at index (1,)); remove or replace those values before fitting
+    """
+    if value is None:
+        raise ValueError(f"{name} is None; pass an array of numbers")
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be numeric, got the string {value!r}")
+    if _is_complex(value):
+        # float() would drop the imaginary part with only a warning: refuse instead.
+        raise ValueError(
+            f"{name} is complex; pass real numbers (e.g. np.real(...) if the "
+            "imaginary parts are rounding noise)"
+        )
+    try:
+        array = np.array(value, dtype=float)  # a copy: callers may not mutate input
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
+    if ndim is not None and array.ndim != ndim:
+        raise ValueError(
+            f"{name} must be {ndim}-dimensional, got shape {array.shape}"
+            + (
+                " (pass a column as a 2-D array of shape (m, 1))"
+                if ndim == 2 and array.ndim == 1
+                else ""
+            )
+        )
+    if not np.all(np.isfinite(array)):
+        bad = np.argwhere(~np.isfinite(array))
+        where = tuple(int(i) for i in bad[0])
+        raise ValueError(
+            f"{name} contains NaN or inf ({len(bad)} entries, first at index {where}); "
+            "remove or replace those values before fitting"
+        )
+    return array
+
+
+def _is_complex(value: Any) -> bool:
+    try:
+        return bool(np.iscomplexobj(value))
+    except (TypeError, ValueError):  # ragged or non-numeric: reported by the caller
+        return False
+
+
+def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
+    """Return a finite 1-D float array, of length ``size`` when given.
+
+    Examples
+    --------
+    >>> as_vector([1, 2, 3], "theta", 3)
+    array([1., 2., 3.])
+    >>> as_vector([[1, 2, 3]], "theta")
+    Traceback (most recent call last):
+    ...
+    ValueError: theta must be a 1-D vector, got shape (1, 3); pass it flattened, e.g. np.ravel(...)
+    """
+    vector = as_float_array(value, name)
+    if vector.ndim == 2 and 1 in vector.shape:
+        raise ValueError(
+            f"{name} must be a 1-D vector, got shape {vector.shape}; "
+            "pass it flattened, e.g. np.ravel(...)"
+        )
+    if vector.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D vector, got shape {vector.shape}")
+    if size is not None and vector.shape[0] != size:
+        raise ValueError(f"{name} must have length {size}, got {vector.shape[0]}")
+    return vector
+
+
+def as_matrix(
+    value: Any, name: str, shape: tuple[int | None, int | None] | None = None
+) -> np.ndarray:
+    """Return a finite 2-D float array, checking ``shape`` where given (None: any).
+
+    Examples
+    --------
+    >>> as_matrix([[1, 0], [0, 1]], "A", shape=(None, 2)).shape
+    (2, 2)
+    """
+    matrix = as_float_array(value, name, ndim=2)
+    if shape is not None:
+        for axis, expected in enumerate(shape):
+            if expected is not None and matrix.shape[axis] != expected:
+                raise ValueError(f"{name} must have shape {_shape_text(shape)}, got {matrix.shape}")
+    return matrix
+
+
+def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False) -> np.ndarray:
+    """Validate a covariance matrix: square ``size`` x ``size``, symmetric, PD.
+
+    Parameters
+    ----------
+    value : array_like
+        The covariance matrix.
+    name : str
+        Its name in error messages (``"Qyy"``, ``"R"``, ...).
+    size : int
+        Required dimension.
+    allow_singular : bool
+        Accept positive semi-definite matrices.
+
+    Returns
+    -------
+    numpy.ndarray
+        A float64 copy.
+
+    Raises
+    ------
+    ValueError
+        Wrong shape or not symmetric.
+    numpy.linalg.LinAlgError
+        Not positive (semi-)definite.
+
+    Examples
+    --------
+    >>> as_covariance([[2.0, 0.5], [0.5, 1.0]], "R", 2)
+    array([[2. , 0.5],
+           [0.5, 1. ]])
+    >>> as_covariance([[1.0, 2.0], [2.0, 1.0]], "R", 2)
+    Traceback (most recent call last):
+    ...
+    numpy.linalg.LinAlgError: R is not positive definite (smallest eigenvalue -1); a covariance matrix needs positive variances and correlations in [-1, 1]
+    """
+    matrix = as_matrix(value, name, shape=(size, size))
+    scale = max(float(np.max(np.abs(matrix))), np.finfo(float).tiny)
+    asym = float(np.max(np.abs(matrix - matrix.T)))
+    if asym > SYMMETRY_RTOL * scale:
+        raise ValueError(
+            f"{name} is not symmetric (largest |{name} - {name}^T| = {asym:.3g}); "
+            "a covariance matrix must equal its transpose"
+        )
+    eigenvalues = np.linalg.eigvalsh(matrix)
+    smallest = float(eigenvalues[0])
+    tol = -np.finfo(float).eps * size * scale if allow_singular else 0.0
+    if smallest < tol or (not allow_singular and smallest <= 0):
+        kind = "positive semi-definite" if allow_singular else "positive definite"
+        raise LinAlgError(
+            f"{name} is not {kind} (smallest eigenvalue {smallest:.3g}); "
+            "a covariance matrix needs positive variances and correlations in [-1, 1]"
+        )
+    return matrix
+
+
+def _shape_text(shape: tuple[int | None, ...]) -> str:
+    return "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
+
+
+# ---------------------------------------------------------------------------
+# integers: one rule for counts and indices
+# ---------------------------------------------------------------------------
+def _integer(value: Any, name: str, what: str | None) -> int:
+    """``value`` as an int under the course's one integer rule (see the module docstring)."""
+    label = name if what is None else f"{name} ({what})"
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{label} must be an integer, got {value!r}")
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        number = float(value)
+        if math.isfinite(number) and number.is_integer():
+            return int(number)
+        reason = (
+            "a fraction cannot be a count or an index"
+            if math.isfinite(number)
+            else "it must be finite"
+        )
+        raise ValueError(f"{label} must be an integer, got {value!r} ({reason})")
+    raise ValueError(f"{label} must be an integer, got {value!r}")
+
+
+def as_count(value: Any, name: str, *, minimum: int = 1, what: str | None = None) -> int:
+    """A count (number of samples, records, steps, degrees of freedom) as an ``int``.
+
+    Parameters
+    ----------
+    value : int or float
+        An integer, or a float with an integral value (``1e4``).
+    name : str
+        The argument's name for messages.
+    minimum : int, default 1
+        Smallest accepted value (0 for "non-negative").
+    what : str, optional
+        What the count means, added to messages ("the number of records").
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ValueError
+        A fraction, NaN, inf, a bool, a non-number, or a value below ``minimum``.
+
+    Examples
+    --------
+    >>> as_count(10.0, "N")
+    10
+    >>> as_count(0, "N", what="the number of samples")
+    Traceback (most recent call last):
+    ...
+    ValueError: N (the number of samples) must be a positive integer, got 0
+    """
+    count = _integer(value, name, what)
+    if count < minimum:
+        label = name if what is None else f"{name} ({what})"
+        kind = {0: "a non-negative integer", 1: "a positive integer"}.get(
+            minimum, f"an integer of at least {minimum}"
+        )
+        raise ValueError(f"{label} must be {kind}, got {count}")
+    return count
+
+
+def as_index(
+    value: Any, name: str, size: int, *, negative: bool = False, what: str | None = None
+) -> int:
+    """An index into a sequence of length ``size``, as a non-negative ``int``.
+
+    Parameters
+    ----------
+    value : int or float
+        The index (same integer rule as :func:`as_count`).
+    name : str
+        The argument's name for messages.
+    size : int
+        Length of the indexed sequence.
+    negative : bool, default False
+        Accept Python-style negative indices (``-1`` is the last); the
+        returned index is always in ``0 .. size-1``.
+    what : str, optional
+        What is indexed, for messages.
+
+    Examples
+    --------
+    >>> as_index(-1, "t", 10, negative=True)
+    9
+    >>> as_index(10, "j", 10)
+    Traceback (most recent call last):
+    ...
+    ValueError: j must be an integer index in 0..9, got 10
+    """
+    index = _integer(value, name, what)
+    label = name if what is None else f"{name} ({what})"
+    low = -size if negative else 0
+    if not low <= index < size:
+        span = f"{low}..{size - 1}" if size else "an empty range"
+        raise ValueError(f"{label} must be an integer index in {span}, got {index}")
+    return index % size if size else index
+
+
+def as_indices(
+    values: Any, name: str, size: int, *, allow_empty: bool = True, what: str | None = None
+) -> list[int]:
+    """Distinct indices into a sequence of length ``size``, sorted.
+
+    ``None`` and an empty sequence give ``[]`` (unless ``allow_empty`` is
+    False); a single integer is one index.
+
+    Examples
+    --------
+    >>> as_indices([2, 0], "free", 3)
+    [0, 2]
+    >>> as_indices([0, 0], "free", 3)
+    Traceback (most recent call last):
+    ...
+    ValueError: free contains repeated indices: [0, 0]
+    """
+    if values is None:
+        items: list[Any] = []
+    elif isinstance(values, (numbers.Number, np.generic)) or (
+        isinstance(values, np.ndarray) and values.ndim == 0
+    ):
+        items = [values]
+    elif isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise ValueError(f"{name} must be a sequence of integer indices, got {values!r}")
+    else:
+        items = list(values)
+    label = name if what is None else f"{name} ({what})"
+    out = []
+    for item in items:
+        try:
+            index = _integer(item, name, what)
+        except ValueError:
+            raise ValueError(f"{label} must be integer indices, got {item!r}") from None
+        if not 0 <= index < size:
+            raise ValueError(f"{label} index {index} is out of range 0..{size - 1}")
+        out.append(index)
+    if len(set(out)) != len(out):
+        raise ValueError(f"{label} contains repeated indices: {out}")
+    if not out and not allow_empty:
+        raise ValueError(f"{label} must name at least one index")
+    return sorted(out)
+
+
+# ---------------------------------------------------------------------------
+# real numbers
+# ---------------------------------------------------------------------------
+def as_finite(value: Any, name: str, *, what: str | None = None) -> float:
+    """A real, finite scalar as a ``float``.
+
+    Examples
+    --------
+    >>> as_finite(3, "threshold")
+    3.0
+    >>> as_finite("3", "threshold")
+    Traceback (most recent call last):
+    ...
+    ValueError: threshold must be a real number, got '3'
+    """
+    label = name if what is None else f"{name} ({what})"
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{label} must be a real number, got {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ValueError(f"{label} must be finite, got {value!r}")
+    return number
+
+
+def as_positive(value: Any, name: str, *, what: str | None = None) -> float:
+    """A positive, finite scalar (a standard deviation, a sampling interval).
+
+    Examples
+    --------
+    >>> as_positive(0.2, "sigma")
+    0.2
+    >>> as_positive(0, "sigma", what="the noise standard deviation")
+    Traceback (most recent call last):
+    ...
+    ValueError: sigma (the noise standard deviation) must be positive, got 0
+    """
+    number = as_finite(value, name, what=what)
+    if number <= 0:
+        label = name if what is None else f"{name} ({what})"
+        raise ValueError(f"{label} must be positive, got {value!r}")
+    return number
+
+
+def as_variance(value: Any, name: str, *, positive: bool = False, what: str | None = None) -> float:
+    """A variance: finite and non-negative (positive with ``positive=True``).
+
+    Examples
+    --------
+    >>> as_variance(0.0, "q")
+    0.0
+    >>> as_variance(-1, "r", positive=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: r must be positive (it is a variance), got -1
+    """
+    number = as_finite(value, name, what=what)
+    if number < 0 or (positive and number == 0):
+        label = name if what is None else f"{name} ({what})"
+        kind = "positive" if positive else "non-negative"
+        raise ValueError(f"{label} must be {kind} (it is a variance), got {value!r}")
+    return number
+
+
+def as_probability(value: Any, name: str = "alpha") -> float:
+    """A probability strictly between 0 and 1 (a level of significance, a power).
+
+    Examples
+    --------
+    >>> as_probability(0.05)
+    0.05
+    >>> as_probability(1.0, "power")
+    Traceback (most recent call last):
+    ...
+    ValueError: power must lie strictly between 0 and 1, got 1.0
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a number in (0, 1), got {value!r}")
+    number = float(value)
+    if not 0.0 < number < 1.0:
+        raise ValueError(f"{name} must lie strictly between 0 and 1, got {value!r}")
+    return number
+
+
+#: The historical name of :func:`as_probability`.
+check_alpha = as_probability
+
+
+# ---------------------------------------------------------------------------
+# randomness
+# ---------------------------------------------------------------------------
+def as_generator(rng: Any) -> np.random.Generator:
+    """Return a :class:`numpy.random.Generator` from a Generator, a seed or None.
+
+    Legacy ``RandomState`` objects and the global numpy state are refused:
+    randomness in the course always flows through an explicit Generator.
+
+    Examples
+    --------
+    >>> g = as_generator(7)
+    >>> as_generator(g) is g
+    True
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, np.random.RandomState):
+        raise TypeError(
+            "pass a numpy.random.Generator (np.random.default_rng(seed)), not a legacy RandomState"
+        )
+    return np.random.default_rng(rng)
