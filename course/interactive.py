@@ -269,8 +269,8 @@ def power_view(size=0.2, alpha=0.05, sigma=0.2, *, U, nominal, free, ax=None, ma
     curves, at_size = {}, {}
     for i in range(nominal.size):
         mode = f"F{i + 1}"
-        thetas = np.repeat(nominal[:, None], grid.size, axis=1)
-        thetas[i] += grid
+        thetas = np.repeat(nominal[None, :], grid.size, axis=0)  # one parameter vector per row
+        thetas[:, i] += grid
         curves[mode] = dg.prediction_error_power(U, nominal, free, thetas, sigma=sigma, alpha=alpha)
         theta = nominal.copy()
         theta[i] += size
@@ -366,7 +366,7 @@ def ekf_view(
     model = kf.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
     result = kf.extended_kalman_filter(model, y, u)
     statistic = kf.windowed_nis(result, window)
-    threshold = kf.windowed_nis_threshold(alpha, window)
+    threshold = kf.windowed_nis_threshold(window, alpha)
     with np.errstate(invalid="ignore"):
         alarm = statistic > threshold
     before = alarm[:, window - 1 : t_fault]
