@@ -17,7 +17,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 ALL_NOTEBOOKS = sorted(
-    p for p in ROOT.rglob("*.ipynb") if ".ipynb_checkpoints" not in p.parts and ".git" not in p.parts
+    p
+    for p in ROOT.rglob("*.ipynb")
+    if ".ipynb_checkpoints" not in p.parts and ".git" not in p.parts
 )
 APPENDICES = {
     "05_nis_matrix_and_wishart": "05a_wishart_numerics_under_the_hood",
@@ -132,7 +134,9 @@ def test_figure_cells_end_with_plt_show(path):
     for index, cell in enumerate(_read(path).cells):
         if cell.cell_type != "code" or "_widget(" in cell.source:
             continue
-        draws = re.search(r"plt\.(subplots|figure)\(|\bplot_\w+\(|interactive\.\w+_view\(", cell.source)
+        draws = re.search(
+            r"plt\.(subplots|figure)\(|\bplot_\w+\(|interactive\.\w+_view\(", cell.source
+        )
         if draws:
             assert cell.source.rstrip().endswith("plt.show()"), f"{path.name}, cell {index}"
 
@@ -142,7 +146,9 @@ def test_sliders_never_run_under_the_tests(path):
     for index, cell in enumerate(_read(path).cells):
         if cell.cell_type == "code" and "_widget(" in cell.source:
             tags = cell.metadata.get("tags", [])
-            assert "nbval-skip" in tags, f"{path.name}, cell {index}: tag the widget cell nbval-skip"
+            assert "nbval-skip" in tags, (
+                f"{path.name}, cell {index}: tag the widget cell nbval-skip"
+            )
             assert not cell.outputs, f"{path.name}, cell {index}: store widget cells without output"
 
 
