@@ -21,7 +21,8 @@ widgets. Its **widget builder** (``omt_widget``, ...) wires ipywidgets
 sliders (``continuous_update=False``: the figure is redrawn when the slider
 is released) to the update function. ipywidgets is imported only by the
 builders; it comes with the ``notebooks`` extra and is not needed by the
-library or the tests.
+library or the tests. The sources of the examples are listed in the course
+bibliography (``docs/bibliography.md``).
 """
 
 from __future__ import annotations

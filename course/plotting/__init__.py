@@ -22,7 +22,8 @@ raises a ``ValueError`` naming the argument.  One submodule per topic:
   over many records, quadratic-form laws, critical regions and power.
 
 Matplotlib is imported lazily inside the functions, so importing
-:mod:`course` never loads it.
+:mod:`course` never loads it. The figures follow the course's sources, which
+are listed in full in the course bibliography (``docs/bibliography.md``).
 """
 
 from __future__ import annotations
