@@ -2,6 +2,8 @@
 
 ``course open``
     start Jupyter on the course notebooks (the course's main entry point).
+``course docs OUT_DIR``
+    build the course website (notebooks, API reference, guides) into OUT_DIR.
 ``course release`` and ``course grade``
     the instructors' exercise commands (see :mod:`course.grading`).
 
@@ -63,6 +65,20 @@ def _open(args) -> int:
     return subprocess.call(command, cwd=folder)
 
 
+def _docs(args) -> int:
+    from course.docsite import build_site
+
+    try:
+        report = build_site(
+            args.out_dir, cache_dir=args.cache, jobs=args.jobs, lite=not args.no_lite
+        )
+    except (RuntimeError, FileNotFoundError, ValueError) as error:
+        print(f"course docs: {error}", file=sys.stderr)
+        return 1
+    print(report.summary())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="course",
@@ -93,12 +109,28 @@ def build_parser() -> argparse.ArgumentParser:
     p_open.add_argument("--no-browser", action="store_true", help="do not launch a browser")
     p_open.set_defaults(func=_open)
 
+    p_docs = sub.add_parser(
+        "docs",
+        help="build the course website into a folder",
+        description="Build the course website (executed notebooks, API reference, guides, "
+        "an in-browser JupyterLite) into OUT_DIR; open OUT_DIR/index.html. Needs the docs "
+        'extra (python -m pip install -e ".[docs]"). Executed notebooks are cached, so a '
+        "rebuild runs only the notebooks whose code changed. Sphinx warnings are errors.",
+    )
+    p_docs.add_argument("out_dir", help="folder to write the site into")
+    p_docs.add_argument(
+        "--cache", help="folder for executed notebooks between builds (default .cache/docs)"
+    )
+    p_docs.add_argument("--jobs", type=int, default=1, help="parallel Sphinx processes")
+    p_docs.add_argument("--no-lite", action="store_true", help="skip the JupyterLite app")
+    p_docs.set_defaults(func=_docs)
+
     try:
-        from course.grading import cli as exercise_cli
+        from course.grading import cli as grading_cli
     except ImportError:  # the library without its grader: `course open` only
         pass
     else:
-        exercise_cli.add_commands(sub)
+        grading_cli.add_commands(sub)
     return parser
 
 

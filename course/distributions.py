@@ -176,7 +176,7 @@ class FrozenDistribution:
         return max(lower, 0.0) + upper_part - lower_part if lower >= 0 else upper_part - lower_part
 
     def var(self) -> float:
-        """Var[X] = E[X²] − E[X]², with E[X²] = ∫ 2|t| P(|X| > |t|) dt."""
+        """``Var[X] = E[X²] − E[X]²``, with ``E[X²] = ∫ 2|t| P(|X| > |t|) dt``."""
         mu = self.mean()
         lower, upper = self._bounds
         second = integrate.quad(

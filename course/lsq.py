@@ -491,7 +491,7 @@ class WTestResult:
         return [self.test(int(i)) for i in np.flatnonzero(self.testable)]
 
     def summary(self) -> str:
-        """One line: largest |w|, threshold and the rejected observations."""
+        """One line: largest ``|w|``, threshold and the rejected observations."""
         i = self.largest
         return (
             f"w-tests (alpha = {format_number(self.alpha)}): critical |w| = "

@@ -73,7 +73,7 @@ __all__ = [
     "check_alpha",
 ]
 
-#: Relative tolerance for "symmetric": |Q - Q^T| <= SYMMETRY_RTOL * max|Q|.
+#: Relative tolerance for "symmetric": ``|Q - Q^T| <= SYMMETRY_RTOL * max|Q|``.
 SYMMETRY_RTOL = 1e-10
 
 

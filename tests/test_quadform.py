@@ -25,14 +25,18 @@ import math
 import numpy as np
 import pytest
 from conftest import binomial_band
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.linalg import LinAlgError
 from scipy import stats
 
+from course import quadform
 from course.quadform import (
     QuadraticForm,
     WeightedChiSquare,
     imhof_cdf,
     imhof_sf,
+    inversion_integrands,
     liu_tang_zhang_cdf,
     liu_tang_zhang_sf,
 )
@@ -448,3 +452,377 @@ def test_errors_for_bad_input():
         imhof_cdf(1.0, [1.0], [1], [-1.0])
     with pytest.raises(ValueError, match="method"):
         imhof_cdf(1.0, [1.0], method="davies")
+
+
+# ---------------------------------------------------------------------------
+# the measured error of the Liu-Tang-Zhang approximation (as documented)
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("mixed, bound", [(False, 0.03), (True, 0.11)])
+def test_ltz_error_in_the_body_is_within_its_documented_bound(mixed, bound):
+    # the family of liu_tang_zhang_sf's docstring, where 0.01 <= P <= 0.99
+    rng = np.random.default_rng(int(mixed))
+    worst = 0.0
+    for _ in range(40):
+        r = int(rng.integers(1, 6))
+        w = rng.uniform(0.1, 5, r)
+        if mixed:
+            w *= rng.choice([-1.0, 1.0], r)
+            w[0] = -np.sign(w[-1]) * abs(w[0]) if r > 1 else w[0]
+        h = rng.integers(1, 6, r).astype(float)
+        d = rng.uniform(0, 5, r) * (rng.random(r) < 0.5)
+        law = WeightedChiSquare(w, h, d)
+        grid = law.mean() + law.std() * np.linspace(-4, 6, 41)
+        exact = law.cdf(grid)
+        body = (exact >= 0.01) & (exact <= 0.99)
+        worst = max(worst, np.max(np.abs(liu_tang_zhang_cdf(grid, w, h, d) - exact)[body]))
+    assert worst <= bound
+    assert worst > bound / 20  # an approximation, not an exact law
+
+
+def test_ltz_has_no_overflow_at_huge_scales():
+    # OverflowError before: the cumulants of sigma = 1e300 were squared in floats
+    assert liu_tang_zhang_cdf(1.0, [1.0], sigma=1e300) == pytest.approx(0.5)
+    x = np.array([0.5, 2.0, 7.0])
+    small = liu_tang_zhang_cdf(x, [2.0, 1.0])
+    assert np.allclose(liu_tang_zhang_cdf(x * 1e300, [2e300, 1e300]), small, rtol=1e-12)
+    assert np.allclose(liu_tang_zhang_sf(x * 1e-300, [2e-300, 1e-300]), 1 - small, rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# floating-point extremes: never NaN, never an overflow warning
+# ---------------------------------------------------------------------------
+SCALES = [1e-300, 1e-150, 1e150, 1e300]
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("scale", SCALES)
+def test_laws_are_scale_invariant_down_to_the_limits_of_doubles(scale):
+    weights, dof, nc = np.array([2.0, -1.0, 0.5]), [1, 3, 2], [0.5, 0.0, 1.0]
+    x = np.array([-6.0, -0.3, 0.0, 0.2, 4.0, 40.0])
+    reference = imhof_cdf(x, weights, dof, nc, sigma=0.3)
+    got = imhof_cdf(x * scale, weights * scale, dof, nc, sigma=0.3 * scale)
+    assert np.allclose(got, reference, rtol=1e-9, atol=1e-14)
+    assert np.allclose(
+        imhof_sf(x * scale, weights * scale, dof, nc, sigma=0.3 * scale), 1 - reference, atol=1e-12
+    )
+    law = WeightedChiSquare(weights * scale, dof, nc, sigma=0.3 * scale)
+    assert np.allclose(law.cdf(x * scale), reference, rtol=1e-9, atol=1e-14)
+    assert law.isf(0.01) == pytest.approx(
+        WeightedChiSquare(weights, dof, nc, sigma=0.3).isf(0.01) * scale, rel=1e-8
+    )
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("scale", SCALES)
+def test_quadratic_form_is_scale_invariant_in_A_and_cov(scale):
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(3, 3))
+    A = A + A.T
+    B = rng.normal(size=(3, 3))
+    S = B @ B.T + 0.1 * np.eye(3)
+    mu = rng.normal(size=3)
+    x = np.array([-3.0, 0.0, 2.0, 10.0])
+    reference = QuadraticForm(A, mu, S).cdf(x)
+    # A scaled: Q scales; cov scaled by s^2 and mean by s: Q scales by s^2
+    assert np.allclose(QuadraticForm(A * scale, mu, S).cdf(x * scale), reference, atol=1e-12)
+    root = math.sqrt(scale)
+    assert np.allclose(QuadraticForm(A, mu * root, S * scale).cdf(x * scale), reference, atol=1e-12)
+
+
+def test_quadratic_form_beyond_double_precision_is_refused_clearly():
+    with pytest.raises(ValueError, match="beyond double precision"):
+        QuadraticForm(np.eye(2) * 1e300, cov=np.eye(2) * 1e300)
+    with pytest.raises(ValueError, match="empty"):
+        QuadraticForm(np.zeros((0, 0)))
+
+
+@pytest.mark.filterwarnings("error")
+def test_imhof_near_zero_and_far_in_the_tails():
+    # NaN before: the saddle point of 5 chi2_1 at 1e-300 overflowed
+    assert imhof_cdf(1e-300, [5.0]) == pytest.approx(stats.chi2.cdf(2e-301, 1), rel=1e-12)
+    x = np.array([1e-300, 1e-200, 1e-100, 1e-20, 1e-8])
+    assert np.allclose(imhof_cdf(x, [1.0], [6]), stats.chi2.cdf(x, 6), rtol=1e-10, atol=0)
+    assert imhof_cdf(0.0, [1.0, 2.0]) == 0.0
+    # upper tails down to 1e-300 keep their relative accuracy, then underflow to 0
+    x = np.array([50.0, 300.0, 800.0, 1300.0, 1380.0])
+    assert np.allclose(imhof_sf(x, [1.0]), stats.chi2.sf(x, 1), rtol=1e-8, atol=0)
+    assert np.allclose(imhof_sf(x, [1.0], [4]), stats.chi2.sf(x, 4), rtol=1e-8, atol=0)
+    assert imhof_sf(1e4, [1.0]) == 0.0 and imhof_sf(1e300, [1.0]) == 0.0
+    assert imhof_cdf(np.inf, [1.0, -1.0]) == 1.0 and imhof_cdf(-np.inf, [1.0, -1.0]) == 0.0
+    # lower tail of a mixed form far below zero
+    a, b = 2.0, 0.7
+    far = -np.array([50.0, 400.0, 900.0])
+    exact = b / (a + b) * np.exp(far / (2 * b))
+    assert np.allclose(imhof_cdf(far, [a, -b], [2, 2]), exact, rtol=1e-8, atol=0)
+
+
+@pytest.mark.filterwarnings("error")
+def test_normal_term_dominating_the_weights():
+    # a weight of 1e-300 beside sigma = 1: the normal law to double precision
+    x = np.array([-2.0, 0.0, 1.5])
+    assert np.allclose(imhof_cdf(x, [1e-300, -1e-300], sigma=1.0), stats.norm.cdf(x), atol=1e-15)
+    assert imhof_cdf(0.0, [1.0, -1.0], sigma=1e300) == pytest.approx(0.5)
+
+
+def test_inversion_integrands_refuses_a_nan_point():
+    # silently NaN arrays before
+    with pytest.raises(ValueError, match="c must be finite"):
+        inversion_integrands(np.nan, [1.0])
+    _real_axis, contour, tail = inversion_integrands(20.0, [6.0, 3.0, 1.0])
+    u = np.linspace(0.0, 10.0, 401)
+    # the contour integral reproduces the tail probability (upper here)
+    assert tail == "upper"
+    assert np.trapezoid(contour, u) / np.pi == pytest.approx(imhof_sf(20.0, [6, 3, 1]), rel=1e-6)
+
+
+# ---------------------------------------------------------------------------
+# accuracy on demand
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8, 1e-12])
+def test_requested_relative_accuracy_is_met_on_davies_cases(rtol):
+    # the smaller tail is the one integrated: its relative error is below rtol
+    for (weights, dof, nc), values in DAVIES_CASES.items():
+        c = np.array([v[0] for v in values], float)
+        ref = np.array([v[1] for v in values])
+        small = np.minimum(ref, 1 - ref)
+        cdf = imhof_cdf(c, weights, dof, nc, rtol=rtol)
+        got = np.where(ref < 0.5, cdf, 1 - cdf)
+        assert np.all(np.abs(got - small) <= rtol * small + 2e-16)
+        # one point at a time takes the scalar path: the same accuracy
+        scalar = np.array([imhof_cdf(ci, weights, dof, nc, rtol=rtol) for ci in c])
+        assert np.all(np.abs(scalar - cdf) <= 2 * rtol * small + 2e-16)
+
+
+def test_many_weights_take_the_numpy_path_and_agree(monkeypatch):
+    rng = np.random.default_rng(9)
+    w = np.concatenate([rng.uniform(0.1, 2, 30), -rng.uniform(0.1, 1, 10)])
+    dof = rng.integers(1, 4, 40)
+    nc = rng.uniform(0, 1, 40)
+    x = np.array([-5.0, 0.0, 10.0, 40.0])
+    numpy_path = imhof_cdf(x, w, dof, nc)
+    monkeypatch.setattr(quadform, "_PYTHON_TERMS", 64)
+    monkeypatch.setattr(quadform, "_LAWS", {})
+    python_path = imhof_cdf(x, w, dof, nc)
+    assert np.allclose(numpy_path, python_path, rtol=1e-10, atol=1e-14)
+    law = WeightedChiSquare(w, dof, nc)
+    draws = law.rvs(100_000, rng=rng)
+    for p, f in zip(numpy_path, (draws[:, None] <= x).mean(axis=0)):
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / x.size)
+        assert lo <= f <= hi
+
+
+def test_tolerances_that_cannot_be_met_are_refused():
+    with pytest.raises(ValueError, match="cannot be met"):
+        imhof_cdf(1.0, [1.0], rtol=1e-18)
+    with pytest.raises(ValueError, match="not both 0"):
+        imhof_cdf(1.0, [1.0], rtol=0.0)
+    # an absolute tolerance alone is accepted
+    assert imhof_cdf(2.0, [1.0], rtol=0.0, atol=1e-9) == pytest.approx(
+        stats.chi2.cdf(2.0, 1), abs=1e-9
+    )
+
+
+# ---------------------------------------------------------------------------
+# property-based tests
+# ---------------------------------------------------------------------------
+_weight = st.floats(-5, 5).filter(lambda v: abs(v) > 0.01)
+_laws = st.tuples(
+    st.lists(_weight, min_size=1, max_size=5),
+    st.lists(st.integers(1, 6), min_size=5, max_size=5),
+    st.lists(st.sampled_from([0.0, 0.0, 0.5, 3.0]), min_size=5, max_size=5),
+    st.sampled_from([0.0, 0.0, 0.7]),
+)
+_settings = settings(max_examples=60, deadline=None, derandomize=True)
+
+
+def _law_terms(law):
+    weights, dof, nc, sigma = law
+    r = len(weights)
+    return np.array(weights), np.array(dof[:r], float), np.array(nc[:r]), sigma
+
+
+@_settings
+@given(_laws, st.lists(st.floats(-10, 30), min_size=2, max_size=6))
+def test_property_cdf_is_a_probability_and_monotone(law, points):
+    weights, dof, nc, sigma = _law_terms(law)
+    x = np.sort(np.array(points))
+    cdf = imhof_cdf(x, weights, dof, nc, sigma=sigma)
+    assert np.all(np.isfinite(cdf)) and np.all((cdf >= 0) & (cdf <= 1))
+    # monotone up to the requested accuracy
+    assert np.all(np.diff(cdf) >= -1e-9)
+    sf = imhof_sf(x, weights, dof, nc, sigma=sigma)
+    assert np.allclose(cdf + sf, 1.0, atol=1e-12)
+
+
+@_settings
+@given(_laws, st.floats(-10, 30), st.sampled_from([1e-200, 1e-7, 3.0, 1e7, 1e200]))
+def test_property_scale_invariance(law, point, scale):
+    weights, dof, nc, sigma = _law_terms(law)
+    base = imhof_cdf(point, weights, dof, nc, sigma=sigma)
+    scaled = imhof_cdf(point * scale, weights * scale, dof, nc, sigma=sigma * scale)
+    assert abs(scaled - base) <= 1e-9 * min(base, 1 - base) + 1e-14
+
+
+@_settings
+@given(
+    st.floats(0.05, 20), st.integers(1, 4), st.integers(1, 8), st.floats(0, 5), st.floats(0.0, 60)
+)
+def test_property_equal_weights_give_a_scaled_chi_square(weight, copies, dof, nc, point):
+    # copies equal terms w chi2(dof, nc/copies) = w chi2(copies dof, nc)
+    w = [weight] * copies
+    got = imhof_cdf(point, w, [dof] * copies, [nc / copies] * copies)
+    exact = (
+        stats.ncx2.cdf(point / weight, copies * dof, nc)
+        if nc
+        else stats.chi2.cdf(point / weight, copies * dof)
+    )
+    assert got == pytest.approx(exact, abs=1e-10)
+
+
+@settings(max_examples=8, deadline=None, derandomize=True)
+@given(_laws)
+def test_property_agrees_with_monte_carlo(law):
+    weights, dof, nc, sigma = _law_terms(law)
+    wcs = WeightedChiSquare(weights, dof, nc, sigma=sigma)
+    rng = np.random.default_rng(abs(hash(repr(law))) % 2**32)
+    draws = wcs.rvs(40_000, rng=rng)
+    points = np.quantile(draws, [0.05, 0.5, 0.95])
+    for p, f in zip(wcs.cdf(points), (draws[:, None] <= points).mean(axis=0)):
+        lo, hi = binomial_band(draws.size, p, miss=1e-6)
+        assert lo <= f <= hi
+
+
+# ---------------------------------------------------------------------------
+# every public function refuses bad input with a clear error naming the argument
+# ---------------------------------------------------------------------------
+_W = [2.0, -1.0, 0.5]
+BAD_CALLS = [
+    ("c", lambda: imhof_cdf(np.nan, _W)),
+    ("c", lambda: imhof_sf([1.0, np.nan], _W)),
+    ("c", lambda: imhof_cdf(None, _W)),
+    ("c", lambda: imhof_cdf("one", _W)),
+    ("weights", lambda: imhof_cdf(1.0, None)),
+    ("weights", lambda: imhof_cdf(1.0, [])),
+    ("weights", lambda: imhof_cdf(1.0, [1.0, np.inf])),
+    ("weights", lambda: imhof_cdf(1.0, [[1.0, 2.0]])),
+    ("weights", lambda: imhof_cdf(1.0, [1.0 + 2j])),
+    ("weights", lambda: imhof_cdf(1.0, np.array([1.0 + 0j]))),
+    ("dof", lambda: imhof_cdf(1.0, _W, [1, 2])),
+    ("dof", lambda: imhof_cdf(1.0, _W, [1, 0, 2])),
+    ("dof", lambda: imhof_cdf(1.0, _W, [1, -2, 2])),
+    ("dof", lambda: imhof_sf(1.0, _W, [1, np.nan, 2])),
+    ("noncentrality", lambda: imhof_cdf(1.0, _W, None, [0.0, -1.0, 0.0])),
+    ("noncentrality", lambda: imhof_cdf(1.0, _W, None, [0.0, 1.0])),
+    ("sigma", lambda: imhof_cdf(1.0, _W, sigma=-1.0)),
+    ("sigma", lambda: imhof_cdf(1.0, _W, sigma=np.nan)),
+    ("sigma", lambda: imhof_cdf(1.0, _W, sigma=[1.0, 2.0])),
+    ("rtol", lambda: imhof_cdf(1.0, _W, rtol=-1e-6)),
+    ("atol", lambda: imhof_cdf(1.0, _W, atol=np.nan)),
+    ("method", lambda: imhof_cdf(1.0, _W, method="davies")),
+    ("weights", lambda: liu_tang_zhang_cdf(1.0, [np.nan])),
+    ("x", lambda: liu_tang_zhang_sf([np.inf], _W)),
+    ("c", lambda: liu_tang_zhang_cdf(None, _W)),
+    ("c", lambda: inversion_integrands(np.nan, _W)),
+    ("c", lambda: inversion_integrands(-1.0, _W)),
+    ("u", lambda: inversion_integrands(1.0, _W, u=[0.0, np.nan])),
+    ("weights", lambda: WeightedChiSquare([])),
+    ("dof", lambda: WeightedChiSquare(_W, dof=[1, 1, -1])),
+    ("offset", lambda: WeightedChiSquare(_W, offset=np.inf)),
+    ("x", lambda: WeightedChiSquare(_W).cdf(np.nan)),
+    ("probabilities", lambda: WeightedChiSquare(_W).ppf(1.5)),
+    ("size", lambda: WeightedChiSquare(_W).rvs(2.5)),
+    ("size", lambda: WeightedChiSquare(_W).rvs(-1)),
+    ("cumulant", lambda: WeightedChiSquare(_W).cumulant(2.5)),
+    ("A", lambda: QuadraticForm(None)),
+    ("A", lambda: QuadraticForm(np.zeros((0, 0)))),
+    ("A", lambda: QuadraticForm([[1.0, np.nan], [np.nan, 1.0]])),
+    ("A", lambda: QuadraticForm([1.0, 2.0])),
+    ("mean", lambda: QuadraticForm(np.eye(2), mean=[1.0])),
+    ("cov", lambda: QuadraticForm(np.eye(2), cov=[[1.0, 0.0], [0.0, np.inf]])),
+    ("cov", lambda: QuadraticForm(np.eye(2), cov=[[1.0, 2.0], [0.0, 1.0]])),
+    ("cov", lambda: QuadraticForm(np.eye(2), cov=[[1.0, 2.0], [2.0, 1.0]])),
+    ("size", lambda: QuadraticForm(np.eye(2)).rvs_direct(2.5)),
+]
+
+
+@pytest.mark.parametrize(
+    "name, call", BAD_CALLS, ids=[f"{i}-{n}" for i, (n, _) in enumerate(BAD_CALLS)]
+)
+def test_bad_input_is_refused_naming_the_argument(name, call):
+    with pytest.raises((ValueError, LinAlgError)) as info:
+        call()
+    message = str(info.value)
+    assert name in message or name.rstrip("s") in message
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("rtol", [1e-4, 1e-10])
+def test_normal_term_at_zero_with_few_degrees_of_freedom(rtol):
+    # chi2_{1/2} + N(0, 1) at 0: the tail bound without the normal factor ran
+    # past its limit (a warning); P = E[Phi(-Y)], Y ~ chi2_{1/2}
+    from scipy import integrate
+
+    exact = integrate.quad(lambda y: stats.norm.cdf(-y) * stats.chi2.pdf(y, 0.5), 0, np.inf)[0]
+    assert imhof_cdf(0.0, [1.0], [0.5], sigma=1.0, rtol=rtol) == pytest.approx(
+        exact, rel=max(rtol, 1e-8)
+    )
+
+
+@pytest.mark.filterwarnings("error")
+def test_small_positive_weight_with_large_noncentrality():
+    # found by a hypothesis hunt: the truncation bound in Re s assumed
+    # |1 - 2 w s| >= w Re s for every positive weight, which fails for a small
+    # one (2e-4 beside 18.5, noncentrality 8505): the integral was cut early
+    weights = [-27.835, -2.054, 2.1568e-4, 18.548]
+    nc = [0.0073, 0.2514, 8504.75, 0.11496]
+    law = WeightedChiSquare(weights, noncentrality=nc)
+    rng = np.random.default_rng(12)
+    draws = law.rvs(200_000, rng=rng)
+    points = np.array([-80.0, 0.0, 65.9, 139.8])
+    for p, f in zip(law.cdf(points), (draws[:, None] <= points).mean(axis=0)):
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / points.size)
+        assert lo <= f <= hi
+    assert law.sf(139.8) == pytest.approx(imhof_sf(139.8, weights, 1, nc, rtol=1e-12), rel=1e-9)
+
+
+@pytest.mark.filterwarnings("error")
+def test_drift_of_small_noncentral_weights_takes_a_vertical_path():
+    # found by a hypothesis hunt: below the drift d w of a small noncentral
+    # term, exp(d w s) outgrows exp(-s x) along a path opening to the right
+    # (values of 1e172 cancelling): such points take a nearly vertical path
+    weights, dof = [0.5, 5.105e-4, 5.646e-4, -6.819e-4], [1.0, 1.0, 1.0, 6.0]
+    nc = [0.0, 0.0, 0.0, 9749.0]
+    x = np.array([-3.0, -1.0, 0.0, 2.0])
+    vector = imhof_cdf(x, weights, dof, nc)
+    scalar = np.array([imhof_cdf(v, weights, dof, nc) for v in x])
+    assert np.allclose(vector, scalar, rtol=1e-9, atol=1e-14)
+    draws = WeightedChiSquare(weights, dof, nc).rvs(200_000, rng=np.random.default_rng(3))
+    for p, f in zip(vector, (draws[:, None] <= x).mean(axis=0)):
+        lo, hi = binomial_band(draws.size, p, miss=1e-4 / x.size)
+        assert lo <= f <= hi
+
+
+@pytest.mark.filterwarnings("error")
+def test_tiny_weight_beside_noncentral_terms_far_below_the_mean():
+    # found by hypothesis hunts: a bisection step toward the pole jumped from
+    # s = -67 to -1e-140 (OverflowError in a cube), and an all-central bound
+    # needed a truncation point beyond its limit for chi2_1 - chi2_1(148) at 0
+    w, nc = [2.0, 2.3971e-4], [4.0, 1.0]
+    assert imhof_cdf(1.0, w, 1, nc) == pytest.approx(imhof_cdf([1.0, 1.0], w, 1, nc)[0], rel=1e-9)
+    exact = integrate_cdf_of_difference(148.0)
+    assert imhof_sf(0.0, [1.0, -1.0], 1, [0.0, 148.0], rtol=1e-6) == pytest.approx(exact, rel=1e-5)
+
+
+def integrate_cdf_of_difference(nc):
+    """P(chi2_1 > Y) for Y ~ chi2_1(nc), by one-dimensional quadrature."""
+    from scipy import integrate
+
+    mean, sd = 1 + nc, math.sqrt(2 * (1 + 2 * nc))
+    return integrate.quad(
+        lambda y: stats.chi2.sf(y, 1) * stats.ncx2.pdf(y, 1, nc),
+        max(mean - 12 * sd, 0),
+        mean + 12 * sd,
+        epsabs=0,
+        epsrel=1e-12,
+        limit=500,
+    )[0]

@@ -113,6 +113,7 @@ class Question:
     def expected(self, case: Case | None = None, data: Any = None) -> Any:
         """The reference value (normalised through the plain-data codec)."""
         if self.kind == "function":
+            assert case is not None, "a function question needs a case"
             value = self.reference(*decode(encode(case.args)), **decode(encode(case.kwargs)))
         elif self.data is not None:
             value = self.reference(data)
@@ -159,6 +160,7 @@ class Checks:
         self.preload = tuple(preload)
         self.files = tuple(files)
         self.questions: dict[str, Question] = {}
+        self.solution_dir: Path | None = None  # set by load_checks
 
     # -- decorators --------------------------------------------------------------------
     def _register(self, question: Question) -> Question:
@@ -314,6 +316,7 @@ def load_checks(solution_dir: str | Path) -> Checks:
     package.__package__ = pkg_name
     sys.modules[pkg_name] = package
     spec = importlib.util.spec_from_file_location(f"{pkg_name}.checks", checks_file)
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
     _exec_without_bytecode(spec, module)
@@ -339,6 +342,7 @@ def load_data_module(path: str | Path, assignment: str) -> types.ModuleType:
     path = Path(path).resolve()
     name = f"_course_data_{re.sub(r'[^0-9A-Za-z_]', '_', assignment)}"
     spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None
     module = importlib.util.module_from_spec(spec)
     _exec_without_bytecode(spec, module)
     return module

@@ -6,15 +6,42 @@ import os
 import sys
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+#: Where `course release` and `course grade` look for solutions/ and exercises/.
+COURSE_DIR_HELP = (
+    "the course folder holding solutions/ and exercises/ (default: $COURSE_DIR, else the "
+    "working folder or the nearest parent that has one of them)"
+)
+
+
+def find_course_dir(explicit: str | None = None) -> Path:
+    """The course folder: ``--course-dir``, then ``$COURSE_DIR``, then the working folder and
+    its parents (the first holding ``solutions/`` or ``exercises/``), else the working folder.
+
+    Never the package's own location: installed without ``-e`` the package lives in
+    site-packages, far from any course folder.
+    """
+    if explicit:
+        return Path(explicit).expanduser().resolve()
+    if os.environ.get("COURSE_DIR"):
+        return Path(os.environ["COURSE_DIR"]).expanduser().resolve()
+    here = Path.cwd().resolve()
+    for folder in (here, *here.parents):
+        if (folder / "solutions").is_dir() or (folder / "exercises").is_dir():
+            return folder
+    return here
+
+
+def _folder(args, name: str) -> Path:
+    explicit = getattr(args, name, None)
+    return Path(explicit) if explicit else find_course_dir(args.course_dir) / name
 
 
 def _release(args) -> int:
     from course.grading.notebook import MarkerError
     from course.grading.release import find_solutions, release
 
-    solutions = Path(args.solutions)
-    exercises = Path(args.exercises)
+    solutions = _folder(args, "solutions")
+    exercises = _folder(args, "exercises")
     names = find_solutions(solutions) if args.all else list(args.names)
     if not names:
         print(
@@ -50,9 +77,10 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.grading.driver import GradeOptions, grade
+    from course.grading.driver import GradeOptions, available_cpus, grade
+    from course.grading.isolation import IsolationError
 
-    solutions = Path(args.solutions)
+    solutions = _folder(args, "solutions")
     name = Path(args.assignment).name
     solution_dir = (
         Path(args.assignment)
@@ -70,14 +98,26 @@ def _grade(args) -> int:
         print(f"course grade: {submissions} is not a folder of submissions", file=sys.stderr)
         return 2
     options = GradeOptions(
-        jobs=args.jobs or os.cpu_count() or 1,
+        jobs=args.jobs or available_cpus(),
         timeout=args.timeout,
         memory_mb=args.memory,
         mode=args.mode,
         regrade=args.regrade,
         progress=not args.no_progress,
+        unsafe_no_isolation=args.unsafe_no_isolation,
+        cluster=args.cluster,
+        announce=lambda text: print(text, file=sys.stderr),
     )
-    summary = grade(solution_dir, submissions, Path(args.out), options)
+    try:
+        summary = grade(solution_dir, submissions, Path(args.out), options)
+    except IsolationError as exc:
+        print(f"course grade: refusing to run: {exc}", file=sys.stderr)
+        return 2
+    except RuntimeError as exc:
+        if args.cluster and "distributed" in str(exc):
+            print(f"course grade: {exc}", file=sys.stderr)
+            return 2
+        raise
     print(summary.text())
     return 0
 
@@ -96,16 +136,9 @@ def add_commands(subparsers) -> None:
     p_rel.add_argument(
         "--all", action="store_true", help="release every assignment under solutions/"
     )
-    p_rel.add_argument(
-        "--solutions",
-        default=str(REPO_ROOT / "solutions"),
-        help="authoring folder (default: %(default)s)",
-    )
-    p_rel.add_argument(
-        "--exercises",
-        default=str(REPO_ROOT / "exercises"),
-        help="output folder (default: %(default)s)",
-    )
+    p_rel.add_argument("--course-dir", help=COURSE_DIR_HELP)
+    p_rel.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
+    p_rel.add_argument("--exercises", help="output folder (default: COURSE_DIR/exercises)")
     p_rel.set_defaults(func=_release)
 
     p_gr = subparsers.add_parser(
@@ -123,7 +156,7 @@ def add_commands(subparsers) -> None:
         "--jobs",
         type=int,
         default=None,
-        help="students graded in parallel (default: number of cores)",
+        help="students graded in parallel (default: the CPUs this process may use)",
     )
     p_gr.add_argument(
         "--timeout",
@@ -150,8 +183,17 @@ def add_commands(subparsers) -> None:
     )
     p_gr.add_argument("--no-progress", action="store_true", help="no progress bar")
     p_gr.add_argument(
-        "--solutions",
-        default=str(REPO_ROOT / "solutions"),
-        help="authoring folder (default: %(default)s)",
+        "--cluster",
+        metavar="ADDRESS",
+        help="grade on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786), one "
+        "task per student; needs the [cluster] extra",
     )
+    p_gr.add_argument(
+        "--unsafe-no-isolation",
+        action="store_true",
+        help="grade even on a machine whose kernel offers neither Landlock nor user namespaces "
+        "(student code could then read and change the grader's files)",
+    )
+    p_gr.add_argument("--course-dir", help=COURSE_DIR_HELP)
+    p_gr.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
     p_gr.set_defaults(func=_grade)

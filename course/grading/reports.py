@@ -18,7 +18,15 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Summary", "append_result", "feedback_markdown", "read_results", "write_csv"]
+__all__ = [
+    "Summary",
+    "append_result",
+    "csv_text",
+    "feedback_markdown",
+    "read_results",
+    "slowest",
+    "write_csv",
+]
 
 
 def _fmt_points(x: float) -> str:
@@ -64,18 +72,29 @@ def feedback_markdown(row: dict, checks) -> str:
     return "\n".join(lines) + "\n"
 
 
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_text(value) -> str:
+    """A text cell that a spreadsheet will not run as a formula: a leading ``= + - @`` (or tab,
+    carriage return) gets a ``'`` in front (OWASP's advice against CSV injection). A student
+    ID is a file name, chosen by the student."""
+    text = str(value)
+    return "'" + text if text.startswith(_FORMULA_START) else text
+
+
 def write_csv(rows: list[dict], question_ids: list[str], path: Path) -> None:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["student", *question_ids, "total", "max", "status"])
+    writer.writerow(["student", *(csv_text(q) for q in question_ids), "total", "max", "status"])
     for row in sorted(rows, key=lambda r: r["student"]):
         writer.writerow(
             [
-                row["student"],
+                csv_text(row["student"]),
                 *(_fmt_points(row["questions"].get(q, {}).get("points", 0)) for q in question_ids),
                 _fmt_points(row["total"]),
                 _fmt_points(row["max"]),
-                row["status"],
+                csv_text(row["status"]),
             ]
         )
     path.write_text(buf.getvalue(), encoding="utf-8")
@@ -123,7 +142,22 @@ class Summary:
                 f"{k} ({v})" for k, v in sorted(statuses.items(), key=lambda kv: (-kv[1], kv[0]))
             )
         )
+        slow = slowest(self.rows)
+        if slow:
+            times = sorted(float(r["wall_seconds"]) for r in self.rows if "wall_seconds" in r)
+            median = times[len(times) // 2]
+            lines.append(
+                "slowest: "
+                + ", ".join(f"{r['student']} ({float(r['wall_seconds']):.1f} s)" for r in slow)
+                + f"; median {median:.2f} s per student"
+            )
         return "\n".join(lines)
+
+
+def slowest(rows: list[dict], n: int = 3) -> list[dict]:
+    """The ``n`` rows with the longest ``wall_seconds`` (the students worth a look)."""
+    timed = [r for r in rows if isinstance(r.get("wall_seconds"), (int, float))]
+    return sorted(timed, key=lambda r: (-float(r["wall_seconds"]), r["student"]))[:n]
 
 
 def read_results(path: Path) -> dict[str, dict]:

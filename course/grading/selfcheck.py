@@ -26,10 +26,9 @@ from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestio
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]
 
-_REPO_ROOT = Path(__file__).resolve().parents[2]
 
 #: Set by the grading runner (sandboxed child) before any student code runs.
-_GRADING = None
+_GRADING: dict | None = None
 
 
 class _GradingStandIn:
@@ -63,7 +62,8 @@ def _locate(name: str, path) -> tuple[str, Path]:
     cwd = Path.cwd()
     for folder in [cwd, *cwd.parents]:
         candidates += [folder, folder / name, folder / "exercises" / name]
-    candidates.append(_REPO_ROOT / "exercises" / name)
+    if os.environ.get("COURSE_DIR"):  # never the package's own location (site-packages)
+        candidates.append(Path(os.environ["COURSE_DIR"]) / "exercises" / name)
     for folder in candidates:
         spec_file = folder / CHECKS_FILE
         if spec_file.is_file():
@@ -129,7 +129,7 @@ class Assignment:
             from course.grading.checks import student_rng
 
             func = getattr(self._data_mod(), key)
-            self._data_cache[key] = encode(func(student_rng(self.name, key, self.student_id)))
+            self._data_cache[key] = encode(func(student_rng(self.name, key, str(self.student_id))))
         return decode(self._data_cache[key])
 
     def _require_id(self):
@@ -227,7 +227,8 @@ class Assignment:
         if not callable(func):
             print(f"  FAIL: {q.target} is {describe(func)}, not a function")
             return
-        passed, hint_shown, forbidden = 0, False, set()
+        passed, hint_shown = 0, False
+        forbidden: set[str] = set()
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
