@@ -365,7 +365,8 @@ def ekf_view(
         beta, u, rng, Ts=Ts, q_x=q_x, r=r, x0=0.5, fault=fault, batch=runs
     )
     model = kf.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
-    result = kf.extended_kalman_filter(model, y, u)
+    result = kf.extended_kalman_filter(model, y, u)  # stores the covariances it draws
+    P_filt = np.asarray(result.P_filt)
     statistic = kf.windowed_nis(result, window)
     threshold = kf.windowed_nis_threshold(window, alpha)
     with np.errstate(invalid="ignore"):
@@ -390,7 +391,7 @@ def ekf_view(
     plot_estimate(
         t,
         result.x_filt[0, :, 0],
-        np.sqrt(result.P_filt[0, :, 0, 0]),
+        np.sqrt(P_filt[0, :, 0, 0]),
         truth=beta,
         ax=ax_b,
         label=r"$\hat\beta$ (run 1)",

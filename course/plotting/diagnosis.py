@@ -488,33 +488,33 @@ def plot_power_curves(
         raise ValueError("theory must be a non-empty mapping label -> power values")
     ax = axes_or_new(ax)
     colors = dict(colors or {})
-    for i, (label, values) in enumerate(theory.items()):
-        values = _checks.array(f"theory[{label!r}]", values, what="probabilities")
-        if values.size != xs.size:
+    for i, (label, given) in enumerate(theory.items()):
+        curve = _checks.array(f"theory[{label!r}]", given, what="probabilities")
+        if curve.size != xs.size:
             raise ValueError(
-                f"theory[{label!r}] has {values.size} values for {xs.size} sizes"
+                f"theory[{label!r}] has {curve.size} values for {xs.size} sizes"
                 + ("" if theory_sizes is not None else " (pass theory_sizes for a fine grid)")
             )
         ax.plot(
             xs,
-            values,
+            curve,
             color=_colour(colors.get(label), i).dark,
             ls=(linestyles or {}).get(label, "-"),
             label=f"{label} (theory)",
         )
     if simulated:
         keys = list(theory)
-        for label, values in simulated.items():
-            values = _checks.array(f"simulated[{label!r}]", values, what="alarm rates")
-            _checks.same_length(f"simulated[{label!r}]", values, "sizes", sizes)
+        for label, given in simulated.items():
+            rates = _checks.array(f"simulated[{label!r}]", given, what="alarm rates")
+            _checks.same_length(f"simulated[{label!r}]", rates, "sizes", sizes)
             i = keys.index(label) if label in keys else len(keys)
             yerr = None
             if n_records is not None:
-                yerr = 1.96 * np.sqrt(np.clip(values * (1 - values), 0, None) / n_records)
+                yerr = 1.96 * np.sqrt(np.clip(rates * (1 - rates), 0, None) / n_records)
             monte_carlo_dots(
                 ax,
                 sizes,
-                values,
+                rates,
                 _colour(colors.get(label), i),
                 label=f"{label} (Monte Carlo)",
                 yerr=yerr,

@@ -385,14 +385,14 @@ def plot_power_curves(M_values, powers, alpha=None, ax=None, simulated=None, n_e
     if not isinstance(powers, dict) or not powers:
         raise ValueError("powers must be a non-empty mapping test name -> power values")
     ax = axes_or_new(ax)
-    for index, (label, values) in enumerate(powers.items()):
-        values = _checks.array(f"powers[{label!r}]", values, what="power values")
-        _checks.same_length(f"powers[{label!r}]", values, "M_values", M_values)
+    for index, (label, given) in enumerate(powers.items()):
+        exact = _checks.array(f"powers[{label!r}]", given, what="power values")
+        _checks.same_length(f"powers[{label!r}]", exact, "M_values", M_values)
         colours = pair(_TESTS.get(label, index))
-        ax.plot(M_values, values, "o-", ms=3, color=colours.dark, label=f"{label} (exact)")
+        ax.plot(M_values, exact, "o-", ms=3, color=colours.dark, label=f"{label} (exact)")
     for index, (label, points) in enumerate((simulated or {}).items()):
-        Ms, rates = zip(*points)
-        rates = _checks.array(f"simulated[{label!r}]", rates, what="rejection rates")
+        Ms, given_rates = zip(*points)
+        rates = _checks.array(f"simulated[{label!r}]", given_rates, what="rejection rates")
         yerr = None
         if n_experiments is not None:
             yerr = 1.96 * np.sqrt(rates * (1 - rates) / n_experiments)
