@@ -331,6 +331,10 @@ def test_decision_structure_figure_shows_the_diagnoses():
     texts = [t.get_text() for t in ax.texts]
     assert texts.count("✓") == 1 and texts.count("alarm") == 2  # only F1 explains T2 and T3
     assert [tick.get_text() for tick in ax.get_yticklabels()][-1] == "diagnoses"
+    # the surviving mode keeps its own colour (F1's pair), not another fault's
+    f1_cell = [p for p in ax.patches if tuple(np.round(p.get_xy(), 2)) == (1.0, 3.1)]
+    assert len(f1_cell) == 1
+    assert matplotlib.colors.to_hex(f1_cell[0].get_facecolor()) == style.pair("F1").light
 
 
 def test_whitened_scatter_reports_nis_as_the_trace():

@@ -215,13 +215,15 @@ def plot_decision_structure(structure, alarms=None, ax=None, title=None):
         i = len(tests)
         for j, mode in enumerate(modes):
             ok = mode in consistent
+            # a surviving mode keeps its own colour, as in its column above
+            colours = pair(mode) if mode == "NF" or mode[:1] == "F" else pair(j)
             ax.add_patch(
                 Rectangle(
                     (j, i + 0.1),
                     1,
                     0.9,
-                    fc=pair(2).light if ok else "0.92",
-                    ec=pair(2).dark if ok else "0.6",
+                    fc=colours.light if ok else "0.92",
+                    ec=colours.dark if ok else "0.6",
                     lw=1.5 if ok else 1,
                 )
             )
