@@ -154,6 +154,8 @@ def test_sliders_never_run_under_the_tests(path):
 
 # a number printed in scientific notation whose exponent says "round-off of an O(1) quantity"
 ROUND_OFF = re.compile(r"\b\d(?:\.\d+)?e-1[3-7]\b")
+# a rounded zero that kept the sign of its round-off ("-0.0000"): the sign flips between machines
+NEGATIVE_ZERO = re.compile(r"(?<![\w.])-0(?:\.0+)?(?![\d.]|e[+-]?\d)")
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
@@ -168,9 +170,21 @@ def test_stored_outputs_compare_teaching_not_round_off(path):
                 f"{path.name}, cell {index} prints {found.group(0)}: round-off differs between "
                 "machines; print a decision such as '< 1e-12' instead"
             )
+            found = NEGATIVE_ZERO.search(text)
+            assert found is None, (
+                f"{path.name}, cell {index} prints {found.group(0)}: a rounded zero with the sign "
+                "of its round-off; add 0.0 after rounding"
+            )
 
 
 def test_the_round_off_pattern():
     assert ROUND_OFF.search("largest |e_hat| = 2.8e-14")
     assert ROUND_OFF.search("difference 4e-16")
     assert not ROUND_OFF.search("p = 1.248e-47") and not ROUND_OFF.search("posterior 2.076e-09")
+
+
+def test_the_negative_zero_pattern():
+    assert NEGATIVE_ZERO.search("0.5924    -0.0000")
+    assert NEGATIVE_ZERO.search("x_hat = [-0.0, 1.0]") and NEGATIVE_ZERO.search("shift -0 samples")
+    for fine in ("-0.0542", "-0.003", "e_hat = -0.5", "t - 0.05", "10-0.0", "1e-05", "-0.07"):
+        assert not NEGATIVE_ZERO.search(fine), fine
