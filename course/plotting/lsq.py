@@ -3,7 +3,9 @@
 Every function takes ``ax=None`` (a new figure is made when None), returns
 the axes it drew on and draws in the course style
 (:mod:`course.plotting.style`). Matplotlib (and scipy for densities) are
-imported inside the functions, so importing this module is cheap.
+imported inside the functions, so importing this module is cheap. The figures follow
+Tiberius et al. (2021, Chapter 10) and Baarda (1968), listed in full in the course bibliography
+(``docs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -5,7 +5,8 @@ returns the axes it drew on and draws in the course style
 (:mod:`course.plotting.style`): the mean, covariance and correlation tests
 keep pairs 0, 1 and 2 in every figure.  The numbers come from
 :mod:`course.mismatched` and :mod:`course.quadform`; nothing here computes
-a statistic.
+a statistic. The figures follow Baram (1980) and Imhof (1961), listed in full in the course
+bibliography (``docs/bibliography.md``).
 """
 
 from __future__ import annotations
