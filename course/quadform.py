@@ -140,7 +140,7 @@ def _real_array(value, name):
         raise ValueError(f"{name} is complex; pass real numbers")
     try:
         return np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(
             f"{name} must be real numbers, got {type(value).__name__}: {exc}"
         ) from None
@@ -184,20 +184,27 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
     d2) = w chi2(h1 + h2, d1 + d2)``.  ``dof`` may be any positive real (a
     chi-square with ``h`` degrees of freedom is a Gamma(h/2, 2) variable).
     """
-    w = _finite_vector(weights, "weights")
-    r = w.size
-    if r == 0:
-        raise ValueError("weights is empty; pass at least one weight")
-    h = np.ones(r) if dof is None else _finite_vector(dof, "dof", r)
-    d = np.zeros(r) if noncentrality is None else _finite_vector(noncentrality, "noncentrality", r)
+    columns = _short_columns(weights, dof, noncentrality)
+    if columns is None:
+        w = _finite_vector(weights, "weights")
+        r = w.size
+        if r == 0:
+            raise ValueError("weights is empty; pass at least one weight")
+        h = np.ones(r) if dof is None else _finite_vector(dof, "dof", r)
+        d = (
+            np.zeros(r)
+            if noncentrality is None
+            else _finite_vector(noncentrality, "noncentrality", r)
+        )
+        if r <= _PYTHON_TERMS:
+            columns = w.tolist(), h.tolist(), d.tolist()
     sigma = _finite_scalar(sigma, "sigma")
     if sigma < 0:
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
         )
-    if r <= _PYTHON_TERMS:
+    if columns is not None:
         # a few terms: checks, sorting and merging in Python floats are cheaper
-        columns = w.tolist(), h.tolist(), d.tolist()
         _check_terms(min(columns[1]), min(columns[2]))
         rows = sorted(t for t in zip(*columns) if t[0] != 0)
         if not rows:
@@ -227,6 +234,54 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
             h = np.array([h[g].sum() for g in members])
             d = np.array([d[g].sum() for g in members])
     return w, h, d, sigma
+
+
+def _short_columns(weights, dof, noncentrality):
+    """``(w, h, d)`` as lists of finite Python floats for a few plain terms, else None.
+
+    The fast way in for a law of at most ``_PYTHON_TERMS`` terms given as
+    lists or tuples of Python numbers or as 1-D float arrays (``dof`` and
+    ``noncentrality`` also as one number): no numpy call.  Anything else,
+    and every bad value, returns None and takes the numpy validation, which
+    words the error.
+    """
+    w = _short_column(weights)
+    if not w:
+        return None
+    r = len(w)
+    h = [1.0] * r if dof is None else _short_column(dof, r)
+    d = [0.0] * r if noncentrality is None else _short_column(noncentrality, r)
+    if h is None or d is None:
+        return None
+    return w, h, d
+
+
+def _short_column(value, size=None):
+    """A short list/tuple of numbers or 1-D real array as finite floats (None if not)."""
+    kind = type(value)
+    if kind is list or kind is tuple:
+        if len(value) > _PYTHON_TERMS or not all(
+            type(v) is int or isinstance(v, float) for v in value
+        ):
+            return None
+        try:
+            column = [float(v) for v in value]
+        except OverflowError:  # an int beyond the doubles
+            return None
+    elif kind is np.ndarray:
+        if value.ndim != 1 or value.dtype.kind not in "fiu" or value.size > _PYTHON_TERMS:
+            return None
+        column = value.astype(float).tolist() if value.dtype.kind != "f" else value.tolist()
+    elif size is not None and (kind is float or kind is int):
+        try:
+            column = [float(value)] * size
+        except OverflowError:
+            return None
+    else:
+        return None
+    if size is not None and len(column) != size:
+        return None
+    return column if all(map(math.isfinite, column)) else None
 
 
 def _check_terms(smallest_dof, smallest_noncentrality):
@@ -263,7 +318,7 @@ def _term_constants(w, h, d):
     """Per-term summands of the constants of :class:`_Side` (floats or arrays).
 
     ``d/2``; ``h/2`` (k); ``w (h + d)`` (mean); ``2 w^2 (h + 2d)`` (variance);
-    ``-h/2 log|w| - d/2 [w > 0]`` (log D of the truncation bound);
+    ``-h/2 log(2|w|) - d/4`` (log D of the truncation bound, see :func:`_plan`);
     ``d/(4w)``, ``(h + d)/(4w)`` and ``-h/2 log(2w)`` (positive weights only:
     see :func:`_near_zero`).
     """
@@ -275,7 +330,7 @@ def _term_constants(w, h, d):
         0.5 * h,
         w * (h + d),
         2.0 * w * w * (h + 2.0 * d),
-        -0.5 * h * log_w - 0.5 * d * positive,
+        -0.5 * h * (log_w + math.log(2.0)) - 0.25 * d,
         d * quarter,
         (h + d) * quarter,
         -0.5 * h * (log_w + math.log(2.0)) * positive,
@@ -307,42 +362,58 @@ class _Side:
 
     def __init__(self, w, h, d, sigma2):
         self.w, self.h, self.d, self.sigma2 = w, h, d, sigma2
-        self.w2 = 2.0 * w
-        self.minus_w2 = -self.w2
-        self.minus_half_h = -0.5 * h
-        positive = w.size > 0 and w[-1] > 0
-        self.s_max = 0.5 / float(w[-1]) if positive else math.inf
-        self.s_min = 0.5 / float(w[0]) if w.size and w[0] < 0 else -math.inf
-        # the largest weight's term: it dominates the far upper tail
-        self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
-        self.positive_form = bool(w.size and w[0] > 0 and not sigma2)
-        # Im s beyond which every |1 - 2 w s| >= 1, and log of D = prod
-        # (2|w|)^(-h/2) exp(-sum d/4): |M(s)| <= D Y^-k with Y = Im s, once
-        # every |1 - 2 w s| >= 2 (Y >= 2 y_unit) when noncentral (see _plan)
-        self.y_unit = 0.5 / float(np.min(np.abs(w))) if w.size else 0.0
-        self.log_d_y = (
-            -0.5 * float(h @ np.log(2.0 * np.abs(w))) - 0.25 * float(d.sum()) if w.size else 0.0
-        )
+        r = w.size
         # per-term rows for the Python-float versions of derivatives and cgf
         self.rows: tuple | None = None
         self.cgf_rows: tuple | None = None
-        if w.size <= _PYTHON_TERMS:
-            # a few terms are summed faster by Python than by numpy calls
+        if r == 0:
+            columns = [[0.0], [0.0], [0.0]]  # no chi-square term: every sum is 0
+            sums = [0.0] * 8
+        elif r <= _PYTHON_TERMS:
+            # a few terms: every constant in Python floats (numpy calls cost more)
             columns = [w.tolist(), h.tolist(), d.tolist()]
             sums = [math.fsum(column) for column in zip(*map(_term_constants, *columns))]
             self.rows = tuple(map(_derivative_factors, *columns))
             self.cgf_rows = tuple((2.0 * wi, 0.5 * hi, 0.5 * di) for wi, hi, di in zip(*columns))
         else:
+            columns = [[float(v[0]), float(v[-1])] for v in (w, h, d)]
             sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
-        half_d, self.k, self.mean, var, self.log_d, d_over_w, zero_slope, log_c = sums
+        w_first, w_last = columns[0][0], columns[0][-1]
+        positive = w_last > 0
+        self.s_max = 0.5 / w_last if positive else math.inf
+        self.s_min = 0.5 / w_first if w_first < 0 else -math.inf
+        # the largest weight's term: it dominates the far upper tail
+        self.top = (w_last, columns[1][-1], columns[2][-1]) if positive else None
+        self.positive_form = bool(r and w_first > 0 and not sigma2)
+        # Im s beyond which every |1 - 2 w s| >= 1, and log of D = prod
+        # (2|w|)^(-h/2) exp(-sum d/4): |M(s)| <= D Y^-k with Y = Im s, once
+        # every |1 - 2 w s| >= 2 (Y >= 2 y_unit) when noncentral (see _plan)
+        smallest = min(map(abs, columns[0])) if self.rows else float(np.min(np.abs(w), initial=1))
+        self.y_unit = 0.5 / smallest if r else 0.0
+        half_d, self.k, self.mean, var, self.log_d_y, d_over_w, zero_slope, log_c = sums
         self.half_d_sum = half_d
         self.noncentral = half_d > 0
         self.var = var + sigma2
         # for the bound on the lower-tail saddle of a positive form
-        self.d_over_w = d_over_w if self.noncentral and w.size and w[0] > 0 else 0.0
+        self.d_over_w = d_over_w if self.noncentral and w_first > 0 else 0.0
         # P(X <= x) ~ C x^k / Gamma(k+1) near 0 for a positive form (see _near_zero)
         self.zero_slope = zero_slope
         self.log_c0 = log_c - half_d - math.lgamma(self.k + 1.0)
+
+    @functools.cached_property
+    def w2(self):
+        """``2 w`` (for the numpy versions)."""
+        return 2.0 * self.w
+
+    @functools.cached_property
+    def minus_w2(self):
+        """``-2 w`` (for the numpy integrand)."""
+        return -2.0 * self.w
+
+    @functools.cached_property
+    def minus_half_h(self):
+        """``-h/2`` (for the numpy integrand)."""
+        return -0.5 * self.h
 
     @functools.cached_property
     def factors(self):
