@@ -87,7 +87,10 @@ Laws
 Input checks
     :mod:`course.validation`: bad input raises ``ValueError`` or
     ``numpy.linalg.LinAlgError`` naming the argument and what to do; a count
-    is an integer (a whole float such as ``1e4`` counts as one).
+    is an integer (a whole float such as ``1e4`` counts as one); a
+    covariance must be positive definite numerically, not only by rounding
+    (:data:`course.validation.SINGULAR_RTOL`); a ``sigma`` whose square is not
+    a double is refused with advice to rescale.
 Changes
     A change to a public call keeps the old form working for one release
     with a :class:`DeprecationWarning` that says what to write instead

@@ -38,7 +38,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from course import _deprecation
-from course.validation import as_count, as_positive, as_probability
+from course.validation import as_count, as_float_array, as_probability, as_std
 
 __all__ = ["chi2_power", "noncentrality", "residual_norm_law", "residual_threshold"]
 
@@ -57,7 +57,9 @@ def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
     dof : int
         Residual degrees of freedom (observations minus estimated parameters).
     sigma : float, default 1
-        Noise standard deviation (1 when the residuals are already normalised).
+        Noise standard deviation (1 when the residuals are already normalised);
+        ``sigma**2`` must be a normal double (``sigma`` between about 1e-154
+        and 1e154), else a ValueError says to rescale the data.
 
     Returns
     -------
@@ -78,7 +80,8 @@ def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
     12.0
     """
     dof = as_count(dof, "dof", what="the residual degrees of freedom")
-    sigma = as_positive(sigma, "sigma", what="the noise standard deviation")
+    # the law's scale is sigma**2: refused where it over- or underflows
+    sigma = as_std(sigma, "sigma", what="the noise standard deviation")
     return _frozen_chi2(dof, sigma**2)
 
 
@@ -93,7 +96,7 @@ def residual_threshold(dof: Any, alpha: Any = 0.05, *, sigma: Any = 1.0) -> floa
     alpha : float, default 0.05
         False-alarm probability ``P(T > J | H0)``.
     sigma : float, default 1
-        Noise standard deviation (keyword-only).
+        Noise standard deviation (keyword-only); as in :func:`residual_norm_law`.
 
     Returns
     -------
@@ -141,9 +144,12 @@ def chi2_power(dof: Any, noncentrality: Any, alpha: Any = 0.05) -> Any:
     """
     dof = as_count(dof, "dof")
     alpha = as_probability(alpha)
-    lam = np.asarray(noncentrality, dtype=float)
-    if np.any(~np.isfinite(lam)) or np.any(lam < 0):
-        raise ValueError("noncentrality must be finite and non-negative")
+    lam = as_float_array(noncentrality, "noncentrality")
+    if np.any(lam < 0):
+        raise ValueError(
+            f"noncentrality must be non-negative (it is a squared bias over a variance), "
+            f"got {lam.min()!r}"
+        )
     critical = residual_norm_law(dof).isf(alpha)
     # ncx2 at lambda = 0 is the central law; scipy wants lambda > 0.
     power = np.where(lam > 0, stats.ncx2.sf(critical, dof, np.maximum(lam, 1e-300)), alpha)

@@ -2,8 +2,12 @@
 
 ``course open``
     start Jupyter on the course notebooks (the course's main entry point).
-``course release`` and ``course grade``
-    the instructors' exercise commands (see :mod:`course.grading`).
+``course docs OUT_DIR``
+    build the course website (notebooks, API reference, guides) into OUT_DIR.
+``course release``, ``course grade``, ``course export``, ``course secret``
+    the instructors' exercise commands (see :mod:`course.grading`);
+``course submit``
+    write a student's notebook as the file to upload.
 
 ``python -m course`` is the same command.
 """
@@ -18,13 +22,48 @@ from pathlib import Path
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
-def _default_notebooks() -> Path:
+def _default_notebooks() -> Path | None:
     # A clone's notebooks/ next to the working directory wins, so `course open` also works
     # from a clone when the package was installed without -e (then REPO_ROOT is site-packages).
     for folder in (Path.cwd(), *Path.cwd().parents):
         if (folder / "notebooks").is_dir() and (folder / "course").is_dir():
             return folder / "notebooks"
-    return REPO_ROOT / "notebooks"
+    if (REPO_ROOT / "notebooks").is_dir():
+        return REPO_ROOT / "notebooks"
+    return None
+
+
+def _student_workdir(args) -> Path | None:
+    """The student edition: copy the packaged course into the working folder (chosen on first
+    open, then remembered) and return it; None when this install carries no materials."""
+    from course import workspace
+
+    materials = workspace.packaged_materials()
+    if materials is None:
+        return None
+    chosen = args.workdir or workspace.remembered_workdir()
+    if chosen is None:
+        suggestion = workspace.default_workdir()
+        chosen = suggestion
+        if sys.stdin.isatty():
+            answer = input(
+                f"Where should the course keep your notebooks and your work? [{suggestion}] "
+            ).strip()
+            chosen = Path(answer).expanduser() if answer else suggestion
+    folder = Path(chosen).expanduser().resolve()
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"{folder} is a file, not a folder; choose another with --workdir")
+    first = not folder.exists()
+    added, refreshed = workspace.prepare_workdir(folder, materials)
+    workspace.remember_workdir(folder)
+    if first:
+        print(f"Copied the course into {folder}: your work is saved there.")
+    elif added or refreshed:
+        print(
+            f"Updated {folder}: {len(added)} new file(s), {len(refreshed)} course file(s) "
+            "refreshed; your notebooks were not touched."
+        )
+    return folder
 
 
 def _jupyter_command(app: str):
@@ -38,7 +77,24 @@ def _jupyter_command(app: str):
 
 
 def _open(args) -> int:
-    target = Path(args.path).resolve() if args.path else _default_notebooks()
+    target: Path | None
+    if args.path:
+        target = Path(args.path).resolve()
+    else:
+        target = _default_notebooks() if args.workdir is None else None
+        if target is None:
+            try:
+                target = _student_workdir(args)
+            except (OSError, ValueError) as exc:
+                print(f"course open: {exc}", file=sys.stderr)
+                return 2
+        if target is None:
+            print(
+                "course open: no course notebooks here; run it from a clone of the course, "
+                "install the student edition (`pip install <course wheel>`), or pass a folder",
+                file=sys.stderr,
+            )
+            return 2
     if not target.exists():
         print(
             f"course open: {target} does not exist; run it from a clone of the course "
@@ -50,7 +106,7 @@ def _open(args) -> int:
     if command is None:
         print(
             f"course open: Jupyter {'Lab' if args.app == 'lab' else 'Notebook'} is not installed for "
-            f'{sys.executable}; install the course with `python -m pip install -e ".[all]"`',
+            f"{sys.executable}; install it with `{Path(sys.executable).name} -m pip install jupyterlab`",
             file=sys.stderr,
         )
         return 2
@@ -61,6 +117,20 @@ def _open(args) -> int:
         command.append(target.name)  # open that notebook, rooted at its folder
     print(f"Opening the course in Jupyter {args.app} at {target} (Ctrl-C to stop)")
     return subprocess.call(command, cwd=folder)
+
+
+def _docs(args) -> int:
+    from course.docsite import build_site
+
+    try:
+        report = build_site(
+            args.out_dir, cache_dir=args.cache, jobs=args.jobs, lite=not args.no_lite
+        )
+    except (RuntimeError, FileNotFoundError, ValueError) as error:
+        print(f"course docs: {error}", file=sys.stderr)
+        return 1
+    print(report.summary())
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -85,20 +155,44 @@ def build_parser() -> argparse.ArgumentParser:
     p_open.add_argument(
         "path",
         nargs="?",
-        help="folder or notebook to open (default: notebooks/ of the course clone)",
+        help="folder or notebook to open (default: notebooks/ of the course clone, or your "
+        "working folder in the student edition)",
     )
     p_open.add_argument(
         "--app", default="lab", choices=["lab", "notebook"], help="Jupyter front end"
     )
     p_open.add_argument("--no-browser", action="store_true", help="do not launch a browser")
+    p_open.add_argument(
+        "--workdir",
+        type=Path,
+        default=None,
+        help="student edition: the folder for your notebooks and work (asked on first open, "
+        "then remembered; default ~/residual-validation-course)",
+    )
     p_open.set_defaults(func=_open)
 
+    p_docs = sub.add_parser(
+        "docs",
+        help="build the course website into a folder",
+        description="Build the course website (executed notebooks, API reference, guides, "
+        "an in-browser JupyterLite) into OUT_DIR; open OUT_DIR/index.html. Needs the docs "
+        'extra (python -m pip install -e ".[docs]"). Executed notebooks are cached, so a '
+        "rebuild runs only the notebooks whose code changed. Sphinx warnings are errors.",
+    )
+    p_docs.add_argument("out_dir", help="folder to write the site into")
+    p_docs.add_argument(
+        "--cache", help="folder for executed notebooks between builds (default .cache/docs)"
+    )
+    p_docs.add_argument("--jobs", type=int, default=1, help="parallel Sphinx processes")
+    p_docs.add_argument("--no-lite", action="store_true", help="skip the JupyterLite app")
+    p_docs.set_defaults(func=_docs)
+
     try:
-        from course.grading import cli as exercise_cli
+        from course.grading import cli as grading_cli
     except ImportError:  # the library without its grader: `course open` only
         pass
     else:
-        exercise_cli.add_commands(sub)
+        grading_cli.add_commands(sub)
     return parser
 
 

@@ -29,7 +29,15 @@ import numpy as np
 from scipy import integrate, optimize
 
 from course import _deprecation
-from course.validation import as_generator
+from course.validation import (
+    as_callable,
+    as_finite,
+    as_flag,
+    as_float_array,
+    as_generator,
+    as_law,
+    as_size,
+)
 
 __all__ = ["FrozenDistribution", "TailPair", "as_generator"]
 
@@ -159,7 +167,7 @@ class FrozenDistribution:
 
     def interval(self, confidence: Any) -> tuple[Any, Any]:
         """Equal-tailed interval holding probability ``confidence``."""
-        tail = (1.0 - np.asarray(confidence, dtype=float)) / 2
+        tail = (1.0 - _levels(confidence, "confidence")) / 2
         return self.ppf(tail), self.isf(tail)
 
     def mean(self) -> float:
@@ -176,7 +184,7 @@ class FrozenDistribution:
         return max(lower, 0.0) + upper_part - lower_part if lower >= 0 else upper_part - lower_part
 
     def var(self) -> float:
-        """Var[X] = E[X²] − E[X]², with E[X²] = ∫ 2|t| P(|X| > |t|) dt."""
+        """``Var[X] = E[X²] − E[X]²``, with ``E[X²] = ∫ 2|t| P(|X| > |t|) dt``."""
         mu = self.mean()
         lower, upper = self._bounds
         second = integrate.quad(
@@ -208,8 +216,12 @@ class FrozenDistribution:
         the probability of ``[lb, ub]``.
         """
         lower, upper = self._bounds
-        lb = lower if lb is None else max(float(lb), lower)
-        ub = upper if ub is None else min(float(ub), upper)
+        lb = lower if lb is None else max(_bound(lb, "lb"), lower)
+        ub = upper if ub is None else min(_bound(ub, "ub"), upper)
+        if lb > ub:
+            raise ValueError(f"lb = {lb} exceeds ub = {ub}: the interval of integration is empty")
+        func = as_callable(func, "func", optional=True)
+        conditional = as_flag(conditional, "conditional")
         f = (lambda x: x) if func is None else func
         value = integrate.quad(lambda x: f(x) * float(self.pdf(x)), lb, ub, limit=200)[0]
         if conditional:
@@ -222,7 +234,7 @@ class FrozenDistribution:
         ``random_state=`` is the deprecated name of ``rng=``.
         """
         generator = _rng_argument(rng, random_state, f"{type(self).__name__}.rvs")
-        return self._rvs(size, generator)
+        return self._rvs(as_size(size), generator)
 
     def __repr__(self) -> str:
         # Deterministic by default (no memory address): the class and its numeric parameters.
@@ -239,9 +251,7 @@ class FrozenDistribution:
 
     # -- helpers --------------------------------------------------------------
     def _apply(self, func: Callable, x: Any, below: float, above: float) -> Any:
-        x = np.asarray(x, dtype=float)
-        if np.any(np.isnan(x)):
-            raise ValueError("x contains NaN")
+        x = _points(x)
         lower, upper = self._bounds
         out = np.empty_like(x)
         inside = (x > lower) & (x < upper)
@@ -252,7 +262,7 @@ class FrozenDistribution:
         return out[()] if out.ndim == 0 else out
 
     def _invert(self, q: Any, func: Callable, increasing: bool) -> Any:
-        if isinstance(q, (float, int)) and not isinstance(q, bool):
+        if isinstance(q, (float, int)) and not isinstance(q, bool) and 0.0 <= q <= 1.0:
             # A frozen law does not change: a test's critical values (root
             # searches on an exact cdf) are computed once per law and level.
             memo = self.__dict__.setdefault("_quantile_memo", {})
@@ -260,9 +270,7 @@ class FrozenDistribution:
             if key not in memo:
                 memo[key] = self._invert(np.asarray(q, dtype=float), func, increasing)
             return memo[key]
-        q = np.asarray(q, dtype=float)
-        if np.any((q < 0) | (q > 1) | np.isnan(q)):
-            raise ValueError("probabilities must lie in [0, 1]")
+        q = _levels(q)
         lower, upper = self._bounds
         out = np.empty_like(q)
         for index, target in np.ndenumerate(q):
@@ -295,6 +303,26 @@ class FrozenDistribution:
         return float(
             optimize.brentq(gap, left, right, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=500)
         )
+
+
+def _points(x: Any, name: str = "x") -> np.ndarray:
+    """Points where a law is evaluated: real numbers, +-inf allowed, NaN refused."""
+    return as_float_array(x, name, finite=False)
+
+
+def _levels(q: Any, name: str = "q") -> np.ndarray:
+    """Probabilities for ``ppf``/``isf``: real numbers in [0, 1]."""
+    q = as_float_array(q, name)
+    if np.any((q < 0) | (q > 1)):
+        raise ValueError(f"{name}: probabilities must lie in [0, 1], got {q}")
+    return q
+
+
+def _bound(value: Any, name: str) -> float:
+    """An integration bound: a real number or +-inf."""
+    if isinstance(value, (int, float, np.integer, np.floating)) and np.isinf(value):
+        return float(value)
+    return as_finite(value, name)
 
 
 class TailPair:
@@ -336,25 +364,25 @@ class TailPair:
         upper: Any,
         joint_rvs: Callable[[Any, np.random.Generator], tuple[Any, Any]] | None = None,
     ):
-        self.lower = lower
-        self.upper = upper
-        self._joint_rvs = joint_rvs
+        self.lower = as_law(lower, "lower")
+        self.upper = as_law(upper, "upper")
+        self._joint_rvs = as_callable(joint_rvs, "joint_rvs", optional=True)
 
     def cdf(self, x: Any) -> Any:
         """P(low <= x), the lower tail."""
-        return self.lower.cdf(x)
+        return self.lower.cdf(_points(x))
 
     def sf(self, x: Any) -> Any:
         """P(high > x), the upper tail."""
-        return self.upper.sf(x)
+        return self.upper.sf(_points(x))
 
     def ppf(self, q: Any) -> Any:
         """Quantile of ``low``."""
-        return self.lower.ppf(q)
+        return self.lower.ppf(_levels(q)[()])
 
     def isf(self, q: Any) -> Any:
         """Inverse survival function of ``high``."""
-        return self.upper.isf(q)
+        return self.upper.isf(_levels(q)[()])
 
     def rvs(self, size: Any = None, *, rng: Any = None) -> tuple[Any, Any]:
         """Joint draws ``(low, high)``, when a joint sampler was given."""
@@ -363,7 +391,7 @@ class TailPair:
                 "this TailPair has no joint sampler: the two statistics are dependent, "
                 "so drawing each from its own law would be wrong"
             )
-        return self._joint_rvs(size, as_generator(rng))
+        return self._joint_rvs(as_size(size), as_generator(rng))
 
     def __iter__(self) -> Iterator[Any]:
         return iter((self.lower, self.upper))

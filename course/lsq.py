@@ -32,41 +32,47 @@ load_sea_level
 
 Numerics
 --------
-Everything is computed in the *whitened* problem. With the Cholesky factor
-``Qyy = L L^T`` the model becomes ``L^{-1} y = (L^{-1} A) x + ε`` with
-``D(ε) = I``; a full QR factorisation ``L^{-1} A = [Q1 Q2] [R; 0]`` then gives
-the estimate ``x̂ = R^{-1} Q1^T L^{-1} y`` by a triangular solve, the
-covariance of the estimate ``Qxx = R^{-1} R^{-T}``, the residual covariance
-``Qee = (L Q2)(L Q2)^T`` and the w-test quantities, without ever forming
-``(A^T Qyy^{-1} A)^{-1}`` or ``Qyy^{-1}``.
+Everything is computed in the *whitened* problem. With a factor
+``Qyy = L L^T`` (a vector of standard deviations for diagonal Qyy, a banded
+Cholesky factor for sparse Qyy, a dense Cholesky factor otherwise, see
+:func:`course.linalg.covariance_factor`) the model becomes
+``L^{-1} y = (L^{-1} A) x + ε`` with ``D(ε) = I``; a thin QR factorisation
+``L^{-1} A = Q1 R`` (Q1 of shape m x n) then gives the estimate
+``x̂ = R^{-1} Q1^T L^{-1} y`` by a triangular solve, the covariance of the
+estimate ``Qxx = R^{-1} R^{-T}``, the whitened residuals
+``ẽ = L^{-1} y - Q1 Q1^T L^{-1} y`` and the w-test quantities, without ever
+forming ``(A^T Qyy^{-1} A)^{-1}``, ``Qyy^{-1}`` or any m x m matrix. The
+tests need only diagonals, so a fit costs O(m n²) time and O(m n) memory for
+diagonal Qyy; the m x m matrices ``Qee`` and ``Qyy_hat`` are computed when
+asked for.
 """
 
 from __future__ import annotations
 
 import html
 import io
-from dataclasses import dataclass, field
-from functools import lru_cache
+import warnings
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
 from importlib import resources
 from typing import Any, NamedTuple
 
 import numpy as np
 from scipy import linalg as sla
 from scipy import stats
+from scipy.linalg import lapack
 
 from course.chi2 import noncentrality, residual_norm_law
 from course.linalg import (
+    CovarianceFactor,
     check_full_column_rank,
-    cholesky_lower,
-    qr_solve,
+    covariance_factor,
     readonly,
     symmetrize,
-    whiten,
 )
 from course.results import TestResult, decide, format_number
 from course.validation import (
     as_count,
-    as_covariance,
     as_float_array,
     as_index,
     as_matrix,
@@ -93,6 +99,9 @@ __all__ = [
 #: would be 0/0.  Rounding leaves ~1e-30 for a truly untestable observation.
 _UNTESTABLE_RTOL = 1e-10
 
+#: |w_i| within this relative distance of the largest count as equally large.
+_TIE_RTOL = 1e-10
+
 
 @lru_cache(maxsize=1)
 def _standard_normal():
@@ -114,21 +123,37 @@ def _format_vector(values, digits: int = 5, limit: int = 6) -> str:
 # ---------------------------------------------------------------------------
 # the fit
 # ---------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _Factors:
-    """Factorisations kept with a fit so that the tests need no refactoring."""
+#: Below this reciprocal condition number of R the design is checked for
+#: rank deficiency by the library's rank rule (pivoted QR of A); above it,
+#: the columns are far from dependent and the check would be wasted work.
+_RCOND_CHECK = float(np.sqrt(np.finfo(float).eps))
 
-    L: np.ndarray  # lower Cholesky factor of Qyy
-    Q: np.ndarray  # full orthogonal factor of L^{-1} A, m x m
-    R: np.ndarray  # upper triangular factor, n x n
-    z: np.ndarray  # Q2^T L^{-1} y: the m - n independent N(0, 1) "residual coordinates"
+
+def _row_norms_squared(X: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", X, X)
+
+
+def _dense_on_demand(build, what: str, m: int) -> np.ndarray:
+    """Build an m x m matrix the user asked for, with a message that helps if it does not fit."""
+    try:
+        return _readonly(build())
+    except MemoryError as exc:
+        raise MemoryError(
+            f"{what} is an m x m matrix, {8 * m * m / 1e9:.3g} GB at m = {m}, and does not fit "
+            "in memory; the tests need only its diagonal: use sigma_e_hat, sigma_y_hat or "
+            "redundancy_numbers"
+        ) from exc
 
 
 @dataclass(frozen=True, repr=False, eq=False)
 class LeastSquaresFit:
     """Result of a (weighted) least-squares fit of ``E(y) = A x``, ``D(y) = Qyy``.
 
-    Build it with :func:`fit`; all arrays are read-only.
+    Build it with :func:`fit`; all arrays are read-only. The fit stores
+    vectors and the n x n matrices; the m x m matrices ``Qyy``, ``Qee`` and
+    ``Qyy_hat`` are computed on first access (8 m² bytes each: 80 GB at
+    m = 10⁵), and ``redundancy_numbers`` likewise. Their diagonals, which is
+    all the tests need, are cheap: ``sigma_e_hat``, ``sigma_y_hat``.
 
     Attributes
     ----------
@@ -137,7 +162,8 @@ class LeastSquaresFit:
     y : ndarray, shape (m,)
         Observations.
     Qyy : ndarray, shape (m, m)
-        Covariance matrix of the observations.
+        Covariance matrix of the observations, dense (computed on access
+        when Qyy was given as variances or sparse).
     x_hat : ndarray, shape (n,)
         BLUE of the parameters, eq. (8.6).
     y_hat : ndarray, shape (m,)
@@ -147,9 +173,9 @@ class LeastSquaresFit:
     Qxx : ndarray, shape (n, n)
         Covariance of ``x̂``, ``(A^T Qyy^{-1} A)^{-1}``, eq. (8.7).
     Qyy_hat : ndarray, shape (m, m)
-        Covariance of ``ŷ``, ``A Qxx A^T``.
+        Covariance of ``ŷ``, ``A Qxx A^T`` (computed on access).
     Qee : ndarray, shape (m, m)
-        Covariance of ``ê``, ``Qyy - A Qxx A^T`` (Section 10.3).
+        Covariance of ``ê``, ``Qyy - A Qxx A^T`` (Section 10.3; computed on access).
     redundancy_numbers : ndarray, shape (m,)
         ``diag(Qee Qyy^{-1})``; each in [0, 1] for diagonal Qyy, summing to m - n.
     m, n : int
@@ -158,17 +184,16 @@ class LeastSquaresFit:
 
     A: np.ndarray
     y: np.ndarray
-    Qyy: np.ndarray
     x_hat: np.ndarray
     y_hat: np.ndarray
     e_hat: np.ndarray
     Qxx: np.ndarray
-    Qyy_hat: np.ndarray
-    Qee: np.ndarray
-    redundancy_numbers: np.ndarray
     m: int
     n: int
-    _factors: _Factors = field(repr=False)
+    _covariance: CovarianceFactor
+    _R: np.ndarray  # upper triangular, L^{-1} A = Q1 R
+    _Q1: np.ndarray  # m x n, orthonormal columns spanning L^{-1} A
+    _e_w: np.ndarray  # whitened residuals L^{-1} ê, orthogonal to Q1
 
     @property
     def redundancy(self) -> int:
@@ -178,8 +203,51 @@ class LeastSquaresFit:
     @property
     def squared_norm(self) -> float:
         """Weighted squared norm of the residuals, ``ê^T Qyy^{-1} ê`` (eq. 10.2)."""
-        z = self._factors.z
-        return float(z @ z)
+        return float(self._e_w @ self._e_w)
+
+    @cached_property
+    def Qyy(self) -> np.ndarray:
+        """Covariance matrix of the observations as a dense (m, m) array."""
+        return _dense_on_demand(lambda: self._covariance.dense(copy=False), "Qyy", self.m)
+
+    @cached_property
+    def _G(self) -> np.ndarray:
+        # G = A R^{-1} = L Q1, so that Q_ŷŷ = G G^T; one triangular solve, O(m n²).
+        return _readonly(
+            sla.solve_triangular(self._R, self.A.T, trans="T", lower=False, check_finite=False).T
+        )
+
+    @cached_property
+    def Qyy_hat(self) -> np.ndarray:
+        """Covariance of the adjusted observations, ``A Qxx A^T`` (m x m, built on access)."""
+        return _dense_on_demand(lambda: symmetrize(self._G @ self._G.T), "Qyy_hat", self.m)
+
+    @cached_property
+    def Qee(self) -> np.ndarray:
+        """Covariance of the residuals, ``Qyy - A Qxx A^T`` (m x m, built on access)."""
+
+        def build():
+            Q = self._covariance.dense()
+            Q -= self._G @ self._G.T
+            return symmetrize(Q)
+
+        return _dense_on_demand(build, "Qee", self.m)
+
+    @cached_property
+    def redundancy_numbers(self) -> np.ndarray:
+        """``r_i = (Qee Qyy^{-1})_ii``, evaluated as ``1 - (L Q1)_i · (L^{-T} Q1)_i``."""
+        LtQ1 = self._covariance.whiten_transpose(self._Q1)
+        return _readonly(1.0 - np.einsum("ij,ij->i", self._G, LtQ1))
+
+    @cached_property
+    def _w_parts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Numerators, squared denominators and weights of Baarda's w_i (see :func:`w_tests`)."""
+        cov = self._covariance
+        numerator = cov.whiten_transpose(self._e_w)  # c_i^T Qyy^{-1} ê
+        weight = cov.inverse_diagonal()  # c_i^T Qyy^{-1} c_i
+        # c_i^T Qyy^{-1} Qee Qyy^{-1} c_i = |L^{-1} c_i|² - |Q1^T L^{-1} c_i|²
+        denom2 = weight - _row_norms_squared(cov.whiten_transpose(self._Q1))
+        return _readonly(numerator), _readonly(denom2), _readonly(weight)
 
     @property
     def sigma_x_hat(self) -> np.ndarray:
@@ -189,12 +257,13 @@ class LeastSquaresFit:
     @property
     def sigma_y_hat(self) -> np.ndarray:
         """Standard deviations of the adjusted observations, ``sqrt(diag(Qyy_hat))``."""
-        return np.sqrt(np.clip(np.diag(self.Qyy_hat), 0.0, None))
+        return np.sqrt(_row_norms_squared(self._G))
 
     @property
     def sigma_e_hat(self) -> np.ndarray:
         """Standard deviations of the residuals, ``sqrt(diag(Qee))``."""
-        return np.sqrt(np.clip(np.diag(self.Qee), 0.0, None))
+        variances = self._covariance.diagonal() - _row_norms_squared(self._G)
+        return np.sqrt(np.clip(variances, 0.0, None))
 
     def __repr__(self) -> str:
         return (
@@ -229,8 +298,12 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
         Design matrix with full column rank and ``m >= n``.
     y : array_like, shape (m,)
         Observations.
-    Qyy : array_like, shape (m, m), optional
-        Symmetric positive definite covariance matrix of ``y``; the identity
+    Qyy : array_like of shape (m,) or (m, m), scipy.sparse matrix, optional
+        Covariance of ``y``. A 1-D array holds the VARIANCES ``σ_i²`` of
+        uncorrelated observations (square standard deviations first: the
+        slip cannot be seen in Qyy itself, and :func:`overall_model_test`
+        warns when the data point to it); a matrix, dense or
+        ``scipy.sparse``, must be symmetric positive definite. The identity
         when omitted (unit-weight, uncorrelated observations).
 
     Returns
@@ -241,7 +314,8 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     Raises
     ------
     ValueError
-        Shape mismatch, NaN or inf, ``m < n``, non-symmetric ``Qyy``.
+        Shape mismatch, NaN or inf, ``m < n``, non-symmetric ``Qyy``, a
+        non-positive variance in a 1-D ``Qyy``.
     numpy.linalg.LinAlgError
         ``A`` rank deficient (the dependent columns are named) or ``Qyy``
         not positive definite.
@@ -257,11 +331,16 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     and ``ŷ = A x̂``, ``ê = y - ŷ`` (10.1), ``Q_ŷŷ = A Q_x̂x̂ A^T`` and
     ``Q_êê = Qyy - A Q_x̂x̂ A^T`` (Section 10.3, from the error propagation
     law 7.9). The normal equations are not used: with ``Qyy = L L^T`` and
-    the QR factorisation ``L^{-1} A = [Q1 Q2][R; 0]``,
-    ``x̂ = R^{-1} Q1^T L^{-1} y``, ``Q_x̂x̂ = R^{-1} R^{-T}``,
-    ``Q_ŷŷ = (L Q1)(L Q1)^T`` and ``Q_êê = (L Q2)(L Q2)^T``. The redundancy
-    numbers ``r_i = (Q_êê Q_yy^{-1})_{ii}`` are row-wise products of
-    ``L Q2`` and ``L^{-T} Q2``; they sum to ``m - n``.
+    the thin QR factorisation ``L^{-1} A = Q1 R``,
+    ``x̂ = R^{-1} Q1^T L^{-1} y``, ``Q_x̂x̂ = R^{-1} R^{-T}`` and, with
+    ``G = A R^{-1} = L Q1``, ``Q_ŷŷ = G G^T`` and ``Q_êê = Qyy - G G^T``.
+    The redundancy numbers ``r_i = (Q_êê Q_yy^{-1})_{ii}`` are
+    ``1 - G_i · (L^{-T} Q1)_i``; they sum to ``m - n``. The Cholesky
+    factorisation is also the check that Qyy is positive definite.
+
+    Cost: O(m n²) time and O(m n) memory for diagonal Qyy (1-D, a diagonal
+    matrix or a diagonal sparse matrix), O(m b² + m n b) for a sparse Qyy of
+    bandwidth b after reordering, O(m³) for a dense correlated Qyy.
 
     Examples
     --------
@@ -270,6 +349,13 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     >>> f = fit(A, [14, 20, 20, 24])
     >>> [float(v) for v in np.round(f.x_hat, 10)], round(f.squared_norm, 10)
     ([12.0, 3.0], 6.0)
+
+    Uncorrelated observations with standard deviations ``sigma`` give their
+    variances as a vector; with ``sigma = 2`` the squared norm is 6 / 2²:
+
+    >>> sigma = np.full(4, 2.0)
+    >>> round(fit(A, [14, 20, 20, 24], sigma**2).squared_norm, 10)
+    1.5
     """
     A = as_matrix(A, "A")
     m, n = A.shape
@@ -291,56 +377,33 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
             f"A has fewer rows than columns (m = {m} observations, n = {n} parameters): "
             "the parameters are not determined; add observations or remove parameters"
         )
-    check_full_column_rank(A, "A")
-    if Qyy is None:
-        Qyy = np.eye(m)
-    else:
-        if np.ndim(Qyy) == 1:
-            raise ValueError(
-                f"Qyy must be an (m, m) = ({m}, {m}) covariance matrix, got a 1-D array; "
-                "for uncorrelated observations with variances v pass np.diag(v)"
-            )
-        if np.ndim(Qyy) == 0:
-            raise ValueError(
-                f"Qyy must be an (m, m) = ({m}, {m}) covariance matrix, got a scalar; "
-                f"for equal variances s2 pass s2 * np.eye({m})"
-            )
-        Qyy = as_covariance(Qyy, "Qyy", m)
-    L = cholesky_lower(Qyy, "Qyy")
-
-    A_w = whiten(L, A)
-    y_w = whiten(L, y)
-    solution = qr_solve(A_w, y_w, full=True)
-    Q, R, x_hat = solution.Q, solution.R, solution.x
-    Q1, Q2 = Q[:, :n], Q[:, n:]
-    Qxx = symmetrize(solution.R_inv @ solution.R_inv.T)
-
+    covariance = covariance_factor(Qyy, "Qyy", m)
+    y_w = covariance.whiten(y)
+    # LAPACK works column-major: a Fortran-ordered input halves the QR's time at m = 1e5.
+    A_w = np.asfortranarray(covariance.whiten(A))
+    Q1, R = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
+    rcond, _ = lapack.dtrcon(R, norm="1", uplo="U")
+    if not rcond > _RCOND_CHECK:
+        check_full_column_rank(A, "A")  # names the dependent columns, if any
+    coefficients = Q1.T @ y_w
+    x_hat = sla.solve_triangular(R, coefficients, lower=False, check_finite=False)
+    e_w = y_w - Q1 @ coefficients
+    R_inv = sla.solve_triangular(R, np.eye(n), lower=False, check_finite=False)
+    Qxx = symmetrize(R_inv @ R_inv.T)
     y_hat = A @ x_hat
-    e_hat = y - y_hat
-    LQ1 = L @ Q1
-    LQ2 = L @ Q2
-    Qyy_hat = symmetrize(LQ1 @ LQ1.T)
-    Qee = symmetrize(LQ2 @ LQ2.T)
-    # diag(Qee Qyy^{-1}) = rowwise (L Q2) . (L^{-T} Q2): one triangular solve.
-    LtQ2 = sla.solve_triangular(L, Q2, trans="T", lower=True, check_finite=False)
-    redundancy_numbers = np.sum(LQ2 * LtQ2, axis=1)
-    z = Q2.T @ y_w
-
-    factors = _Factors(L=_readonly(L), Q=_readonly(Q), R=_readonly(R), z=_readonly(z))
     return LeastSquaresFit(
         A=_readonly(A),
         y=_readonly(y),
-        Qyy=_readonly(np.array(Qyy, dtype=float)),
         x_hat=_readonly(x_hat),
         y_hat=_readonly(y_hat),
-        e_hat=_readonly(e_hat),
+        e_hat=_readonly(y - y_hat),
         Qxx=_readonly(Qxx),
-        Qyy_hat=_readonly(Qyy_hat),
-        Qee=_readonly(Qee),
-        redundancy_numbers=_readonly(redundancy_numbers),
         m=int(m),
         n=int(n),
-        _factors=factors,
+        _covariance=covariance,
+        _R=_readonly(R),
+        _Q1=_readonly(Q1),
+        _e_w=_readonly(e_w),
     )
 
 
@@ -397,7 +460,20 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     ``T = Σ (ê_i / σ_i)²`` (10.3); for m repeated measurements of one
     quantity ``T / (m - 1) = σ̂² / σ²`` (Section 10.1.4), which is why
     ``T / (m - n)`` is reported as the (a-posteriori) variance factor. T is
-    evaluated as ``||Q2^T L^{-1} y||²``, the same number without ``Qyy^{-1}``.
+    evaluated as ``||ẽ||²`` with ``ẽ = L^{-1} ê`` the whitened residuals, the
+    same number without ``Qyy^{-1}``.
+
+    A 1-D Qyy filled with standard deviations instead of variances is a
+    likely slip that no check of Qyy alone can see (both are positive
+    numbers). It shows here, and only here: the variance factor is then
+    about the typical standard deviation instead of 1. A :class:`UserWarning`
+    says so when Qyy was given as a 1-D array, T falls outside the central
+    range ``[chi2_{1-α}(m - n), chi2_α(m - n)]``, the same data with Qyy's
+    entries read as standard deviations (variances ``Qyy_i²``) fall inside
+    it, and the residuals' pattern does not favour the values as variances
+    (a likelihood ratio of the two readings with a free common scale, above
+    1/10; it is 1 when all values are equal). With equal values the slip
+    looks exactly like a wrong variance factor, so the warning names both.
 
     Examples
     --------
@@ -414,13 +490,54 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     _require_redundancy(fit, "overall model test")
     dof = fit.redundancy
     T = fit.squared_norm
-    return TestResult.from_null(
+    null = residual_norm_law(dof)
+    result = TestResult.from_null(
         "overall model test",
         T,
-        residual_norm_law(dof),
+        null,
         alpha,
         dof=dof,
         details={"variance factor T/(m-n)": T / dof},
+    )
+    hint = _standard_deviation_hint(fit, result)
+    if hint:
+        warnings.warn(hint, UserWarning, stacklevel=2)
+    return result
+
+
+def _standard_deviation_hint(fit: LeastSquaresFit, result: TestResult) -> str:
+    """A message when a 1-D Qyy of variances looks like standard deviations, else ``""``."""
+    cov = fit._covariance
+    # T inside the central range [chi2_{1-alpha}, chi2_alpha]: nothing to explain. Read off
+    # the decision (p = sf(T)), so that the usual case costs no quantile computations.
+    if cov.given_as != "variances" or not (result.reject or 1.0 - result.pvalue < result.alpha):
+        return ""
+    T, alpha, null = result.statistic, result.alpha, result.null
+    low, high = float(null.ppf(alpha)), float(null.isf(alpha))
+    sigma = cov.diagonal()  # the given variances, read as standard deviations
+    # The refit costs one more O(m n²) QR, paid only when the test is already surprising.
+    A_w = np.asfortranarray(fit.A / sigma[:, None])
+    y_w = fit.y / sigma
+    Q1, _ = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
+    e_w = y_w - Q1 @ (Q1.T @ y_w)
+    T_alt = float(e_w @ e_w)
+    if not low <= T_alt <= high:
+        return ""
+    # With a free common scale, the log-likelihood of "standard deviations" minus that of
+    # "variances" is (m log(T / T_alt) - sum log sigma) / 2: it compares the SHAPE of the
+    # weights, and is 0 when all values are equal. Stay silent when the residuals' pattern
+    # clearly fits the values as variances.
+    log_ratio = 0.5 * (fit.m * np.log(T / T_alt) - float(np.sum(np.log(sigma))))
+    if log_ratio < -np.log(10.0):
+        return ""
+    dof = fit.redundancy
+    return (
+        f"Qyy was given as a 1-D array of variances and the overall model test finds "
+        f"T = {T:.4g}, a variance factor T/(m-n) = {T / dof:.3g}, outside the central range "
+        f"[{low:.4g}, {high:.4g}] of chi2({dof}) at alpha = {alpha:g}. Read as standard "
+        f"deviations (variances Qyy**2), the same data give T = {T_alt:.4g}, inside that "
+        "range. Qyy must hold VARIANCES: if you passed standard deviations sigma, pass "
+        "sigma**2 (if Qyy does hold variances, the model or the stated precision is wrong)."
     )
 
 
@@ -491,7 +608,7 @@ class WTestResult:
         return [self.test(int(i)) for i in np.flatnonzero(self.testable)]
 
     def summary(self) -> str:
-        """One line: largest |w|, threshold and the rejected observations."""
+        """One line: largest ``|w|``, threshold and the rejected observations."""
         i = self.largest
         return (
             f"w-tests (alpha = {format_number(self.alpha)}): critical |w| = "
@@ -532,15 +649,39 @@ class WTestResult:
 
 def _w_quantities(fit: LeastSquaresFit):
     """Numerators, squared denominators and testability of Baarda's w_i."""
-    f = fit._factors
-    # M = L^{-T} Q; row i of M is c_i^T L^{-T} Q, whose squared norm is (Qyy^{-1})_ii.
-    M = sla.solve_triangular(f.L, f.Q, trans="T", lower=True, check_finite=False)
-    M2 = M[:, fit.n :]
-    numerator = M2 @ f.z  # c_i^T Qyy^{-1} ê
-    denom2 = np.sum(M2 * M2, axis=1)  # c_i^T Qyy^{-1} Qee Qyy^{-1} c_i
-    weight = np.sum(M * M, axis=1)  # c_i^T Qyy^{-1} c_i
+    numerator, denom2, weight = fit._w_parts
+    return numerator, denom2, denom2 > _UNTESTABLE_RTOL * weight
+
+
+def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
+    """Baarda's w_i = numerator_i / sqrt(denom2_i) and their two-sided tests."""
     testable = denom2 > _UNTESTABLE_RTOL * weight
-    return numerator, denom2, testable
+    m = numerator.shape[0]
+    w = np.full(m, np.nan)
+    w[testable] = numerator[testable] / np.sqrt(denom2[testable])
+    null = _standard_normal()
+    decision = decide(null, w[testable], alpha, "two-sided")
+    critical = decision.critical_value.upper
+    pvalues = np.full(m, np.nan)
+    pvalues[testable] = decision.pvalue
+    reject = np.zeros(m, dtype=bool)
+    reject[testable] = decision.reject
+    largest = 0
+    if np.any(testable):
+        # The first of the largest: |w| equal up to rounding count as a tie (with redundancy
+        # 1 all testable |w_i| are equal), so the choice does not depend on round-off.
+        abs_w = np.abs(w)
+        largest = int(np.flatnonzero(abs_w >= (1 - _TIE_RTOL) * np.nanmax(abs_w))[0])
+    return WTestResult(
+        w=_readonly(w),
+        critical_value=critical,
+        reject=_readonly(reject),
+        pvalues=_readonly(pvalues),
+        largest=largest,
+        testable=_readonly(testable),
+        alpha=alpha,
+        null=null,
+    )
 
 
 def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
@@ -578,10 +719,13 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
 
     reduces for diagonal Qyy to the chapter's eq. (10.4), ``w_i = ê_i /
     σ_êi``, and also holds for correlated observations. The critical value
-    is two-sided, ``N_{α/2}(0, 1)`` (Section 10.3). With ``Qyy = L L^T`` and
-    ``L^{-1} A = [Q1 Q2][R; 0]``: ``Q_yy^{-1} ê = L^{-T} Q2 z`` and
-    ``Q_yy^{-1} Q_êê Q_yy^{-1} = (L^{-T} Q2)(L^{-T} Q2)^T`` with
-    ``z = Q2^T L^{-1} y``, so both come from one triangular solve.
+    is two-sided, ``N_{α/2}(0, 1)`` (Section 10.3). With ``Qyy = L L^T``,
+    the thin QR ``L^{-1} A = Q1 R`` and the whitened residuals ``ẽ``:
+    ``Q_yy^{-1} ê = L^{-T} ẽ`` and
+    ``c_i^T Q_yy^{-1} Q_êê Q_yy^{-1} c_i = |L^{-1} c_i|² - |Q1^T L^{-1} c_i|²``,
+    where ``|L^{-1} c_i|² = (Q_yy^{-1})_{ii}``; so the numerators and the
+    denominators come from one whitening solve with n + 1 right-hand sides
+    and the diagonal of ``Q_yy^{-1}`` (O(m n) for diagonal Qyy).
     Reference: W. Baarda (1968), *A testing procedure for use in geodetic
     networks*, Netherlands Geodetic Commission.
 
@@ -599,28 +743,7 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     fit = _check_fit(fit)
     alpha = as_probability(alpha)
     _require_redundancy(fit, "w-test")
-    numerator, denom2, testable = _w_quantities(fit)
-    w = np.full(fit.m, np.nan)
-    w[testable] = numerator[testable] / np.sqrt(denom2[testable])
-    null = _standard_normal()
-    decision = decide(null, w[testable], alpha, "two-sided")
-    critical = decision.critical_value.upper
-    pvalues = np.full(fit.m, np.nan)
-    pvalues[testable] = decision.pvalue
-    reject = np.zeros(fit.m, dtype=bool)
-    reject[testable] = decision.reject
-    abs_w = np.abs(w)
-    largest = int(np.nanargmax(abs_w)) if np.any(testable) else 0
-    return WTestResult(
-        w=_readonly(w),
-        critical_value=critical,
-        reject=_readonly(reject),
-        pvalues=_readonly(pvalues),
-        largest=largest,
-        testable=_readonly(testable),
-        alpha=alpha,
-        null=null,
-    )
+    return _w_test_result(*fit._w_parts, alpha)
 
 
 # ---------------------------------------------------------------------------
@@ -724,6 +847,20 @@ def data_snooping(
     cannot tell which observation is wrong: the removal is then arbitrary
     (the first largest), which is why practitioners want redundancy to spare.
 
+    Each removal is a rank-one downdate, not a fresh fit: removing
+    observation i gives the same estimate, T and w-tests of the others as
+    keeping it with an outlier parameter of its own, ``E(y) = A x + c_i ∇_i``
+    (the alternative hypothesis of its w-test). In the whitened problem that
+    adds the column ``L^{-1} c_i`` to the design, i.e. one orthonormal
+    vector ``q`` to ``Q1``; the whitened residuals lose their component
+    along ``q`` (T drops by exactly ``w_i²``), and the numerators and squared
+    denominators of the remaining ``w_j`` change by ``L^{-T} q`` terms. Qyy
+    is factored once; a round costs O(m (n + k)) for diagonal Qyy and O(m²)
+    for a dense one, against O(m n²) and O(m³) for a fresh fit. The final
+    ``fit`` is computed once, on the kept observations. (Only the cut-off
+    for untestable observations, a generalised redundancy below 1e-10, is
+    measured in the full model's weights ``(Q_yy^{-1})_jj``.)
+
     Examples
     --------
     >>> import numpy as np
@@ -736,38 +873,87 @@ def data_snooping(
     alpha = as_probability(alpha)
     if max_removals is not None:
         max_removals = as_count(max_removals, "max_removals", minimum=0)
-    current = fit(A, y, Qyy)
-    A_all, y_all, Q_all = current.A, current.y, current.Qyy
-    kept = list(range(current.m))
+    first = fit(A, y, Qyy)
+    model = _OutlierModel(first)
+    kept = np.arange(first.m)
     removed: list[int] = []
     rounds: list[WTestResult] = []
     round_indices: list[tuple] = []
     while True:
-        if current.redundancy == 0:
+        if first.redundancy - len(removed) == 0:
             reason = "no redundancy left"
             break
-        wt = w_tests(current, alpha)
+        # Round 1 tests the fit itself; later rounds read the downdated model.
+        wt = model.w_tests(kept, alpha) if removed else w_tests(first, alpha)
         rounds.append(wt)
-        round_indices.append(tuple(kept))
+        round_indices.append(tuple(kept.tolist()))
         if not wt.any_reject:
             reason = "no observation rejected"
             break
         if max_removals is not None and len(removed) >= max_removals:
             reason = "max_removals reached"
             break
-        worst = kept.pop(wt.largest)
+        worst = int(kept[wt.largest])
+        kept = np.delete(kept, wt.largest)
         removed.append(worst)
-        index = np.array(kept)
-        current = fit(A_all[index], y_all[index], Q_all[np.ix_(index, index)])
+        model.remove(worst)
+    current = first
+    if removed:
+        current = fit(first.A[kept], first.y[kept], first._covariance.take(kept))
     return SnoopingResult(
         removed=tuple(removed),
-        kept=tuple(kept),
+        kept=tuple(kept.tolist()),
         rounds=tuple(rounds),
         round_indices=tuple(round_indices),
         fit=current,
         stop_reason=reason,
         alpha=alpha,
     )
+
+
+class _OutlierModel:
+    """A fit whose removed observations each carry an outlier parameter of their own.
+
+    Holds the whitened residuals and the w-test numerators and squared
+    denominators of every observation, and downdates them by one rank per
+    removal (see :func:`data_snooping`).
+    """
+
+    def __init__(self, first: LeastSquaresFit):
+        self._covariance = first._covariance
+        # Orthonormal columns spanning the whitened design and the outlier columns added so
+        # far, in a column-major buffer that grows by doubling (columns contiguous for BLAS).
+        self._n = first.n
+        self._basis = np.empty((first.m, 2 * first.n + 8), order="F")
+        self._basis[:, : first.n] = first._Q1
+        numerator, denom2, weight = first._w_parts
+        self._e_w = first._e_w.copy()
+        self._numerator = numerator.copy()
+        self._denom2 = denom2.copy()
+        self._weight = weight
+
+    def remove(self, i: int) -> None:
+        v = self._covariance.whiten_unit(i)  # the outlier column L^{-1} c_i
+        basis = self._basis[:, : self._n]
+        for _ in range(2):  # classical Gram-Schmidt, twice: orthogonal to working precision
+            v -= basis @ (basis.T @ v)
+        q = v / np.linalg.norm(v)
+        coefficient = float(q @ self._e_w)  # = w_i of the round that removed i
+        self._e_w -= coefficient * q
+        Lt_q = self._covariance.whiten_transpose(q)
+        self._numerator -= coefficient * Lt_q
+        self._denom2 -= Lt_q * Lt_q
+        if self._n == self._basis.shape[1]:
+            grown = np.empty((self._basis.shape[0], 2 * self._n), order="F")
+            grown[:, : self._n] = self._basis
+            self._basis = grown
+        self._basis[:, self._n] = q
+        self._n += 1
+
+    def w_tests(self, index: np.ndarray, alpha: float) -> WTestResult:
+        return _w_test_result(
+            self._numerator[index], self._denom2[index], self._weight[index], alpha
+        )
 
 
 # ---------------------------------------------------------------------------
@@ -879,7 +1065,7 @@ def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> Co
             f"{A_new.shape}; for a single row use np.reshape(row, (1, -1))"
         )
     y_new = A_new @ fit.x_hat
-    G = sla.solve_triangular(fit._factors.R, A_new.T, trans="T", lower=False, check_finite=False)
+    G = sla.solve_triangular(fit._R, A_new.T, trans="T", lower=False, check_finite=False)
     sigma = np.sqrt(np.sum(G * G, axis=0))
     return ConfidenceBand(y_new, stats.norm.isf((1.0 - level) / 2) * sigma)
 

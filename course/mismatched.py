@@ -54,7 +54,14 @@ from course.filters import LinearModel, kalman_filter, riccati_gains
 from course.linalg import readonly, symmetrize
 from course.quadform import QuadraticForm, WeightedChiSquare
 from course.results import TestResult, critical_value, rejection_probability
-from course.validation import as_count, as_float_array, as_index, as_probability
+from course.validation import (
+    InputTypeError,
+    as_count,
+    as_flag,
+    as_float_array,
+    as_index,
+    as_probability,
+)
 
 __all__ = [
     "APPENDIX_MISPRINTS",
@@ -200,7 +207,7 @@ class ResidualMoments:
 def _check_models(true_model, filter_model):
     for name, model in (("true_model", true_model), ("filter_model", filter_model)):
         if not isinstance(model, LinearModel):
-            raise TypeError(
+            raise InputTypeError(
                 f"{name} must be a course.filters.LinearModel, got {type(model).__name__}"
             )
         if model.n_inputs:
@@ -210,9 +217,22 @@ def _check_models(true_model, filter_model):
             )
     if true_model.n_outputs != filter_model.n_outputs:
         raise ValueError(
-            f"the models must have the same number of outputs: the true model has "
-            f"{true_model.n_outputs}, the filter's {filter_model.n_outputs}"
+            f"true_model and filter_model must have the same number of outputs: the true "
+            f"model has {true_model.n_outputs}, the filter's {filter_model.n_outputs}"
         )
+
+
+def _check_moments(moments: Any, name: str = "moments") -> ResidualMoments:
+    if not isinstance(moments, ResidualMoments):
+        raise InputTypeError(
+            f"{name} must be the ResidualMoments of a pair of models (from residual_moments), "
+            f"got {type(moments).__name__}"
+        )
+    return moments
+
+
+def _outputs(p: Any) -> int:
+    return as_count(p, "p", what="the number of outputs")
 
 
 def _check_steps(N: Any) -> int:
@@ -488,6 +508,7 @@ def moment_zscores(residuals: Any, moments: ResidualMoments) -> MomentZScores:
     >>> bool(np.abs(z.z_mean).max() < 5 and np.abs(z.z_cov).max() < 5)
     True
     """
+    moments = _check_moments(moments)
     r = _as_records(residuals)
     M = r.shape[0]
     if r.shape[1:] != moments.mean.shape:
@@ -509,7 +530,7 @@ def moment_zscores(residuals: Any, moments: ResidualMoments) -> MomentZScores:
 # statistics of a cross-record section
 # ---------------------------------------------------------------------------
 def _as_records(residuals) -> np.ndarray:
-    r = as_float_array(residuals, "residuals")
+    r = as_float_array(residuals, "residuals", empty=False)
     if r.ndim == 2:
         r = r[..., None]
     if r.ndim != 3:
@@ -517,7 +538,10 @@ def _as_records(residuals) -> np.ndarray:
             f"residuals must have shape (M, N, p) (records, times, outputs) or (M, N), got {r.shape}"
         )
     if r.shape[0] < 2:
-        raise ValueError("at least two records are needed for cross-record statistics")
+        raise ValueError(
+            f"residuals holds {r.shape[0]} record(s): cross-record statistics need at least "
+            "two records"
+        )
     return r
 
 
@@ -575,7 +599,7 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
     >>> vectors.shape
     (1, 1)
     """
-    N = moments.n_steps
+    N = _check_moments(moments).n_steps
     j = _index(j, N, "j")
     if k is None:
         lam, V = np.linalg.eigh(moments.cov[j])
@@ -702,12 +726,14 @@ def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
     return float(np.mean((dj @ u) * (dk @ w)))
 
 
-def _pair(directions, p):
+def _pair(directions, p, name="directions"):
+    if isinstance(directions, (str, bytes)):
+        raise ValueError(f"{name} must be a pair (u, w) of unit vectors, got {directions!r}")
     try:
         u, w = directions
     except (TypeError, ValueError):
-        raise ValueError("directions must be a pair (u, w) of unit vectors") from None
-    return _unit(u, p, "u"), _unit(w, p, "w")
+        raise ValueError(f"{name} must be a pair (u, w) of unit vectors") from None
+    return _unit(u, p, f"{name}[0] (u)"), _unit(w, p, f"{name}[1] (w)")
 
 
 # ---------------------------------------------------------------------------
@@ -749,7 +775,7 @@ def mean_matrix(M: int, p: int) -> np.ndarray:
     4.0
     """
     M = _check_M(M)
-    return np.kron(np.full((M, M), 1.0 / M**2), np.eye(int(p)))
+    return np.kron(np.full((M, M), 1.0 / M**2), np.eye(_outputs(p)))
 
 
 def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
@@ -782,10 +808,11 @@ def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
     1.0
     """
     M = _check_M(M)
+    p = _outputs(p)
     J = _centering(M) / M
     if direction is None:
-        return np.kron(J, np.eye(int(p)))
-    v = _unit(direction, int(p), "direction")[:, None]
+        return np.kron(J, np.eye(p))
+    v = _unit(direction, p, "direction")[:, None]
     D = np.kron(np.eye(M), v)
     return D @ J @ D.T
 
@@ -823,7 +850,7 @@ def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
     -1.0
     """
     M = _check_M(M)
-    p = int(p)
+    p = _outputs(p)
     J = _centering(M)
     zero = np.zeros((M, M))
     B_M = np.block([[zero, J], [J, zero]]) / (2 * M)
@@ -867,7 +894,7 @@ def section_moments(moments: ResidualMoments, j: int, M: int):
     ((3,), (3, 3))
     """
     M = _check_M(M)
-    j = _index(j, moments.n_steps, "j")
+    j = _index(j, _check_moments(moments).n_steps, "j")
     return SectionMoments(np.tile(moments.mean[j], M), np.kron(np.eye(M), moments.cov[j]))
 
 
@@ -903,7 +930,7 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
     ((6,), (6, 6))
     """
     M = _check_M(M)
-    N = moments.n_steps
+    N = _check_moments(moments).n_steps
     j, k = _index(j, N, "j"), _index(k, N, "k")
     mean = np.concatenate([np.tile(moments.mean[j], M), np.tile(moments.mean[k], M)])
     I = np.eye(M)
@@ -982,7 +1009,9 @@ def statistic_law(
     >>> round(float(law.mean()), 4) == round(0.9 * float(residual_moments(true, filt, 5).cov[2, 0, 0]), 4)
     True
     """
-    if kind not in _KINDS:
+    moments = _check_moments(moments)
+    full = as_flag(full, "full")
+    if not isinstance(kind, str) or kind not in _KINDS:
         raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
     M = _check_M(M)
     N, p = moments.n_steps, moments.n_outputs
@@ -991,6 +1020,10 @@ def statistic_law(
         if k is None:
             raise ValueError("the correlation statistic needs a second section k")
         k = _index(k, N, "k")
+    elif k is not None:
+        raise ValueError(
+            f"k (a second section) is only for the correlation statistic, not {kind!r}"
+        )
     # A law is a function of its arguments: remember it with the moments, so
     # that testing many records against one null (a Monte Carlo study) builds
     # it, and finds its quantiles, once.
@@ -1053,9 +1086,17 @@ def _direction_for(null, kind, j, k, gamma):
 
 def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, power_against):
     if not isinstance(null, ResidualMoments):
-        raise TypeError(
-            "null must be the ResidualMoments of the pair (M0, M1) from residual_moments"
+        raise InputTypeError(
+            "null must be the ResidualMoments of the pair (M0, M1) from residual_moments, "
+            f"got {type(null).__name__}"
         )
+    if power_against is not None:
+        _check_moments(power_against, "power_against")
+        if power_against.mean.shape != null.mean.shape:
+            raise ValueError(
+                f"power_against holds moments of (N, p) = {power_against.mean.shape}, null of "
+                f"{null.mean.shape}: both must describe the residuals tested"
+            )
     r = _as_records(residuals)
     M, N, p = r.shape
     if (N, p) != null.mean.shape:
@@ -1296,7 +1337,9 @@ def power(
     >>> [round(power(null, alt, "covariance", 2, M), 2) for M in (5, 20, 50)]
     [0.17, 0.45, 0.79]
     """
-    if kind not in _KINDS:
+    _check_moments(null, "null")
+    _check_moments(alternative_moments, "alternative_moments")
+    if not isinstance(kind, str) or kind not in _KINDS:
         raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
     alpha = as_probability(alpha)
     direction = _direction_for(null, kind, j, k, gamma)

@@ -1544,7 +1544,7 @@ def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
 
     Notes
     -----
-    ``1 - `` :func:`liu_tang_zhang_sf`, computed from the complementary
+    One minus :func:`liu_tang_zhang_sf`, computed from the complementary
     noncentral chi-square function; Liu, Tang & Zhang (2009), (3)-(8).  Its
     measured error is stated in :func:`liu_tang_zhang_sf`.
 

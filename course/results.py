@@ -117,7 +117,7 @@ class Decision(NamedTuple):
 
 
 def _check_alternative(alternative: str) -> str:
-    if alternative not in ALTERNATIVES:
+    if not isinstance(alternative, str) or alternative not in ALTERNATIVES:
         raise ValueError(f"alternative must be one of {ALTERNATIVES}, got {alternative!r}")
     return alternative
 
@@ -147,8 +147,9 @@ def critical_value(null: Law, alpha: float, alternative: str = "greater") -> Any
     >>> critical_value(stats.norm(), 0.05, "two-sided")  # doctest: +ELLIPSIS
     CriticalValues(lower=-1.959..., upper=1.959...)
     """
-    from course.validation import as_probability
+    from course.validation import as_law, as_probability
 
+    null = as_law(null, "null")
     alpha = as_probability(alpha)
     alternative = _check_alternative(alternative)
     if alternative == "greater":
@@ -156,6 +157,13 @@ def critical_value(null: Law, alpha: float, alternative: str = "greater") -> Any
     if alternative == "less":
         return float(null.ppf(alpha))
     return CriticalValues(float(null.ppf(alpha / 2)), float(null.isf(alpha / 2)))
+
+
+def _statistic(value: Any, name: str = "statistic") -> np.ndarray:
+    """A statistic (or an array of them): real, not NaN; +-inf is a possible value."""
+    from course.validation import as_float_array
+
+    return as_float_array(value, name, finite=False, empty=False)
 
 
 def _tails(statistic: Any, alternative: str):
@@ -166,8 +174,8 @@ def _tails(statistic: Any, alternative: str):
                 "a two-sided test on several statistics takes a pair (low, high), "
                 f"got {len(statistic)} values"
             )
-        return np.asarray(statistic[0], dtype=float), np.asarray(statistic[1], dtype=float)
-    value = np.asarray(statistic, dtype=float)
+        return _statistic(statistic[0]), _statistic(statistic[1])
+    value = _statistic(statistic)
     return value, value
 
 
@@ -235,13 +243,39 @@ def rejection_probability(law: Law, critical: Any, alternative: str = "greater")
     >>> round(rejection_probability(stats.norm(loc=3), 1.6449, "greater"), 4)
     0.9123
     """
+    from course.validation import as_finite, as_law
+
+    law = as_law(law, "law")
     alternative = _check_alternative(alternative)
+    if alternative == "two-sided":
+        lower, upper = _critical_pair(critical)
+        return float(law.cdf(lower) + law.sf(upper))
+    if isinstance(critical, tuple):
+        raise ValueError(
+            f"critical must be one number for a {alternative!r} test, got {critical!r}"
+        )
+    critical = as_finite(critical, "critical", what="the critical value")
     if alternative == "greater":
         return float(law.sf(critical))
-    if alternative == "less":
-        return float(law.cdf(critical))
-    lower, upper = critical
-    return float(law.cdf(lower) + law.sf(upper))
+    return float(law.cdf(critical))
+
+
+def _critical_pair(critical: Any, name: str = "critical") -> tuple[float, float]:
+    """The ``(lower, upper)`` thresholds of a two-sided test."""
+    from course.validation import as_finite
+
+    if isinstance(critical, (str, bytes)) or not isinstance(critical, (tuple, list)):
+        raise ValueError(
+            f"{name} of a two-sided test must be a pair (lower, upper), got {critical!r}"
+        )
+    if len(critical) != 2:
+        raise ValueError(
+            f"{name} of a two-sided test must be a pair (lower, upper), got {critical!r}"
+        )
+    lower, upper = (as_finite(c, name, what="a critical value") for c in critical)
+    if lower > upper:
+        raise ValueError(f"{name} = ({lower}, {upper}): the lower threshold exceeds the upper one")
+    return lower, upper
 
 
 _ALTERNATIVES = ("greater", "less", "two-sided")
@@ -286,6 +320,9 @@ def format_number(value: Any, digits: int = 5) -> str:
     >>> format_number(6.0), format_number(0.0497870684), format_number((74.2219, 129.5612), 4)
     ('6', '0.049787', '(74.22, 129.6)')
     """
+    from course.validation import as_count
+
+    digits = as_count(digits, "digits", what="the number of significant digits")
     value = as_plain(value)
     if isinstance(value, bool) or value is None:
         return str(value)
@@ -382,20 +419,89 @@ class TestResult:
     details: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
-        if not 0.0 < float(self.alpha) < 1.0:
-            raise ValueError(f"alpha must lie strictly between 0 and 1, got {self.alpha!r}")
-        if self.alternative not in _ALTERNATIVES:
-            raise ValueError(
-                f"alternative must be one of {_ALTERNATIVES}, got {self.alternative!r}"
-            )
+        # Every field is checked, and checked against the others: a result that
+        # contradicts itself (a decision the statistic does not support, a
+        # p-value outside [0, 1]) is refused rather than shown to a student.
+        from course.validation import (
+            InputTypeError,
+            as_finite,
+            as_flag,
+            as_law,
+            as_probability,
+        )
+
         set_ = object.__setattr__
-        set_(self, "statistic", _plain_number(self.statistic))
-        set_(self, "critical_value", _plain_number(self.critical_value))
-        set_(self, "alpha", float(self.alpha))
-        set_(self, "pvalue", float(self.pvalue))
-        set_(self, "reject", bool(self.reject))
-        set_(self, "dof", as_plain(self.dof))
+        set_(self, "alpha", as_probability(self.alpha, "alpha"))
+        alternative = _check_alternative(self.alternative)
+        set_(self, "null", as_law(self.null, "null"))
+        statistic = _plain_number(self.statistic)
+        values: tuple[Any, ...]
+        if isinstance(statistic, tuple):
+            if alternative != "two-sided" or len(statistic) != 2:
+                raise ValueError(
+                    "statistic may be a pair (low, high) only for a two-sided test, "
+                    f"got {statistic!r} with alternative={alternative!r}"
+                )
+            values = statistic
+        else:
+            values = (statistic,)
+        for value in values:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value):
+                raise ValueError(
+                    f"statistic must be a real number (not NaN), got {self.statistic!r}"
+                )
+        set_(self, "statistic", statistic)
+        if alternative == "two-sided":
+            critical: Any = CriticalValues(*_critical_pair(self.critical_value, "critical_value"))
+        else:
+            critical = as_finite(self.critical_value, "critical_value")
+        set_(self, "critical_value", _plain_number(critical))
+        pvalue = as_finite(self.pvalue, "pvalue")
+        if not 0.0 <= pvalue <= 1.0:
+            raise ValueError(f"pvalue must lie in [0, 1], got {self.pvalue!r}")
+        set_(self, "pvalue", pvalue)
+        set_(self, "reject", as_flag(self.reject, "reject"))
+        self._check_decision(values)
+        dof = as_plain(self.dof)
+        if dof is not None:
+            dof = as_finite(dof, "dof", what="degrees of freedom")
+            if dof <= 0:
+                raise ValueError(f"dof (degrees of freedom) must be positive, got {self.dof!r}")
+            dof = int(dof) if dof.is_integer() else dof
+        set_(self, "dof", dof)
+        if not isinstance(self.details, Mapping):
+            raise InputTypeError(
+                f"details must be a mapping (a dict), got {type(self.details).__name__}"
+            )
         set_(self, "details", {key: as_plain(value) for key, value in self.details.items()})
+
+    def _check_decision(self, values: tuple) -> None:
+        """``reject`` must follow from statistic and critical value, and agree with the p-value."""
+        low, high = values[0], values[-1]
+        crit = self.critical_value
+        if self.alternative == "greater":
+            rejects = high > crit
+        elif self.alternative == "less":
+            rejects = low < crit
+        else:
+            rejects = low < crit[0] or high > crit[1]
+        if self.reject != rejects:
+            raise ValueError(
+                f"reject={self.reject} contradicts statistic {format_number(self.statistic)} "
+                f"and critical_value {format_number(crit)} ({self.alternative}): "
+                f"the decision must be {rejects}; build results with TestResult.from_null"
+            )
+        # The p-value and the decision agree up to the accuracy of the law's
+        # quantiles (root searches): p < alpha exactly when H0 is rejected.
+        slack = 1e-6 * self.alpha
+        if self.reject and self.pvalue > self.alpha + slack:
+            raise ValueError(
+                f"pvalue {self.pvalue!r} >= alpha {self.alpha!r} contradicts reject=True"
+            )
+        if not self.reject and self.pvalue < self.alpha - slack:
+            raise ValueError(
+                f"pvalue {self.pvalue!r} < alpha {self.alpha!r} contradicts reject=False"
+            )
 
     @classmethod
     def from_null(
@@ -440,6 +546,17 @@ class TestResult:
         >>> TestResult.from_null("w-test", 2.5, stats.norm(), 0.05, "two-sided").summary()
         'w-test: statistic = 2.5, critical region outside [-1.96, 1.96] (alpha = 0.05), p = 0.01242: reject H0'
         """
+        from course.validation import InputTypeError
+
+        if not isinstance(statistic, tuple) and np.ndim(statistic) != 0:
+            raise ValueError(
+                "statistic must be one number (or, for a two-sided test, a pair (low, high)); "
+                f"got shape {np.shape(statistic)}: use decide() for arrays of statistics"
+            )
+        if details is not None and not isinstance(details, Mapping):
+            raise InputTypeError(
+                f"details must be a mapping (a dict), got {type(details).__name__}"
+            )
         decision = decide(null, statistic, alpha, alternative)
         return cls(
             name=name,
@@ -467,7 +584,10 @@ class TestResult:
         >>> round(r.power(stats.norm(loc=2.0)), 4)
         0.6388
         """
-        return rejection_probability(alternative_law, self.critical_value, self.alternative)
+        from course.validation import as_law
+
+        law = as_law(alternative_law, "alternative_law")
+        return rejection_probability(law, self.critical_value, self.alternative)
 
     # -- presentation -----------------------------------------------------
     def _fields(self):

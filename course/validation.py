@@ -28,10 +28,26 @@ Numbers (:func:`as_finite`, :func:`as_positive`, :func:`as_variance`, :func:`as_
     Real, finite scalars (a 0-d array counts as a scalar); positive,
     non-negative (a variance) or strictly inside (0, 1) (a level of
     significance or a power) where the name says so.
+Covariances are positive definite *numerically*
+    A covariance whose Cholesky factorisation succeeds only by rounding is
+    refused as well: see :data:`SINGULAR_RTOL`.
+Sizes (:func:`as_size`)
+    ``None``, a count or a tuple of counts (the shape of random draws).
+Standard deviations (:func:`as_std`)
+    Positive and finite, and with a square that is a normal double: a
+    ``sigma`` of ``1e300`` (or ``1e-300``) whose variance overflows (or
+    underflows) is refused with advice to rescale the data, never turned
+    into ``inf``, ``0`` or NaN further down.
 Randomness (:func:`as_generator`)
-    A :class:`numpy.random.Generator`, or a seed (``int``/``None``) for a new
-    one; legacy ``RandomState`` objects are refused so that no code path
-    touches numpy's global random state.
+    A :class:`numpy.random.Generator`, or a seed (an integer, a sequence of
+    them or ``None``) for a new one; legacy ``RandomState`` objects are
+    refused so that no code path touches numpy's global random state.
+Everything else (:func:`as_flag`, :func:`as_callable`, :func:`as_law`)
+    A flag is a ``bool`` (``"no"`` is not ``False``); a function must be
+    callable; a law must have ``cdf``, ``sf``, ``ppf``, ``isf`` and ``rvs``.
+
+A value of the wrong *type* raises :class:`InputTypeError`, which is both a
+``ValueError`` (as every refusal of bad input) and a ``TypeError``.
 
 Examples
 --------
@@ -57,30 +73,61 @@ import numpy as np
 from numpy.linalg import LinAlgError
 
 __all__ = [
+    "SINGULAR_RTOL",
     "SYMMETRY_RTOL",
+    "InputTypeError",
+    "as_callable",
     "as_count",
     "as_covariance",
+    "as_covariance_stack",
     "as_finite",
+    "as_flag",
     "as_float_array",
     "as_generator",
     "as_index",
     "as_indices",
+    "as_law",
     "as_matrix",
     "as_positive",
     "as_probability",
+    "as_size",
+    "as_std",
     "as_variance",
     "as_vector",
     "check_alpha",
 ]
 
-#: Relative tolerance for "symmetric": |Q - Q^T| <= SYMMETRY_RTOL * max|Q|.
+#: Relative tolerance for "symmetric": ``|Q - Q^T| <= SYMMETRY_RTOL * max|Q|``.
 SYMMETRY_RTOL = 1e-10
+
+#: Relative tolerance for "numerically singular", per dimension of the matrix: a
+#: covariance ``Q`` (m x m) with Cholesky factor ``L`` is singular when some
+#: ``L_ii**2 <= SINGULAR_RTOL * m * Q_ii``.  ``L_ii**2 / Q_ii`` is the share of the
+#: variance of variable ``i`` that the variables before it do not explain
+#: (``1 - R_i**2``); below ``m`` rounding errors it is rounding, not information.
+#: The rule is scale-free (``D Q D`` is singular exactly when ``Q`` is) and, like
+#: the course's rank rule (:func:`course.linalg.rank_tolerance`), proportional to
+#: ``m * eps``.
+SINGULAR_RTOL = 4 * np.finfo(float).eps
+
+
+class InputTypeError(TypeError, ValueError):
+    """An argument of the wrong type (a ``ValueError`` like every refusal, and a ``TypeError``)."""
 
 
 # ---------------------------------------------------------------------------
 # arrays
 # ---------------------------------------------------------------------------
-def as_float_array(value: Any, name: str, ndim: int | None = None) -> np.ndarray:
+def as_float_array(
+    value: Any,
+    name: str,
+    ndim: int | None = None,
+    *,
+    min_ndim: int | None = None,
+    finite: bool = True,
+    empty: bool = True,
+    nan: bool = False,
+) -> np.ndarray:
     """Return ``value`` as a float64 copy, refusing NaN, inf and a wrong ndim.
 
     Parameters
@@ -91,6 +138,16 @@ def as_float_array(value: Any, name: str, ndim: int | None = None) -> np.ndarray
         The argument's name, used in error messages.
     ndim : int, optional
         Required number of dimensions.
+    min_ndim : int, optional
+        Smallest number of dimensions (leading batch axes are free).
+    finite : bool, default True
+        Refuse ``inf`` too (NaN is always refused); ``False`` for points
+        where a law is evaluated (``cdf(inf)`` is 1).
+    empty : bool, default True
+        Accept an array without elements.
+    nan : bool, default False
+        Accept NaN, where it marks an undefined sample (a window not yet
+        full); a user's data never get this.
 
     Returns
     -------
@@ -116,6 +173,8 @@ def as_float_array(value: Any, name: str, ndim: int | None = None) -> np.ndarray
         raise ValueError(f"{name} is None; pass an array of numbers")
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{name} must be numeric, got the string {value!r}")
+    if isinstance(value, (dict, set)) or callable(value):
+        raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}")
     if _is_complex(value):
         # float() would drop the imaginary part with only a warning: refuse instead.
         raise ValueError(
@@ -126,6 +185,11 @@ def as_float_array(value: Any, name: str, ndim: int | None = None) -> np.ndarray
         array = np.array(value, dtype=float)  # a copy: callers may not mutate input
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
+    if min_ndim is not None and array.ndim < min_ndim:
+        raise ValueError(
+            f"{name} must have at least {min_ndim} dimension(s), got shape {array.shape}"
+            + (" (a scalar where an array is expected)" if array.ndim == 0 else "")
+        )
     if ndim is not None and array.ndim != ndim:
         raise ValueError(
             f"{name} must be {ndim}-dimensional, got shape {array.shape}"
@@ -135,13 +199,21 @@ def as_float_array(value: Any, name: str, ndim: int | None = None) -> np.ndarray
                 else ""
             )
         )
-    if not np.all(np.isfinite(array)):
-        bad = np.argwhere(~np.isfinite(array))
+    bad_entries = np.zeros(array.shape, bool)
+    if finite:
+        bad_entries |= np.isinf(array)
+    if not nan:
+        bad_entries |= np.isnan(array)
+    if bad_entries.any():
+        bad = np.argwhere(bad_entries)
         where = tuple(int(i) for i in bad[0])
+        what = " or ".join(w for w, on in (("NaN", not nan), ("inf", finite)) if on)
         raise ValueError(
-            f"{name} contains NaN or inf ({len(bad)} entries, first at index {where}); "
+            f"{name} contains {what} ({len(bad)} entries, first at index {where}); "
             "remove or replace those values before fitting"
         )
+    if not empty and array.size == 0:
+        raise ValueError(f"{name} is empty (shape {array.shape}); pass at least one value")
     return array
 
 
@@ -152,8 +224,8 @@ def _is_complex(value: Any) -> bool:
         return False
 
 
-def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
-    """Return a finite 1-D float array, of length ``size`` when given.
+def as_vector(value: Any, name: str, size: int | None = None, *, empty: bool = False) -> np.ndarray:
+    """Return a finite 1-D float array, of length ``size`` when given (non-empty by default).
 
     Examples
     --------
@@ -170,17 +242,30 @@ def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
             f"{name} must be a 1-D vector, got shape {vector.shape}; "
             "pass it flattened, e.g. np.ravel(...)"
         )
+    if vector.ndim == 0:
+        raise ValueError(
+            f"{name} must be a 1-D vector, got the scalar {float(vector)!r}; "
+            f"pass a sequence, e.g. [{float(vector)!r}]"
+        )
     if vector.ndim != 1:
         raise ValueError(f"{name} must be a 1-D vector, got shape {vector.shape}")
     if size is not None and vector.shape[0] != size:
         raise ValueError(f"{name} must have length {size}, got {vector.shape[0]}")
+    if not empty and vector.size == 0:
+        raise ValueError(f"{name} is empty; pass at least one value")
     return vector
 
 
 def as_matrix(
-    value: Any, name: str, shape: tuple[int | None, int | None] | None = None
+    value: Any,
+    name: str,
+    shape: tuple[int | None, int | None] | None = None,
+    *,
+    empty: bool = False,
 ) -> np.ndarray:
     """Return a finite 2-D float array, checking ``shape`` where given (None: any).
+
+    An array without elements is refused unless ``empty`` is true.
 
     Examples
     --------
@@ -192,6 +277,10 @@ def as_matrix(
         for axis, expected in enumerate(shape):
             if expected is not None and matrix.shape[axis] != expected:
                 raise ValueError(f"{name} must have shape {_shape_text(shape)}, got {matrix.shape}")
+    if not empty and matrix.size == 0:
+        raise ValueError(
+            f"{name} is empty (shape {matrix.shape}); pass at least one row and column"
+        )
     return matrix
 
 
@@ -219,7 +308,21 @@ def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False
     ValueError
         Wrong shape or not symmetric.
     numpy.linalg.LinAlgError
-        Not positive (semi-)definite.
+        Not positive definite, numerically included (not positive
+        semi-definite with ``allow_singular``).
+
+    Notes
+    -----
+    Positive definiteness is decided by the Cholesky factorisation
+    ``Q = L L^T`` (no eigendecomposition), with a relative tolerance on its
+    diagonal: the matrix is *numerically singular*, and refused, when some
+    ``L_ii**2 <= SINGULAR_RTOL * m * Q_ii`` (:data:`SINGULAR_RTOL` is
+    ``4 eps``).  ``L_ii**2 / Q_ii`` is the part of the variance of variable
+    ``i`` that the variables before it leave unexplained; an exactly
+    singular matrix (a variable that is a combination of others) leaves only
+    rounding there, and its Cholesky factorisation may still "succeed".
+    With ``allow_singular=True`` the smallest eigenvalue must be at least
+    ``-m eps max|Q|``.
 
     Examples
     --------
@@ -230,8 +333,17 @@ def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False
     Traceback (most recent call last):
     ...
     numpy.linalg.LinAlgError: R is not positive definite (smallest eigenvalue -1); a covariance matrix needs positive variances and correlations in [-1, 1]
+
+    ``X X^T`` for a 3 x 2 matrix ``X`` is singular, but rounding leaves its
+    smallest eigenvalue at +1.6e-15 and its Cholesky factorisation succeeds:
+
+    >>> as_covariance([[2.0, 4.0, 5.0], [4.0, 10.0, 13.0], [5.0, 13.0, 17.0]], "Qyy", 3)
+    Traceback (most recent call last):
+    ...
+    numpy.linalg.LinAlgError: Qyy is numerically singular: variable 2 is a linear combination of variables 0..1 up to rounding (1 - R^2 = 1.1e-16 < 2.7e-15); remove the redundant variable or add its independent variance
     """
     matrix = as_matrix(value, name, shape=(size, size))
+    allow_singular = as_flag(allow_singular, "allow_singular")
     scale = max(float(np.max(np.abs(matrix))), np.finfo(float).tiny)
     asym = float(np.max(np.abs(matrix - matrix.T)))
     if asym > SYMMETRY_RTOL * scale:
@@ -239,16 +351,100 @@ def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False
             f"{name} is not symmetric (largest |{name} - {name}^T| = {asym:.3g}); "
             "a covariance matrix must equal its transpose"
         )
-    eigenvalues = np.linalg.eigvalsh(matrix)
-    smallest = float(eigenvalues[0])
-    tol = -np.finfo(float).eps * size * scale if allow_singular else 0.0
-    if smallest < tol or (not allow_singular and smallest <= 0):
-        kind = "positive semi-definite" if allow_singular else "positive definite"
-        raise LinAlgError(
-            f"{name} is not {kind} (smallest eigenvalue {smallest:.3g}); "
-            "a covariance matrix needs positive variances and correlations in [-1, 1]"
-        )
+    if allow_singular:
+        smallest = float(np.linalg.eigvalsh(matrix / scale)[0]) * scale
+        if smallest < -np.finfo(float).eps * size * scale:
+            raise _not_definite(name, "positive semi-definite", smallest)
+        return matrix
+    # Cholesky of the correlation-scaled matrix: scale-free, and safe at 1e+-300.
+    diagonal = np.diag(matrix)
+    if np.any(diagonal <= 0):
+        raise _not_definite(name, "positive definite", _smallest_eigenvalue(matrix, scale))
+    std = np.sqrt(diagonal)
+    correlation = matrix / std[:, None] / std[None, :]
+    try:
+        L = np.linalg.cholesky(correlation)
+    except LinAlgError:
+        raise _not_definite(
+            name, "positive definite", _smallest_eigenvalue(matrix, scale)
+        ) from None
+    _refuse_singular_pivots(L, np.ones(size), name)
     return matrix
+
+
+def as_covariance_stack(
+    value: Any, name: str, size: int | None = None, *, allow_singular: bool = False
+) -> np.ndarray:
+    """A covariance ``(m, m)`` or a stack of them ``(..., m, m)``, each checked as by :func:`as_covariance`.
+
+    Examples
+    --------
+    >>> as_covariance_stack(np.stack([np.eye(2), 2 * np.eye(2)]), "P", 2).shape
+    (2, 2, 2)
+    """
+    allow_singular = as_flag(allow_singular, "allow_singular")
+    stack = as_float_array(value, name, min_ndim=2, empty=False)
+    m = stack.shape[-1]
+    if stack.shape[-2] != m or (size is not None and m != size):
+        expected = "(..., m, m)" if size is None else f"(..., {size}, {size})"
+        raise ValueError(f"{name} must have shape {expected}, got {stack.shape}")
+    scale = np.maximum(np.max(np.abs(stack), axis=(-2, -1), keepdims=True), np.finfo(float).tiny)
+    if np.any(np.abs(stack - np.swapaxes(stack, -1, -2)) > SYMMETRY_RTOL * scale):
+        raise ValueError(f"{name} is not symmetric; a covariance matrix must equal its transpose")
+    if allow_singular:
+        smallest = np.linalg.eigvalsh(stack / scale)[..., 0]
+        if np.any(smallest < -np.finfo(float).eps * m):
+            worst = float(np.min(smallest * scale[..., 0, 0]))
+            raise _not_definite(name, "positive semi-definite", worst)
+        return stack
+    variances = np.diagonal(stack, axis1=-2, axis2=-1)
+    if np.any(variances <= 0):
+        raise _not_definite(name, "positive definite", float(np.min(variances)))
+    std = np.sqrt(variances)
+    try:
+        L = np.linalg.cholesky(stack / std[..., :, None] / std[..., None, :])
+    except LinAlgError:
+        raise LinAlgError(
+            f"{name} is not positive definite (Cholesky factorisation failed); a covariance "
+            "matrix needs positive variances and correlations in [-1, 1]"
+        ) from None
+    _refuse_singular_pivots(L, np.ones(variances.shape), name)
+    return stack
+
+
+def _smallest_eigenvalue(matrix: np.ndarray, scale: float) -> float:
+    return float(np.linalg.eigvalsh(matrix / scale)[0]) * scale
+
+
+def _not_definite(name: str, kind: str, smallest: float) -> LinAlgError:
+    return LinAlgError(
+        f"{name} is not {kind} (smallest eigenvalue {smallest:.3g}); "
+        "a covariance matrix needs positive variances and correlations in [-1, 1]"
+    )
+
+
+def _refuse_singular_pivots(L: np.ndarray, variances: np.ndarray, name: str) -> None:
+    """Raise a LinAlgError when a Cholesky factor ``L`` of a covariance is numerically singular.
+
+    ``L`` may be a stack ``(..., m, m)`` with ``variances`` the diagonals of
+    the factored matrices ``(..., m)``; the rule is :data:`SINGULAR_RTOL`.
+    """
+    m = L.shape[-1]
+    pivots = np.diagonal(L, axis1=-2, axis2=-1) ** 2
+    tolerance = SINGULAR_RTOL * m * variances
+    singular = ~(pivots > tolerance)
+    if not singular.any():
+        return
+    where = tuple(int(i) for i in np.argwhere(singular)[0])
+    *stack, i = where
+    share = float(pivots[where] / variances[where]) if variances[where] > 0 else 0.0
+    place = f" (matrix {tuple(stack)} of the stack)" if stack else ""
+    previous = f"variables 0..{i - 1}" if i else "nothing (its variance is 0)"
+    raise LinAlgError(
+        f"{name} is numerically singular{place}: variable {i} is a linear combination of "
+        f"{previous} up to rounding (1 - R^2 = {share:.2g} < {SINGULAR_RTOL * m:.2g}); "
+        "remove the redundant variable or add its independent variance"
+    )
 
 
 def _shape_text(shape: tuple[int | None, ...]) -> str:
@@ -468,6 +664,43 @@ def as_variance(value: Any, name: str, *, positive: bool = False, what: str | No
     return number
 
 
+def as_std(value: Any, name: str = "sigma", *, what: str | None = None) -> float:
+    """A standard deviation whose variance is a normal double.
+
+    Positive and finite like :func:`as_positive`, and ``value**2`` must lie
+    between the smallest normal double (2.2e-308) and the largest (1.8e308):
+    a ``sigma`` of ``1e300`` has a variance of ``1e600``, which no double
+    holds.  Such a value is refused with advice to rescale rather than
+    turned into ``inf`` or ``0`` (and NaN) further down.  Functions whose
+    answer scales with ``sigma`` (test statistics ``|r / sigma|^2``) compute
+    in scaled form and may take :func:`as_positive` instead.
+
+    Examples
+    --------
+    >>> as_std(0.2)
+    0.2
+    >>> as_std(1e300)
+    Traceback (most recent call last):
+    ...
+    ValueError: sigma = 1e+300 is too large: its square, the variance, overflows double precision; express the data in larger units so that sigma lies between 1e-150 and 1e150
+    """
+    number = as_positive(value, name, what=what)
+    label = name if what is None else f"{name} ({what})"
+    square = number * number
+    if square > np.finfo(float).max or not math.isfinite(square):
+        problem = "is too large: its square, the variance, overflows double precision"
+        unit = "larger"
+    elif square < np.finfo(float).tiny:
+        problem = "is too small: its square, the variance, underflows double precision"
+        unit = "smaller"
+    else:
+        return number
+    raise ValueError(
+        f"{label} = {number!r} {problem}; express the data in {unit} units so that "
+        f"{name} lies between 1e-150 and 1e150"
+    )
+
+
 def as_probability(value: Any, name: str = "alpha") -> float:
     """A probability strictly between 0 and 1 (a level of significance, a power).
 
@@ -497,11 +730,13 @@ check_alpha = as_probability
 # ---------------------------------------------------------------------------
 # randomness
 # ---------------------------------------------------------------------------
-def as_generator(rng: Any) -> np.random.Generator:
+def as_generator(rng: Any, name: str = "rng") -> np.random.Generator:
     """Return a :class:`numpy.random.Generator` from a Generator, a seed or None.
 
     Legacy ``RandomState`` objects and the global numpy state are refused:
     randomness in the course always flows through an explicit Generator.
+    A seed is a non-negative integer (or a sequence of them), as
+    :func:`numpy.random.default_rng` takes.
 
     Examples
     --------
@@ -512,7 +747,105 @@ def as_generator(rng: Any) -> np.random.Generator:
     if isinstance(rng, np.random.Generator):
         return rng
     if isinstance(rng, np.random.RandomState):
-        raise TypeError(
-            "pass a numpy.random.Generator (np.random.default_rng(seed)), not a legacy RandomState"
+        raise InputTypeError(
+            f"{name}: pass a numpy.random.Generator (np.random.default_rng(seed)), "
+            "not a legacy RandomState"
         )
-    return np.random.default_rng(rng)
+    try:
+        return np.random.default_rng(rng)
+    except (TypeError, ValueError) as exc:
+        raise InputTypeError(
+            f"{name} must be a numpy.random.Generator or a seed (a non-negative integer or "
+            f"None), got {rng!r} ({exc})"
+        ) from None
+
+
+# ---------------------------------------------------------------------------
+# sizes, flags, functions, laws
+# ---------------------------------------------------------------------------
+def as_size(value: Any, name: str = "size") -> tuple[int, ...] | None:
+    """The shape of random draws: ``None``, a count, or a tuple of counts (0 allowed).
+
+    Examples
+    --------
+    >>> as_size(3), as_size((2, 1e3)), as_size(None)
+    ((3,), (2, 1000), None)
+    >>> as_size(2.5)
+    Traceback (most recent call last):
+    ...
+    ValueError: size must be an integer, got 2.5 (a fraction cannot be a count or an index)
+    """
+    if value is None:
+        return None
+    if isinstance(value, (numbers.Number, np.generic)) or (
+        isinstance(value, np.ndarray) and value.ndim == 0
+    ):
+        return (as_count(value, name, minimum=0),)
+    if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+        raise ValueError(f"{name} must be None, an integer or a tuple of integers, got {value!r}")
+    return tuple(as_count(n, name, minimum=0) for n in value)
+
+
+def as_flag(value: Any, name: str) -> bool:
+    """A yes/no option: ``True`` or ``False`` (numpy bools too), nothing else.
+
+    ``bool("no")`` is ``True``: a string, a number or ``None`` is refused
+    rather than read as a truth value.
+
+    Examples
+    --------
+    >>> as_flag(False, "full")
+    False
+    >>> as_flag("no", "full")
+    Traceback (most recent call last):
+    ...
+    course.validation.InputTypeError: full must be True or False, got 'no'
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise InputTypeError(f"{name} must be True or False, got {value!r}")
+
+
+def as_callable(value: Any, name: str, *, optional: bool = False) -> Any:
+    """A function (or ``None`` when ``optional``).
+
+    Examples
+    --------
+    >>> as_callable(None, "jac_h", optional=True) is None
+    True
+    >>> as_callable(3.0, "f")
+    Traceback (most recent call last):
+    ...
+    course.validation.InputTypeError: f must be callable (a function), got float 3.0
+    """
+    if value is None and optional:
+        return None
+    if not callable(value):
+        raise InputTypeError(
+            f"{name} must be callable (a function), got {type(value).__name__} {value!r}"
+        )
+    return value
+
+
+_LAW_METHODS = ("cdf", "sf", "ppf", "isf")
+
+
+def as_law(value: Any, name: str) -> Any:
+    """A frozen law: an object with ``cdf``, ``sf``, ``ppf`` and ``isf`` (scipy's interface).
+
+    Examples
+    --------
+    >>> from scipy import stats
+    >>> as_law(stats.chi2(2), "null").mean()
+    np.float64(2.0)
+    >>> as_law(2.0, "null")
+    Traceback (most recent call last):
+    ...
+    course.validation.InputTypeError: null must be a frozen law with cdf, sf, ppf and isf (e.g. scipy.stats.chi2(2)), got float
+    """
+    if not all(callable(getattr(value, method, None)) for method in _LAW_METHODS):
+        raise InputTypeError(
+            f"{name} must be a frozen law with cdf, sf, ppf and isf "
+            f"(e.g. scipy.stats.chi2(2)), got {type(value).__name__}"
+        )
+    return value

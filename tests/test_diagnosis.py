@@ -115,7 +115,8 @@ def test_diagnoses_single_fault(structure, alarms, expected):
 
 def test_diagnoses_accepts_test_results_and_exoneration(structure):
     def result(reject):
-        return TestResult("t", 1.0, 0.05, 2.0, 0.5, reject, stats.chi2(1))
+        # a consistent result (TestResult refuses a decision its statistic contradicts)
+        return TestResult.from_null("t", 9.0 if reject else 1.0, stats.chi2(1), 0.05)
 
     assert dg.diagnoses(structure, [result(True), result(False), result(False)]) == ("F2", "F3")
     # With exoneration silent tests clear their X-modes: a lone T1 alarm fits no mode

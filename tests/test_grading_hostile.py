@@ -2,7 +2,13 @@
 right points for its honest parts, and nothing escapes OUT.
 
 All submissions are variations of the 01_least_squares solution (14 points, 8 questions), graded
-in ONE run (2 jobs, 3 s per question) so the suite stays fast.
+in ONE run (2 jobs, 3 s per question) so the suite stays fast. The assignment is graded from a
+copy of the course in a temporary folder that also holds secrets (a file beside checks.py, a
+file in a fake $HOME, another student's notebook): the attacks of issue 11 try to read them
+(dir_fd, /proc, listings, a switched-off audit hook), to write outside the child's folder, to
+reach a TCP listener, to forge points for forbidden calls, and to slip the solution in as a
+link. Secrets must never reach OUT, files outside the temporary folders keep their hashes,
+forged points are 0 and the honest students of the same batch keep full marks.
 """
 
 from __future__ import annotations
@@ -11,6 +17,11 @@ import copy
 import csv
 import hashlib
 import json
+import os
+import secrets
+import shutil
+import socket
+import types
 from pathlib import Path
 
 import pytest
@@ -59,8 +70,9 @@ def _sha_tree(folder: Path) -> dict:
     }
 
 
-def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
+def _submissions(env) -> dict[str, object]:
     """student id -> notebook dict (or raw text for broken files)."""
+    sentinel = env.sentinel
     subs: dict[str, object] = {}
     subs["solution"] = _solution()
     subs["untouched"] = _release()
@@ -155,7 +167,7 @@ def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
     subs["reads_solutions"] = _with_answer(
         "q1",
         (
-            f"source = open({str(SOLUTION_DIR / 'checks.py')!r}).read()\n"
+            f"source = open({str(env.solution_dir / 'checks.py')!r}).read()\n"
             "x_hat_day1 = np.array([12.0, 3.0])"
         ),
     )
@@ -199,31 +211,250 @@ def _submissions(tmp: Path, sentinel: Path) -> dict[str, object]:
     subs["constant_rate"] = _with_answer(
         "q8", ("def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n    return alpha")
     )
+    subs.update(_issue_11_attacks(env))
     subs["empty"] = {"cells": [], "metadata": {}, "nbformat": 4, "nbformat_minor": 5}
     subs["not_json"] = "{ this is not json"
     subs["not_a_notebook"] = json.dumps({"hello": "world"})
     return subs
 
 
+W_TESTS = "getattr(lsq, 'w_' + 'tests')(getattr(lsq, 'f' + 'it')(A, y, Qyy), 0.05).w"
+
+
+def _q3_honest() -> str:
+    source = _cell(_solution(), "q3-answer")["source"]
+    return source.replace("def overall_model_test_stat(", "def _honest_q3(")
+
+
+def _attack_in_q3(attack: str) -> dict:
+    """A notebook whose q3 function first runs ``attack`` (which appends what it got hold of to
+    ``leaked``) and then answers honestly. Anything leaked is raised, so it would reach the
+    student's feedback (every case of q3 reports the error)."""
+    body = "".join("    " + line + "\n" for line in attack.strip("\n").split("\n"))
+    return _with_answer(
+        "q3",
+        _q3_honest()
+        + "\n\n\ndef overall_model_test_stat(A, y, Qyy, alpha):\n"
+        + "    import os, socket, stat\n    leaked = []\n"
+        + body
+        + "    if leaked:\n"
+        + "        raise RuntimeError('LEAKED ' + ' | '.join(map(str, leaked)))\n"
+        + "    return _honest_q3(A, y, Qyy, alpha)\n",
+    )
+
+
+def _issue_11_attacks(env) -> dict[str, object]:
+    secret_paths = [
+        str(env.solution_dir / "checks.py"),
+        str(env.solution_secret),
+        str(env.home_secret),
+        str(env.victim),
+    ]
+    subs: dict[str, object] = {}
+    # reading secrets with os.open(folder) + a relative path and dir_fd, and through /proc
+    subs["reads_with_dir_fd"] = _attack_in_q3(
+        (
+            f"for p in {secret_paths!r}:\n"
+            "    for base, rel in (('/', p.lstrip('/')), ('/proc/self/root', p.lstrip('/')),\n"
+            "                      (os.path.dirname(p), os.path.basename(p))):\n"
+            "        try:\n"
+            "            d = os.open(base, os.O_RDONLY)\n"
+            "            fd = os.open(rel, os.O_RDONLY, dir_fd=d)\n"
+            "            leaked.append(os.read(fd, 100).decode(errors='replace'))\n"
+            "            break\n"
+            "        except OSError:\n"
+            "            pass\n"
+        ),
+    )
+    # listings tell where the submissions and the output are
+    subs["lists_folders"] = _attack_in_q3(
+        (
+            f"for d in ('/', '/tmp', {str(env.root)!r}, {str(env.root.parent)!r}):\n"
+            "    try:\n"
+            "        leaked.extend(os.listdir(d))\n"
+            "    except OSError:\n"
+            "        pass\n"
+        ),
+    )
+    # writing outside the temporary folder with dir_fd, and renaming with src_dir_fd
+    marker = env.marker
+    subs["writes_with_dir_fd"] = _with_answer(
+        "q2",
+        (
+            "import os\n"
+            f"for d in ({str(env.course)!r}, {str(env.home)!r}, '/tmp'):\n"
+            "    try:\n"
+            "        dfd = os.open(d, os.O_RDONLY)\n"
+            f"        fd = os.open('{marker}', os.O_WRONLY | os.O_CREAT, 0o644, dir_fd=dfd)\n"
+            "        os.write(fd, b'pwned')\n"
+            "    except OSError:\n"
+            "        pass\n"
+            "try:\n"
+            f"    cfd = os.open({str(env.course)!r}, os.O_RDONLY)\n"
+            f"    os.rename('README.md', '{marker}.md', src_dir_fd=cfd, dst_dir_fd=cfd)\n"
+            "except OSError:\n"
+            "    pass\n"
+            "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
+            "e_hat_day2 = y_day2 - A @ x_hat_day2\n"
+        ),
+    )
+    # switching the audit hook off through gc, then reading, writing and connecting freely
+    subs["hook_switched_off"] = _attack_in_q3(
+        (
+            "import gc\n"
+            "for f in gc.get_objects():\n"
+            "    if type(f).__name__ == 'function' and f.__name__ == 'hook' and f.__closure__:\n"
+            "        for name, cell in zip(f.__code__.co_freevars, f.__closure__):\n"
+            "            if name == 'blocked':\n"
+            "                cell.cell_contents = frozenset()\n"
+            "            elif name == 'path_events':\n"
+            "                cell.cell_contents = {}\n"
+            "            elif name in ('readable', 'writable'):\n"
+            "                cell.cell_contents = lambda full: True\n"
+            f"for p in {secret_paths!r}:\n"
+            "    try:\n"
+            "        leaked.append(open(p).read(100))\n"
+            "    except OSError:\n"
+            "        pass\n"
+            "try:\n"
+            f"    open('/tmp/{marker}-hook', 'w').write('pwned')\n"
+            "except OSError:\n"
+            "    pass\n"
+            "try:\n"
+            f"    socket.create_connection(('127.0.0.1', {env.port}), timeout=2).sendall(b'pwned')\n"
+            "    leaked.append('connected')\n"
+            "except OSError:\n"
+            "    pass\n"
+        ),
+    )
+    # a refused socketpair() must not leave sockets open in the child
+    subs["socketpair_leak"] = _attack_in_q3(
+        (
+            "try:\n"
+            "    socket.socketpair()\n"
+            "except OSError:\n"
+            "    pass\n"
+            "for fd in map(int, os.listdir('/proc/self/fd')):\n"
+            "    try:\n"
+            "        if stat.S_ISSOCK(os.fstat(fd).st_mode):\n"
+            "            leaked.append(f'open socket {fd}')\n"
+            "    except OSError:\n"
+            "        pass\n"
+        ),
+    )
+    # forbidden calls from code whose globals claim to be the library
+    forged = f"def w_statistics(A, y, Qyy):\n    return {W_TESTS}\n"
+    subs["forged_library_name"] = _with_answer(
+        "q4",
+        (
+            "_g = {'__name__': 'course.lsq', 'lsq': lsq}\n"
+            f"exec({forged!r}, _g)\n"
+            "w_statistics = _g['w_statistics']\n"
+        ),
+    )
+    # a forbidden call, then clearing the child's own record of it
+    subs["cleared_record"] = _with_answer(
+        "q4",
+        (
+            "import sys\n"
+            "def w_statistics(A, y, Qyy):\n"
+            f"    out = {W_TESTS}\n"
+            "    for m in list(sys.modules.values()):\n"
+            "        state = getattr(m, '_STATE', None)\n"
+            "        if state is not None and hasattr(state, 'hits'):\n"
+            "            state.hits.clear()\n"
+            "    return out\n"
+        ),
+    )
+    # the original function fished out of the tripwire, or a fresh module from source
+    subs["unwrapped_original"] = _with_answer(
+        "q4",
+        (
+            "def w_statistics(A, y, Qyy):\n"
+            "    w, f = getattr(lsq, 'w_' + 'tests'), getattr(lsq, 'f' + 'it')\n"
+            "    w = (getattr(w, '__kwdefaults__', None) or {}).get('__original', w)\n"
+            "    f = (getattr(f, '__kwdefaults__', None) or {}).get('__original', f)\n"
+            "    return w(f(A, y, Qyy), 0.05).w\n"
+        ),
+    )
+    subs["reloaded_module"] = _with_answer(
+        "q4",
+        (
+            "import importlib\n"
+            "def w_statistics(A, y, Qyy):\n"
+            "    fresh = importlib.reload(lsq)\n"
+            "    return getattr(fresh, 'w_' + 'tests')(getattr(fresh, 'f' + 'it')(A, y, Qyy), 0.05).w\n"
+        ),
+    )
+    subs["=1+1"] = _solution()  # an honest student whose ID is a spreadsheet formula
+    return subs
+
+
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("hostile")
-    sub_dir, out = tmp / "submissions", tmp / "out"
+    token = secrets.token_hex(8)
+    env = types.SimpleNamespace(root=tmp, marker=f"pwned-{token}", token=token)
+    # a copy of the course, with a secret beside checks.py and a file of the "repository"
+    env.course = tmp / "course"
+    env.solution_dir = env.course / "solutions" / NAME
+    shutil.copytree(SOLUTION_DIR, env.solution_dir)
+    (env.course / "README.md").write_text("the course repository\n")
+    env.solution_secret = env.solution_dir / "secret-answers.txt"
+    env.solution_secret.write_text(f"SOLSECRET-{token}\n")
+    env.home = tmp / "home"
+    env.home.mkdir()
+    env.home_secret = env.home / "token.txt"
+    env.home_secret.write_text(f"HOMESECRET-{token}\n")
+    sub_dir, out = tmp / f"subs-{token}", tmp / f"out-{token}"
     sub_dir.mkdir()
+    env.victim = sub_dir / "victim.ipynb"
     outside = tmp / "outside"
     outside.mkdir()
-    sentinel = outside / "sentinel.txt"
-    sentinel.write_text("original")
-    for sid, nb in _submissions(tmp, sentinel).items():
+    env.sentinel = outside / "sentinel.txt"
+    env.sentinel.write_text("original")
+    listener = socket.create_server(("127.0.0.1", 0))
+    listener.setblocking(False)
+    env.port = listener.getsockname()[1]
+    victim = _solution()
+    victim["cells"].append(
+        {"cell_type": "markdown", "id": "victim-note", "metadata": {}, "source": f"VICTIM-{token}"}
+    )
+    subs = _submissions(env)
+    subs["victim"] = victim
+    for sid, nb in subs.items():
         text = nb if isinstance(nb, str) else json.dumps(nb)
         if sid == "solution":
             (sub_dir / sid).mkdir()
             (sub_dir / sid / f"{NAME}.ipynb").write_text(text)  # the folder form
         else:
             (sub_dir / f"{sid}.ipynb").write_text(text)
-    before_subs, before_repo = _sha_tree(sub_dir), _sha_tree(ROOT / "solutions")
+    solution_nb = env.solution_dir / f"{NAME}.ipynb"
+    (sub_dir / "symlinked_file.ipynb").symlink_to(solution_nb)  # the solution, as a link
+    (sub_dir / "symlinked_folder").mkdir()
+    (sub_dir / "symlinked_folder" / f"{NAME}.ipynb").symlink_to(solution_nb)
+    os.link(solution_nb, sub_dir / "hardlinked.ipynb")
+    watched = {"course": env.course, "home": env.home, "submissions": sub_dir}
+    before = {name: _sha_tree(folder) for name, folder in watched.items()}
+    before_repo = _sha_tree(ROOT / "solutions")
+    tmp_before = set(os.listdir("/tmp"))
     options = GradeOptions(jobs=2, timeout=TIMEOUT, memory_mb=512, progress=False)
-    summary = grade(SOLUTION_DIR, sub_dir, out, options)
+    old_home = os.environ.get("HOME")
+    os.environ["HOME"] = str(env.home)
+    try:
+        summary = grade(env.solution_dir, sub_dir, out, options)
+    finally:
+        if old_home is None:
+            os.environ.pop("HOME", None)
+        else:
+            os.environ["HOME"] = old_home
+    try:
+        connection = listener.accept()[0]
+        connection.close()
+        connected = True
+    except BlockingIOError:
+        connected = False
+    listener.close()
     rows = {
         json.loads(line)["student"]: json.loads(line)
         for line in (out / "results.jsonl").read_text().splitlines()
@@ -232,11 +463,17 @@ def graded(tmp_path_factory):
         "summary": summary,
         "rows": rows,
         "out": out,
+        "env": env,
         "sub_dir": sub_dir,
-        "sentinel": sentinel,
-        "before_subs": before_subs,
+        "sentinel": env.sentinel,
+        "watched": watched,
+        "before": before,
         "before_repo": before_repo,
+        "tmp_new": set(os.listdir("/tmp")) - tmp_before,
+        "connected": connected,
+        "expected_ids": set(subs) | {"symlinked_file", "symlinked_folder", "hardlinked"},
         "options": options,
+        "solution_dir": env.solution_dir,
     }
 
 
@@ -259,10 +496,10 @@ def _expect(row, zero: dict, status: str | None = None):
 
 def test_every_submission_is_graded(graded):
     rows = graded["rows"]
-    assert set(rows) == set(_submissions(Path("."), Path("x")).keys())
+    assert set(rows) == graded["expected_ids"]
     with open(graded["out"] / "grades.csv") as f:
         table = list(csv.DictReader(f))
-    assert [r["student"] for r in table] == sorted(rows)
+    assert [r["student"].removeprefix("'") for r in table] == sorted(rows)
     assert list(table[0]) == ["student", *POINTS, "total", "max", "status"]
     for sid in rows:
         assert (graded["out"] / "feedback" / f"{sid}.md").is_file()
@@ -335,7 +572,8 @@ def test_writes_and_deletes_outside_tmp_are_refused(graded):
 
 
 def test_nothing_outside_out_changed(graded):
-    assert _sha_tree(graded["sub_dir"]) == graded["before_subs"]
+    for name, folder in graded["watched"].items():
+        assert _sha_tree(folder) == graded["before"][name], name
     assert _sha_tree(ROOT / "solutions") == graded["before_repo"]
     names = {p.name for p in graded["out"].iterdir()}
     assert names == {"grades.csv", "results.jsonl", "feedback"}
@@ -405,7 +643,7 @@ def test_feedback_hides_hidden_cases_and_code(graded):
 def test_rerun_resumes_and_regrade_is_identical(graded, tmp_path):
     out = graded["out"]
     before = (out / "results.jsonl").read_text()
-    summary = grade(SOLUTION_DIR, graded["sub_dir"], out, graded["options"])
+    summary = grade(graded["solution_dir"], graded["sub_dir"], out, graded["options"])
     assert summary.graded == 0 and summary.resumed == len(graded["rows"])
     assert (out / "results.jsonl").read_text() == before
     # regrading from scratch gives identical rows (no timestamps, no temp paths)
@@ -415,16 +653,95 @@ def test_rerun_resumes_and_regrade_is_identical(graded, tmp_path):
         src = graded["sub_dir"] / f"{sid}.ipynb"
         (small / src.name).write_bytes(src.read_bytes())
     out2 = tmp_path / "out2"
-    grade(SOLUTION_DIR, small, out2, graded["options"])
+    grade(graded["solution_dir"], small, out2, graded["options"])
     again = {
         json.loads(l)["student"]: json.loads(l)
         for l in (out2 / "results.jsonl").read_text().splitlines()
     }
-    for sid, row in again.items():
-        assert row == graded["rows"][sid], sid
+    for sid, row in again.items():  # identical but for the time it took
+        assert row.pop("wall_seconds") >= 0 and graded["rows"][sid]["wall_seconds"] >= 0
+        assert row == {k: v for k, v in graded["rows"][sid].items() if k != "wall_seconds"}, sid
     assert all(r["checks_sha256"] and r["version"] for r in again.values())
 
 
 def test_summary_text(graded):
     text = graded["summary"].text()
     assert "q1" in text and "full marks" in text and "status:" in text
+
+
+# -- issue 11: the kernel's walls ------------------------------------------------------------
+def _out_text(graded) -> str:
+    out = graded["out"]
+    return "\n".join(p.read_text(errors="replace") for p in sorted(out.rglob("*")) if p.is_file())
+
+
+def test_secrets_never_reach_the_output(graded):
+    text, token = _out_text(graded), graded["env"].token
+    for secret in ("SOLSECRET", "HOMESECRET", "VICTIM"):
+        assert f"{secret}-{token}" not in text, secret
+    assert "binomial_band" not in text and "CHECKS = Checks" not in text  # checks.py unread
+
+
+def test_dir_fd_and_proc_cannot_read_secrets(graded):
+    _expect(graded["rows"]["reads_with_dir_fd"], {})  # nothing leaked, so the answer stands
+
+
+def test_listings_do_not_reveal_the_grader_s_folders(graded):
+    token = graded["env"].token
+    assert f"subs-{token}" not in _out_text(graded) and f"out-{token}" not in _out_text(graded)
+    _expect(graded["rows"]["lists_folders"], {})
+
+
+def test_dir_fd_cannot_write_or_rename_outside(graded):
+    _expect(graded["rows"]["writes_with_dir_fd"], {})
+    marker = graded["env"].marker
+    assert not any(name.startswith(marker) for name in graded["tmp_new"])
+    assert (graded["env"].course / "README.md").is_file()
+
+
+def test_switching_the_audit_hook_off_gains_nothing(graded):
+    _expect(graded["rows"]["hook_switched_off"], {})
+    assert not graded["connected"], "a submission reached a TCP listener of the grading machine"
+    assert not any(name.startswith(graded["env"].marker) for name in graded["tmp_new"])
+
+
+def test_refused_socketpair_leaves_no_socket_open(graded):
+    _expect(graded["rows"]["socketpair_leak"], {})
+
+
+@pytest.mark.parametrize(
+    "sid", ["forged_library_name", "cleared_record", "unwrapped_original", "reloaded_module"]
+)
+def test_forbidden_calls_cannot_be_forged(graded, sid):
+    row = graded["rows"][sid]
+    _expect(row, {"q4": None})  # zero points for q4, everything else untouched
+    assert row["questions"]["q4"]["status"] in ("forbidden", "error"), row["questions"]["q4"]
+
+
+def test_links_to_the_solution_are_refused(graded):
+    for sid in ("symlinked_file", "symlinked_folder", "hardlinked"):
+        row = graded["rows"][sid]
+        assert row["total"] == 0 and row["status"] == "refused", row
+        assert "refused" in " ".join(row["notes"]), row["notes"]
+
+
+def test_honest_students_of_the_batch_keep_full_marks(graded):
+    for sid in ("solution", "victim", "=1+1"):
+        _expect(graded["rows"][sid], {})
+
+
+def test_csv_cells_cannot_be_spreadsheet_formulas(graded):
+    with open(graded["out"] / "grades.csv", newline="") as f:
+        cells = [cell for row in csv.reader(f) for cell in row]
+    assert "'=1+1" in cells
+    assert not [c for c in cells if c[:1] in ("=", "+", "@") or (c[:1] == "-" and c[1:2].isalpha())]
+
+
+def test_summary_names_the_slowest_students(graded):
+    text = graded["summary"].text()
+    slow = [line for line in text.splitlines() if line.startswith("slowest: ")]
+    times = sorted((r["wall_seconds"], sid) for sid, r in graded["rows"].items())
+    assert all(t >= 0 for t, _ in times)
+    assert slow and all(sid in slow[0] for _, sid in times[-3:]), (slow, times[-3:])
+    # a submission that times out on a question is slower than the honest solution
+    assert graded["rows"]["infinite_loop"]["wall_seconds"] > TIMEOUT

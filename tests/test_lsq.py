@@ -305,10 +305,11 @@ def test_rank_deficient_A_names_the_column():
         (
             A_LINE,
             DAY1,
-            np.ones(4),
+            np.ones(3),
             ValueError,
-            "for uncorrelated observations with variances v pass np.diag",
+            r"Qyy given as a 1-D array holds the variances of the m = 4 observations, got 3",
         ),
+        (A_LINE, DAY1, [1.0, 0.0, 1.0, 1.0], ValueError, r"variances, .* Qyy\[1\] = 0.0"),
         (A_LINE, DAY1, np.triu(np.ones((4, 4))), ValueError, "Qyy is not symmetric"),
         (A_LINE, DAY1, np.diag([1.0, 1.0, -1.0, 1.0]), LinAlgError, "Qyy is not positive definite"),
         (A_LINE, DAY1, np.ones((4, 4)), LinAlgError, "Qyy is not positive definite"),
@@ -606,3 +607,356 @@ def test_plot_helpers_return_their_axes():
         plt.close(new.figure)
     finally:
         plt.close(fig)
+
+
+# ---------------------------------------------------------------------------
+# input forms for network sizes: 1-D variances and scipy.sparse
+# ---------------------------------------------------------------------------
+def _assert_same_fit(f, ref, rtol=1e-10, atol=1e-12):
+    for name in ("x_hat", "e_hat", "Qxx", "redundancy_numbers", "sigma_e_hat", "sigma_y_hat"):
+        np.testing.assert_allclose(
+            getattr(f, name), getattr(ref, name), rtol=rtol, atol=atol, err_msg=name
+        )
+    assert f.squared_norm == pytest.approx(ref.squared_norm, rel=rtol)
+    np.testing.assert_allclose(
+        lsq.w_tests(f).w, lsq.w_tests(ref).w, rtol=rtol, atol=atol, err_msg="w"
+    )
+    np.testing.assert_allclose(lsq.mdb(f), lsq.mdb(ref), rtol=rtol, err_msg="mdb")
+
+
+def test_variances_as_vector_equal_the_diagonal_matrix():
+    rng = np.random.default_rng(50)
+    m = 12
+    A = np.column_stack([np.ones(m), np.linspace(0, 1, m), np.linspace(0, 1, m) ** 2])
+    variances = rng.uniform(0.2, 5.0, m)
+    y = A @ [1.0, -2.0, 0.5] + np.sqrt(variances) * rng.standard_normal(m)
+    f = lsq.fit(A, y, variances)
+    ref = lsq.fit(A, y, np.diag(variances))
+    _assert_same_fit(f, ref)
+    np.testing.assert_array_equal(f.Qyy, np.diag(variances))
+    np.testing.assert_allclose(f.Qee, ref.Qee, atol=1e-12)
+    dense = dense_reference(A, y, np.diag(variances))
+    np.testing.assert_allclose(f.squared_norm, np.sum(f.e_hat**2 / variances), rtol=1e-12)
+    np.testing.assert_allclose(f.Qee, dense["Qee"], rtol=1e-9, atol=1e-12)
+    # a list is accepted like an array, and the caller's vector is not changed
+    kept = variances.copy()
+    lsq.fit(A, y, list(variances))
+    np.testing.assert_array_equal(variances, kept)
+
+
+def _block_diagonal_covariance(rng, blocks, size=3):
+    """A GNSS-like covariance: correlated size x size blocks, rows shuffled."""
+    import scipy.sparse as sp
+
+    parts = []
+    for _ in range(blocks):
+        B = rng.standard_normal((size, size))
+        parts.append(B @ B.T + 0.5 * np.eye(size))
+    Q = sp.block_diag(parts, format="csr")
+    perm = rng.permutation(size * blocks)
+    return Q[perm][:, perm]
+
+
+def test_sparse_covariances_equal_their_dense_form():
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(51)
+    m = 30
+    t = np.linspace(0, 1, m)
+    A = np.column_stack([np.ones(m), t, t**2])
+    y = A @ [1.0, 2.0, -1.0] + rng.standard_normal(m)
+    tridiagonal = sp.diags(
+        [np.full(m - 1, 0.45), np.full(m, 1.0), np.full(m - 1, 0.45)], [-1, 0, 1], format="csc"
+    )
+    diagonal = sp.diags(rng.uniform(0.5, 2.0, m))
+    full = sp.csr_array(random_spd(rng, m))  # no band to exploit: factored densely
+    for Q in (_block_diagonal_covariance(rng, 10), tridiagonal, diagonal, full):
+        f = lsq.fit(A, y, Q)
+        dense = Q.toarray()
+        _assert_same_fit(f, lsq.fit(A, y, dense))
+        np.testing.assert_allclose(f.Qee, lsq.fit(A, y, dense).Qee, atol=1e-12)
+        np.testing.assert_array_equal(f.Qyy, dense)
+        ref = dense_reference(A, y, dense)
+        np.testing.assert_allclose(lsq.w_tests(f).w, ref["w"], rtol=1e-9)
+        snoop = lsq.data_snooping(A, y + 30 * (np.arange(m) == 7), Q, alpha=0.001)
+        assert snoop.removed[0] == 7
+
+
+@pytest.mark.parametrize(
+    "Q, error, match",
+    [
+        ("nonsymmetric", ValueError, "Qyy is not symmetric"),
+        ("nan", ValueError, "Qyy contains NaN or inf"),
+        ("indefinite", LinAlgError, "Qyy is not positive definite"),
+        ("negative diagonal", LinAlgError, r"diagonal entry 2 is -1.0"),
+        ("shape", ValueError, r"Qyy must have shape \(6, 6\), got \(5, 5\)"),
+    ],
+)
+def test_sparse_covariance_bad_input(Q, error, match):
+    import scipy.sparse as sp
+
+    m = 6
+    A = np.column_stack([np.ones(m), np.arange(m, dtype=float)])
+    y = np.arange(m, dtype=float) ** 1.5
+    matrix = {
+        "nonsymmetric": sp.diags([np.ones(m), np.full(m - 1, 0.3)], [0, 1]),
+        "nan": sp.diags([np.r_[1.0, np.nan, 1, 1, 1, 1]], [0]),
+        "indefinite": sp.diags([np.ones(m), np.full(m - 1, 0.9), np.full(m - 1, 0.9)], [0, 1, -1]),
+        "negative diagonal": sp.diags([np.r_[1.0, 1, -1, 1, 1, 1]], [0]),
+        "shape": sp.eye(5),
+    }[Q]
+    with pytest.raises(error, match=match):
+        lsq.fit(A, y, matrix)
+
+
+def test_a_scalar_or_a_wrong_length_vector_is_refused_with_the_fix():
+    with pytest.raises(ValueError, match=r"or the vector of variances np.full\(4, s2\)"):
+        lsq.fit(A_LINE, DAY1, 4.0)
+    with pytest.raises(ValueError, match="holds the variances of the m = 4 observations, got 5"):
+        lsq.fit(A_LINE, DAY1, np.ones(5))
+    with pytest.raises(ValueError, match=r"must be positive; Qyy\[3\] = -2.0"):
+        lsq.fit(A_LINE, DAY1, [1.0, 1.0, 1.0, -2.0])
+    with pytest.raises(ValueError, match="Qyy contains NaN or inf"):
+        lsq.fit(A_LINE, DAY1, [1.0, np.inf, 1.0, 1.0])
+
+
+# ---------------------------------------------------------------------------
+# standard deviations passed where variances belong
+# ---------------------------------------------------------------------------
+def _line_data(rng, sigma, m=200):
+    t = np.linspace(0, 10, m)
+    A = np.column_stack([np.ones(m), t])
+    return A, A @ [3.0, 0.5] + sigma * rng.standard_normal(m)
+
+
+@pytest.mark.parametrize("sigma", [3.0, 0.3])
+def test_standard_deviations_passed_as_variances_are_named(sigma):
+    # Too large (sigma = 3: T ~ 3 (m-n)) or too small (sigma = 0.3: T ~ 0.3 (m-n)).
+    rng = np.random.default_rng(52)
+    A, y = _line_data(rng, sigma)
+    f = lsq.fit(A, y, np.full(200, sigma))  # the slip: sigma instead of sigma**2
+    with pytest.warns(
+        UserWarning, match=r"if you passed standard deviations sigma, pass sigma\*\*2"
+    ):
+        result = lsq.overall_model_test(f, 0.05)
+    assert result.statistic == pytest.approx(f.squared_norm)
+    # heteroscedastic: the pattern of the residuals points to the slip as well
+    sigmas = rng.uniform(0.5 * sigma, 2 * sigma, 200)
+    y = A @ [3.0, 0.5] + sigmas * rng.standard_normal(200)
+    with pytest.warns(UserWarning, match="Read as standard deviations"):
+        lsq.overall_model_test(lsq.fit(A, y, sigmas), 0.05)
+
+
+def test_no_standard_deviation_warning_when_it_is_not_the_likely_cause(recwarn):
+    rng = np.random.default_rng(53)
+    A, y = _line_data(rng, 3.0)
+    lsq.overall_model_test(lsq.fit(A, y, np.full(200, 9.0)), 0.05)  # right: variances
+    # a dense diagonal matrix is written as a covariance: no guessing there
+    lsq.overall_model_test(lsq.fit(A, y, 3.0 * np.eye(200)), 0.05)
+    # unequal variances given right, and a gross outlier: the test rejects, but the
+    # residuals' pattern fits the values as variances, so the slip is not suggested
+    sigmas = rng.uniform(0.3, 6.0, 200)
+    y = A @ [3.0, 0.5] + sigmas * rng.standard_normal(200)
+    y[17] += 80 * sigmas[17]
+    result = lsq.overall_model_test(lsq.fit(A, y, sigmas**2), 0.05)
+    assert result.reject
+    assert not [w for w in recwarn if issubclass(w.category, UserWarning)]
+
+
+# ---------------------------------------------------------------------------
+# lazy m x m matrices and memory
+# ---------------------------------------------------------------------------
+def test_m_by_m_matrices_are_built_only_when_asked_for():
+    A, y, Qyy = correlated_problem(seed=9)
+    f = lsq.fit(A, y, Qyy)
+    lsq.overall_model_test(f)
+    lsq.w_tests(f)
+    lsq.mdb(f)
+    _ = (f.sigma_e_hat, f.sigma_y_hat, f.redundancy_numbers)
+    assert not {"Qee", "Qyy_hat"} & set(vars(f))
+    ref = dense_reference(A, y, Qyy)
+    np.testing.assert_allclose(f.Qee, ref["Qee"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(f.Qyy_hat, ref["Qyy_hat"], rtol=1e-9, atol=1e-12)
+    assert {"Qee", "Qyy_hat"} <= set(vars(f))
+    assert f.Qee is f.Qee  # computed once
+    with pytest.raises(ValueError, match="read-only"):
+        f.Qee[0, 0] = 1.0
+    np.testing.assert_allclose(f.sigma_e_hat**2, np.diag(f.Qee), rtol=1e-10, atol=1e-13)
+
+
+@pytest.mark.parametrize("form", ["variances", "sparse blocks"])
+def test_fit_and_tests_at_m_3000_use_no_m_by_m_memory(form):
+    import tracemalloc
+
+    rng = np.random.default_rng(54)
+    m, n = 3000, 3
+    A = np.column_stack([np.ones(m), rng.standard_normal((m, n - 1))])
+    if form == "variances":
+        Q = rng.uniform(0.5, 2.0, m)
+        noise = np.sqrt(Q) * rng.standard_normal(m)
+    else:
+        Q = _block_diagonal_covariance(rng, m // 3)
+        noise = rng.standard_normal(m)  # the law of y does not matter here
+    y = A @ [1.0, 2.0, 3.0] + noise
+    tracemalloc.start()
+    try:
+        f = lsq.fit(A, y, Q)
+        lsq.overall_model_test(f)
+        lsq.w_tests(f)
+        lsq.data_snooping(A, y, Q, alpha=0.001, max_removals=2)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 0.05 * 8 * m * m  # one m x m matrix would be 72 MB
+
+
+# ---------------------------------------------------------------------------
+# data snooping by downdating
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["identity", "variances", "correlated", "sparse"])
+def test_snooping_downdate_equals_a_fresh_fit_every_round(kind):
+    rng = np.random.default_rng(60)
+    m = 24
+    t = np.linspace(-1, 1, m)
+    A = np.column_stack([np.ones(m), t, t**2])
+    Q = {
+        "identity": None,
+        "variances": rng.uniform(0.3, 3.0, m),
+        "correlated": random_spd(rng, m, cond=20.0),
+        "sparse": _block_diagonal_covariance(rng, m // 3),
+    }[kind]
+    dense = (
+        np.eye(m)
+        if Q is None
+        else np.diag(Q)
+        if np.ndim(Q) == 1
+        else np.asarray(Q.todense() if kind == "sparse" else Q)
+    )
+    y = A @ [1.0, -1.0, 2.0] + np.linalg.cholesky(dense) @ rng.standard_normal(m)
+    y[[4, 11, 19]] += [25.0, -30.0, 40.0]
+    res = lsq.data_snooping(A, y, Q, alpha=0.001)
+    assert {4, 11, 19} <= set(res.removed)
+    fresh_fits = []
+    for wt, idx in zip(res.rounds, res.round_indices):
+        idx = np.array(idx)
+        fresh = lsq.fit(A[idx], y[idx], dense[np.ix_(idx, idx)])
+        ref = lsq.w_tests(fresh, 0.001)
+        np.testing.assert_allclose(wt.w, ref.w, rtol=1e-10, atol=1e-12)
+        np.testing.assert_array_equal(wt.reject, ref.reject)
+        np.testing.assert_array_equal(wt.testable, ref.testable)
+        assert wt.largest == ref.largest
+        fresh_fits.append(fresh)
+    # removing observation i lowers T by exactly w_i² of the round that removed it
+    for k in range(1, len(res.rounds)):
+        w_removed = res.rounds[k - 1].w[res.rounds[k - 1].largest]
+        drop = fresh_fits[k - 1].squared_norm - fresh_fits[k].squared_norm
+        assert drop == pytest.approx(w_removed**2, rel=1e-9)
+    keep = np.array(res.kept)
+    _assert_same_fit(res.fit, lsq.fit(A[keep], y[keep], dense[np.ix_(keep, keep)]))
+
+
+def test_snooping_with_redundancy_one_removes_the_first_of_equal_w():
+    # All |w_i| are equal when m - n = 1; which one goes must not depend on round-off.
+    A = np.column_stack([np.ones(4), T4, T4**2 / 2])
+    wt = lsq.w_tests(lsq.fit(A, DAY2), 0.01)
+    np.testing.assert_allclose(np.abs(wt.w), np.abs(wt.w[0]), rtol=1e-12)
+    assert wt.largest == 0
+    assert lsq.data_snooping(A, DAY2, alpha=0.01).removed == (0,)
+
+
+def test_snooping_keeps_untestable_observations_untested():
+    # observation 3 alone determines x2; observation 5 becomes untestable once 4 is removed
+    A = np.array([[1, 0, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1]], float)
+    y = np.array([1.0, 1.1, 0.9, 7.0, 2.0, 40.0])
+    res = lsq.data_snooping(A, y, alpha=0.01)
+    assert not res.rounds[0].testable[3]
+    for wt, idx in zip(res.rounds, res.round_indices):
+        idx = np.array(idx)
+        ref = lsq.w_tests(lsq.fit(A[idx], y[idx]), 0.01)
+        np.testing.assert_array_equal(wt.testable, ref.testable)
+        np.testing.assert_allclose(wt.w, ref.w, rtol=1e-10)
+
+
+# ---------------------------------------------------------------------------
+# property-based tests of the fit
+# ---------------------------------------------------------------------------
+hypothesis = pytest.importorskip("hypothesis")
+from hypothesis import assume, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+from hypothesis.extra import numpy as hnp  # noqa: E402
+
+# Subnormal numbers carry fewer significant digits, so relative tolerances cannot hold there.
+_finite = st.floats(-10.0, 10.0, allow_subnormal=False)
+# The same examples on every run (CI must not flake) and no example database on disk.
+_PROPERTY_SETTINGS = settings(max_examples=60, deadline=None, derandomize=True, database=None)
+
+
+@st.composite
+def weighted_problems(draw):
+    n = draw(st.integers(1, 4))
+    m = draw(st.integers(n + 1, 25))
+    A = draw(hnp.arrays(float, (m, n), elements=_finite))
+    y = draw(hnp.arrays(float, m, elements=st.floats(-100.0, 100.0, allow_subnormal=False)))
+    log_variances = draw(hnp.arrays(float, m, elements=st.floats(-3.0, 3.0)))
+    correlated = draw(st.booleans())
+    if correlated:
+        B = draw(hnp.arrays(float, (m, m), elements=st.floats(-1.0, 1.0)))
+        Q = B @ B.T / m + np.diag(10.0**log_variances)
+    else:
+        Q = 10.0**log_variances
+    singular_values = np.linalg.svd(A, compute_uv=False)
+    assume(singular_values[-1] > 1e-6 * singular_values[0] and singular_values[-1] > 1e-3)
+    return A, y, Q
+
+
+def _as_dense(Q):
+    return np.diag(Q) if np.ndim(Q) == 1 else Q
+
+
+@_PROPERTY_SETTINGS
+@given(weighted_problems())
+def test_property_residuals_are_orthogonal_to_range_of_A_in_the_Qyy_inverse_metric(problem):
+    A, y, Q = problem
+    f = lsq.fit(A, y, Q)
+    L = np.linalg.cholesky(_as_dense(Q))
+    A_w = np.linalg.solve(L, A)
+    e_w = np.linalg.solve(L, f.e_hat)
+    y_w = np.linalg.solve(L, y)
+    # A^T Qyy^{-1} ê = (L^{-1}A)^T (L^{-1}ê) = 0, relative to the sizes involved (1-norms:
+    # they bound the 2-norms and do not underflow for tiny y)
+    gap = np.abs(A_w.T @ e_w)
+    assert np.all(gap <= 1e-9 * np.sum(np.abs(A_w), axis=0) * np.sum(np.abs(y_w)))
+
+
+@_PROPERTY_SETTINGS
+@given(weighted_problems(), hnp.arrays(float, 4, elements=st.floats(-6.0, 6.0)))
+def test_property_T_is_invariant_under_scaling_the_columns_of_A(problem, log_scales):
+    A, y, Q = problem
+    D = 10.0 ** log_scales[: A.shape[1]]
+    f, g = lsq.fit(A, y, Q), lsq.fit(A * D, y, Q)
+    # T = |y_w|² - |Q1^T y_w|² is exact up to rounding relative to |y_w|², y_w = L^{-1} y
+    y_w = np.linalg.solve(np.linalg.cholesky(_as_dense(Q)), y)
+    size = np.max(np.abs(y_w))
+    y_w_norm = size * np.linalg.norm(y_w / size) if size > 0 else 0.0  # no underflow
+    assert g.squared_norm == pytest.approx(f.squared_norm, rel=1e-8, abs=1e-10 * y_w_norm**2)
+    # x̂ scales inversely, to rounding in units of its own standard deviation times |y_w|
+    np.testing.assert_allclose(
+        g.x_hat * D, f.x_hat, rtol=1e-6, atol=1e-8 * y_w_norm * np.max(f.sigma_x_hat)
+    )
+    np.testing.assert_allclose(g.y_hat, f.y_hat, rtol=1e-7, atol=1e-9 * np.max(np.abs(y)))
+
+
+@_PROPERTY_SETTINGS
+@given(weighted_problems())
+def test_property_T_is_the_sum_of_squared_whitened_residuals(problem):
+    A, y, Q = problem
+    f = lsq.fit(A, y, Q)
+    dense = _as_dense(Q)
+    L = np.linalg.cholesky(dense)
+    whitened = np.linalg.solve(L, f.e_hat)
+    scale = np.sum(np.linalg.solve(L, y) ** 2)
+    assert f.squared_norm == pytest.approx(np.sum(whitened**2), rel=1e-8, abs=1e-10 * scale)
+    assert np.sum(f.redundancy_numbers) == pytest.approx(f.redundancy, rel=1e-8)
+    if np.ndim(Q) == 1:
+        assert f.squared_norm == pytest.approx(np.sum(f.e_hat**2 / Q), rel=1e-8, abs=1e-10 * scale)
+        assert np.all(f.redundancy_numbers > -1e-10) and np.all(f.redundancy_numbers < 1 + 1e-10)

@@ -620,3 +620,46 @@ def test_statistic_inputs_are_checked():
         nis.nis_matrix_test(np.ones((2, 3)), np.eye(3))
     with pytest.raises(ValueError, match="alpha"):
         nis.nis_test(eps, np.eye(2), alpha=1.5)
+
+
+# ---------------------------------------------------------------------------
+# the approximation's documented error
+# ---------------------------------------------------------------------------
+def _documented_tracy_widom_errors():
+    """{(which, m, K): error} from the two tables in TracyWidomApproximation's docstring."""
+    import re
+
+    doc = nis.TracyWidomApproximation.__doc__
+    table = {}
+    for which, heading in (("max", "Largest eigenvalue"), ("min", "Smallest eigenvalue")):
+        block = doc[doc.index(heading) :]
+        rows = re.findall(r"^\s*(\d+)((?:\s+(?:[0-9.]+|n/a)){7})\s*$", block, re.M)[:7]
+        assert len(rows) == 7, f"the {which} table must have 7 rows"
+        for m_text, values in rows:
+            m = int(m_text)
+            first = m if which == "max" else m + 1
+            for K, value in zip((first, 10, 30, 100, 300, 1000, 10_000), values.split()):
+                if value != "n/a":
+                    table[(which, m, K)] = float(value)
+    return table
+
+
+def _measured_tracy_widom_error(m, K, which):
+    exact = nis.extreme_eigenvalue(m, K, which)
+    approx = nis.extreme_eigenvalue(m, K, which, method="tracy-widom")
+    x = np.linspace(float(exact.ppf(1e-6)), float(exact.isf(1e-6)), 400)
+    return float(np.max(np.abs(exact.cdf(x) - approx.cdf(x))))
+
+
+@pytest.mark.parametrize("which, m", [(w, m) for w in ("max", "min") for m in (1, 2, 3, 4, 6)])
+def test_tracy_widom_error_is_what_its_docstring_says(which, m):
+    # Every documented entry with m <= 6 (where the exact law is exact to 1e-13) is
+    # measured again: a documented number that is too small OR too large fails.
+    table = _documented_tracy_widom_errors()
+    entries = {K: err for (w, mm, K), err in table.items() if w == which and mm == m}
+    assert len(entries) == 7
+    for K, documented in entries.items():
+        measured = _measured_tracy_widom_error(m, K, which)
+        assert measured == pytest.approx(documented, rel=0.1, abs=0.001), (which, m, K)
+    # and it is never good enough to replace the exact law for a test threshold
+    assert min(entries.values()) >= 0.004

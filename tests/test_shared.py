@@ -87,7 +87,8 @@ def test_two_sided_result_with_tuple_critical_values():
 
 
 def test_less_alternative_summary():
-    r = make_result(alternative="less", reject=True)
+    # statistic 6 < 9.2103 rejects; a consistent result has p < alpha too
+    r = make_result(alternative="less", reject=True, pvalue=0.005)
     assert "critical region < 9.2103" in r.summary()
 
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from numpy.linalg import LinAlgError
 
 from course import diagnosis as dg
 from course import filters as kf
@@ -103,3 +104,74 @@ def test_linalg_still_exports_the_checks():
 
     assert linalg.as_covariance is validation.as_covariance
     assert linalg.check_alpha is validation.as_probability
+
+
+# ---------------------------------------------------------------------------
+# the bad inputs issue 15 names, one by one (the tables of test_bad_input_*.py
+# feed every class of bad input to every public callable; these are the
+# reported cases, kept readable)
+# ---------------------------------------------------------------------------
+def test_issue_15_sigma_at_the_limits_of_floating_point():
+    U = np.column_stack([np.ones(6), np.arange(6.0)])
+    y = U @ [1.0, 0.5] + np.array([0.1, -0.2, 0.0, 0.2, -0.1, 0.05])
+    for sigma in (1e300, 1e-300):  # OverflowError / ZeroDivisionError before
+        with pytest.raises(ValueError, match=r"sigma .* units"):
+            dg.prediction_error_test(y, U, [1.0, 0.5], sigma=sigma)
+        with pytest.raises(ValueError, match="sigma"):
+            dg.fault_noncentrality(U, [1.0, 0.5], [0], [1.0, 0.6], sigma=sigma)
+    # a log-likelihood has an answer at every sigma: computed in logs, never NaN
+    assert np.isfinite(dg.normal_log_likelihood(4.0, [3.0, 5.0], sigma=1e300))
+    assert dg.normal_log_likelihood(4.0, [3.0, 5.0], sigma=1e-300) == -np.inf
+
+
+def test_issue_15_numerically_singular_covariance():
+    # exactly singular (X X^T of a 3 x 2 X) with a smallest eigenvalue of +1.6e-15 after rounding
+    Q = np.array([[2.0, 4.0, 5.0], [4.0, 10.0, 13.0], [5.0, 13.0, 17.0]])
+    assert np.linalg.eigvalsh(Q)[0] > 0
+    with pytest.raises(LinAlgError, match="numerically singular"):
+        validation.as_covariance(Q, "Qyy", 3)
+    with pytest.raises(LinAlgError, match="numerically singular"):
+        nis.nis(np.ones((4, 3)), Q)
+    # the rule is scale-free: a regular covariance stays regular at 1e-300 and 1e300
+    regular = np.array([[2.0, 0.5], [0.5, 1.0]])
+    for scale in (1e-300, 1e300):
+        validation.as_covariance(scale * regular, "R", 2)
+
+
+def test_issue_15_contradictory_test_results():
+    from scipy import stats
+
+    from course.results import TestResult
+
+    good = dict(
+        name="z", statistic=2.5, alpha=0.05, critical_value=1.6449, pvalue=0.0062, reject=True,
+        null=stats.norm(),
+    )  # fmt: skip
+    TestResult(**good)
+    for bad in ({"reject": "no"}, {"pvalue": np.nan}, {"pvalue": 1.5}, {"reject": False}):
+        with pytest.raises(ValueError, match=r"reject|pvalue"):
+            TestResult(**{**good, **bad})
+
+
+def test_issue_15_leaks_become_named_refusals():
+    with pytest.raises(ValueError, match="size"):
+        nis.simulate_extreme_eigenvalues(2, 10, size=2.5, rng=0)
+    model = kf.NonlinearModel(lambda x, u: x, lambda x: x, Q=[[0.1]], R=[[1.0]], x0_mean=[0.0])
+    with pytest.raises(ValueError, match="model"):
+        kf.ekf_predict(None, [0.0], [[1.0]])
+    with pytest.raises(ValueError, match="x_filt"):
+        kf.ekf_predict(model, [], [[1.0]])
+    with pytest.raises(ValueError, match="f must be callable"):
+        kf.numerical_jacobian(None, [1.0])
+    with pytest.raises(ValueError, match="beta"):
+        dg.simulate_beta_system(0.8, [1.0], 0)
+    with pytest.raises(ValueError, match="moments"):
+        mismatched.moment_zscores(np.ones((3, 2, 1)), None)
+    for matrix in (mismatched.mean_matrix, mismatched.covariance_matrix):
+        with pytest.raises(ValueError, match=r"\bp\b"):
+            matrix(3, -1)
+    with pytest.raises(ValueError, match="structure"):
+        dg.diagnoses(None, [True])
+    with pytest.raises(ValueError, match="R"):
+        kf.NonlinearModel(lambda x, u: x, lambda x: x, Q=np.zeros((0, 0)), R=np.zeros((0, 0)),
+                          x0_mean=[0.0])  # fmt: skip

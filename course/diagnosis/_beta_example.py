@@ -162,18 +162,19 @@ def simulate_beta_system(
     ((3, 100, 2), (3, 100, 1))
     """
     rng = as_generator(rng)
-    beta = as_float_array(beta, "beta")
-    u = as_float_array(u, "u")
+    beta = as_float_array(beta, "beta", min_ndim=1, empty=False)
+    u = as_float_array(u, "u", min_ndim=1, empty=False)
     N = beta.shape[-1]
     if beta.ndim < 1 or u.ndim < 1 or u.shape[-1] != N:
         raise ValueError(
             f"beta and u must be (N,) or (batch, N) with equal N, got {beta.shape}, {u.shape}"
         )
-    f = np.zeros(N) if fault is None else as_float_array(fault, "fault")
+    f = np.zeros(N) if fault is None else as_float_array(fault, "fault", min_ndim=1)
     if f.shape[-1] != N:
         raise ValueError(f"fault must have N = {N} samples, got shape {f.shape}")
     shape = np.broadcast_shapes(_batch_shape(batch), beta.shape[:-1], u.shape[:-1], f.shape[:-1])
-    Ts, x0 = as_finite(Ts, "Ts"), as_finite(x0, "x0")
+    Ts = as_positive(Ts, "Ts", what="the sampling interval")
+    x0 = as_finite(x0, "x0")
     q_x, r = as_variance(q_x, "q_x"), as_variance(r, "r")
     # time-major (N, *batch) so that every step touches contiguous memory
     w = np.sqrt(q_x) * rng.standard_normal((N,) + shape)

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from course import _deprecation
-from course.validation import as_float_array, as_indices, as_matrix, as_positive, as_vector
+from course.validation import as_float_array, as_indices, as_matrix, as_std, as_vector
 
 
 def _records(y: Any, N: int | None, name: str = "y") -> tuple[np.ndarray, str]:
@@ -21,7 +21,7 @@ def _records(y: Any, N: int | None, name: str = "y") -> tuple[np.ndarray, str]:
     come back in that layout too).  A square ``(N, N)`` array is read as
     records leading.
     """
-    Y = as_float_array(y, name)
+    Y = as_float_array(y, name, empty=False)
     if Y.ndim not in (1, 2):
         raise ValueError(
             f"{name} must be one record of shape (N,) or M records as the rows of an (M, N) "
@@ -60,7 +60,7 @@ def _parameter_vectors(theta: Any, p: int, name: str = "theta") -> tuple[np.ndar
     ``theta`` is ``(p,)`` or ``K`` vectors as the rows of ``(K, p)``; the old
     ``(p, K)`` layout (vectors as columns) works with a DeprecationWarning.
     """
-    theta = as_float_array(theta, name)
+    theta = as_float_array(theta, name, empty=False)
     if theta.ndim == 1:
         if theta.shape[0] != p:
             raise ValueError(f"{name} must have shape ({p},) or (K, {p}), got {theta.shape}")
@@ -83,7 +83,12 @@ def _indices(free: Any, p: int, what: str = "free") -> list[int]:
 
 def _model(U: Any, nominal: Any) -> tuple[np.ndarray, np.ndarray]:
     U = as_matrix(U, "U")
-    nominal = as_vector(nominal, "nominal", U.shape[1])
+    nominal = as_vector(nominal, "nominal")
+    if nominal.shape[0] != U.shape[1]:
+        raise ValueError(
+            f"nominal has {nominal.shape[0]} parameters but U has {U.shape[1]} columns; "
+            "give one nominal value per column of U"
+        )
     return U, nominal
 
 
@@ -95,7 +100,14 @@ def _split(U: np.ndarray, nominal: np.ndarray, free: list[int]) -> tuple[np.ndar
 
 
 def _check_sigma(sigma: Any, name: str = "sigma") -> float:
-    return as_positive(sigma, name, what="the noise standard deviation")
+    """The noise standard deviation: positive, with a representable variance.
+
+    The laws and covariances of the diagnosis tests are in units of
+    ``sigma**2``, so a ``sigma`` whose square over- or underflows (1e300,
+    1e-300) is refused with advice to rescale (:func:`course.validation.as_std`),
+    never turned into an ``OverflowError`` or a division by zero.
+    """
+    return as_std(sigma, name, what="the noise standard deviation")
 
 
 def _void_test_message(dof_what: str) -> str:

@@ -20,14 +20,17 @@ from course import _deprecation
 from course.chi2 import residual_norm_law
 from course.diagnosis._common import _check_sigma, _indices, _model, _void_test_message
 from course.diagnosis._prediction_error import prediction_error
-from course.distributions import FrozenDistribution
+from course.distributions import FrozenDistribution, _levels
 from course.linalg import cholesky_lower, whiten
 from course.results import TestResult, format_number
 from course.validation import (
+    InputTypeError,
+    as_callable,
     as_count,
     as_finite,
     as_float_array,
     as_matrix,
+    as_positive,
     as_probability,
     as_vector,
 )
@@ -68,15 +71,16 @@ def normal_log_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
     >>> round(normal_log_likelihood(4.0, [3.0, 5.0]), 6)
     -2.837877
     """
-    sigma = _check_sigma(sigma)
-    z = np.atleast_1d(as_float_array(z, "z")).ravel()
-    theta = as_float_array(theta, "theta")
-    sq = (
-        np.sum((z[..., :] - theta[..., None]) ** 2, axis=-1)
-        if theta.ndim
-        else np.sum((z - theta) ** 2)
-    )
-    value = -0.5 * z.size * np.log(2 * np.pi * sigma**2) - sq / (2 * sigma**2)
+    # In logs and in units of sigma, so that sigma = 1e300 or 1e-300 cannot overflow:
+    # log L = -N/2 log(2 pi) - N log(sigma) - sum(((z - theta) / sigma)^2) / 2, which is
+    # -inf (not NaN) when the data lie further than ~1e154 sigma from theta.
+    sigma = as_positive(sigma, "sigma", what="the noise standard deviation")
+    z = np.atleast_1d(as_float_array(z, "z", empty=False)).ravel()
+    theta = as_float_array(theta, "theta", empty=False)
+    with np.errstate(over="ignore"):
+        scaled = (z[..., :] - theta[..., None]) / sigma if theta.ndim else (z - theta) / sigma
+        sq = np.sum(scaled**2, axis=-1)
+    value = -0.5 * z.size * np.log(2 * np.pi) - z.size * np.log(sigma) - 0.5 * sq
     return float(value) if np.ndim(value) == 0 else value
 
 
@@ -142,6 +146,63 @@ class MLResult:
         )
 
 
+_MINIMIZE_METHODS = (
+    "nelder-mead", "powell", "cg", "bfgs", "newton-cg", "l-bfgs-b", "tnc", "cobyla",
+    "cobyqa", "slsqp", "trust-constr", "dogleg", "trust-ncg", "trust-exact", "trust-krylov",
+)  # fmt: skip
+
+
+def _method(method: Any) -> Any:
+    """A :func:`scipy.optimize.minimize` method: None, one of its names, or a callable."""
+    if method is None or callable(method):
+        return method
+    if not isinstance(method, str) or method.lower() not in _MINIMIZE_METHODS:
+        raise ValueError(
+            f"method must be None or a scipy.optimize.minimize method {_MINIMIZE_METHODS}, "
+            f"got {method!r}"
+        )
+    return method
+
+
+def _pair_bounds(bounds: Any, n: int, name: str) -> list[tuple[float, float]] | None:
+    """``None`` or one ``(low, high)`` pair per parameter; ``None`` in a pair means unbounded."""
+    if bounds is None:
+        return None
+    if isinstance(bounds, (str, bytes)) or not isinstance(bounds, Sequence | np.ndarray):
+        raise ValueError(
+            f"{name} must be a list of (low, high) pairs, one per parameter; got {bounds!r}"
+        )
+    pairs = list(bounds)
+    if len(pairs) != n:
+        raise ValueError(
+            f"{name} must hold {n} (low, high) pairs, one per parameter, got {len(pairs)}"
+        )
+    out = []
+    for j, pair in enumerate(pairs):
+        try:
+            low, high = pair
+            low_f = -np.inf if low is None else float(low)
+            high_f = np.inf if high is None else float(high)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}[{j}] must be a pair (low, high), got {pair!r}") from None
+        if np.isnan(low_f) or np.isnan(high_f) or not low_f < high_f:
+            raise ValueError(f"{name}[{j}] = {pair!r} needs low < high (None for no bound)")
+        out.append((low, high))
+    return out
+
+
+def _first_call(log_likelihood: Callable, nominal: np.ndarray) -> None:
+    """Call the user's function once at ``nominal`` so that a mismatch is reported clearly."""
+    try:
+        value = log_likelihood(nominal.copy())
+        float(value)
+    except Exception as exc:
+        raise ValueError(
+            f"log_likelihood(nominal) raised {type(exc).__name__}: {exc}; it must take a full "
+            f"parameter vector (here nominal, {nominal.size} values) and return a number"
+        ) from exc
+
+
 def maximum_likelihood(
     log_likelihood: Callable,
     nominal,
@@ -186,9 +247,13 @@ def maximum_likelihood(
     >>> round(float(ml.theta[0]), 6)
     4.0
     """
+    log_likelihood = as_callable(log_likelihood, "log_likelihood")
     nominal = as_vector(nominal, "nominal")
     p = nominal.size
     free = list(range(p)) if free is None else _indices(free, p)
+    bounds = _pair_bounds(bounds, len(free), "bounds")
+    method = _method(method)
+    _first_call(log_likelihood, nominal)
 
     def full(theta_free):
         theta = nominal.copy()
@@ -265,10 +330,10 @@ class LogLikelihoodLaw(FrozenDistribution):
         return self.c - 0.5 * rng.chisquare(self.dof, size=size)
 
     def ppf(self, q):
-        return self.c - 0.5 * stats.chi2.isf(q, self.dof)
+        return self.c - 0.5 * stats.chi2.isf(_levels(q), self.dof)
 
     def isf(self, q):
-        return self.c - 0.5 * stats.chi2.ppf(q, self.dof)
+        return self.c - 0.5 * stats.chi2.ppf(_levels(q), self.dof)
 
     def mean(self):
         return self.c - 0.5 * self.dof
@@ -406,6 +471,7 @@ def glr_test(
     (1, 0.0758)
     """
     alpha = as_probability(alpha)
+    log_likelihood = as_callable(log_likelihood, "log_likelihood")
     nominal = as_vector(nominal, "nominal")
     p = nominal.size
     free0 = _indices(free0, p, "free0")
@@ -414,7 +480,14 @@ def glr_test(
         raise ValueError(
             f"free0 {free0} must be a proper subset of free1 {free1} (nested hypotheses)"
         )
-    start = nominal if theta_init is None else as_vector(theta_init, "theta_init", p)
+    start = nominal if theta_init is None else as_vector(theta_init, "theta_init")
+    if start.shape != (p,):
+        raise ValueError(
+            f"theta_init must have length {p}, one value per entry of nominal, got {start.shape[0]}"
+        )
+    if bounds is not None:
+        bounds = _pair_bounds(bounds, p, "bounds")
+    _first_call(log_likelihood, nominal)
     base = nominal.copy()
     # Under H1 the parameters outside free1 keep their nominal values.
     fit1 = maximum_likelihood(
@@ -652,14 +725,20 @@ def mode_log_likelihoods(
     U, nominal = _model(U, nominal)
     y = as_vector(y, "y", U.shape[0])
     N = y.size
+    if not isinstance(modes, Mapping):
+        raise InputTypeError(
+            f"modes must be a mapping {{mode: faulty parameter indices}}, got {type(modes).__name__}"
+        )
+    if prior_std is not None:
+        prior_std = _check_sigma(prior_std, "prior_std")
     out = {}
     for mode, faulty in modes.items():
-        faulty = _indices(faulty, U.shape[1], f"parameters of mode {mode!r}")
+        faulty = _indices(faulty, U.shape[1], f"modes[{mode!r}]")
         if prior_std is None or not faulty:
             T = prediction_error(y, U, nominal, faulty).statistic
             out[str(mode)] = float(-0.5 * N * np.log(2 * np.pi * sigma**2) - T / (2 * sigma**2))
         else:
-            tau = _check_sigma(prior_std)
+            tau = prior_std
             Uf = U[:, faulty]
             cov = sigma**2 * np.eye(N) + tau**2 * (Uf @ Uf.T)
             L = cholesky_lower(cov, "marginal covariance")
@@ -744,6 +823,11 @@ def bayes_ranking(
     >>> ranking.modes, [round(p, 3) for p in ranking.posterior]
     (('NF', 'F1'), [0.549, 0.451])
     """
+    for name, value in (("log_likelihoods", log_likelihoods), ("priors", priors)):
+        if not isinstance(value, Mapping):
+            raise InputTypeError(
+                f"{name} must be a mapping {{mode: value}}, got {type(value).__name__}"
+            )
     modes = list(log_likelihoods)
     if set(modes) != set(priors):
         raise ValueError(
@@ -751,11 +835,11 @@ def bayes_ranking(
         )
     if not modes:
         raise ValueError("at least one mode is needed")
-    logl = np.array([float(log_likelihoods[m]) for m in modes])
-    prior = np.array([float(priors[m]) for m in modes])
-    if np.any(np.isnan(logl)) or np.any(logl == np.inf):
-        raise ValueError("log-likelihoods must be finite numbers or -inf")
-    if np.any(~np.isfinite(prior)) or np.any(prior <= 0):
+    logl = as_float_array([log_likelihoods[m] for m in modes], "log_likelihoods", finite=False)
+    prior = as_float_array([priors[m] for m in modes], "priors")
+    if np.any(logl == np.inf):
+        raise ValueError("log_likelihoods must be finite numbers or -inf")
+    if np.any(prior <= 0):
         raise ValueError("priors must be positive probabilities")
     if abs(prior.sum() - 1.0) > 1e-9:
         raise ValueError(

@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 
 from course import _deprecation
-from course.diagnosis._common import _check_sigma, _records
+from course.diagnosis._common import _check_sigma, _indices, _records
 from course.diagnosis._prediction_error import prediction_error
-from course.diagnosis._structures import DecisionStructure, diagnosis_matrix
-from course.validation import as_count, as_generator, as_matrix, as_vector
+from course.diagnosis._structures import DecisionStructure, _check_structure, diagnosis_matrix
+from course.validation import as_callable, as_count, as_flag, as_generator, as_matrix, as_vector
 
 
 def simulate_regression_records(
@@ -57,7 +57,12 @@ def simulate_regression_records(
     (3, 5)
     """
     U = as_matrix(U, "U")
-    theta = as_vector(theta, "theta", U.shape[1])
+    theta = as_vector(theta, "theta")
+    if theta.shape[0] != U.shape[1]:
+        raise ValueError(
+            f"theta has {theta.shape[0]} parameters but U has {U.shape[1]} columns; "
+            "give one parameter per column of U"
+        )
     sigma = _check_sigma(sigma)
     generator = as_generator(rng)
     n_records = as_count(n_records, "n_records", what="the number of records")
@@ -122,9 +127,18 @@ def linear_test_statistics(
     array([[0., 1.]])
     """
     U = as_matrix(U, "U")
+    U = as_matrix(U, "U")
     columns, _ = _records(Y, U.shape[0], "Y")
     rows = columns.T if columns.ndim == 2 else columns[None, :]
-    return np.column_stack([prediction_error(rows, U, nominal, free).statistic for free in tests])
+    if isinstance(tests, (str, bytes)) or not isinstance(tests, Sequence | np.ndarray):
+        raise ValueError(
+            f"tests must be a sequence of index sequences, one per test, e.g. [(0,), (1,)]; "
+            f"got {tests!r}"
+        )
+    frees = [_indices(free, U.shape[1], f"tests[{k}]") for k, free in enumerate(tests)]
+    if not frees:
+        raise ValueError("tests names no test; give one sequence of free parameters per test")
+    return np.column_stack([prediction_error(rows, U, nominal, free).statistic for free in frees])
 
 
 @dataclass(frozen=True, repr=False, eq=False)
@@ -186,6 +200,18 @@ class IsolationResult:
             f"<table><caption>P(mode in diagnoses | true mode), {self.n_records} records per mode</caption>"
             f"<tr><th>true</th>{head}</tr>{''.join(rows)}</table>"
         )
+
+
+def _modes_to_simulate(structure: DecisionStructure, modes) -> tuple:
+    if isinstance(modes, (str, bytes)) or not isinstance(modes, Sequence | np.ndarray):
+        raise ValueError(f"modes must be a list of mode names, got {modes!r}")
+    chosen = []
+    for mode in modes:
+        try:
+            chosen.append(structure.modes[structure.mode_index(mode)])
+        except ValueError as exc:
+            raise ValueError(f"modes: {exc}") from None
+    return tuple(chosen)
 
 
 def isolation_monte_carlo(
@@ -253,16 +279,14 @@ def isolation_monte_carlo(
     >>> iso.exact.round(1)  # NF alone is never the diagnosis: no alarm rules nothing out
     array([0., 1., 1., 1.])
     """
-    if not isinstance(structure, DecisionStructure):
-        raise ValueError("structure must be a DecisionStructure")
+    structure = _check_structure(structure)
+    simulate = as_callable(simulate, "simulate")
+    statistics = as_callable(statistics, "statistics")
+    exoneration = as_flag(exoneration, "exoneration")
     rng = as_generator(rng)
     n_tests = len(structure.tests)
     thresholds = as_vector(thresholds, "thresholds", n_tests)
-    modes = (
-        structure.modes
-        if modes is None
-        else tuple(structure.modes[structure.mode_index(m)] for m in modes)
-    )
+    modes = structure.modes if modes is None else _modes_to_simulate(structure, modes)
     n_records = as_count(n_records, "n_records", what="records per mode")
     alarm_rate = np.empty((len(modes), n_tests))
     membership = np.empty((len(modes), len(structure.modes)))

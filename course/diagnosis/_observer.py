@@ -16,7 +16,7 @@ from course import _deprecation
 from course.filters._models import _as_signal
 from course.filters._stacked import _mv
 from course.nis._windowed import windowed_sum
-from course.validation import as_float_array, as_matrix, as_positive, as_vector
+from course.validation import as_callable, as_float_array, as_matrix, as_positive, as_vector
 
 
 @dataclass(frozen=True, repr=False, eq=False)
@@ -110,6 +110,7 @@ def observer_residuals(
     >>> round(float(obs.theta_hat[-1, 0]), 2)
     2.0
     """
+    f, h = as_callable(f, "f"), as_callable(h, "h")
     x0 = as_vector(x0, "x0")
     theta0 = as_vector(theta0, "theta0")
     n, k = x0.shape[0], theta0.shape[0]
@@ -117,14 +118,22 @@ def observer_residuals(
     if len(h0) != 1:
         raise ValueError(f"h(x0) must return a 1-D vector, got shape {h0}")
     p = h0[0]
-    y = _as_signal(y, "y", p)
+    y = _as_signal(y, "y", p, width_from="h(x0)")
     N = y.shape[-2]
     if u is not None:
-        u = as_float_array(u, "u")
+        u = as_float_array(u, "u", min_ndim=1, empty=False)
         if u.ndim == 1:
             u = u[:, None]
         if u.shape[-2] != N:
-            raise ValueError(f"u must have N = {N} samples along axis -2, got shape {u.shape}")
+            raise ValueError(
+                f"u must have the N = {N} samples of y along axis -2, got shape {u.shape}"
+            )
+    f0 = np.shape(f(x0, None if u is None else u[..., 0, :], theta0))
+    if f0[-1:] != (n,):
+        raise ValueError(
+            f"f(x0, u, theta0) returned shape {f0}, expected ({n},): n = {n} states from x0, "
+            f"k = {k} parameters from theta0"
+        )
     batch = y.shape[:-2] if u is None else np.broadcast_shapes(y.shape[:-2], u.shape[:-2])
     Ts = as_positive(Ts, "Ts", what="the sampling interval")
 

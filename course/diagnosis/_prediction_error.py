@@ -29,7 +29,14 @@ from course.diagnosis._common import (
 )
 from course.linalg import lstsq_min_norm, range_basis
 from course.results import TestResult, format_number
-from course.validation import as_float_array, as_matrix, as_probability, as_vector
+from course.validation import (
+    as_callable,
+    as_float_array,
+    as_matrix,
+    as_positive,
+    as_probability,
+    as_vector,
+)
 
 
 @dataclass(frozen=True, repr=False, eq=False)
@@ -148,6 +155,8 @@ def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> Regr
 
 
 def _lstsq_columns(Phi: np.ndarray, Y: np.ndarray, rcond: float | None):
+    if rcond is not None:
+        rcond = as_positive(rcond, "rcond", what="the relative rank tolerance")
     solution = lstsq_min_norm(Phi, Y, rcond)
     return solution.x, solution.residual, solution.rank
 
@@ -396,6 +405,51 @@ def prediction_error_power(
 # ---------------------------------------------------------------------------
 # prediction errors: general models
 # ---------------------------------------------------------------------------
+def _bounds(bounds: Any, n: int, name: str) -> list[tuple[float, float]] | None:
+    """``None`` or one ``(low, high)`` pair per parameter; ``None`` or +-inf means unbounded."""
+    if bounds is None:
+        return None
+    if isinstance(bounds, (str, bytes)) or not isinstance(bounds, Sequence | np.ndarray):
+        raise ValueError(
+            f"{name} must be a list of (low, high) pairs, one per parameter; got {bounds!r}"
+        )
+    pairs = list(bounds)
+    if len(pairs) != n:
+        raise ValueError(
+            f"{name} must hold {n} (low, high) pairs, one per parameter, got {len(pairs)}"
+        )
+    out = []
+    for j, pair in enumerate(pairs):
+        try:
+            low, high = pair
+            low = -np.inf if low is None else float(low)
+            high = np.inf if high is None else float(high)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}[{j}] must be a pair (low, high), got {pair!r}") from None
+        if np.isnan(low) or np.isnan(high) or not low < high:
+            raise ValueError(f"{name}[{j}] = ({low}, {high}) needs low < high (None for no bound)")
+        out.append((low, high))
+    return out
+
+
+def _lower_upper(bounds: Any, n: int, name: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """``None`` or ``(lower, upper)``, each a number or one value per parameter (least_squares)."""
+    if bounds is None:
+        return None
+    try:
+        lower, upper = bounds
+        lower = np.broadcast_to(np.asarray(lower, dtype=float), (n,)).copy()
+        upper = np.broadcast_to(np.asarray(upper, dtype=float), (n,)).copy()
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{name} must be (lower, upper), each a number or {n} values (one per free "
+            f"parameter), as for scipy.optimize.least_squares; got {bounds!r}"
+        ) from None
+    if np.isnan(lower).any() or np.isnan(upper).any() or not np.all(lower < upper):
+        raise ValueError(f"{name} needs lower < upper (np.inf for no bound), got {bounds!r}")
+    return lower, upper
+
+
 @dataclass(frozen=True, repr=False, eq=False)
 class NonlinearFit:
     """Result of :func:`nonlinear_prediction_error`.
@@ -482,15 +536,27 @@ def nonlinear_prediction_error(
     >>> round(float(fit.theta[1]), 6), round(fit.statistic, 12)
     (1.4, 0.0)
     """
+    predict = as_callable(predict, "predict")
     nominal = as_vector(nominal, "nominal")
     p = nominal.size
     free = _indices(free, p)
-    y = as_float_array(y, "y")
+    y = as_float_array(y, "y", empty=False)
+    bounds = _lower_upper(bounds, len(free), "bounds")
 
     def full(theta_free):
         theta = nominal.copy()
         theta[free] = theta_free
         return theta
+
+    try:
+        first = np.shape(predict(nominal.copy()))
+    except Exception as exc:
+        raise ValueError(
+            f"predict(nominal) raised {type(exc).__name__}: {exc}; check that nominal holds the "
+            f"{p} parameters predict expects"
+        ) from exc
+    if first != y.shape:
+        raise ValueError(f"predict(nominal) returned shape {first}, but y has shape {y.shape}")
 
     def residual(theta_free):
         pred = np.asarray(predict(full(theta_free)), dtype=float)

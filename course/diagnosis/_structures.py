@@ -17,7 +17,7 @@ import numpy as np
 from course.diagnosis._common import _indices
 from course.linalg import range_basis, readonly
 from course.results import TestResult
-from course.validation import as_count, as_index, as_matrix
+from course.validation import InputTypeError, as_count, as_flag, as_index, as_matrix, as_positive
 
 _ZERO_MARKS = {"0", "o", "O", "-", ""}
 _X_MARKS = {"x", "X", "1"}
@@ -126,19 +126,23 @@ class DecisionStructure:
         Each test line is the test name followed by one ``0`` or ``X`` per
         mode, separated by white space (``|`` characters are ignored).
         """
-        lines = [ln.replace("|", " ").split() for ln in str(text).strip().splitlines()]
+        if not isinstance(text, str):
+            raise InputTypeError(
+                f"text must be a string holding the table, got {type(text).__name__}"
+            )
+        lines = [ln.replace("|", " ").split() for ln in text.strip().splitlines()]
         lines = [ln for ln in lines if ln]
         if len(lines) < 2:
             raise ValueError(
-                "a decision structure table needs a header line of mode names and at "
-                "least one test line, e.g. 'NF F1\\nT1 0 X'"
+                "text must hold a header line of mode names and at least one test line, "
+                "e.g. 'NF F1\\nT1 0 X'"
             )
         modes = lines[0]
         tests, rows = [], []
         for line in lines[1:]:
             if len(line) != len(modes) + 1:
                 raise ValueError(
-                    f"test line {' '.join(line)!r} has {len(line) - 1} entries but the header "
+                    f"text: test line {' '.join(line)!r} has {len(line) - 1} entries but the header "
                     f"names {len(modes)} modes; give one 0 or X per mode after the test name"
                 )
             tests.append(line[0])
@@ -244,17 +248,17 @@ def _parse_sensitivity(value) -> np.ndarray:
         rows = [list(row) for row in (value.tolist() if isinstance(value, np.ndarray) else value)]
     except TypeError:
         raise ValueError(
-            "a decision structure is a 2-D table, one row per test and one entry per fault mode, "
+            "sensitivity must be a 2-D table, one row per test and one entry per fault mode, "
             f"e.g. [[0, 0, 1], [0, 1, 0]]; got {value!r}"
         ) from None
     if not rows or not rows[0]:
-        raise ValueError("a decision structure needs at least one test and one mode")
+        raise ValueError("sensitivity needs at least one test (row) and one mode (column)")
     width = len(rows[0])
     matrix = np.zeros((len(rows), width), dtype=bool)
     for k, row in enumerate(rows):
         if len(row) != width:
             raise ValueError(
-                f"row {k} of the decision structure has {len(row)} entries, row 0 has {width}; "
+                f"row {k} of sensitivity has {len(row)} entries, row 0 has {width}; "
                 "every test needs one entry per fault mode"
             )
         for j, entry in enumerate(row):
@@ -273,12 +277,14 @@ def _mark(entry, k, j) -> bool:
     ):
         return bool(entry)
     raise ValueError(
-        f"entry ({k}, {j}) of the decision structure is {entry!r}; use 0 (not sensitive) "
+        f"sensitivity entry ({k}, {j}) is {entry!r}; use 0 (not sensitive) "
         "or X (may alarm), or False/True"
     )
 
 
 def _names(names, what, size) -> tuple:
+    if isinstance(names, (str, bytes)) or not isinstance(names, Sequence | np.ndarray):
+        raise InputTypeError(f"{what} must be a sequence of names (a list of str), got {names!r}")
     names = tuple(str(n) for n in names)
     if len(names) != size:
         raise ValueError(f"{what} names {len(names)} entries but the table has {size}")
@@ -296,22 +302,43 @@ def _lookup(key, names, what) -> int:
         raise ValueError(f"unknown {what} {key!r}; the structure has {list(names)}") from None
 
 
+def _check_structure(structure) -> DecisionStructure:
+    if not isinstance(structure, DecisionStructure):
+        raise InputTypeError(
+            "structure must be a DecisionStructure (build one with DecisionStructure(...) or "
+            f"DecisionStructure.from_text(...)), got {type(structure).__name__}"
+        )
+    return structure
+
+
+def _alarmed_row(structure: DecisionStructure, test) -> int:
+    try:
+        return structure.row_index(test)
+    except ValueError as exc:
+        raise ValueError(f"alarms: {exc}") from None
+
+
 def _alarm_vector(structure: DecisionStructure, alarms) -> np.ndarray:
     n_tests = len(structure.tests)
     if isinstance(alarms, Mapping):
         vector = np.zeros(n_tests, dtype=bool)
         for key, value in alarms.items():
-            vector[structure.row_index(key)] = _as_alarm(value)
+            vector[_alarmed_row(structure, key)] = _as_alarm(value)
         return vector
     if isinstance(alarms, (str, bytes)):
         alarms = [alarms]
+    if alarms is None or not isinstance(alarms, Sequence | np.ndarray):
+        raise InputTypeError(
+            "alarms must be one True/False (or TestResult) per test, the names of the tests "
+            f"that alarmed, or a {{test: alarm}} mapping; got {alarms!r}"
+        )
     items = list(alarms)
     if not items:  # no test named: nothing alarmed
         return np.zeros(n_tests, dtype=bool)
     if all(isinstance(a, str) for a in items):
         vector = np.zeros(n_tests, dtype=bool)
         for name in items:
-            vector[structure.row_index(name)] = True
+            vector[_alarmed_row(structure, name)] = True
         return vector
     if len(items) != n_tests:
         raise ValueError(
@@ -325,9 +352,11 @@ def _alarm_vector(structure: DecisionStructure, alarms) -> np.ndarray:
 def _as_alarm(value) -> bool:
     if isinstance(value, TestResult):
         return value.reject
-    if isinstance(value, (bool, np.bool_)) or value in (0, 1):
+    if isinstance(value, (bool, np.bool_)) or (
+        isinstance(value, (int, float, np.integer, np.floating)) and value in (0, 1)
+    ):
         return bool(value)
-    raise ValueError(f"an alarm must be True/False, 0/1 or a TestResult, got {value!r}")
+    raise ValueError(f"alarms: an alarm must be True/False, 0/1 or a TestResult, got {value!r}")
 
 
 def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False) -> tuple:
@@ -385,10 +414,7 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
     >>> diagnoses(ds, [])
     ('NF', 'F1', 'F2', 'F3')
     """
-    if not isinstance(structure, DecisionStructure):
-        raise ValueError(
-            "structure must be a DecisionStructure (build one with DecisionStructure(...))"
-        )
+    structure = _check_structure(structure)
     alarm = _alarm_vector(structure, alarms)
     consistent = diagnosis_matrix(structure, alarm[None, :], exoneration=exoneration)[0]
     return tuple(m for m, ok in zip(structure.modes, consistent) if ok)
@@ -429,6 +455,10 @@ def diagnosis_matrix(
     array([[False,  True, False, False],
            [False, False, False, False]])
     """
+    structure = _check_structure(structure)
+    exoneration = as_flag(exoneration, "exoneration")
+    if alarms is None or isinstance(alarms, (str, bytes)):
+        raise InputTypeError(f"alarms must be a boolean array (M, n_tests), got {alarms!r}")
     alarms = np.asarray(alarms)
     if alarms.ndim != 2 or alarms.shape[1] != len(structure.tests):
         raise ValueError(
@@ -489,7 +519,13 @@ def multiple_fault_diagnoses(
     >>> multiple_fault_diagnoses(ds, ["T1", "T2", "T3"])
     [('F1', 'F2'), ('F1', 'F3'), ('F2', 'F3')]
     """
+    structure = _check_structure(structure)
     alarm = _alarm_vector(structure, alarms)
+    if no_fault is not None and (not isinstance(no_fault, str) or no_fault not in structure.modes):
+        raise ValueError(
+            f"no_fault must be None or one of the modes {list(structure.modes)} (the no-fault "
+            f"mode, left out of the fault sets), got {no_fault!r}"
+        )
     faults = [j for j, m in enumerate(structure.modes) if m != no_fault]
     S = structure.sensitivity
     conflicts = [frozenset(j for j in faults if S[k, j]) for k in np.flatnonzero(alarm)]
@@ -505,6 +541,16 @@ def multiple_fault_diagnoses(
             if all(cand & c for c in conflicts):
                 found.append(cand)
     return [tuple(structure.modes[j] for j in sorted(f)) for f in found]
+
+
+def _index_sets(value, name: str, p: int) -> dict:
+    """``{name: sorted parameter indices}`` from a mapping of names to index sequences."""
+    if not isinstance(value, Mapping):
+        raise InputTypeError(
+            f"{name} must be a mapping {{name: parameter indices}}, e.g. {{'F1': (0,)}}; "
+            f"got {type(value).__name__}"
+        )
+    return {str(key): _indices(free, p, f"{name}[{key!r}]") for key, free in value.items()}
 
 
 def linear_decision_structure(
@@ -553,12 +599,12 @@ def linear_decision_structure(
     """
     U = as_matrix(U, "U")
     p = U.shape[1]
+    modes, tests = _index_sets(modes, "modes", p), _index_sets(tests, "tests", p)
+    rtol = as_positive(rtol, "rtol", what="the relative tolerance")
     matrix = np.zeros((len(tests), len(modes)), dtype=bool)
     for k, free in enumerate(tests.values()):
-        free = _indices(free, p, "test free parameters")
         basis = range_basis(U[:, free])
         for j, faulty in enumerate(modes.values()):
-            faulty = _indices(faulty, p, "mode parameters")
             if not faulty:
                 continue
             D = U[:, faulty]

@@ -21,11 +21,14 @@ from course.filters._models import (
     _model_records,
 )
 from course.filters._stacked import _batch_major, _time_major
-from course.filters._steps import ekf_predict, ekf_update, kf_predict, kf_update
+from course.filters._steps import _ekf_predict as ekf_predict
+from course.filters._steps import _ekf_update as ekf_update
+from course.filters._steps import _kf_predict as kf_predict
+from course.filters._steps import _kf_update as kf_update
+from course.linalg import _symmetrize as symmetrize
 from course.linalg import readonly as _readonly
-from course.linalg import symmetrize
 from course.nis import _statistics as _nis_home
-from course.validation import as_covariance, as_vector
+from course.validation import InputTypeError, as_covariance, as_flag, as_vector
 
 
 # ---------------------------------------------------------------------------
@@ -397,7 +400,10 @@ def extended_kalman_filter(
     if isinstance(model, LinearModel):
         model = NonlinearModel.from_linear(model)
     if not isinstance(model, NonlinearModel):
-        raise TypeError(f"model must be a NonlinearModel, got {type(model).__name__}")
+        raise InputTypeError(
+            f"model must be a NonlinearModel (or a LinearModel), got {type(model).__name__}"
+        )
+    store_covariances = as_flag(store_covariances, "store_covariances")
     y, u, N, batch = _model_records(model, y, u)
     if u is not None:
         u = np.broadcast_to(u, batch + u.shape[-2:])

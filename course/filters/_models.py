@@ -12,13 +12,18 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from course.filters._stacked import _T, _batch_major, _time_major
-from course.linalg import psd_sqrt, readonly, symmetrize
+from course.linalg import _symmetrize as symmetrize
+from course.linalg import psd_sqrt, readonly
 from course.validation import (
+    InputTypeError,
+    as_callable,
     as_count,
     as_covariance,
+    as_flag,
     as_float_array,
     as_generator,
     as_matrix,
+    as_positive,
     as_vector,
 )
 
@@ -46,19 +51,22 @@ def _check_steps(N: Any) -> int:
     return as_count(N, "N", what="the number of samples")
 
 
-def _as_signal(value, name: str, width: int, N: int | None = None) -> np.ndarray:
+def _as_signal(
+    value, name: str, width: int, N: int | None = None, width_from: str = "the model"
+) -> np.ndarray:
     """A signal of shape ``(*batch, N, width)``; ``(N,)`` is accepted when width is 1."""
-    array = as_float_array(value, name)
+    array = as_float_array(value, name, min_ndim=1)
     if array.ndim == 1:
         if width != 1:
             raise ValueError(
-                f"{name} has shape {array.shape} but the model has {width} channels; "
+                f"{name} has shape {array.shape} but {width_from} has {width} channels; "
                 f"pass an array of shape (N, {width}) or (batch, N, {width})"
             )
         array = array[:, None]
     if array.ndim < 2 or array.shape[-1] != width:
         raise ValueError(
-            f"{name} must have shape (N, {width}) or (batch, N, {width}), got {array.shape}"
+            f"{name} must have shape (N, {width}) or (batch, N, {width}) for the {width} "
+            f"channels of {width_from}, got {array.shape}"
         )
     if N is not None and array.shape[-2] != N:
         raise ValueError(f"{name} must have N = {N} samples along axis -2, got {array.shape[-2]}")
@@ -73,7 +81,7 @@ def _noise(rng, sqrt_cov: np.ndarray, mean: np.ndarray, shape: tuple) -> np.ndar
     return mean + z @ sqrt_cov.T
 
 
-def _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean):
+def _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean, n_from="F"):
     """Checked ``Q``, ``G`` (identity by default), ``x0_cov``, ``w_mean``, ``v_mean`` of a model
     with ``n`` states and ``p`` outputs (defaults: ``x0_cov = I``, zero means)."""
     Q = as_matrix(Q, "Q")
@@ -81,12 +89,17 @@ def _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean):
     if G is None:
         if Q.shape != (n, n):
             raise ValueError(
-                f"Q has shape {Q.shape} but without G it must be n x n = ({n}, {n}); "
+                f"Q has shape {Q.shape} but without G it must be n x n = ({n}, {n}) "
+                f"(n from {n_from}); "
                 "pass G (n x q) to say how a q-dimensional noise enters the state"
             )
         G = np.eye(n)
     else:
-        G = as_matrix(G, "G", shape=(n, None))
+        G = as_matrix(G, "G")
+        if G.shape[0] != n:
+            raise ValueError(
+                f"G must have n = {n} rows (the number of states, from {n_from}), got shape {G.shape}"
+            )
         if G.shape[1] != q:
             raise ValueError(
                 f"G has {G.shape[1]} columns but Q is {Q.shape[0]} x {Q.shape[1]}; "
@@ -323,9 +336,16 @@ def numerical_jacobian(f, x, step=None) -> np.ndarray:
     array([[3., 2.],
            [0., 1.]])
     """
-    x = np.asarray(x, dtype=float)
+    f = as_callable(f, "f")
+    x = as_float_array(x, "x", min_ndim=1, empty=False)
+    step = _FD_SCALE if step is None else as_positive(step, "step", what="the relative step")
+    return _numerical_jacobian(f, x, step)
+
+
+def _numerical_jacobian(f, x: np.ndarray, step: float = _FD_SCALE) -> np.ndarray:
+    """:func:`numerical_jacobian` without input checks (the EKF's loop)."""
     n = x.shape[-1]
-    h = (_FD_SCALE if step is None else float(step)) * np.maximum(1.0, np.abs(x))
+    h = step * np.maximum(1.0, np.abs(x))
     # the step actually taken, (x + h) - x, is what must be divided by
     offsets = np.eye(n) * h[..., None, :]
     xp = x[..., None, :] + offsets
@@ -335,9 +355,10 @@ def numerical_jacobian(f, x, step=None) -> np.ndarray:
     return _T(diff / dx[..., :, None])
 
 
-def _check_model(model) -> None:
+def _check_model(model, name: str = "model") -> None:
     if not isinstance(model, LinearModel):
-        raise TypeError(f"model must be a LinearModel, got {type(model).__name__}")
+        hint = " (use extended_kalman_filter for a NonlinearModel)" if hasattr(model, "g") else ""
+        raise InputTypeError(f"{name} must be a LinearModel, got {type(model).__name__}{hint}")
 
 
 class NonlinearModel:
@@ -410,15 +431,17 @@ class NonlinearModel:
         v_mean=None,
         n_inputs=0,
     ):
-        for name, fun in (("g", g), ("h", h), ("jac_g", jac_g), ("jac_h", jac_h)):
-            if fun is not None and not callable(fun):
-                raise ValueError(f"{name} must be callable, got {type(fun).__name__}")
+        g, h = as_callable(g, "g"), as_callable(h, "h")
+        jac_g = as_callable(jac_g, "jac_g", optional=True)
+        jac_h = as_callable(jac_h, "jac_h", optional=True)
         x0_mean = as_vector(x0_mean, "x0_mean")
         n = x0_mean.shape[0]
         R = as_matrix(R, "R")
         p = R.shape[0]
         R = as_covariance(R, "R", p)
-        Q, G, x0_cov, w_mean, v_mean = _noise_terms(n, p, Q, G, x0_cov, w_mean, v_mean)
+        Q, G, x0_cov, w_mean, v_mean = _noise_terms(
+            n, p, Q, G, x0_cov, w_mean, v_mean, n_from="x0_mean"
+        )
         q = Q.shape[0]
         n_inputs = as_count(n_inputs, "n_inputs", minimum=0, what="the dimension of u")
 
@@ -437,8 +460,8 @@ class NonlinearModel:
         for name, value, shape in (
             ("g(x0_mean, u)", lambda: self.g(self.x0_mean, u0), (n,)),
             ("h(x0_mean)", lambda: self.h(self.x0_mean), (p,)),
-            ("jacobian_g(x0_mean, u)", lambda: self.jacobian_g(self.x0_mean, u0), (n, n)),
-            ("jacobian_h(x0_mean)", lambda: self.jacobian_h(self.x0_mean), (p, n)),
+            ("jacobian_g(x0_mean, u)", lambda: self._jacobian_g(self.x0_mean, u0), (n, n)),
+            ("jacobian_h(x0_mean)", lambda: self._jacobian_h(self.x0_mean), (p, n)),
         ):
             try:
                 got = np.shape(value())
@@ -467,6 +490,7 @@ class NonlinearModel:
         are supplied, so the EKF reproduces the Kalman filter to rounding.
         """
         _check_model(model)
+        numerical_jacobians = as_flag(numerical_jacobians, "numerical_jacobians")
         F, H, B = model.F, model.H, model.B
         has_u = model.n_inputs > 0
 
@@ -503,18 +527,36 @@ class NonlinearModel:
 
     def jacobian_g(self, x, u=None) -> np.ndarray:
         """``dg/dx`` at ``(x, u)``: the user's ``jac_g`` or central differences."""
+        x = self._states(x)
+        if u is not None:
+            u = as_float_array(u, "u", min_ndim=1, empty=False)
+        return self._jacobian_g(x, u)
+
+    def _states(self, x) -> np.ndarray:
+        x = as_float_array(x, "x", min_ndim=1, empty=False)
+        if x.shape[-1] != self.n_states:
+            raise ValueError(
+                f"x must have n = {self.n_states} states along its last axis, got {x.shape}"
+            )
+        return x
+
+    def _jacobian_g(self, x, u=None) -> np.ndarray:
         if self.jac_g is not None:
             return np.asarray(self.jac_g(x, u), dtype=float)
+        x = np.asarray(x, dtype=float)
         if u is None:
-            return numerical_jacobian(lambda z: self.g(z, None), x)
+            return _numerical_jacobian(lambda z: self.g(z, None), x)
         u = np.asarray(u)[..., None, :]  # one copy per perturbed point
-        return numerical_jacobian(lambda z: self.g(z, u), x)
+        return _numerical_jacobian(lambda z: self.g(z, u), x)
 
     def jacobian_h(self, x) -> np.ndarray:
         """``dh/dx`` at ``x``: the user's ``jac_h`` or central differences."""
+        return self._jacobian_h(self._states(x))
+
+    def _jacobian_h(self, x) -> np.ndarray:
         if self.jac_h is not None:
             return np.asarray(self.jac_h(x), dtype=float)
-        return numerical_jacobian(self.h, x)
+        return _numerical_jacobian(self.h, np.asarray(x, dtype=float))
 
     def simulate(self, N, rng, batch=None, u=None):
         """Draw state and output sequences; see :meth:`LinearModel.simulate`."""

@@ -14,8 +14,9 @@ import numpy as np
 from numpy.linalg import LinAlgError
 
 from course import _deprecation
-from course.filters._steps import kf_update
-from course.linalg import matrix_rank, qr_solve, symmetrize
+from course.filters._steps import _kf_update as kf_update
+from course.linalg import _symmetrize as symmetrize
+from course.linalg import matrix_rank, qr_solve
 from course.nis import _statistics as _nis_home
 from course.validation import as_covariance, as_float_array, as_matrix, as_variance, as_vector
 

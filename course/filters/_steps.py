@@ -11,8 +11,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.linalg import LinAlgError
 
+from course.filters._models import NonlinearModel
 from course.filters._stacked import _T, _mm, _mv
-from course.linalg import symmetrize
+from course.linalg import _symmetrize as symmetrize
+from course.validation import InputTypeError, as_covariance_stack, as_float_array
 
 
 class MeasurementUpdate(NamedTuple):
@@ -81,6 +83,27 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     >>> step.x_filt, step.S, step.K
     (array([1.]), array([[2.]]), array([[0.5]]))
     """
+    x_pred = _state(x_pred, "x_pred")
+    P_pred = as_covariance_stack(P_pred, "P_pred", allow_singular=True)
+    y = _state(y, "y")
+    H = as_float_array(H, "H", min_ndim=2, empty=False)
+    R = as_covariance_stack(R, "R")
+    if v_mean is not None:
+        v_mean = _state(v_mean, "v_mean")
+        if v_mean.shape[-1] != y.shape[-1]:
+            raise ValueError(
+                f"v_mean must have length p = {y.shape[-1]} like y, got {v_mean.shape}"
+            )
+    return _kf_update(x_pred, P_pred, y, H, R, v_mean)
+
+
+def _state(value, name: str) -> np.ndarray:
+    """A finite vector ``(..., d)`` of a filter step (a state, a measurement)."""
+    return as_float_array(value, name, min_ndim=1, empty=False)
+
+
+def _kf_update(x_pred, P_pred, y, H, R, v_mean=None):
+    """:func:`kf_update` for arrays the library built (no value checks: the filters' loop)."""
     x_pred, P_pred, y, H, R = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y, H, R))
     _check_update_shapes(x_pred, P_pred, y, H, R)
     y_hat = _mv(H, x_pred)
@@ -97,13 +120,17 @@ def _check_update_shapes(x_pred, P_pred, y, H, R) -> None:
     if x_pred.ndim < 1:
         problems.append(f"x_pred must be (..., n), got shape {x_pred.shape}")
     if P_pred.ndim < 2 or P_pred.shape[-2:] != (n, n):
-        problems.append(f"P_pred must be (..., {n}, {n}) for n = {n} states, got {P_pred.shape}")
+        problems.append(
+            f"P_pred must be (..., {n}, {n}) for the n = {n} states of x_pred, got {P_pred.shape}"
+        )
     if y.ndim < 1:
         problems.append(f"y must be (..., p), got shape {y.shape}")
     if H.ndim < 2 or H.shape[-2:] != (p, n):
-        problems.append(f"H must be (..., p, n) = (..., {p}, {n}), got {H.shape}")
+        problems.append(
+            f"H must be (..., p, n) = (..., {p}, {n}) for the lengths of y and x_pred, got {H.shape}"
+        )
     if R.ndim < 2 or R.shape[-2:] != (p, p):
-        problems.append(f"R must be (..., {p}, {p}) for p = {p} outputs, got {R.shape}")
+        problems.append(f"R must be (..., {p}, {p}) for the p = {p} outputs of y, got {R.shape}")
     if problems:
         raise ValueError("measurement update: " + "; ".join(problems))
 
@@ -115,7 +142,9 @@ def _check_predict_shapes(x_filt, P_filt, F, GQG) -> None:
         problems.append(f"x_filt must be (..., n), got shape {x_filt.shape}")
     for name, a in (("P_filt", P_filt), ("F", F), ("GQG", GQG)):
         if a.ndim < 2 or a.shape[-2:] != (n, n):
-            problems.append(f"{name} must be (..., {n}, {n}) for n = {n} states, got {a.shape}")
+            problems.append(
+                f"{name} must be (..., {n}, {n}) for the n = {n} states of x_filt, got {a.shape}"
+            )
     if problems:
         raise ValueError("time update: " + "; ".join(problems))
 
@@ -182,6 +211,21 @@ def kf_predict(x_filt, P_filt, F, GQG, offset=None):
     >>> step.x_pred, step.P_pred
     (array([2.]), array([[4.5]]))
     """
+    x_filt = _state(x_filt, "x_filt")
+    P_filt = as_covariance_stack(P_filt, "P_filt", allow_singular=True)
+    F = as_float_array(F, "F", min_ndim=2, empty=False)
+    GQG = as_covariance_stack(GQG, "GQG", allow_singular=True)
+    if offset is not None:
+        offset = _state(offset, "offset")
+        if offset.shape[-1] != x_filt.shape[-1]:
+            raise ValueError(
+                f"offset must have length n = {x_filt.shape[-1]} like x_filt, got {offset.shape}"
+            )
+    return _kf_predict(x_filt, P_filt, F, GQG, offset)
+
+
+def _kf_predict(x_filt, P_filt, F, GQG, offset=None):
+    """:func:`kf_predict` without value checks (the filters' loop)."""
     x_filt, P_filt, F, GQG = (np.asarray(a, dtype=float) for a in (x_filt, P_filt, F, GQG))
     _check_predict_shapes(x_filt, P_filt, F, GQG)
     x_pred = _mv(F, x_filt)
@@ -229,8 +273,26 @@ def ekf_update(model, x_pred, P_pred, y):
     >>> step.eps, step.S          # y - h(x) and H P H^T + R with H = 2x = 4
     (array([1.]), array([[17.]]))
     """
+    _check_nonlinear(model)
+    x_pred = _state(x_pred, "x_pred")
+    P_pred = as_covariance_stack(P_pred, "P_pred", allow_singular=True)
+    return _ekf_update(model, x_pred, P_pred, _state(y, "y"))
+
+
+def _check_nonlinear(model) -> None:
+    if not isinstance(model, NonlinearModel):
+        hint = (
+            " (NonlinearModel.from_linear(model) writes a LinearModel as one)"
+            if hasattr(model, "F")
+            else ""
+        )
+        raise InputTypeError(f"model must be a NonlinearModel, got {type(model).__name__}{hint}")
+
+
+def _ekf_update(model, x_pred, P_pred, y):
+    """:func:`ekf_update` without value checks (the filter's loop)."""
     x_pred, P_pred, y = (np.asarray(a, dtype=float) for a in (x_pred, P_pred, y))
-    H = model.jacobian_h(x_pred)
+    H = model._jacobian_h(x_pred)
     _check_update_shapes(x_pred, P_pred, y, H, model.R)
     eps = y - model.h(x_pred) - model.v_mean
     return _update_core(x_pred, P_pred, eps, H, model.R)
@@ -272,8 +334,24 @@ def ekf_predict(model, x_filt, P_filt, u=None):
     >>> step.x_pred, step.P_pred.round(6)  # g(x) and F P F^T + Q with F = x = 2
     (array([2.]), array([[4.1]]))
     """
+    _check_nonlinear(model)
+    x_filt = _state(x_filt, "x_filt")
+    P_filt = as_covariance_stack(P_filt, "P_filt", allow_singular=True)
+    if model.n_inputs == 0 and u is not None:
+        raise ValueError("this model has no input (n_inputs = 0) but u was passed")
+    if model.n_inputs and u is None:
+        raise ValueError(f"this model has {model.n_inputs} input(s): pass u of shape (..., m)")
+    if u is not None:
+        u = _state(u, "u")
+        if u.shape[-1] != model.n_inputs:
+            raise ValueError(f"u must have length m = {model.n_inputs}, got shape {u.shape}")
+    return _ekf_predict(model, x_filt, P_filt, u)
+
+
+def _ekf_predict(model, x_filt, P_filt, u=None):
+    """:func:`ekf_predict` without value checks (the filter's loop)."""
     x_filt, P_filt = np.asarray(x_filt, dtype=float), np.asarray(P_filt, dtype=float)
-    F = model.jacobian_g(x_filt, u)
+    F = model._jacobian_g(x_filt, u)
     _check_predict_shapes(x_filt, P_filt, F, model.GQG)
     x_pred = model.g(x_filt, u) + model.Gw
     return TimeUpdate(x_pred, symmetrize(_mm(_mm(F, P_filt), _T(F)) + model.GQG))

@@ -29,6 +29,12 @@ isolation
     The isolation layers of a child, one per module.
 tripwire
     Forbidden library functions.
+secret, personal
+    A graded class's instructor secret, and the personal data issued from it.
+submit, identity, roster
+    Handing in (``check.submit()``), whose submission is whose, the roster and LMS grade files.
+export, leaks
+    ``course export`` (the student edition) and the scan that keeps solutions out of it.
 
 ``course.exercises`` is the old name of this package; it still works for one release.
 """

@@ -22,6 +22,7 @@ import numpy as np
 
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
+from course.grading.secret import Secret
 from course.grading.vocabulary import DEMO_STUDENT_ID
 
 __all__ = [
@@ -41,13 +42,20 @@ _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _NAME = re.compile(r"^[0-9A-Za-z][0-9A-Za-z_.-]*$")
 
 
-def student_rng(assignment: str, key: str, student_id: str) -> np.random.Generator:
+def student_rng(
+    assignment: str, key: str, student_id: str, secret: Secret | None = None
+) -> np.random.Generator:
     """The random generator of one student's data set ``key`` of ``assignment``.
 
-    Seeded with the first 128 bits of ``sha256(assignment NUL key NUL student_id)`` (surrounding
-    whitespace of the ID ignored), so it is the same on every machine and in every process;
-    Python's ``hash`` is salted per process and is never used.
+    Without ``secret`` (self-learners): seeded with the first 128 bits of
+    ``sha256(assignment NUL key NUL student_id)``, so anyone with the ID rebuilds the data.
+    With the instructor's :class:`~course.grading.secret.Secret`: seeded with
+    ``HMAC-SHA256(secret, ...)``, which nothing in the student distribution determines.
+    Surrounding whitespace of the ID is ignored; the seed is the same on every machine and in
+    every process (Python's ``hash`` is salted per process and is never used).
     """
+    if secret is not None:
+        return np.random.default_rng(secret.seed(assignment, key, student_id))
     text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode()
     seed = int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
     return np.random.default_rng(seed)
@@ -113,6 +121,7 @@ class Question:
     def expected(self, case: Case | None = None, data: Any = None) -> Any:
         """The reference value (normalised through the plain-data codec)."""
         if self.kind == "function":
+            assert case is not None, "a function question needs a case"
             value = self.reference(*decode(encode(case.args)), **decode(encode(case.kwargs)))
         elif self.data is not None:
             value = self.reference(data)
@@ -159,6 +168,7 @@ class Checks:
         self.preload = tuple(preload)
         self.files = tuple(files)
         self.questions: dict[str, Question] = {}
+        self.solution_dir: Path | None = None  # set by load_checks
 
     # -- decorators --------------------------------------------------------------------
     def _register(self, question: Question) -> Question:
@@ -278,10 +288,11 @@ class Checks:
     def data_keys(self) -> list[str]:
         return sorted({q.data for q in self.questions.values() if q.data is not None})
 
-    def data_for(self, key: str, student_id: str) -> Any:
-        """The per-student data set ``key`` for ``student_id`` (plain data)."""
+    def data_for(self, key: str, student_id: str, secret: Secret | None = None) -> Any:
+        """The per-student data set ``key`` for ``student_id`` (plain data), drawn with the
+        instructor's ``secret`` when one is given (see :func:`student_rng`)."""
         func = getattr(self.data_module, key)
-        return decode(encode(func(student_rng(self.name, key, student_id))))
+        return decode(encode(func(student_rng(self.name, key, student_id, secret))))
 
     def validate(self) -> None:
         """Check the question set for authoring mistakes (raises ValueError)."""
@@ -314,6 +325,7 @@ def load_checks(solution_dir: str | Path) -> Checks:
     package.__package__ = pkg_name
     sys.modules[pkg_name] = package
     spec = importlib.util.spec_from_file_location(f"{pkg_name}.checks", checks_file)
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
     _exec_without_bytecode(spec, module)
@@ -339,6 +351,7 @@ def load_data_module(path: str | Path, assignment: str) -> types.ModuleType:
     path = Path(path).resolve()
     name = f"_course_data_{re.sub(r'[^0-9A-Za-z_]', '_', assignment)}"
     spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None
     module = importlib.util.module_from_spec(spec)
     _exec_without_bytecode(spec, module)
     return module

@@ -1,4 +1,5 @@
-"""The ``course release`` and ``course grade`` subcommands (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``export`` and ``secret``, and the
+students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -6,15 +7,42 @@ import os
 import sys
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+#: Where `course release` and `course grade` look for solutions/ and exercises/.
+COURSE_DIR_HELP = (
+    "the course folder holding solutions/ and exercises/ (default: $COURSE_DIR, else the "
+    "working folder or the nearest parent that has one of them)"
+)
+
+
+def find_course_dir(explicit: str | None = None) -> Path:
+    """The course folder: ``--course-dir``, then ``$COURSE_DIR``, then the working folder and
+    its parents (the first holding ``solutions/`` or ``exercises/``), else the working folder.
+
+    Never the package's own location: installed without ``-e`` the package lives in
+    site-packages, far from any course folder.
+    """
+    if explicit:
+        return Path(explicit).expanduser().resolve()
+    if os.environ.get("COURSE_DIR"):
+        return Path(os.environ["COURSE_DIR"]).expanduser().resolve()
+    here = Path.cwd().resolve()
+    for folder in (here, *here.parents):
+        if (folder / "solutions").is_dir() or (folder / "exercises").is_dir():
+            return folder
+    return here
+
+
+def _folder(args, name: str) -> Path:
+    explicit = getattr(args, name, None)
+    return Path(explicit) if explicit else find_course_dir(args.course_dir) / name
 
 
 def _release(args) -> int:
     from course.grading.notebook import MarkerError
     from course.grading.release import find_solutions, release
 
-    solutions = Path(args.solutions)
-    exercises = Path(args.exercises)
+    solutions = _folder(args, "solutions")
+    exercises = _folder(args, "exercises")
     names = find_solutions(solutions) if args.all else list(args.names)
     if not names:
         print(
@@ -50,9 +78,10 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.grading.driver import GradeOptions, grade
+    from course.grading.driver import GradeOptions, available_cpus, grade
+    from course.grading.isolation import IsolationError
 
-    solutions = Path(args.solutions)
+    solutions = _folder(args, "solutions")
     name = Path(args.assignment).name
     solution_dir = (
         Path(args.assignment)
@@ -69,17 +98,190 @@ def _grade(args) -> int:
     if not submissions.is_dir():
         print(f"course grade: {submissions} is not a folder of submissions", file=sys.stderr)
         return 2
+    class_options = _class_options(args)
+    if class_options is None:
+        return 2
     options = GradeOptions(
-        jobs=args.jobs or os.cpu_count() or 1,
+        **class_options,
+        jobs=args.jobs or available_cpus(),
         timeout=args.timeout,
         memory_mb=args.memory,
         mode=args.mode,
         regrade=args.regrade,
         progress=not args.no_progress,
+        unsafe_no_isolation=args.unsafe_no_isolation,
+        cluster=args.cluster,
+        announce=lambda text: print(text, file=sys.stderr),
     )
-    summary = grade(solution_dir, submissions, Path(args.out), options)
+    try:
+        summary = grade(solution_dir, submissions, Path(args.out), options)
+    except IsolationError as exc:
+        print(f"course grade: refusing to run: {exc}", file=sys.stderr)
+        return 2
+    except RuntimeError as exc:
+        if args.cluster and "distributed" in str(exc):
+            print(f"course grade: {exc}", file=sys.stderr)
+            return 2
+        raise
     print(summary.text())
     return 0
+
+
+def _class_options(args) -> dict | None:
+    """The secret and the roster of ``course grade`` (None after printing why not)."""
+    from course.grading.roster import RosterError, read_roster
+    from course.grading.secret import SecretError, load_secret
+
+    try:
+        secret = load_secret(args.secret)
+        roster = read_roster(args.roster) if args.roster else None
+    except (SecretError, RosterError) as exc:
+        print(f"course grade: {exc}", file=sys.stderr)
+        return None
+    print(
+        "personal data: "
+        + (
+            f"drawn with the secret {secret.key_id} ({secret.source})"
+            if secret is not None
+            else "public generators (no secret)"
+        ),
+        file=sys.stderr,
+    )
+    return {
+        "secret": secret,
+        "roster": roster,
+        "missing_as_zero": args.missing_as_zero,
+        "lms_column": args.lms_column,
+    }
+
+
+def _export(args) -> int:
+    from course.grading.export import ExportError, export
+    from course.grading.roster import RosterError, read_roster
+    from course.grading.secret import SecretError, load_secret
+
+    try:
+        secret = None if args.no_secret else load_secret(args.secret)
+        roster = read_roster(args.roster) if args.roster else None
+        result = export(
+            args.dest, root=find_course_dir(args.course_dir), secret=secret, roster=roster
+        )
+    except (ExportError, SecretError, RosterError, OSError) as exc:
+        print(f"course export: {exc}", file=sys.stderr)
+        return 2
+    if secret is None:
+        print(
+            "course export: no instructor secret: personal data come from the public data.py, "
+            "so students can rebuild the truth behind personal questions (fine for "
+            "self-learners; for a graded class pass --secret and --roster)",
+            file=sys.stderr,
+        )
+    print(f"exported the student edition into {result.dest}:")
+    for path in result.artefacts:
+        print(f"  {path.name}{'/' if path.is_dir() else ''}")
+    print(
+        f"personal data: {result.data_key}"
+        + (f", {result.students} students" if result.students else "")
+        + "; nothing of solutions/ found in any file (see EXPORT.md)"
+    )
+    return 0
+
+
+def _submit(args) -> int:
+    from course.grading.personal import PersonalData
+    from course.grading.submit import Refused, make_submission, unanswered_questions
+
+    notebook = Path(args.notebook)
+    if not notebook.is_file():
+        print(f"course submit: {notebook} is not a file", file=sys.stderr)
+        return 2
+    try:
+        personal = PersonalData.read(notebook.parent)
+        path, digest, nb = make_submission(
+            notebook, args.id, None, Path(args.out) if args.out else None, personal
+        )
+    except (Refused, ValueError) as exc:
+        print(f"course submit: not submitted: {exc}", file=sys.stderr)
+        return 2
+    missing = unanswered_questions(nb)
+    if missing:
+        print(f"not answered: {', '.join(missing)}")
+    print(
+        f"wrote {path} (sha256 {digest[:16]}…). The self-checks run in the notebook "
+        "(check.submit()); upload this file to your course's assignment page."
+    )
+    return 0
+
+
+def _secret(args) -> int:
+    from course.grading.secret import SecretError, load_secret, new_secret
+
+    try:
+        secret = new_secret(args.file) if args.action == "new" else load_secret(args.file)
+    except SecretError as exc:
+        print(f"course secret: {exc}", file=sys.stderr)
+        return 2
+    if secret is None:
+        print(
+            "course secret: no key file given and $COURSE_SECRET_FILE is not set", file=sys.stderr
+        )
+        return 2
+    verb = "created" if args.action == "new" else "read"
+    print(f"{verb} {secret.source}: key id {secret.key_id} (keep the file private; back it up)")
+    return 0
+
+
+def _add_class_commands(subparsers) -> None:
+    """``course export``, ``course submit`` and ``course secret`` (the student distribution)."""
+    p_ex = subparsers.add_parser(
+        "export",
+        help="build the student distribution (folder, zip, wheel, sdist) without solutions",
+        description="Write into DEST (new or empty) what students receive: the library, the "
+        "teaching notebooks, the released exercises and a student README, as a folder, a zip, "
+        "a wheel and an sdist. Nothing of solutions/; every file is scanned before it is "
+        "handed over. For a graded class give --secret and --roster: students then get their "
+        "personal data, not the generators.",
+    )
+    p_ex.add_argument("dest", metavar="DEST", help="output folder (must not exist, or be empty)")
+    p_ex.add_argument(
+        "--secret",
+        default=None,
+        help="the class's key file (default: $COURSE_SECRET_FILE; make one with `course secret new`)",
+    )
+    p_ex.add_argument(
+        "--no-secret",
+        action="store_true",
+        help="ignore $COURSE_SECRET_FILE: a self-learner edition",
+    )
+    p_ex.add_argument("--roster", default=None, help="CSV of the class (id, name, email)")
+    p_ex.add_argument("--course-dir", help=COURSE_DIR_HELP)
+    p_ex.set_defaults(func=_export)
+
+    p_sub = subparsers.add_parser(
+        "submit",
+        help="write <ID>_<assignment>.ipynb from a saved assignment notebook, ready to upload",
+        description="Check the student ID of a saved assignment notebook and write "
+        "<ID>_<assignment>.ipynb beside it (with the ID in its metadata). In the notebook, "
+        "check.submit() does the same after running every self-check.",
+    )
+    p_sub.add_argument("notebook", metavar="NOTEBOOK", help="the saved assignment notebook")
+    p_sub.add_argument(
+        "--id", default=None, help="student ID (default: STUDENT_ID in the notebook)"
+    )
+    p_sub.add_argument("--out", default=None, help="folder to write to (default: beside NOTEBOOK)")
+    p_sub.set_defaults(func=_submit)
+
+    p_sec = subparsers.add_parser(
+        "secret",
+        help="make (or check) the instructor's key file of a graded class",
+        description="`course secret new FILE` writes a new random key (mode 0600; never "
+        "overwrites). `course secret show [FILE]` prints its public key id. Keep the file "
+        "outside the course folder; grade and export with --secret FILE or "
+        "COURSE_SECRET_FILE=FILE.",
+    )
+    p_sec.add_argument("action", choices=["new", "show"])
+    p_sec.add_argument("file", metavar="FILE", nargs="?", default=None)
+    p_sec.set_defaults(func=_secret)
 
 
 def add_commands(subparsers) -> None:
@@ -96,16 +298,9 @@ def add_commands(subparsers) -> None:
     p_rel.add_argument(
         "--all", action="store_true", help="release every assignment under solutions/"
     )
-    p_rel.add_argument(
-        "--solutions",
-        default=str(REPO_ROOT / "solutions"),
-        help="authoring folder (default: %(default)s)",
-    )
-    p_rel.add_argument(
-        "--exercises",
-        default=str(REPO_ROOT / "exercises"),
-        help="output folder (default: %(default)s)",
-    )
+    p_rel.add_argument("--course-dir", help=COURSE_DIR_HELP)
+    p_rel.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
+    p_rel.add_argument("--exercises", help="output folder (default: COURSE_DIR/exercises)")
     p_rel.set_defaults(func=_release)
 
     p_gr = subparsers.add_parser(
@@ -123,7 +318,7 @@ def add_commands(subparsers) -> None:
         "--jobs",
         type=int,
         default=None,
-        help="students graded in parallel (default: number of cores)",
+        help="students graded in parallel (default: the CPUs this process may use)",
     )
     p_gr.add_argument(
         "--timeout",
@@ -150,8 +345,39 @@ def add_commands(subparsers) -> None:
     )
     p_gr.add_argument("--no-progress", action="store_true", help="no progress bar")
     p_gr.add_argument(
-        "--solutions",
-        default=str(REPO_ROOT / "solutions"),
-        help="authoring folder (default: %(default)s)",
+        "--secret",
+        default=None,
+        help="the class's key file, as given to `course export` (default: $COURSE_SECRET_FILE)",
     )
+    p_gr.add_argument(
+        "--roster",
+        default=None,
+        help="CSV of the class (id, name, email): report missing and unknown submissions and "
+        "write canvas.csv and moodle.csv beside grades.csv",
+    )
+    p_gr.add_argument(
+        "--missing-as-zero",
+        action="store_true",
+        help="LMS files: 0 for roster students without a submission (default: blank)",
+    )
+    p_gr.add_argument(
+        "--lms-column",
+        default=None,
+        help="LMS files: the assignment's column name (default: the assignment's title)",
+    )
+    p_gr.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="grade on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786), one "
+        "task per student; needs the [cluster] extra",
+    )
+    p_gr.add_argument(
+        "--unsafe-no-isolation",
+        action="store_true",
+        help="grade even on a machine whose kernel offers neither Landlock nor user namespaces "
+        "(student code could then read and change the grader's files)",
+    )
+    p_gr.add_argument("--course-dir", help=COURSE_DIR_HELP)
+    p_gr.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
     p_gr.set_defaults(func=_grade)
+    _add_class_commands(subparsers)

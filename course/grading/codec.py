@@ -67,7 +67,7 @@ class Band:
             and np.array_equal(self.hi, other.hi)
         )
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # bands compare by value, unhashable
 
 
 def _encode_float(value: float):

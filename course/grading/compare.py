@@ -141,15 +141,14 @@ def compare(
         if bool(np.all(inside)):
             return Verdict(True)
         bad = np.argwhere(~inside)[0] if arr_b.ndim else ()
-        i = tuple(bad)
-        g = arr_b[i] if arr_b.ndim else arr_b[()]
-        band = (
-            f" [{_fmt(lo_b[i] if lo_b.ndim else lo_b[()])}, {_fmt(hi_b[i] if hi_b.ndim else hi_b[()])}]"
-            if reveal
-            else " band"
-        )
+        at = tuple(bad)
+        g = arr_b[at] if arr_b.ndim else arr_b[()]
+        low = float(lo_b[at] if lo_b.ndim else lo_b[()])
+        high = float(hi_b[at] if hi_b.ndim else hi_b[()])
+        band = f" [{_fmt(low)}, {_fmt(high)}]" if reveal else " band"
         return Verdict(
-            False, f"{label}: got {_fmt(g)}{_where(i, arr_b.shape)}, outside the accepted{band}"
+            False,
+            f"{label}: got {_fmt(float(g))}{_where(at, arr_b.shape)}, outside the accepted{band}",
         )
     if expected is None:
         return Verdict(
@@ -173,8 +172,8 @@ def compare(
             return Verdict(
                 False, f"{label}: expected length {len(expected)}, got length {len(got)}"
             )
-        for i, (e, g) in enumerate(zip(expected, got)):
-            v = compare(e, g, rtol, atol, reveal, f"{path}[{i}]" if path else f"item [{i}]")
+        for k, (e, g) in enumerate(zip(expected, got)):
+            v = compare(e, g, rtol, atol, reveal, f"{path}[{k}]" if path else f"item [{k}]")
             if not v.ok:
                 return v
         return Verdict(True)

@@ -12,14 +12,19 @@ finish; a rerun skips students already graded with the same checks and library v
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
+from course.grading.identity import resolve_identities
+from course.grading.isolation import Isolation, detect
 from course.grading.reports import (
     Summary,
     append_result,
@@ -27,14 +32,39 @@ from course.grading.reports import (
     read_results,
     write_csv,
 )
+from course.grading.roster import Roster, write_canvas_csv, write_moodle_csv
+from course.grading.secret import Secret, public_key_id
 from course.grading.session import AssignmentGrader
 
-__all__ = ["GradeOptions", "Summary", "find_submissions", "grade"]
+__all__ = [
+    "GradeOptions",
+    "Submission",
+    "Summary",
+    "available_cpus",
+    "find_submissions",
+    "grade",
+]
+
+
+def available_cpus() -> int:
+    """The CPUs this process may actually run on: its affinity mask, capped by a cgroup CPU
+    quota (containers), at least 1. ``os.cpu_count()`` counts the machine's cores instead."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    try:
+        quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
+        if quota != "max":
+            cpus = min(cpus, max(1, int(-(-int(quota) // int(period)))))
+    except (OSError, ValueError):
+        pass
+    return max(1, cpus)
 
 
 @dataclass
 class GradeOptions:
-    jobs: int = field(default_factory=lambda: os.cpu_count() or 1)
+    jobs: int = field(default_factory=available_cpus)
     timeout: float | None = None  # overrides every question's time limit
     memory_mb: int = 1024
     mode: str = "auto"
@@ -42,38 +72,121 @@ class GradeOptions:
     progress: bool = True
     ready_timeout: float = 60.0
     student_budget: float | None = None  # wall-clock seconds for one student, all attempts
+    unsafe_no_isolation: bool = False  # grade even where the kernel offers no file-system walls
+    namespaces: bool = True  # use bubblewrap when installed
+    landlock: bool = True  # use Landlock when the kernel has it
+    announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
+    cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
+    secret: Secret | None = None  # the instructor's key of personal data (None: public data)
+    roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
+    missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
+    lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
+
+    def isolation(self) -> Isolation:
+        """The sandbox layers (raises IsolationError where none walls off the file system)."""
+        return detect(
+            namespaces=self.namespaces, landlock=self.landlock, unsafe=self.unsafe_no_isolation
+        )
 
 
-def find_submissions(folder: Path, assignment: str) -> list[tuple[str, Path | None, str | None]]:
-    """``(student_id, notebook_path, problem)`` for every submission in ``folder``: a file
-    ``<id>.ipynb`` or a folder ``<id>/`` holding ``<assignment>.ipynb`` (or a single notebook)."""
-    found: dict[str, tuple[str, Path | None, str | None]] = {}
-    for entry in sorted(Path(folder).iterdir()):
+@dataclass(frozen=True)
+class Submission:
+    """One student's submission as found in the folder (``path`` None: nothing to grade)."""
+
+    student: str
+    path: Path | None
+    note: str | None = None  # told to the student and the instructor
+    refused: bool = False  # a symbolic link, or a file from outside the submissions
+
+
+def _inodes(folder: Path | None) -> set[tuple[int, int]]:
+    if folder is None or not Path(folder).is_dir():
+        return set()
+    out = set()
+    for p in Path(folder).rglob("*"):
+        try:
+            st = p.lstat()
+        except OSError:
+            continue
+        out.add((st.st_dev, st.st_ino))
+    return out
+
+
+def _outside(path: Path, root: Path, private: set) -> str | None:
+    """Why ``path`` (inside the submissions folder ``root``) must not be graded, or None."""
+    if path.is_symlink():
+        return "it is a symbolic link; submit the notebook file itself"
+    real = path.resolve()
+    if not real.is_relative_to(root):
+        return "it lies outside the submissions folder"
+    st = path.lstat()
+    if (st.st_dev, st.st_ino) in private:
+        return "it is a hard link to one of the course's own files"
+    return None
+
+
+def find_submissions(folder: Path, assignment: str, private_dir: Path | None = None) -> list:
+    """A :class:`Submission` for every submission in ``folder``: a file ``<id>.ipynb`` or a
+    folder ``<id>/`` holding ``<assignment>.ipynb`` (or a single notebook).
+
+    Symbolic links (a notebook, a student's folder, anything on the way) and hard links to
+    files of ``private_dir`` (the assignment's solution folder) are refused with a note: a
+    "submission" that is a link to the solution notebook must not be graded as the student's.
+    """
+    root = Path(folder).resolve()
+    private = _inodes(private_dir)
+    found: dict[str, Submission] = {}
+    for entry in sorted(root.iterdir()):
         if entry.name.startswith((".", "_")):
             continue
-        if entry.is_file() and entry.suffix == ".ipynb":
-            sid = entry.stem
-            found[sid] = (sid, entry, None)
-        elif entry.is_dir():
-            sid = entry.name
-            if sid in found:
-                continue
-            preferred = entry / f"{assignment}.ipynb"
-            notebooks = sorted(
-                p for p in entry.rglob("*.ipynb") if ".ipynb_checkpoints" not in p.parts
-            )
-            if preferred.is_file():
-                found[sid] = (sid, preferred, None)
-            elif len(notebooks) >= 1:
-                note = (
-                    None
-                    if len(notebooks) == 1
-                    else f"several notebooks in the folder; graded {notebooks[0].name}"
-                )
-                found[sid] = (sid, notebooks[0], note)
-            else:
-                found[sid] = (sid, None, "no notebook (.ipynb) in the submission folder")
+        is_notebook = entry.suffix == ".ipynb" and (entry.is_file() or entry.is_symlink())
+        if not (is_notebook or entry.is_dir()):
+            continue
+        sid = entry.stem if is_notebook else entry.name
+        if sid in found and not is_notebook:
+            continue
+        why = _outside(entry, root, private)
+        if why is not None:
+            found[sid] = Submission(sid, None, f"the submission was refused: {why}", True)
+            continue
+        if is_notebook:
+            found[sid] = Submission(sid, entry)
+            continue
+        notebooks = sorted(
+            p
+            for p in entry.rglob("*.ipynb")
+            if ".ipynb_checkpoints" not in p.parts
+            and not any(q.is_symlink() for q in p.relative_to(entry).parents if q != Path("."))
+        )
+        refused = [(p, _outside(p, root, private)) for p in notebooks]
+        refused = [(p, why) for p, why in refused if why is not None]
+        if refused:
+            p, why = refused[0]
+            note = f"the submission was refused: {p.relative_to(entry)} in the folder: {why}"
+            found[sid] = Submission(sid, None, note, True)
+            continue
+        preferred = entry / f"{assignment}.ipynb"
+        if preferred.is_file():
+            found[sid] = Submission(sid, preferred)
+        elif notebooks:
+            several = f"several notebooks in the folder; graded {notebooks[0].name}"
+            found[sid] = Submission(sid, notebooks[0], several if len(notebooks) > 1 else None)
+        else:
+            found[sid] = Submission(sid, None, "no notebook (.ipynb) in the submission folder")
     return [found[k] for k in sorted(found)]
+
+
+def _grade_locally(grader: AssignmentGrader, pending: list, jobs: int):
+    """Rows of ``pending`` submissions as they finish, ``jobs`` students at a time."""
+    if pending:
+        grader.sandbox  # noqa: B018  (start the fork server now, not in the first student's time)
+    with ThreadPoolExecutor(max_workers=max(1, int(jobs))) as pool:
+        futures = [
+            pool.submit(grader.grade_one, sub.student, sub.path, sub.note, sub.refused)
+            for sub in pending
+        ]
+        for fut in as_completed(futures):
+            yield fut.result()
 
 
 def grade(
@@ -94,24 +207,34 @@ def grade(
         results_path.unlink()
     lock = threading.Lock()
     with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
-        todo = find_submissions(submissions, grader.name)
+        identity = resolve_identities(
+            find_submissions(submissions, grader.name, private_dir=solution_dir),
+            grader.name,
+            options.roster.ids if options.roster is not None else None,
+            grader.data_key,
+        )
+        todo = identity.entries
         previous = read_results(results_path)
         rows: dict[str, dict] = {}
         pending = []
-        for sid, path, problem in todo:
-            old = previous.get(sid)
+        for sub in todo:
+            old = previous.get(sub.student)
             if (
                 old
                 and old.get("checks_sha256") == grader.digest
                 and old.get("version") == grader.version
+                and old.get("data_key", public_key_id) == grader.data_key
             ):
-                rows[sid] = old
+                rows[sub.student] = old
             else:
-                pending.append((sid, path, problem))
+                pending.append(sub)
         resumed = len(rows)
+
+        paths = {sub.student: sub.path for sub in todo}
 
         def finish(row: dict) -> None:
             with lock:
+                row["file"] = _file_record(paths.get(row["student"]), submissions)
                 append_result(row, results_path)
                 (out / "feedback" / f"{row['student']}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
@@ -133,15 +256,19 @@ def grade(
             if tqdm
             else None
         )
-        jobs = max(1, int(options.jobs))
-        with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = [
-                pool.submit(grader.grade_one, sid, path, problem) for sid, path, problem in pending
-            ]
-            for fut in as_completed(futures):
-                finish(fut.result())
-                if bar is not None:
-                    bar.update(1)
+        if options.cluster:
+            from course.grading.cluster import grade_on_cluster
+
+            results = grade_on_cluster(options.cluster, grader, pending, options)
+        else:
+            if options.announce is not None:
+                iso = grader.sandbox.isolation if pending else grader.isolation
+                options.announce(iso.describe())
+            results = _grade_locally(grader, pending, options.jobs)
+        for row in results:
+            finish(row)
+            if bar is not None:
+                bar.update(1)
         if bar is not None:
             bar.close()
         for row in rows.values():  # feedback of resumed students too (cheap, keeps OUT complete)
@@ -149,9 +276,9 @@ def grade(
             if not fb.exists():
                 fb.write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
         qids = [q.id for q in grader.questions]
-        final = [rows[sid] for sid, _, _ in todo]
+        final = [rows[sub.student] for sub in todo]
         write_csv(final, qids, out / "grades.csv")
-        return Summary(
+        summary = Summary(
             final,
             qids,
             {q.id: q.points for q in grader.questions},
@@ -160,3 +287,36 @@ def grade(
             time.monotonic() - start,
             out,
         )
+        summary.flags = identity.flags
+        if options.roster is not None:
+            _class_files(summary, grader, options, out)
+        return summary
+
+
+def _file_record(path: Path | None, submissions: Path) -> dict | None:
+    """The graded file and its sha256: the receipt ``check.submit()`` printed matches it."""
+    if path is None:
+        return None
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        digest = None
+    name = (
+        path.relative_to(submissions).as_posix() if path.is_relative_to(submissions) else path.name
+    )
+    return {"name": name, "sha256": digest}
+
+
+def _class_files(summary: Summary, grader, options: GradeOptions, out: Path) -> None:
+    """Missing and unknown submissions against the roster, and the LMS grade files."""
+    roster = options.roster
+    assert roster is not None
+    by_id = {row["student"]: row for row in summary.rows}
+    summary.missing = [s.id for s in roster.students if s.id not in by_id]
+    known = set(roster.ids)
+    summary.unknown = sorted(sid for sid in by_id if sid not in known)
+    column = options.lms_column or grader.checks.title
+    write_canvas_csv(
+        by_id, roster, column, grader.checks.max_points, out / "canvas.csv", options.missing_as_zero
+    )
+    write_moodle_csv(by_id, roster, column, out / "moodle.csv", options.missing_as_zero)

@@ -1,9 +1,18 @@
-"""The warm fork server: ``python -m course.grading.forkserver SOCK_FD PRELOAD_JSON``.
+"""The warm fork server: ``python -m course.grading.forkserver SOCK_FD CONFIG_JSON``.
 
-Started once per :class:`~course.grading.sandbox.Sandbox`, it imports the scientific stack and
-the course library, then forks one child per request of the grader (received on a UNIX
-socket together with the child's two pipe ends). It never runs student code itself; its children
-run :func:`course.grading.runner.child_main` and never return.
+Started once per :class:`~course.grading.sandbox.Sandbox` (inside bubblewrap when available),
+it prepares everything that does not depend on the student, once:
+
+1. switches to ``nobody`` when the grader is root and the namespaces make that possible;
+2. imports the scientific stack and every course module;
+3. instruments the forbidden library functions (:mod:`course.grading.tripwire`) to report to a
+   descriptor number reserved now;
+4. opens the Landlock allow-list (descriptors of the folders children may read).
+
+Then it forks one child per request of the grader, received on a UNIX socket together with the
+child's three pipe ends, and answers with the child's pid and a pidfd (which the grader can
+signal across PID namespaces). It never runs student code itself; its children run
+:func:`course.grading.runner.child_main` and never return.
 """
 
 from __future__ import annotations
@@ -18,16 +27,17 @@ import time
 __all__: list[str] = []
 
 
-def _server_main(sock_fd: int, preload_json: str) -> None:
+def _server_main(sock_fd: int, config_json: str) -> None:
     from course.grading import runner
     from course.grading.isolation import seccomp
-    from course.grading.vocabulary import Op
+    from course.grading.vocabulary import Op, ReplyStatus
 
     seccomp.die_with_parent()
-    if os.getppid() == 1:  # the grader is already gone
+    config = json.loads(config_json)
+    if os.getppid() == 1 and not config.get("namespaced"):  # the grader is already gone
         return
     sock = socket.socket(fileno=sock_fd)
-    runner.preload(json.loads(preload_json))
+    setup = runner.prepare(config)
     statuses: dict[int, int] = {}
 
     def reap():
@@ -42,7 +52,16 @@ def _server_main(sock_fd: int, preload_json: str) -> None:
             if len(statuses) > 10000:
                 statuses.pop(next(iter(statuses)))
 
-    sock.send(json.dumps({"status": "ready"}).encode())
+    sock.send(
+        json.dumps(
+            {
+                "status": ReplyStatus.READY.value,
+                "unprivileged": setup.unprivileged,
+                "tripwires": setup.tripwires,
+            }
+        ).encode()
+    )
+    keep_base = {0, 1, 2, setup.event_fd, *setup.policy_fds()}
     while True:
         try:
             msg, fds, _flags, _addr = socket.recv_fds(sock, 65536, 4)
@@ -52,29 +71,33 @@ def _server_main(sock_fd: int, preload_json: str) -> None:
             break
         reap()
         req = json.loads(msg)
-        if req["op"] == Op.SPAWN:
-            req_r, resp_w = fds
+        if req["op"] == Op.SPAWN and len(fds) == 3:
+            req_r, resp_w, event_w = fds
             pid = os.fork()
             if pid == 0:  # the child: never returns
                 try:
                     os.setsid()
-                    keep = {0, 1, 2, req_r, resp_w}
-                    for fd in (
-                        map(int, os.listdir("/proc/self/fd"))
-                        if os.path.isdir("/proc/self/fd")
-                        else []
-                    ):
+                    keep = keep_base | {req_r, resp_w, event_w}
+                    for fd in map(int, os.listdir("/proc/self/fd")):
                         if fd not in keep:
                             with contextlib.suppress(OSError):
                                 os.close(fd)
-                    if not os.path.isdir("/proc/self/fd"):
-                        sock.close()
-                    runner.child_main(req_r, resp_w, req["tmpdir"])
+                    os.dup2(event_w, setup.event_fd)  # the number the tripwires write to
+                    os.close(event_w)
+                    runner.child_main(req_r, resp_w, req["tmpdir"], setup)
                 finally:
                     os._exit(5)
             for fd in fds:
                 os.close(fd)
-            sock.send(json.dumps({"pid": pid}).encode())
+            pidfd = None
+            with contextlib.suppress(OSError, AttributeError):
+                pidfd = os.pidfd_open(pid)
+            reply = json.dumps({"pid": pid}).encode()
+            if pidfd is not None:
+                socket.send_fds(sock, [reply], [pidfd])
+                os.close(pidfd)
+            else:
+                sock.send(reply)
         elif req["op"] == Op.STATUS:
             pid = int(req["pid"])
             deadline = time.monotonic() + 5

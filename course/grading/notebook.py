@@ -14,8 +14,11 @@ submitted notebook against the release and lists what the grader runs, in which 
 from __future__ import annotations
 
 import ast
+import errno
 import json
+import os
 import re
+import stat
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,6 +36,7 @@ __all__ = [
     "build_plan",
     "forbidden_mentions",
     "make_release",
+    "read_notebook_bytes",
     "read_submission",
     "student_id_in",
 ]
@@ -95,7 +99,7 @@ def strip_markers(
     """Return the released source (stubs for SOLUTION regions, HIDDEN TESTS regions removed)
     and the number of solution regions; raise :class:`MarkerError` on malformed markers."""
     out: list[str] = []
-    state = None  # None | ("solution", indent, line, stubs) | ("hidden", line)
+    state: Any = None  # None | ("solution", indent, line, stubs) | ("hidden", line)
     regions = 0
     lines = source.split("\n")
     for n, line in enumerate(lines, 1):
@@ -273,7 +277,7 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                 raise MarkerError(
                     f"{where}: second answer cell for {question} (first: cell {seen_answers[question]})"
                 )
-            seen_answers[question] = index
+            seen_answers[str(question)] = index
         if role == CellRole.SETUP:
             if not _STUDENT_ID_LINE.search(released):
                 raise MarkerError(
@@ -341,13 +345,25 @@ def _defined_names(source: str) -> set:
 # --------------------------------------------------------------------------------------
 # submissions
 # --------------------------------------------------------------------------------------
-def read_submission(path) -> dict:
-    """Read a submitted notebook leniently (no schema validation); :class:`SubmissionError`
-    when it is not a JSON notebook at all."""
+def read_notebook_bytes(path) -> bytes:
+    """The bytes of a submitted notebook, refusing a symbolic link (even one swapped in after
+    the submissions were listed) and anything larger than :data:`MAX_NOTEBOOK_BYTES` + 1."""
     try:
-        raw = open(path, "rb").read(MAX_NOTEBOOK_BYTES + 1)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
     except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise SubmissionError("the notebook is a symbolic link") from None
         raise SubmissionError(f"cannot read the notebook ({exc.strerror})") from None
+    with os.fdopen(fd, "rb") as f:
+        if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+            raise SubmissionError("the notebook is not a regular file")
+        return f.read(MAX_NOTEBOOK_BYTES + 1)
+
+
+def read_submission(source) -> dict:
+    """Read a submitted notebook (a path, or its bytes) leniently (no schema validation);
+    :class:`SubmissionError` when it is not a JSON notebook at all."""
+    raw = source if isinstance(source, bytes) else read_notebook_bytes(source)
     if len(raw) > MAX_NOTEBOOK_BYTES:
         raise SubmissionError(f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB")
     if not raw.strip():

@@ -15,10 +15,18 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Summary", "append_result", "feedback_markdown", "read_results", "write_csv"]
+__all__ = [
+    "Summary",
+    "append_result",
+    "csv_text",
+    "feedback_markdown",
+    "read_results",
+    "slowest",
+    "write_csv",
+]
 
 
 def _fmt_points(x: float) -> str:
@@ -64,18 +72,29 @@ def feedback_markdown(row: dict, checks) -> str:
     return "\n".join(lines) + "\n"
 
 
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_text(value) -> str:
+    """A text cell that a spreadsheet will not run as a formula: a leading ``= + - @`` (or tab,
+    carriage return) gets a ``'`` in front (OWASP's advice against CSV injection). A student
+    ID is a file name, chosen by the student."""
+    text = str(value)
+    return "'" + text if text.startswith(_FORMULA_START) else text
+
+
 def write_csv(rows: list[dict], question_ids: list[str], path: Path) -> None:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["student", *question_ids, "total", "max", "status"])
+    writer.writerow(["student", *(csv_text(q) for q in question_ids), "total", "max", "status"])
     for row in sorted(rows, key=lambda r: r["student"]):
         writer.writerow(
             [
-                row["student"],
+                csv_text(row["student"]),
                 *(_fmt_points(row["questions"].get(q, {}).get("points", 0)) for q in question_ids),
                 _fmt_points(row["total"]),
                 _fmt_points(row["max"]),
-                row["status"],
+                csv_text(row["status"]),
             ]
         )
     path.write_text(buf.getvalue(), encoding="utf-8")
@@ -90,6 +109,29 @@ class Summary:
     resumed: int
     seconds: float
     out: Path
+    flags: list = field(default_factory=list)  # doubts about who submitted what (identity)
+    missing: list | None = None  # roster IDs without a submission (None: no roster)
+    unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
+
+    def class_text(self) -> str:
+        """The identity flags and the roster's missing and unknown submissions."""
+        lines = []
+        if self.flags:
+            lines.append(f"Check these {len(self.flags)} submission name(s):")
+            lines += [f"  - {flag}" for flag in self.flags]
+        if self.missing is not None:
+            lines.append(
+                f"Roster: {len(self.missing)} missing"
+                + (
+                    f" ({', '.join(self.missing[:20])}{' …' if len(self.missing) > 20 else ''})"
+                    if self.missing
+                    else ""
+                )
+                + f", {len(self.unknown)} not on the roster"
+                + (f" ({', '.join(self.unknown)})" if self.unknown else "")
+                + "; LMS files: canvas.csv, moodle.csv"
+            )
+        return "\n".join(lines)
 
     def text(self) -> str:
         n = len(self.rows)
@@ -98,7 +140,7 @@ class Summary:
             f"in {self.seconds:.1f} s; results in {self.out}"
         ]
         if not n:
-            return lines[0]
+            return "\n".join([lines[0], self.class_text()]).rstrip()
         lines.append(f"{'question':<10}{'max':>6}{'mean':>8}{'full marks':>12}")
         for qid in self.question_ids:
             pts = [r["questions"][qid]["points"] for r in self.rows if qid in r["questions"]]
@@ -123,7 +165,23 @@ class Summary:
                 f"{k} ({v})" for k, v in sorted(statuses.items(), key=lambda kv: (-kv[1], kv[0]))
             )
         )
-        return "\n".join(lines)
+        slow = slowest(self.rows)
+        if slow:
+            times = sorted(float(r["wall_seconds"]) for r in self.rows if "wall_seconds" in r)
+            median = times[len(times) // 2]
+            lines.append(
+                "slowest: "
+                + ", ".join(f"{r['student']} ({float(r['wall_seconds']):.1f} s)" for r in slow)
+                + f"; median {median:.2f} s per student"
+            )
+        extra = self.class_text()
+        return "\n".join(lines + ([extra] if extra else []))
+
+
+def slowest(rows: list[dict], n: int = 3) -> list[dict]:
+    """The ``n`` rows with the longest ``wall_seconds`` (the students worth a look)."""
+    timed = [r for r in rows if isinstance(r.get("wall_seconds"), (int, float))]
+    return sorted(timed, key=lambda r: (-float(r["wall_seconds"]), r["student"]))[:n]
 
 
 def read_results(path: Path) -> dict[str, dict]:

@@ -1,16 +1,18 @@
 """The sandboxed child that runs ONE student's notebook for the grader.
 
-It is started either by forking from the warm fork server (:mod:`course.grading.sandbox`) or
-as ``python -m course.grading.runner REQ_FD RESP_FD`` (spawn mode). Either way it:
+It is forked from the warm fork server (:mod:`course.grading.forkserver`), or started as
+``python -m course.grading.runner REQ_FD RESP_FD EVENT_FD CONFIG`` (spawn mode). Either way:
 
-1. moves into its fresh temporary directory, scrubs its environment, sends its own stdout and
-   stderr to a capped file there, and reads the ``init`` request from the grader;
-2. sets resource limits (memory, CPU time, file size, no core files), turns on the silent
-   grading stand-in for ``check``, installs the forbidden-function tripwires, then installs the
-   audit hook and the seccomp filter (both irreversible) — only then does student code run;
-3. answers requests, one JSON line each, on its dedicated response pipe: ``run`` a cell (IPython
-   semantics, magics work), ``value`` of a variable, ``call`` a function with arguments. Values
-   travel as plain data (:mod:`course.grading.codec`), never pickle.
+1. :func:`prepare` (once per fork server) imports the library, instruments forbidden
+   functions and opens the Landlock allow-list;
+2. the child moves into its fresh temporary directory, scrubs its environment, sends its own
+   stdout and stderr to a capped file there, and reads the ``init`` request from the grader;
+3. it switches to ``nobody`` if that is its job, sets resource limits, turns on the silent
+   grading stand-in for ``check``, then confines itself with Landlock, installs the seccomp
+   filter and the audit hook (all irreversible) — only then does student code run;
+4. it answers requests, one JSON line each, on its dedicated response pipe: ``run`` a cell
+   (IPython semantics, magics work), ``value`` of a variable, ``call`` a function with
+   arguments. Values travel as plain data (:mod:`course.grading.codec`), never pickle.
 
 Nothing here decides a score: the trusted parent compares values with references it computes
 itself, so a child that lies can only misreport its own answers.
@@ -35,16 +37,14 @@ from builtins import (  # bound now, so a student patching builtins cannot break
     int,
     len,
     list,
-    set,
-    sorted,
     str,
     type,
 )
+from dataclasses import dataclass, field
 
 from course.grading import codec
-from course.grading.isolation.audit import make_audit_hook
+from course.grading.isolation.audit import close_leaked, make_audit_hook, open_fds
 from course.grading.isolation.limits import set_limits
-from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import Op, ReplyStatus
 
 _dumps = json.dumps
@@ -113,16 +113,9 @@ class _Trusted:
 
 
 _MISSING = object()
-_TRUSTED = contextlib.nullcontext()  # replaced by a _Trusted snapshot before student code runs
-
-
-class _State:
-    question = None
-    hits: typing.ClassVar[dict] = {}
-    forbid: typing.ClassVar[dict] = {}
-
-
-_STATE = _State()
+_TRUSTED: typing.Any = (
+    contextlib.nullcontext()
+)  # replaced by a _Trusted snapshot before student code runs
 
 
 class CappedWriter:
@@ -217,19 +210,6 @@ def enter_sandbox_dir(tmpdir: str) -> None:
     )  # over-long files fail with EFBIG instead of killing us
 
 
-def install_tripwires(forbid: dict, user_ns: dict) -> None:
-    """Wrap each forbidden function once, for the whole run: a call made from notebook code
-    while a question that forbids it is running is recorded against that question."""
-
-    def record(name):
-        q = _STATE.question
-        if q is not None and name in _STATE.forbid.get(q, ()):
-            _STATE.hits.setdefault(q, set()).add(name)
-
-    for dotted in sorted({name for names in forbid.values() for name in names}):
-        wrap_forbidden(dotted, record, user_ns)
-
-
 def make_shell():
     """A plain IPython shell (no history database, no colours): IPython semantics for cells."""
     from IPython.core.interactiveshell import InteractiveShell
@@ -246,7 +226,7 @@ def make_shell():
         return None
 
     for magic in ("matplotlib", "pylab"):
-        shell.register_magic_function(_noop_magic, "line", magic)
+        shell.register_magic_function(_noop_magic, "line", magic)  # type: ignore[arg-type]
     return shell
 
 
@@ -265,6 +245,22 @@ PRELOAD = (
     "course.lsq",
     "course.grading.selfcheck",
 )
+
+
+def course_modules() -> list[str]:
+    """Every module of the course library (not the grader's own, which pull in nbformat):
+    imported before student code, because a child may not read the library's sources
+    (:mod:`course.grading.isolation.paths`)."""
+    import pkgutil
+
+    import course
+
+    names = ["course", "course.exercises"]  # the old name, for notebooks handed out before
+    skip = ("course.__main__", "course.cli", "course.exercises", "course.grading")
+    for info in pkgutil.walk_packages(course.__path__, "course."):
+        if not any(info.name == s or info.name.startswith(s + ".") for s in skip):
+            names.append(info.name)
+    return names
 
 
 def preload(modules=PRELOAD) -> list:
@@ -297,7 +293,11 @@ class RequestLoop:
     def __init__(self, req_fd: int, resp_fd: int):
         self.requests = os.fdopen(req_fd, "rb", buffering=1 << 16)
         self.resp_fd = resp_fd
-        self.shell = None
+        self.shell: typing.Any = None  # the IPython shell, made before student code
+        self.refused = False  # set by the audit hook when it refuses an event
+
+    def note_refusal(self) -> None:
+        self.refused = True
 
     def send(self, obj: dict) -> None:
         with _TRUSTED:
@@ -315,22 +315,14 @@ class RequestLoop:
             return _loads(line)
 
     # -- operations ---------------------------------------------------------------------
-    def _hits(self, question):
-        hits = _STATE.hits.pop(question, set()) if question else set()
-        return sorted(hits)
-
     def op_run(self, req):
-        question = req.get("question")
-        _STATE.question = question
         try:
             result = self.shell.run_cell(req["source"], store_history=False, silent=False)
             error = result.error_before_exec or result.error_in_exec
         except BaseException as exc:  # run_cell normally catches everything itself
             error = exc
-        finally:
-            _STATE.question = None
         sys.stdout.flush()
-        reply = {"status": _OK if error is None else _ERROR, "tripwire": self._hits(question)}
+        reply: dict = {"status": _OK if error is None else _ERROR}
         if error is not None:
             reply["error"] = _error_info(error)
         return reply
@@ -351,7 +343,6 @@ class RequestLoop:
 
     def op_call(self, req):
         ns = self.shell.user_ns
-        question = req.get("question")
         func = ns.get(req["name"])
         if func is None and req["name"] not in ns:
             return {"status": _UNDEFINED}
@@ -363,23 +354,19 @@ class RequestLoop:
                 kwargs = _decode(req["kwargs"], False)
         except BaseException as exc:
             return {"status": _ERROR, "error": _error_info(exc)}
-        _STATE.question = question
         try:
             out = func(*args, **kwargs)
         except NotImplementedError:
-            return {"status": _STUB, "tripwire": self._hits(question)}
+            return {"status": _STUB}
         except BaseException as exc:  # includes SystemExit and KeyboardInterrupt from student code
-            return {"status": _ERROR, "error": _error_info(exc), "tripwire": self._hits(question)}
-        finally:
-            _STATE.question = None
-        hits = self._hits(question)
+            return {"status": _ERROR, "error": _error_info(exc)}
         if out is Ellipsis:
-            return {"status": _STUB, "tripwire": hits}
+            return {"status": _STUB}
         try:
             with _TRUSTED:
-                return {"status": _OK, "value": _encode(out), "tripwire": hits}
+                return {"status": _OK, "value": _encode(out)}
         except BaseException as exc:
-            return {"status": _UNENCODABLE, "error": _error_info(exc), "tripwire": hits}
+            return {"status": _UNENCODABLE, "error": _error_info(exc)}
 
     def serve(self) -> None:
         while True:
@@ -390,6 +377,8 @@ class RequestLoop:
             if req is None or req.get("op") == Op.EXIT.value:
                 return
             op = getattr(self, "op_" + str(req.get("op")), None)
+            before = open_fds()
+            self.refused = False
             try:
                 reply = (
                     op(req)
@@ -398,6 +387,8 @@ class RequestLoop:
                 )
             except BaseException as exc:
                 reply = {"status": _ERROR, "error": _error_info(exc)}
+            if self.refused:  # e.g. socket.socketpair(): refused after the sockets existed
+                close_leaked(before, keep=(self.resp_fd,))
             reply["id"] = req.get("id")
             reply["nonce"] = req.get("nonce")
             try:
@@ -416,7 +407,62 @@ class RequestLoop:
                     return
 
 
-def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
+@dataclass
+class Setup:
+    """What :func:`prepare` made ready for every child of one fork server (or spawned runner)."""
+
+    event_fd: int
+    landlock_abi: int = 0
+    policy: typing.Any = None  # a landlock.Policy, or None
+    seccomp: bool = True
+    drop_child: tuple[int, int] | None = None  # each child switches to this (uid, gid)
+    unprivileged: bool = False
+    tripwires: dict = field(default_factory=dict)
+
+    def policy_fds(self) -> list[int]:
+        return self.policy.fds() if self.policy is not None else []
+
+
+def prepare(config: dict) -> Setup:
+    """Everything before any child exists (trusted; once per fork server or spawned runner)."""
+    from course.grading import tripwire
+    from course.grading.isolation import landlock, privileges
+    from course.grading.isolation.paths import python_paths
+
+    drop_to = tuple(config["drop_to"]) if config.get("drop_to") else None
+    unprivileged = os.geteuid() != 0
+    if drop_to and config.get("drop_in_server"):
+        privileges.drop(drop_to)  # inside bubblewrap: every path it needs is traversable
+        unprivileged = True
+    event_fd = os.open(os.devnull, os.O_WRONLY)  # reserves the number; a child dup2s onto it
+    preload(tuple(config.get("preload", PRELOAD)) + tuple(course_modules()))
+    tripwires = tripwire.instrument(config.get("forbid", ()), event_fd)
+    policy = None
+    if config.get("landlock"):
+        policy = landlock.Policy()
+        for path in config.get("read", ()):
+            policy.allow(path, landlock.READ_ONLY)
+        for path in config.get("devices", ()):
+            policy.allow(path, landlock.DEVICE)
+    drop_child = None
+    if (
+        drop_to
+        and not config.get("drop_in_server")
+        and privileges.readable_by(drop_to, config.get("read") or python_paths())
+    ):
+        drop_child, unprivileged = drop_to, True
+    return Setup(
+        event_fd=event_fd,
+        landlock_abi=int(config.get("landlock") or 0),
+        policy=policy,
+        seccomp=bool(config.get("seccomp", True)),
+        drop_child=drop_child,
+        unprivileged=unprivileged,
+        tripwires=tripwires,
+    )
+
+
+def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None) -> None:
     """Everything the child does after it exists (both modes); never returns normally."""
     code = 0
     try:
@@ -427,18 +473,17 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
             os._exit(3)
         limits = init.get("limits", {})
         from course.grading import selfcheck
-        from course.grading.isolation import seccomp
+        from course.grading.isolation import landlock, privileges, seccomp
 
-        use_seccomp = bool(limits.get("seccomp", True)) and seccomp.available()
+        if setup.drop_child is not None:
+            privileges.drop(setup.drop_child)
+        use_seccomp = bool(limits.get("seccomp", True)) and setup.seccomp and seccomp.available()
         if not use_seccomp:
             limits = dict(limits, nproc=0)  # only a backstop for non-root users
         set_limits(limits)
         sys.dont_write_bytecode = True
         child.shell = shell or make_shell()
-        user_ns = child.shell.user_ns
         selfcheck._GRADING = {"student_id": init["student_id"], "data": init.get("data", {})}
-        _STATE.forbid = {q: set(v) for q, v in init.get("forbid", {}).items()}
-        install_tripwires(init.get("forbid", {}), user_ns)
         cap = int(limits.get("output_chars", 1_000_000))
         sys.stdout = CappedWriter(1, cap)
         sys.stderr = CappedWriter(2, cap // 4)
@@ -448,14 +493,24 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
         global _TRUSTED
         _TRUSTED = _Trusted()
         seccomp.die_with_parent()
-        secure = seccomp.install() if use_seccomp else False  # uses ctypes: before the hook
-        sys.addaudithook(make_audit_hook(tmpdir, init.get("deny_read", ())))
+        abi = 0
+        if setup.policy is not None:  # ctypes, like seccomp: before the audit hook
+            setup.policy.allow(tmpdir, landlock.READ_WRITE)
+            setup.policy.allow(f"/proc/{os.getpid()}", landlock.READ_ONLY)
+            abi = landlock.confine(setup.policy, setup.landlock_abi)
+            setup.policy.close()
+        secure = seccomp.install(pinned_fd=setup.event_fd) if use_seccomp else False
+        sys.addaudithook(
+            make_audit_hook(tmpdir, init.get("deny_read", ()), on_refuse=child.note_refusal)
+        )
         child.send(
             {
                 "id": init.get("id"),
                 "nonce": init.get("nonce"),
                 "status": _READY,
                 "seccomp": bool(secure),
+                "landlock": abi,
+                "uid": os.getuid(),
                 "pid": os.getpid(),
             }
         )
@@ -473,11 +528,13 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, shell=None) -> None:
 
 
 def main(argv=None) -> None:
-    """Spawn mode: ``python -m course.grading.runner REQ_FD RESP_FD`` (cwd: its temp dir)."""
+    """Spawn mode: ``python -m course.grading.runner REQ_FD RESP_FD EVENT_FD TMPDIR CONFIG``."""
     argv = sys.argv[1:] if argv is None else argv
-    req_fd, resp_fd = int(argv[0]), int(argv[1])
-    preload()
-    child_main(req_fd, resp_fd, os.getcwd())
+    req_fd, resp_fd, event_w = int(argv[0]), int(argv[1]), int(argv[2])
+    setup = prepare(json.loads(argv[4]))
+    os.dup2(event_w, setup.event_fd)
+    os.close(event_w)
+    child_main(req_fd, resp_fd, argv[3], setup)
 
 
 if __name__ == "__main__":

@@ -1,58 +1,33 @@
-"""Process isolation for grading, without Docker.
+"""Process isolation for grading, without Docker: the parent's side.
 
 Each submission runs in its OWN process (never the grader's), started in one of two ways:
 
 ``fork`` (default on Linux)
-    A warm *fork server* (``python -m course.grading.forkserver``) imports numpy, scipy,
-    matplotlib, IPython and the course library once; each child is ``os.fork()``-ed from it and
+    A warm *fork server* (:mod:`course.grading.forkserver`) imports numpy, scipy, matplotlib,
+    IPython and the whole course library once; each child is ``os.fork()``-ed from it and
     starts in milliseconds. The server never runs student code.
 ``spawn``
     ``python -m course.grading.runner`` per submission: slower (every child imports the
     scientific stack), works wherever ``subprocess`` works.
 
-Either way the child (see :mod:`course.grading.runner`) lives in its own session/process
-group, in a fresh ``tempfile.mkdtemp`` directory, with a scrubbed environment (PATH, HOME=its
-temp dir, LANG, MPLBACKEND=Agg, thread counts; no PYTHON* variables but PYTHONPATH when needed),
-stdin from /dev/null and stdout/stderr in a capped file in its temp dir. Before student code it
-sets limits (``RLIMIT_AS`` = mapped memory + budget, ``RLIMIT_CPU``, ``RLIMIT_FSIZE``, no core
-files; ``RLIMIT_NPROC`` = 0 when seccomp is unavailable), then installs
+With bubblewrap, the fork server (or each spawned child) lives in namespaces of its own: a root
+that holds only the Python installation, the course package and the children's temporary
+folders, no network, its own PID space. Each child then, before any student code, confines
+itself with Landlock (it may read Python and the course's data, write only its own temporary
+folder), switches to ``nobody`` when the grader is root, sets resource limits and installs a
+seccomp filter; see :mod:`course.grading.isolation` for what each layer enforces and the
+order in which :func:`~course.grading.isolation.detect` falls back.
 
-- a Python audit hook (``sys.addaudithook``; cannot be removed) refusing process creation
-  (fork, exec, system, spawn, subprocess), ctypes, sockets, signals to other processes,
-  raising limits, writes outside its temp dir, and reads of the grader's own folders
-  (solutions, submissions, output);
-- a seccomp-BPF filter (:mod:`course.grading.isolation.seccomp`, Linux x86-64/aarch64) in which the
-  kernel refuses fork/clone of processes, exec, ptrace, kill of other processes and raising
-  limits — this still holds when the audit hook is bypassed and when grading as root, where
-  ``RLIMIT_NPROC`` is not enforced.
+The parent enforces a wall-clock limit on every request and, on expiry, kills the child with
+SIGKILL through a pidfd (valid across PID namespaces). Fork server and children also ask the
+kernel to kill them when their parent dies, so an interrupted grader leaves nothing running.
+Requests and replies are JSON lines on two dedicated pipes (not stdout/stderr), each reply
+echoing a random nonce; numpy arrays travel as dtype/shape/base64, never pickle. A third pipe
+carries reports of forbidden library calls (:mod:`course.grading.tripwire`), read by the parent
+as they happen. Hidden inputs are sent only after the student's cells ran, and references are
+computed and compared only in the parent.
 
-The parent enforces a wall-clock limit on every request and, on expiry, kills the child's whole
-process group with SIGKILL (a loop ignoring SIGINT cannot survive it). Fork server and children
-also ask the kernel to kill them when their parent dies, so an interrupted grader leaves nothing
-running. Requests and replies are
-JSON lines on two dedicated pipes (not stdout/stderr), each reply echoing a random nonce;
-numpy arrays travel as dtype/shape/base64, never pickle. Hidden inputs are sent only after the
-student's cells ran, and references are computed and compared only in the parent.
-
-What this sandbox does NOT stop (it is defence in depth, not a security boundary):
-
-- Audit hooks are not a security boundary: code in the same interpreter can reach around them
-  (e.g. through objects created before the hook, or C extensions already loaded). The seccomp
-  filter is the kernel-enforced layer, and it covers only process creation, exec, ptrace,
-  signals and limits.
-- READING files: a submission can read any file the grading user can read (except the folders
-  the grader denies to the audit hook), e.g. other files in your home directory. Run the
-  grader as an unprivileged user that can read little else. Without network and without
-  writes outside its temp dir it has few ways to get data out, but its own feedback text
-  (exception messages) is one.
-- Network: blocked only by the audit hook (sockets) — there is no network namespace.
-- Memory is limited per process as address space (RLIMIT_AS), not as resident memory; the
-  temp dir is limited per file (RLIMIT_FSIZE), not in total; CPU is limited per process.
-- A submission can lie about its own answers (for instance by writing on the reply pipe):
-  it can never see hidden inputs before its code ran, and the parent does the comparing, so
-  a lie cannot turn a wrong answer into points, only break its own grading.
-- Timing side channels, /proc information about other processes, and the shared CPU
-  (a submission can slow down others running in parallel within its CPU limit).
+What a submission can still do is listed in ``docs/instructors/sandbox.md``.
 """
 
 from __future__ import annotations
@@ -73,6 +48,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from course.grading.isolation import Isolation, detect
+from course.grading.tripwire import parse_events
 from course.grading.vocabulary import Op, ReplyStatus
 
 __all__ = [
@@ -149,23 +126,25 @@ def describe_exit(returncode: int | None) -> str:
     return f"the process was killed by signal {name}"
 
 
-def _scrubbed_env(extra: dict | None = None) -> dict:
+def _server_env(rundir: str) -> dict:
+    """The environment of the fork server (children replace theirs): nothing of the grader's.
+
+    A child can read its process's initial environment in ``/proc/self/environ``, so the
+    grader's variables (tokens, paths) must not be there in the first place.
+    """
     env = {
-        k: v
-        for k, v in os.environ.items()
-        if not k.startswith(("PYTHON", "JUPYTER", "IPYTHON", "MPL"))
+        "PATH": "/usr/bin:/bin",
+        "HOME": rundir,
+        "LANG": "C.UTF-8",
+        "LC_ALL": "C.UTF-8",
+        "MPLBACKEND": "Agg",
+        "MPLCONFIGDIR": os.path.join(rundir, "matplotlib"),
+        "OPENBLAS_NUM_THREADS": "1",
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "PYTHONPATH": _PACKAGE_PARENT,
     }
-    env.update(
-        {
-            "MPLBACKEND": "Agg",
-            "OPENBLAS_NUM_THREADS": "1",
-            "OMP_NUM_THREADS": "1",
-            "MKL_NUM_THREADS": "1",
-            "PYTHONDONTWRITEBYTECODE": "1",
-            "PYTHONPATH": _PACKAGE_PARENT,
-        }
-    )
-    env.update(extra or {})
     return env
 
 
@@ -173,17 +152,29 @@ class ChildHandle:
     """The grader's (parent's) handle on one sandboxed child: requests, kill, exit status."""
 
     def __init__(
-        self, sandbox: Sandbox, pid: int, tmpdir: str, req_w: int, resp_r: int, popen=None
+        self,
+        sandbox: Sandbox,
+        pid: int,
+        tmpdir: str,
+        req_w: int,
+        resp_r: int,
+        event_r: int,
+        pidfd: int | None = None,
+        popen=None,
     ):
         self.sandbox = sandbox
         self.pid = pid
+        self.pidfd = pidfd
         self.tmpdir = tmpdir
         self.req_w = req_w
         self.resp_r = resp_r
+        self.event_r = event_r
         self.popen = popen
         self.alive = True
         self.killed_by_us = False
         self._buffer = b""
+        self._events_tail = b""
+        self._events: list[str] = []
         self._next_id = 0
         self.info: dict = {}
 
@@ -204,13 +195,30 @@ class ChildHandle:
                 raise ChildDied(self._death_cause()) from None
             view = view[n:]
 
+    def _read_events(self) -> None:
+        """Take what is in the event pipe now (never blocks)."""
+        while self.event_r >= 0:
+            try:
+                chunk = os.read(self.event_r, 1 << 16)
+            except BlockingIOError:
+                return
+            except OSError:
+                return
+            if not chunk:
+                return
+            names, self._events_tail = parse_events(self._events_tail + chunk)
+            self._events.extend(names)
+
     def _readline(self, deadline: float) -> bytes:
         while b"\n" not in self._buffer:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 raise ChildTimeout()
-            ready, _, _ = select.select([self.resp_r], [], [], remaining)
-            if not ready:
+            watched = [self.resp_r] + ([self.event_r] if self.event_r >= 0 else [])
+            ready, _, _ = select.select(watched, [], [], remaining)
+            if self.event_r in ready:
+                self._read_events()
+            if self.resp_r not in ready:
                 continue
             chunk = os.read(self.resp_r, 1 << 20)
             if not chunk:
@@ -222,11 +230,18 @@ class ChildHandle:
         line, self._buffer = self._buffer.split(b"\n", 1)
         return line
 
+    def take_events(self) -> list[str]:
+        """Forbidden library calls reported since the last call (in the order they happened)."""
+        self._read_events()
+        events, self._events = self._events, []
+        return events
+
     def request(self, op: str, timeout: float, **fields) -> dict:
         """Send one request and wait for its reply; on timeout the child is killed.
 
         Raises :class:`ChildTimeout` or :class:`ChildDied`; lines that are not the reply to this
-        request (wrong nonce, not JSON) are ignored, so printing cannot forge a reply.
+        request (wrong nonce, not JSON) are ignored, so printing cannot forge a reply. Reports
+        of forbidden calls made meanwhile are collected (:meth:`take_events`).
         """
         if not self.alive:
             raise ChildDied("the process had already ended")
@@ -246,28 +261,32 @@ class ChildHandle:
                     and reply.get("nonce") == nonce
                     and reply.get("id") == self._next_id
                 ):
+                    self._read_events()  # written before the reply, so already in the pipe
                     return reply
-        except ChildTimeout:
-            self.kill()
-            raise
-        except ChildDied:
+        except (ChildTimeout, ChildDied):
+            self._read_events()
             self.kill()
             raise
 
     # -- lifecycle -------------------------------------------------------------------------
-    def kill(self) -> None:
-        """SIGKILL the child's whole process group (idempotent)."""
-        if self.alive:
-            self.killed_by_us = True
+    def _signal_kill(self) -> None:
+        if self.pidfd is not None:
+            with contextlib.suppress(ProcessLookupError, OSError):
+                signal.pidfd_send_signal(self.pidfd, signal.SIGKILL)
+        else:
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(self.pid, signal.SIGKILL)
+
+    def kill(self) -> None:
+        """SIGKILL the child (idempotent)."""
+        if self.alive:
+            self.killed_by_us = True
+            self._signal_kill()
             self.alive = False
 
     def _death_cause(self) -> str:
-        was_alive = self.alive
-        if was_alive:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(self.pid, signal.SIGKILL)  # make sure nothing of it keeps running
+        if self.alive:
+            self._signal_kill()  # make sure nothing of it keeps running
             self.alive = False
         status = self.sandbox._exit_status(self)
         return describe_exit(status)
@@ -289,17 +308,43 @@ class ChildHandle:
         if self.popen is not None:
             with contextlib.suppress(subprocess.TimeoutExpired):
                 self.popen.wait(timeout=5)
-        for fd in (self.req_w, self.resp_r):
-            with contextlib.suppress(OSError):
-                os.close(fd)
-        self.req_w = self.resp_r = -1
+        for fd in (self.req_w, self.resp_r, self.event_r, self.pidfd):
+            if fd is not None and fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+        self.req_w = self.resp_r = self.event_r = -1
+        self.pidfd = None
         shutil.rmtree(self.tmpdir, ignore_errors=True)
 
 
 class Sandbox:
-    """Factory of sandboxed children (one per submission attempt), thread-safe."""
+    """Factory of sandboxed children (one per submission attempt), thread-safe.
 
-    def __init__(self, mode: str = "auto", limits: Limits | None = None, preload=(), deny_read=()):
+    Parameters
+    ----------
+    mode : {"auto", "fork", "spawn"}
+    limits : Limits
+    preload : sequence of str
+        Modules to import before student code (every course module is imported anyway).
+    deny_read : sequence of path
+        Folders no child may see (course folders, submissions, output); the home folder and the
+        working directory are added. With bubblewrap or Landlock they are unreachable anyway
+        (allow-lists); the audit hook names them in its error messages.
+    forbid : sequence of str
+        Dotted names of forbidden library functions to instrument (:mod:`~course.grading.tripwire`).
+    isolation : Isolation, optional
+        The layers to use (default: :func:`~course.grading.isolation.detect`).
+    """
+
+    def __init__(
+        self,
+        mode: str = "auto",
+        limits: Limits | None = None,
+        preload=(),
+        deny_read=(),
+        forbid=(),
+        isolation: Isolation | None = None,
+    ):
         if mode == "auto":
             mode = (
                 "fork"
@@ -310,32 +355,71 @@ class Sandbox:
             raise ValueError(f"unknown sandbox mode {mode!r}")
         self.mode = mode
         self.limits = limits or Limits()
+        self.isolation = isolation if isolation is not None else detect()
         from course.grading.runner import PRELOAD
 
         self.preload = tuple(dict.fromkeys(PRELOAD + tuple(preload)))
-        self.deny_read = [str(Path(p).resolve()) for p in deny_read]
+        self.forbid = tuple(sorted(set(forbid)))
+        self.deny_read = [str(Path(p).resolve()) for p in deny_read]  # named by the audit hook
+        # never mounted nor allowed, should a Python folder contain one of them
+        self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]
         self._lock = threading.Lock()
-        self._server = None
-        self._sock = None
-        self._rundir = tempfile.mkdtemp(prefix="course-grade-run-")
+        self._server: subprocess.Popen | None = None
+        self._sock: socket.socket | None = None
+        self._rundir = os.path.realpath(tempfile.mkdtemp(prefix="course-grade-run-"))
+        self._children = os.path.join(self._rundir, "children")
+        os.mkdir(self._children)
+        os.mkdir(os.path.join(self._rundir, "matplotlib"))
+        if self.isolation.drop_to is not None:
+            for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
+                os.chown(folder, *self.isolation.drop_to)
+        self.server_info: dict = {}
         if mode == "fork":
             self._start_server()
 
-    # -- fork server ----------------------------------------------------------------------
+    # -- launching ------------------------------------------------------------------------
+    def _config(self) -> dict:
+        """What the fork server (or a spawned runner) needs before any student code."""
+        from course.grading.isolation.paths import DEVICES, landlock_paths
+
+        iso = self.isolation
+        return {
+            "preload": list(self.preload),
+            "forbid": list(self.forbid),
+            "landlock": iso.landlock,
+            "read": landlock_paths(self.protected) if iso.landlock else [],
+            "devices": list(DEVICES),
+            "seccomp": bool(iso.seccomp and self.limits.seccomp),
+            "drop_to": list(iso.drop_to) if iso.drop_to else None,
+            # inside bubblewrap the server switches at once; without, each child does (if it can)
+            "drop_in_server": bool(iso.bwrap and iso.drop_to),
+            "namespaced": bool(iso.bwrap),  # bubblewrap's init is the parent (pid 1)
+        }
+
+    def _wrap(self, argv: list[str]) -> list[str]:
+        if not self.isolation.bwrap:
+            return argv
+        from course.grading.isolation.namespaces import bwrap_command
+        from course.grading.isolation.paths import mount_paths
+
+        read_only = mount_paths(self.protected)
+        return bwrap_command(self.isolation.bwrap, read_only, [self._rundir], "/") + argv
+
     def _start_server(self) -> None:
         parent_sock, child_sock = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         log = open(os.path.join(self._rundir, "forkserver.log"), "wb")
+        argv = [
+            sys.executable,
+            "-m",
+            "course.grading.forkserver",
+            str(child_sock.fileno()),
+            json.dumps(self._config()),
+        ]
         self._server = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "course.grading.forkserver",
-                str(child_sock.fileno()),
-                json.dumps(self.preload),
-            ],
+            self._wrap(argv),
             pass_fds=(child_sock.fileno(),),
             cwd=self._rundir,
-            env=_scrubbed_env(),
+            env=_server_env(self._rundir),
             stdin=subprocess.DEVNULL,
             stdout=log,
             stderr=subprocess.STDOUT,
@@ -344,53 +428,81 @@ class Sandbox:
         log.close()
         child_sock.close()
         self._sock = parent_sock
-        self._sock.settimeout(120)
+        parent_sock.settimeout(120)
         try:
-            reply = json.loads(self._sock.recv(65536) or b"null")
+            reply = json.loads(parent_sock.recv(65536) or b"null")
         except (OSError, ValueError):
             reply = None
         if not reply or reply.get("status") != ReplyStatus.READY:
+            log_text = self._server_log()
             self.close()
-            raise SandboxError(
-                "the fork server did not start; see " + os.path.join(self._rundir, "forkserver.log")
-            )
+            raise SandboxError(f"the fork server did not start: {log_text[-1500:]}")
+        self.server_info = reply
+        self.isolation = self.isolation.with_(unprivileged=bool(reply.get("unprivileged")))
 
-    def _server_call(self, message: dict, fds=()) -> dict:
+    def _server_log(self) -> str:
+        try:
+            with open(os.path.join(self._rundir, "forkserver.log"), "rb") as f:
+                return f.read().decode("utf-8", "replace")
+        except OSError:
+            return ""
+
+    def _server_call(self, message: dict, fds=()) -> tuple[dict, list[int]]:
+        if self._sock is None:
+            raise SandboxError("the fork server is not running")
         data = json.dumps(message).encode()
         if fds:
             socket.send_fds(self._sock, [data], list(fds))
         else:
             self._sock.send(data)
-        reply = self._sock.recv(65536)
+        reply, got_fds, _flags, _addr = socket.recv_fds(self._sock, 65536, 1)
         if not reply:
+            for fd in got_fds:
+                os.close(fd)
             raise SandboxError("the fork server died")
-        return json.loads(reply)
+        return json.loads(reply), got_fds
 
     # -- children -------------------------------------------------------------------------
     def start(self, init: dict, ready_timeout: float = 60.0) -> ChildHandle:
         """Start a child, send it ``init`` and wait until it is ready for student code."""
-        tmpdir = tempfile.mkdtemp(prefix="course-grade-")
+        tmpdir = tempfile.mkdtemp(prefix="child-", dir=self._children)
+        if self.isolation.drop_to is not None:
+            os.chown(tmpdir, *self.isolation.drop_to)
         req_r, req_w = os.pipe()
         resp_r, resp_w = os.pipe()
-        for fd in (req_w, resp_r):
+        event_r, event_w = os.pipe()
+        for fd in (req_w, resp_r, event_r):
             os.set_inheritable(fd, False)
+        os.set_blocking(event_r, False)
         popen = None
+        pidfd = None
         try:
             if self.mode == "fork":
                 with self._lock:
                     if self._server is None or self._server.poll() is not None:
                         self._start_server()
-                    reply = self._server_call(
-                        {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w)
+                    reply, got = self._server_call(
+                        {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
                     )
                 pid = int(reply["pid"])
+                pidfd = got[0] if got else None
             else:
                 log = open(os.path.join(tmpdir, "startup.txt"), "wb")
+                argv = [
+                    sys.executable,
+                    "-m",
+                    "course.grading.runner",
+                    str(req_r),
+                    str(resp_w),
+                    str(event_w),
+                    tmpdir,
+                    json.dumps(self._config()),
+                ]
                 popen = subprocess.Popen(
-                    [sys.executable, "-m", "course.grading.runner", str(req_r), str(resp_w)],
-                    pass_fds=(req_r, resp_w),
+                    self._wrap(argv),
+                    pass_fds=(req_r, resp_w, event_w),
                     cwd=tmpdir,
-                    env=_scrubbed_env({"MPLCONFIGDIR": os.path.join(self._rundir, "matplotlib")}),
+                    env=_server_env(self._rundir),
                     stdin=subprocess.DEVNULL,
                     stdout=log,
                     stderr=subprocess.STDOUT,
@@ -399,9 +511,9 @@ class Sandbox:
                 log.close()
                 pid = popen.pid
         finally:
-            os.close(req_r)
-            os.close(resp_w)
-        child = ChildHandle(self, pid, tmpdir, req_w, resp_r, popen)
+            for fd in (req_r, resp_w, event_w):
+                os.close(fd)
+        child = ChildHandle(self, pid, tmpdir, req_w, resp_r, event_r, pidfd, popen)
         init = dict(init, limits=self.limits.as_dict(), deny_read=self.deny_read)
         try:
             reply = child.request(Op.INIT, ready_timeout, **init)
@@ -409,7 +521,8 @@ class Sandbox:
             out = child.output()
             child.close()
             raise SandboxError(f"a grading process did not start ({exc!r}); {out[-500:]}") from None
-        child.info = {"seccomp": bool(reply.get("seccomp"))}
+        child.info = {k: reply.get(k) for k in ("seccomp", "landlock", "uid")}
+        child.take_events()  # nothing before student code counts
         return child
 
     def _exit_status(self, child: ChildHandle):
@@ -420,9 +533,11 @@ class Sandbox:
                 return None
         with self._lock:
             try:
-                reply = self._server_call({"op": Op.STATUS, "pid": child.pid})
+                reply, got = self._server_call({"op": Op.STATUS, "pid": child.pid})
             except (OSError, SandboxError, ValueError):
                 return None
+        for fd in got:
+            os.close(fd)
         status = reply.get("status")
         if status is None:
             return None

@@ -21,15 +21,15 @@ from typing import Any
 
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, compare, describe
+from course.grading.personal import PersonalData
 from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]
 
-_REPO_ROOT = Path(__file__).resolve().parents[2]
 
 #: Set by the grading runner (sandboxed child) before any student code runs.
-_GRADING = None
+_GRADING: dict | None = None
 
 
 class _GradingStandIn:
@@ -49,6 +49,9 @@ class _GradingStandIn:
     def all(self):
         return None
 
+    def submit(self, *args, **kwargs):
+        return None
+
     def __repr__(self):
         return "<self-check disabled while grading>"
 
@@ -63,7 +66,13 @@ def _locate(name: str, path) -> tuple[str, Path]:
     cwd = Path.cwd()
     for folder in [cwd, *cwd.parents]:
         candidates += [folder, folder / name, folder / "exercises" / name]
-    candidates.append(_REPO_ROOT / "exercises" / name)
+    if os.environ.get("COURSE_DIR"):  # never the package's own location (site-packages)
+        candidates.append(Path(os.environ["COURSE_DIR"]) / "exercises" / name)
+    from course.workspace import packaged_materials
+
+    packaged = packaged_materials()
+    if packaged is not None:  # an installed student edition: its own copy of the release
+        candidates.append(packaged / "exercises" / name)
     for folder in candidates:
         spec_file = folder / CHECKS_FILE
         if spec_file.is_file():
@@ -91,6 +100,8 @@ class Assignment:
         self._questions: dict[str, PublicQuestion] = {q.id: q for q in spec.questions}
         self._data_module = data_module
         self._data_cache: dict[str, Any] = {}
+        # a graded class's data, issued by the instructor (None: drawn here from data.py)
+        self.personal = PersonalData.read(folder) if data_module is None else None
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -125,11 +136,13 @@ class Assignment:
                 f"assignment {self.name} has no data set {key!r}; known: {self.spec.data_keys}"
             )
         self._require_id()
+        if self.personal is not None:
+            return self.personal.data(str(self.student_id), key)
         if key not in self._data_cache:
             from course.grading.checks import student_rng
 
             func = getattr(self._data_mod(), key)
-            self._data_cache[key] = encode(func(student_rng(self.name, key, self.student_id)))
+            self._data_cache[key] = encode(func(student_rng(self.name, key, str(self.student_id))))
         return decode(self._data_cache[key])
 
     def _require_id(self):
@@ -137,6 +150,19 @@ class Assignment:
             raise ValueError(
                 "Set STUDENT_ID in the first cell to your student ID, then re-run that cell."
             )
+
+    # -- submitting ---------------------------------------------------------------------
+    def submit(self, notebook=None, out=None):
+        """Run every self-check, then write ``<ID>_<assignment>.ipynb`` ready to upload.
+
+        Refuses (with one message, writing nothing) a missing, placeholder, demo or malformed
+        ``STUDENT_ID`` and an ID the class's personal data do not know. ``notebook`` is the
+        saved notebook (found automatically in Jupyter and VS Code); ``out`` the folder to
+        write to (default: beside the notebook). Returns the path written, or None.
+        """
+        from course.grading.submit import submit_from_kernel
+
+        return submit_from_kernel(self, sys._getframe(1).f_globals, notebook, out)
 
     # -- checking -----------------------------------------------------------------------
     def __repr__(self):
@@ -227,7 +253,8 @@ class Assignment:
         if not callable(func):
             print(f"  FAIL: {q.target} is {describe(func)}, not a function")
             return
-        passed, hint_shown, forbidden = 0, False, set()
+        passed, hint_shown = 0, False
+        forbidden: set[str] = set()
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:

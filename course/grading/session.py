@@ -11,6 +11,7 @@ costs only the question it happened in: the child is killed, a fresh one re-runs
 from __future__ import annotations
 
 import re
+import threading
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,7 +25,8 @@ from course.grading.notebook import (
     read_submission,
 )
 from course.grading.release import checks_digest, load_assignment
-from course.grading.sandbox import ChildDied, ChildTimeout, Limits, Sandbox
+from course.grading.sandbox import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
+from course.grading.secret import public_key_id
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -63,6 +65,9 @@ class AssignmentGrader:
         self.checks, self.release = load_assignment(self.solution_dir)
         self.name = self.checks.name
         self.digest = checks_digest(self.solution_dir, self.checks.files)
+        # personal data are drawn with the instructor's secret when the class has one
+        self.secret = getattr(self.options, "secret", None)
+        self.data_key = self.secret.key_id if self.secret is not None else public_key_id
         self.version = _version()
         self.questions = list(self.checks.questions.values())
         # references that do not depend on the student: computed once, here, in the parent
@@ -79,15 +84,35 @@ class AssignmentGrader:
             if self.solution_dir.parent.name == "solutions"
             else self.solution_dir
         )
-        self.sandbox = Sandbox(
-            mode=self.options.mode,
-            limits=Limits(memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5),
-            preload=self.checks.preload,
-            deny_read=[solutions_root, *deny_read],
-        )
+        #: question -> the forbidden functions it names (reports of others are ignored)
+        self.forbid = {q.id: frozenset(q.forbid) for q in self.questions}
+        self._deny_read = [solutions_root, *deny_read]
+        self.isolation = self.options.isolation()  # refuses early where nothing walls files off
+        self._sandbox: Sandbox | None = None
+        self._sandbox_lock = threading.Lock()
+
+    @property
+    def sandbox(self) -> Sandbox:
+        """The sandbox (its warm fork server starts on first use)."""
+        with self._sandbox_lock:
+            if self._sandbox is None:
+                self._sandbox = Sandbox(
+                    mode=self.options.mode,
+                    limits=Limits(
+                        memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5
+                    ),
+                    preload=self.checks.preload,
+                    deny_read=self._deny_read,
+                    forbid=[name for names in self.forbid.values() for name in names],
+                    isolation=self.isolation,
+                )
+            return self._sandbox
 
     def close(self) -> None:
-        self.sandbox.close()
+        with self._sandbox_lock:
+            if self._sandbox is not None:
+                self._sandbox.close()
+                self._sandbox = None
 
     def __enter__(self):
         return self
@@ -117,6 +142,7 @@ class AssignmentGrader:
             "assignment": self.name,
             "checks_sha256": self.digest,
             "version": self.version,
+            "data_key": self.data_key,
             "questions": {},
             "notes": [],
             "total": 0.0,
@@ -133,11 +159,20 @@ class AssignmentGrader:
             "cases": cases or [],
         }
 
-    def grade_one(self, sid: str, path: Path | None, problem: str | None = None) -> dict:
-        """Grade one submission; never raises (a grader failure is recorded in the row)."""
+    def grade_one(
+        self,
+        sid: str,
+        path: Path | None,
+        problem: str | None = None,
+        refused: bool = False,
+        raw: bytes | None = None,
+    ) -> dict:
+        """Grade one submission (its notebook at ``path``, or its bytes ``raw``); never raises
+        (a grader failure is recorded in the row). ``wall_seconds`` says how long it took."""
+        start = time.monotonic()
         row = self._row(sid)
         try:
-            self._grade(row, sid, path, problem)
+            self._grade(row, sid, path, problem, refused, raw)
         except Exception as exc:  # a bug or sandbox failure must not abort the batch
             for q in self.questions:
                 row["questions"].setdefault(
@@ -155,11 +190,22 @@ class AssignmentGrader:
         ]
         if row["status"] == SubmissionStatus.OK and abnormal:
             row["status"] = "; ".join(abnormal)
+        row["wall_seconds"] = round(time.monotonic() - start, 3)
         return row
 
-    def _grade(self, row: dict, sid: str, path: Path | None, problem: str | None) -> None:
-        if problem and path is None:
-            row["status"] = SubmissionStatus.INVALID_NOTEBOOK
+    def _grade(
+        self,
+        row: dict,
+        sid: str,
+        path: Path | None,
+        problem: str | None,
+        refused: bool = False,
+        raw: bytes | None = None,
+    ) -> None:
+        if problem and path is None and raw is None:
+            row["status"] = (
+                SubmissionStatus.REFUSED if refused else SubmissionStatus.INVALID_NOTEBOOK
+            )
             row["notes"].append(problem[0].upper() + problem[1:] + ".")
             for q in self.questions:
                 row["questions"][q.id] = self._question_result(q, GradeStatus.NOT_ANSWERED, problem)
@@ -167,7 +213,7 @@ class AssignmentGrader:
         if problem:
             row["notes"].append(problem[0].upper() + problem[1:] + ".")
         try:
-            nb = read_submission(path)
+            nb = read_submission(raw if raw is not None else path)
         except SubmissionError as exc:
             row["status"] = SubmissionStatus.INVALID_NOTEBOOK
             row["notes"].append(f"The submission could not be read: {exc}.")
@@ -208,12 +254,17 @@ class StudentSession:
         self.sid = sid
         self.plan = plan
         self.skipped: set[int] = set()
-        self.hard: dict[str, tuple[str, str]] = {}  # question -> (status, message) from its cells
+        self.hard: dict[
+            str, tuple[GradeStatus, str]
+        ] = {}  # question -> (status, message) from its cells
         self.cell_errors: dict[int, dict] = {}
         self.hits: dict[str, set] = {}
-        self.child = None
+        self.child: ChildHandle | None = None
         self.deadline = time.monotonic() + grader.budget()
-        self.data = {key: grader.checks.data_for(key, sid) for key in grader.checks.data_keys()}
+        self.data = {
+            key: grader.checks.data_for(key, sid, grader.secret)
+            for key in grader.checks.data_keys()
+        }
 
     # -- messages -------------------------------------------------------------------------
     def clean(self, text: str) -> str:
@@ -225,7 +276,7 @@ class StudentSession:
         return self.clean(f"{err.get('type', 'Error')}: {err.get('message', '')}".rstrip(": "))
 
     # -- child lifecycle ------------------------------------------------------------------
-    def _failure_status(self, cause: str) -> str:
+    def _failure_status(self, cause: str) -> GradeStatus:
         if "memory" in cause or "MemoryError" in cause:
             return GradeStatus.MEMORY
         return GradeStatus.CRASH
@@ -236,11 +287,11 @@ class StudentSession:
                 continue
             limit = self.g.timeout_for(cell.question)
             try:
-                reply = self.child.request(
+                reply = self._request(
+                    cell.question,
                     Op.RUN,
                     min(limit, max(0.1, self.deadline - time.monotonic())),
                     source=cell.source,
-                    question=cell.question,
                 )
             except ChildTimeout:
                 self._cell_failed(
@@ -256,8 +307,6 @@ class StudentSession:
                     f"{cell.label} stopped the process: {exc.cause}",
                 )
                 return False
-            if cell.question:
-                self.hits.setdefault(cell.question, set()).update(reply.get("tripwire") or [])
             if reply.get("status") == ReplyStatus.ERROR:
                 err = reply.get("error") or {}
                 self.cell_errors[i] = err
@@ -268,7 +317,7 @@ class StudentSession:
                     )
         return True
 
-    def _cell_failed(self, i: int, status: str, message: str) -> None:
+    def _cell_failed(self, i: int, status: GradeStatus, message: str) -> None:
         self.skipped.add(i)
         cell = self.plan.cells[i]
         if cell.question:
@@ -278,6 +327,20 @@ class StudentSession:
                 f"{message[0].upper() + message[1:]}; it was skipped ({status})."
             )
         self._drop_child()
+
+    def _request(self, question: str | None, op: Op, timeout: float, **fields) -> dict:
+        """One request to the child; forbidden calls it reported meanwhile count against
+        ``question`` (they reached the parent as they happened, see course.grading.tripwire)."""
+        child = self.child
+        assert child is not None, "ensure_child() first"
+        try:
+            return child.request(op, timeout, **fields)
+        finally:
+            called = child.take_events()
+            forbidden = self.g.forbid.get(question, frozenset()) if question else frozenset()
+            hits = [name for name in called if name in forbidden]
+            if hits and question:
+                self.hits.setdefault(question, set()).update(hits)
 
     def _drop_child(self) -> None:
         if self.child is not None:
@@ -293,7 +356,6 @@ class StudentSession:
                 "student_id": self.sid,
                 "assignment": self.g.name,
                 "data": {k: encode(v) for k, v in self.data.items()},
-                "forbid": {q.id: list(q.forbid) for q in self.g.questions if q.forbid},
             }
             self.child = self.g.sandbox.start(init, self.g.options.ready_timeout)
             if not self._run_cells():
@@ -357,7 +419,7 @@ class StudentSession:
     def _grade_value(self, q) -> dict:
         g = self.g
         try:
-            reply = self.child.request(Op.VALUE, 30, name=q.target)
+            reply = self._request(q.id, Op.VALUE, 30, name=q.target)
         except (ChildTimeout, ChildDied) as exc:
             self._drop_child()
             return g._question_result(
@@ -425,11 +487,11 @@ class StudentSession:
                 continue
             limit = g.timeout_for(q.id)
             try:
-                reply = self.child.request(
+                reply = self._request(
+                    q.id,
                     Op.CALL,
                     limit,
                     name=q.target,
-                    question=q.id,
                     args=encode(case.args),
                     kwargs=encode(case.kwargs),
                 )
@@ -447,8 +509,6 @@ class StudentSession:
                 results.append({"label": label, "ok": False, "message": exc.cause})
                 self._drop_child()
                 continue
-            if reply.get("tripwire"):
-                self.hits.setdefault(q.id, set()).update(reply["tripwire"])
             rstatus = reply.get("status")
             if rstatus == ReplyStatus.UNDEFINED:
                 return self._missing(q, f"no function {q.target}")
@@ -499,7 +559,7 @@ class StudentSession:
             if passed == len(results):
                 status = GradeStatus.PASS
             elif (
-                all(r["message"].startswith("raised ") for r in results if not r["ok"])
+                all(str(r["message"]).startswith("raised ") for r in results if not r["ok"])
                 and passed == 0
             ):
                 status = GradeStatus.ERROR

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import enum
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ __all__ = [
     "DEMO_STUDENT_ID",
     "PLACEHOLDER_ID",
     "PUBLIC_FORMAT",
+    "STUDENT_ID_RULE",
     "CellOrigin",
     "CellRole",
     "GradeStatus",
@@ -31,6 +33,8 @@ __all__ = [
     "PublicSpec",
     "ReplyStatus",
     "SubmissionStatus",
+    "check_student_id",
+    "is_student_id",
 ]
 
 
@@ -49,6 +53,39 @@ PLACEHOLDER_ID = "replace-with-your-student-id"
 
 #: The student ID the public self-check and ``course release`` use where one is needed.
 DEMO_STUDENT_ID = "demo"
+
+#: What a student ID may look like: it names files (``<ID>_<assignment>.ipynb``), rows of
+#: ``grades.csv`` and LMS imports, so no spaces, no path separators and no leading ``=+-@``.
+STUDENT_ID_RULE = "1 to 64 letters, digits and . _ - @, starting with a letter or digit"
+_STUDENT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._@-]{0,63}$")
+
+
+def is_student_id(text) -> bool:
+    """True when ``text`` is a well-formed student ID (not checking placeholder or demo)."""
+    return isinstance(text, str) and _STUDENT_ID.match(text) is not None
+
+
+def check_student_id(student_id, where: str = "STUDENT_ID") -> str:
+    """The stripped ``student_id``, or ValueError saying what is wrong and what to do.
+
+    Refuses a missing ID, the release's placeholder, the demo ID and malformed text.
+    """
+    sid = "" if student_id is None else str(student_id).strip()
+    if not sid:
+        raise ValueError(f"{where} is empty: set it to your student ID, exactly as registered")
+    if sid == PLACEHOLDER_ID:
+        raise ValueError(
+            f"{where} is still the placeholder {PLACEHOLDER_ID!r}: set it to your student ID "
+            "in the first cell and run that cell again"
+        )
+    if sid == DEMO_STUDENT_ID:
+        raise ValueError(
+            f"{where} is the demo ID {DEMO_STUDENT_ID!r}: set it to your own student ID"
+        )
+    if not is_student_id(sid):
+        raise ValueError(f"{where} {sid!r} is not a valid student ID ({STUDENT_ID_RULE})")
+    return sid
+
 
 #: The public file of a release, and the version of its format.
 CHECKS_FILE = "checks.json"

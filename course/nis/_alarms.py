@@ -9,11 +9,17 @@ these are their Monte Carlo estimates.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from course.results import format_number
-from course.validation import as_finite, as_index, as_probability
+from course.validation import as_finite, as_float_array, as_index, as_probability
+
+
+def _with_undefined(value: Any, name: str) -> np.ndarray:
+    """A float array of test quantities in which NaN marks undefined samples (inf is refused)."""
+    return as_float_array(value, name, nan=True)
 
 
 def empirical_threshold(null_statistic, alpha) -> float:
@@ -48,13 +54,10 @@ def empirical_threshold(null_statistic, alpha) -> float:
     9.5
     """
     alpha = as_probability(alpha)
-    try:
-        values = np.asarray(null_statistic, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError("null_statistic must be a numeric array") from None
-    values = values[np.isfinite(values)]
+    values = _with_undefined(null_statistic, "null_statistic")
+    values = values[~np.isnan(values)]
     if values.size == 0:
-        raise ValueError("null_statistic has no finite values")
+        raise ValueError("null_statistic has no finite values (all are NaN, undefined)")
     return float(np.quantile(values, 1.0 - alpha))
 
 
@@ -153,17 +156,12 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     >>> stats.false_alarm_rate, stats.detection_probability, stats.delays
     (0.16666666666666666, 1.0, array([0., 1.]))
     """
-    try:
-        T = np.array(statistic, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError("statistic must be a numeric (n_runs, N) array") from None
-    if T.ndim != 2:
+    T = _with_undefined(statistic, "statistic")
+    if T.ndim != 2 or T.size == 0:
         raise ValueError(
             f"statistic must have shape (n_runs, N), got {T.shape}; "
             "for a single run pass statistic[None, :]"
         )
-    if np.isinf(T).any():
-        raise ValueError("statistic contains inf; only NaN (undefined samples) is allowed")
     _n_runs, N = T.shape
     threshold = as_finite(threshold, "threshold")
     if fault_time is not None:

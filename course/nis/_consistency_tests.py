@@ -15,7 +15,7 @@ import numpy as np
 
 from course.chi2 import residual_norm_law
 from course.distributions import TailPair
-from course.linalg import whiten_vectors
+from course.linalg import _whiten_vectors as whiten_vectors
 from course.nis._laws import (
     extreme_eigenvalue,
     prob_eigenvalues_within,
@@ -117,7 +117,7 @@ def _single_record(innovations: Any, S: Any):
     eps, L = _innovations_and_factor(innovations, S)
     if eps.ndim != 2:
         raise ValueError(
-            f"a test takes one record of shape (K, m), got shape {eps.shape}; for many runs "
+            f"innovations must be one record of shape (K, m), got shape {eps.shape}; for many runs "
             "use nis()/nis_matrix_eigenvalues() with nis_critical_values()/"
             "nis_matrix_critical_values() (vectorised)"
         )
@@ -222,7 +222,11 @@ def nis_matrix_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult
     eps, L = _single_record(innovations, S)
     alpha = as_probability(alpha)
     K, m = eps.shape
-    _check_dims(m, K)
+    if m > K:
+        raise ValueError(
+            f"innovations has K = {K} < m = {m} (steps < outputs): the NIS matrix of fewer "
+            "steps than outputs is singular and the Wishart laws do not apply; test at least m steps"
+        )
     z = whiten_vectors(L, eps)
     values = np.linalg.eigvalsh(z.T @ z / K)
     lmin, lmax = float(values[0]), float(values[-1])

@@ -14,7 +14,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from course.linalg import cholesky_factor, whiten_vectors, whitened_squared_norms
+from course.linalg import _whiten_vectors as whiten_vectors
+from course.linalg import _whitened_squared_norms as whitened_squared_norms
+from course.linalg import cholesky_factor
 from course.validation import as_count, as_float_array
 
 
@@ -50,7 +52,7 @@ def _check_which(which: Any) -> str:
 
 def _innovations_and_factor(innovations, S, name_eps="innovations", name_S="S"):
     """Validate (..., K, m) innovations and their covariances; return (eps, L)."""
-    eps = as_float_array(innovations, name_eps)
+    eps = as_float_array(innovations, name_eps, empty=False)
     if eps.ndim < 2:
         raise ValueError(
             f"{name_eps} must have shape (K, m) or (..., K, m) (time along the second-to-last "

@@ -14,7 +14,7 @@ import numpy as np
 from course import _deprecation
 from course.chi2 import residual_norm_law
 from course.results import TestResult
-from course.validation import as_count, as_index, as_probability
+from course.validation import InputTypeError, as_count, as_float_array, as_index, as_probability
 
 
 def _window(window: Any) -> int:
@@ -54,12 +54,8 @@ def windowed_sum(values: Any, window: Any) -> np.ndarray:
     >>> windowed_sum([1.0, 2.0, 3.0, float("nan"), 5.0, 6.0], 2)
     array([nan,  3.,  5., nan, nan, 11.])
     """
-    try:
-        values = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError("values must be a numeric array of shape (..., N)") from None
-    if values.ndim < 1:
-        raise ValueError("values must have at least one axis (the time axis, last)")
+    # NaN marks undefined samples; inf is no value of a test quantity
+    values = as_float_array(values, "values", nan=True, min_ndim=1, empty=False)
     window = _window(window)
     N = values.shape[-1]
     if window > N:
@@ -119,7 +115,7 @@ def windowed_nis(result: Any, window: Any) -> np.ndarray:
     (5, 100)
     """
     if not _is_filter_output(result):
-        raise TypeError(
+        raise InputTypeError(
             f"result must be a FilterResult or an RLSResult, got {type(result).__name__}; "
             "for an array of NIS values use windowed_sum"
         )
@@ -221,18 +217,16 @@ def windowed_chi2_test(
         nis = result.nis()
         p = result.n_outputs
     else:
-        try:
-            nis = np.asarray(result, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(
-                "result must be a FilterResult, an RLSResult or a 1-D array of NIS values"
-            ) from None
-        if nis.ndim != 1:
-            raise ValueError(f"nis must be a 1-D vector (one record), got shape {nis.shape}")
         # NaN marks undefined samples (allowed); inf or negative values are not NIS values
-        if np.isinf(nis).any() or (nis < 0).any():
+        nis = as_float_array(result, "result", nan=True, empty=False)
+        if nis.ndim != 1:
             raise ValueError(
-                "NIS values must be finite and non-negative (NaN marks undefined samples)"
+                "result must be a FilterResult, an RLSResult or a 1-D array of the NIS values "
+                f"of one record, got an array of shape {nis.shape}"
+            )
+        if (nis < 0).any():
+            raise ValueError(
+                "result holds NIS values, which must be non-negative (NaN marks undefined samples)"
             )
         p = (
             1

@@ -9,8 +9,35 @@ kernel would refuse anyway into a clear ``PermissionError: not allowed while gra
 from __future__ import annotations
 
 import os
+import stat
 
-__all__ = ["make_audit_hook"]
+__all__ = ["close_leaked", "make_audit_hook", "open_fds"]
+
+
+def open_fds() -> set[int]:
+    """The descriptors open in this process now."""
+    try:
+        return {int(fd) for fd in os.listdir("/proc/self/fd")}
+    except OSError:
+        return set()
+
+
+def close_leaked(before: set[int], keep=()) -> list[int]:
+    """Close the sockets opened since ``before`` (call after an event was refused).
+
+    ``socket.socketpair()`` creates both sockets before Python raises its audit events; when
+    the hook refuses them, the descriptors would stay open in the child. (The seccomp filter
+    refuses sockets outright; this is the clean-up for a child without it.)
+    """
+    closed = []
+    for fd in sorted(open_fds() - set(before) - set(keep)):
+        try:
+            if stat.S_ISSOCK(os.fstat(fd).st_mode):
+                os.close(fd)
+                closed.append(fd)
+        except OSError:
+            continue
+    return closed
 
 
 _BLOCKED_EVENTS = frozenset(
@@ -67,7 +94,7 @@ _PATH_EVENTS = {
 }
 
 
-def make_audit_hook(tmpdir: str, deny_read=()):
+def make_audit_hook(tmpdir: str, deny_read=(), on_refuse=None):
     """The audit hook: refuse process creation, native code loading, sockets, signals to other
     processes, raising limits, any write outside ``tmpdir`` and reads under ``deny_read``."""
     realpath, fspath, sep = os.path.realpath, os.fspath, os.sep
@@ -101,19 +128,25 @@ def make_audit_hook(tmpdir: str, deny_read=()):
                 return False
         return not any(full == d or full.startswith(d + sep) for d in denied)
 
+    refused = on_refuse if on_refuse is not None else (lambda: None)
+
+    def refuse(message: str):
+        refused()
+        raise PermissionError(message)
+
     def hook(event, args):
         if event in blocked:
-            raise PermissionError(f"not allowed while grading: {event}")
+            refuse(f"not allowed while grading: {event}")
         if event == "open":
             full = resolve(args[0]) if args[0] is not None else None
             flags = args[2] if len(args) > 2 and isinstance(args[2], int) else 0
             mode = args[1] if isinstance(args[1], str) else ""
             if (flags & write_flags or any(c in mode for c in "wax+")) and not writable(full):
-                raise PermissionError(
+                refuse(
                     f"not allowed while grading: writing {args[0]!r} (outside the temporary folder)"
                 )
             if not readable(full):
-                raise PermissionError(f"not allowed while grading: reading {args[0]!r}")
+                refuse(f"not allowed while grading: reading {args[0]!r}")
         elif event in path_events:
             for i in path_events[event]:
                 if (
@@ -121,16 +154,16 @@ def make_audit_hook(tmpdir: str, deny_read=()):
                     and not isinstance(args[i], int)
                     and not writable(resolve(args[i]))
                 ):
-                    raise PermissionError(f"not allowed while grading: {event} {args[i]!r}")
+                    refuse(f"not allowed while grading: {event} {args[i]!r}")
         elif event in ("os.kill", "os.killpg"):
             if not (event == "os.kill" and args and args[0] == me):
-                raise PermissionError(f"not allowed while grading: {event}")
+                refuse(f"not allowed while grading: {event}")
         elif (
             event in ("os.listdir", "os.scandir")
             and args
             and args[0] is not None
             and not readable(resolve(args[0]))
         ):
-            raise PermissionError("not allowed while grading: listing a protected folder")
+            refuse("not allowed while grading: listing a protected folder")
 
     return hook

@@ -1,0 +1,148 @@
+"""The website's machinery without building it: the teaching map, API pages, the CLI.
+
+The full build and its checks in a browser are in ``test_website.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("sphinx", reason='the docs extra is not installed (pip install -e ".[docs]")')
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+
+import course_site  # noqa: E402
+
+from course import cli  # noqa: E402
+from course.docsite import LITE_INSTALL_CELL, _lite_notebook, build_site, find_root  # noqa: E402
+
+
+def test_names_used_follow_aliases_across_cells():
+    cells = [
+        "%matplotlib inline\nfrom course import lsq\nimport course.nis as N\nfrom course.plotting import lsq as plots",
+        "fit = lsq.fit(A, y)\nN.nis_test(e, S)",
+        "plots.plot_w_tests(result)\n!ls",
+        "this is not python (",
+        "import course\ncourse.quadform.imhof_cdf(1.0, [1.0])",
+    ]
+    used = course_site.dotted_names_used(cells)
+    for name in (
+        "course.lsq.fit",
+        "course.nis.nis_test",
+        "course.plotting.lsq.plot_w_tests",
+        "course.quadform.imhof_cdf",
+    ):
+        assert name in used
+    assert not any("numpy" in name for name in used)
+
+
+def test_teaching_map_matches_objects_through_private_modules_and_reexports(tmp_path):
+    notebook = tmp_path / "nb.ipynb"
+    # windowed_nis is defined in a private module of course.nis and re-exported by filters.
+    notebook.write_text(
+        json.dumps(
+            {
+                "cells": [
+                    {"cell_type": "code", "source": "from course.filters import windowed_nis"},
+                    {"cell_type": "code", "source": ["from course import lsq\n", "lsq.w_tests"]},
+                ]
+            }
+        )
+    )
+    api = {m: course_site.public_members(m) for m in course_site.public_namespaces()}
+    taught = course_site.teaching_map({"notebooks/nb": notebook}, api)
+    assert taught["course.lsq.w_tests"] == ["notebooks/nb"]
+    assert taught["course.nis.windowed_nis"] == ["notebooks/nb"]
+    assert "course.filters.windowed_nis" not in taught  # documented once, under course.nis
+
+
+def test_every_public_object_is_documented_exactly_once():
+    api = {m: course_site.public_members(m) for m in course_site.public_namespaces()}
+    homes = course_site.home_namespaces(api)
+    for module_name, members in api.items():
+        module = __import__(module_name, fromlist=["_"])
+        for name in members:
+            obj = getattr(module, name)
+            if course_site._is_documentable(obj):
+                assert homes[id(obj)] in api
+    assert "course.grading" in api and "course.plotting.lsq" in api
+
+
+def test_api_pages_follow_the_public_names_and_drop_stale_pages(tmp_path):
+    stale = tmp_path / "docs/api/modules/course.gone.rst"
+    stale.parent.mkdir(parents=True)
+    stale.write_text("old")
+    api = course_site.write_api_pages(tmp_path)
+    pages = {p.stem for p in (tmp_path / "docs/api/modules").glob("*.rst")}
+    assert pages == set(api)
+    lsq = (tmp_path / "docs/api/modules/course.lsq.rst").read_text()
+    assert ".. autofunction:: w_tests" in lsq
+    filters = (tmp_path / "docs/api/modules/course.filters.rst").read_text()
+    assert ":py:obj:`course.nis.windowed_nis`" in filters
+    assert ".. autofunction:: windowed_nis\n" not in filters
+
+
+def test_shapes_in_types_are_escaped_but_not_inside_literals():
+    lines = ["x : (*batch, N) ndarray", "    Shape ``(*batch, N)`` as given.", "(*batch,) ndarray"]
+    course_site.escape_shape_stars(None, "function", "f", None, {}, lines)
+    assert lines == [
+        "x : (\\*batch, N) ndarray",
+        "    Shape ``(*batch, N)`` as given.",
+        "(\\*batch,) ndarray",
+    ]
+
+
+def test_see_also_names_the_notebook_after_numpydoc():
+    from types import SimpleNamespace
+
+    app = SimpleNamespace(
+        srcdir=str(ROOT),
+        config=SimpleNamespace(course_site_assignments=["exercises/*/*.ipynb"]),
+        course_taught={
+            "course.lsq.fit": [
+                "notebooks/01_least_squares_validation",
+                "exercises/01_least_squares/01_least_squares",
+            ]
+        },
+    )
+    with_box = ["Text.", "", ".. seealso::", "", "    :obj:`w_tests`", "        W-tests.", ""]
+    course_site.add_notebook_see_also(app, "function", "course.lsq.fit", None, {}, with_box)
+    assert with_box[4:10] == [
+        "    :doc:`/notebooks/01_least_squares_validation`",
+        "        Notebook that uses it.",
+        "",
+        "    :doc:`/exercises/01_least_squares/01_least_squares`",
+        "        Assignment that uses it.",
+        "",
+    ]
+    without = ["Text."]
+    course_site.add_notebook_see_also(app, "function", "course.lsq.fit", None, {}, without)
+    assert ".. seealso::" in without
+    untouched = ["Text."]
+    course_site.add_notebook_see_also(app, "function", "course.lsq.mdb", None, {}, untouched)
+    assert untouched == ["Text."]
+
+
+def test_lite_copy_installs_the_course_first(tmp_path):
+    source = ROOT / "notebooks" / "01_least_squares_validation.ipynb"
+    _lite_notebook(source, tmp_path / source.name)
+    copy = json.loads((tmp_path / source.name).read_text())
+    original = json.loads(source.read_text())
+    assert "".join(copy["cells"][0]["source"]).endswith(LITE_INSTALL_CELL)
+    assert copy["cells"][1:] == original["cells"]
+
+
+def test_docs_command_is_wired(capsys):
+    args = cli.build_parser().parse_args(["docs", "out", "--no-lite", "--jobs", "2"])
+    assert args.func is cli._docs and args.no_lite and args.jobs == 2
+    assert find_root(ROOT / "notebooks") == ROOT
+
+
+def test_cache_inside_the_output_folder_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="cache_dir"):
+        build_site(tmp_path / "site", root=ROOT, cache_dir=tmp_path / "site" / "cache")

@@ -1,0 +1,167 @@
+"""The isolation layers one by one (each in a fresh process, since they cannot be undone):
+Landlock's allow-list, the seccomp filter's sockets and pinned descriptor, the forbidden-call
+tripwire, layer detection and the refusal to grade without file-system walls."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from course.grading.isolation import IsolationError, detect, landlock, seccomp
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(code: str) -> list[str]:
+    result = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    return result.stdout.split()
+
+
+needs_landlock = pytest.mark.skipif(landlock.abi_version() < 1, reason="kernel without Landlock")
+
+
+@needs_landlock
+def test_landlock_allows_exactly_the_policy(tmp_path):
+    secret = tmp_path / "secret.txt"
+    secret.write_text("secret")
+    (tmp_path / "work").mkdir()
+    out = _run(
+        f"""
+        import os, socket, sysconfig
+        from course.grading.isolation import landlock as L
+        p = L.Policy()
+        p.allow(sysconfig.get_paths()["stdlib"], L.READ_ONLY)
+        p.allow({str(tmp_path / "work")!r}, L.READ_WRITE)
+        abi = L.confine(p)
+        p.close()
+        def attempt(f):
+            try:
+                f()
+                return "yes"
+            except OSError:
+                return "no"
+        secret = {str(secret)!r}
+        d = os.open("/", os.O_RDONLY) if attempt(lambda: os.open("/", os.O_RDONLY)) == "yes" else None
+        print(attempt(lambda: open(secret).read()))                      # plain path
+        print(attempt(lambda: os.open(secret.lstrip("/"), os.O_RDONLY, dir_fd=d)) if d else "no")
+        print(attempt(lambda: open("/proc/self/root" + secret).read()))  # /proc
+        os.symlink(secret, {str(tmp_path / "work" / "link")!r})
+        print(attempt(lambda: open({str(tmp_path / "work" / "link")!r}).read()))  # symlink
+        print(attempt(lambda: open({str(tmp_path / "new.txt")!r}, "w")))  # write outside
+        print(attempt(lambda: open({str(tmp_path / "work" / "ok.txt")!r}, "w").write("x")))
+        print(attempt(lambda: len(open(os.__file__).read())))           # the stdlib
+        print(attempt(lambda: socket.create_connection(("127.0.0.1", 9), 1)) if abi >= 4 else "no")
+        """
+    )
+    assert out == ["no", "no", "no", "no", "no", "yes", "yes", "no"]
+
+
+def test_seccomp_refuses_sockets_and_pins_the_report_pipe():
+    if not seccomp.available():
+        pytest.skip("no seccomp filter for this platform")
+    out = _run(
+        """
+        import os, socket
+        from course.grading.isolation import seccomp
+        r, w = os.pipe()
+        assert seccomp.install(pinned_fd=w)
+        def attempt(f):
+            try:
+                f()
+                return "yes"
+            except OSError:
+                return "no"
+        print(attempt(socket.socketpair), attempt(socket.socket))
+        print(attempt(lambda: os.close(w)), attempt(lambda: os.dup2(0, w)))
+        os.closerange(w, w + 2)  # close_range refused, then close() per descriptor: refused
+        print(attempt(lambda: os.write(w, b"x")), attempt(lambda: os.close(os.dup(0))))
+        """
+    )
+    assert out == ["no", "no", "no", "no", "yes", "yes"]
+
+
+def test_tripwire_reports_calls_that_do_not_come_from_the_library():
+    out = _run(
+        """
+        import os, types
+        import numpy as np
+        import course.lsq as lsq
+        from course.grading import tripwire
+        r, w = os.pipe()
+        os.set_blocking(r, False)
+        how = tripwire.instrument(["course.lsq.w_tests", "course.lsq.fit"], w)
+        assert set(how.values()) == {"instrumented"}, how
+        def calls():
+            try:
+                data = os.read(r, 1 << 16)
+            except BlockingIOError:
+                data = b""
+            return ",".join(n.rsplit(".", 1)[1] for n in tripwire.parse_events(data)[0]) or "-"
+        A = np.array([[1.0, 1], [1, 2], [1, 3], [1, 4], [1, 5]])
+        y, Q = np.array([1.0, 2.1, 2.9, 4.2, 4.9]), np.eye(5)
+        f = lsq.fit(A, y, Q)
+        print(calls())                                       # fit
+        lsq.data_snooping(A, y, Q, 0.05, 1)
+        print(calls())                                       # - (library-internal)
+        from course.lsq import w_tests
+        w_tests(f, 0.05)
+        print(calls())                                       # w_tests (same function object)
+        g = {"__name__": "course.lsq", "lsq": lsq, "f": f}
+        exec("def forged():\\n    return lsq.w_tests(f, 0.05)", g)
+        g["forged"]()
+        print(calls())                                       # w_tests (names do not count)
+        F = types.FunctionType(lsq.data_snooping.__code__, dict(vars(lsq)))
+        F(A, y, Q, 0.05, 1)
+        print(calls())                                       # fit,w_tests (foreign globals)
+        print(lsq.w_tests.__kwdefaults__, lsq.w_tests.__name__)
+        """
+    )
+    assert out[:5] == ["fit", "-", "w_tests", "w_tests", "fit,w_tests"], out
+    assert out[5:] == ["None", "w_tests"]
+
+
+def test_events_are_found_whatever_a_submission_writes_around_them():
+    from course.grading.tripwire import EVENT, parse_events
+
+    stream = b"\x1ecourse-forb" + EVENT % b"course.lsq.fit" + b"garbage\x1e" + EVENT % b"a.b"
+    names, tail = parse_events(stream[:-3])
+    assert names == ["course.lsq.fit"] and tail.startswith(b"\x1e")
+    names, _ = parse_events(tail + stream[-3:])
+    assert names == ["a.b"]
+
+
+def test_grading_is_refused_without_file_system_walls(tmp_path):
+    with pytest.raises(IsolationError, match="--unsafe-no-isolation"):
+        detect(namespaces=False, landlock=False)
+    iso = detect(namespaces=False, landlock=False, unsafe=True)
+    assert not iso.filesystem and "UNSAFE" in iso.describe()
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    result = subprocess.run(
+        [sys.executable, "-m", "course", "grade", str(ROOT / "solutions" / "01_least_squares")]
+        + [str(subs), "--out", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "Sandbox: " in result.stderr  # the layers, printed once
+    assert result.stderr.count("Sandbox: ") <= 1
+
+
+def test_detected_layers_are_described():
+    iso = detect()
+    text = iso.describe()
+    assert text.startswith("Sandbox: ") and "resource limits" in text
+    if landlock.abi_version():
+        assert f"Landlock ABI {landlock.abi_version()}" in text

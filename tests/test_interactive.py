@@ -1,0 +1,137 @@
+"""The sliders' update functions: plain functions that draw and return the numbers they show.
+
+ipywidgets is never imported here: the widget builders only wire sliders to
+these functions, which is all the notebooks' interactive layer adds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+matplotlib = pytest.importorskip("matplotlib")
+matplotlib.use("Agg", force=True)
+import matplotlib.pyplot as plt  # noqa: E402
+
+from course import diagnosis as dg  # noqa: E402
+from course import filters as kf  # noqa: E402
+from course import interactive, lsq  # noqa: E402
+from course import mismatched as mm  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+def test_importing_the_module_needs_no_ipywidgets():
+    # only the widget builders import ipywidgets, lazily
+    source = open(interactive.__file__, encoding="utf-8").read()
+    head = source.split("def _ipywidgets")[0]
+    assert "import ipywidgets" not in head
+
+
+def test_omt_view_agrees_with_the_library_and_the_power_formula():
+    no_outlier = interactive.omt_view(alpha=0.05, outlier=0.0)
+    t, y = lsq.load_sea_level(0)
+    fit = lsq.fit(np.column_stack([np.ones_like(t), t]), y, 4.0 * np.eye(t.size))
+    assert no_outlier["T"] == pytest.approx(lsq.overall_model_test(fit, 0.05).statistic)
+    assert no_outlier["omt_power"] == pytest.approx(0.05)
+    assert no_outlier["w_power"] == pytest.approx(0.05)
+    big = interactive.omt_view(alpha=0.05, outlier=15.0)
+    assert big["omt_reject"] and 4 in big["w_reject"]
+    # the w-test is the most powerful test against one outlier: more power than the OMT
+    assert 0.05 < big["omt_power"] < big["w_power"] <= 1.0
+    # a larger alpha can only enlarge the critical region
+    assert (
+        interactive.omt_view(alpha=0.2, outlier=5.0)["w_power"]
+        > interactive.omt_view(alpha=0.01, outlier=5.0)["w_power"]
+    )
+
+
+def _signals():
+    t = np.arange(50)
+    return np.column_stack(
+        [
+            1.0 + 0.5 * np.sin(2 * np.pi * t / 25),
+            np.cos(2 * np.pi * t / 16) + 0.3,
+            np.where((t // 10) % 2 == 0, 1.0, -0.5),
+        ]
+    )
+
+
+def test_power_view_is_alpha_without_fault_and_blind_to_the_decoupled_fault():
+    U = _signals()
+    at = interactive.power_view(0.0, 0.05, 0.2, U=U, nominal=np.ones(3), free=[0])
+    assert at == pytest.approx({"F1": 0.05, "F2": 0.05, "F3": 0.05})
+    at = interactive.power_view(0.2, 0.05, 0.2, U=U, nominal=np.ones(3), free=[0])
+    assert at["F1"] == pytest.approx(0.05)  # theta_1 is free: its fault is decoupled
+    theta = np.array([1.0, 1.2, 1.0])
+    assert at["F2"] == pytest.approx(
+        dg.prediction_error_power(U, np.ones(3), [0], theta, sigma=0.2, alpha=0.05)
+    )
+    noisier = interactive.power_view(0.2, 0.05, 0.4, U=U, nominal=np.ones(3), free=[0])
+    assert noisier["F2"] < at["F2"]
+
+
+def test_ekf_view_trades_false_alarms_against_detection():
+    quiet = interactive.ekf_view(q_beta=1e-4, fault_size=0.0, runs=200)
+    # no fault: the per-sample alarm rate is near the design alpha = 0.001
+    assert quiet["false_alarm_rate"] < 0.01 and quiet["detection"] < 0.1
+    stiff = interactive.ekf_view(q_beta=0.0, fault_size=0.0, runs=200)
+    assert (
+        stiff["false_alarm_rate"] > 10 * quiet["false_alarm_rate"]
+    )  # beta cannot follow the drift
+    loud = interactive.ekf_view(q_beta=1e-4, fault_size=0.3, runs=200)
+    assert loud["detection"] > 0.9
+
+
+def test_nis_view_power_is_alpha_under_h0_and_the_matrix_test_sees_correlation():
+    h0 = interactive.nis_view(correlation=0.0, anisotropy=1.0, K=30, runs=4000)
+    for key in ("nis_power", "matrix_power"):
+        lo, hi = stats.binom.interval(0.999, 4000, 0.05)
+        assert lo / 4000 <= h0[key] <= hi / 4000
+    corr = interactive.nis_view(correlation=0.8, anisotropy=1.0, K=50, runs=2000)
+    assert corr["matrix_power"] > 0.8 > corr["nis_power"]
+    assert corr["eigenvalues"] == pytest.approx((0.2, 1.8))
+
+
+def test_records_view_matches_the_library_power_and_grows_with_M():
+    M0 = kf.LinearModel(F=[[0.9]], H=[[1.0]], Q=[[0.5]], R=[[1.0]], x0_cov=[[1.0]])
+    M1 = kf.LinearModel(F=[[0.8]], H=[[1.0]], Q=[[1.0]], R=[[1.0]], x0_cov=[[1.0]])
+    M2 = kf.LinearModel(F=[[0.9]], H=[[1.0]], Q=[[1.5]], R=[[1.0]], x0_cov=[[1.0]])
+    null, alt = mm.residual_moments(M0, M1, 6), mm.residual_moments(M2, M1, 6)
+    small = interactive.records_view(5, null=null, alternative=alt, j=4, k=5)
+    large = interactive.records_view(40, null=null, alternative=alt, j=4, k=5)
+    assert small["covariance"] == pytest.approx(mm.power(null, alt, "covariance", 4, 5), rel=1e-6)
+    assert large["covariance"] > small["covariance"]
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: interactive.omt_view(alpha=0.0), "alpha"),
+        (lambda: interactive.omt_view(outlier=np.nan), "outlier"),
+        (lambda: interactive.nis_view(correlation=1.0), "correlation"),
+        (lambda: interactive.nis_view(K=1), "K"),
+        (lambda: interactive.ekf_view(q_beta=-1.0), "q_beta"),
+    ],
+)
+def test_update_functions_refuse_bad_slider_values(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_widget_builders_wire_sliders_that_redraw_on_release(capsys):
+    pytest.importorskip("ipywidgets")
+    widget = interactive.omt_widget()
+    sliders = [s for row in widget.children[:2] for s in row.children]
+    assert [s.description for s in sliders] == ["α", "outlier [record units]"]
+    assert all(s.continuous_update is False for s in sliders)
+    capsys.readouterr()
+    sliders[1].value = 3.0  # moving a slider redraws the figure
+    assert "Figure" in capsys.readouterr().out
+    U = _signals()
+    assert interactive.power_widget(U=U, nominal=np.ones(3), free=[0]) is not None

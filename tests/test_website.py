@@ -1,0 +1,387 @@
+"""The course website, built by ``course docs`` and checked in a real browser.
+
+The site is built from a copy of the repository into a temporary folder (with its own
+notebook cache, so the build executes every notebook as on a fresh clone), served on
+127.0.0.1 and visited with Debian's Chromium through Playwright. Screenshots of the landing
+page and of a notebook page are saved under the test's temporary folder (printed at the end;
+set ``COURSE_WEBSITE_ARTIFACTS=DIR`` to keep them in DIR instead).
+
+Skipped, with the reason, when Chromium or the docs extra is not installed: install them with
+``apt-get install chromium`` and ``python -m pip install -e ".[docs]"``.
+"""
+
+from __future__ import annotations
+
+import functools
+import http.server
+import json
+import os
+import re
+import shutil
+import threading
+import time
+import uuid
+from dataclasses import dataclass, field
+from html.parser import HTMLParser
+from pathlib import Path
+from urllib.parse import unquote, urldefrag, urlparse
+
+import pytest
+
+pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parent.parent
+CHROMIUM = os.environ.get("COURSE_CHROMIUM") or shutil.which("chromium") or ""
+# Chromium on a machine without network: no background connections, no GPU, no sandbox (root).
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+if not CHROMIUM:
+    reason = "no Chromium installed (apt-get install chromium, or set COURSE_CHROMIUM)"
+    if os.environ.get("COURSE_REQUIRE_BROWSER"):  # set by .ci/run, which installs one
+        pytest.fail(reason, pytrace=False)
+    pytest.skip(reason, allow_module_level=True)
+pytest.importorskip("sphinx", reason='the docs extra is not installed (pip install -e ".[docs]")')
+sync_api = pytest.importorskip(
+    "playwright.sync_api", reason='the docs extra is not installed (pip install -e ".[docs]")'
+)
+
+from course.docsite import LITE_INSTALL_CELL, build_site  # noqa: E402
+
+# Where the incremental-build test adds a cell: the quickest teaching notebook to re-run.
+INCREMENTAL_NOTEBOOK = "notebooks/03_parameter_estimation_and_likelihood.ipynb"
+
+
+# -- Build and serve ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("website")
+
+
+@pytest.fixture(scope="module")
+def source(workdir) -> Path:
+    """A copy of the repository, so the incremental test can edit a notebook."""
+    copy = workdir / "src"
+    shutil.copytree(
+        ROOT,
+        copy,
+        ignore=shutil.ignore_patterns(
+            ".git", ".cache", ".venv*", "build", "dist", "*.egg-info", "__pycache__", "_build"
+        ),
+    )
+    return copy
+
+
+@pytest.fixture(scope="module")
+def site(source, workdir):
+    # COURSE_WEBSITE_CACHE=DIR reuses executed notebooks between runs of this test (local
+    # iteration); by default the build executes every notebook, as on a fresh clone.
+    cache = Path(os.environ.get("COURSE_WEBSITE_CACHE") or workdir / "cache")
+    report = build_site(workdir / "site", root=source, cache_dir=cache, quiet=True)
+    print(report.summary())
+    return report
+
+
+@pytest.fixture(scope="module")
+def server(site):
+    handler = functools.partial(_QuietHandler, directory=str(site.out_dir))
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
+    thread.start()
+    yield f"http://127.0.0.1:{httpd.server_address[1]}/"
+    httpd.shutdown()
+    httpd.server_close()
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+@pytest.fixture(scope="module")
+def browser(server):
+    with sync_api.sync_playwright() as playwright:
+        # Playwright gives every launch a fresh, empty profile (user data dir).
+        chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture(scope="module")
+def artifacts(workdir) -> Path:
+    folder = Path(os.environ.get("COURSE_WEBSITE_ARTIFACTS") or workdir / "screenshots")
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+# -- Crawl every page once --------------------------------------------------------------------------
+
+
+class _Links(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.hrefs: list[str] = []
+        self.ids: set[str] = set()
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        for key in ("id", "name"):
+            if attrs.get(key):
+                self.ids.add(attrs[key])
+        if tag == "a" and attrs.get("href"):
+            self.hrefs.append(attrs["href"])
+        if tag in ("link", "script", "img") and (attrs.get("href") or attrs.get("src")):
+            self.hrefs.append(attrs.get("href") or attrs.get("src"))
+
+
+def _parsed(cache: dict[Path, _Links], path: Path) -> _Links:
+    """Each page parsed once (a module page is large and linked to many times)."""
+    if path not in cache:
+        cache[path] = _parse(path)
+    return cache[path]
+
+
+def _parse(path: Path) -> _Links:
+    parser = _Links()
+    parser.feed(path.read_text(encoding="utf-8", errors="replace"))
+    return parser
+
+
+@dataclass
+class PageVisit:
+    """What the browser saw on one page."""
+
+    console_errors: list[str] = field(default_factory=list)
+    failed_requests: list[str] = field(default_factory=list)
+    maths: int = 0  # elements Sphinx marked as maths
+    typeset: int = 0  # of those, how many MathJax turned into mjx-container
+    math_errors: int = 0  # TeX MathJax could not parse
+    images: list = field(default_factory=list)  # [src, loaded] of every notebook output image
+
+
+def _html_pages(site_dir: Path) -> list[str]:
+    """Every page of the Sphinx site (the JupyterLite app under lite/ is checked apart)."""
+    return sorted(
+        p.relative_to(site_dir).as_posix()
+        for p in site_dir.rglob("*.html")
+        if not p.relative_to(site_dir).as_posix().startswith(("lite/", "_static/"))
+    )
+
+
+MATH_CHECK = """async () => {
+  const maths = document.querySelectorAll('.math');
+  if (maths.length === 0) return [0, 0, 0];
+  for (let i = 0; i < 100 && !(window.MathJax && MathJax.startup && MathJax.startup.promise); i++)
+    await new Promise(r => setTimeout(r, 100));
+  if (window.MathJax && MathJax.startup) await MathJax.startup.promise;
+  let typeset = 0;
+  for (const m of maths) if (m.querySelector('mjx-container') || m.tagName === 'MJX-CONTAINER') typeset++;
+  return [maths.length, typeset, document.querySelectorAll('mjx-merror').length];
+}"""
+
+IMAGE_CHECK = """() => Array.from(document.querySelectorAll('.cell_output img')).map(
+  img => [img.getAttribute('src'), img.complete && img.naturalWidth > 0])"""
+
+
+@pytest.fixture(scope="module")
+def visits(site, server, browser) -> dict[str, PageVisit]:
+    """Every page of the site, loaded once in Chromium."""
+    context = browser.new_context()
+    result = {}
+    for rel in _html_pages(site.out_dir):
+        if rel == "index.html":
+            continue  # forwards to docs/index.html (checked in the screenshot test)
+        visit = PageVisit()
+        page = context.new_page()
+        page.on(
+            "console",
+            lambda m, v=visit: v.console_errors.append(m.text) if m.type == "error" else None,
+        )
+        page.on("pageerror", lambda e, v=visit: v.console_errors.append(str(e)))
+        page.on("requestfailed", lambda r, v=visit: v.failed_requests.append(r.url))
+        page.on(
+            "response",
+            lambda r, v=visit: (
+                v.failed_requests.append(f"{r.status} {r.url}") if r.status >= 400 else None
+            ),
+        )
+        page.goto(server + rel, wait_until="load")
+        visit.maths, visit.typeset, visit.math_errors = page.evaluate(MATH_CHECK)
+        visit.images = page.evaluate(IMAGE_CHECK)
+        page.close()
+        result[rel] = visit
+    context.close()
+    return result
+
+
+# -- The checks -----------------------------------------------------------------------------------
+
+
+def test_every_page_loads_without_console_errors(visits):
+    assert len(visits) > 25, f"only {len(visits)} pages: is the API reference missing?"
+    bad = {
+        rel: v.console_errors + v.failed_requests
+        for rel, v in visits.items()
+        if v.console_errors or v.failed_requests
+    }
+    assert not bad, f"pages with console errors or failed requests: {bad}"
+
+
+def test_every_internal_link_resolves(site):
+    """Every href/src of every page points at a file of the site, and every #anchor exists."""
+    out = site.out_dir
+    parsed: dict[Path, _Links] = {}
+    broken = []
+    for rel in _html_pages(out):
+        page = out / rel
+        links = _parsed(parsed, page)
+        for href in links.hrefs:
+            url, fragment = urldefrag(href)
+            if urlparse(href).scheme or href.startswith(("//", "mailto:", "javascript:")):
+                continue  # external: none may be needed to read the site (next test)
+            target = (page.parent / unquote(urlparse(url).path)).resolve() if url else page
+            if target.is_dir():
+                target = target / "index.html"
+            if not target.is_file():
+                broken.append(f"{rel}: {href}")
+                continue
+            if fragment and target.suffix == ".html":
+                ids = _parsed(parsed, target).ids
+                if fragment not in ids:
+                    broken.append(f"{rel}: {href} (no #{fragment})")
+    assert not broken, f"{len(broken)} broken internal links: {broken[:30]}"
+
+
+def test_no_resource_comes_from_outside_the_site(site):
+    """Scripts, styles, fonts and images are served by the site itself (it works offline)."""
+    outside = set()
+    for rel in _html_pages(site.out_dir):
+        page = site.out_dir / rel
+        text = page.read_text(encoding="utf-8")
+        for match in re.finditer(
+            r'<(?:script|link|img)[^>]+(?:src|href)="(https?:)?//([^"/]+)', text
+        ):
+            outside.add(f"{rel}: {match.group(2)}")
+    assert not outside, sorted(outside)[:20]
+
+
+def test_formulas_are_typeset(visits):
+    with_math = {rel: v for rel, v in visits.items() if v.maths}
+    assert any(rel.startswith("notebooks/") for rel in with_math), "no notebook page has maths"
+    assert any(rel.startswith("docs/api/") for rel in with_math), "no API page has maths"
+    untypeset = {
+        rel: f"{v.typeset}/{v.maths} typeset, {v.math_errors} TeX errors"
+        for rel, v in with_math.items()
+        if v.typeset < v.maths or v.math_errors
+    }
+    assert not untypeset, untypeset
+
+
+def test_every_notebook_page_shows_its_figures(site, visits):
+    notebooks = sorted((site.out_dir / "notebooks").glob("*.html"))
+    assert len(notebooks) >= 6
+    for page in notebooks:
+        rel = page.relative_to(site.out_dir).as_posix()
+        source = json.loads((ROOT / "notebooks" / f"{page.stem}.ipynb").read_text())
+        expected = sum(
+            "image/png" in output.get("data", {})
+            for cell in source["cells"]
+            for output in cell.get("outputs", [])
+        )
+        images = visits[rel].images
+        assert len(images) >= max(expected, 1), f"{rel}: {len(images)} figures, expected {expected}"
+        assert all(loaded for _, loaded in images), f"{rel}: figures that did not load {images}"
+
+
+def test_search_finds_the_w_test(server, browser):
+    page = browser.new_page()
+    page.goto(server + "search.html?q=w-test", wait_until="load")
+    page.wait_for_selector("#search-results li", timeout=30_000)
+    hits = page.eval_on_selector_all("#search-results li a", "els => els.map(a => a.href)")
+    page.close()
+    assert any("course.lsq" in hit or "01_least_squares" in hit for hit in hits), hits
+
+
+def test_screenshots_of_landing_and_notebook_page(server, browser, artifacts):
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    page.goto(server, wait_until="networkidle")  # index.html forwards to the landing page
+    assert page.url.endswith("docs/index.html")
+    assert "Learning path" in page.inner_text("body")
+    page.screenshot(path=str(artifacts / "landing.png"))
+    page.goto(server + "notebooks/01_least_squares_validation.html", wait_until="networkidle")
+    page.wait_for_selector("mjx-container", state="attached")  # typeset (some sit in folded toc)
+    page.screenshot(path=str(artifacts / "notebook-01.png"))
+    page.close()
+    for name in ("landing.png", "notebook-01.png"):
+        assert (artifacts / name).stat().st_size > 10_000
+    print(f"screenshots in {artifacts}")
+
+
+def test_assignments_appear_only_as_student_versions(site):
+    assert not (site.out_dir / "solutions").exists()
+    pages = list((site.out_dir / "exercises").rglob("*.html"))
+    assert len(pages) >= 6
+    for folder in ("exercises", "notebooks"):  # the authoring guide may explain the markers
+        for page in (site.out_dir / folder).rglob("*.html"):
+            assert "BEGIN SOLUTION" not in page.read_text(encoding="utf-8"), page
+
+
+def test_api_pages_name_the_notebooks_that_use_them(site):
+    page = (site.out_dir / "docs/api/modules/course.lsq.html").read_text()
+    w_tests = page[page.index('id="course.lsq.w_tests"') :]
+    end = w_tests.find('<dl class="py', 1)  # up to the next documented object, if any
+    w_tests = w_tests if end < 0 else w_tests[:end]
+    assert "seealso" in w_tests and "01_least_squares_validation.html" in w_tests
+    notebook = (site.out_dir / "notebooks/01_least_squares_validation.html").read_text()
+    assert "course.lsq.html#course.lsq.w_tests" in notebook
+
+
+def test_jupyterlite_has_the_course_wheel_and_the_notebooks(site, server, browser):
+    lite = site.out_dir / "lite"
+    wheels = json.loads((lite / "pypi" / "all.json").read_text())
+    assert "residual-validation-course" in wheels or "residual_validation_course" in wheels
+    contents = json.loads((lite / "api" / "contents" / "all.json").read_text())
+    names = {item["name"] for item in contents["content"]}
+    assert "01_least_squares_validation.ipynb" in names
+    first = json.loads((lite / "files" / "01_least_squares_validation.ipynb").read_text())
+    assert LITE_INSTALL_CELL in "".join(first["cells"][0]["source"])
+    # The app itself loads; running code needs Pyodide from its CDN, which this test cannot reach.
+    page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(server + "lite/lab/index.html", wait_until="load")
+    page.wait_for_selector("#jp-main-dock-panel", timeout=60_000)
+    page.close()
+    assert not errors, errors
+
+
+def test_incremental_build_reexecutes_only_the_changed_notebook(site, source):
+    marker = f"incremental build check {uuid.uuid4().hex[:8]}"  # new code: never in a cache
+    notebook_path = source / INCREMENTAL_NOTEBOOK
+    notebook = json.loads(notebook_path.read_text())
+    notebook["cells"].append(
+        {
+            "cell_type": "code",
+            "execution_count": None,
+            "id": "incremental-build-check",
+            "metadata": {},
+            "outputs": [],
+            "source": [f"print({marker!r})"],
+        }
+    )
+    notebook_path.write_text(json.dumps(notebook, indent=1))
+    start = time.perf_counter()
+    report = build_site(site.out_dir, root=source, cache_dir=site.cache_dir, quiet=True)
+    print(f"incremental rebuild: {time.perf_counter() - start:.0f} s; {report.summary()}")
+    assert report.executed == [INCREMENTAL_NOTEBOOK]
+    page = site.out_dir / "notebooks" / (Path(INCREMENTAL_NOTEBOOK).stem + ".html")
+    assert marker in page.read_text()
