@@ -324,7 +324,7 @@ _SCALAR = _ScalarMath()
 
 
 def _term_constants(w, h, d):
-    """Per-term summands of the constants of :class:`_Side` (floats or arrays).
+    """Per-term summands of the constants of :class:`_Side` (arrays; lists: :func:`_term_sums`).
 
     ``d/2``; ``h/2`` (k); ``w (h + d)`` (mean); ``2 w^2 (h + 2d)`` (variance);
     ``-h/2 log(2|w|) - d/4`` (log D of the truncation bound, see :func:`_plan`);
@@ -332,7 +332,7 @@ def _term_constants(w, h, d):
     see :func:`_near_zero`).
     """
     positive = w > 0
-    log_w = np.log(np.abs(w)) if isinstance(w, np.ndarray) else math.log(abs(w))
+    log_w = np.log(np.abs(w))
     quarter = 0.25 / w * positive
     return (
         0.5 * d,
@@ -356,6 +356,24 @@ def _derivative_factors(w, h, d):
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
+def _term_sums(w, h, d):
+    """The sums of :func:`_term_constants` over a few terms given as lists (one Python loop)."""
+    half_d = k = mean = var = log_d = d_over_w = zero_slope = log_c = 0.0
+    for wi, hi, di in zip(w, h, d):
+        half_d += 0.5 * di
+        k += 0.5 * hi
+        mean += wi * (hi + di)
+        var += 2.0 * wi * wi * (hi + di + di)
+        log_2w = math.log(2.0 * abs(wi))
+        log_d -= 0.5 * hi * log_2w + 0.25 * di
+        if wi > 0:
+            quarter = 0.25 / wi
+            d_over_w += di * quarter
+            zero_slope += (hi + di) * quarter
+            log_c -= 0.5 * hi * log_2w
+    return half_d, k, mean, var, log_d, d_over_w, zero_slope, log_c
+
+
 # ---------------------------------------------------------------------------
 # the normalised terms of one tail
 # ---------------------------------------------------------------------------
@@ -374,30 +392,30 @@ class _Side:
         self.sigma2 = sigma2
         self.r = r = len(w)
         # per-term rows for the Python-float versions of derivatives, cgf and path
-        self.rows: tuple | None = None
-        self.cgf_rows: tuple | None = None
+        self.rows: list | None = None
+        self.cgf_rows: list | None = None
         self.w2_list: list | None = None
         if type(w) is not list and r <= _PYTHON_TERMS:
             w, h, d = w.tolist(), h.tolist(), d.tolist()
         if type(w) is list:
-            # a few terms: every constant in Python floats (numpy calls cost more);
-            # the arrays of the numpy versions are made on first use
+            # a few terms: every constant in one loop of Python floats (numpy
+            # calls cost more); the arrays of the numpy versions on first use
             self._columns = w, h, d
-            sums = [math.fsum(column) for column in zip(*map(_term_constants, w, h, d))] or [
-                0.0
-            ] * 8
-            self.rows = tuple(map(_derivative_factors, w, h, d))
-            self.cgf_rows = tuple((2.0 * wi, 0.5 * hi, 0.5 * di) for wi, hi, di in zip(w, h, d))
-            self.w2_list = [2.0 * wi for wi in w]
-            self.log_weights = np.array([-0.5 * hi for hi in h], dtype=complex)
-            self.inverse_weights = np.array([0.5 * di for di in d], dtype=complex)
+            sums = _term_sums(w, h, d)
+            self.rows, self.cgf_rows = rows, cgf_rows = [], []
+            self.w2_list = w2_list = []
+            for wi, hi, di in zip(w, h, d):
+                w2, hw, dw = wi + wi, hi * wi, di * wi
+                rows.append(
+                    (w2, hw, dw, w2 * hw, 8.0 * wi * wi * hw, 4.0 * wi * dw, 24.0 * wi * wi * dw)
+                )
+                cgf_rows.append((w2, 0.5 * hi, 0.5 * di))
+                w2_list.append(w2)
             ends = [(w[0], w[-1]), (h[0], h[-1]), (d[0], d[-1])] if r else [(0.0, 0.0)] * 3
             smallest = min(map(abs, w)) if r else 1.0
         else:
             self.w, self.h, self.d = w, h, d
             sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
-            self.log_weights = (-0.5 * h).astype(complex)
-            self.inverse_weights = (0.5 * d).astype(complex)
             ends = [(float(v[0]), float(v[-1])) for v in (w, h, d)]
             smallest = float(np.min(np.abs(w)))
         (w_first, w_last), (_, h_last), (_, d_last) = ends
@@ -420,6 +438,8 @@ class _Side:
         # P(X <= x) ~ C x^k / Gamma(k+1) near 0 for a positive form (see _near_zero)
         self.zero_slope = zero_slope
         self.log_c0 = log_c - half_d - math.lgamma(self.k + 1.0)
+        # rows of the path matrix (see _path_coefficients)
+        self.rows_of_path = (2 * r if self.noncentral else r) + 3
 
     # the arrays of the numpy versions (for a few terms given as lists: made on first use)
     @functools.cached_property
@@ -448,6 +468,23 @@ class _Side:
     def factors(self):
         """Per-term factors of the derivatives of ``K`` (for the numpy version)."""
         return _derivative_factors(self.w, self.h, self.d)
+
+    @functools.cached_property
+    def exponent_weights(self):
+        """Weights ``W`` of the rows of the path matrix in the exponent (see :func:`_integrand`).
+
+        ``log z_r``: ``-h_r/2``; ``1/z_r``: ``d_r/2`` (noncentral laws only);
+        the linear part: 1.
+        """
+        if self.rows is not None:
+            h, d = self._columns[1], self._columns[2]
+            row = [-0.5 * v for v in h]
+            if self.noncentral:
+                row += [0.5 * v for v in d]
+            row.append(1.0)
+            return np.array(row, dtype=complex)
+        parts = [-0.5 * self.h, 0.5 * self.d] if self.noncentral else [-0.5 * self.h]
+        return np.concatenate(parts + [[1.0]]).astype(complex)
 
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
@@ -706,36 +743,43 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
 
 @functools.lru_cache(maxsize=64)
 def _nodes(step, count, odd):
-    """``u`` and the columns ``(1, cosh u - 1, sinh u)`` at ``u = step j`` (j < count) or ``step (2j + 1)``."""
+    """``u`` and the complex rows ``(1, cosh u - 1, sinh u)`` at ``u = step j`` (j < count) or ``step (2j + 1)``."""
     u = step * (2.0 * np.arange(count) + 1.0 if odd else np.arange(count))
-    return u, np.stack([np.ones(count), np.cosh(u) - 1.0, np.sinh(u)])
+    basis = np.stack([np.ones(count), np.cosh(u) - 1.0, np.sinh(u)]).astype(complex)
+    return u, basis
 
 
 def _path_coefficients(x, side, s0, a, b, k0):
     """Coefficients of the path quantities in the basis ``(1, cosh u - 1, sinh u)``.
 
     On the hyperbola ``s = s0 + a(cosh u - 1) + i b sinh u`` every factor
-    ``z_r = 1 - 2 w_r s``, ``s`` itself, the linear part ``-(s - s0) x - K(s0)
-    [- sum d/2]`` of ``E - E0`` and ``s'(u) = a sinh u + i b cosh u`` are
-    linear in ``(1, cosh u - 1, sinh u)``: one matrix product of these ``(r +
-    3, 3)`` coefficients (rows ``z_1 .. z_r, s, linear, s'``) with the nodes'
-    basis gives them all.  Floats give one point's matrix (in Python for a
-    few terms), 1-D arrays one matrix per point ``(points, r + 3, 3)``.
+    ``z_r = 1 - 2 w_r s``, the linear part ``-(s - s0) x - K(s0) [- sum
+    d/2]`` of ``E - E0``, ``s'(u) = a sinh u + i b cosh u`` and ``s`` itself
+    are linear in ``(1, cosh u - 1, sinh u)``: one matrix product of these
+    coefficients with the nodes' basis gives them all.  Rows: ``z_1 .. z_r``
+    (their logarithms), ``z_1 .. z_r`` again for the noncentral terms (their
+    reciprocals), the linear part, ``s'``, ``s`` (see
+    :meth:`_Side.exponent_weights`).  Floats give one point's matrix (built
+    in Python for a few terms), 1-D arrays one matrix per point ``(points,
+    rows, 3)``.
     """
     ib = 1j * b
     c0 = k0 + side.half_d_sum  # the noncentral terms' -d/2 (0 when central)
     if side.w2_list is not None and isinstance(s0, float):
-        rows = [(1.0 - v * s0, -v * a, -v * ib) for v in side.w2_list]
-        rows += [(s0, a, ib), (-c0, -x * a, -x * ib), (ib, ib, a)]
+        z = [(1.0 - v * s0, -v * a, -v * ib) for v in side.w2_list]
+        rows = z + z if side.noncentral else z
+        rows += [(-c0, -x * a, -x * ib), (ib, ib, a), (s0, a, ib)]
         return np.array(rows)
     path = np.stack(np.broadcast_arrays(s0, a, ib), axis=-1)
     r = side.r
-    coef = np.empty(path.shape[:-1] + (r + 3, 3), dtype=complex)
+    coef = np.empty(path.shape[:-1] + (side.rows_of_path, 3), dtype=complex)
     np.multiply(side.minus_w2[:, None], path[..., None, :], out=coef[..., :r, :])
     coef[..., :r, 0] += 1.0
-    coef[..., r, :] = path
-    coef[..., r + 1, :] = np.stack(np.broadcast_arrays(-c0, -x * a, -x * ib), axis=-1)
-    coef[..., r + 2, :] = np.stack(np.broadcast_arrays(ib, ib, a), axis=-1)
+    if side.noncentral:
+        coef[..., r : 2 * r, :] = coef[..., :r, :]
+    coef[..., -3, :] = np.stack(np.broadcast_arrays(-c0, -x * a, -x * ib), axis=-1)
+    coef[..., -2, :] = np.stack(np.broadcast_arrays(ib, ib, a), axis=-1)
+    coef[..., -1, :] = path
     return coef
 
 
@@ -744,37 +788,41 @@ def _integrand(basis, coef, side, pole):
 
     ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
     ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes.  One
-    point gives shape (nodes,), many (points, nodes).  About a dozen numpy
-    calls whatever the number of terms: on the few dozen nodes of one point
-    their overhead, not the arithmetic, is the cost.  ``Im(1 - 2 w s) = -2 w
-    Im s`` keeps the logarithm off its cut; ``E - E0`` is built from ``s -
+    point gives shape (nodes,), many (points, nodes).  The exponent is one
+    product ``W . [log z, 1/z, linear]`` with the weights ``W = (-h/2, d/2,
+    1)`` of :meth:`_Side.exponent_weights`: about ten numpy calls whatever the
+    number of terms (on the few dozen nodes of one point their overhead, and
+    the complex logarithms, are the cost).  ``Im z = -2 w Im s`` keeps every
+    ``log z`` off its cut along the path; ``E - E0`` is built from ``s -
     s0`` (the coefficients), so no digits cancel when ``s0 x`` is large.
     """
     r = side.r
     path = coef @ basis
-    z = path[..., :r, :]
-    if z.size > _COMPLEX_LOG_SIZE:
+    logs = path[..., :r, :]
+    if logs.size > _COMPLEX_LOG_SIZE:
         # numpy's complex log costs ~100 ns a value, this real split ~45
-        weights = side.log_weights.real
-        e = weights @ np.log(np.abs(z)) + 1j * (weights @ np.arctan2(z.imag, z.real))
+        angle = np.arctan2(logs.imag, logs.real)
+        logs.real = np.log(np.abs(logs))
+        logs.imag = angle
     else:
-        e = side.log_weights @ np.log(z)
-    e += path[..., r + 1, :]
+        np.log(logs, out=logs)
     if side.noncentral:
-        e += side.inverse_weights @ np.reciprocal(z)
+        inverse = path[..., r : 2 * r, :]
+        np.reciprocal(inverse, out=inverse)
+    e = side.exponent_weights @ path[..., :-2, :]
+    s = path[..., -1, :]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
-        s = path[..., r, :]
         e += (0.5 * side.sigma2) * (s * s)
     # where a drift outgrows exp(-s x) the values are huge (capped below the
     # overflow): the callers see them above _BLOWUP and take a nearly
     # vertical path instead
     real = e.real
     np.minimum(real, 600.0, out=real)
-    value = np.exp(e)
-    value *= path[..., r + 2, :]
+    value = np.exp(e, out=e)
+    value *= path[..., -2, :]
     if pole:
-        value /= path[..., r, :]
+        value /= s
     return value.imag
 
 
