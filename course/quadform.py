@@ -779,7 +779,7 @@ def _path_coefficients(x, side, s0, a, b, k0):
     c0 = k0 + side.half_d_sum  # the noncentral terms' -d/2 (0 when central)
     if side.w2_list is not None and isinstance(s0, float):
         # one flat list of Python numbers: numpy reads it faster than nested rows
-        z = []
+        z: list[complex] = []
         for v in side.w2_list:
             z += (1.0 - v * s0, -v * a, -v * ib)
         flat = z + z if side.noncentral else z
