@@ -1685,9 +1685,11 @@ class WeightedChiSquare(FrozenDistribution):
             array.setflags(write=False)
         self.weights, self.dof, self.noncentrality = w, h, d
         self.sigma, self.offset = float(sigma), offset
-        self.atol, self.rtol = float(atol), float(rtol)
-        # the normalised terms of each tail, built on first use
+        self.atol, self.rtol = _tolerances(atol, rtol)
+        # the normalised terms of each tail, built on first use; a few terms
+        # also as Python floats for one point (see _at)
         self._sides, self._density_sides = {}, {}
+        self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
         lower = offset if (sigma == 0 and np.all(w > 0)) else -np.inf
         upper = offset if (sigma == 0 and np.all(w < 0)) else np.inf
         self.support = (lower, upper)
@@ -1739,6 +1741,31 @@ class WeightedChiSquare(FrozenDistribution):
         _sf, cdf, err, conv = self._both(x)
         _warn_unconverged(conv, err, stacklevel=5)
         return cdf.reshape(np.shape(x))
+
+    def cdf(self, x):
+        """P(X <= x); one Python number takes a path in Python floats."""
+        both = self._at(x)
+        return super().cdf(x) if both is None else np.float64(both[1])
+
+    def sf(self, x):
+        """P(X > x), computed directly in the upper tail; one Python number takes Python floats."""
+        both = self._at(x)
+        return super().sf(x) if both is None else np.float64(both[0])
+
+    def _at(self, x):
+        """``(sf, cdf)`` at one plain Python number inside the support, else None (the general path)."""
+        if self._few is None or not (type(x) is float or type(x) is int):
+            return None
+        x = float(x)
+        lower, upper = self._bounds
+        if not lower < x < upper:  # outside the support, or NaN: the general path words it
+            return None
+        sf, cdf, err, ok = _probability_at(
+            x - self.offset, *self._few, self.sigma, self.atol, self.rtol, self._sides
+        )
+        if not ok:
+            _warn_unconverged(np.array([ok]), np.array([err]), stacklevel=4)
+        return sf, cdf
 
     def _sf(self, x):
         sf, _cdf, err, conv = self._both(x)

@@ -593,6 +593,23 @@ def test_requested_relative_accuracy_is_met_on_davies_cases(rtol):
         assert np.all(np.abs(scalar - cdf) <= 2 * rtol * small + 2e-16)
 
 
+def test_a_frozen_law_at_one_python_number_agrees_with_its_array_path():
+    # one plain number takes Python floats (law.cdf(c) in a loop is the usual
+    # use); it must give the array path's numbers, types and refusals
+    law = WeightedChiSquare([7.0, 3.0, -2.0], [6, 2, 1], [6.0, 2.0, 0.5], offset=1.5, rtol=1e-8)
+    for c in (-30.0, 0.0, 1.5, 20, 140.0):
+        cdf, sf = law.cdf(c), law.sf(c)
+        assert type(cdf) is np.float64 and type(sf) is np.float64
+        assert cdf == pytest.approx(float(law.cdf(np.array([c]))[0]), rel=1e-12, abs=1e-300)
+        assert sf == pytest.approx(float(law.sf(np.array([c]))[0]), rel=1e-12, abs=1e-300)
+    positive = WeightedChiSquare([2.0, 1.0], offset=1.0)
+    assert positive.cdf(1.0) == 0.0 and positive.sf(0.5) == 1.0 and positive.cdf(math.inf) == 1.0
+    with pytest.raises(ValueError, match="NaN"):
+        positive.cdf(math.nan)
+    with pytest.raises(ValueError, match="rtol"):
+        WeightedChiSquare([1.0], rtol=-1e-6)
+
+
 def test_many_weights_take_the_numpy_path_and_agree(monkeypatch):
     rng = np.random.default_rng(9)
     w = np.concatenate([rng.uniform(0.1, 2, 30), -rng.uniform(0.1, 1, 10)])
