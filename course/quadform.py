@@ -49,9 +49,12 @@ Accuracy on demand.  The law is first scaled to ``max(|w|, sigma) = 1``
 0).  The error is controlled by (i) a rigorous truncation bound in the style
 of Imhof's ``T_U`` and (ii) the trapezoidal rule at two steps from one
 evaluation, the coarse step chosen from ``rtol`` (``3.5/log(1/rtol)``), the
-step halved while the two levels differ by more than the tolerance.  A loose
-``rtol`` therefore costs fewer nodes; one point is set up in Python floats
-around a single numpy evaluation of the integrand (about 0.15 ms), many
+step halved while the two levels differ by more than the tolerance.  (The
+square of that difference, the asymptotic error model, would halve the
+nodes but erred by up to 1e3 rtol on random laws: the convergence is often
+not yet in its asymptotic regime.)  A loose ``rtol`` therefore costs fewer
+nodes; one point is set up in Python floats around one numpy evaluation of
+the integrand (about 0.2 ms for a first call on a shared 2-core machine), many
 points are processed together without a Python loop over them.  Far below
 the weights of a positive form the first term of the expansion at 0 is
 exact to double precision and is used instead (``imhof_cdf(1e-300,
@@ -61,6 +64,7 @@ exact to double precision and is used instead (``imhof_cdf(1e-300,
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import warnings
 
@@ -120,13 +124,14 @@ _NEGLIGIBLE = 1e-17
 # Below x sum((h + d)/(4w)) = _NEAR_ZERO (k + 1) a positive form's CDF is
 # its leading term at 0 to double precision (see _near_zero).
 _NEAR_ZERO = 1e-17
-# Validated laws remembered by imhof_cdf and imhof_sf (see _law).
-_LAWS: dict = {}
-_LAWS_SIZE = 64
 # Relative tolerances below this cannot be met in double precision.
 _MIN_RTOL = 1e-15
 # Up to this many terms, one point's saddle is found in Python floats.
 _PYTHON_TERMS = 24
+# Python numbers taken without numpy (bool, numpy scalars and the rest go through numpy).
+_PLAIN_NUMBERS = (float, int)
+# Beyond this many factors the integrand takes logarithms in real arithmetic.
+_COMPLEX_LOG_SIZE = 2000
 
 
 # ---------------------------------------------------------------------------
@@ -140,7 +145,7 @@ def _real_array(value, name):
         raise ValueError(f"{name} is complex; pass real numbers")
     try:
         return np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(
             f"{name} must be real numbers, got {type(value).__name__}: {exc}"
         ) from None
@@ -177,42 +182,61 @@ def _finite_scalar(value, name):
 
 
 def _terms(weights, dof, noncentrality, sigma=0.0):
-    """Validate and normalise ``(weights, dof, noncentrality, sigma)``.
+    """Validate and normalise ``(weights, dof, noncentrality, sigma)``; arrays.
 
     Zero weights are dropped (they contribute nothing), the weights are
     sorted increasingly and equal ones merged: ``w chi2(h1, d1) + w chi2(h2,
     d2) = w chi2(h1 + h2, d1 + d2)``.  ``dof`` may be any positive real (a
     chi-square with ``h`` degrees of freedom is a Gamma(h/2, 2) variable).
     """
-    w = _finite_vector(weights, "weights")
-    r = w.size
-    if r == 0:
-        raise ValueError("weights is empty; pass at least one weight")
-    h = np.ones(r) if dof is None else _finite_vector(dof, "dof", r)
-    d = np.zeros(r) if noncentrality is None else _finite_vector(noncentrality, "noncentrality", r)
+    w, h, d, sigma = _validated(weights, dof, noncentrality, sigma)
+    if type(w) is list:
+        w, h, d = np.array(w, dtype=float), np.array(h, dtype=float), np.array(d, dtype=float)
+    return w, h, d, sigma
+
+
+def _validated(weights, dof, noncentrality, sigma=0.0):
+    """:func:`_terms` as lists of Python floats for at most ``_PYTHON_TERMS`` terms, else arrays."""
+    columns = _short_columns(weights, dof, noncentrality)
+    if columns is None:
+        w = _finite_vector(weights, "weights")
+        r = w.size
+        if r == 0:
+            raise ValueError("weights is empty; pass at least one weight")
+        h = np.ones(r) if dof is None else _finite_vector(dof, "dof", r)
+        d = (
+            np.zeros(r)
+            if noncentrality is None
+            else _finite_vector(noncentrality, "noncentrality", r)
+        )
+        if r <= _PYTHON_TERMS:
+            columns = w.tolist(), h.tolist(), d.tolist()
     sigma = _finite_scalar(sigma, "sigma")
     if sigma < 0:
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
         )
-    if r <= _PYTHON_TERMS:
+    if columns is not None:
         # a few terms: checks, sorting and merging in Python floats are cheaper
-        columns = w.tolist(), h.tolist(), d.tolist()
-        _check_terms(min(columns[1]), min(columns[2]))
-        rows = sorted(t for t in zip(*columns) if t[0] != 0)
-        if not rows:
-            return np.zeros(0), np.zeros(0), np.zeros(0), sigma
+        w, h, d = columns
+        _check_terms(min(h), min(d))
+        rows = sorted(zip(w, h, d))
+        if 0.0 in w:
+            rows = [row for row in rows if row[0] != 0]
+            if not rows:
+                return [], [], [], sigma
         tol = _MERGE_RTOL * max(-rows[0][0], rows[-1][0])
-        groups = [[rows[0]]]
-        for row in rows[1:]:
-            if row[0] - groups[-1][-1][0] > tol:
-                groups.append([row])
-            else:
-                groups[-1].append(row)
-        if len(groups) < len(rows):
-            rows = [_merge(group) for group in groups]
-        w, h, d = (np.array(column) for column in zip(*rows))
-        return w, h, d, sigma
+        weights = [row[0] for row in rows]
+        if any(b - a <= tol for a, b in itertools.pairwise(weights)):
+            groups = [[rows[0]]]
+            for row in rows[1:]:
+                if row[0] - groups[-1][-1][0] > tol:
+                    groups.append([row])
+                else:
+                    groups[-1].append(row)
+            rows = [_merge(group) if len(group) > 1 else group[0] for group in groups]
+            weights = [row[0] for row in rows]
+        return weights, [row[1] for row in rows], [row[2] for row in rows], sigma
     _check_terms(h.min(), d.min())
     keep = w != 0
     w, h, d = w[keep], h[keep], d[keep]
@@ -227,6 +251,54 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
             h = np.array([h[g].sum() for g in members])
             d = np.array([d[g].sum() for g in members])
     return w, h, d, sigma
+
+
+def _short_columns(weights, dof, noncentrality):
+    """``(w, h, d)`` as lists of finite Python floats for a few plain terms, else None.
+
+    The fast way in for a law of at most ``_PYTHON_TERMS`` terms given as
+    lists or tuples of Python numbers or as 1-D real arrays (``dof`` and
+    ``noncentrality`` also as one number): no numpy call.  Anything else,
+    and every bad value, returns None and takes the numpy validation, which
+    words the error.
+    """
+    w = _short_column(weights)
+    if not w:
+        return None
+    r = len(w)
+    h = [1.0] * r if dof is None else _short_column(dof, r)
+    d = [0.0] * r if noncentrality is None else _short_column(noncentrality, r)
+    if h is None or d is None:
+        return None
+    return w, h, d
+
+
+def _short_column(value, size=None):
+    """A short list/tuple of Python numbers or 1-D real array as finite floats (None if not)."""
+    kind = type(value)
+    if kind is list or kind is tuple:
+        if len(value) > _PYTHON_TERMS:
+            return None
+        try:
+            column = [float(v) for v in value if type(v) in _PLAIN_NUMBERS]
+        except OverflowError:  # an int beyond the doubles
+            return None
+        if len(column) != len(value):
+            return None
+    elif kind is np.ndarray:
+        if value.ndim != 1 or value.dtype.kind not in "fiu" or value.size > _PYTHON_TERMS:
+            return None
+        column = value.astype(float).tolist() if value.dtype.kind != "f" else value.tolist()
+    elif size is not None and kind in _PLAIN_NUMBERS:
+        try:
+            column = [float(value)] * size
+        except OverflowError:
+            return None
+    else:
+        return None
+    if size is not None and len(column) != size:
+        return None
+    return column if all(map(math.isfinite, column)) else None
 
 
 def _check_terms(smallest_dof, smallest_noncentrality):
@@ -260,22 +332,22 @@ _SCALAR = _ScalarMath()
 
 
 def _term_constants(w, h, d):
-    """Per-term summands of the constants of :class:`_Side` (floats or arrays).
+    """Per-term summands of the constants of :class:`_Side` (arrays; lists: :func:`_term_sums`).
 
     ``d/2``; ``h/2`` (k); ``w (h + d)`` (mean); ``2 w^2 (h + 2d)`` (variance);
-    ``-h/2 log|w| - d/2 [w > 0]`` (log D of the truncation bound);
+    ``-h/2 log(2|w|) - d/4`` (log D of the truncation bound, see :func:`_plan`);
     ``d/(4w)``, ``(h + d)/(4w)`` and ``-h/2 log(2w)`` (positive weights only:
     see :func:`_near_zero`).
     """
     positive = w > 0
-    log_w = np.log(np.abs(w)) if isinstance(w, np.ndarray) else math.log(abs(w))
+    log_w = np.log(np.abs(w))
     quarter = 0.25 / w * positive
     return (
         0.5 * d,
         0.5 * h,
         w * (h + d),
         2.0 * w * w * (h + 2.0 * d),
-        -0.5 * h * log_w - 0.5 * d * positive,
+        -0.5 * h * (log_w + math.log(2.0)) - 0.25 * d,
         d * quarter,
         (h + d) * quarter,
         -0.5 * h * (log_w + math.log(2.0)) * positive,
@@ -292,6 +364,24 @@ def _derivative_factors(w, h, d):
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
+def _term_sums(w, h, d):
+    """The sums of :func:`_term_constants` over a few terms given as lists (one Python loop)."""
+    half_d = k = mean = var = log_d = d_over_w = zero_slope = log_c = 0.0
+    for wi, hi, di in zip(w, h, d):
+        half_d += 0.5 * di
+        k += 0.5 * hi
+        mean += wi * (hi + di)
+        var += 2.0 * wi * wi * (hi + di + di)
+        log_2w = math.log(2.0 * abs(wi))
+        log_d -= 0.5 * hi * log_2w + 0.25 * di
+        if wi > 0:
+            quarter = 0.25 / wi
+            d_over_w += di * quarter
+            zero_slope += (hi + di) * quarter
+            log_c -= 0.5 * hi * log_2w
+    return half_d, k, mean, var, log_d, d_over_w, zero_slope, log_c
+
+
 # ---------------------------------------------------------------------------
 # the normalised terms of one tail
 # ---------------------------------------------------------------------------
@@ -306,53 +396,109 @@ class _Side:
     """
 
     def __init__(self, w, h, d, sigma2):
-        self.w, self.h, self.d, self.sigma2 = w, h, d, sigma2
-        self.w2 = 2.0 * w
-        self.minus_w2 = -self.w2
-        self.minus_half_h = -0.5 * h
-        positive = w.size > 0 and w[-1] > 0
-        self.s_max = 0.5 / float(w[-1]) if positive else math.inf
-        self.s_min = 0.5 / float(w[0]) if w.size and w[0] < 0 else -math.inf
+        """``w, h, d``: lists of floats (at most ``_PYTHON_TERMS``) or arrays."""
+        self.sigma2 = sigma2
+        self.r = r = len(w)
+        # per-term rows for the Python-float versions of derivatives, cgf and path
+        self.rows: list | None = None
+        self.cgf_rows: list | None = None
+        self.w2_list: list | None = None
+        if type(w) is not list and r <= _PYTHON_TERMS:
+            w, h, d = w.tolist(), h.tolist(), d.tolist()
+        if type(w) is list:
+            # a few terms: every constant in one loop of Python floats (numpy
+            # calls cost more); the arrays of the numpy versions on first use
+            self._columns = w, h, d
+            sums = _term_sums(w, h, d)
+            self.rows, self.cgf_rows = rows, cgf_rows = [], []
+            self.w2_list = w2_list = []
+            for wi, hi, di in zip(w, h, d):
+                w2, hw, dw = wi + wi, hi * wi, di * wi
+                rows.append(
+                    (w2, hw, dw, w2 * hw, 8.0 * wi * wi * hw, 4.0 * wi * dw, 24.0 * wi * wi * dw)
+                )
+                cgf_rows.append((w2, 0.5 * hi, 0.5 * di))
+                w2_list.append(w2)
+            ends = [(w[0], w[-1]), (h[0], h[-1]), (d[0], d[-1])] if r else [(0.0, 0.0)] * 3
+            smallest = min(map(abs, w)) if r else 1.0
+        else:
+            self.w, self.h, self.d = w, h, d
+            sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
+            ends = [(float(v[0]), float(v[-1])) for v in (w, h, d)]
+            smallest = float(np.min(np.abs(w)))
+        (w_first, w_last), (_, h_last), (_, d_last) = ends
+        positive = w_last > 0
+        self.s_max = 0.5 / w_last if positive else math.inf
+        self.s_min = 0.5 / w_first if w_first < 0 else -math.inf
         # the largest weight's term: it dominates the far upper tail
-        self.top = (float(w[-1]), float(h[-1]), float(d[-1])) if positive else None
-        self.positive_form = bool(w.size and w[0] > 0 and not sigma2)
+        self.top = (w_last, h_last, d_last) if positive else None
+        self.positive_form = bool(r and w_first > 0 and not sigma2)
         # Im s beyond which every |1 - 2 w s| >= 1, and log of D = prod
         # (2|w|)^(-h/2) exp(-sum d/4): |M(s)| <= D Y^-k with Y = Im s, once
         # every |1 - 2 w s| >= 2 (Y >= 2 y_unit) when noncentral (see _plan)
-        self.y_unit = 0.5 / float(np.min(np.abs(w))) if w.size else 0.0
-        self.log_d_y = (
-            -0.5 * float(h @ np.log(2.0 * np.abs(w))) - 0.25 * float(d.sum()) if w.size else 0.0
-        )
-        # per-term rows for the Python-float versions of derivatives and cgf
-        self.rows: tuple | None = None
-        self.cgf_rows: tuple | None = None
-        if w.size <= _PYTHON_TERMS:
-            # a few terms are summed faster by Python than by numpy calls
-            columns = [w.tolist(), h.tolist(), d.tolist()]
-            sums = [math.fsum(column) for column in zip(*map(_term_constants, *columns))]
-            self.rows = tuple(map(_derivative_factors, *columns))
-            self.cgf_rows = tuple((2.0 * wi, 0.5 * hi, 0.5 * di) for wi, hi, di in zip(*columns))
-        else:
-            sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
-        half_d, self.k, self.mean, var, self.log_d, d_over_w, zero_slope, log_c = sums
+        self.y_unit = 0.5 / smallest if r else 0.0
+        half_d, self.k, self.mean, var, self.log_d_y, d_over_w, zero_slope, log_c = sums
         self.half_d_sum = half_d
         self.noncentral = half_d > 0
         self.var = var + sigma2
         # for the bound on the lower-tail saddle of a positive form
-        self.d_over_w = d_over_w if self.noncentral and w.size and w[0] > 0 else 0.0
+        self.d_over_w = d_over_w if self.noncentral and w_first > 0 else 0.0
         # P(X <= x) ~ C x^k / Gamma(k+1) near 0 for a positive form (see _near_zero)
         self.zero_slope = zero_slope
         self.log_c0 = log_c - half_d - math.lgamma(self.k + 1.0)
+        # rows of the path matrix (see _path_coefficients)
+        self.rows_of_path = (2 * r if self.noncentral else r) + 3
+
+    # the arrays of the numpy versions (for a few terms given as lists: made on first use)
+    @functools.cached_property
+    def w(self):
+        return np.array(self._columns[0], dtype=float)
+
+    @functools.cached_property
+    def h(self):
+        return np.array(self._columns[1], dtype=float)
+
+    @functools.cached_property
+    def d(self):
+        return np.array(self._columns[2], dtype=float)
+
+    @functools.cached_property
+    def w2(self):
+        """``2 w`` (for the numpy versions)."""
+        return 2.0 * self.w
+
+    @functools.cached_property
+    def minus_w2(self):
+        """``-2 w`` (for the numpy path coefficients)."""
+        return -2.0 * self.w
 
     @functools.cached_property
     def factors(self):
         """Per-term factors of the derivatives of ``K`` (for the numpy version)."""
         return _derivative_factors(self.w, self.h, self.d)
 
+    @functools.cached_property
+    def exponent_weights(self):
+        """Weights ``W`` of the rows of the path matrix in the exponent (see :func:`_integrand`).
+
+        ``log z_r``: ``-h_r/2``; ``1/z_r``: ``d_r/2`` (noncentral laws only);
+        the linear part: 1.
+        """
+        if self.rows is not None:
+            h, d = self._columns[1], self._columns[2]
+            row = [-0.5 * v for v in h]
+            if self.noncentral:
+                row += [0.5 * v for v in d]
+            row.append(1.0)
+            return np.array(row, dtype=complex)
+        parts = [-0.5 * self.h, 0.5 * self.d] if self.noncentral else [-0.5 * self.h]
+        return np.concatenate(parts + [[1.0]]).astype(complex)
+
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
         """The side of ``-X``: weights negated, kept in increasing order."""
-        return cls(-w[::-1], h[::-1], d[::-1], sigma2)
+        minus_w = [-v for v in reversed(w)] if type(w) is list else -w[::-1]
+        return cls(minus_w, h[::-1], d[::-1], sigma2)
 
     # -- the cumulant generating function K(s) = log M(s) ---------------------
     def derivatives(self, s, x, pole):
@@ -605,47 +751,96 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
 
 @functools.lru_cache(maxsize=64)
 def _nodes(step, count, odd):
-    """``(u, cosh u - 1, sinh u, cosh u)`` at ``u = step j`` (j < count) or ``step (2j + 1)``."""
-    u = step * (2.0 * np.arange(count) + 1.0 if odd else np.arange(count))
-    cosh = np.cosh(u)
-    return u, cosh - 1.0, np.sinh(u), cosh
+    """``u`` and the complex rows ``(1, cosh u - 1, sinh u)`` at ``u = step j`` (j < count) or ``step (2j + 1)``."""
+    u = np.arange(1.0, 2.0 * count, 2.0) if odd else np.arange(float(count))
+    u *= step
+    # filled in place: a few ufunc calls, no stacking (one point's nodes cost ~10 us)
+    basis = np.zeros((3, count), dtype=complex)
+    real = basis.real
+    real[0] = 1.0
+    np.cosh(u, out=real[1])
+    real[1] -= 1.0
+    np.sinh(u, out=real[2])
+    return u, basis
 
 
-def _integrand(nodes, x, side, pole, s0, a, b, k0):
-    """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola.
+def _path_coefficients(x, side, s0, a, b, k0):
+    """Coefficients of the path quantities in the basis ``(1, cosh u - 1, sinh u)``.
+
+    On the hyperbola ``s = s0 + a(cosh u - 1) + i b sinh u`` every factor
+    ``z_r = 1 - 2 w_r s``, the linear part ``-(s - s0) x - K(s0) [- sum
+    d/2]`` of ``E - E0``, ``s'(u) = a sinh u + i b cosh u`` and ``s`` itself
+    are linear in ``(1, cosh u - 1, sinh u)``: one matrix product of these
+    coefficients with the nodes' basis gives them all.  Rows: ``z_1 .. z_r``
+    (their logarithms), ``z_1 .. z_r`` again for the noncentral terms (their
+    reciprocals), the linear part, ``s'``, ``s`` (see
+    :meth:`_Side.exponent_weights`).  Floats give one point's matrix (built
+    in Python for a few terms), 1-D arrays one matrix per point ``(points,
+    rows, 3)``.
+    """
+    ib = 1j * b
+    c0 = k0 + side.half_d_sum  # the noncentral terms' -d/2 (0 when central)
+    if side.w2_list is not None and isinstance(s0, float):
+        # one flat list of Python numbers: numpy reads it faster than nested rows
+        z: list[complex] = []
+        for v in side.w2_list:
+            z += (1.0 - v * s0, -v * a, -v * ib)
+        flat = z + z if side.noncentral else z
+        flat += (-c0, -x * a, -x * ib, ib, ib, a, s0, a, ib)
+        return np.array(flat, dtype=complex).reshape(-1, 3)
+    path = np.stack(np.broadcast_arrays(s0, a, ib), axis=-1)
+    r = side.r
+    coef = np.empty(path.shape[:-1] + (side.rows_of_path, 3), dtype=complex)
+    np.multiply(side.minus_w2[:, None], path[..., None, :], out=coef[..., :r, :])
+    coef[..., :r, 0] += 1.0
+    if side.noncentral:
+        coef[..., r : 2 * r, :] = coef[..., :r, :]
+    coef[..., -3, :] = np.stack(np.broadcast_arrays(-c0, -x * a, -x * ib), axis=-1)
+    coef[..., -2, :] = np.stack(np.broadcast_arrays(ib, ib, a), axis=-1)
+    coef[..., -1, :] = path
+    return coef
+
+
+def _integrand(basis, coef, side, pole):
+    """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola, from :func:`_path_coefficients`.
 
     ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
-    ``nodes`` holds ``u``, ``cosh u - 1``, ``sinh u`` and ``cosh u``.  The
-    parameters are floats (one point: result of shape (nodes,)) or columns of
-    shape (points, 1) (result (points, nodes)).  The logarithm of ``1 - 2 w
-    s`` is taken in real arithmetic (modulus and angle: several times faster
-    than a complex log); ``Im(1 - 2 w s) = -2 w Im s`` keeps it off the cut.
-    ``E - E0`` is formed from the differences ``s - s0`` so that no digits
-    cancel when ``s0 x`` is large.
+    ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes.  One
+    point gives shape (nodes,), many (points, nodes).  The exponent is one
+    product ``W . [log z, 1/z, linear]`` with the weights ``W = (-h/2, d/2,
+    1)`` of :meth:`_Side.exponent_weights`: about ten numpy calls whatever the
+    number of terms (on the few dozen nodes of one point their overhead, and
+    the complex logarithms, are the cost).  ``Im z = -2 w Im s`` keeps every
+    ``log z`` off its cut along the path; ``E - E0`` is built from ``s -
+    s0`` (the coefficients), so no digits cancel when ``s0 x`` is large.
     """
-    _, cosh_m1, sinh, cosh = nodes
-    dre = a * cosh_m1
-    im = b * sinh
-    re = dre + s0
-    zr = 1.0 - re[..., None] * side.w2
-    zi = im[..., None] * side.minus_w2
-    modulus = np.hypot(zr, zi)
-    e_re = np.log(modulus) @ side.minus_half_h - (k0 + x * dre)
-    e_im = np.arctan2(zi, zr) @ side.minus_half_h - x * im
+    r = side.r
+    path = coef @ basis
+    logs = path[..., :r, :]
+    if logs.size > _COMPLEX_LOG_SIZE:
+        # numpy's complex log costs ~100 ns a value, this real split ~45
+        angle = np.arctan2(logs.imag, logs.real)
+        logs.real = np.log(np.abs(logs))
+        logs.imag = angle
+    else:
+        np.log(logs, out=logs)
     if side.noncentral:
-        inv2 = 0.5 / (modulus * modulus)
-        e_re = e_re + (zr * inv2) @ side.d - side.half_d_sum
-        e_im = e_im - (zi * inv2) @ side.d
+        inverse = path[..., r : 2 * r, :]
+        np.reciprocal(inverse, out=inverse)
+    e = side.exponent_weights @ path[..., :-2, :]
+    s = path[..., -1, :]
     if side.sigma2:
-        # k0 holds sigma2 s0^2 / 2; Re(sigma2 s^2 / 2) = that + sigma2 (re^2 - s0^2 - im^2) / 2
-        e_re = e_re + 0.5 * side.sigma2 * (dre * (re + s0) - im * im + s0 * s0)
-        e_im = e_im + side.sigma2 * re * im
+        # k0 = K(s0) holds sigma2 s0^2 / 2
+        e += (0.5 * side.sigma2) * (s * s)
     # where a drift outgrows exp(-s x) the values are huge (capped below the
     # overflow): the callers see them above _BLOWUP and take a nearly
     # vertical path instead
-    value = np.exp(np.minimum(e_re, 600.0) + 1j * e_im) * (a * sinh + 1j * (b * cosh))
+    real = e.real
+    np.minimum(real, 600.0, out=real)
+    value = np.exp(e, out=e)
+    value *= path[..., -2, :]
     if pole:
-        value /= re + 1j * im
+        value /= s
     return value.imag
 
 
@@ -671,12 +866,11 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     coarse = np.empty(x.shape)
     blown = np.zeros(x.shape, dtype=bool)
     # chunks over x keep the (points, nodes, weights) work arrays small
-    size = max(1, _CHUNK // ((n + 1) * max(side.w.size, 1)))
+    size = max(1, _CHUNK // ((n + 1) * max(side.r, 1)))
     for start in range(0, x.size, size):
         i = slice(start, start + size)
-        f = _integrand(
-            nodes, x[i, None], side, pole, s0[i, None], a[i, None], b[i, None], k0[i, None]
-        )
+        coef = _path_coefficients(x[i], side, s0[i], a[i], b[i], k0[i])
+        f = _integrand(nodes[1], coef, side, pole)
         f *= nodes[0] <= U[i, None]
         blown[i] = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
         f[:, 0] *= 0.5
@@ -697,9 +891,8 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         h *= 0.5
         nodes = _nodes(h, n, True)
         n *= 2
-        f = _integrand(
-            nodes, x[j, None], side, pole, s0[j, None], a[j, None], b[j, None], k0[j, None]
-        )
+        coef = _path_coefficients(x[j], side, s0[j], a[j], b[j], k0[j])
+        f = _integrand(nodes[1], coef, side, pole)
         f *= nodes[0] <= U[j, None]
         refined = 0.5 * total[j] + h * f.sum(axis=1)
         diff[j] = np.abs(refined - total[j])
@@ -827,13 +1020,23 @@ def _normalised(sides, w, h, d, sigma):
     """
     terms = sides.get("terms")
     if terms is None:
-        m = max(-float(w[0]), float(w[-1]), sigma) if w.size else sigma
-        w, sigma = w / m, sigma / m
-        if sigma and w.size:
-            keep = np.abs(w) * (h + d + 1.0) > _NEGLIGIBLE * sigma
-            w, h, d = w[keep], h[keep], d[keep]
+        r = len(w)
+        m = max(-float(w[0]), float(w[-1]), sigma) if r else sigma
+        sigma = sigma / m
+        if type(w) is list:
+            w = [v / m for v in w]
+            if sigma and r:
+                kept = [
+                    t for t in zip(w, h, d) if abs(t[0]) * (t[1] + t[2] + 1.0) > _NEGLIGIBLE * sigma
+                ]
+                w, h, d = map(list, zip(*kept)) if kept else ([], [], [])
+        else:
+            w = w / m
+            if sigma and r:
+                keep = np.abs(w) * (h + d + 1.0) > _NEGLIGIBLE * sigma
+                w, h, d = w[keep], h[keep], d[keep]
         terms = sides["terms"] = (m, w, h, d, sigma * sigma)
-    return terms[0], terms[1].size == 0
+    return terms[0], len(terms[1]) == 0
 
 
 def _side(sides, sign):
@@ -875,7 +1078,8 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
     converged = U <= _U_MAX
     h = 0.5 * step
     n = math.ceil(min(U, _U_MAX) / h)
-    f = _integrand(_nodes(h, n + 1, False), x, side, pole, s0, a, b, k0).tolist()
+    coef = _path_coefficients(x, side, s0, a, b, k0)
+    f = _integrand(_nodes(h, n + 1, False)[1], coef, side, pole).tolist()
     if not max(map(abs, f)) <= _BLOWUP * abs(f[0]):
         if opening is None:
             return _contour_at(x, side, upper, pole, atol, rtol, _SAFE_OPENING)
@@ -891,7 +1095,7 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
             converged = False
             break
         h *= 0.5
-        f = _integrand(_nodes(h, n, True), x, side, pole, s0, a, b, k0).tolist()
+        f = _integrand(_nodes(h, n, True)[1], coef, side, pole).tolist()
         n *= 2
         refined = 0.5 * total + h * math.fsum(f)
         diff, total = abs(refined - total), refined
@@ -1001,62 +1205,29 @@ def _points(c):
     return x, shape
 
 
-def _law(weights, dof, noncentrality, sigma):
-    """:func:`_terms` and a dict for their :class:`_Side` objects, remembered per input.
-
-    A loop of scalar calls on one law (a scan over c, a root search) then
-    validates and prepares the terms once.  The key holds the exact values
-    of the inputs (bytes of arrays), so equal inputs give equal results.
-    """
-    try:
-        key = tuple(map(_memo_key, (weights, dof, noncentrality, sigma)))
-        hash(key)
-    except TypeError:
-        return (*_terms(weights, dof, noncentrality, sigma), {})
-    law = _LAWS.get(key)
-    if law is None:
-        law = (*_terms(weights, dof, noncentrality, sigma), {})
-        if len(_LAWS) >= _LAWS_SIZE:
-            del _LAWS[next(iter(_LAWS))]
-        _LAWS[key] = law
-    return law
-
-
-def _memo_key(value):
-    """A hashable key of an input: numbers and sequences of numbers as they are, arrays by value."""
-    if isinstance(value, np.ndarray):
-        return value.dtype.str, value.shape, value.tobytes()
-    if isinstance(value, (list, tuple)):
-        if all(type(v) in (float, int) for v in value):
-            return type(value).__name__, tuple(value)
-        raise TypeError("not a plain sequence of numbers")
-    if value is None or type(value) in (float, int):
-        return value
-    raise TypeError("not memoised")
-
-
 def _evaluate(c, weights, dof, noncentrality, sigma, atol, rtol, method):
-    w, h, d, sigma, sides = _law(weights, dof, noncentrality, sigma)
+    w, h, d, sigma = _validated(weights, dof, noncentrality, sigma)
     atol, rtol = _tolerances(atol, rtol)
-    if method == "contour" and w.size and isinstance(c, (float, int)) and not isinstance(c, bool):
+    if method == "contour" and len(w) and isinstance(c, (float, int)) and not isinstance(c, bool):
         # one point: Python floats all the way (numpy calls cost more than the work)
         if math.isnan(c):
             raise ValueError("c is NaN; pass the point at which to evaluate the law")
-        sf, cdf, err, ok = _probability_at(float(c), w, h, d, sigma, atol, rtol, sides)
+        sf, cdf, err, ok = _probability_at(float(c), w, h, d, sigma, atol, rtol, {})
         if not ok:
             _warn_unconverged(np.array([ok]), np.array([err]), stacklevel=4)
         return sf, cdf, err
     x, shape = _points(c)
-    if w.size == 0 and sigma == 0:
+    if len(w) == 0 and sigma == 0:
         # every weight is zero: the form is the constant 0
         sf = (x < 0).astype(float)
         return sf.reshape(shape), (1 - sf).reshape(shape), np.zeros(shape)
     if method == "contour":
-        sf, cdf, err, conv = _probabilities(x, w, h, d, sigma, atol, rtol, sides)
+        sf, cdf, err, conv = _probabilities(x, w, h, d, sigma, atol, rtol)
         _warn_unconverged(conv, err, stacklevel=4)
     elif method == "imhof":
-        if w.size == 0:
+        if len(w) == 0:
             raise ValueError("method='imhof' needs at least one chi-square term")
+        w, h, d = np.asarray(w, dtype=float), np.asarray(h, dtype=float), np.asarray(d, dtype=float)
         # an absolute tolerance: the real-axis integral has no relative control
         sf, err = _imhof_real_axis(x, w, h, d, sigma, atol if atol > 0 else rtol)
         if sigma == 0 and (np.all(w > 0) or np.all(w < 0)):
@@ -1264,8 +1435,9 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     k0 = side.cgf_at(s0)
     a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, _SCALAR)
     # the path and its integrand in u do not depend on the scale m
-    nodes = (u, np.cosh(u) - 1.0, np.sinh(u), np.cosh(u))
-    contour = _integrand(nodes, x, side, True, s0, a, b, k0) * math.exp(e0)
+    basis = np.stack([np.ones(u.size), np.cosh(u) - 1.0, np.sinh(u)])
+    coef = _path_coefficients(x, side, s0, a, b, k0)
+    contour = _integrand(basis, coef, side, True) * math.exp(e0)
     return real_axis, contour, ("upper" if upper else "lower")
 
 
@@ -1516,9 +1688,11 @@ class WeightedChiSquare(FrozenDistribution):
             array.setflags(write=False)
         self.weights, self.dof, self.noncentrality = w, h, d
         self.sigma, self.offset = float(sigma), offset
-        self.atol, self.rtol = float(atol), float(rtol)
-        # the normalised terms of each tail, built on first use
+        self.atol, self.rtol = _tolerances(atol, rtol)
+        # the normalised terms of each tail, built on first use; a few terms
+        # also as Python floats for one point (see _at)
         self._sides, self._density_sides = {}, {}
+        self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
         lower = offset if (sigma == 0 and np.all(w > 0)) else -np.inf
         upper = offset if (sigma == 0 and np.all(w < 0)) else np.inf
         self.support = (lower, upper)
@@ -1570,6 +1744,31 @@ class WeightedChiSquare(FrozenDistribution):
         _sf, cdf, err, conv = self._both(x)
         _warn_unconverged(conv, err, stacklevel=5)
         return cdf.reshape(np.shape(x))
+
+    def cdf(self, x):
+        """P(X <= x); one Python number takes a path in Python floats."""
+        both = self._at(x)
+        return super().cdf(x) if both is None else np.float64(both[1])
+
+    def sf(self, x):
+        """P(X > x), computed directly in the upper tail; one Python number takes Python floats."""
+        both = self._at(x)
+        return super().sf(x) if both is None else np.float64(both[0])
+
+    def _at(self, x):
+        """``(sf, cdf)`` at one plain Python number inside the support, else None (the general path)."""
+        if self._few is None or not (type(x) is float or type(x) is int):
+            return None
+        x = float(x)
+        lower, upper = self._bounds
+        if not lower < x < upper:  # outside the support, or NaN: the general path words it
+            return None
+        sf, cdf, err, ok = _probability_at(
+            x - self.offset, *self._few, self.sigma, self.atol, self.rtol, self._sides
+        )
+        if not ok:
+            _warn_unconverged(np.array([ok]), np.array([err]), stacklevel=4)
+        return sf, cdf
 
     def _sf(self, x):
         sf, _cdf, err, conv = self._both(x)
