@@ -141,6 +141,10 @@ def _real_array(value, name):
     """``value`` as a new float array; None, complex and non-numeric values are refused."""
     if value is None:
         raise ValueError(f"{name} is None; pass a number or an array of numbers")
+    if isinstance(value, (str, bytes)) or (
+        isinstance(value, (list, tuple)) and any(isinstance(v, (str, bytes)) for v in value)
+    ):  # numpy would read "1" as 1.0: text typed by mistake must not pass as a number
+        raise ValueError(f"{name} must be real numbers, got text {value!r}")
     if getattr(value, "dtype", None) is not None and value.dtype.kind == "c":
         raise ValueError(f"{name} is complex; pass real numbers")
     try:
@@ -1420,10 +1424,14 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
             f"inversion_integrands needs c > 0 and at least one positive weight, got c = {c:g}"
         )
     u = np.linspace(0.0, 10.0, 401) if u is None else _finite_vector(u, "u")
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         wu = np.multiply.outer(u, w)
-        theta = 0.5 * np.sum(h * np.arctan(wu) + d * wu / (1 + wu**2), axis=-1) - 0.5 * c * u
-        log_rho = np.sum(0.25 * h * np.log1p(wu**2) + 0.5 * d * wu**2 / (1 + wu**2), axis=-1)
+        # wu/(1+wu^2) and wu^2/(1+wu^2) written so that wu = 0 and wu^2 = inf (weights near
+        # 1e300) give their limits 0 and 1, not 0/0 or inf/inf
+        wu_ratio = 1.0 / (wu + 1.0 / wu)
+        wu2_share = 1.0 / (1.0 + 1.0 / wu**2)
+        theta = 0.5 * np.sum(h * np.arctan(wu) + d * wu_ratio, axis=-1) - 0.5 * c * u
+        log_rho = np.sum(0.25 * h * np.log1p(wu**2) + 0.5 * d * wu2_share, axis=-1)
         real_axis = np.where(
             u == 0, 0.5 * (np.sum(w * (h + d)) - c), np.sin(theta) / (u * np.exp(log_rho))
         )
@@ -1431,9 +1439,17 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     side = _Side(w / m, h, d, 0.0)
     x = c / m
     upper = x > side.mean
-    s0, g2, g3 = _saddle_at(x, side, upper, True)
-    k0 = side.cgf_at(s0)
-    a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, _SCALAR)
+    try:
+        s0, g2, g3 = _saddle_at(x, side, upper, True)
+        k0 = side.cgf_at(s0)
+        a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, _SCALAR)
+    except (ZeroDivisionError, OverflowError):
+        # c / max|w| below ~1e-290: the saddle point is not representable in doubles
+        raise ValueError(
+            f"c / max|weights| = {x:.3g} is too close to 0 for the contour integrand to be "
+            "drawn in double precision; the law is scale-invariant, so scale c and the "
+            "weights by the same factor (imhof_cdf handles such points by itself)"
+        ) from None
     # the path and its integrand in u do not depend on the scale m
     basis = np.stack([np.ones(u.size), np.cosh(u) - 1.0, np.sinh(u)])
     coef = _path_coefficients(x, side, s0, a, b, k0)
@@ -1676,9 +1692,7 @@ class WeightedChiSquare(FrozenDistribution):
         self._set_terms(w, h, d, sigma, offset, atol, rtol)
 
     def _set_terms(self, w, h, d, sigma, offset, atol=ATOL, rtol=RTOL):
-        offset = float(offset)
-        if not math.isfinite(offset):
-            raise ValueError("offset must be finite")
+        offset = _finite_scalar(offset, "offset")
         if w.size == 0 and sigma == 0:
             raise ValueError(
                 "the law is a point mass (no chi-square term and no normal term); "
