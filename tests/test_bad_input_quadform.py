@@ -8,7 +8,7 @@ of floating point (``1e±300``) must give a finite answer, never NaN or an
 import dataclasses
 
 import numpy as np
-from bad_input import Arg, array, case, count, covariance, generator, matrix, module_tests, real
+from bad_input import array, case, count, covariance, generator, matrix, module_tests, real
 
 from course import quadform
 
