@@ -9,8 +9,11 @@ import sys
 import textwrap
 from pathlib import Path
 
+import hypothesis.extra.numpy as hnp
+import hypothesis.strategies as st
 import numpy as np
 import pytest
+from hypothesis import given, settings
 from scipy.stats import chi2
 
 from course.grading.checks import load_checks, student_rng
@@ -100,6 +103,9 @@ def test_compare_reports_shape_where_and_tolerance_never_the_expected_value():
         (2.0, "2.0", "expected a float, got a string"),
         (np.array([True, False]), np.array([False, True]), "every decision is the opposite"),
         (np.array([2.0, 3.0]), np.array([4.0, 9.0]), "the square"),
+        (np.array([12.0, 3.0]), np.array([0.0, 0.0]), "all zeros"),
+        (12.0, 0.0, "all zeros"),
+        (np.array([12.0, 0.0]), np.array([5.0, 1.0]), "not within the tolerance"),
     ],
 )
 def test_compare_names_the_kind_of_wrong(expected, got, words):
@@ -499,3 +505,36 @@ def test_a_forbidden_call_fails_the_self_check(mistakes_demo, capsys):
     check._check("q1", namespace, None, False)
     out = capsys.readouterr().out
     assert "FAIL: your answer uses scipy.stats.norm" in out and "PASS" not in out
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    expected=hnp.arrays(
+        np.float64,
+        hnp.array_shapes(min_dims=0, max_dims=2, max_side=4),
+        elements=st.floats(-1e6, 1e6, allow_nan=False).filter(lambda x: abs(x) > 1e-3),
+    ),
+    how=st.sampled_from(["double", "negate", "shift", "reverse", "transpose", "noise", "zero"]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_compare_never_shows_an_expected_number(expected, how, seed):
+    """Whatever the wrong answer, the student's message carries no expected element (at 6
+    significant digits or as repr), and a diagnosis never breaks the verdict."""
+    rng = np.random.default_rng(seed)
+    got = {
+        "double": lambda e: 2.0 * e,
+        "negate": lambda e: -e,
+        "shift": lambda e: e + 1.0,
+        "reverse": lambda e: e[::-1] if e.ndim else e,
+        "transpose": lambda e: e.T,
+        "noise": lambda e: e * (1 + rng.uniform(1e-6, 1e-2, e.shape)),
+        "zero": np.zeros_like,
+    }[how](expected)
+    v = compare(expected, got, rtol=1e-9, atol=1e-12)
+    if v.ok:
+        return
+    for x in np.atleast_1d(expected).ravel():
+        digits = f"{abs(x):.6e}".split("e")[0].replace(".", "").rstrip("0")
+        if len(digits) >= 4:  # a number with some digits: its printed forms must not show
+            for text in (f"{x:.6g}", repr(float(x))):
+                assert text not in v.message, (text, v.message)
