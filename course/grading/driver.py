@@ -25,13 +25,6 @@ from typing import Any
 
 from course.grading.identity import resolve_identities
 from course.grading.isolation import Isolation, detect
-from course.grading.reports import (
-    Summary,
-    append_result,
-    feedback_markdown,
-    read_results,
-    write_csv,
-)
 from course.grading.marks import (
     SHORT_ANSWERS_FILE,
     MarksError,
@@ -43,6 +36,13 @@ from course.grading.marks import (
     unimported_edits,
     validate_marks,
     write_short_answers,
+)
+from course.grading.reports import (
+    Summary,
+    append_result,
+    feedback_markdown,
+    read_results,
+    write_csv,
 )
 from course.grading.roster import Roster, write_canvas_csv, write_moodle_csv
 from course.grading.secret import Secret, public_key_id
