@@ -357,7 +357,7 @@ def test_release_writes_points_into_headers_and_the_total(course):
 
 def test_release_fails_when_header_and_checks_disagree(tmp_path):
     """Old code: the header said 3 points, checks.py 2, and nobody noticed."""
-    with pytest.raises(MarkerError, match="header of q2 states 3 point.*checks.py gives 2"):
+    with pytest.raises(MarkerError, match=r"header of q2 states 3 point.*checks\.py gives 2"):
         _course(tmp_path, _solution_cells(q2_header="## q2 (3 points): accept or reject?"))
 
 

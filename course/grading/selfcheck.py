@@ -212,7 +212,7 @@ class Assignment:
     def _not_answered(self, q, why: str) -> None:
         print(f"  not answered yet: {why}")
 
-    def _check_value(self, q, got) -> float | None:
+    def _check_value(self, q, got):  # -> 1.0 or 0.0 when public, else None
         if got is _MISSING:
             return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
@@ -256,7 +256,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func) -> float | None:
+    def _check_function(self, q, func):  # -> the fraction of public cases passed
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
