@@ -388,3 +388,30 @@ def test_course_assignments_state_points_and_lock_cells(name):
         assert f"{q.id} ({q.points:g} point" in text, q.id
     assert f"{checks.max_points:g} points in total" in text
     assert all(c.metadata.get("deletable") is False for c in nb.cells)
+
+
+def test_selfcheck_notes_an_answer_set_outside_its_answer_cell():
+    """The kernel hears each cell's id from JupyterLab: an answer retyped in a new cell is
+    noted by the self-check (old code: PASS, and 0 points at grading)."""
+    from types import SimpleNamespace
+
+    from course.grading.items import AnswerCells
+
+    watcher = AnswerCells({"x": "q1"})
+    watcher._shell = SimpleNamespace(user_ns={})
+
+    def run(cell_id, **assign):
+        watcher._pre(SimpleNamespace(cell_id=cell_id))
+        watcher._shell.user_ns.update(assign)
+        watcher._post(None)
+
+    run("q1-answer", x=[2.0])
+    assert watcher.note("q1", "x") is None
+    run("q1-check")  # reading x does not move it
+    assert watcher.note("q1", "x") is None
+    run("3f9c2e", x=[2.0])
+    assert "x was last set in a cell that is not the answer cell of q1 (id 'q1-answer')" in (
+        watcher.note("q1", "x") or ""
+    )
+    run(None, x=[3.0])  # a front end that sends no cell ids: no guess
+    assert watcher.set_in["x"] == "3f9c2e"
