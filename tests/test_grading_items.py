@@ -415,3 +415,10 @@ def test_selfcheck_notes_an_answer_set_outside_its_answer_cell():
     )
     run(None, x=[3.0])  # a front end that sends no cell ids: no guess
     assert watcher.set_in["x"] == "3f9c2e"
+
+
+def test_submit_lists_an_unanswered_short_answer(course):
+    from course.grading.submit import unanswered_questions
+
+    assert unanswered_questions(_student(course, {"q1": "x = 2.0"})) == ["q2", "q3"]
+    assert unanswered_questions(_student(course, RIGHT)) == []
