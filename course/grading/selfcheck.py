@@ -25,6 +25,7 @@ from typing import Any
 
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, compare, describe
+from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
 from course.grading.personal import PersonalData
 from course.grading.tripwire import wrap_forbidden
@@ -108,6 +109,8 @@ class Assignment:
         self._failures: dict[str, int] = {}  # failed self-checks per question: hint stage
         # a graded class's data, issued by the instructor (None: drawn here from data.py)
         self.personal = PersonalData.read(folder) if data_module is None else None
+        # which cell set each answer (notes an answer set outside its answer cell)
+        self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -175,11 +178,13 @@ class Assignment:
         return f"<self-check of {self.name}: {len(self._questions)} questions; call check('q1')>"
 
     def all(self, namespace: dict | None = None) -> None:
-        """Self-check every question in turn."""
+        """Self-check every question in turn, then sum up (:func:`public_summary`)."""
         ns = namespace if namespace is not None else sys._getframe(1).f_globals
+        earned = {}
         for qid in self._questions:
-            self._check(qid, ns, None, False)
+            earned[qid] = self._check(qid, ns, None, False)
             print()
+        print(public_summary(self.spec, earned))
 
     def __call__(self, qid: str, *value) -> None:
         """Self-check question ``qid``; pass ``value`` to check it instead of the notebook's."""
@@ -187,20 +192,35 @@ class Assignment:
             raise TypeError("check(question) or check(question, value)")
         self._check(qid, sys._getframe(1).f_globals, value[0] if value else None, bool(value))
 
-    def _check(self, qid, ns, value, explicit) -> None:
+    def _check(self, qid, ns, value, explicit) -> float:
+        """Print the self-check of ``qid``; return the points its public checks give."""
+        earned = self._check_one(qid, ns, value, explicit)
+        q = self._questions.get(qid)
+        note = self._cells.note(qid, q.target) if q is not None and not explicit else None
+        if note:
+            print(note)
+        return earned
+
+    def _check_one(self, qid, ns, value, explicit) -> float:
         if qid not in self._questions:
             print(
                 f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
             )
-            return
+            return 0.0
         q = self._questions[qid]
+        if q.kind in ITEM_KINDS:  # choice, short answer: never right/wrong here
+            self_check_item(q, value if explicit else ns.get(q.target, _MISSING), _MISSING)
+            return 0.0
         points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
         print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")
         if q.kind == "function":
-            self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
+            fraction = self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
         else:
             source = None if explicit else _answer_source(ns, q.target)
-            self._check_value(q, value if explicit else ns.get(q.target, _MISSING), source)
+            fraction = self._check_value(
+                q, value if explicit else ns.get(q.target, _MISSING), source
+            )
+        return q.points * float(fraction or 0.0)
 
     # -- hints --------------------------------------------------------------------------
     def _failed(self, q) -> str:
@@ -229,7 +249,7 @@ class Assignment:
             "it scores 0 at grading whatever it returns. Compute it with numpy instead."
         )
 
-    def _check_value(self, q, got, source: str | None) -> None:
+    def _check_value(self, q, got, source: str | None):  # -> 1.0 or 0.0 when public, else None
         if got is _MISSING:
             return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
@@ -261,13 +281,13 @@ class Assignment:
             )
             if verdict.ok:
                 print("  PASS")
-            else:
-                print("  FAIL")
-                hint = self._failed(q)
-                if hint:
-                    print(f"      {hint}")
-                print(f"      {verdict.message}")
-            return
+                return 1.0
+            print("  FAIL")
+            hint = self._failed(q)
+            if hint:
+                print(f"      {hint}")
+            print(f"      {verdict.message}")
+            return 0.0
         # private value (per-student or not public): type/shape, then public properties
         results = []
         verdict = check_signature(q.signature, got, path=q.target)
@@ -294,7 +314,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func) -> None:
+    def _check_function(self, q, func):  # -> the fraction of public cases that count
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
@@ -354,7 +374,7 @@ class Assignment:
                 f"  0 of {n} public case{'s count' if n != 1 else ' counts'} while the forbidden "
                 f"call stays ({passed} of {n} give the right values){more}."
             )
-            return
+            return 0.0
         if passed < n:
             hint = self._failed(q)
             if hint:
@@ -362,6 +382,33 @@ class Assignment:
         for line in lines:
             print(line)
         print(f"  {passed} of {n} public case{'s pass' if n != 1 else ' passes'}{more}.")
+        return passed / n if q.partial or passed == n else 0.0
+
+
+def public_summary(spec: PublicSpec, earned: dict) -> str:
+    """The last line of ``check.all()``: "N of M points from public checks; K hidden cases at
+    grading", and what else only grading decides. ``earned``: question -> points."""
+    covered = sum(q.points for q in spec.questions if q.kind == "function" or q.cases)
+    hidden = sum(q.hidden_cases for q in spec.questions if q.kind != "short_answer")
+    later = [q for q in spec.questions if q.kind != "function" and not q.cases]
+    line = (
+        f"{sum(earned.values()):g} of {covered:g} points from public checks; "
+        f"{hidden} hidden case{'s' if hidden != 1 else ''} at grading"
+    )
+    if later:
+        kinds = sorted(
+            {
+                {"choice": "choices", "short_answer": "short answers"}.get(
+                    q.kind, "personal or private values"
+                )
+                for q in later
+            }
+        )
+        line += (
+            f"; {sum(q.points for q in later):g} more points ({', '.join(kinds)}) are decided "
+            "only at grading"
+        )
+    return f"{line} ({spec.max_points:g} points in total)."
 
 
 class _Missing:
