@@ -261,7 +261,13 @@ def run_self_checks(name: str, exercises: Path = EXERCISES) -> list[tuple[str, s
     check = Assignment.load(name, student_id="s123", path=exercises / name)
     outputs = []
     for q in check.spec.questions:
-        answers = list(_answers(q)) if q.cases else list(_private_answers(q))
+        if q.kind == "short_answer":
+            answers = [("untouched", None)]
+        elif q.kind == "choice":  # every option, and one that is none of them
+            answers = [(f"option {o!r}", o) for o in decode(q.options or [])]
+            answers.append(("not an option", "none of these"))
+        else:
+            answers = list(_answers(q)) if q.cases else list(_private_answers(q))
         repeats = max(3, len(q.hints) if hasattr(q, "hints") else 1)
         for label, answer in answers:
             buf = io.StringIO()
@@ -353,7 +359,7 @@ def _wrong_submission(name: str):
         if meta.get("role") == "setup":
             cells.append(nbformat.v4.new_code_cell(_WRONG_HELPER))
         qid = meta.get("question") if meta.get("role") == "answer" else None
-        if qid in checks.questions:
+        if qid in checks.questions and checks.questions[qid].kind != "short_answer":
             q = checks.questions[qid]
             t = q.target
             if q.kind == "value":
@@ -372,6 +378,8 @@ def _graded_values(checks, sid: str) -> list:
     """The expected values of every case the grader checks for ``sid`` (hidden and personal)."""
     out: list = []
     for q in checks.questions.values():
+        if q.kind == "short_answer":
+            continue  # marked by the instructor: no expected value
         if q.kind == "function":
             for case in q.cases:
                 _leaves(q.expected(case), out)
