@@ -236,6 +236,8 @@ def _from_signature(sig, fill):
         return None
     if "str" in sig:
         return "F1"
+    if "names" in sig:  # a list of names of any length (a diagnosis)
+        return ["F1"]
     if "sequence" in sig:
         return tuple(_from_signature(s, fill) for s in sig["sequence"])
     if "dict" in sig:
@@ -261,13 +263,9 @@ def run_self_checks(name: str, exercises: Path = EXERCISES) -> list[tuple[str, s
     check = Assignment.load(name, student_id="s123", path=exercises / name)
     outputs = []
     for q in check.spec.questions:
-        if q.kind == "short_answer":
-            answers = [("untouched", None)]
-        elif q.kind == "choice":  # every option, and one that is none of them
-            answers = [(f"option {o!r}", o) for o in decode(q.options or [])]
-            answers.append(("not an option", "none of these"))
-        else:
-            answers = list(_answers(q)) if q.cases else list(_private_answers(q))
+        if q.kind in ("choice", "short_answer"):  # never right/wrong in the self-check
+            continue
+        answers = list(_answers(q)) if q.cases else list(_private_answers(q))
         repeats = max(3, len(q.hints) if hasattr(q, "hints") else 1)
         for label, answer in answers:
             buf = io.StringIO()
@@ -275,6 +273,13 @@ def run_self_checks(name: str, exercises: Path = EXERCISES) -> list[tuple[str, s
                 for _ in range(1 if label.startswith("right") else repeats):
                     check(q.id, answer)
             outputs.append((q.id, label, buf.getvalue()))
+    for q in check.spec.questions:  # choices: every option, and one that is none of them
+        if q.kind == "choice":
+            for option in [*decode(q.options or []), "none of these"]:
+                buf = io.StringIO()
+                with contextlib.redirect_stdout(buf):
+                    check(q.id, option)
+                outputs.append((q.id, f"option {option!r}", buf.getvalue()))
     return outputs
 
 
