@@ -78,8 +78,9 @@ def _patterns(leaf) -> list[str]:
 
 
 def _number_regex(text: str) -> re.Pattern:
-    # a whole number token: not inside a longer number (0.5 must not match 10.55)
-    return re.compile(rf"(?<![\d.]){re.escape(text)}(?![\d])")
+    # a whole number token: not inside a longer number or a name (0.5 must not match 10.55,
+    # 123 not the student ID s123)
+    return re.compile(rf"(?<![\w.]){re.escape(text)}(?![\d])")
 
 
 def public_values(spec) -> dict[str, list]:
@@ -293,6 +294,12 @@ def leaks(name: str, exercises: Path = EXERCISES) -> list[str]:
         {(qid, p) for qid, leaves in values.items() for leaf in leaves for p in _patterns(leaf)}
     )
     compiled = [(qid, p, _number_regex(p)) for qid, p in patterns]
+    # a choice lists its options and echoes the student's: public by construction
+    options = {
+        q.id: {p for o in decode(q.options or []) for p in _patterns(o)}
+        for q in spec.questions
+        if q.kind == "choice"
+    }
     found = []
     for qid, label, out in run_self_checks(name, exercises):
         for line in out.splitlines():
@@ -300,6 +307,8 @@ def leaks(name: str, exercises: Path = EXERCISES) -> list[str]:
                 found.append(f"{qid} / {label}: {line.strip()[:160]}")
                 continue
             for owner, text, regex in compiled:
+                if text in options.get(qid, ()):
+                    continue
                 if regex.search(line):
                     found.append(
                         f"{qid} / {label}: shows {text} (expected value of {owner}): "
@@ -427,6 +436,14 @@ def test_grading_feedback_shows_no_expected_value(tmp_path):
             for case in r["cases"]
         )
         patterns = {p for leaf in _graded_values(checks, "s-wrong") for p in _patterns(leaf)}
+        # a choice's options are printed in the question itself: public by construction
+        patterns -= {
+            p
+            for q in checks.questions.values()
+            if q.kind == "choice"
+            for o in getattr(q, "options", ())
+            for p in _patterns(o)
+        }
         regexes = [(p, _number_regex(p)) for p in sorted(patterns)]
         for line in text.splitlines():
             if _EXPECTED_VALUE.search(line):
