@@ -558,7 +558,8 @@ def load_checks(solution_dir: str | Path) -> Checks:
     if not checks_file.is_file():
         raise FileNotFoundError(f"{checks_file} does not exist: every assignment needs a checks.py")
     pkg_name = _safe_module_name(solution_dir)
-    for mod in [m for m in sys.modules if m == pkg_name or m.startswith(pkg_name + ".")]:
+    # a snapshot: another thread (a grader, a test) may import meanwhile
+    for mod in [m for m in list(sys.modules) if m == pkg_name or m.startswith(pkg_name + ".")]:
         del sys.modules[mod]
     package = types.ModuleType(pkg_name)
     package.__path__ = [str(solution_dir)]
