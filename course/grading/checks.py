@@ -23,7 +23,7 @@ import numpy as np
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
 from course.grading.secret import Secret
-from course.grading.vocabulary import DEMO_STUDENT_ID
+from course.grading.vocabulary import DEMO_STUDENT_ID, QuestionKind
 
 __all__ = [
     "DEMO_STUDENT_ID",
@@ -73,14 +73,15 @@ class Case:
 
 @dataclass
 class Question:
-    """One graded question (built by :meth:`Checks.value` or :meth:`Checks.function`)."""
+    """One graded question (built by :meth:`Checks.value`, :meth:`Checks.function`,
+    :meth:`Checks.choice` or :meth:`Checks.short_answer`)."""
 
     id: str
-    kind: str  # "value" or "function"
-    target: str  # the variable or function name the student defines
+    kind: str  # a QuestionKind: "value", "function", "choice" or "short_answer"
+    target: str  # the variable or function name the student defines ("" for a short answer)
     points: float
     hint: str
-    reference: Callable
+    reference: Callable | None
     rtol: float = 1e-7
     atol: float = 1e-9
     data: str | None = None
@@ -90,6 +91,16 @@ class Question:
     timeout: float | None = None
     partial: bool = True
     cases: list = field(default_factory=list)
+    options: tuple = ()  # a choice question's options
+    rubric: str = ""  # a short-answer question's marking guide (instructors only)
+
+    def __call__(self, reference: Callable) -> Question:
+        """``@CHECKS.short_answer(...)`` on a stub: keeps the stub (e.g. returning a model
+        answer for the markers) and returns the question."""
+        if self.kind != QuestionKind.SHORT_ANSWER:
+            raise TypeError(f"{self.id}: only a short-answer question decorates a function")
+        self.reference = reference
+        return self
 
     def case(
         self, *args, label: str | None = None, hidden: bool = False, kwargs: dict | None = None
@@ -120,6 +131,8 @@ class Question:
 
     def expected(self, case: Case | None = None, data: Any = None) -> Any:
         """The reference value (normalised through the plain-data codec)."""
+        if self.reference is None:
+            raise ValueError(f"{self.id}: a {self.kind} question has no reference value")
         if self.kind == "function":
             assert case is not None, "a function question needs a case"
             value = self.reference(*decode(encode(case.args)), **decode(encode(case.kwargs)))
@@ -178,7 +191,7 @@ class Checks:
             )
         if question.id in self.questions:
             raise ValueError(f"question {question.id!r} is defined twice")
-        if not _IDENT.match(question.target):
+        if question.kind != QuestionKind.SHORT_ANSWER and not _IDENT.match(question.target):
             raise ValueError(f"{question.id}: {question.target!r} is not a Python name")
         if not question.points > 0:
             raise ValueError(f"{question.id}: points must be positive")
@@ -279,6 +292,128 @@ class Checks:
             )
 
         return decorator
+
+    def choice(
+        self,
+        qid: str,
+        *,
+        var: str,
+        options,
+        points: float,
+        hint: str = "",
+        data: str | None = None,
+        timeout: float | None = None,
+    ):
+        """Register a multiple-choice question; decorate the reference returning the right option.
+
+        The student sets ``var`` to one of ``options`` (strings or numbers; strings match
+        ignoring case and surrounding spaces, numbers by value). The public self-check says only
+        whether the answer is one of the options, never whether it is right; ``course grade``
+        gives full ``points`` when it is a right option and 0 otherwise.
+
+        Parameters
+        ----------
+        qid : str
+            The question id (``"q6b"``); its header and answer cell name it.
+        var : str
+            The variable the answer cell assigns (``verdict = "reject"``).
+        options : sequence of str or numbers
+            At least two distinct options, shown in the self-check (public).
+        points : float
+            Points for a right option.
+        hint : str, optional
+            Shown when the answer is not one of the options.
+        data : str, optional
+            A per-student data set: the reference is then ``f(d)`` for the student's data.
+        timeout : float, optional
+            Time limit of the answer cell in seconds.
+
+        Notes
+        -----
+        The reference returns the right option, or a list of options that are all accepted
+        (two wordings of one idea). A reference returning something that is not an option
+        fails ``course release``. For a numeric item whose value stays private, use
+        :meth:`value` with ``public=False``.
+
+        Examples
+        --------
+        >>> checks = Checks("00_demo")
+        >>> @checks.choice("q1", var="verdict", options=["accept", "reject"], points=1)
+        ... def q1():
+        ...     return "reject"
+        >>> checks.questions["q1"].options
+        ('accept', 'reject')
+        """
+        from course.grading.items import check_options
+
+        opts = check_options(qid, options)
+
+        def decorator(reference):
+            return self._register(
+                Question(
+                    id=qid,
+                    kind=QuestionKind.CHOICE,
+                    target=var,
+                    points=float(points),
+                    hint=hint,
+                    reference=reference,
+                    data=data,
+                    public=False,
+                    timeout=timeout,
+                    partial=False,
+                    options=opts,
+                )
+            )
+
+        return decorator
+
+    def short_answer(self, qid: str, *, points: float, rubric: str = "", hint: str = ""):
+        """Register a short-answer question, marked by the instructor; returns the question.
+
+        The student writes a few sentences in the question's markdown answer cell (in the
+        solution notebook: a markdown cell with ``metadata.course = {"role": "answer",
+        "question": qid}``, see :func:`course.grading.authoring.short_answer_cell`; its text
+        is the model answer and never ships). ``course grade`` scores it "to mark" (0 points)
+        and writes every answer, with ``rubric`` and blank points/comment columns, into
+        ``OUT/short_answers.csv``; ``course grade ... --short-answers FILE`` merges the filled
+        file into the grades and the feedback.
+
+        Parameters
+        ----------
+        qid : str
+            The question id.
+        points : float
+            The most points a marker may give.
+        rubric : str, optional
+            What a full answer says (instructors and markers only; never released).
+        hint : str, optional
+            Shown to the student in the feedback when the answer did not get full points.
+
+        Notes
+        -----
+        Works as a plain call or as a decorator on a stub (its return value is ignored by the
+        grader; it may return the model answer for your own reference).
+
+        Examples
+        --------
+        >>> checks = Checks("00_demo")
+        >>> q = checks.short_answer("q2", points=1, rubric="names the dof; says why")
+        >>> str(q.kind), q.points
+        ('short_answer', 1.0)
+        """
+        return self._register(
+            Question(
+                id=qid,
+                kind=QuestionKind.SHORT_ANSWER,
+                target="",
+                points=float(points),
+                hint=hint,
+                reference=None,
+                public=False,
+                partial=True,
+                rubric=str(rubric),
+            )
+        )
 
     # -- helpers -----------------------------------------------------------------------
     @property

@@ -16,6 +16,7 @@ import nbformat
 from course.grading.checks import Checks, load_checks
 from course.grading.codec import encode
 from course.grading.compare import signature
+from course.grading.items import right_options
 from course.grading.notebook import Release, make_release
 from course.grading.vocabulary import (
     CHECKS_FILE,
@@ -24,6 +25,7 @@ from course.grading.vocabulary import (
     PublicCase,
     PublicQuestion,
     PublicSpec,
+    QuestionKind,
 )
 
 __all__ = [
@@ -80,7 +82,14 @@ def public_spec(checks: Checks) -> PublicSpec:
             properties=q.properties,
             public=q.public,
         )
-        if q.kind == "function":
+        if q.kind == QuestionKind.SHORT_ANSWER:
+            pass  # marked by the instructor: nothing to check in the notebook
+        elif q.kind == QuestionKind.CHOICE:
+            data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
+            right_options(q.id, q.options, q.expected(data=data))  # an option, or release fails
+            entry.options = encode(list(q.options))
+            entry.hidden_cases = 1
+        elif q.kind == "function":
             for case in q.public_cases:
                 entry.cases.append(
                     PublicCase(

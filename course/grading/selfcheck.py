@@ -21,6 +21,7 @@ from typing import Any
 
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, compare, describe
+from course.grading.items import ITEM_KINDS, self_check_item
 from course.grading.personal import PersonalData
 from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
@@ -169,11 +170,13 @@ class Assignment:
         return f"<self-check of {self.name}: {len(self._questions)} questions; call check('q1')>"
 
     def all(self, namespace: dict | None = None) -> None:
-        """Self-check every question in turn."""
+        """Self-check every question in turn, then sum up (:func:`public_summary`)."""
         ns = namespace if namespace is not None else sys._getframe(1).f_globals
+        earned = {}
         for qid in self._questions:
-            self._check(qid, ns, None, False)
+            earned[qid] = self._check(qid, ns, None, False)
             print()
+        print(public_summary(self.spec, earned))
 
     def __call__(self, qid: str, *value) -> None:
         """Self-check question ``qid``; pass ``value`` to check it instead of the notebook's."""
@@ -181,19 +184,24 @@ class Assignment:
             raise TypeError("check(question) or check(question, value)")
         self._check(qid, sys._getframe(1).f_globals, value[0] if value else None, bool(value))
 
-    def _check(self, qid, ns, value, explicit) -> None:
+    def _check(self, qid, ns, value, explicit) -> float:
+        """Print the self-check of ``qid``; return the points its public checks give."""
         if qid not in self._questions:
             print(
                 f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
             )
-            return
+            return 0.0
         q = self._questions[qid]
+        if q.kind in ITEM_KINDS:  # choice, short answer: never right/wrong here
+            self_check_item(q, value if explicit else ns.get(q.target, _MISSING), _MISSING)
+            return 0.0
         points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
         print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")
         if q.kind == "function":
-            self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
+            fraction = self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
         else:
-            self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
+            fraction = self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
+        return q.points * float(fraction or 0.0)
 
     def _fail(self, q, message: str) -> None:
         print("  FAIL")
@@ -204,7 +212,7 @@ class Assignment:
     def _not_answered(self, q, why: str) -> None:
         print(f"  not answered yet: {why}")
 
-    def _check_value(self, q, got) -> None:
+    def _check_value(self, q, got) -> float | None:
         if got is _MISSING:
             return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
@@ -219,9 +227,10 @@ class Assignment:
             verdict = compare(expected, got, q.rtol, q.atol)
             if verdict.ok:
                 print("  PASS")
+                return 1.0
             else:
                 self._fail(q, verdict.message)
-            return
+            return 0.0
         # private value (per-student or not public): type/shape, then public properties
         results = []
         verdict = check_signature(q.signature, got)
@@ -247,7 +256,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func) -> None:
+    def _check_function(self, q, func) -> float | None:
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
@@ -298,6 +307,34 @@ class Assignment:
                 f"  Warning: your function calls {', '.join(sorted(forbidden))}, which this question "
                 "forbids: it would score 0 at grading. Use numpy primitives instead."
             )
+            return 0.0
+        return passed / n if q.partial or passed == n else 0.0
+
+
+def public_summary(spec: PublicSpec, earned: dict) -> str:
+    """The last line of ``check.all()``: "N of M points from public checks; K hidden cases at
+    grading", and what else only grading decides. ``earned``: question -> points."""
+    covered = sum(q.points for q in spec.questions if q.kind == "function" or q.cases)
+    hidden = sum(q.hidden_cases for q in spec.questions if q.kind != "short_answer")
+    later = [q for q in spec.questions if q.kind != "function" and not q.cases]
+    line = (
+        f"{sum(earned.values()):g} of {covered:g} points from public checks; "
+        f"{hidden} hidden case{'s' if hidden != 1 else ''} at grading"
+    )
+    if later:
+        kinds = sorted(
+            {
+                {"choice": "choices", "short_answer": "short answers"}.get(
+                    q.kind, "personal or private values"
+                )
+                for q in later
+            }
+        )
+        line += (
+            f"; {sum(q.points for q in later):g} more points ({', '.join(kinds)}) are decided "
+            "only at grading"
+        )
+    return f"{line} ({spec.max_points:g} points in total)."
 
 
 class _Missing:

@@ -31,8 +31,10 @@ __all__ = [
     "PublicCase",
     "PublicQuestion",
     "PublicSpec",
+    "QuestionKind",
     "ReplyStatus",
     "SubmissionStatus",
+    "answer_cell_id",
     "check_student_id",
     "is_student_id",
 ]
@@ -102,6 +104,20 @@ class CellRole(_Word):
     TEXT = "text"  # markdown and raw cells
 
 
+class QuestionKind(_Word):
+    """What a question asks for (``Question.kind``, ``checks.json``)."""
+
+    VALUE = "value"  # a variable, compared with the reference value
+    FUNCTION = "function"  # a function, called on public and hidden cases
+    CHOICE = "choice"  # one of a list of options (multiple choice), graded at grading only
+    SHORT_ANSWER = "short_answer"  # text in a markdown cell, marked by the instructor
+
+
+#: The id of the answer cell of question ``qid`` in every release (the grader finds it by it).
+def answer_cell_id(qid: str) -> str:
+    return f"{qid}-answer"
+
+
 class CellOrigin(_Word):
     """Where a cell the grader runs comes from."""
 
@@ -149,6 +165,8 @@ class GradeStatus(_Word):
     FORBIDDEN = "forbidden"
     GRADER_ERROR = "grader error"
     SKIPPED = "skipped"
+    TO_MARK = "to mark"  # a short answer the instructor has not marked yet
+    MARKED = "marked"  # a short answer marked by the instructor (course grade --short-answers)
 
 
 #: Question statuses that the submission's status lists (``"q1: timeout; q3: forbidden"``).
@@ -217,6 +235,7 @@ class PublicQuestion:
     cases: list[PublicCase] = field(default_factory=list)
     hidden_cases: int = 0
     signature: dict | None = None  # type and shape of a value that is not shipped
+    options: list | None = None  # a choice question's options (encoded plain data)
 
     def to_dict(self) -> dict:
         out = {
@@ -237,6 +256,8 @@ class PublicQuestion:
         }
         if self.signature is not None:
             out["signature"] = self.signature
+        if self.options is not None:
+            out["options"] = self.options
         return out
 
     @classmethod
@@ -257,6 +278,7 @@ class PublicQuestion:
             cases=[PublicCase.from_dict(c) for c in d.get("cases", [])],
             hidden_cases=int(d.get("hidden_cases", 0)),
             signature=d.get("signature"),
+            options=d.get("options"),
         )
 
 
