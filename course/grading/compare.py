@@ -287,6 +287,9 @@ def signature(value: Any) -> Any:
         return {"none": True}
     if isinstance(value, str):
         return {"str": True}
+    if isinstance(value, (tuple, list)) and value and all(isinstance(v, str) for v in value):
+        # a list of names (a diagnosis): its length is part of the answer, not of its type
+        return {"names": True}
     if isinstance(value, (tuple, list)):
         return {"sequence": [signature(v) for v in value]}
     if isinstance(value, dict):
@@ -311,6 +314,11 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
         return Verdict(
             isinstance(got, str),
             "" if isinstance(got, str) else f"{label}: expected a string, got {describe(got)}",
+        )
+    if "names" in sig:
+        ok = isinstance(got, (tuple, list)) and all(isinstance(v, str) for v in got)
+        return Verdict(
+            ok, "" if ok else f"{label}: expected a list of strings, got {describe(got)}"
         )
     if "sequence" in sig:
         items = sig["sequence"]

@@ -192,6 +192,19 @@ def q6(d):
     return lsq.overall_model_test(lsq.fit(d["A"], d["y"], d["Qyy"]), d["alpha"]).statistic
 
 
+@CHECKS.choice(
+    "q6b",
+    var="verdict_mine",
+    options=["accepted", "rejected"],
+    points=1,
+    data="survey",
+    hint='Answer "accepted" or "rejected".',
+)
+def q6b(d):
+    result = lsq.overall_model_test(lsq.fit(d["A"], d["y"], d["Qyy"]), d["alpha"])
+    return "rejected" if result.reject else "accepted"
+
+
 @CHECKS.value(
     "q7",
     var="suspect_mine",
