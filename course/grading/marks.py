@@ -148,7 +148,8 @@ def parse_marks_csv(path: Path, checks) -> dict:
     line}}. Rows with blank points are not marked yet and skipped. :class:`MarksError` lists
     unknown questions, bad or out-of-range points and repeated rows."""
     shorts = short_questions(checks)
-    errors, out = [], {}
+    errors: list[str] = []
+    out: dict[tuple[str, str], dict] = {}
     for line, r in _read_rows(path):
         sid, qid = _unquote(r.get("student", "")), _unquote(r.get("question", ""))
         if not sid and not qid and not any((v or "").strip() for v in r.values() if v):
@@ -190,7 +191,8 @@ def parse_marks_csv(path: Path, checks) -> dict:
 def validate_marks(path: Path, entries: dict, rows: dict) -> dict:
     """Check ``entries`` against the graded ``rows`` (student -> row): unknown students, answers
     not given or changed since the file was written. Returns the marks to keep."""
-    errors, marks = [], {}
+    errors: list[str] = []
+    marks: dict[str, dict] = {}
     for (sid, qid), entry in sorted(entries.items(), key=lambda kv: kv[1]["line"]):
         line = entry["line"]
         row = rows.get(sid)

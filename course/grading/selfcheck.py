@@ -21,7 +21,7 @@ from typing import Any
 
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, compare, describe
-from course.grading.items import ITEM_KINDS, self_check_item
+from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.personal import PersonalData
 from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
@@ -103,6 +103,8 @@ class Assignment:
         self._data_cache: dict[str, Any] = {}
         # a graded class's data, issued by the instructor (None: drawn here from data.py)
         self.personal = PersonalData.read(folder) if data_module is None else None
+        # which cell set each answer (notes an answer set outside its answer cell)
+        self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -186,6 +188,14 @@ class Assignment:
 
     def _check(self, qid, ns, value, explicit) -> float:
         """Print the self-check of ``qid``; return the points its public checks give."""
+        earned = self._check_one(qid, ns, value, explicit)
+        q = self._questions.get(qid)
+        note = self._cells.note(qid, q.target) if q is not None and not explicit else None
+        if note:
+            print(note)
+        return earned
+
+    def _check_one(self, qid, ns, value, explicit) -> float:
         if qid not in self._questions:
             print(
                 f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
@@ -212,7 +222,7 @@ class Assignment:
     def _not_answered(self, q, why: str) -> None:
         print(f"  not answered yet: {why}")
 
-    def _check_value(self, q, got) -> float | None:
+    def _check_value(self, q, got):  # -> 1.0 or 0.0 when public, else None
         if got is _MISSING:
             return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
@@ -256,7 +266,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func) -> float | None:
+    def _check_function(self, q, func):  # -> the fraction of public cases passed
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
