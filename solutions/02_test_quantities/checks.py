@@ -5,9 +5,10 @@ are sent to the student's function only at grading time.
 """
 
 import numpy as np
+from scipy import stats
 
 from course import diagnosis as dg
-from course.grading.checks import Checks
+from course.grading.checks import Checks, Mistake
 
 from . import data
 
@@ -94,8 +95,12 @@ def q2():
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
     ],
-    hint="Minimise sum (y - th1 u1 - u2 - u3)^2 over th1: the minimiser is a ratio of two sums. "
-    "If u1 is identically zero every th1 gives the same sum: do not divide by zero.",
+    hint=(
+        "Set the derivative of the sum with respect to th1 to zero: what is left is a ratio of "
+        "two sums. What happens to that ratio when u1 is identically zero?",
+        "Minimise sum (y - th1 u1 - u2 - u3)^2 over th1: the minimiser is a ratio of two sums. "
+        "If u1 is identically zero every th1 gives the same sum: do not divide by zero.",
+    ),
 )
 def q3(y, u1, u2, u3):
     return float(dg.prediction_error(y, np.column_stack([u1, u2, u3]), NOMINAL, free=[0]).statistic)
@@ -143,7 +148,20 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
     points=1,
     rtol=1e-8,
     atol=1e-12,
-    hint="T = (1/N) sum (y - u - b_hat)^2 with b_hat the mean of y - u (the lecture's 1/N form).",
+    hint=(
+        "Estimate the bias first, then measure what is left: the lecture's form is a mean, not a sum.",
+        "T = (1/N) sum (y - u - b_hat)^2 with b_hat the mean of y - u (the lecture's 1/N form).",
+    ),
+    mistakes=[
+        Mistake(
+            "the bias was not removed: subtract its estimate b_hat before squaring",
+            lambda: float(np.mean((Y_GB - U_GB) ** 2)),
+        ),
+        Mistake(
+            "looks like the sample variance with 1/(N - 1): the lecture's T divides by N",
+            lambda: float(np.var(Y_GB - U_GB, ddof=1)),
+        ),
+    ],
 )
 def q5():
     b_hat = np.mean(Y_GB - U_GB)
@@ -156,14 +174,35 @@ def q5():
     points=2,
     rtol=1e-6,
     atol=1e-9,
-    hint="Under H0, T1/sigma^2 ~ chi2(N - 1): J = sigma^2 chi2.isf(alpha, N - 1). Under F2, "
-    "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
-    "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
+    hint=(
+        "J is a threshold on T1 itself, not on T1/sigma^2; and one gain is estimated.",
+        "Under H0, T1/sigma^2 ~ chi2(N - 1): J = sigma^2 chi2.isf(alpha, N - 1). Under F2, "
+        "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
+        "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
+    ),
+    mistakes=[
+        Mistake(
+            "looks like chi2 with N degrees of freedom: T1 estimates one gain, so N - 1",
+            lambda: _threshold_and_power(N, 0.01),
+        ),
+        Mistake(
+            "looks two-sided (alpha/2): the test alarms in the upper tail only",
+            lambda: _threshold_and_power(N - 1, 0.005),
+        ),
+    ],
 )
 def q6():
     J = dg.residual_threshold(N - 1, 0.01, sigma=SIGMA)
     power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
     return (J, power)
+
+
+def _threshold_and_power(dof, alpha):
+    """(J, power) of q6 with other degrees of freedom or level (the mistakes)."""
+    J = float(SIGMA**2 * stats.chi2.isf(alpha, dof))
+    d = 0.15 * U2
+    d_perp = d - U1 * (U1 @ d) / (U1 @ U1)
+    return (J, float(stats.ncx2.sf(J / SIGMA**2, dof, (d_perp @ d_perp) / SIGMA**2)))
 
 
 def _three_statistics(d):
@@ -213,6 +252,13 @@ def q7_practice():
     points=1,
     hint="Each test alarms when T_k exceeds sigma^2 times the upper alpha quantile of the chi2 law "
     "of T_k / sigma^2: how many degrees of freedom does T_k have when one gain is estimated?",
+    mistakes=[
+        Mistake(
+            "the alarms look like a threshold with chi2(N) or at alpha/2: one test sees this "
+            "small fault only just, so the threshold must be exactly sigma^2 chi2_alpha(N - 1)",
+            lambda: _diagnosis(_three_statistics({"y": Y_NEAR, "U": U}), N + 1, SIGMA, 0.01),
+        ),
+    ],
 )
 def q8_practice():
     return _diagnosis(_three_statistics({"y": Y_NEAR, "U": U}), N, SIGMA, 0.01)
@@ -243,6 +289,18 @@ def q7(d):
     atol=1e-12,
     hint="The threshold on T_k for false-alarm rate mine['alpha']: sigma^2 times the upper alpha "
     "quantile of the chi2 law of T_k / sigma^2, with your sigma. How many degrees of freedom?",
+    mistakes=[
+        Mistake(
+            "looks like chi2 with N degrees of freedom: T_k estimates one gain, so N - 1",
+            lambda d: float(dg.residual_threshold(d["y"].size, d["alpha"], sigma=d["sigma"])),
+        ),
+        Mistake(
+            "looks two-sided (alpha/2): the test alarms in the upper tail only",
+            lambda d: float(
+                dg.residual_threshold(d["y"].size - 1, d["alpha"] / 2, sigma=d["sigma"])
+            ),
+        ),
+    ],
 )
 def q8a(d):
     return float(dg.residual_threshold(d["y"].size - 1, d["alpha"], sigma=d["sigma"]))
@@ -280,9 +338,24 @@ def q8b(d):
     timeout=30,
     atol=0.1 / 20000,  # the same count of detections: a fraction k / n_runs, exactly
     rtol=0.0,
-    hint="Draw ALL the noise with one call, rng.standard_normal((n_runs, N)) with "
-    "rng = np.random.default_rng(seed): row r is the noise of record r. Then T1 of every record "
-    "and the fraction above the threshold of q6 at this alpha.",
+    hint=(
+        "Follow the recipe exactly: rng = np.random.default_rng(seed) and ONE call "
+        "rng.standard_normal((n_runs, N)), row r the noise of record r.",
+        "Then T1 of every record (theta1 free) and the fraction above the threshold of q6 at "
+        "this alpha and sigma.",
+    ),
+    mistakes=[
+        Mistake(
+            "this is the exact power (the formula of q6), not the simulated rate",
+            lambda U_, theta, sigma, alpha, n_runs, seed: dg.prediction_error_power(
+                U_, NOMINAL, [0], theta, sigma=sigma, alpha=alpha
+            ),
+        ),
+        Mistake(
+            "returns alpha: the promised false-alarm rate, not the simulated rate",
+            lambda U_, theta, sigma, alpha, n_runs, seed: float(alpha),
+        ),
+    ],
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):
     # The simulation the question prescribes, run with the case's seed: a correct answer counts
