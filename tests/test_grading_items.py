@@ -260,6 +260,7 @@ def test_marking_file_round_trip(graded, course):
         ({"points": "3"}, "3 points for invalid q3: give between 0 and 2"),
         ({"points": "-1"}, "give between 0 and 2"),
         ({"points": "lots"}, "is not a number"),
+        ({"comment": "see me"}, "a comment but no points for invalid q3"),
         ({"answer_id": "0123456789ab", "points": "1"}, "changed since this file was written"),
     ],
 )

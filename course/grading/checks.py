@@ -152,8 +152,15 @@ class Question:
     timeout: float | None = None
     partial: bool = True
     cases: list = field(default_factory=list)
+    mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
     options: tuple = ()  # a choice question's options
     rubric: str = ""  # a short-answer question's marking guide (instructors only)
+
+    @property
+    def hints(self) -> tuple[str, ...]:
+        """The hint stages: after the k-th failed self-check the student sees stage
+        ``min(k, len(hints)) - 1`` (a nudge first, the formula only at the last stage)."""
+        return _hint_stages(self.id, self.hint)
 
     def __call__(self, reference: Callable) -> Question:
         """``@CHECKS.short_answer(...)`` on a stub: keeps the stub (e.g. returning a model
@@ -162,13 +169,6 @@ class Question:
             raise TypeError(f"{self.id}: only a short-answer question decorates a function")
         self.reference = reference
         return self
-    mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
-
-    @property
-    def hints(self) -> tuple[str, ...]:
-        """The hint stages: after the k-th failed self-check the student sees stage
-        ``min(k, len(hints)) - 1`` (a nudge first, the formula only at the last stage)."""
-        return _hint_stages(self.id, self.hint)
 
     def case(
         self, *args, label: str | None = None, hidden: bool = False, kwargs: dict | None = None

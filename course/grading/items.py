@@ -27,6 +27,7 @@ __all__ = [
     "is_unanswered_text",
     "match_option",
     "option_text",
+    "right_options",
     "self_check_item",
 ]
 

@@ -36,6 +36,7 @@ __all__ = [
     "load_marks",
     "parse_marks_csv",
     "save_marks",
+    "short_questions",
     "unimported_edits",
     "validate_marks",
     "write_short_answers",
@@ -66,6 +67,7 @@ def answer_id(text: str) -> str:
 
 
 def short_questions(checks) -> dict:
+    """The short-answer questions of ``checks``, by id."""
     return {q.id: q for q in checks.questions.values() if q.kind == QuestionKind.SHORT_ANSWER}
 
 
@@ -166,6 +168,11 @@ def parse_marks_csv(path: Path, checks) -> dict:
             errors.append(f"line {line}: points {r.get('points')!r} is not a number")
             continue
         if points is None:
+            if _unquote(r.get("comment") or ""):
+                errors.append(
+                    f"line {line}: a comment but no points for {sid} {qid}: give the points "
+                    "(0 is fine) or clear the comment"
+                )
             continue
         top = shorts[qid].points
         if not (math.isfinite(points) and 0 <= points <= top):

@@ -290,8 +290,8 @@ def points_cell_text(questions: dict) -> str:
             "any part of its points may be given."
         )
     lines.append(
-        "- A question whose answer cell raises an error, runs too long or uses a forbidden "
-        "function earns 0 for that question only."
+        "- An answer that runs too long, crashes or uses a forbidden function earns 0 for its "
+        "question; the other questions are graded as usual."
     )
     lines += [
         "",

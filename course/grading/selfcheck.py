@@ -282,12 +282,11 @@ class Assignment:
             if verdict.ok:
                 print("  PASS")
                 return 1.0
-            else:
-                print("  FAIL")
-                hint = self._failed(q)
-                if hint:
-                    print(f"      {hint}")
-                print(f"      {verdict.message}")
+            print("  FAIL")
+            hint = self._failed(q)
+            if hint:
+                print(f"      {hint}")
+            print(f"      {verdict.message}")
             return 0.0
         # private value (per-student or not public): type/shape, then public properties
         results = []
@@ -315,7 +314,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func):  # -> the fraction of public cases passed
+    def _check_function(self, q, func):  # -> the fraction of public cases that count
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
