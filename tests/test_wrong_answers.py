@@ -34,6 +34,7 @@ the real grader, ``course.grading.driver.grade``.
 
 from __future__ import annotations
 
+import ast
 import importlib.util
 import json
 import re
@@ -96,46 +97,95 @@ def load_spec(path: Path) -> Spec:
     )
 
 
-def _closure(depends: dict) -> dict[str, set]:
-    """Every question each question depends on, directly or through another answer."""
-    out: dict[str, set] = {}
-
-    def visit(q: str, seen: set) -> set:
-        if q not in out:
-            deps: set = set()
-            for p in depends.get(q, []):
-                if p not in seen:
-                    deps |= {p} | visit(p, seen | {p})
-            out[q] = deps
-        return out[q]
-
-    for q in depends:
-        visit(q, {q})
-    return out
+def _defined(source: str) -> set[str]:
+    """The names an answer cell defines at top level (functions and assigned variables)."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return set()
+    names: set[str] = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names |= {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)}
+    return names
 
 
-def pack(spec: Spec) -> list[dict[str, Variant]]:
+def _mentions(source: str, names: set[str]) -> bool:
+    try:
+        used = {n.id for n in ast.walk(ast.parse(source)) if isinstance(n, ast.Name)}
+    except SyntaxError:
+        return True
+    return bool(used & names)
+
+
+class _Needs:
+    """Which answers a cell's source relies on, given the batch it runs in.
+
+    ``DEPENDS`` says which questions' answers a question may use; a source relies on one only
+    when it uses a name that question's solution cell defines (so a self-contained variant can
+    share a notebook with a wrong prerequisite). An answer left at the solution relies on what
+    the solution's cell uses, transitively. Without the solution sources every listed
+    dependency counts.
+    """
+
+    def __init__(self, depends: dict, solutions: dict):
+        self.depends = depends
+        self.solutions = solutions
+        self.defined = {
+            p: _defined(solutions[p]) if p in solutions else None
+            for deps in depends.values()
+            for p in deps
+        }
+
+    def __call__(self, qid: str, source: str, batch: dict, seen: frozenset = frozenset()) -> set:
+        out: set = set()
+        for p in self.depends.get(qid, []):
+            names = self.defined.get(p)
+            if p in seen or (names is not None and not _mentions(source, names)):
+                continue
+            out.add(p)
+            if p in batch and not batch[p].right:
+                continue
+            src = batch[p].source if p in batch else self.solutions.get(p, "")
+            out |= self(p, src, batch, seen | {qid})
+        return out
+
+
+def pack(spec: Spec, solutions: dict | None = None) -> list[dict[str, Variant]]:
     """First-fit packing of the variants into notebooks (one variant per question per notebook).
 
-    A variant of q joins a notebook only when every question q depends on (directly or not) is
-    absent or right there, and a wrong variant only when no question depending on it is graded
-    there.
+    A variant joins a notebook only when no answer graded there relies (directly, or through a
+    solution cell) on a wrong variant. ``solutions``: question -> the solution's answer source.
     """
-    needs = _closure(spec.depends)
+    needs = _Needs(spec.depends, solutions or {})
     batches: list[dict[str, Variant]] = []
     for v in spec.variants:
         for batch in batches:
             if v.qid in batch:
                 continue
-            if any(p in batch and not batch[p].right for p in needs.get(v.qid, ())):
-                continue
-            if not v.right and any(v.qid in needs.get(r, ()) for r in batch):
+            trial = {**batch, v.qid: v}
+            if any(
+                p in trial and not trial[p].right
+                for r in trial
+                for p in needs(r, trial[r].source, trial)
+            ):
                 continue
             batch[v.qid] = v
             break
         else:
             batches.append({v.qid: v})
     return batches
+
+
+def _solution_sources(solution_nb) -> dict[str, str]:
+    return {
+        c.metadata["course"]["question"]: c.source
+        for c in solution_nb.cells
+        if c.get("metadata", {}).get("course", {}).get("role") == "answer"
+    }
 
 
 def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
@@ -160,7 +210,7 @@ def grade_spec(spec: Spec, tmp: Path) -> list[tuple[Variant, dict]]:
     solution_nb = nbformat.read(solution_dir / f"{spec.assignment}.ipynb", as_version=4)
     subs = tmp / "subs"
     subs.mkdir(parents=True)
-    batches = pack(spec)
+    batches = pack(spec, _solution_sources(solution_nb))
     ids = [f"{spec.student}-{k + 1}" for k in range(len(batches))]
     for sid, batch in zip(ids, batches):
         nbformat.write(build_notebook(solution_nb, batch, sid), subs / f"{sid}.ipynb")
@@ -248,6 +298,16 @@ def test_packing_respects_dependencies():
             if q in batch and p in batch:
                 assert batch[p].right, batch
     assert sum(len(b) for b in batches) == 7
+    # with the solutions known, a variant that does not use q3's function may join a wrong q3
+    spec.wrong["q6"] = [("w6a", "T = 1.0"), ("w6b", "T = f(2)")]
+    solutions = {"q3": "def f(x):\n    return x", "q6": "T = f(1)", "q7": "u = T"}
+    batches = pack(spec, solutions)
+    assert any("q3" in b and not b["q3"].right and b.get("q6", None) for b in batches)
+    for batch in batches:
+        if "q6" in batch and "q3" in batch and "f(" in batch["q6"].source:
+            assert batch["q3"].right
+        if "q7" in batch and "q3" in batch and "q6" not in batch:  # q7 -> solution q6 -> q3
+            assert batch["q3"].right
 
 
 def _natural(qid: str) -> list:
