@@ -157,8 +157,8 @@ def self_check_item(q, got, missing) -> None:
         return
     if match_option(options, got) is None:
         print(f"  FAIL: {got!r} is not one of the options ({option_text(options)})")
-        if q.hint:
-            print(f"      Hint: {q.hint}")
+        if q.hints:  # the first stage: a choice is never right or wrong here
+            print(f"      Hint: {q.hints[0]}")
         return
     print(
         f"  OK: {got!r} is one of the options. Whether it is the right one is checked only at "
