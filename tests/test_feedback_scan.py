@@ -290,8 +290,16 @@ def leaks(name: str, exercises: Path = EXERCISES) -> list[str]:
 
     spec = PublicSpec.read(exercises / name)
     values = public_values(spec)
+    # a choice's options are public text (mode names such as 'F2'), not an answer shown
+    options = {str(o) for q in spec.questions for o in (getattr(q, "options", None) or ())}
     patterns = sorted(
-        {(qid, p) for qid, leaves in values.items() for leaf in leaves for p in _patterns(leaf)}
+        {
+            (qid, p)
+            for qid, leaves in values.items()
+            for leaf in leaves
+            if not (isinstance(leaf, str) and leaf in options)
+            for p in _patterns(leaf)
+        }
     )
     compiled = [(qid, p, _number_regex(p)) for qid, p in patterns]
     # a choice lists its options and echoes the student's: public by construction
