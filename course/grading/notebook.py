@@ -566,6 +566,10 @@ class Plan:
     answered: set = field(default_factory=set)  # questions with at least one answer cell
     answer_sources: dict = field(default_factory=dict)  # question -> source of its slot
     notebook_student_id: str | None = None
+    texts: dict = field(default_factory=dict)  # short-answer question -> its markdown text
+    #: question -> "adopted" (answer cell deleted, an added cell defines the answer and is
+    #: graded instead) or "missing" (answer cell deleted, nothing found)
+    deleted: dict = field(default_factory=dict)
 
 
 def student_id_in(source: str) -> str | None:
@@ -595,18 +599,26 @@ def setup_source(release: Release, student_id: str) -> str:
     )
 
 
-def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
+def build_plan(release: Release, nb: dict, student_id: str, targets: dict | None = None) -> Plan:
     """Match a submitted notebook against the release and list the cells to run, in order.
 
     Protected cells (setup, context) always run in their RELEASE version, at their release
     position, even when the student deleted or edited them (edits are noted). Answer cells are
-    matched by cell id, then by ``metadata.course``; every copy runs, in the student's order, at
-    the question's position. Cells the student added run right after the matched cell that
-    precedes them in the student's notebook (answers they follow count as part of that answer).
-    Check cells and copies of protected cells are not run.
+    matched by cell id (``<question>-answer``), then by ``metadata.course``, wherever the student
+    moved them; every copy runs, in the student's order, at the question's position. Cells the
+    student added run right after the matched cell that precedes them in the student's notebook
+    (answers they follow count as part of that answer). Check cells and copies of protected
+    cells are not run. Short answers (markdown answer cells) are collected in ``plan.texts``.
+
+    When a question's answer cell is missing (deleted, or retyped in a new cell), the added
+    cells that define its variable or function (``targets``: question -> name) are graded as
+    its answer, and ``plan.deleted`` and a note say so; otherwise it counts as not answered.
     """
     plan = Plan()
     by_id = release.by_id()
+    text_answers = {
+        c.question for c in release.cells if c.role == CellRole.ANSWER and c.cell_type == "markdown"
+    }
     code_cells = [c for c in release.cells if c.cell_type == "code"]
     slots: dict[Any, list] = {c.index: [] for c in code_cells}
     answer_slot = {c.question: c.index for c in code_cells if c.role == CellRole.ANSWER}
@@ -614,6 +626,18 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
     anchor = release.setup.index
     n_extra = 0
     for pos, cell in enumerate(nb.get("cells", [])):
+        if isinstance(cell, dict) and cell.get("cell_type") == "markdown":
+            cid = cell.get("id") if isinstance(cell.get("id"), str) else None
+            meta = _course_meta(cell)
+            if cid in by_id and by_id[cid].question in text_answers:
+                qid = by_id[cid].question
+            elif meta.get("role") == CellRole.ANSWER and meta.get("question") in text_answers:
+                qid = meta["question"]
+            else:
+                continue
+            plan.texts[qid] = (plan.texts.get(qid, "") + "\n\n" + _source(cell)).strip()
+            plan.answered.add(qid)
+            continue
         if not isinstance(cell, dict) or cell.get("cell_type") != "code":
             continue
         src = _source(cell)
@@ -653,6 +677,14 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
             )
         anchor = match.index
 
+    for qid in sorted(text_answers - plan.answered):
+        plan.deleted[qid] = "missing"
+        plan.notes.append(
+            f"The answer cell of {qid} (id {answer_cell_id(qid)!r}) is missing from the "
+            f"notebook (deleted?): {qid} counts as not answered."
+        )
+    _adopt_added_answers(plan, slots, answer_slot, targets or {})
+
     for cell in code_cells:
         if cell.role == CellRole.SETUP:
             plan.cells.append(
@@ -668,14 +700,48 @@ def build_plan(release: Release, nb: dict, student_id: str) -> Plan:
             plan.cells.extend(slots[cell.index])
         else:
             q = cell.question
+            own = [item for item in slots[cell.index] if item.question in (None, q)]
             for item in slots[cell.index]:
-                plan.cells.append(PlanCell(item.source, q, item.origin, item.label))
-            plan.answer_sources[q] = "\n\n".join(item.source for item in slots[cell.index])
-            if q not in plan.answered:
-                plan.notes.append(
-                    f"No answer cell for {q} was found (deleted?); {q} counts as not answered."
+                plan.cells.append(
+                    PlanCell(item.source, item.question or q, item.origin, item.label)
                 )
+            if q not in plan.deleted:
+                plan.answer_sources[q] = "\n\n".join(item.source for item in own)
     return plan
+
+
+def _adopt_added_answers(plan: Plan, slots: dict, answer_slot: dict, targets: dict) -> None:
+    """For each question whose answer cell is missing: grade the added cells that define its
+    variable or function as its answer (and say so), or note that it is not answered."""
+    added = [
+        item
+        for cells in slots.values()
+        for item in cells
+        if item.origin == CellOrigin.EXTRA and item.question is None
+    ]
+    for qid in answer_slot:
+        if qid in plan.answered:
+            continue
+        where = (
+            f"The answer cell of {qid} (id {answer_cell_id(qid)!r}) is missing from the notebook"
+        )
+        target = targets.get(qid)
+        mine = [item for item in added if target and target in _defined_names(item.source)]
+        if not mine:
+            plan.deleted[qid] = "missing"
+            plan.notes.append(f"{where} (deleted?): {qid} counts as not answered.")
+            continue
+        for item in mine:
+            item.question = qid
+            added.remove(item)
+        plan.deleted[qid] = "adopted"
+        plan.answered.add(qid)
+        plan.answer_sources[qid] = "\n\n".join(item.source for item in mine)
+        plan.notes.append(
+            f"{where} (deleted?); {', '.join(item.label for item in mine)} "
+            f"defines {target} and was graded as the answer of {qid}. Keep answers in their "
+            "answer cells: JupyterLab does not let you delete them."
+        )
 
 
 def forbidden_mentions(source: str, forbid) -> list[str]:

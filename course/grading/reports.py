@@ -61,7 +61,7 @@ def feedback_markdown(row: dict, checks) -> str:
                     f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
                     + (f": {case['message']}" if case["message"] and not case["ok"] else "")
                 )
-        if q is not None and q.hint and r["points"] < r["max"]:
+        if q is not None and q.hint and r["points"] < r["max"] and r["status"] != "to mark":
             lines += ["", f"Hint: {q.hint}"]
     if row["notes"]:
         lines += ["", "## Notes", ""] + [f"- {n}" for n in row["notes"]]
@@ -112,10 +112,25 @@ class Summary:
     flags: list = field(default_factory=list)  # doubts about who submitted what (identity)
     missing: list | None = None  # roster IDs without a submission (None: no roster)
     unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
+    marking: str = ""  # what happened to the short answers (course.grading.marks)
 
     def class_text(self) -> str:
-        """The identity flags and the roster's missing and unknown submissions."""
+        """The identity flags, deleted answer cells, the roster's missing and unknown
+        submissions and the short answers to mark."""
         lines = []
+        deleted = [
+            f"{r['student']} ("
+            + ", ".join(
+                f"{qid}: {'graded from an added cell' if how == 'adopted' else 'not answered'}"
+                for qid, how in sorted(r["deleted_answers"].items())
+            )
+            + ")"
+            for r in self.rows
+            if r.get("deleted_answers")
+        ]
+        if deleted:
+            lines.append(f"Answer cells deleted in {len(deleted)} submission(s):")
+            lines += [f"  - {text}" for text in deleted]
         if self.flags:
             lines.append(f"Check these {len(self.flags)} submission name(s):")
             lines += [f"  - {flag}" for flag in self.flags]
@@ -131,6 +146,8 @@ class Summary:
                 + (f" ({', '.join(self.unknown)})" if self.unknown else "")
                 + "; LMS files: canvas.csv, moodle.csv"
             )
+        if self.marking:
+            lines.append(self.marking)
         return "\n".join(lines)
 
     def text(self) -> str:
