@@ -41,11 +41,12 @@ export, leaks
 
 from importlib import import_module
 
-__all__ = ["Assignment", "Band", "Checks", "binomial_band", "student_rng"]
+__all__ = ["Assignment", "Band", "Checks", "Mistake", "binomial_band", "student_rng"]
 
 _LAZY = {
     "Assignment": "course.grading.selfcheck",
     "Checks": "course.grading.checks",
+    "Mistake": "course.grading.checks",
     "Band": "course.grading.codec",
     "binomial_band": "course.grading.compare",
     "student_rng": "course.grading.checks",

@@ -13,7 +13,7 @@ import importlib.util
 import re
 import sys
 import types
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,6 +30,7 @@ __all__ = [
     "Band",
     "Case",
     "Checks",
+    "Mistake",
     "Question",
     "binomial_band",
     "load_checks",
@@ -61,6 +62,66 @@ def student_rng(
     return np.random.default_rng(seed)
 
 
+@dataclass(frozen=True)
+class Mistake:
+    """A plausible wrong answer the feedback recognises and names.
+
+    Parameters
+    ----------
+    message : str
+        What the student reads when the answer matches this mistake (and not the right answer),
+        e.g. ``"looks one-sided: z_alpha instead of z_alpha/2"``. Say what went wrong in kind;
+        never the right value.
+    reference : callable
+        Computes the WRONG answer, with the signature of the question's own reference: ``f()``
+        or ``f(data)`` for a value question, ``f(*case_args, **case_kwargs)`` for a function
+        question. Like the reference it runs in the grader and in ``course release`` (public
+        cases: its value ships in ``checks.json``), never in a student's process.
+
+    Notes
+    -----
+    A case whose answer matches a mistake within the question's tolerance scores 0 like any
+    other wrong answer; the mistake only changes the message. Automatic diagnostics (shape,
+    NaN, sign, a constant factor, transposed, off by one, a permutation) need no declaration:
+    declare the mistakes that are specific to the method taught.
+
+    Examples
+    --------
+    >>> from scipy.stats import norm
+    >>> one_sided = Mistake("looks one-sided: z_alpha instead of z_alpha/2",
+    ...                     lambda alpha: norm.isf(alpha))
+    >>> one_sided.message
+    'looks one-sided: z_alpha instead of z_alpha/2'
+    """
+
+    message: str
+    reference: Callable
+
+    def __post_init__(self):
+        if not isinstance(self.message, str) or not self.message.strip():
+            raise ValueError("Mistake(message, reference): message must be a non-empty string")
+        if not callable(self.reference):
+            raise ValueError(
+                "Mistake(message, reference): reference must be a function computing the wrong "
+                "answer, with the signature of the question's reference"
+            )
+
+
+def _hint_stages(qid: str, hint) -> tuple[str, ...]:
+    """``hint=`` as a tuple of stages: a str is one stage, a sequence of str is staged."""
+    if hint is None or hint == "":
+        return ()
+    if isinstance(hint, str):
+        return (hint,)
+    try:
+        stages = tuple(hint)
+    except TypeError:
+        raise ValueError(f"{qid}: hint must be a string or a sequence of strings") from None
+    if not stages or not all(isinstance(s, str) and s.strip() for s in stages):
+        raise ValueError(f"{qid}: hint stages must be non-empty strings")
+    return stages
+
+
 @dataclass
 class Case:
     """Arguments of one call of a student's function, public or hidden."""
@@ -80,7 +141,7 @@ class Question:
     kind: str  # a QuestionKind: "value", "function", "choice" or "short_answer"
     target: str  # the variable or function name the student defines ("" for a short answer)
     points: float
-    hint: str
+    hint: str | tuple  # one stage (str) or staged hints; see ``hints``
     reference: Callable | None
     rtol: float = 1e-7
     atol: float = 1e-9
@@ -93,6 +154,13 @@ class Question:
     cases: list = field(default_factory=list)
     options: tuple = ()  # a choice question's options
     rubric: str = ""  # a short-answer question's marking guide (instructors only)
+    mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
+
+    @property
+    def hints(self) -> tuple[str, ...]:
+        """The hint stages: after the k-th failed self-check the student sees stage
+        ``min(k, len(hints)) - 1`` (a nudge first, the formula only at the last stage)."""
+        return _hint_stages(self.id, self.hint)
 
     def __call__(self, reference: Callable) -> Question:
         """``@CHECKS.short_answer(...)`` on a stub: keeps the stub (e.g. returning a model
@@ -141,6 +209,22 @@ class Question:
         else:
             value = self.reference()
         return decode(encode(value))
+
+    def mistaken(self, case: Case | None = None, data: Any = None) -> list[tuple[str, Any]]:
+        """``(message, wrong value)`` of each declared :class:`Mistake` for this case or data
+        (normalised through the plain-data codec like :meth:`expected`)."""
+        out = []
+        for mistake in self.mistakes:
+            if self.kind == "function":
+                assert case is not None, "a function question needs a case"
+                args, kwargs = decode(encode(case.args)), decode(encode(case.kwargs))
+                value = mistake.reference(*args, **kwargs)
+            elif self.data is not None:
+                value = mistake.reference(data)
+            else:
+                value = mistake.reference()
+            out.append((mistake.message, decode(encode(value))))
+        return out
 
 
 class Checks:
@@ -197,6 +281,12 @@ class Checks:
             raise ValueError(f"{question.id}: points must be positive")
         if question.rtol < 0 or question.atol < 0:
             raise ValueError(f"{question.id}: tolerances must be non-negative")
+        question.hints  # noqa: B018  (validates hint=)
+        if not all(isinstance(m, Mistake) for m in question.mistakes):
+            raise ValueError(
+                f"{question.id}: mistakes=[Mistake('message', reference), ...] (from "
+                "course.grading.checks import Mistake)"
+            )
         for name in question.forbid:
             if "." not in name:
                 raise ValueError(
@@ -225,7 +315,7 @@ class Checks:
         *,
         var: str,
         points: float,
-        hint: str = "",
+        hint: str | Sequence[str] = "",
         rtol: float = 1e-7,
         atol: float = 1e-9,
         data: str | None = None,
@@ -234,8 +324,16 @@ class Checks:
         forbid=(),
         timeout: float | None = None,
         partial: bool = True,
+        mistakes: Sequence[Mistake] = (),
     ):
-        """Register a question whose answer is the variable ``var``; decorate its reference."""
+        """Register a question whose answer is the variable ``var``; decorate its reference.
+
+        ``hint`` is one string, or a sequence of strings shown in stages (a nudge after the
+        first failed self-check, the next stage after the next failure, ..., the formula last).
+        ``mistakes`` lists :class:`Mistake` objects: plausible wrong answers, computed like the
+        reference (``f()``, or ``f(data)`` with ``data=``), whose message the feedback shows
+        when the answer matches one of them.
+        """
 
         def decorator(reference):
             return self._register(
@@ -244,7 +342,7 @@ class Checks:
                     kind="value",
                     target=var,
                     points=float(points),
-                    hint=hint,
+                    hint=hint if isinstance(hint, str) else tuple(hint),
                     reference=reference,
                     rtol=float(rtol),
                     atol=float(atol),
@@ -254,6 +352,7 @@ class Checks:
                     forbid=tuple(forbid),
                     timeout=timeout,
                     partial=partial,
+                    mistakes=tuple(mistakes),
                 )
             )
 
@@ -265,14 +364,19 @@ class Checks:
         *,
         func: str,
         points: float,
-        hint: str = "",
+        hint: str | Sequence[str] = "",
         rtol: float = 1e-7,
         atol: float = 1e-9,
         forbid=(),
         timeout: float | None = None,
         partial: bool = True,
+        mistakes: Sequence[Mistake] = (),
     ):
-        """Register a question whose answer is the function ``func``; decorate its reference."""
+        """Register a question whose answer is the function ``func``; decorate its reference.
+
+        ``hint`` and ``mistakes`` as in :meth:`value`; a mistake's reference takes the case's
+        arguments, like the question's reference.
+        """
 
         def decorator(reference):
             return self._register(
@@ -281,13 +385,14 @@ class Checks:
                     kind="function",
                     target=func,
                     points=float(points),
-                    hint=hint,
+                    hint=hint if isinstance(hint, str) else tuple(hint),
                     reference=reference,
                     rtol=float(rtol),
                     atol=float(atol),
                     forbid=tuple(forbid),
                     timeout=timeout,
                     partial=partial,
+                    mistakes=tuple(mistakes),
                 )
             )
 

@@ -73,7 +73,7 @@ def public_spec(checks: Checks) -> PublicSpec:
             kind=q.kind,
             target=q.target,
             points=q.points,
-            hint=q.hint,
+            hint=q.hint if isinstance(q.hint, str) else list(q.hint),
             rtol=q.rtol,
             atol=q.atol,
             partial=q.partial,
@@ -97,6 +97,7 @@ def public_spec(checks: Checks) -> PublicSpec:
                         args=encode(case.args),
                         kwargs=encode(case.kwargs),
                         expected=encode(q.expected(case)),
+                        mistakes=[(m, encode(v)) for m, v in q.mistaken(case)],
                     )
                 )
             entry.hidden_cases = len(q.hidden_cases)
@@ -104,7 +105,13 @@ def public_spec(checks: Checks) -> PublicSpec:
             data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
             value = q.expected(data=data)
             if q.public:
-                entry.cases.append(PublicCase(label=q.target, expected=encode(value)))
+                entry.cases.append(
+                    PublicCase(
+                        label=q.target,
+                        expected=encode(value),
+                        mistakes=[(m, encode(v)) for m, v in q.mistaken(data=data)],
+                    )
+                )
             else:
                 entry.signature = signature(value)
                 entry.hidden_cases = 1

@@ -34,7 +34,10 @@ def _fmt_points(x: float) -> str:
 
 
 def feedback_markdown(row: dict, checks) -> str:
-    """The student's feedback: per question points, status, message and hint."""
+    """The student's feedback: per question points, status, message and hint.
+
+    It never shows an expected value (a case's ``detail`` stays in results.jsonl, for the
+    instructor) and only the first stage of staged hints."""
     lines = [f"# {checks.title}: feedback for {row['student']}", ""]
     lines.append(
         f"**Total: {_fmt_points(row['total'])} / {_fmt_points(row['max'])}**"
@@ -61,8 +64,9 @@ def feedback_markdown(row: dict, checks) -> str:
                     f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
                     + (f": {case['message']}" if case["message"] and not case["ok"] else "")
                 )
-        if q is not None and q.hint and r["points"] < r["max"] and r["status"] != "to mark":
-            lines += ["", f"Hint: {q.hint}"]
+        if q is not None and q.hints and r["points"] < r["max"] and r["status"] != "to mark":
+            # the first stage only: the later ones (the formula) stay in the self-check
+            lines += ["", f"Hint: {q.hints[0]}"]
     if row["notes"]:
         lines += ["", "## Notes", ""] + [f"- {n}" for n in row["notes"]]
     lines.append("")

@@ -84,6 +84,15 @@ class AssignmentGrader:
         self.value_expected = {
             q.id: q.expected() for q in self.questions if q.kind == "value" and q.data is None
         }
+        # declared mistakes (message, wrong value) of the same cases: named in the feedback
+        self.case_mistakes = {
+            q.id: [q.mistaken(case) for case in q.public_cases + q.hidden_cases]
+            for q in self.questions
+            if q.kind == "function"
+        }
+        self.value_mistakes = {
+            q.id: q.mistaken() for q in self.questions if q.kind == "value" and q.data is None
+        }
         solutions_root = (
             self.solution_dir.parent
             if self.solution_dir.parent.name == "solutions"
@@ -506,10 +515,15 @@ class StudentSession:
             return g._question_result(q, GradeStatus.ERROR, f"{q.target} could not be read")
         if q.data is not None:
             expected = q.expected(data=self.data[q.data])
+            mistakes = q.mistaken(data=self.data[q.data]) if q.mistakes else []
         else:
             expected = g.value_expected[q.id]
-        verdict = compare(expected, got, q.rtol, q.atol, reveal=q.public)
+            mistakes = g.value_mistakes[q.id]
+        # message: for the student, never an expected value; detail: the instructor's records
+        verdict = compare(expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes)
         case = {"label": q.target, "ok": verdict.ok, "message": verdict.message}
+        if not verdict.ok:
+            case["detail"] = verdict.detail
         if verdict.ok:
             return g._question_result(q, GradeStatus.PASS, "", q.points, [case])
         message = verdict.message
@@ -526,7 +540,7 @@ class StudentSession:
         status = None
         first_message = ""
         n_hidden = 0
-        for case, exp in zip(cases, expected):
+        for case, exp, mistakes in zip(cases, expected, g.case_mistakes[q.id]):
             if case.hidden:
                 n_hidden += 1
                 label = f"hidden case {n_hidden}"
@@ -598,8 +612,10 @@ class StudentSession:
             except (EncodingError, TypeError, ValueError, KeyError):
                 results.append({"label": label, "ok": False, "message": "unreadable result"})
                 continue
-            verdict = compare(exp, got, q.rtol, q.atol, reveal=not case.hidden)
+            verdict = compare(exp, got, q.rtol, q.atol, mistakes=mistakes)
             results.append({"label": label, "ok": verdict.ok, "message": verdict.message})
+            if not verdict.ok:
+                results[-1]["detail"] = verdict.detail  # instructor only (results.jsonl)
             if not verdict.ok:
                 first_message = first_message or f"{label}: {verdict.message}"
         if self.hits.get(q.id):

@@ -196,12 +196,14 @@ class SubmissionStatus(_Word):
 # --------------------------------------------------------------------------------------
 @dataclass
 class PublicCase:
-    """One public case: the encoded arguments (function questions) and expected value."""
+    """One public case: the encoded arguments (function questions) and expected value, and
+    the declared mistakes as ``[message, encoded wrong value]`` pairs."""
 
     label: str
     expected: Any
     args: Any = None
     kwargs: Any = None
+    mistakes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         out: dict = {"label": self.label}
@@ -209,11 +211,14 @@ class PublicCase:
             out["args"] = self.args
             out["kwargs"] = self.kwargs
         out["expected"] = self.expected
+        if self.mistakes:
+            out["mistakes"] = [[str(m), v] for m, v in self.mistakes]
         return out
 
     @classmethod
     def from_dict(cls, d: dict) -> PublicCase:
-        return cls(d["label"], d["expected"], d.get("args"), d.get("kwargs"))
+        mistakes = [(str(m), v) for m, v in d.get("mistakes", [])]
+        return cls(d["label"], d["expected"], d.get("args"), d.get("kwargs"), mistakes)
 
 
 @dataclass
@@ -224,7 +229,7 @@ class PublicQuestion:
     kind: str  # "value" or "function"
     target: str
     points: float
-    hint: str = ""
+    hint: str | list = ""  # one stage, or the list of staged hints
     rtol: float = 1e-7
     atol: float = 1e-9
     partial: bool = True
@@ -237,13 +242,20 @@ class PublicQuestion:
     signature: dict | None = None  # type and shape of a value that is not shipped
     options: list | None = None  # a choice question's options (encoded plain data)
 
+    @property
+    def hints(self) -> list[str]:
+        """The hint stages (one stage when ``hint`` is a string; none when it is empty)."""
+        if isinstance(self.hint, str):
+            return [self.hint] if self.hint else []
+        return [str(h) for h in self.hint]
+
     def to_dict(self) -> dict:
         out = {
             "id": self.id,
             "kind": self.kind,
             "target": self.target,
             "points": self.points,
-            "hint": self.hint,
+            "hint": self.hint if isinstance(self.hint, str) else list(self.hint),
             "rtol": self.rtol,
             "atol": self.atol,
             "partial": self.partial,
