@@ -37,6 +37,17 @@ Q6 = _correlated(6, 0.4, 2.0) + np.diag(_R6.uniform(0.1, 0.5, 6))
 Y6 = A6 @ np.array([1.0, -2.0, 0.3]) + np.linalg.cholesky(Q6) @ _R6.standard_normal(6)
 Y6[2] += 9.0
 
+# The public practice survey of q6_practice and q7_practice (data.survey's design, seed 2026):
+# the largest |e| (index 6) is not the blunder, which only the w-test finds.
+Y_PRACTICE = np.array(
+    [11.663, 10.733, 15.378, 13.056, 12.023, 12.388, 17.657, 14.225, 11.862, 14.963, 11.791, 13.548]
+)
+SIGMA_PRACTICE = np.array(
+    [0.967, 0.871, 0.345, 1.291, 1.405, 0.677, 2.669, 0.798, 1.467, 1.42, 1.136, 1.253]
+)
+A_PRACTICE = np.column_stack([np.ones(12), np.arange(12.0)])
+Q_PRACTICE = np.diag(SIGMA_PRACTICE**2)
+
 CHECKS = Checks(
     "01_least_squares",
     title="Assignment 1: least-squares validation",
@@ -90,9 +101,17 @@ def q3(A, y, Qyy, alpha):
 
 q3.case(A_LINE, Y_DAY1, I4, 0.01, label="day 1 of the line fit, alpha = 0.01")
 q3.case(A_LINE, Y_DAY2, I4, 0.01, label="day 2 of the line fit, alpha = 0.01")
+q3.case(
+    A_LINE,
+    Y_DAY2,
+    np.diag([1.0, 4.0, 4.0, 1.0]),
+    0.01,
+    label="day 2 with sigma = 2 for the two middle observations (Qyy not I), alpha = 0.01",
+)
 ### BEGIN HIDDEN TESTS
 q3.case(A_SEA, Y_SEA, np.eye(5), 0.10, hidden=True)
 q3.case(A_QUAD, Y_DAY2, np.diag([1.0, 4.0, 4.0, 1.0]), 0.05, hidden=True)
+q3.case(A_SEA, Y_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), 0.10, hidden=True)
 q3.case(A6, Y6, Q6, 0.05, hidden=True)
 ### END HIDDEN TESTS
 
@@ -123,7 +142,7 @@ q4.case(A6, Y6, Q6, hidden=True)
     "q5",
     var="band_t2",
     points=1,
-    rtol=1e-6,
+    rtol=1e-4,  # the printed 1.96 is as right as norm.isf(0.025) = 1.959964
     atol=1e-8,
     hint="sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
     "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).",
@@ -132,6 +151,30 @@ def q5():
     f = lsq.fit(A_LINE, Y_DAY1)
     _, half = lsq.confidence_band(f, np.array([[1.0, 2.0]]), level=0.95)
     return (float(f.sigma_y_hat[1]), float(half[0]))
+
+
+@CHECKS.value(
+    "q6_practice",
+    var="T_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-8,
+    hint="The same computation as q6, on the public survey of the notebook: fit with its "
+    "(diagonal, not identity) Qyy and take the overall model test statistic.",
+)
+def q6_practice():
+    return lsq.overall_model_test(lsq.fit(A_PRACTICE, Y_PRACTICE, Q_PRACTICE), 0.01).statistic
+
+
+@CHECKS.value(
+    "q7_practice",
+    var="suspect_practice",
+    points=1,
+    hint="Data snooping on the public survey: the observation with the largest |w| (each residual "
+    "divided by ITS OWN standard deviation), as a 0-based index.",
+)
+def q7_practice():
+    return int(lsq.data_snooping(A_PRACTICE, Y_PRACTICE, Q_PRACTICE, alpha=0.01).removed[0])
 
 
 @CHECKS.value(
