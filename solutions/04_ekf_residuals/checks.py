@@ -14,7 +14,8 @@ from course.grading.checks import Band, Checks, binomial_band
 
 from . import data
 
-# The fixed record of q7: the notebook's context cell builds the same one with the same seed.
+# The fixed record of q7: the notebook's context cell builds the same one with the same seed
+# (4062: a threshold with L - 1 degrees of freedom counts 19 false alarms instead of 14).
 TS, Q_X, R = 0.1, 1e-4, 2.5e-3
 N7, T_FAULT7 = 200, 150
 _t7 = np.arange(N7)
@@ -23,7 +24,7 @@ BETA7 = 0.8 + 0.6 * _t7 / N7
 _, Y7 = kf.simulate_beta_system(
     BETA7,
     U7,
-    np.random.default_rng(4042),
+    np.random.default_rng(4062),
     Ts=TS,
     q_x=Q_X,
     r=R,
