@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import filters as kf
-from course.grading.checks import Band, Checks, binomial_band
+from course.grading.checks import Band, Checks, Mistake, binomial_band
 
 from . import data
 
@@ -88,9 +88,19 @@ _NO_FILTERS = [
 ]
 
 
+_Q1_MISTAKES = [
+    Mistake(
+        "looks like the FILTERED variance P(t|t): the question asks for the prediction "
+        "variance P(t|t-1), the fixed point of update + predict",
+        lambda: (float((np.sqrt(5) - 1) / 2 * (1 + np.sqrt(5)) / 2), float((np.sqrt(5) - 1) / 2)),
+    ),
+]
+
+
 @CHECKS.value(
     "q1",
     var="steady",
+    mistakes=_Q1_MISTAKES,
     points=1,
     rtol=1e-8,
     atol=1e-10,
@@ -166,6 +176,21 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
     points=1,
     rtol=1e-6,
     atol=1e-8,
+    mistakes=[
+        Mistake(
+            "L - 1 degrees of freedom: nothing is estimated from the window, so a sum of L "
+            "squares keeps all L",
+            lambda: float(stats.chi2.isf(0.001, 9)),
+        ),
+        Mistake(
+            "looks two-sided: only LARGE sums alarm, so all of alpha belongs in the upper tail",
+            lambda: float(stats.chi2.isf(0.0005, 10)),
+        ),
+        Mistake(
+            "a lower-tail quantile: the alarm is for large sums (isf, not ppf)",
+            lambda: float(stats.chi2.ppf(0.001, 10)),
+        ),
+    ],
     hint=[
         "Which law does a sum of L squared independent N(0, 1) values follow under H0, "
         "and with how many degrees of freedom?",
@@ -177,14 +202,35 @@ def q4():
     return float(stats.chi2.isf(0.001, 10))
 
 
-def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R):
-    """(threshold, first alarm) of the windowed NIS of the beta-drift EKF; -1: no alarm."""
+def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None, shift=0):
+    """(threshold, first alarm) of the windowed NIS of the beta-drift EKF; -1: no alarm.
+
+    ``dof`` and ``shift`` make the declared mistakes (another dof, the window's first sample).
+    """
     model = kf.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
     T = kf.windowed_nis(kf.extended_kalman_filter(model, y, u), window)
-    threshold = kf.windowed_nis_threshold(window, alpha)
+    if dof is None:
+        threshold = kf.windowed_nis_threshold(window, alpha)
+    else:
+        threshold = float(stats.chi2.isf(alpha, dof))
     with np.errstate(invalid="ignore"):
         alarms = np.flatnonzero(threshold < T)
-    return (float(threshold), int(alarms[0]) if alarms.size else -1)
+    return (float(threshold), int(alarms[0]) + shift if alarms.size else -1)
+
+
+def _alarm_mistakes(record):
+    """The declared mistakes of q5_practice / q5; ``record(d)`` gives (y, u, window, alpha)."""
+    return [
+        Mistake(
+            "threshold with L - 1 degrees of freedom: a window of L squared normalised "
+            "innovations is chi2 with L degrees of freedom",
+            lambda *d: _first_alarm(*record(*d)[:3], record(*d)[3], dof=record(*d)[2] - 1),
+        ),
+        Mistake(
+            "looks like the index of the window's FIRST sample: a window belongs to its last one",
+            lambda *d: _first_alarm(*record(*d), shift=1 - record(*d)[2]),
+        ),
+    ]
 
 
 _HINT_ALARM = [
@@ -205,6 +251,7 @@ _HINT_ALARM = [
     rtol=1e-6,
     atol=1e-8,
     hint=_HINT_ALARM,
+    mistakes=_alarm_mistakes(lambda: (Y_PRACTICE, U7, 10, 0.001)),
 )
 def q5_practice():
     return _first_alarm(Y_PRACTICE, U7, 10, 0.001)
@@ -219,6 +266,7 @@ def q5_practice():
     data="record",
     properties="record_alarm_properties",
     hint=["Do q5_practice first: the same code must pass its public check there.", *_HINT_ALARM],
+    mistakes=_alarm_mistakes(lambda d: (d["y"], d["u"], d["window"], d["alpha"])),
 )
 def q5(d):
     return _first_alarm(

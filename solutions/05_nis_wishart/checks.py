@@ -8,7 +8,7 @@ import numpy as np
 from scipy import stats
 
 from course import nis
-from course.grading.checks import Checks, binomial_band
+from course.grading.checks import Checks, Mistake, binomial_band
 
 from . import data
 
@@ -118,6 +118,17 @@ q2.case(EPS_C, S_C, hidden=True)
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.consistency_interval", "course.nis.nis_critical_values"],
+    mistakes=[
+        Mistake(
+            "the poster's law: eps_bar itself is not chi2(mK) -- with the 1/K average, K times "
+            "eps_bar is",
+            lambda: (float(stats.chi2(60).ppf(0.025)), float(stats.chi2(60).isf(0.025))),
+        ),
+        Mistake(
+            "alpha not split: a two-sided 95 % interval leaves 2.5 % in each tail",
+            lambda: (float(stats.chi2(60).ppf(0.05)) / 20, float(stats.chi2(60).isf(0.05)) / 20),
+        ),
+    ],
     hint=[
         "The poster's 1/K hides a factor: is eps_bar itself chi-square, or a multiple of it?",
         "Find a two-sided interval (alpha/2 in each tail) for the chi-square variable first, "
@@ -137,6 +148,12 @@ def q3():
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.nis_matrix_critical_values"],
+    mistakes=[
+        Mistake(
+            "alpha not split: each of the two thresholds gets alpha/2",
+            lambda: tuple(float(v) for v in nis.nis_matrix_critical_values(2, 30, 0.1)),
+        ),
+    ],
     hint=[
         "Two thresholds share alpha: each tail gets half of it.",
         "The lower threshold is a quantile of the law of lambda_min (ppf), the upper one an "
@@ -154,6 +171,12 @@ def q4():
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.nis_matrix_test"],
+    mistakes=[
+        Mistake(
+            "the decision looks one-sided: thresholds at alpha instead of alpha/2",
+            lambda eps, S, alpha: q5.reference(eps, S, 2 * alpha),
+        ),
+    ],
     hint=[
         "The test of q4 at level alpha: a two-sided test with two thresholds; m and K come "
         "from eps.shape (K rows, m columns).",
@@ -199,6 +222,15 @@ def _pvalues(eps, S, alpha):
     points=1,
     rtol=1e-6,
     atol=1e-9,
+    mistakes=[
+        Mistake(
+            "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)",
+            lambda: (
+                float(stats.chi2(120).sf(np.sum(nis.nis(EPS_PRACTICE, S_PRACTICE)))),
+                _pvalues(EPS_PRACTICE, S_PRACTICE, 0.05)[1],
+            ),
+        ),
+    ],
     hint=[
         "Both p-values are two-sided: 2 min(F, 1 - F), capped at 1 for the matrix test.",
         "p_nis uses the chi2(m K) law of the NIS SUM K * eps_bar (not of the average); "
@@ -263,6 +295,12 @@ CHECKS.short_answer(
     points=2,
     timeout=30,
     forbid=["course.nis.simulate_extreme_eigenvalues", "course.nis.prob_eigenvalues_within"],
+    mistakes=[
+        Mistake(
+            "the nominal alpha: for small K the test's size is below alpha -- simulate it",
+            lambda m, K, alpha, n_runs, seed: float(alpha),
+        ),
+    ],
     hint=[
         "Simulate, do not predict: with small K the rate is not alpha (both extreme "
         "eigenvalues can fall outside at once).",
@@ -295,6 +333,12 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.consistency_interval"],
+    mistakes=[
+        Mistake(
+            "quantiles of chi2(nN) for the SUM: the run average is that sum divided by N",
+            lambda: (float(stats.chi2(200).ppf(0.025)), float(stats.chi2(200).isf(0.025))),
+        ),
+    ],
     hint=[
         "Averaging over N runs works like averaging over K steps in q3: which multiple of "
         "the average is chi-square, and with how many degrees of freedom?",

@@ -7,7 +7,7 @@ are sent to the student's function only at grading time.
 import numpy as np
 
 from course import filters, mismatched
-from course.grading.checks import Checks
+from course.grading.checks import Checks, Mistake
 from course.quadform import WeightedChiSquare
 
 from . import data
@@ -79,6 +79,15 @@ def _augmented(F0, H0, F1, H1, K):
     rtol=1e-10,
     atol=1e-12,
     forbid=_FORBID_MOMENTS,
+    mistakes=[
+        Mistake(
+            "the paper's misprint: the residual is H0 x - H1 xhat, so H~ = [H0, -H1]",
+            lambda F0, H0, F1, H1, K: (
+                q1.reference(F0, H0, F1, H1, K)[0],
+                np.hstack([np.asarray(H0, float), np.asarray(H1, float)]),
+            ),
+        ),
+    ],
     hint=[
         "The filter may have fewer states than the true model: the blocks have shapes "
         "(n0, n0), (n0, n1), (n1, n0), (n1, n1). Mind the sign in H~: r = H0 x - H1 xhat + v.",
@@ -97,6 +106,15 @@ def q1(F0, H0, F1, H1, K):
 
 
 q1.case(F0_A, H0_A, F1_A, H1_A, K_A[0], label="2 true states, 1 filter state, p = 1")
+# two filter states: the order of F1 and (I - K H1) matters (it does not for one state)
+q1.case(
+    np.array(_B0.F),
+    np.array(_B0.H),
+    np.array(_B1.F),
+    np.array(_B1.H),
+    K_B[1],
+    label="2 true states, 2 filter states, p = 2",
+)
 ### BEGIN HIDDEN TESTS
 q1.case(np.array(_B0.F), np.array(_B0.H), np.array(_B1.F), np.array(_B1.H), K_B[2], hidden=True)
 q1.case(np.array(_C0.F), np.array(_C0.H), np.array(_C1.F), np.array(_C1.H), K_C[4], hidden=True)
@@ -163,6 +181,13 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
     points=1,
     rtol=1e-9,
     atol=1e-12,
+    mistakes=[
+        Mistake(
+            "tr(P_j) would be the expectation around the TRUE mean; the sample mean is "
+            "subtracted here",
+            lambda: float(np.trace(P_Q3)),
+        ),
+    ],
     hint=[
         "The sample mean is subtracted before squaring: how many independent deviations are "
         "left out of M?",
@@ -221,6 +246,27 @@ q4.case(R_C, 6, 1, hidden=True)
     rtol=1e-7,
     atol=1e-10,
     forbid=_FORBID_TESTS,
+    mistakes=[
+        Mistake(
+            "M degrees of freedom: subtracting the sample mean leaves M - 1",
+            lambda P, M, alpha: (
+                float(
+                    WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, float)) / M, dof=M).ppf(
+                        alpha / 2
+                    )
+                ),
+                float(
+                    WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, float)) / M, dof=M).isf(
+                        alpha / 2
+                    )
+                ),
+            ),
+        ),
+        Mistake(
+            "alpha not split: a two-sided test puts alpha/2 in each tail",
+            lambda P, M, alpha: _covariance_critical_values(P, M, 2 * alpha),
+        ),
+    ],
     hint=[
         "Two-sided: alpha is split between the two tails.",
         "The weights of the weighted chi-square sum are the eigenvalues of P divided by M; "
@@ -336,6 +382,12 @@ P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
     rtol=1e-6,
     atol=1e-9,
     forbid=_FORBID_TESTS,
+    mistakes=[
+        Mistake(
+            "looks like 1 - power: the probability that the test does NOT reject",
+            lambda: 1.0 - q7.reference(),
+        ),
+    ],
     hint=[
         "Thresholds come from the NULL law (P0); the probability of crossing them from the "
         "ALTERNATIVE's law (P2). Both tails count.",
