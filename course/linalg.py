@@ -57,6 +57,7 @@ from course.validation import (
     SYMMETRY_RTOL,
     InputTypeError,
     _refuse_singular_pivots,
+    _refuse_small_pivots,
     as_count,
     as_covariance,
     as_finite,
@@ -928,7 +929,7 @@ def covariance_factor(value, name: str, size: int) -> CovarianceFactor:
     covariances, e.g. 3 x 3 blocks of GNSS baselines, have b = 2); O(m³/3)
     time and O(m²) memory for a dense one.
     """
-    m = int(size)
+    m = as_count(size, "size")
     if value is None:
         return _DiagonalFactor(np.ones(m), "identity", None)
     if sparse.issparse(value):
@@ -970,6 +971,7 @@ def covariance_factor(value, name: str, size: int) -> CovarianceFactor:
         L = sla.cholesky(matrix, lower=True, check_finite=False)
     except (LinAlgError, sla.LinAlgError):
         raise _not_positive_definite(name, "Cholesky factorisation failed") from None
+    _refuse_singular_pivots(L, diagonal, name)
     return _DenseFactor(L, "matrix", matrix)
 
 
@@ -1004,6 +1006,7 @@ def _sparse_factor(value, name: str, m: int) -> CovarianceFactor:
             L = sla.cholesky(matrix.toarray(), lower=True, check_finite=False)
         except (LinAlgError, sla.LinAlgError):
             raise _not_positive_definite(name, "Cholesky factorisation failed") from None
+        _refuse_singular_pivots(L, diagonal, name)
         return _DenseFactor(L, "sparse matrix", matrix)
     lower = rows >= cols
     band = np.zeros((bandwidth + 1, m))
@@ -1012,4 +1015,6 @@ def _sparse_factor(value, name: str, m: int) -> CovarianceFactor:
         band = sla.cholesky_banded(band, lower=True, check_finite=False)
     except (LinAlgError, sla.LinAlgError):
         raise _not_positive_definite(name, "banded Cholesky factorisation failed") from None
+    # Pivots in the reordered order, so the message's "variable i" counts in that order.
+    _refuse_small_pivots(band[0] ** 2, diagonal[perm], name)
     return _BandedFactor(band, perm, matrix)

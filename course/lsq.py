@@ -72,6 +72,7 @@ from course.linalg import (
 )
 from course.results import TestResult, decide, format_number
 from course.validation import (
+    InputTypeError,
     as_count,
     as_float_array,
     as_index,
@@ -389,8 +390,17 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     x_hat = sla.solve_triangular(R, coefficients, lower=False, check_finite=False)
     e_w = y_w - Q1 @ coefficients
     R_inv = sla.solve_triangular(R, np.eye(n), lower=False, check_finite=False)
-    Qxx = symmetrize(R_inv @ R_inv.T)
-    y_hat = A @ x_hat
+    with np.errstate(over="ignore", invalid="ignore"):
+        Qxx_raw = R_inv @ R_inv.T
+        y_hat = A @ x_hat
+    if not all(np.all(np.isfinite(v)) for v in (Qxx_raw, x_hat, y_hat)):
+        # A scaled near the limits of floating point (A * 1e-300): Qxx ~ 1/|A|^2 overflows.
+        raise ValueError(
+            "A is scaled so far from 1 that the estimate or its covariance overflows double "
+            f"precision (largest |A| = {float(np.max(np.abs(A))):.3g}); rescale the columns of A "
+            "(change the parameters' units), fit, and scale x_hat back"
+        )
+    Qxx = symmetrize(Qxx_raw)
     return LeastSquaresFit(
         A=_readonly(A),
         y=_readonly(y),
@@ -409,8 +419,9 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
 
 def _check_fit(value) -> LeastSquaresFit:
     if not isinstance(value, LeastSquaresFit):
-        raise TypeError(
-            f"expected a LeastSquaresFit (the result of course.lsq.fit), got {type(value).__name__}"
+        raise InputTypeError(
+            f"fit must be a LeastSquaresFit (the result of course.lsq.fit(A, y, Qyy)), "
+            f"got {type(value).__name__}"
         )
     return value
 
@@ -590,10 +601,7 @@ class WTestResult:
 
     def test(self, i: int) -> TestResult:
         """The w-test of observation ``i`` as a :class:`~course.results.TestResult`."""
-        m = self.w.shape[0]
-        if not -m <= int(i) < m:
-            raise IndexError(f"observation index {i} out of range for m = {m}")
-        i = int(i) % m
+        i = as_index(i, "i", self.w.shape[0], negative=True, what="observation index")
         if not self.testable[i]:
             raise ValueError(
                 f"observation {i} cannot be tested: it has no redundancy (its residual is "

@@ -429,8 +429,13 @@ def _refuse_singular_pivots(L: np.ndarray, variances: np.ndarray, name: str) -> 
     ``L`` may be a stack ``(..., m, m)`` with ``variances`` the diagonals of
     the factored matrices ``(..., m)``; the rule is :data:`SINGULAR_RTOL`.
     """
-    m = L.shape[-1]
-    pivots = np.diagonal(L, axis1=-2, axis2=-1) ** 2
+    _refuse_small_pivots(np.diagonal(L, axis1=-2, axis2=-1) ** 2, variances, name)
+
+
+def _refuse_small_pivots(pivots: np.ndarray, variances: np.ndarray, name: str) -> None:
+    """The rule of :func:`_refuse_singular_pivots` on the squared pivots ``L_ii**2`` alone
+    (a banded factor stores only its bands)."""
+    m = pivots.shape[-1]
     tolerance = SINGULAR_RTOL * m * variances
     singular = ~(pivots > tolerance)
     if not singular.any():

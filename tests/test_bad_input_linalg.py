@@ -6,6 +6,8 @@ below); the building blocks of ``course.linalg`` refuse bad arrays like every
 other public function.
 """
 
+import dataclasses
+
 import numpy as np
 from bad_input import (
     Arg,
@@ -138,6 +140,14 @@ TABLE = {
     "symmetrize": case(linalg.symmetrize, P=array(S, min_ndim=2)),
     "psd_sqrt": case(linalg.psd_sqrt, C=covariance(S, psd=True)),
     "cholesky_lower": case(linalg.cholesky_lower, matrix=covariance(S), name="matrix"),
+    "covariance_factor": case(
+        linalg.covariance_factor,
+        value=dataclasses.replace(
+            covariance(S, none_ok=True).but(drop=("1-D",)), names=("S",)
+        ),  # a 1-D value is valid: the variances of uncorrelated observations
+        name="S",
+        size=Arg(2, {"fraction": 2.5, "None": None, "text": "2", "negative": -1}),
+    ),
     "cholesky_factor": case(linalg.cholesky_factor, S=covariance(S, min_ndim=2), name="S"),
     "whiten": case(
         linalg.whiten,
@@ -202,6 +212,19 @@ EXEMPT = {
     "InputTypeError": "an exception class",
     "QRSolution": "a named tuple the library returns",
     "MinNormSolution": "a named tuple the library returns",
+    "CovarianceFactor": "built only by covariance_factor, which validates (case above)",
+    **{
+        f"CovarianceFactor.{method}": "works on arrays lsq.fit has already validated"
+        for method in (
+            "dense",
+            "diagonal",
+            "inverse_diagonal",
+            "take",
+            "whiten",
+            "whiten_transpose",
+            "whiten_unit",
+        )
+    },
 }
 
 (

@@ -1,10 +1,6 @@
 """Bad input to every public callable of course.lsq (see tests/bad_input.py).
 
-Least squares is being rewritten for network sizes (issue 15, item 1: 1-D
-variances, sparse Q_yy, thin QR), and its input checks with it; until that
-work lands, the cases today's code fails are expected failures (``XFAIL``
-below, not strict, so a fix shows as XPASS). ``lsq.noncentrality`` is
-``course.chi2.noncentrality``, tested there.
+``lsq.noncentrality`` is ``course.chi2.noncentrality``, tested there.
 """
 
 import numpy as np
@@ -37,8 +33,6 @@ def design(value=A):
 def fit_arg(value=FIT):
     return obj(value).but(array=np.eye(2))
 
-
-REASON = "lsq's input checks are rewritten with least squares for issue 15 item 1"
 
 TABLE = {
     "fit": case(lsq.fit, A=design(), y=array(Y), Qyy=covariance(QYY, none_ok=True)),
@@ -78,21 +72,7 @@ EXEMPT = {
     "WTestResult": "a result the library returns",
 }
 
-#: What today's lsq still gets wrong (measured): a fit of the wrong type raises a TypeError
-#: naming no argument, an index of WTestResult.test is not checked, and A scaled by 1e-300
-#: overflows in x_hat.
-XFAIL = {
-    **{
-        f"{name}:fit={label}": REASON
-        for name in ("overall_model_test", "w_tests", "mdb", "confidence_band")
-        for label in ("number", "text", "None", "array")
-    },
-    **{
-        f"WTestResult.test:i={label}": REASON
-        for label in ("fraction", "out of range", "None", "text")
-    },
-    "fit:A=A * 1e-300": REASON,
-}
+XFAIL: dict[str, str] = {}  # every case passes since least squares was rewritten (issue 15)
 
 (
     test_every_public_callable_has_cases,

@@ -260,6 +260,7 @@ def test_marking_file_round_trip(graded, course):
         ({"points": "3"}, "3 points for invalid q3: give between 0 and 2"),
         ({"points": "-1"}, "give between 0 and 2"),
         ({"points": "lots"}, "is not a number"),
+        ({"comment": "see me"}, "a comment but no points for invalid q3"),
         ({"answer_id": "0123456789ab", "points": "1"}, "changed since this file was written"),
     ],
 )
@@ -357,7 +358,7 @@ def test_release_writes_points_into_headers_and_the_total(course):
 
 def test_release_fails_when_header_and_checks_disagree(tmp_path):
     """Old code: the header said 3 points, checks.py 2, and nobody noticed."""
-    with pytest.raises(MarkerError, match="header of q2 states 3 point.*checks.py gives 2"):
+    with pytest.raises(MarkerError, match=r"header of q2 states 3 point.*checks\.py gives 2"):
         _course(tmp_path, _solution_cells(q2_header="## q2 (3 points): accept or reject?"))
 
 
@@ -388,3 +389,37 @@ def test_course_assignments_state_points_and_lock_cells(name):
         assert f"{q.id} ({q.points:g} point" in text, q.id
     assert f"{checks.max_points:g} points in total" in text
     assert all(c.metadata.get("deletable") is False for c in nb.cells)
+
+
+def test_selfcheck_notes_an_answer_set_outside_its_answer_cell():
+    """The kernel hears each cell's id from JupyterLab: an answer retyped in a new cell is
+    noted by the self-check (old code: PASS, and 0 points at grading)."""
+    from types import SimpleNamespace
+
+    from course.grading.items import AnswerCells
+
+    watcher = AnswerCells({"x": "q1"})
+    watcher._shell = SimpleNamespace(user_ns={})
+
+    def run(cell_id, **assign):
+        watcher._pre(SimpleNamespace(cell_id=cell_id))
+        watcher._shell.user_ns.update(assign)
+        watcher._post(None)
+
+    run("q1-answer", x=[2.0])
+    assert watcher.note("q1", "x") is None
+    run("q1-check")  # reading x does not move it
+    assert watcher.note("q1", "x") is None
+    run("3f9c2e", x=[2.0])
+    assert "x was last set in a cell that is not the answer cell of q1 (id 'q1-answer')" in (
+        watcher.note("q1", "x") or ""
+    )
+    run(None, x=[3.0])  # a front end that sends no cell ids: no guess
+    assert watcher.set_in["x"] == "3f9c2e"
+
+
+def test_submit_lists_an_unanswered_short_answer(course):
+    from course.grading.submit import unanswered_questions
+
+    assert unanswered_questions(_student(course, {"q1": "x = 2.0"})) == ["q2", "q3"]
+    assert unanswered_questions(_student(course, RIGHT)) == []

@@ -233,7 +233,7 @@ def test_w_test_per_observation_test_results():
         assert t.statistic == pytest.approx(wt.w[i]) and t.reject == wt.reject[i]
     # the largest |ê| (-10, obs 2) is not the largest |w|: the end point has less redundancy
     assert wt.rejected == [0, 1, 2, 3] and wt.largest == 3
-    with pytest.raises(IndexError):
+    with pytest.raises(ValueError, match="observation index"):
         wt.test(4)
 
 
@@ -338,7 +338,7 @@ def test_alpha_and_type_validation():
             lsq.overall_model_test(f, bad)
         with pytest.raises(ValueError, match="alpha must"):
             lsq.w_tests(f, bad)
-    with pytest.raises(TypeError, match="expected a LeastSquaresFit"):
+    with pytest.raises(TypeError, match="fit must be a LeastSquaresFit"):
         lsq.overall_model_test((A_LINE, DAY1), 0.05)
 
 

@@ -441,6 +441,7 @@ def _tiny_course(root: Path, leak: str | None) -> None:
     from course.grading.authoring import (
         answer_cell,
         check_cell,
+        md,
         new_assignment_notebook,
         setup_cell,
     )
@@ -463,6 +464,7 @@ def _tiny_course(root: Path, leak: str | None) -> None:
         "01_tiny",
         [
             setup_cell("01_tiny"),
+            md("## q1: the answer"),  # every question has a header (the release writes its points)
             answer_cell("q1", f"### BEGIN SOLUTION\n{region}\n### END SOLUTION"),
             check_cell("q1"),
         ],

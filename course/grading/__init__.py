@@ -11,6 +11,8 @@ vocabulary
     The shared words: cell roles, student IDs, protocol operations, statuses, ``checks.json``.
 checks
     The authoring vocabulary of ``checks.py`` (:class:`~course.grading.checks.Checks`).
+items, marks
+    Choice and short-answer questions; the short-answer marking file and its re-import.
 authoring
     Helpers that build solution notebooks with the right cell metadata.
 notebook

@@ -152,9 +152,9 @@ class Question:
     timeout: float | None = None
     partial: bool = True
     cases: list = field(default_factory=list)
+    mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
     options: tuple = ()  # a choice question's options
     rubric: str = ""  # a short-answer question's marking guide (instructors only)
-    mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
 
     @property
     def hints(self) -> tuple[str, ...]:

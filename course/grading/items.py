@@ -12,6 +12,7 @@ instructor marks: ``course grade`` exports every answer with the rubric into a C
 
 from __future__ import annotations
 
+import contextlib
 import math
 from typing import Any
 
@@ -20,11 +21,13 @@ from course.grading.vocabulary import QuestionKind, answer_cell_id
 __all__ = [
     "ITEM_KINDS",
     "SHORT_ANSWER_STUB",
+    "AnswerCells",
     "check_options",
     "choice_verdict",
     "is_unanswered_text",
     "match_option",
     "option_text",
+    "right_options",
     "self_check_item",
 ]
 
@@ -161,3 +164,72 @@ def self_check_item(q, got, missing) -> None:
         f"  OK: {got!r} is one of the options. Whether it is the right one is checked only at "
         "grading (the self-check never tells)."
     )
+
+
+class AnswerCells:
+    """Which notebook cell last set each answer, as the kernel saw it run.
+
+    JupyterLab (and VS Code) tell the kernel the id of every cell they run; a question's answer
+    belongs in the cell ``<qid>-answer``. The grader finds answers by that id, so a self-check
+    notes when an answer was set in another cell (typically: the answer cell was deleted and
+    the answer retyped in a new one). Only object identities of the answers' names are
+    compared before and after each cell: nothing is copied.
+    """
+
+    _active: AnswerCells | None = None  # one per kernel: re-running the setup cell replaces it
+
+    def __init__(self, targets: dict[str, str]):
+        self.targets = dict(targets)  # name -> question
+        self.set_in: dict[str, str] = {}
+        self._before: dict[str, int] = {}
+        self._cell: str | None = None
+        self._shell: Any = None
+
+    @classmethod
+    def install(cls, targets: dict[str, str]) -> AnswerCells:
+        watcher = cls(targets)
+        try:
+            from IPython import get_ipython
+        except ImportError:  # pragma: no cover - IPython is a dependency
+            return watcher
+        shell = get_ipython()
+        if shell is None:
+            return watcher
+        old = cls._active
+        if old is not None and old._shell is not None:
+            for event, callback in (("pre_run_cell", old._pre), ("post_run_cell", old._post)):
+                with contextlib.suppress(ValueError):
+                    old._shell.events.unregister(event, callback)
+        watcher._shell = shell
+        shell.events.register("pre_run_cell", watcher._pre)
+        shell.events.register("post_run_cell", watcher._post)
+        cls._active = watcher
+        return watcher
+
+    def _pre(self, info=None) -> None:
+        ns = self._shell.user_ns
+        self._cell = getattr(info, "cell_id", None)
+        self._before = {name: id(ns.get(name, _UNSET)) for name in self.targets}
+
+    def _post(self, result=None) -> None:
+        if not self._cell:
+            return  # this front end does not say which cell ran
+        ns = self._shell.user_ns
+        for name in self.targets:
+            if name in ns and id(ns[name]) != self._before.get(name):
+                self.set_in[name] = self._cell
+
+    def note(self, qid: str, name: str) -> str | None:
+        """A note when ``name`` (the answer of ``qid``) was last set outside its answer cell."""
+        cell = self.set_in.get(name)
+        if not name or cell is None or cell == answer_cell_id(qid):
+            return None
+        return (
+            f"  Note: {name} was last set in a cell that is not the answer cell of {qid} "
+            f"(id {answer_cell_id(qid)!r}). If you deleted that cell, undo it (Edit → Undo "
+            "Cell Operation, or z), or keep the answer where it is: the grader then grades the "
+            "cell that sets it, and tells your instructor that the answer cell is missing."
+        )
+
+
+_UNSET = object()

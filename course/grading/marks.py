@@ -36,6 +36,7 @@ __all__ = [
     "load_marks",
     "parse_marks_csv",
     "save_marks",
+    "short_questions",
     "unimported_edits",
     "validate_marks",
     "write_short_answers",
@@ -66,6 +67,7 @@ def answer_id(text: str) -> str:
 
 
 def short_questions(checks) -> dict:
+    """The short-answer questions of ``checks``, by id."""
     return {q.id: q for q in checks.questions.values() if q.kind == QuestionKind.SHORT_ANSWER}
 
 
@@ -148,7 +150,8 @@ def parse_marks_csv(path: Path, checks) -> dict:
     line}}. Rows with blank points are not marked yet and skipped. :class:`MarksError` lists
     unknown questions, bad or out-of-range points and repeated rows."""
     shorts = short_questions(checks)
-    errors, out = [], {}
+    errors: list[str] = []
+    out: dict[tuple[str, str], dict] = {}
     for line, r in _read_rows(path):
         sid, qid = _unquote(r.get("student", "")), _unquote(r.get("question", ""))
         if not sid and not qid and not any((v or "").strip() for v in r.values() if v):
@@ -165,6 +168,11 @@ def parse_marks_csv(path: Path, checks) -> dict:
             errors.append(f"line {line}: points {r.get('points')!r} is not a number")
             continue
         if points is None:
+            if _unquote(r.get("comment") or ""):
+                errors.append(
+                    f"line {line}: a comment but no points for {sid} {qid}: give the points "
+                    "(0 is fine) or clear the comment"
+                )
             continue
         top = shorts[qid].points
         if not (math.isfinite(points) and 0 <= points <= top):
@@ -190,7 +198,8 @@ def parse_marks_csv(path: Path, checks) -> dict:
 def validate_marks(path: Path, entries: dict, rows: dict) -> dict:
     """Check ``entries`` against the graded ``rows`` (student -> row): unknown students, answers
     not given or changed since the file was written. Returns the marks to keep."""
-    errors, marks = [], {}
+    errors: list[str] = []
+    marks: dict[str, dict] = {}
     for (sid, qid), entry in sorted(entries.items(), key=lambda kv: kv[1]["line"]):
         line = entry["line"]
         row = rows.get(sid)

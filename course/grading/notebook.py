@@ -281,8 +281,8 @@ def points_cell_text(questions: dict) -> str:
         )
     if kinds & {str(QuestionKind.VALUE), str(QuestionKind.CHOICE)}:
         lines.append(
-            "- A value or a choice is right (all its points) or not (none), within the stated "
-            "tolerance."
+            "- A value (within its stated tolerance) or a choice is either right, for all its "
+            "points, or not, for none."
         )
     if str(QuestionKind.SHORT_ANSWER) in kinds:
         lines.append(
@@ -290,8 +290,8 @@ def points_cell_text(questions: dict) -> str:
             "any part of its points may be given."
         )
     lines.append(
-        "- A question whose answer cell raises an error, runs too long or uses a forbidden "
-        "function earns 0 for that question only."
+        "- An answer that runs too long, crashes or uses a forbidden function earns 0 for its "
+        "question; the other questions are graded as usual."
     )
     lines += [
         "",

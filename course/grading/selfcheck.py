@@ -25,7 +25,7 @@ from typing import Any
 
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, compare, describe
-from course.grading.items import ITEM_KINDS, self_check_item
+from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
 from course.grading.personal import PersonalData
 from course.grading.tripwire import wrap_forbidden
@@ -109,6 +109,8 @@ class Assignment:
         self._failures: dict[str, int] = {}  # failed self-checks per question: hint stage
         # a graded class's data, issued by the instructor (None: drawn here from data.py)
         self.personal = PersonalData.read(folder) if data_module is None else None
+        # which cell set each answer (notes an answer set outside its answer cell)
+        self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -192,6 +194,14 @@ class Assignment:
 
     def _check(self, qid, ns, value, explicit) -> float:
         """Print the self-check of ``qid``; return the points its public checks give."""
+        earned = self._check_one(qid, ns, value, explicit)
+        q = self._questions.get(qid)
+        note = self._cells.note(qid, q.target) if q is not None and not explicit else None
+        if note:
+            print(note)
+        return earned
+
+    def _check_one(self, qid, ns, value, explicit) -> float:
         if qid not in self._questions:
             print(
                 f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
@@ -272,12 +282,11 @@ class Assignment:
             if verdict.ok:
                 print("  PASS")
                 return 1.0
-            else:
-                print("  FAIL")
-                hint = self._failed(q)
-                if hint:
-                    print(f"      {hint}")
-                print(f"      {verdict.message}")
+            print("  FAIL")
+            hint = self._failed(q)
+            if hint:
+                print(f"      {hint}")
+            print(f"      {verdict.message}")
             return 0.0
         # private value (per-student or not public): type/shape, then public properties
         results = []
@@ -305,7 +314,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func) -> float | None:
+    def _check_function(self, q, func):  # -> the fraction of public cases that count
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import inspect
 import json
 import logging as std_logging
 import pkgutil
@@ -67,8 +68,14 @@ def _is_module(dotted: str) -> bool:
 
 
 def public_members(module_name: str) -> list[str]:
+    """The names of ``__all__`` to document on the module's page.
+
+    A submodule listed in ``__all__`` (``course.plotting.style``) has its own page; documenting
+    it here too would describe the same object twice.
+    """
     module = importlib.import_module(module_name)
-    return sorted(getattr(module, "__all__", []))
+    names = getattr(module, "__all__", [])
+    return sorted(n for n in names if not inspect.ismodule(getattr(module, n, None)))
 
 
 def _write_if_changed(path: Path, text: str) -> None:
