@@ -308,3 +308,118 @@ def test_right_answers_pass_every_public_check(name):
     for qid, label, out in run_self_checks(name):
         if label.startswith("right") and "PASS" in out:
             assert "FAIL" not in out, f"{name} {qid} ({label}):\n{out}"
+
+
+# -- the grading feedback a student receives -----------------------------------------------
+_WRONG_HELPER = """\
+import numpy as _np
+
+
+def _wrong(v):  # a plausible wrong answer of the same type: floats doubled, ints + 1, ...
+    if isinstance(v, (bool, _np.bool_)):
+        return not v
+    if isinstance(v, (int, _np.integer)):
+        return int(v) + 1
+    if isinstance(v, (float, _np.floating)):
+        return float(v) * 2.0
+    if isinstance(v, _np.ndarray):
+        return {"b": lambda: ~v, "i": lambda: v + 1, "u": lambda: v + 1}.get(
+            v.dtype.kind, lambda: v * 2.0
+        )()
+    if isinstance(v, tuple):
+        return tuple(_wrong(x) for x in v)
+    if isinstance(v, list):
+        return [_wrong(x) for x in v]
+    if isinstance(v, dict):
+        return {k: _wrong(x) for k, x in v.items()}
+    if isinstance(v, str):
+        return v.lower() + "x"
+    return v
+"""
+
+
+def _wrong_submission(name: str):
+    """The solution notebook with every answer made wrong by a cell the student added."""
+    import nbformat
+
+    from course.grading.checks import load_checks
+
+    checks = load_checks(ROOT / "solutions" / name)
+    nb = nbformat.read(ROOT / "solutions" / name / f"{name}.ipynb", as_version=4)
+    cells = []
+    for cell in nb.cells:
+        cells.append(cell)
+        meta = cell.get("metadata", {}).get("course", {})
+        if meta.get("role") == "setup":
+            cells.append(nbformat.v4.new_code_cell(_WRONG_HELPER))
+        qid = meta.get("question") if meta.get("role") == "answer" else None
+        if qid in checks.questions:
+            q = checks.questions[qid]
+            t = q.target
+            if q.kind == "value":
+                source = f"{t} = _wrong({t})"
+            else:
+                source = (
+                    f"_right_{t} = {t}\n\n\ndef {t}(*args, **kwargs):\n"
+                    f"    return _wrong(_right_{t}(*args, **kwargs))"
+                )
+            cells.append(nbformat.v4.new_code_cell(source))
+    nb.cells = cells
+    return nb, checks
+
+
+def _graded_values(checks, sid: str) -> list:
+    """The expected values of every case the grader checks for ``sid`` (hidden and personal)."""
+    out: list = []
+    for q in checks.questions.values():
+        if q.kind == "function":
+            for case in q.cases:
+                _leaves(q.expected(case), out)
+        elif q.data is not None:
+            _leaves(q.expected(data=checks.data_for(q.data, sid)), out)
+        else:
+            _leaves(q.expected(), out)
+    return out
+
+
+def test_grading_feedback_shows_no_expected_value(tmp_path):
+    """Wrong answers to every question of every assignment, graded: the student's feedback
+    file names what is wrong without any expected value (public, hidden or personal); the
+    instructor's results.jsonl keeps expected and got."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import nbformat
+
+    from course.grading.driver import GradeOptions, grade
+
+    def graded(name):
+        nb, checks = _wrong_submission(name)
+        subs = tmp_path / name / "subs"
+        subs.mkdir(parents=True)
+        nbformat.write(nb, subs / "s-wrong.ipynb")
+        out = tmp_path / name / "out"
+        grade(ROOT / "solutions" / name, subs, out, GradeOptions(jobs=1, progress=False))
+        text = (out / "feedback" / "s-wrong.md").read_text("utf-8")
+        row = json.loads((out / "results.jsonl").read_text().splitlines()[-1])
+        return name, checks, text, row
+
+    found, details = [], 0
+    with ThreadPoolExecutor(max_workers=2) as pool:  # two assignments at a time (2 cores)
+        results = list(pool.map(graded, ASSIGNMENTS))
+    for name, checks, text, row in results:
+        assert row["total"] < row["max"], (name, row["total"])
+        details += sum(
+            "expected" in case.get("detail", "")
+            for r in row["questions"].values()
+            for case in r["cases"]
+        )
+        patterns = {p for leaf in _graded_values(checks, "s-wrong") for p in _patterns(leaf)}
+        regexes = [(p, _number_regex(p)) for p in sorted(patterns)]
+        for line in text.splitlines():
+            if _EXPECTED_VALUE.search(line):
+                found.append(f"{name}: {line.strip()[:160]}")
+            found += [
+                f"{name}: shows {p}: {line.strip()[:160]}" for p, r in regexes if r.search(line)
+            ]
+    assert not found, f"{len(found)} leak(s):\n" + "\n".join(found[:40])
+    assert details > 0  # the instructor's records do say what was expected

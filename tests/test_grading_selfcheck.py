@@ -9,8 +9,11 @@ import sys
 import textwrap
 from pathlib import Path
 
+import hypothesis.extra.numpy as hnp
+import hypothesis.strategies as st
 import numpy as np
 import pytest
+from hypothesis import given, settings
 from scipy.stats import chi2
 
 from course.grading.checks import load_checks, student_rng
@@ -100,6 +103,9 @@ def test_compare_reports_shape_where_and_tolerance_never_the_expected_value():
         (2.0, "2.0", "expected a float, got a string"),
         (np.array([True, False]), np.array([False, True]), "every decision is the opposite"),
         (np.array([2.0, 3.0]), np.array([4.0, 9.0]), "the square"),
+        (np.array([12.0, 3.0]), np.array([0.0, 0.0]), "all zeros"),
+        (12.0, 0.0, "all zeros"),
+        (np.array([12.0, 0.0]), np.array([5.0, 1.0]), "not within the tolerance"),
     ],
 )
 def test_compare_names_the_kind_of_wrong(expected, got, words):
@@ -389,3 +395,146 @@ def test_public_spec_round_trips_the_committed_checks_json():
         spec = PublicSpec.loads(text)
         assert spec.assignment == folder.name and spec.questions
         assert spec.text() == text
+
+
+# -- declared mistakes and forbidden calls (issue 13) ----------------------------------------
+_MISTAKE_CHECKS = """
+from scipy.stats import norm
+
+from course.grading.checks import Checks, Mistake
+
+CHECKS = Checks("mistakes_demo")
+
+
+@CHECKS.value(
+    "q1",
+    var="z",
+    points=1,
+    hint=["Two-sided: alpha is split.", "z = norm.isf(alpha / 2)"],
+    mistakes=[Mistake("looks one-sided: z_alpha instead of z_alpha/2", lambda: norm.isf(0.05))],
+    forbid=["scipy.stats.norm"],
+)
+def q1():
+    return norm.isf(0.025)
+
+
+q2 = CHECKS.function(
+    "q2",
+    func="crit",
+    points=1,
+    mistakes=[Mistake("looks one-sided", lambda alpha: norm.isf(alpha))],
+    forbid=["course.lsq.fit"],
+)(lambda alpha: norm.isf(alpha / 2))
+q2.case(0.05)
+q2.case(0.01, hidden=True)
+"""
+
+
+@pytest.fixture()
+def mistakes_demo(tmp_path):
+    from course.grading.release import public_spec
+    from course.grading.vocabulary import PublicSpec
+
+    folder = tmp_path / "mistakes_demo"
+    folder.mkdir()
+    (folder / "checks.py").write_text(_MISTAKE_CHECKS)
+    checks = load_checks(folder)
+    spec = PublicSpec.loads(public_spec(checks).text())
+    return checks, spec, Assignment(spec, folder, "s1")
+
+
+def test_declared_mistakes_ship_for_public_cases_and_are_named(mistakes_demo, capsys):
+    from scipy.stats import norm
+
+    checks, spec, check = mistakes_demo
+    assert spec.question("q1").cases[0].mistakes[0][0].startswith("looks one-sided")
+    assert spec.question("q1").hint == ["Two-sided: alpha is split.", "z = norm.isf(alpha / 2)"]
+    assert len(spec.question("q2").cases) == 1  # the hidden case's mistake stays private
+    check("q1", norm.isf(0.05))
+    out = capsys.readouterr().out
+    assert "z: looks one-sided: z_alpha instead of z_alpha/2" in out
+    assert "Hint 1 of 2" in out and "1.95996" not in out and "1.64485" not in out
+    check("q2", lambda alpha: float(norm.isf(alpha)))
+    assert "value: looks one-sided" in capsys.readouterr().out
+    check("q1", norm.isf(0.025))
+    assert "PASS" in capsys.readouterr().out
+    # the grader names the mistake of every case, hidden ones included
+    wrong = checks.questions["q2"].mistaken(checks.questions["q2"].hidden_cases[0])
+    assert wrong[0][0] == "looks one-sided" and wrong[0][1] == pytest.approx(norm.isf(0.01))
+
+
+def test_mistake_and_hint_arguments_are_validated():
+    from course.grading.checks import Checks, Mistake
+
+    with pytest.raises(ValueError, match="message must be a non-empty string"):
+        Mistake("", lambda: 1.0)
+    with pytest.raises(ValueError, match="reference must be a function"):
+        Mistake("m", 1.0)
+    c = Checks("x")
+    with pytest.raises(ValueError, match="mistakes=\\[Mistake"):
+        c.value("q1", var="v", points=1, mistakes=["not a Mistake"])(lambda: 1.0)
+    with pytest.raises(ValueError, match="hint stages must be non-empty strings"):
+        c.value("q2", var="w", points=1, hint=["nudge", ""])(lambda: 1.0)
+    from course.grading import Mistake as exported
+
+    assert exported is Mistake
+
+
+def test_a_forbidden_call_fails_the_self_check(mistakes_demo, capsys):
+    from course import lsq
+
+    _, _, check = mistakes_demo
+
+    def crit(alpha):  # right values, through a forbidden library function
+        lsq.fit(np.ones((2, 1)), np.ones(2))
+        from scipy.stats import norm
+
+        return float(norm.isf(alpha / 2))
+
+    check("q2", crit)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer uses course.lsq.fit" in out and "scores 0 at grading" in out
+    assert "PASS" not in out and "Warning" not in out
+    # a value question: the answer cell (IPython's input history) is scanned like the grader does
+    from scipy.stats import norm
+
+    namespace = {
+        "z": norm.isf(0.025),
+        "In": ["", "from scipy.stats import norm\nz = norm.isf(0.025)"],
+    }
+    check._check("q1", namespace, None, False)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer uses scipy.stats.norm" in out and "PASS" not in out
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    expected=hnp.arrays(
+        np.float64,
+        hnp.array_shapes(min_dims=0, max_dims=2, max_side=4),
+        elements=st.floats(-1e6, 1e6, allow_nan=False).filter(lambda x: abs(x) > 1e-3),
+    ),
+    how=st.sampled_from(["double", "negate", "shift", "reverse", "transpose", "noise", "zero"]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_compare_never_shows_an_expected_number(expected, how, seed):
+    """Whatever the wrong answer, the student's message carries no expected element (at 6
+    significant digits or as repr), and a diagnosis never breaks the verdict."""
+    rng = np.random.default_rng(seed)
+    got = {
+        "double": lambda e: 2.0 * e,
+        "negate": lambda e: -e,
+        "shift": lambda e: e + 1.0,
+        "reverse": lambda e: e[::-1] if e.ndim else e,
+        "transpose": lambda e: e.T,
+        "noise": lambda e: e * (1 + rng.uniform(1e-6, 1e-2, e.shape)),
+        "zero": np.zeros_like,
+    }[how](expected)
+    v = compare(expected, got, rtol=1e-9, atol=1e-12)
+    if v.ok:
+        return
+    for x in np.atleast_1d(expected).ravel():
+        digits = f"{abs(x):.6e}".split("e")[0].replace(".", "").rstrip("0")
+        if len(digits) >= 4:  # a number with some digits: its printed forms must not show
+            for text in (f"{x:.6g}", repr(float(x))):
+                assert text not in v.message, (text, v.message)

@@ -186,6 +186,14 @@ def _factor_text(r: float, frac: Fraction | None) -> str:
 
 
 def _diagnose(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
+    """:func:`_kind_of_wrong`, or '' should it fail: a diagnosis must never break a verdict."""
+    try:
+        return _kind_of_wrong(e, g, rtol, atol)
+    except Exception:
+        return ""
+
+
+def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
     """What kind of wrong ``g`` is against ``e`` (same shape, not close); '' when unknown.
 
     Never names a value of ``e``: only relations (sign, factor, order, transpose, off by one,
@@ -225,12 +233,15 @@ def _diagnose(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
             "tolerance (rounded, or a printed number typed in?)"
         )
     nonzero = np.abs(ef) > atol
+    if bool(np.any(nonzero)) and bool(np.all(gf == 0)):
+        return "all zeros (a result never filled in?)"
     if bool(np.any(nonzero)) and bool(np.all(np.abs(gf[~nonzero]) <= atol)):
         with np.errstate(divide="ignore", invalid="ignore"):
             ratios = gf[nonzero] / ef[nonzero]
         r = float(np.median(ratios))
         if (
             math.isfinite(r)
+            and r != 0
             and abs(abs(r) - 1) > 1e-3
             and _close(r * ef, gf, lo_rtol, atol * abs(r))
         ):
@@ -356,7 +367,7 @@ def _compare_numbers(exp: np.ndarray, arr: np.ndarray, expected, got, rtol, atol
         sub = _diagnose(e[bad], g[bad], rtol, atol)
         kind = f"on the wrong elements {sub}" if sub else ""
     kind = kind or "not within the tolerance"
-    return Verdict(False, f"{label}: {count}{kind} ({tolerance})", detail)
+    return Verdict(False, f"{label}: {count}{kind}; {tolerance}", detail)
 
 
 def _match_mistake(mistakes, got, rtol, atol) -> str | None:
@@ -396,7 +407,7 @@ def compare(
     Examples
     --------
     >>> compare(2.0, 4.0).message
-    'value: too large by a factor ≈ 2.0 (tolerance |got - expected| <= atol 0 + rtol 1e-07·|expected|)'
+    'value: too large by a factor ≈ 2.0; tolerance |got - expected| <= atol 1e-09 + rtol 1e-07·|expected|'
     """
     verdict = _compare(expected, got, rtol, atol, path)
     if verdict.ok:
