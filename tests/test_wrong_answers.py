@@ -96,24 +96,40 @@ def load_spec(path: Path) -> Spec:
     )
 
 
+def _closure(depends: dict) -> dict[str, set]:
+    """Every question each question depends on, directly or through another answer."""
+    out: dict[str, set] = {}
+
+    def visit(q: str, seen: set) -> set:
+        if q not in out:
+            deps: set = set()
+            for p in depends.get(q, []):
+                if p not in seen:
+                    deps |= {p} | visit(p, seen | {p})
+            out[q] = deps
+        return out[q]
+
+    for q in depends:
+        visit(q, {q})
+    return out
+
+
 def pack(spec: Spec) -> list[dict[str, Variant]]:
     """First-fit packing of the variants into notebooks (one variant per question per notebook).
 
-    A variant of q joins a notebook only when every question q depends on is absent or right
-    there, and a wrong variant only when no question depending on it is graded there.
+    A variant of q joins a notebook only when every question q depends on (directly or not) is
+    absent or right there, and a wrong variant only when no question depending on it is graded
+    there.
     """
-    dependents: dict[str, set] = {}
-    for q, deps in spec.depends.items():
-        for p in deps:
-            dependents.setdefault(p, set()).add(q)
+    needs = _closure(spec.depends)
     batches: list[dict[str, Variant]] = []
     for v in spec.variants:
         for batch in batches:
             if v.qid in batch:
                 continue
-            if any(p in batch and not batch[p].right for p in spec.depends.get(v.qid, [])):
+            if any(p in batch and not batch[p].right for p in needs.get(v.qid, ())):
                 continue
-            if not v.right and dependents.get(v.qid, set()) & set(batch):
+            if not v.right and any(v.qid in needs.get(r, ()) for r in batch):
                 continue
             batch[v.qid] = v
             break
@@ -221,17 +237,17 @@ def test_packing_respects_dependencies():
     spec = Spec(
         "x",
         "s",
-        {"q6": ["q3"]},
-        {"q3": [("w3", "")], "q6": [("w6a", ""), ("w6b", "")]},
-        {"q3": [("r3", "")], "q6": [("r6", "")]},
+        {"q6": ["q3"], "q7": ["q6"]},
+        {"q3": [("w3", "")], "q6": [("w6a", ""), ("w6b", "")], "q7": [("w7", "")]},
+        {"q3": [("r3", "")], "q6": [("r6", "")], "q7": [("r7", "")]},
         [],
     )
     batches = pack(spec)
     for batch in batches:
-        if "q6" in batch and "q3" in batch:
-            assert batch["q3"].right
-    assert sum(len(b) for b in batches) == 5
-    assert len(batches) <= 4  # first fit; 3 would be optimal
+        for q, p in (("q6", "q3"), ("q7", "q6"), ("q7", "q3")):  # q7 needs q3 through q6
+            if q in batch and p in batch:
+                assert batch[p].right, batch
+    assert sum(len(b) for b in batches) == 7
 
 
 def _natural(qid: str) -> list:

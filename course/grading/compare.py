@@ -532,6 +532,9 @@ def signature(value: Any) -> Any:
         return {"none": True}
     if isinstance(value, str):
         return {"str": True}
+    if isinstance(value, (tuple, list)) and value and all(isinstance(v, str) for v in value):
+        # a list of names (a diagnosis): its length is part of the answer, not of its type
+        return {"names": True}
     if isinstance(value, (tuple, list)):
         fields = getattr(type(value), "_fields", None)
         if isinstance(fields, tuple) and len(fields) == len(value):
@@ -559,6 +562,11 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
         return Verdict(
             isinstance(got, str),
             "" if isinstance(got, str) else f"{label}: expected a string, got {describe(got)}",
+        )
+    if "names" in sig:
+        ok = isinstance(got, (tuple, list)) and all(isinstance(v, str) for v in got)
+        return Verdict(
+            ok, "" if ok else f"{label}: expected a list of strings, got {describe(got)}"
         )
     if "sequence" in sig:
         items = sig["sequence"]

@@ -443,6 +443,8 @@ def _answer_source(ns: dict, target: str) -> str | None:
 def _sig_text(sig) -> str:
     if "kind" in sig:
         return f"{sig['kind']}" + (f", shape {tuple(sig['shape'])}" if sig["shape"] else " scalar")
+    if "names" in sig:
+        return "a list of strings"
     if "sequence" in sig:
         return f"sequence of {len(sig['sequence'])}"
     if "dict" in sig:

@@ -41,7 +41,7 @@ _Q8_HEAD = """def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):
     m, n = A.shape
     L = np.linalg.cholesky(Qyy)
 """
-_Q8_SIM = """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_normal((m, n_runs))
+_Q8_SIM = """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_normal((n_runs, m)).T
     A_w = linalg.solve_triangular(L, A, lower=True)
     Y_w = linalg.solve_triangular(L, Y, lower=True)
     X = np.linalg.lstsq(A_w, Y_w, rcond=None)[0]
@@ -254,11 +254,29 @@ suspect_mine = int(snooping.removed[0])
         (
             "Qyy ignored in the test",
             _Q8_HEAD
-            + """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_normal((m, n_runs))
+            + """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_normal((n_runs, m)).T
     X = np.linalg.lstsq(A, Y, rcond=None)[0]
     T = np.sum((Y - A @ X) ** 2, axis=0)
     return float(np.mean(T > stats.chi2.isf(alpha, m - n)))
 """,
+        ),
+        (
+            "the exact probability (ncx2), not a simulation",
+            """def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    lam = lsq.fit(A, np.asarray(bias, dtype=float), Qyy).squared_norm
+    c = stats.chi2.isf(alpha, m - n)
+    return float(stats.ncx2.sf(c, m - n, lam)) if lam > 0 else float(alpha)
+""",
+        ),
+        (
+            "noise drawn as (m, n_runs): another random sample",
+            _Q8_HEAD
+            + _Q8_SIM.replace(
+                "rng.standard_normal((n_runs, m)).T", "rng.standard_normal((m, n_runs))"
+            )
+            + "    return float(np.mean(T > stats.chi2.isf(alpha, m - n)))\n",
         ),
         (
             "count of rejections, not the fraction",
