@@ -357,7 +357,7 @@ def _wrong_submission(name: str):
         if meta.get("role") == "setup":
             cells.append(nbformat.v4.new_code_cell(_WRONG_HELPER))
         qid = meta.get("question") if meta.get("role") == "answer" else None
-        if qid in checks.questions:
+        if qid in checks.questions and checks.questions[qid].kind in ("value", "function"):
             q = checks.questions[qid]
             t = q.target
             if q.kind == "value":
@@ -376,6 +376,8 @@ def _graded_values(checks, sid: str) -> list:
     """The expected values of every case the grader checks for ``sid`` (hidden and personal)."""
     out: list = []
     for q in checks.questions.values():
+        if q.kind not in ("value", "function"):  # choices and short answers: no number
+            continue
         if q.kind == "function":
             for case in q.cases:
                 _leaves(q.expected(case), out)

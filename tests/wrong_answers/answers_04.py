@@ -207,7 +207,7 @@ WRONG = {
             + f"alarm = (thr, {_FIRST.format(T='T_mine', thr='thr')} - (L - 1))",
         ),
         ("the demo student's answer hard-coded", f"alarm = {DEMO_ALARM}"),
-        ("the practice answer hard-coded", "alarm = (29.58829844507442, 123)"),
+        ("the practice answer hard-coded", "alarm = (29.58829844507442, 121)"),
         (
             "one-sided mix-up: alpha/2",
             _Q5_T
