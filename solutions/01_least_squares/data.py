@@ -20,11 +20,14 @@ def survey(rng):
     A = np.column_stack([np.ones(m), t])
     x_true = np.array([rng.uniform(10.0, 20.0), rng.uniform(-0.5, 0.5)])
     sigma = rng.uniform(0.5, 1.5, size=m)
-    k, j = (int(i) for i in rng.choice(np.arange(1, m - 1), size=2, replace=False))
-    sigma[k] = rng.uniform(0.3, 0.4)  # not an end point, where redundancy is lowest
-    sigma[j] = rng.uniform(2.5, 3.0)
+    # the blunder sits in the middle third, where even a precise observation keeps enough
+    # redundancy for the w-test to see it (near the ends the line would follow it)
+    k = int(rng.integers(m // 3, m - m // 3))
+    j = int(rng.choice([i for i in range(1, m - 1) if i != k]))
+    sigma[k] = rng.uniform(0.35, 0.45)
+    sigma[j] = rng.uniform(2.8, 3.2)
     noise = sigma * rng.standard_normal(m)
-    noise[j] = rng.choice([-1.0, 1.0]) * rng.uniform(1.8, 2.2) * sigma[j]
+    noise[j] = rng.choice([-1.0, 1.0]) * rng.uniform(2.0, 2.4) * sigma[j]
     noise[k] = rng.choice([-1.0, 1.0]) * rng.uniform(8.0, 10.0) * sigma[k]
     y = A @ x_true + noise
     return {

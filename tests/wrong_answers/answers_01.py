@@ -8,12 +8,12 @@ docstring of tests/test_wrong_answers.py).
 
 ASSIGNMENT = "01_least_squares"
 STUDENT = "wa01"
-DEPENDS = {"q6": ["q3"], "q6_practice": ["q3"]}
+DEPENDS = {"q6": ["q3"], "q6_practice": ["q3"], "q6b": ["q6"]}
 
 # The demo student's personal answers, as a student copying them from a classmate's screen
 # (or from the solution run as "demo") would hard-code them.
-DEMO_T = "76.50528606174365"
-DEMO_SUSPECT = "3"
+DEMO_T = "65.20560537845853"
+DEMO_SUSPECT = "6"
 
 _Q3_HEAD = """def overall_model_test_stat(A, y, Qyy, alpha):
     A = np.asarray(A, dtype=float)
@@ -285,6 +285,9 @@ suspect_mine = int(snooping.removed[0])
     ],
 }
 
+WRONG["q6b"] = [
+    ("the decision read backwards", 'verdict_mine = "accepted" if reject_mine else "rejected"'),
+]
 WRONG["q6_practice"] = [
     (
         "unweighted T (Qyy ignored)",
@@ -427,6 +430,12 @@ suspect_mine = int(np.argmax(np.abs(res.w)))
         ),
     ],
 }
+RIGHT["q6b"] = [
+    (
+        "own comparison, capitalised",
+        'verdict_mine = "Rejected" if T_mine > stats.chi2.isf(mine["alpha"], 10) else "Accepted"',
+    ),
+]
 RIGHT["q6_practice"] = [
     (
         "lsq",
