@@ -41,10 +41,10 @@ def _record_with_eigenvalues(targets, S, rng):
     alpha/2, where a one-sided test and the two-sided test disagree.
     """
     K, m = targets[0], len(targets[1])
-    z = rng.standard_normal((K, m))
-    lam, V = np.linalg.eigh(z.T @ z / K)
-    z = z @ V @ np.diag(np.sqrt(np.asarray(targets[1]) / lam)) @ V.T
-    return z @ np.linalg.cholesky(np.asarray(S, dtype=float)).T
+    white = rng.standard_normal((K, m))
+    lam, V = np.linalg.eigh(white.T @ white / K)
+    white = white @ V @ np.diag(np.sqrt(np.asarray(targets[1]) / lam)) @ V.T
+    return white @ np.linalg.cholesky(np.asarray(S, dtype=float)).T
 
 
 # m = 2, K = 12, alpha = 0.05: thresholds (0.2377, 2.3303) at alpha/2, (0.2834, 2.1343) at alpha.
