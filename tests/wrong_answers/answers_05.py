@@ -209,7 +209,9 @@ WRONG = {
             'which_rejects = ["neither", "only the NIS test", "only the matrix test", "both"][\n'
             '    int(p_nis > mine["alpha"]) + 2 * int(p_matrix > mine["alpha"])]',
         ),
-        ("the demo student's verdict hard-coded", 'which_rejects = "only the matrix test"'),
+        # The demo student's verdict hard-coded is not listed: with four options it is the
+        # right verdict for a share of the class, and a copied choice that happens to be
+        # right cannot be told from a right one (q6 grades the p-values behind it).
     ],
     "q7": [
         ("the nominal alpha (no simulation)", _Q7 + "    return alpha\n"),
