@@ -1,7 +1,7 @@
 """The batch grader against a hostile class: every bad submission gets the right status and the
 right points for its honest parts, and nothing escapes OUT.
 
-All submissions are variations of the 01_least_squares solution (14 points, 8 questions), graded
+All submissions are variations of the 01_least_squares solution (17 points, 11 questions), graded
 in ONE run (2 jobs, 3 s per question) so the suite stays fast. The assignment is graded from a
 copy of the course in a temporary folder that also holds secrets (a file beside checks.py, a
 file in a fake $HOME, another student's notebook): the attacks of issue 11 try to read them
@@ -31,8 +31,20 @@ from course.grading.driver import GradeOptions, grade
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
 SOLUTION_DIR = ROOT / "solutions" / NAME
-FULL = 14.0
-POINTS = {"q1": 1, "q2": 1, "q3": 3, "q4": 3, "q5": 1, "q6": 2, "q7": 1, "q8": 2}
+FULL = 17.0
+POINTS = {
+    "q1": 1,
+    "q2": 1,
+    "q3": 3,
+    "q4": 3,
+    "q5": 1,
+    "q6_practice": 1,
+    "q7_practice": 1,
+    "q6": 2,
+    "q6b": 1,
+    "q7": 1,
+    "q8": 2,
+}
 TIMEOUT = 3.0
 
 
@@ -207,7 +219,7 @@ def _submissions(env) -> dict[str, object]:
     subs["copied_numbers"] = _with_answer(
         "q6", "T_mine = 76.50528606174367  # the demo student's value"
     )
-    # a Monte Carlo answer that does not simulate: right under H0, wrong for every biased case
+    # a Monte Carlo answer that does not simulate: what the test promises, not what it does
     subs["constant_rate"] = _with_answer(
         "q8", ("def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n    return alpha")
     )
@@ -521,8 +533,12 @@ def test_infinite_loop_costs_only_its_question(graded):
 
 
 def test_sigint_ignoring_loop_is_killed(graded):
-    # q6 calls the student's own q3 function, so it loops too; the rest is unaffected
-    _expect(graded["rows"]["ignores_sigint"], {"q3": "timeout", "q6": "timeout"})
+    # q6 and q6_practice call the student's own q3 function, so they loop too, and q6b reads
+    # q6's decision; the rest is unaffected
+    _expect(
+        graded["rows"]["ignores_sigint"],
+        {"q3": "timeout", "q6": "timeout", "q6_practice": "timeout", "q6b": None},
+    )
 
 
 def test_os_exit_is_a_crash_of_that_question(graded):
@@ -606,17 +622,18 @@ def test_forbidden_calls(graded):
 
 
 def test_copied_numbers_fail_per_student_question(graded):
-    _expect(graded["rows"]["copied_numbers"], {"q6": "fail"})
+    # q6b reads the decision of q6's cell, which the copied number replaced
+    _expect(graded["rows"]["copied_numbers"], {"q6": "fail", "q6b": None})
 
 
-def test_monte_carlo_band_is_not_fooled_by_returning_alpha(graded):
+def test_monte_carlo_is_not_fooled_by_returning_alpha(graded):
+    """q8 repeats the student's seeded simulation (issue 13): alpha is not a simulated rate,
+    not even under H0, where it used to pass three cases of six."""
     row = graded["rows"]["constant_rate"]
     assert all(row["questions"][q]["points"] == pts for q, pts in POINTS.items() if q != "q8")
     q8 = row["questions"]["q8"]
-    passed = [c["ok"] for c in q8["cases"]]
-    assert len(passed) == 6 and sum(passed) == 3  # the three cases without a bias
-    assert q8["status"] == "partial" and q8["points"] == pytest.approx(1.0)
-    assert not q8["cases"][1]["ok"] and "outside the accepted" in q8["cases"][1]["message"]
+    assert len(q8["cases"]) == 6 and not any(c["ok"] for c in q8["cases"])
+    assert q8["status"] == "fail" and q8["points"] == 0
 
 
 def test_broken_files(graded):

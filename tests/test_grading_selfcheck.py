@@ -9,8 +9,12 @@ import sys
 import textwrap
 from pathlib import Path
 
+import hypothesis.extra.numpy as hnp
+import hypothesis.strategies as st
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from scipy.stats import chi2
 
 from course.grading.checks import load_checks, student_rng
 from course.grading.codec import Band, EncodingError, decode, encode, loads
@@ -54,17 +58,83 @@ def test_codec_refuses_objects_and_student_bands():
 
 
 # -- comparisons ----------------------------------------------------------------------------
-def test_compare_reports_shape_largest_error_and_tolerance():
+def test_compare_reports_shape_where_and_tolerance_never_the_expected_value():
     exp = np.array([1.0, 2.0, 3.0])
     assert compare(exp, exp + 1e-12).ok
     v = compare(exp, np.array([1.0, 2.0]))
     assert not v.ok and "expected shape (3,), got shape (2,)" in v.message
+    assert "one element too few" in v.message
     v = compare(exp, np.array([1.0, 2.5, 3.1]), rtol=1e-6, atol=1e-8)
-    assert "2 of 3 elements wrong" in v.message and "largest error 0.5 at [1]" in v.message
-    assert "expected 2, got 2.5" in v.message and "tolerance" in v.message
+    assert "2 of 3 elements wrong, the worst at [1]" in v.message and "tolerance" in v.message
+    assert "rtol 1e-06" in v.message and "atol 1e-08" in v.message
+    assert "expected 2" not in v.message and "2.5" not in v.message
+    # the instructor's detail has both, with the digits that tell them apart
+    assert "expected 2, got 2.5" in v.detail and "largest error 0.5" in v.detail
     hidden = compare(exp, np.array([1.0, 2.5, 3.1]), reveal=False)
-    assert "expected 2" not in hidden.message and "largest error 0.5" in hidden.message
+    assert "expected 2" not in hidden.detail
     assert "got NaN at [0]" in compare(exp, np.array([np.nan, 2, 3])).message
+    # `expected 3, got 3`: a near miss is named as such, and the detail shows enough digits
+    v = compare(3.0, 3.0000001, rtol=1e-10, atol=0.0)
+    assert "close: it agrees to about 7 significant digits" in v.message
+    assert "expected 3, got 3.0000001" in v.detail
+
+
+@pytest.mark.parametrize(
+    ("expected", "got", "words"),
+    [
+        (0.75, 1.5, "too large by a factor ≈ 2.0"),
+        (1.5, 2.0, "too large by a factor ≈ 1.33 (= 4/3)"),
+        (np.array([1.0, 2.0, 4.0]), np.array([0.5, 1.0, 2.0]), "too small by a factor ≈ 2.0"),
+        (np.array([1.0, 2.0, 4.0]), np.array([1.37, 2.74, 5.48]), "too large by a factor ≈ 1.37"),
+        (np.array([1.0, -2.0, 4.0]), np.array([-1.0, 2.0, -4.0]), "the sign is flipped"),
+        (-0.5, 1.0, "the sign is flipped and too large by a factor ≈ 2.0"),
+        (np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([[1.0, 3.0], [2.0, 4.0]]), "transposed"),
+        (np.array([[1.0, 2.0, 3.0]]), np.array([[1.0], [2.0], [3.0]]), "transposed"),
+        (np.array([1.0, 2.0, 3.0]), np.array([2.0, 3.0, 1.0]), "another order"),
+        (np.array([1.0, 2.0, 3.0]), np.array([3.0, 2.0, 1.0]), "reverse order"),
+        (4, 5, "off by one: one too large"),
+        (np.array([0, 3]), np.array([1, 4]), "off by one: every element is one too large"),
+        (np.array([1.0, 2.0]), np.array([1.0, np.nan]), "got NaN at [1]"),
+        (2.0, 4.0, "tolerance |got - expected| <= atol"),
+        (["NF", "F1"], ["F1", "NF"], "the right items in another order"),
+        (np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 3.0, 4.0]), "one element too many"),
+        (np.array([1.0, 2.0]), np.array([[1.0, 2.0]]), "the right number of elements"),
+        ("F1", "f1", "only in upper/lower case"),
+        (2.0, "2.0", "expected a float, got a string"),
+        (np.array([True, False]), np.array([False, True]), "every decision is the opposite"),
+        (np.array([2.0, 3.0]), np.array([4.0, 9.0]), "the square"),
+        (np.array([12.0, 3.0]), np.array([0.0, 0.0]), "all zeros"),
+        (12.0, 0.0, "all zeros"),
+        (np.array([12.0, 0.0]), np.array([5.0, 1.0]), "not within the tolerance"),
+    ],
+)
+def test_compare_names_the_kind_of_wrong(expected, got, words):
+    v = compare(expected, got, rtol=1e-8, atol=1e-10)
+    assert not v.ok and words in v.message, v.message
+
+
+def test_compare_names_a_declared_mistake_only_when_the_answer_is_wrong():
+    mistakes = [("looks one-sided: z_alpha instead of z_alpha/2", 1.6448536269514722)]
+    v = compare(1.959963984540054, 1.6448536269514724, mistakes=mistakes)
+    assert not v.ok and v.message == "value: looks one-sided: z_alpha instead of z_alpha/2"
+    assert compare(1.959963984540054, 1.959963984540054, mistakes=mistakes).ok
+    assert "one-sided" not in compare(1.959963984540054, 3.0, mistakes=mistakes).message
+
+
+def test_field_names_instead_of_item_numbers():
+    from collections import namedtuple
+
+    Result = namedtuple("Result", "statistic critical_value reject")
+    expected = decode(encode(Result(6.0, 9.21, False)))  # the name survives the codec
+    assert expected._fields == ("statistic", "critical_value", "reject")
+    v = compare(expected, (6.0, 10.21, False))
+    assert v.message.startswith("critical_value: ") and "item [1]" not in v.message
+    v = compare((6.0, 9.21, False), Result(6.0, 9.21, True))  # the student's names count too
+    assert v.message.startswith("reject: ")
+    assert compare({"w": 1.0, "k": 2}, {"w": 1.0, "k": 3}).message.startswith("k: ")
+    assert check_signature(signature(expected), (6.0, "x", False)).message.startswith(
+        "critical_value: "
+    )
 
 
 def test_compare_exact_kinds_and_containers():
@@ -73,7 +143,7 @@ def test_compare_exact_kinds_and_containers():
     assert compare("a", "a").ok and not compare("a", "b").ok
     assert compare((1.0, True), [1.0, True]).ok
     v = compare((1.0, 2.0, False), (1.0, 2.1, False))
-    assert not v.ok and v.message.startswith("item [1]")
+    assert not v.ok and v.message.startswith("item [1]")  # no names to use
     assert not compare({"x": 1.0}, {"y": 1.0}).ok
     assert "expected a float, got a string" in compare(1.0, "1.0").message
 
@@ -124,7 +194,8 @@ def test_per_student_values_are_not_shipped():
     spec = (EXERCISE_DIR / "checks.json").read_text()
     demo = checks.questions["q6"].expected(data=checks.data_for("survey", "demo"))
     assert repr(demo)[:8] not in spec
-    assert json.loads(spec)["questions"][5]["signature"] == {"kind": "float", "shape": []}
+    q6 = next(q for q in json.loads(spec)["questions"] if q["id"] == "q6")
+    assert q6["signature"] == {"kind": "float", "shape": []}
 
 
 # -- the student's self-check ---------------------------------------------------------------
@@ -139,8 +210,8 @@ def test_self_check_pass_fail_hint_first(check, capsys):
     assert "PASS" in capsys.readouterr().out
     check("q2", np.array([6.0, -4.0, -10.0, 9.0]))
     out = capsys.readouterr().out
-    assert "FAIL" in out and out.index("Hint:") < out.index("largest error")
-    assert "at [3]" in out and "tolerance" in out
+    assert "FAIL" in out and out.index("Hint") < out.index("the worst at [3]")
+    assert "tolerance" in out and "8.0" not in out and "expected 8" not in out
 
 
 def test_self_check_function_and_stub(check, capsys):
@@ -157,16 +228,67 @@ def test_self_check_function_and_stub(check, capsys):
 
     check("q3", good)
     out = capsys.readouterr().out
-    assert "2 of 2 public cases pass; 3 hidden cases run at grading." in out
-    assert "forbids" in out  # the self-check warns about the library call
+    # a forbidden library call is a FAIL (it scores 0 at grading), not PASS plus a warning
+    assert "FAIL: your answer uses course.lsq.fit, course.lsq.overall_model_test" in out
+    assert "PASS" not in out and "0 of 3 public cases count" in out
+
+    def mine(A, y, Qyy, alpha):  # the fit is weighted too (a public case has Qyy != I)
+        L = np.linalg.cholesky(Qyy)
+        A_w, y_w = np.linalg.solve(L, A), np.linalg.solve(L, y)
+        e = y_w - A_w @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+        statistic = float(e @ e)
+        critical = float(chi2.isf(alpha, A.shape[0] - A.shape[1]))
+        return statistic, critical, statistic > critical
+
+    check("q3", mine)
+    out = capsys.readouterr().out
+    assert "3 of 3 public cases pass; 4 hidden cases run at grading." in out
 
     def wrong_dof(A, y, Qyy, alpha):
-        T, c, _ = good(A, y, Qyy, alpha)
+        T, c, _ = mine(A, y, Qyy, alpha)
         return T, c + 1.0, False
 
     check("q3", wrong_dof)
     out = capsys.readouterr().out
     assert "FAIL" in out and "item [1]" in out and "def " not in out
+
+
+def test_staged_hints_count_failures_in_the_kernel(tmp_path, capsys):
+    from course.grading.vocabulary import PublicCase, PublicQuestion, PublicSpec
+
+    spec = PublicSpec(
+        "demo_hints",
+        "t",
+        2.0,
+        [
+            PublicQuestion(
+                "q1",
+                "value",
+                "x",
+                1.0,
+                hint=["a nudge", "the idea", "the formula"],
+                cases=[PublicCase("x", encode(0.75))],
+            ),
+            PublicQuestion("q2", "value", "y", 1.0, hint="one stage", cases=[PublicCase("y", 1.0)]),
+        ],
+    )
+    spec = PublicSpec.loads(spec.text())  # as shipped in checks.json
+    check = Assignment(spec, tmp_path, "s1")
+    stages = []
+    for _ in range(4):
+        check("q1", 1.5)
+        stages.append(capsys.readouterr().out)
+    assert "Hint 1 of 3 (another failed check shows the next one): a nudge" in stages[0]
+    assert "Hint 2 of 3" in stages[1] and "the idea" in stages[1]
+    assert "Hint 3 of 3: the formula" in stages[2] and "Hint 3 of 3: the formula" in stages[3]
+    assert all("0.75" not in out for out in stages)
+    check("q1", 0.75)  # a pass shows no hint and does not count
+    assert "PASS" in capsys.readouterr().out
+    check("q2", 2.0)
+    assert "Hint: one stage" in capsys.readouterr().out
+    fresh = Assignment(spec, tmp_path, "s1")  # a new kernel starts over
+    fresh("q1", 1.5)
+    assert "Hint 1 of 3" in capsys.readouterr().out
 
 
 def test_self_check_finds_answers_in_the_caller_namespace(check, capsys):
@@ -238,7 +360,7 @@ def test_spawn_mode_grades_like_fork_mode(tmp_path):
         GradeOptions(jobs=1, mode="spawn", progress=False),
     )
     row = json.loads((tmp_path / "out" / "results.jsonl").read_text())
-    assert row["total"] == row["max"] == 14.0, row
+    assert row["total"] == row["max"] == 17.0, row
 
 
 def test_old_package_name_still_works_for_one_release():
@@ -276,3 +398,146 @@ def test_public_spec_round_trips_the_committed_checks_json():
         spec = PublicSpec.loads(text)
         assert spec.assignment == folder.name and spec.questions
         assert spec.text() == text
+
+
+# -- declared mistakes and forbidden calls (issue 13) ----------------------------------------
+_MISTAKE_CHECKS = """
+from scipy.stats import norm
+
+from course.grading.checks import Checks, Mistake
+
+CHECKS = Checks("mistakes_demo")
+
+
+@CHECKS.value(
+    "q1",
+    var="z",
+    points=1,
+    hint=["Two-sided: alpha is split.", "z = norm.isf(alpha / 2)"],
+    mistakes=[Mistake("looks one-sided: z_alpha instead of z_alpha/2", lambda: norm.isf(0.05))],
+    forbid=["scipy.stats.norm"],
+)
+def q1():
+    return norm.isf(0.025)
+
+
+q2 = CHECKS.function(
+    "q2",
+    func="crit",
+    points=1,
+    mistakes=[Mistake("looks one-sided", lambda alpha: norm.isf(alpha))],
+    forbid=["course.lsq.fit"],
+)(lambda alpha: norm.isf(alpha / 2))
+q2.case(0.05)
+q2.case(0.01, hidden=True)
+"""
+
+
+@pytest.fixture()
+def mistakes_demo(tmp_path):
+    from course.grading.release import public_spec
+    from course.grading.vocabulary import PublicSpec
+
+    folder = tmp_path / "mistakes_demo"
+    folder.mkdir()
+    (folder / "checks.py").write_text(_MISTAKE_CHECKS)
+    checks = load_checks(folder)
+    spec = PublicSpec.loads(public_spec(checks).text())
+    return checks, spec, Assignment(spec, folder, "s1")
+
+
+def test_declared_mistakes_ship_for_public_cases_and_are_named(mistakes_demo, capsys):
+    from scipy.stats import norm
+
+    checks, spec, check = mistakes_demo
+    assert spec.question("q1").cases[0].mistakes[0][0].startswith("looks one-sided")
+    assert spec.question("q1").hint == ["Two-sided: alpha is split.", "z = norm.isf(alpha / 2)"]
+    assert len(spec.question("q2").cases) == 1  # the hidden case's mistake stays private
+    check("q1", norm.isf(0.05))
+    out = capsys.readouterr().out
+    assert "z: looks one-sided: z_alpha instead of z_alpha/2" in out
+    assert "Hint 1 of 2" in out and "1.95996" not in out and "1.64485" not in out
+    check("q2", lambda alpha: float(norm.isf(alpha)))
+    assert "value: looks one-sided" in capsys.readouterr().out
+    check("q1", norm.isf(0.025))
+    assert "PASS" in capsys.readouterr().out
+    # the grader names the mistake of every case, hidden ones included
+    wrong = checks.questions["q2"].mistaken(checks.questions["q2"].hidden_cases[0])
+    assert wrong[0][0] == "looks one-sided" and wrong[0][1] == pytest.approx(norm.isf(0.01))
+
+
+def test_mistake_and_hint_arguments_are_validated():
+    from course.grading.checks import Checks, Mistake
+
+    with pytest.raises(ValueError, match="message must be a non-empty string"):
+        Mistake("", lambda: 1.0)
+    with pytest.raises(ValueError, match="reference must be a function"):
+        Mistake("m", 1.0)
+    c = Checks("x")
+    with pytest.raises(ValueError, match="mistakes=\\[Mistake"):
+        c.value("q1", var="v", points=1, mistakes=["not a Mistake"])(lambda: 1.0)
+    with pytest.raises(ValueError, match="hint stages must be non-empty strings"):
+        c.value("q2", var="w", points=1, hint=["nudge", ""])(lambda: 1.0)
+    from course.grading import Mistake as exported
+
+    assert exported is Mistake
+
+
+def test_a_forbidden_call_fails_the_self_check(mistakes_demo, capsys):
+    from course import lsq
+
+    _, _, check = mistakes_demo
+
+    def crit(alpha):  # right values, through a forbidden library function
+        lsq.fit(np.ones((2, 1)), np.ones(2))
+        from scipy.stats import norm
+
+        return float(norm.isf(alpha / 2))
+
+    check("q2", crit)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer uses course.lsq.fit" in out and "scores 0 at grading" in out
+    assert "PASS" not in out and "Warning" not in out
+    # a value question: the answer cell (IPython's input history) is scanned like the grader does
+    from scipy.stats import norm
+
+    namespace = {
+        "z": norm.isf(0.025),
+        "In": ["", "from scipy.stats import norm\nz = norm.isf(0.025)"],
+    }
+    check._check("q1", namespace, None, False)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer uses scipy.stats.norm" in out and "PASS" not in out
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    expected=hnp.arrays(
+        np.float64,
+        hnp.array_shapes(min_dims=0, max_dims=2, max_side=4),
+        elements=st.floats(-1e6, 1e6, allow_nan=False).filter(lambda x: abs(x) > 1e-3),
+    ),
+    how=st.sampled_from(["double", "negate", "shift", "reverse", "transpose", "noise", "zero"]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_compare_never_shows_an_expected_number(expected, how, seed):
+    """Whatever the wrong answer, the student's message carries no expected element (at 6
+    significant digits or as repr), and a diagnosis never breaks the verdict."""
+    rng = np.random.default_rng(seed)
+    got = {
+        "double": lambda e: 2.0 * e,
+        "negate": lambda e: -e,
+        "shift": lambda e: e + 1.0,
+        "reverse": lambda e: e[::-1] if e.ndim else e,
+        "transpose": lambda e: e.T,
+        "noise": lambda e: e * (1 + rng.uniform(1e-6, 1e-2, e.shape)),
+        "zero": np.zeros_like,
+    }[how](expected)
+    v = compare(expected, got, rtol=1e-9, atol=1e-12)
+    if v.ok:
+        return
+    for x in np.atleast_1d(expected).ravel():
+        digits = f"{abs(x):.6e}".split("e")[0].replace(".", "").rstrip("0")
+        if len(digits) >= 4:  # a number with some digits: its printed forms must not show
+            for text in (f"{x:.6g}", repr(float(x))):
+                assert text not in v.message, (text, v.message)

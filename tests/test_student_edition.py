@@ -195,7 +195,7 @@ def _matches(secret: Secret | None, students: int = 6) -> dict[str, int]:
     for name in PERSONAL:
         checks = load_checks(SOLUTIONS / name)
         for q in checks.questions.values():
-            if q.data is None:
+            if q.data is None or q.kind == "choice":  # a few options: chance agreement is common
                 continue
             hits = 0
             for sid in IDS[:students]:
@@ -441,6 +441,7 @@ def _tiny_course(root: Path, leak: str | None) -> None:
     from course.grading.authoring import (
         answer_cell,
         check_cell,
+        md,
         new_assignment_notebook,
         setup_cell,
     )
@@ -463,6 +464,7 @@ def _tiny_course(root: Path, leak: str | None) -> None:
         "01_tiny",
         [
             setup_cell("01_tiny"),
+            md("## q1: the answer"),  # every question has a header (the release writes its points)
             answer_cell("q1", f"### BEGIN SOLUTION\n{region}\n### END SOLUTION"),
             check_cell("q1"),
         ],

@@ -11,6 +11,8 @@ vocabulary
     The shared words: cell roles, student IDs, protocol operations, statuses, ``checks.json``.
 checks
     The authoring vocabulary of ``checks.py`` (:class:`~course.grading.checks.Checks`).
+items, marks
+    Choice and short-answer questions; the short-answer marking file and its re-import.
 authoring
     Helpers that build solution notebooks with the right cell metadata.
 notebook
@@ -41,11 +43,12 @@ export, leaks
 
 from importlib import import_module
 
-__all__ = ["Assignment", "Band", "Checks", "binomial_band", "student_rng"]
+__all__ = ["Assignment", "Band", "Checks", "Mistake", "binomial_band", "student_rng"]
 
 _LAZY = {
     "Assignment": "course.grading.selfcheck",
     "Checks": "course.grading.checks",
+    "Mistake": "course.grading.checks",
     "Band": "course.grading.codec",
     "binomial_band": "course.grading.compare",
     "student_rng": "course.grading.checks",

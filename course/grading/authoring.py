@@ -24,6 +24,7 @@ __all__ = [
     "md",
     "new_assignment_notebook",
     "setup_cell",
+    "short_answer_cell",
 ]
 
 SETUP_TEMPLATE = """\
@@ -53,6 +54,18 @@ def setup_cell(name: str, student_id: str = "demo"):
 def answer_cell(question: str, source: str, cell_id: str | None = None):
     """An answer cell of ``question``; ``source`` holds ``### BEGIN/END SOLUTION`` regions."""
     return _code(source, cell_id or f"{question}-answer", {"role": "answer", "question": question})
+
+
+def short_answer_cell(question: str, model_answer: str = "", cell_id: str | None = None):
+    """The markdown answer cell of a short-answer question (``CHECKS.short_answer``).
+
+    ``model_answer`` is the solution's text (instructors only): the release replaces the whole
+    cell by a placeholder line the student overwrites.
+    """
+    cell = nbformat.v4.new_markdown_cell(model_answer or "*(model answer)*")
+    cell["metadata"] = {"course": {"role": "answer", "question": question}}
+    cell["id"] = cell_id or f"{question}-answer"
+    return cell
 
 
 def check_cell(question: str, cell_id: str | None = None):

@@ -13,7 +13,7 @@ import importlib.util
 import re
 import sys
 import types
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,13 +23,14 @@ import numpy as np
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
 from course.grading.secret import Secret
-from course.grading.vocabulary import DEMO_STUDENT_ID
+from course.grading.vocabulary import DEMO_STUDENT_ID, QuestionKind
 
 __all__ = [
     "DEMO_STUDENT_ID",
     "Band",
     "Case",
     "Checks",
+    "Mistake",
     "Question",
     "binomial_band",
     "load_checks",
@@ -61,6 +62,66 @@ def student_rng(
     return np.random.default_rng(seed)
 
 
+@dataclass(frozen=True)
+class Mistake:
+    """A plausible wrong answer the feedback recognises and names.
+
+    Parameters
+    ----------
+    message : str
+        What the student reads when the answer matches this mistake (and not the right answer),
+        e.g. ``"looks one-sided: z_alpha instead of z_alpha/2"``. Say what went wrong in kind;
+        never the right value.
+    reference : callable
+        Computes the WRONG answer, with the signature of the question's own reference: ``f()``
+        or ``f(data)`` for a value question, ``f(*case_args, **case_kwargs)`` for a function
+        question. Like the reference it runs in the grader and in ``course release`` (public
+        cases: its value ships in ``checks.json``), never in a student's process.
+
+    Notes
+    -----
+    A case whose answer matches a mistake within the question's tolerance scores 0 like any
+    other wrong answer; the mistake only changes the message. Automatic diagnostics (shape,
+    NaN, sign, a constant factor, transposed, off by one, a permutation) need no declaration:
+    declare the mistakes that are specific to the method taught.
+
+    Examples
+    --------
+    >>> from scipy.stats import norm
+    >>> one_sided = Mistake("looks one-sided: z_alpha instead of z_alpha/2",
+    ...                     lambda alpha: norm.isf(alpha))
+    >>> one_sided.message
+    'looks one-sided: z_alpha instead of z_alpha/2'
+    """
+
+    message: str
+    reference: Callable
+
+    def __post_init__(self):
+        if not isinstance(self.message, str) or not self.message.strip():
+            raise ValueError("Mistake(message, reference): message must be a non-empty string")
+        if not callable(self.reference):
+            raise ValueError(
+                "Mistake(message, reference): reference must be a function computing the wrong "
+                "answer, with the signature of the question's reference"
+            )
+
+
+def _hint_stages(qid: str, hint) -> tuple[str, ...]:
+    """``hint=`` as a tuple of stages: a str is one stage, a sequence of str is staged."""
+    if hint is None or hint == "":
+        return ()
+    if isinstance(hint, str):
+        return (hint,)
+    try:
+        stages = tuple(hint)
+    except TypeError:
+        raise ValueError(f"{qid}: hint must be a string or a sequence of strings") from None
+    if not stages or not all(isinstance(s, str) and s.strip() for s in stages):
+        raise ValueError(f"{qid}: hint stages must be non-empty strings")
+    return stages
+
+
 @dataclass
 class Case:
     """Arguments of one call of a student's function, public or hidden."""
@@ -73,14 +134,15 @@ class Case:
 
 @dataclass
 class Question:
-    """One graded question (built by :meth:`Checks.value` or :meth:`Checks.function`)."""
+    """One graded question (built by :meth:`Checks.value`, :meth:`Checks.function`,
+    :meth:`Checks.choice` or :meth:`Checks.short_answer`)."""
 
     id: str
-    kind: str  # "value" or "function"
-    target: str  # the variable or function name the student defines
+    kind: str  # a QuestionKind: "value", "function", "choice" or "short_answer"
+    target: str  # the variable or function name the student defines ("" for a short answer)
     points: float
-    hint: str
-    reference: Callable
+    hint: str | tuple  # one stage (str) or staged hints; see ``hints``
+    reference: Callable | None
     rtol: float = 1e-7
     atol: float = 1e-9
     data: str | None = None
@@ -90,6 +152,23 @@ class Question:
     timeout: float | None = None
     partial: bool = True
     cases: list = field(default_factory=list)
+    mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
+    options: tuple = ()  # a choice question's options
+    rubric: str = ""  # a short-answer question's marking guide (instructors only)
+
+    @property
+    def hints(self) -> tuple[str, ...]:
+        """The hint stages: after the k-th failed self-check the student sees stage
+        ``min(k, len(hints)) - 1`` (a nudge first, the formula only at the last stage)."""
+        return _hint_stages(self.id, self.hint)
+
+    def __call__(self, reference: Callable) -> Question:
+        """``@CHECKS.short_answer(...)`` on a stub: keeps the stub (e.g. returning a model
+        answer for the markers) and returns the question."""
+        if self.kind != QuestionKind.SHORT_ANSWER:
+            raise TypeError(f"{self.id}: only a short-answer question decorates a function")
+        self.reference = reference
+        return self
 
     def case(
         self, *args, label: str | None = None, hidden: bool = False, kwargs: dict | None = None
@@ -120,6 +199,8 @@ class Question:
 
     def expected(self, case: Case | None = None, data: Any = None) -> Any:
         """The reference value (normalised through the plain-data codec)."""
+        if self.reference is None:
+            raise ValueError(f"{self.id}: a {self.kind} question has no reference value")
         if self.kind == "function":
             assert case is not None, "a function question needs a case"
             value = self.reference(*decode(encode(case.args)), **decode(encode(case.kwargs)))
@@ -128,6 +209,22 @@ class Question:
         else:
             value = self.reference()
         return decode(encode(value))
+
+    def mistaken(self, case: Case | None = None, data: Any = None) -> list[tuple[str, Any]]:
+        """``(message, wrong value)`` of each declared :class:`Mistake` for this case or data
+        (normalised through the plain-data codec like :meth:`expected`)."""
+        out = []
+        for mistake in self.mistakes:
+            if self.kind == "function":
+                assert case is not None, "a function question needs a case"
+                args, kwargs = decode(encode(case.args)), decode(encode(case.kwargs))
+                value = mistake.reference(*args, **kwargs)
+            elif self.data is not None:
+                value = mistake.reference(data)
+            else:
+                value = mistake.reference()
+            out.append((mistake.message, decode(encode(value))))
+        return out
 
 
 class Checks:
@@ -178,12 +275,18 @@ class Checks:
             )
         if question.id in self.questions:
             raise ValueError(f"question {question.id!r} is defined twice")
-        if not _IDENT.match(question.target):
+        if question.kind != QuestionKind.SHORT_ANSWER and not _IDENT.match(question.target):
             raise ValueError(f"{question.id}: {question.target!r} is not a Python name")
         if not question.points > 0:
             raise ValueError(f"{question.id}: points must be positive")
         if question.rtol < 0 or question.atol < 0:
             raise ValueError(f"{question.id}: tolerances must be non-negative")
+        question.hints  # noqa: B018  (validates hint=)
+        if not all(isinstance(m, Mistake) for m in question.mistakes):
+            raise ValueError(
+                f"{question.id}: mistakes=[Mistake('message', reference), ...] (from "
+                "course.grading.checks import Mistake)"
+            )
         for name in question.forbid:
             if "." not in name:
                 raise ValueError(
@@ -212,7 +315,7 @@ class Checks:
         *,
         var: str,
         points: float,
-        hint: str = "",
+        hint: str | Sequence[str] = "",
         rtol: float = 1e-7,
         atol: float = 1e-9,
         data: str | None = None,
@@ -221,8 +324,16 @@ class Checks:
         forbid=(),
         timeout: float | None = None,
         partial: bool = True,
+        mistakes: Sequence[Mistake] = (),
     ):
-        """Register a question whose answer is the variable ``var``; decorate its reference."""
+        """Register a question whose answer is the variable ``var``; decorate its reference.
+
+        ``hint`` is one string, or a sequence of strings shown in stages (a nudge after the
+        first failed self-check, the next stage after the next failure, ..., the formula last).
+        ``mistakes`` lists :class:`Mistake` objects: plausible wrong answers, computed like the
+        reference (``f()``, or ``f(data)`` with ``data=``), whose message the feedback shows
+        when the answer matches one of them.
+        """
 
         def decorator(reference):
             return self._register(
@@ -231,7 +342,7 @@ class Checks:
                     kind="value",
                     target=var,
                     points=float(points),
-                    hint=hint,
+                    hint=hint if isinstance(hint, str) else tuple(hint),
                     reference=reference,
                     rtol=float(rtol),
                     atol=float(atol),
@@ -241,6 +352,7 @@ class Checks:
                     forbid=tuple(forbid),
                     timeout=timeout,
                     partial=partial,
+                    mistakes=tuple(mistakes),
                 )
             )
 
@@ -252,14 +364,19 @@ class Checks:
         *,
         func: str,
         points: float,
-        hint: str = "",
+        hint: str | Sequence[str] = "",
         rtol: float = 1e-7,
         atol: float = 1e-9,
         forbid=(),
         timeout: float | None = None,
         partial: bool = True,
+        mistakes: Sequence[Mistake] = (),
     ):
-        """Register a question whose answer is the function ``func``; decorate its reference."""
+        """Register a question whose answer is the function ``func``; decorate its reference.
+
+        ``hint`` and ``mistakes`` as in :meth:`value`; a mistake's reference takes the case's
+        arguments, like the question's reference.
+        """
 
         def decorator(reference):
             return self._register(
@@ -268,17 +385,140 @@ class Checks:
                     kind="function",
                     target=func,
                     points=float(points),
-                    hint=hint,
+                    hint=hint if isinstance(hint, str) else tuple(hint),
                     reference=reference,
                     rtol=float(rtol),
                     atol=float(atol),
                     forbid=tuple(forbid),
                     timeout=timeout,
                     partial=partial,
+                    mistakes=tuple(mistakes),
                 )
             )
 
         return decorator
+
+    def choice(
+        self,
+        qid: str,
+        *,
+        var: str,
+        options,
+        points: float,
+        hint: str = "",
+        data: str | None = None,
+        timeout: float | None = None,
+    ):
+        """Register a multiple-choice question; decorate the reference returning the right option.
+
+        The student sets ``var`` to one of ``options`` (strings or numbers; strings match
+        ignoring case and surrounding spaces, numbers by value). The public self-check says only
+        whether the answer is one of the options, never whether it is right; ``course grade``
+        gives full ``points`` when it is a right option and 0 otherwise.
+
+        Parameters
+        ----------
+        qid : str
+            The question id (``"q6b"``); its header and answer cell name it.
+        var : str
+            The variable the answer cell assigns (``verdict = "reject"``).
+        options : sequence of str or numbers
+            At least two distinct options, shown in the self-check (public).
+        points : float
+            Points for a right option.
+        hint : str, optional
+            Shown when the answer is not one of the options.
+        data : str, optional
+            A per-student data set: the reference is then ``f(d)`` for the student's data.
+        timeout : float, optional
+            Time limit of the answer cell in seconds.
+
+        Notes
+        -----
+        The reference returns the right option, or a list of options that are all accepted
+        (two wordings of one idea). A reference returning something that is not an option
+        fails ``course release``. For a numeric item whose value stays private, use
+        :meth:`value` with ``public=False``.
+
+        Examples
+        --------
+        >>> checks = Checks("00_demo")
+        >>> @checks.choice("q1", var="verdict", options=["accept", "reject"], points=1)
+        ... def q1():
+        ...     return "reject"
+        >>> checks.questions["q1"].options
+        ('accept', 'reject')
+        """
+        from course.grading.items import check_options
+
+        opts = check_options(qid, options)
+
+        def decorator(reference):
+            return self._register(
+                Question(
+                    id=qid,
+                    kind=QuestionKind.CHOICE,
+                    target=var,
+                    points=float(points),
+                    hint=hint,
+                    reference=reference,
+                    data=data,
+                    public=False,
+                    timeout=timeout,
+                    partial=False,
+                    options=opts,
+                )
+            )
+
+        return decorator
+
+    def short_answer(self, qid: str, *, points: float, rubric: str = "", hint: str = ""):
+        """Register a short-answer question, marked by the instructor; returns the question.
+
+        The student writes a few sentences in the question's markdown answer cell (in the
+        solution notebook: a markdown cell with ``metadata.course = {"role": "answer",
+        "question": qid}``, see :func:`course.grading.authoring.short_answer_cell`; its text
+        is the model answer and never ships). ``course grade`` scores it "to mark" (0 points)
+        and writes every answer, with ``rubric`` and blank points/comment columns, into
+        ``OUT/short_answers.csv``; ``course grade ... --short-answers FILE`` merges the filled
+        file into the grades and the feedback.
+
+        Parameters
+        ----------
+        qid : str
+            The question id.
+        points : float
+            The most points a marker may give.
+        rubric : str, optional
+            What a full answer says (instructors and markers only; never released).
+        hint : str, optional
+            Shown to the student in the feedback when the answer did not get full points.
+
+        Notes
+        -----
+        Works as a plain call or as a decorator on a stub (its return value is ignored by the
+        grader; it may return the model answer for your own reference).
+
+        Examples
+        --------
+        >>> checks = Checks("00_demo")
+        >>> q = checks.short_answer("q2", points=1, rubric="names the dof; says why")
+        >>> str(q.kind), q.points
+        ('short_answer', 1.0)
+        """
+        return self._register(
+            Question(
+                id=qid,
+                kind=QuestionKind.SHORT_ANSWER,
+                target="",
+                points=float(points),
+                hint=hint,
+                reference=None,
+                public=False,
+                partial=True,
+                rubric=str(rubric),
+            )
+        )
 
     # -- helpers -----------------------------------------------------------------------
     @property
@@ -318,7 +558,8 @@ def load_checks(solution_dir: str | Path) -> Checks:
     if not checks_file.is_file():
         raise FileNotFoundError(f"{checks_file} does not exist: every assignment needs a checks.py")
     pkg_name = _safe_module_name(solution_dir)
-    for mod in [m for m in sys.modules if m == pkg_name or m.startswith(pkg_name + ".")]:
+    # a snapshot: another thread (a grader, a test) may import meanwhile
+    for mod in [m for m in list(sys.modules) if m == pkg_name or m.startswith(pkg_name + ".")]:
         del sys.modules[mod]
     package = types.ModuleType(pkg_name)
     package.__path__ = [str(solution_dir)]

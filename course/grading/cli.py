@@ -80,6 +80,7 @@ def _release(args) -> int:
 def _grade(args) -> int:
     from course.grading.driver import GradeOptions, available_cpus, grade
     from course.grading.isolation import IsolationError
+    from course.grading.marks import MarksError
 
     solutions = _folder(args, "solutions")
     name = Path(args.assignment).name
@@ -112,11 +113,15 @@ def _grade(args) -> int:
         unsafe_no_isolation=args.unsafe_no_isolation,
         cluster=args.cluster,
         announce=lambda text: print(text, file=sys.stderr),
+        short_answers=Path(args.short_answers) if args.short_answers else None,
     )
     try:
         summary = grade(solution_dir, submissions, Path(args.out), options)
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
+        return 2
+    except MarksError as exc:
+        print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
         if args.cluster and "distributed" in str(exc):
@@ -364,6 +369,13 @@ def add_commands(subparsers) -> None:
         "--lms-column",
         default=None,
         help="LMS files: the assignment's column name (default: the assignment's title)",
+    )
+    p_gr.add_argument(
+        "--short-answers",
+        metavar="FILE",
+        default=None,
+        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, with the "
+        "points column filled) into the grades and the feedback; a bad row refuses the import",
     )
     p_gr.add_argument(
         "--cluster",

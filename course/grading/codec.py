@@ -7,6 +7,9 @@ booleans, ``None``, lists, dicts with string keys, and three tagged forms:
     a numpy array of a numeric or boolean dtype (raw little-endian bytes, never pickle),
 ``{"__tuple__": [...]}``
     a tuple (so that a reference returning a tuple round-trips),
+``{"__namedtuple__": {"fields": [...], "values": [...]}}``
+    a named tuple (decoded as a named tuple with the same field names, so feedback can name
+    ``critical_value`` instead of ``item [1]``),
 ``{"__float__": "nan" | "inf" | "-inf"}`` and ``{"__complex__": [re, im]}``
     the floats JSON cannot spell, and complex scalars,
 ``{"__band__": [lo, hi]}``
@@ -19,7 +22,10 @@ Decoding never executes anything: an unknown tag or an object dtype is an error.
 from __future__ import annotations
 
 import base64
+import collections
+import functools
 import json
+import keyword
 import math
 from typing import Any
 
@@ -114,6 +120,14 @@ def encode(value: Any, _depth: int = 0) -> Any:
     if isinstance(value, Band):
         return {"__band__": [encode(value.lo, _depth + 1), encode(value.hi, _depth + 1)]}
     if isinstance(value, tuple):
+        fields = getattr(type(value), "_fields", None)
+        if isinstance(fields, tuple) and _valid_fields(fields) and len(fields) == len(value):
+            return {
+                "__namedtuple__": {
+                    "fields": list(fields),
+                    "values": [encode(v, _depth + 1) for v in value],
+                }
+            }
         return {"__tuple__": [encode(v, _depth + 1) for v in value]}
     if isinstance(value, list):
         return [encode(v, _depth + 1) for v in value]
@@ -125,6 +139,27 @@ def encode(value: Any, _depth: int = 0) -> Any:
             out[key] = encode(item, _depth + 1)
         return out
     raise EncodingError(f"unsupported type {type(value).__name__}")
+
+
+def _valid_fields(fields) -> bool:
+    return (
+        isinstance(fields, tuple)
+        and 0 < len(fields) <= 64
+        and len(set(fields)) == len(fields)
+        and all(
+            isinstance(f, str)
+            and f.isidentifier()
+            and not f.startswith("_")
+            and not keyword.iskeyword(f)
+            for f in fields
+        )
+    )
+
+
+@functools.lru_cache(maxsize=256)
+def _named_type(fields: tuple) -> type:
+    """The named-tuple type of a decoded value (built from field names, nothing executed)."""
+    return collections.namedtuple("Result", fields)
 
 
 def _decode_float(value):
@@ -153,6 +188,11 @@ def decode(data: Any, allow_band: bool = True) -> Any:
                 return np.frombuffer(raw, dtype=dtype).reshape(shape).copy()
             if tag == "__tuple__":
                 return tuple(decode(v, allow_band) for v in body)
+            if tag == "__namedtuple__":
+                fields = tuple(body["fields"])
+                if not _valid_fields(fields) or len(fields) != len(body["values"]):
+                    raise EncodingError("malformed named tuple")
+                return _named_type(fields)(*(decode(v, allow_band) for v in body["values"]))
             if tag == "__band__" and allow_band:
                 return Band(decode(body[0], False), decode(body[1], False))
             if tag == "__float__":

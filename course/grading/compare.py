@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -19,10 +20,16 @@ __all__ = ["Verdict", "binomial_band", "compare", "describe"]
 
 @dataclass(frozen=True)
 class Verdict:
-    """The outcome of one comparison: ``ok`` and a one-line explanation when not ok."""
+    """The outcome of one comparison.
+
+    ``message`` is for the student: what is wrong in kind (shape, NaN, sign, a factor, order,
+    off by one, a declared mistake) and the tolerance, never an expected value. ``detail`` is
+    for the instructor's records only: expected and got, with enough digits to differ.
+    """
 
     ok: bool
     message: str = ""
+    detail: str = ""
 
 
 def binomial_band(n: int, p: float, miss: float = 1e-4) -> Band:
@@ -108,144 +115,220 @@ def _is_intish(expected) -> bool:
     return isinstance(expected, np.ndarray) and expected.dtype.kind in "iu"
 
 
-def compare(
-    expected: Any,
-    got: Any,
-    rtol: float = 1e-7,
-    atol: float = 1e-9,
-    reveal: bool = True,
-    path: str = "",
-) -> Verdict:
-    """Compare ``got`` with ``expected``.
+def _label(path: str) -> str:
+    return path or "value"
 
-    Floats and float arrays: equal shapes and ``|got - expected| <= atol + rtol*|expected|``
-    element-wise (NaN only matches NaN). Bools and ints: exact. Strings and None: exact.
-    Tuples/lists: same length (either container type), element by element. Dicts: same keys.
-    :class:`Band`: every element of ``got`` inside ``[lo, hi]``.
 
-    ``reveal=False`` (hidden cases) omits expected numbers from the message.
-    """
-    label = path or "value"
-    if isinstance(expected, Band):
-        arr = _numeric(got)
-        if arr is None or arr.dtype.kind == "c":
-            return Verdict(False, f"{label}: expected a real number, got {describe(got)}")
-        lo, hi = np.asarray(expected.lo, float), np.asarray(expected.hi, float)
-        try:
-            arr_b, lo_b, hi_b = np.broadcast_arrays(arr.astype(float), lo, hi)
-        except ValueError:
-            return Verdict(False, f"{label}: expected shape {lo.shape}, got {arr.shape}")
-        if arr.shape != np.broadcast_shapes(arr.shape, lo.shape):
-            return Verdict(False, f"{label}: expected shape {lo.shape}, got {arr.shape}")
-        inside = (arr_b >= lo_b) & (arr_b <= hi_b)
-        if bool(np.all(inside)):
-            return Verdict(True)
-        bad = np.argwhere(~inside)[0] if arr_b.ndim else ()
-        at = tuple(bad)
-        g = arr_b[at] if arr_b.ndim else arr_b[()]
-        low = float(lo_b[at] if lo_b.ndim else lo_b[()])
-        high = float(hi_b[at] if hi_b.ndim else hi_b[()])
-        band = f" [{_fmt(low)}, {_fmt(high)}]" if reveal else " band"
-        return Verdict(
-            False,
-            f"{label}: got {_fmt(float(g))}{_where(at, arr_b.shape)}, outside the accepted{band}",
-        )
-    if expected is None:
-        return Verdict(
-            got is None, "" if got is None else f"{label}: expected None, got {describe(got)}"
-        )
-    if isinstance(expected, str):
-        if got == expected:
-            return Verdict(True)
-        shown = f"{expected!r}" if reveal else "another string"
-        return Verdict(
-            False,
-            f"{label}: expected {shown}, got {describe(got) if not isinstance(got, str) else repr(got[:60])}",
-        )
-    if isinstance(expected, (tuple, list)):
-        if not isinstance(got, (tuple, list)):
-            return Verdict(
-                False,
-                f"{label}: expected a {type(expected).__name__} of length {len(expected)}, got {describe(got)}",
-            )
-        if len(got) != len(expected):
-            return Verdict(
-                False, f"{label}: expected length {len(expected)}, got length {len(got)}"
-            )
-        for k, (e, g) in enumerate(zip(expected, got)):
-            v = compare(e, g, rtol, atol, reveal, f"{path}[{k}]" if path else f"item [{k}]")
-            if not v.ok:
-                return v
-        return Verdict(True)
-    if isinstance(expected, dict):
-        if not isinstance(got, dict):
-            return Verdict(
-                False, f"{label}: expected a dict with keys {sorted(expected)}, got {describe(got)}"
-            )
-        if set(got) != set(expected):
-            return Verdict(
-                False,
-                f"{label}: expected keys {sorted(expected)}, got {sorted(map(str, got))[:10]}",
-            )
-        for k in sorted(expected):
-            v = compare(
-                expected[k], got[k], rtol, atol, reveal, f"{path}[{k!r}]" if path else f"[{k!r}]"
-            )
-            if not v.ok:
-                return v
-        return Verdict(True)
+def _item_path(path: str, expected, got, k: int) -> str:
+    """The name of item ``k`` of a tuple: its field name when either side has named fields."""
+    for value in (expected, got):
+        fields = getattr(type(value), "_fields", None)
+        if isinstance(fields, tuple) and len(fields) == len(value) and isinstance(fields[k], str):
+            return f"{path}.{fields[k]}" if path else fields[k]
+    return f"{path}[{k}]" if path else f"item [{k}]"
 
-    exp = _numeric(expected)
-    if exp is None:
-        raise TypeError(f"cannot compare against expected value of type {type(expected).__name__}")
-    arr = _numeric(got)
-    if arr is None:
-        return Verdict(False, f"{label}: expected {describe(expected)}, got {describe(got)}")
+
+def _key_path(path: str, key) -> str:
+    return f"{path}[{key!r}]" if path else str(key)
+
+
+def _tolerance_text(rtol: float, atol: float) -> str:
+    return f"tolerance |got - expected| <= atol {_fmt(atol)} + rtol {_fmt(rtol)}·|expected|"
+
+
+def _digits_apart(e, g) -> tuple[str, str]:
+    """``e`` and ``g`` printed with the fewest digits (>= 6) that tell them apart."""
+    if isinstance(e, complex) or isinstance(g, complex):
+        return str(e), str(g)
+    for d in (6, 8, 10, 12, 14, 17):
+        a, b = f"{float(e):.{d}g}", f"{float(g):.{d}g}"
+        if a != b:
+            return a, b
+    return repr(float(e)), repr(float(g))
+
+
+def _close(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> bool:
+    """``g`` equals ``e`` within the tolerance (exactly for integers), shapes equal."""
+    if e.shape != g.shape:
+        return False
+    if e.dtype.kind in "biu" and g.dtype.kind in "biu":
+        return bool(np.array_equal(e, g))
+    with np.errstate(invalid="ignore", over="ignore"):
+        ok = (np.abs(g - e) <= atol + rtol * np.abs(e)) | (np.isnan(e) & np.isnan(g))
+        ok |= np.isinf(e) & (g == e)
+    return bool(np.all(ok))
+
+
+def _simple_ratio(r: float) -> Fraction | None:
+    """``r`` as a small fraction (denominator <= 12, numerator <= 1000) or a power of ten."""
+    if not math.isfinite(r) or r <= 0:
+        return None
+    frac = Fraction(r).limit_denominator(12)
+    if frac.numerator <= 1000 and abs(float(frac) - r) <= 1e-6 * r:
+        return frac
+    exponent = round(math.log10(r))
+    if exponent != 0 and abs(10.0**exponent - r) <= 1e-6 * r:
+        return Fraction(10) ** exponent
+    return None
+
+
+def _factor_text(r: float, frac: Fraction | None) -> str:
+    big = r >= 1
+    x = r if big else 1.0 / r
+    shown = f"{x:.3g}"
+    if shown.isdigit():
+        shown += ".0"
+    if frac is not None:
+        f = frac if big else 1 / frac
+        if f.denominator != 1 and f.denominator < 1000:
+            shown += f" (= {f.numerator}/{f.denominator})"
+    return f"too {'large' if big else 'small'} by a factor ≈ {shown}"
+
+
+def _diagnose(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
+    """:func:`_kind_of_wrong`, or '' should it fail: a diagnosis must never break a verdict."""
+    try:
+        return _kind_of_wrong(e, g, rtol, atol)
+    except Exception:
+        return ""
+
+
+def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
+    """What kind of wrong ``g`` is against ``e`` (same shape, not close); '' when unknown.
+
+    Never names a value of ``e``: only relations (sign, factor, order, transpose, off by one,
+    the number of matching digits)."""
+    lo_rtol = max(rtol, 1e-7)  # relations hold only to round-off, whatever the tolerance
+    ef = e.astype(complex if e.dtype.kind == "c" else float)
+    gf = g.astype(ef.dtype)
+    if e.ndim == 2 and e.shape[0] == e.shape[1] > 1 and _close(ef, gf.T, lo_rtol, atol):
+        return "transposed: rows and columns are swapped"
+    if _close(ef, -gf, lo_rtol, atol):
+        return "the sign is flipped"
+    if e.ndim == 1 and e.size > 1 and e.dtype.kind != "c":
+        if _close(ef, gf[::-1], lo_rtol, atol):
+            return "the right values in reverse order"
+        if _close(np.sort(ef), np.sort(gf), lo_rtol, atol):
+            return "the right values in another order (a permutation)"
+    integral = e.dtype.kind in "iu"
+    if integral:
+        step = gf - ef
+        for d in (1.0, -1.0):
+            if bool(np.all(step == d)):
+                what = "one too large" if d > 0 else "one too small"
+                if e.size > 1:
+                    what = "every element is " + what
+                return f"off by one: {what} (a 1-based index or count where 0-based is meant, or the reverse?)"
+    if e.dtype.kind == "c":
+        return ""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.abs(gf - ef) / np.abs(ef)
+    # a near miss: the elements outside the tolerance agree to a few digits
+    outside = np.abs(gf - ef) > atol + rtol * np.abs(ef)
+    worst = float(np.max(rel[outside])) if np.any(outside) else math.inf
+    if math.isfinite(worst) and 0 < worst < 1e-3:
+        digits = max(1, math.floor(-math.log10(worst)))
+        return (
+            f"close: it agrees to about {digits} significant digits, but not within the "
+            "tolerance (rounded, or a printed number typed in?)"
+        )
+    nonzero = np.abs(ef) > atol
+    if bool(np.any(nonzero)) and bool(np.all(gf == 0)):
+        return "all zeros (a result never filled in?)"
+    if bool(np.any(nonzero)) and bool(np.all(np.abs(gf[~nonzero]) <= atol)):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratios = gf[nonzero] / ef[nonzero]
+        r = float(np.median(ratios))
+        if (
+            math.isfinite(r)
+            and r != 0
+            and abs(abs(r) - 1) > 1e-3
+            and _close(r * ef, gf, lo_rtol, atol * abs(r))
+        ):
+            frac = _simple_ratio(abs(r))
+            if frac is not None or np.count_nonzero(nonzero) > 1:
+                text = _factor_text(abs(r), frac)
+                return ("the sign is flipped and " if r < 0 else "") + text
+        if (
+            bool(np.all(ef >= 0))
+            and _close(ef**2, gf, lo_rtol, atol)
+            and not _close(ef, gf, lo_rtol, atol)
+        ):
+            return "looks like the square of the answer (a variance where a standard deviation is asked?)"
+        if bool(np.all(gf >= 0)) and _close(ef, gf**2, lo_rtol, atol):
+            return "looks like the square root of the answer (a standard deviation where a variance is asked?)"
+    return ""
+
+
+def _compare_numbers(exp: np.ndarray, arr: np.ndarray, expected, got, rtol, atol, label) -> Verdict:
+    """Numbers and arrays of the same kind as ``expected`` (shapes may differ)."""
     if arr.shape != exp.shape:
-        return Verdict(
-            False, f"{label}: expected shape {tuple(exp.shape)}, got shape {tuple(arr.shape)}"
-        )
-
+        hint = ""
+        if arr.size == exp.size and arr.size > 0:
+            if (
+                exp.ndim == 2
+                and arr.shape == exp.shape[::-1]
+                and _close(exp.astype(float), arr.T.astype(float), max(rtol, 1e-7), atol)
+            ):
+                hint = ": transposed, rows and columns are swapped"
+            else:
+                hint = " (the right number of elements: reshape, ravel or a missing [:, 0]?)"
+        elif exp.ndim == arr.ndim == 1 and abs(arr.shape[0] - exp.shape[0]) == 1:
+            hint = (
+                f": one element too {'many' if arr.shape[0] > exp.shape[0] else 'few'}"
+                " (off by one in a range or slice?)"
+            )
+        detail = f"{label}: expected shape {tuple(exp.shape)}, got shape {tuple(arr.shape)}"
+        return Verdict(False, detail + hint, detail)
+    s = "s" if exp.ndim else ""
     if _is_boolish(expected):
-        if arr.dtype.kind not in "biu":
-            return Verdict(
-                False, f"{label}: expected bool{'s' if exp.ndim else ''}, got {describe(got)}"
-            )
+        if arr.dtype.kind not in "biu" or (
+            arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1))
+        ):
+            text = f"{label}: expected bool{s}, got {describe(got)}"
+            return Verdict(False, text, text)
         diff = arr.astype(bool) != exp
-        if arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1)):
-            return Verdict(
-                False, f"{label}: expected bool{'s' if exp.ndim else ''}, got {describe(got)}"
-            )
         if not np.any(diff):
             return Verdict(True)
         i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
-        g = bool(arr[i]) if arr.ndim else bool(arr[()])
-        extra = f": expected {not g}, got {g}" if reveal else f": got {g}"
+        g_bool = bool(arr[i]) if arr.ndim else bool(arr[()])
+        if exp.ndim == 0:
+            message = f"{label}: the opposite of the right decision"
+        elif bool(np.all(diff)):
+            message = f"{label}: every decision is the opposite (a comparison the wrong way round?)"
+        else:
+            message = f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first at {_where(i, diff.shape).strip()[3:]}"
         return Verdict(
-            False,
-            f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first{_where(i, diff.shape)}{extra}",
+            False, message, f"{label}{_where(i, diff.shape)}: expected {not g_bool}, got {g_bool}"
         )
-
     if _is_intish(expected):
         if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
-            return Verdict(
-                False, f"{label}: expected integer{'s' if exp.ndim else ''}, got {describe(got)}"
-            )
+            text = f"{label}: expected integer{s}, got {describe(got)}"
+            return Verdict(False, text, text)
         diff = arr != exp
         if not np.any(diff):
             return Verdict(True)
         i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
-        g = arr[i] if arr.ndim else arr[()]
-        e = exp[i] if exp.ndim else exp[()]
-        extra = f": expected {_fmt(e)}, got {_fmt(g)}" if reveal else f": got {_fmt(g)}"
+        e_i, g_i = (exp[i], arr[i]) if exp.ndim else (exp[()], arr[()])
+        kind = _diagnose(exp, arr, 0.0, 0.0)
+        where = (
+            ""
+            if exp.ndim == 0
+            else f" {int(np.sum(diff))} of {diff.size} wrong, first at {_where(i, diff.shape).strip()[3:]};"
+        )
+        message = (
+            f"{label}:{where} {kind or 'not the right integer' + s} (integers must match exactly)"
+        )
         return Verdict(
             False,
-            f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first{_where(i, diff.shape)}{extra}",
+            message,
+            f"{label}{_where(i, diff.shape)}: expected {int(e_i)}, got {_fmt(float(g_i))}",
         )
 
     # floats / complex
     if arr.dtype.kind == "c" and exp.dtype.kind != "c":
-        return Verdict(False, f"{label}: expected real numbers, got complex")
+        text = f"{label}: expected real numbers, got complex"
+        return Verdict(False, text, text)
     e = exp.astype(complex if exp.dtype.kind == "c" else float)
     g = arr.astype(e.dtype)
     both_nan = np.isnan(e) & np.isnan(g)
@@ -257,26 +340,188 @@ def compare(
     if bool(np.all(good)):
         return Verdict(True)
     bad = ~good
-    if np.any(np.isnan(g) & bad):
-        i = tuple(np.argwhere(np.isnan(g) & bad)[0]) if g.ndim else ()
-        return Verdict(False, f"{label}: got NaN{_where(i, g.shape)}")
     score = np.where(bad, np.nan_to_num(err - tol, nan=np.inf, posinf=np.inf), -np.inf)
     i = np.unravel_index(int(np.argmax(score)), score.shape) if score.ndim else ()
     ei = e[i] if e.ndim else e[()]
     gi = g[i] if g.ndim else g[()]
-    erri = err[i] if err.ndim else err[()]
-    toli = tol[i] if tol.ndim else tol[()]
-    count = f"{int(np.sum(bad))} of {bad.size} elements wrong; " if bad.size > 1 else ""
-    if reveal:
-        what = f"expected {_fmt(ei.real) if e.dtype.kind != 'c' else ei}, got {_fmt(gi.real) if g.dtype.kind != 'c' else gi}; "
-    else:
-        what = f"got {_fmt(gi.real) if g.dtype.kind != 'c' else gi}; "
-    tolerance = f"tolerance {_fmt(toli)} = " if reveal else "tolerance "
-    return Verdict(
-        False,
-        f"{label}: {count}largest error {_fmt(erri)}{_where(i, e.shape)} ({what}"
-        f"{tolerance}atol {_fmt(atol)} + rtol {_fmt(rtol)}·|expected|)",
+    a, b = _digits_apart(
+        ei if e.dtype.kind == "c" else ei.real, gi if g.dtype.kind == "c" else gi.real
     )
+    detail = f"{label}{_where(i, e.shape)}: expected {a}, got {b} (largest error {_fmt(float(err[i] if err.ndim else err[()]))})"
+    tolerance = _tolerance_text(rtol, atol)
+    if np.any(np.isnan(g) & bad):
+        j = tuple(np.argwhere(np.isnan(g) & bad)[0]) if g.ndim else ()
+        return Verdict(
+            False, f"{label}: got NaN{_where(j, g.shape)} (a 0/0, or an empty mean?)", detail
+        )
+    if np.any(np.isinf(g) & bad):
+        j = tuple(np.argwhere(np.isinf(g) & bad)[0]) if g.ndim else ()
+        return Verdict(False, f"{label}: got inf{_where(j, g.shape)} (a division by zero?)", detail)
+    count = (
+        f"{int(np.sum(bad))} of {bad.size} elements wrong, the worst at {_where(i, e.shape).strip()[3:]}; "
+        if bad.size > 1
+        else ""
+    )
+    kind = _diagnose(e, g, rtol, atol)
+    if not kind and bad.size > 1 and 0 < int(np.sum(bad)) < bad.size:
+        sub = _diagnose(e[bad], g[bad], rtol, atol)
+        kind = f"on the wrong elements {sub}" if sub else ""
+    kind = kind or "not within the tolerance"
+    return Verdict(False, f"{label}: {count}{kind}; {tolerance}", detail)
+
+
+def _match_mistake(mistakes, got, rtol, atol) -> str | None:
+    for message, wrong in mistakes:
+        try:
+            if compare(wrong, got, rtol, atol).ok:
+                return str(message)
+        except TypeError:
+            continue
+    return None
+
+
+def compare(
+    expected: Any,
+    got: Any,
+    rtol: float = 1e-7,
+    atol: float = 1e-9,
+    reveal: bool = True,
+    path: str = "",
+    mistakes=(),
+) -> Verdict:
+    """Compare ``got`` with ``expected``.
+
+    Floats and float arrays: equal shapes and ``|got - expected| <= atol + rtol*|expected|``
+    element-wise (NaN only matches NaN). Bools and ints: exact. Strings and None: exact.
+    Tuples/lists: same length (either container type), element by element; items of named
+    tuples are named by their fields. Dicts: same keys. :class:`Band`: every element of
+    ``got`` inside ``[lo, hi]``.
+
+    The verdict's ``message`` never contains an expected value: it says what is wrong in kind
+    (type, shape or length, NaN, the sign, a constant factor, transposed, another order, off
+    by one, a near miss) with the tolerance. ``mistakes`` is a sequence of ``(message, wrong
+    value)``: when ``got`` matches a wrong value (and not ``expected``) its message is shown.
+    ``detail`` (expected and got, with enough digits to differ) is for instructors only;
+    ``reveal=False`` leaves it without expected values too.
+
+    Examples
+    --------
+    >>> compare(2.0, 4.0).message
+    'value: too large by a factor ≈ 2.0; tolerance |got - expected| <= atol 1e-09 + rtol 1e-07·|expected|'
+    """
+    verdict = _compare(expected, got, rtol, atol, path)
+    if verdict.ok:
+        return verdict
+    named = _match_mistake(mistakes, got, rtol, atol) if mistakes else None
+    message = f"{_label(path)}: {named}" if named else verdict.message
+    return Verdict(False, message, verdict.detail if reveal else verdict.message)
+
+
+def _compare(expected: Any, got: Any, rtol: float, atol: float, path: str) -> Verdict:
+    label = _label(path)
+    if isinstance(expected, Band):
+        arr = _numeric(got)
+        if arr is None or arr.dtype.kind == "c":
+            text = f"{label}: expected a real number, got {describe(got)}"
+            return Verdict(False, text, text)
+        lo, hi = np.asarray(expected.lo, float), np.asarray(expected.hi, float)
+        try:
+            arr_b, lo_b, hi_b = np.broadcast_arrays(arr.astype(float), lo, hi)
+        except ValueError:
+            text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
+            return Verdict(False, text, text)
+        if arr.shape != np.broadcast_shapes(arr.shape, lo.shape):
+            text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
+            return Verdict(False, text, text)
+        inside = (arr_b >= lo_b) & (arr_b <= hi_b)
+        if bool(np.all(inside)):
+            return Verdict(True)
+        bad = np.argwhere(~inside)[0] if arr_b.ndim else ()
+        at = tuple(bad)
+        g = arr_b[at] if arr_b.ndim else arr_b[()]
+        low = float(lo_b[at] if lo_b.ndim else lo_b[()])
+        high = float(hi_b[at] if hi_b.ndim else hi_b[()])
+        where = _where(at, arr_b.shape)
+        if np.isnan(g):
+            return Verdict(False, f"{label}: got NaN{where}", f"{label}: got NaN{where}")
+        return Verdict(
+            False,
+            f"{label}: outside the accepted band{where} (the band allows for the Monte Carlo "
+            "spread of a right answer: the method or its parameters differ)",
+            f"{label}: got {_fmt(float(g))}{where}, outside the accepted [{_fmt(low)}, {_fmt(high)}]",
+        )
+    if expected is None:
+        text = "" if got is None else f"{label}: expected None, got {describe(got)}"
+        return Verdict(got is None, text, text)
+    if isinstance(expected, str):
+        if got == expected:
+            return Verdict(True)
+        detail = f"{label}: expected {expected!r}, got {got!r}"[:300]
+        if not isinstance(got, str):
+            return Verdict(False, f"{label}: expected a string, got {describe(got)}", detail)
+        if got.strip().casefold() == expected.strip().casefold():
+            return Verdict(False, f"{label}: differs only in upper/lower case or spaces", detail)
+        return Verdict(False, f"{label}: not the right string", detail)
+    if isinstance(expected, (tuple, list)):
+        if not isinstance(got, (tuple, list)):
+            text = f"{label}: expected a {type(expected).__name__} of length {len(expected)}, got {describe(got)}"
+            return Verdict(False, text, text)
+        if len(got) != len(expected):
+            text = f"{label}: expected length {len(expected)}, got length {len(got)}"
+            more = ""
+            if abs(len(got) - len(expected)) == 1:
+                more = f": one item too {'many' if len(got) > len(expected) else 'few'}"
+            return Verdict(False, text + more, text)
+        first = None
+        for k, (e, g) in enumerate(zip(expected, got)):
+            v = _compare(e, g, rtol, atol, _item_path(path, expected, got, k))
+            if not v.ok:
+                first = v
+                break
+        if first is None:
+            return Verdict(True)
+        if len(expected) > 1 and _is_permutation(expected, got, rtol, atol):
+            return Verdict(False, f"{label}: the right items in another order", first.detail)
+        return first
+    if isinstance(expected, dict):
+        if not isinstance(got, dict):
+            text = f"{label}: expected a dict with keys {sorted(expected)}, got {describe(got)}"
+            return Verdict(False, text, text)
+        if set(got) != set(expected):
+            text = f"{label}: expected keys {sorted(expected)}, got {sorted(map(str, got))[:10]}"
+            return Verdict(False, text, text)
+        for k in sorted(expected):
+            v = _compare(expected[k], got[k], rtol, atol, _key_path(path, k))
+            if not v.ok:
+                return v
+        return Verdict(True)
+
+    exp = _numeric(expected)
+    if exp is None:
+        raise TypeError(f"cannot compare against expected value of type {type(expected).__name__}")
+    arr = _numeric(got)
+    if arr is None:
+        text = f"{label}: expected {describe(expected)}, got {describe(got)}"
+        return Verdict(False, text, text)
+    return _compare_numbers(exp, arr, expected, got, rtol, atol, label)
+
+
+def _is_permutation(expected, got, rtol, atol) -> bool:
+    """Every item of ``got`` matches a distinct item of ``expected`` (small sequences only)."""
+    if len(expected) > 50:
+        return False
+    left = list(range(len(expected)))
+    for g in got:
+        for j in left:
+            try:
+                if _compare(expected[j], g, rtol, atol, "").ok:
+                    left.remove(j)
+                    break
+            except TypeError:
+                return False
+        else:
+            return False
+    return True
 
 
 def signature(value: Any) -> Any:
@@ -287,7 +532,13 @@ def signature(value: Any) -> Any:
         return {"none": True}
     if isinstance(value, str):
         return {"str": True}
+    if isinstance(value, (tuple, list)) and value and all(isinstance(v, str) for v in value):
+        # a list of names (a diagnosis): its length is part of the answer, not of its type
+        return {"names": True}
     if isinstance(value, (tuple, list)):
+        fields = getattr(type(value), "_fields", None)
+        if isinstance(fields, tuple) and len(fields) == len(value):
+            return {"sequence": [signature(v) for v in value], "fields": list(fields)}
         return {"sequence": [signature(v) for v in value]}
     if isinstance(value, dict):
         return {"dict": {str(k): signature(v) for k, v in value.items()}}
@@ -312,14 +563,24 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
             isinstance(got, str),
             "" if isinstance(got, str) else f"{label}: expected a string, got {describe(got)}",
         )
+    if "names" in sig:
+        ok = isinstance(got, (tuple, list)) and all(isinstance(v, str) for v in got)
+        return Verdict(
+            ok, "" if ok else f"{label}: expected a list of strings, got {describe(got)}"
+        )
     if "sequence" in sig:
         items = sig["sequence"]
         if not isinstance(got, (tuple, list)) or len(got) != len(items):
             return Verdict(
                 False, f"{label}: expected a sequence of length {len(items)}, got {describe(got)}"
             )
+        fields = sig.get("fields") or getattr(type(got), "_fields", None)
         for i, (s, g) in enumerate(zip(items, got)):
-            v = check_signature(s, g, f"{path}[{i}]" if path else f"item [{i}]")
+            if isinstance(fields, (list, tuple)) and len(fields) == len(items):
+                name = f"{path}.{fields[i]}" if path else str(fields[i])
+            else:
+                name = f"{path}[{i}]" if path else f"item [{i}]"
+            v = check_signature(s, g, name)
             if not v.ok:
                 return v
         return Verdict(True)
@@ -330,7 +591,7 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
                 False, f"{label}: expected a dict with keys {sorted(keys)}, got {describe(got)}"
             )
         for k in sorted(keys):
-            v = check_signature(keys[k], got[k], f"{path}[{k!r}]" if path else f"[{k!r}]")
+            v = check_signature(keys[k], got[k], _key_path(path, k))
             if not v.ok:
                 return v
         return Verdict(True)

@@ -25,6 +25,18 @@ from typing import Any
 
 from course.grading.identity import resolve_identities
 from course.grading.isolation import Isolation, detect
+from course.grading.marks import (
+    SHORT_ANSWERS_FILE,
+    MarksError,
+    apply_marks,
+    load_marks,
+    parse_marks_csv,
+    save_marks,
+    short_questions,
+    unimported_edits,
+    validate_marks,
+    write_short_answers,
+)
 from course.grading.reports import (
     Summary,
     append_result,
@@ -81,6 +93,7 @@ class GradeOptions:
     roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
     missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
     lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
+    short_answers: Path | None = None  # a filled marking file to merge (course.grading.marks)
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""
@@ -207,6 +220,11 @@ def grade(
         results_path.unlink()
     lock = threading.Lock()
     with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
+        marks_in = None  # a filled marking file: checked before anyone is graded
+        if options.short_answers is not None:
+            if not short_questions(grader.checks):
+                raise MarksError(f"{grader.name} has no short-answer questions to mark")
+            marks_in = parse_marks_csv(Path(options.short_answers), grader.checks)
         identity = resolve_identities(
             find_submissions(submissions, grader.name, private_dir=solution_dir),
             grader.name,
@@ -277,6 +295,7 @@ def grade(
                 fb.write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
         qids = [q.id for q in grader.questions]
         final = [rows[sub.student] for sub in todo]
+        marking = _merge_marks(grader.checks, final, out, options, marks_in, results_path)
         write_csv(final, qids, out / "grades.csv")
         summary = Summary(
             final,
@@ -288,9 +307,51 @@ def grade(
             out,
         )
         summary.flags = identity.flags
+        summary.marking = marking
         if options.roster is not None:
             _class_files(summary, grader, options, out)
         return summary
+
+
+def _merge_marks(checks, final: list, out: Path, options, entries, results_path: Path) -> str:
+    """Merge the instructor's short-answer marks into the rows (and their results and
+    feedback) and write the marking file; returns the console summary's line about it."""
+    if not short_questions(checks):
+        return ""
+    marks = load_marks(out)
+    imported = 0
+    if entries is not None:
+        new = validate_marks(Path(options.short_answers), entries, {r["student"]: r for r in final})
+        for sid, by_q in new.items():
+            marks.setdefault(sid, {}).update(by_q)
+            imported += len(by_q)
+        save_marks(out, marks)
+    for row in final:
+        if apply_marks(row, checks, marks):
+            append_result(row, results_path)
+        (out / "feedback" / f"{row['student']}.md").write_text(
+            feedback_markdown(row, checks), encoding="utf-8"
+        )
+    path = out / SHORT_ANSWERS_FILE
+    just_read = (
+        options.short_answers is not None
+        and path.exists()
+        and Path(options.short_answers).resolve() == path.resolve()
+    )
+    head = f"short answers: {imported} mark(s) imported; " if entries is not None else ""
+    edits = 0 if just_read or not path.exists() else unimported_edits(path, marks)
+    if edits:
+        return (
+            f"{head}{path} was NOT rewritten: {edits} row(s) hold marks never imported "
+            f"(import them with --short-answers {path})"
+        )
+    to_mark = write_short_answers(final, checks, path, marks)
+    return (
+        f"{head or 'short answers: '}{to_mark} to mark in {path} (fill `points`, then rerun "
+        f"with --short-answers {path})"
+        if to_mark
+        else f"{head or 'short answers: '}all marked ({path})"
+    )
 
 
 def _file_record(path: Path | None, submissions: Path) -> dict | None:

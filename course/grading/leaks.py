@@ -179,7 +179,12 @@ def needles_for(solution_dir: Path, secret: Secret | None = None, public: str = 
     checks, release = load_assignment(solution_dir)
     out: list[Needle] = []
     for cell in release.cells:
-        if cell.question:
+        if cell.question and cell.cell_type == "markdown":  # a short answer's model answer
+            if len(_norm(cell.solution_source)) > 12:
+                out.append(
+                    Needle("solution", f"{name} {cell.question}", _norm(cell.solution_source))
+                )
+        elif cell.question:
             for region in _solution_regions(cell.solution_source):
                 if _norm(region):
                     out.append(Needle("solution", f"{name} {cell.question}", _norm(region)))
@@ -201,7 +206,7 @@ def needles_for(solution_dir: Path, secret: Secret | None = None, public: str = 
                     out.append(Needle("hidden input", where, text))
                 for text in _value_texts(q.expected(case)):
                     out.append(Needle("hidden expected", where, text))
-        elif not q.public and q.data is None:
+        elif q.kind == "value" and not q.public and q.data is None:
             for text in _value_texts(q.expected()):
                 out.append(Needle("hidden expected", f"{name} {q.id}", text))
     if secret is not None:

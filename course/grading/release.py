@@ -16,6 +16,7 @@ import nbformat
 from course.grading.checks import Checks, load_checks
 from course.grading.codec import encode
 from course.grading.compare import signature
+from course.grading.items import right_options
 from course.grading.notebook import Release, make_release
 from course.grading.vocabulary import (
     CHECKS_FILE,
@@ -24,6 +25,7 @@ from course.grading.vocabulary import (
     PublicCase,
     PublicQuestion,
     PublicSpec,
+    QuestionKind,
 )
 
 __all__ = [
@@ -71,7 +73,7 @@ def public_spec(checks: Checks) -> PublicSpec:
             kind=q.kind,
             target=q.target,
             points=q.points,
-            hint=q.hint,
+            hint=q.hint if isinstance(q.hint, str) else list(q.hint),
             rtol=q.rtol,
             atol=q.atol,
             partial=q.partial,
@@ -80,7 +82,14 @@ def public_spec(checks: Checks) -> PublicSpec:
             properties=q.properties,
             public=q.public,
         )
-        if q.kind == "function":
+        if q.kind == QuestionKind.SHORT_ANSWER:
+            pass  # marked by the instructor: nothing to check in the notebook
+        elif q.kind == QuestionKind.CHOICE:
+            data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
+            right_options(q.id, q.options, q.expected(data=data))  # an option, or release fails
+            entry.options = encode(list(q.options))
+            entry.hidden_cases = 1
+        elif q.kind == "function":
             for case in q.public_cases:
                 entry.cases.append(
                     PublicCase(
@@ -88,6 +97,7 @@ def public_spec(checks: Checks) -> PublicSpec:
                         args=encode(case.args),
                         kwargs=encode(case.kwargs),
                         expected=encode(q.expected(case)),
+                        mistakes=[(m, encode(v)) for m, v in q.mistaken(case)],
                     )
                 )
             entry.hidden_cases = len(q.hidden_cases)
@@ -95,7 +105,13 @@ def public_spec(checks: Checks) -> PublicSpec:
             data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
             value = q.expected(data=data)
             if q.public:
-                entry.cases.append(PublicCase(label=q.target, expected=encode(value)))
+                entry.cases.append(
+                    PublicCase(
+                        label=q.target,
+                        expected=encode(value),
+                        mistakes=[(m, encode(v)) for m, v in q.mistaken(data=data)],
+                    )
+                )
             else:
                 entry.signature = signature(value)
                 entry.hidden_cases = 1

@@ -34,7 +34,10 @@ def _fmt_points(x: float) -> str:
 
 
 def feedback_markdown(row: dict, checks) -> str:
-    """The student's feedback: per question points, status, message and hint."""
+    """The student's feedback: per question points, status, message and hint.
+
+    It never shows an expected value (a case's ``detail`` stays in results.jsonl, for the
+    instructor) and only the first stage of staged hints."""
     lines = [f"# {checks.title}: feedback for {row['student']}", ""]
     lines.append(
         f"**Total: {_fmt_points(row['total'])} / {_fmt_points(row['max'])}**"
@@ -61,8 +64,9 @@ def feedback_markdown(row: dict, checks) -> str:
                     f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
                     + (f": {case['message']}" if case["message"] and not case["ok"] else "")
                 )
-        if q is not None and q.hint and r["points"] < r["max"]:
-            lines += ["", f"Hint: {q.hint}"]
+        if q is not None and q.hints and r["points"] < r["max"] and r["status"] != "to mark":
+            # the first stage only: the later ones (the formula) stay in the self-check
+            lines += ["", f"Hint: {q.hints[0]}"]
     if row["notes"]:
         lines += ["", "## Notes", ""] + [f"- {n}" for n in row["notes"]]
     lines.append("")
@@ -112,10 +116,25 @@ class Summary:
     flags: list = field(default_factory=list)  # doubts about who submitted what (identity)
     missing: list | None = None  # roster IDs without a submission (None: no roster)
     unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
+    marking: str = ""  # what happened to the short answers (course.grading.marks)
 
     def class_text(self) -> str:
-        """The identity flags and the roster's missing and unknown submissions."""
+        """The identity flags, deleted answer cells, the roster's missing and unknown
+        submissions and the short answers to mark."""
         lines = []
+        deleted = [
+            f"{r['student']} ("
+            + ", ".join(
+                f"{qid}: {'graded from an added cell' if how == 'adopted' else 'not answered'}"
+                for qid, how in sorted(r["deleted_answers"].items())
+            )
+            + ")"
+            for r in self.rows
+            if r.get("deleted_answers")
+        ]
+        if deleted:
+            lines.append(f"Answer cells deleted in {len(deleted)} submission(s):")
+            lines += [f"  - {text}" for text in deleted]
         if self.flags:
             lines.append(f"Check these {len(self.flags)} submission name(s):")
             lines += [f"  - {flag}" for flag in self.flags]
@@ -131,6 +150,8 @@ class Summary:
                 + (f" ({', '.join(self.unknown)})" if self.unknown else "")
                 + "; LMS files: canvas.csv, moodle.csv"
             )
+        if self.marking:
+            lines.append(self.marking)
         return "\n".join(lines)
 
     def text(self) -> str:

@@ -1,9 +1,11 @@
 """The student's self-check: ``check = Assignment.load(name, student_id=STUDENT_ID)``.
 
 ``check("q1")`` finds the answer (variable or function) in the notebook, runs the PUBLIC cases
-shipped in ``checks.json`` and prints, per case, pass or fail: on failure the hint first, then a
-compact expected-vs-got line (shape, largest error and where, the tolerance). It never shows test
-code, and says how many hidden cases run at grading. ``check("q1", value)`` checks an explicit
+shipped in ``checks.json`` and prints, per case, pass or fail: on failure a hint (staged: a nudge
+first, more after repeated failures, counted in this kernel) and what is wrong IN KIND (shape,
+NaN, sign, a constant factor, transposed, off by one, another order, a declared mistake) with the
+tolerance. It never prints an expected value, never shows test code, and says how many hidden
+cases run at grading. A forbidden library call is a FAIL, as it scores 0 at grading. ``check("q1", value)`` checks an explicit
 value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
 
 In the grader's sandbox the same setup cell returns a silent stand-in (no checks run in the
@@ -13,14 +15,18 @@ student's process); see :mod:`course.grading.runner`.
 from __future__ import annotations
 
 import contextlib
+import inspect
 import json
 import os
+import re
 import sys
 from pathlib import Path
 from typing import Any
 
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, compare, describe
+from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
+from course.grading.notebook import forbidden_mentions
 from course.grading.personal import PersonalData
 from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
@@ -100,8 +106,11 @@ class Assignment:
         self._questions: dict[str, PublicQuestion] = {q.id: q for q in spec.questions}
         self._data_module = data_module
         self._data_cache: dict[str, Any] = {}
+        self._failures: dict[str, int] = {}  # failed self-checks per question: hint stage
         # a graded class's data, issued by the instructor (None: drawn here from data.py)
         self.personal = PersonalData.read(folder) if data_module is None else None
+        # which cell set each answer (notes an answer set outside its answer cell)
+        self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -169,11 +178,13 @@ class Assignment:
         return f"<self-check of {self.name}: {len(self._questions)} questions; call check('q1')>"
 
     def all(self, namespace: dict | None = None) -> None:
-        """Self-check every question in turn."""
+        """Self-check every question in turn, then sum up (:func:`public_summary`)."""
         ns = namespace if namespace is not None else sys._getframe(1).f_globals
+        earned = {}
         for qid in self._questions:
-            self._check(qid, ns, None, False)
+            earned[qid] = self._check(qid, ns, None, False)
             print()
+        print(public_summary(self.spec, earned))
 
     def __call__(self, qid: str, *value) -> None:
         """Self-check question ``qid``; pass ``value`` to check it instead of the notebook's."""
@@ -181,30 +192,64 @@ class Assignment:
             raise TypeError("check(question) or check(question, value)")
         self._check(qid, sys._getframe(1).f_globals, value[0] if value else None, bool(value))
 
-    def _check(self, qid, ns, value, explicit) -> None:
+    def _check(self, qid, ns, value, explicit) -> float:
+        """Print the self-check of ``qid``; return the points its public checks give."""
+        earned = self._check_one(qid, ns, value, explicit)
+        q = self._questions.get(qid)
+        note = self._cells.note(qid, q.target) if q is not None and not explicit else None
+        if note:
+            print(note)
+        return earned
+
+    def _check_one(self, qid, ns, value, explicit) -> float:
         if qid not in self._questions:
             print(
                 f"{qid}: no such question in {self.name} (questions: {', '.join(self._questions)})"
             )
-            return
+            return 0.0
         q = self._questions[qid]
+        if q.kind in ITEM_KINDS:  # choice, short answer: never right/wrong here
+            self_check_item(q, value if explicit else ns.get(q.target, _MISSING), _MISSING)
+            return 0.0
         points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
         print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")
         if q.kind == "function":
-            self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
+            fraction = self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
         else:
-            self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
+            source = None if explicit else _answer_source(ns, q.target)
+            fraction = self._check_value(
+                q, value if explicit else ns.get(q.target, _MISSING), source
+            )
+        return q.points * float(fraction or 0.0)
 
-    def _fail(self, q, message: str) -> None:
-        print("  FAIL")
-        if q.hint:
-            print(f"      Hint: {q.hint}")
-        print(f"      {message}")
+    # -- hints --------------------------------------------------------------------------
+    def _failed(self, q) -> str:
+        """Count one failed self-check of ``q`` and return the hint line it earns ('' if none).
+
+        After the k-th failure the student sees stage ``min(k, n) - 1`` of the n stages: a
+        nudge first, the formula only after repeated failures. The count lives in this object,
+        i.e. in the kernel's memory, and starts again with a fresh kernel.
+        """
+        self._failures[q.id] = self._failures.get(q.id, 0) + 1
+        stages = q.hints
+        if not stages:
+            return ""
+        k = min(self._failures[q.id], len(stages))
+        if len(stages) == 1:
+            return f"Hint: {stages[0]}"
+        more = " (another failed check shows the next one)" if k < len(stages) else ""
+        return f"Hint {k} of {len(stages)}{more}: {stages[k - 1]}"
 
     def _not_answered(self, q, why: str) -> None:
         print(f"  not answered yet: {why}")
 
-    def _check_value(self, q, got) -> None:
+    def _forbidden_fail(self, q, names) -> None:
+        print(
+            f"  FAIL: your answer uses {', '.join(sorted(names))}, which this question forbids: "
+            "it scores 0 at grading whatever it returns. Compute it with numpy instead."
+        )
+
+    def _check_value(self, q, got, source: str | None):  # -> 1.0 or 0.0 when public, else None
         if got is _MISSING:
             return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
@@ -212,19 +257,40 @@ class Assignment:
         try:
             got = decode(encode(got))
         except TypeError as exc:
+            hint = self._failed(q)
             print(f"  FAIL: {q.target} must be plain numbers/arrays/bools/strings ({exc})")
+            if hint:
+                print(f"      {hint}")
+            return
+        forbidden = forbidden_mentions(source, q.forbid) if source and q.forbid else []
+        if forbidden:
+            self._forbidden_fail(q, forbidden)
+            hint = self._failed(q)
+            if hint:
+                print(f"      {hint}")
             return
         if q.cases:
-            expected = decode(q.cases[0].expected)
-            verdict = compare(expected, got, q.rtol, q.atol)
+            case = q.cases[0]
+            verdict = compare(
+                decode(case.expected),
+                got,
+                q.rtol,
+                q.atol,
+                path=q.target,
+                mistakes=[(m, decode(v)) for m, v in case.mistakes],
+            )
             if verdict.ok:
                 print("  PASS")
-            else:
-                self._fail(q, verdict.message)
-            return
+                return 1.0
+            print("  FAIL")
+            hint = self._failed(q)
+            if hint:
+                print(f"      {hint}")
+            print(f"      {verdict.message}")
+            return 0.0
         # private value (per-student or not public): type/shape, then public properties
         results = []
-        verdict = check_signature(q.signature, got)
+        verdict = check_signature(q.signature, got, path=q.target)
         results.append((f"type and shape ({_sig_text(q.signature)})", verdict.ok, verdict.message))
         if verdict.ok and q.properties:
             try:
@@ -236,8 +302,9 @@ class Assignment:
                     ("properties", False, f"could not evaluate: {type(exc).__name__}: {exc}")
                 )
         failed = [r for r in results if not r[1]]
-        if failed and q.hint:
-            print(f"  Hint: {q.hint}")
+        hint = self._failed(q) if failed else ""
+        if hint:
+            print(f"  {hint}")
         for text, ok, message in results:
             print(
                 f"  {'PASS' if ok else 'FAIL'}: {text}" + (f"\n      {message}" if message else "")
@@ -247,14 +314,18 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func) -> None:
+    def _check_function(self, q, func):  # -> the fraction of public cases that count
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
+            hint = self._failed(q)
             print(f"  FAIL: {q.target} is {describe(func)}, not a function")
+            if hint:
+                print(f"      {hint}")
             return
-        passed, hint_shown = 0, False
-        forbidden: set[str] = set()
+        forbidden: set[str] = set(forbidden_mentions(_source_of(func), q.forbid))
+        passed = 0
+        lines: list[str] = []
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
@@ -269,7 +340,13 @@ class Assignment:
                 if got is Ellipsis:
                     return self._not_answered(q, f"{q.target} returns ...")
                 try:
-                    verdict = compare(decode(case.expected), decode(encode(got)), q.rtol, q.atol)
+                    verdict = compare(
+                        decode(case.expected),
+                        decode(encode(got)),
+                        q.rtol,
+                        q.atol,
+                        mistakes=[(m, decode(v)) for m, v in case.mistakes],
+                    )
                     message = verdict.message
                 except TypeError as exc:
                     verdict, message = (
@@ -278,13 +355,9 @@ class Assignment:
                     )
             if verdict is not None and verdict.ok:
                 passed += 1
-                print(f"  PASS: {case.label}")
-                continue
-            print(f"  FAIL: {case.label}")
-            if q.hint and not hint_shown:
-                print(f"      Hint: {q.hint}")
-                hint_shown = True
-            print(f"      {message}")
+                lines.append(f"  PASS: {case.label}")
+            else:
+                lines.append(f"  FAIL: {case.label}\n      {message}")
         n = len(q.cases)
         hidden = q.hidden_cases
         more = (
@@ -292,12 +365,50 @@ class Assignment:
             if hidden
             else ""
         )
-        print(f"  {passed} of {n} public case{'s pass' if n != 1 else ' passes'}{more}.")
         if forbidden:
+            self._forbidden_fail(q, forbidden)
+            hint = self._failed(q)
+            if hint:
+                print(f"      {hint}")
             print(
-                f"  Warning: your function calls {', '.join(sorted(forbidden))}, which this question "
-                "forbids: it would score 0 at grading. Use numpy primitives instead."
+                f"  0 of {n} public case{'s count' if n != 1 else ' counts'} while the forbidden "
+                f"call stays ({passed} of {n} give the right values){more}."
             )
+            return 0.0
+        if passed < n:
+            hint = self._failed(q)
+            if hint:
+                print(f"  {hint}")
+        for line in lines:
+            print(line)
+        print(f"  {passed} of {n} public case{'s pass' if n != 1 else ' passes'}{more}.")
+        return passed / n if q.partial or passed == n else 0.0
+
+
+def public_summary(spec: PublicSpec, earned: dict) -> str:
+    """The last line of ``check.all()``: "N of M points from public checks; K hidden cases at
+    grading", and what else only grading decides. ``earned``: question -> points."""
+    covered = sum(q.points for q in spec.questions if q.kind == "function" or q.cases)
+    hidden = sum(q.hidden_cases for q in spec.questions if q.kind != "short_answer")
+    later = [q for q in spec.questions if q.kind != "function" and not q.cases]
+    line = (
+        f"{sum(earned.values()):g} of {covered:g} points from public checks; "
+        f"{hidden} hidden case{'s' if hidden != 1 else ''} at grading"
+    )
+    if later:
+        kinds = sorted(
+            {
+                {"choice": "choices", "short_answer": "short answers"}.get(
+                    q.kind, "personal or private values"
+                )
+                for q in later
+            }
+        )
+        line += (
+            f"; {sum(q.points for q in later):g} more points ({', '.join(kinds)}) are decided "
+            "only at grading"
+        )
+    return f"{line} ({spec.max_points:g} points in total)."
 
 
 class _Missing:
@@ -308,9 +419,32 @@ class _Missing:
 _MISSING = _Missing()
 
 
+def _source_of(func) -> str:
+    """The source of a student's function ('' when Python cannot find it)."""
+    try:
+        return inspect.getsource(func)
+    except (OSError, TypeError):
+        return ""
+
+
+def _answer_source(ns: dict, target: str) -> str | None:
+    """The last notebook cell that assigns ``target`` (IPython's input history ``In``), the
+    same text the grader scans for forbidden names; None outside IPython."""
+    history = ns.get("In")
+    if not isinstance(history, list):
+        return None
+    assigns = re.compile(rf"^\s*{re.escape(target)}\s*(?::[^=]*)?=(?!=)", re.MULTILINE)
+    for source in reversed(history):
+        if isinstance(source, str) and assigns.search(source):
+            return source
+    return None
+
+
 def _sig_text(sig) -> str:
     if "kind" in sig:
         return f"{sig['kind']}" + (f", shape {tuple(sig['shape'])}" if sig["shape"] else " scalar")
+    if "names" in sig:
+        return "a list of strings"
     if "sequence" in sig:
         return f"sequence of {len(sig['sequence'])}"
     if "dict" in sig:

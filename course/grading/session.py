@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
+from course.grading.items import choice_verdict, is_unanswered_text
 from course.grading.notebook import (
     SubmissionError,
     build_plan,
@@ -33,8 +34,10 @@ from course.grading.vocabulary import (
     CellOrigin,
     GradeStatus,
     Op,
+    QuestionKind,
     ReplyStatus,
     SubmissionStatus,
+    answer_cell_id,
 )
 
 if TYPE_CHECKING:
@@ -50,6 +53,8 @@ def _version() -> str:
 
 
 _HEX = re.compile(r"0x[0-9a-fA-F]{6,}")
+#: The longest short answer kept (characters): the rest is cut in the marking file.
+MAX_SHORT_ANSWER = 20_000
 
 
 class AssignmentGrader:
@@ -78,6 +83,15 @@ class AssignmentGrader:
         }
         self.value_expected = {
             q.id: q.expected() for q in self.questions if q.kind == "value" and q.data is None
+        }
+        # declared mistakes (message, wrong value) of the same cases: named in the feedback
+        self.case_mistakes = {
+            q.id: [q.mistaken(case) for case in q.public_cases + q.hidden_cases]
+            for q in self.questions
+            if q.kind == "function"
+        }
+        self.value_mistakes = {
+            q.id: q.mistaken() for q in self.questions if q.kind == "value" and q.data is None
         }
         solutions_root = (
             self.solution_dir.parent
@@ -222,8 +236,10 @@ class AssignmentGrader:
                     q, GradeStatus.NOT_ANSWERED, "not graded: the notebook could not be read"
                 )
             return
-        plan = build_plan(self.release, nb, sid)
+        plan = build_plan(self.release, nb, sid, {q.id: q.target for q in self.questions})
         row["notes"].extend(plan.notes)
+        if plan.deleted:
+            row["deleted_answers"] = dict(plan.deleted)
         nb_id = plan.notebook_student_id
         if nb_id is not None and nb_id.strip() == PLACEHOLDER_ID:
             row["notes"].append(
@@ -366,7 +382,13 @@ class StudentSession:
     def run(self) -> None:
         try:
             for q in self.g.questions:
-                self.row["questions"][q.id] = self._grade_question(q)
+                result = self._grade_question(q)
+                if self.plan.deleted.get(q.id) == "adopted":
+                    result["message"] = (
+                        f"graded from your added cell (the answer cell of {q.id} was deleted)"
+                        + (f"; {result['message']}" if result["message"] else "")
+                    )
+                self.row["questions"][q.id] = result
         finally:
             self._drop_child()
 
@@ -382,8 +404,14 @@ class StudentSession:
         g = self.g
         if q.id not in self.plan.answered:
             return g._question_result(
-                q, GradeStatus.NOT_ANSWERED, "no answer cell found (deleted?)"
+                q,
+                GradeStatus.NOT_ANSWERED,
+                f"the answer cell of {q.id} (id {answer_cell_id(q.id)!r}) is missing from the "
+                "notebook (deleted?)"
+                + (f" and no added cell defines {q.target}" if q.target else ""),
             )
+        if q.kind == QuestionKind.SHORT_ANSWER:
+            return self._grade_short_answer(q)
         static = forbidden_mentions(self.plan.answer_sources.get(q.id, ""), q.forbid)
         if static:
             return g._question_result(
@@ -404,9 +432,51 @@ class StudentSession:
                 GradeStatus.FORBIDDEN,
                 f"the answer calls {', '.join(sorted(self.hits[q.id]))}, which this question forbids",
             )
+        if q.kind == QuestionKind.CHOICE:
+            return self._grade_choice(q)
         if q.kind == "value":
             return self._grade_value(q)
         return self._grade_function(q)
+
+    def _grade_short_answer(self, q) -> dict:
+        """A short answer waits for the instructor's mark (course grade --short-answers)."""
+        text = self.plan.texts.get(q.id, "")
+        if is_unanswered_text(text):
+            return self.g._question_result(
+                q, GradeStatus.NOT_ANSWERED, "the answer cell still holds its placeholder"
+            )
+        result = self.g._question_result(
+            q, GradeStatus.TO_MARK, "your instructor marks this answer", 0.0
+        )
+        result["answer"] = text[:MAX_SHORT_ANSWER]
+        return result
+
+    def _grade_choice(self, q) -> dict:
+        g = self.g
+        try:
+            reply = self._request(q.id, Op.VALUE, 30, name=q.target)
+        except (ChildTimeout, ChildDied) as exc:
+            self._drop_child()
+            return g._question_result(
+                q,
+                GradeStatus.CRASH,
+                f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})",
+            )
+        status = reply.get("status")
+        if status == ReplyStatus.UNDEFINED:
+            return self._missing(q, f"no variable {q.target}")
+        if status == ReplyStatus.STUB:
+            return g._question_result(q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ...")
+        try:
+            got = decode(reply.get("value"), allow_band=False) if status == ReplyStatus.OK else None
+        except (EncodingError, TypeError, ValueError, KeyError):
+            got = None
+        expected = q.expected(data=self.data[q.data] if q.data is not None else None)
+        ok, message = choice_verdict(q.id, q.options, expected, got)
+        case = {"label": q.target, "ok": ok, "message": message}
+        if ok:
+            return g._question_result(q, GradeStatus.PASS, "", q.points, [case])
+        return g._question_result(q, GradeStatus.FAIL, message, 0.0, [case])
 
     def _missing(self, q, what: str) -> dict:
         err = self._answer_cell_error(q.id)
@@ -445,10 +515,15 @@ class StudentSession:
             return g._question_result(q, GradeStatus.ERROR, f"{q.target} could not be read")
         if q.data is not None:
             expected = q.expected(data=self.data[q.data])
+            mistakes = q.mistaken(data=self.data[q.data]) if q.mistakes else []
         else:
             expected = g.value_expected[q.id]
-        verdict = compare(expected, got, q.rtol, q.atol, reveal=q.public)
+            mistakes = g.value_mistakes[q.id]
+        # message: for the student, never an expected value; detail: the instructor's records
+        verdict = compare(expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes)
         case = {"label": q.target, "ok": verdict.ok, "message": verdict.message}
+        if not verdict.ok:
+            case["detail"] = verdict.detail
         if verdict.ok:
             return g._question_result(q, GradeStatus.PASS, "", q.points, [case])
         message = verdict.message
@@ -465,7 +540,7 @@ class StudentSession:
         status = None
         first_message = ""
         n_hidden = 0
-        for case, exp in zip(cases, expected):
+        for case, exp, mistakes in zip(cases, expected, g.case_mistakes[q.id]):
             if case.hidden:
                 n_hidden += 1
                 label = f"hidden case {n_hidden}"
@@ -537,8 +612,10 @@ class StudentSession:
             except (EncodingError, TypeError, ValueError, KeyError):
                 results.append({"label": label, "ok": False, "message": "unreadable result"})
                 continue
-            verdict = compare(exp, got, q.rtol, q.atol, reveal=not case.hidden)
+            verdict = compare(exp, got, q.rtol, q.atol, mistakes=mistakes)
             results.append({"label": label, "ok": verdict.ok, "message": verdict.message})
+            if not verdict.ok:
+                results[-1]["detail"] = verdict.detail  # instructor only (results.jsonl)
             if not verdict.ok:
                 first_message = first_message or f"{label}: {verdict.message}"
         if self.hits.get(q.id):

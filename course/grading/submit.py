@@ -20,6 +20,7 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
+from course.grading.items import is_unanswered_text
 from course.grading.notebook import SubmissionError, read_submission, student_id_in
 from course.grading.personal import PersonalData
 from course.grading.secret import public_key_id
@@ -79,6 +80,8 @@ def unanswered_questions(nb: dict) -> list[str]:
             continue
         src = _source(cell)
         stub = "raise NotImplementedError(" in src and "not answered yet" in src
+        if cell.get("cell_type") == "markdown":  # a short answer: still its placeholder?
+            stub = is_unanswered_text(src)
         if stub or src.strip().endswith("= ..."):
             out.append(str(meta["question"]))
     return out

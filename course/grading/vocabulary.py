@@ -31,8 +31,10 @@ __all__ = [
     "PublicCase",
     "PublicQuestion",
     "PublicSpec",
+    "QuestionKind",
     "ReplyStatus",
     "SubmissionStatus",
+    "answer_cell_id",
     "check_student_id",
     "is_student_id",
 ]
@@ -102,6 +104,20 @@ class CellRole(_Word):
     TEXT = "text"  # markdown and raw cells
 
 
+class QuestionKind(_Word):
+    """What a question asks for (``Question.kind``, ``checks.json``)."""
+
+    VALUE = "value"  # a variable, compared with the reference value
+    FUNCTION = "function"  # a function, called on public and hidden cases
+    CHOICE = "choice"  # one of a list of options (multiple choice), graded at grading only
+    SHORT_ANSWER = "short_answer"  # text in a markdown cell, marked by the instructor
+
+
+#: The id of the answer cell of question ``qid`` in every release (the grader finds it by it).
+def answer_cell_id(qid: str) -> str:
+    return f"{qid}-answer"
+
+
 class CellOrigin(_Word):
     """Where a cell the grader runs comes from."""
 
@@ -149,6 +165,8 @@ class GradeStatus(_Word):
     FORBIDDEN = "forbidden"
     GRADER_ERROR = "grader error"
     SKIPPED = "skipped"
+    TO_MARK = "to mark"  # a short answer the instructor has not marked yet
+    MARKED = "marked"  # a short answer marked by the instructor (course grade --short-answers)
 
 
 #: Question statuses that the submission's status lists (``"q1: timeout; q3: forbidden"``).
@@ -178,12 +196,14 @@ class SubmissionStatus(_Word):
 # --------------------------------------------------------------------------------------
 @dataclass
 class PublicCase:
-    """One public case: the encoded arguments (function questions) and expected value."""
+    """One public case: the encoded arguments (function questions) and expected value, and
+    the declared mistakes as ``[message, encoded wrong value]`` pairs."""
 
     label: str
     expected: Any
     args: Any = None
     kwargs: Any = None
+    mistakes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         out: dict = {"label": self.label}
@@ -191,11 +211,14 @@ class PublicCase:
             out["args"] = self.args
             out["kwargs"] = self.kwargs
         out["expected"] = self.expected
+        if self.mistakes:
+            out["mistakes"] = [[str(m), v] for m, v in self.mistakes]
         return out
 
     @classmethod
     def from_dict(cls, d: dict) -> PublicCase:
-        return cls(d["label"], d["expected"], d.get("args"), d.get("kwargs"))
+        mistakes = [(str(m), v) for m, v in d.get("mistakes", [])]
+        return cls(d["label"], d["expected"], d.get("args"), d.get("kwargs"), mistakes)
 
 
 @dataclass
@@ -206,7 +229,7 @@ class PublicQuestion:
     kind: str  # "value" or "function"
     target: str
     points: float
-    hint: str = ""
+    hint: str | list = ""  # one stage, or the list of staged hints
     rtol: float = 1e-7
     atol: float = 1e-9
     partial: bool = True
@@ -217,6 +240,14 @@ class PublicQuestion:
     cases: list[PublicCase] = field(default_factory=list)
     hidden_cases: int = 0
     signature: dict | None = None  # type and shape of a value that is not shipped
+    options: list | None = None  # a choice question's options (encoded plain data)
+
+    @property
+    def hints(self) -> list[str]:
+        """The hint stages (one stage when ``hint`` is a string; none when it is empty)."""
+        if isinstance(self.hint, str):
+            return [self.hint] if self.hint else []
+        return [str(h) for h in self.hint]
 
     def to_dict(self) -> dict:
         out = {
@@ -224,7 +255,7 @@ class PublicQuestion:
             "kind": self.kind,
             "target": self.target,
             "points": self.points,
-            "hint": self.hint,
+            "hint": self.hint if isinstance(self.hint, str) else list(self.hint),
             "rtol": self.rtol,
             "atol": self.atol,
             "partial": self.partial,
@@ -237,6 +268,8 @@ class PublicQuestion:
         }
         if self.signature is not None:
             out["signature"] = self.signature
+        if self.options is not None:
+            out["options"] = self.options
         return out
 
     @classmethod
@@ -257,6 +290,7 @@ class PublicQuestion:
             cases=[PublicCase.from_dict(c) for c in d.get("cases", [])],
             hidden_cases=int(d.get("hidden_cases", 0)),
             signature=d.get("signature"),
+            options=d.get("options"),
         )
 
 

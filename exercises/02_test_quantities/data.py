@@ -23,9 +23,10 @@ def record(rng):
     mode = int(rng.integers(0, 4))
     if mode > 0:
         theta[mode - 1] += rng.choice([-1.0, 1.0]) * rng.uniform(0.3, 0.5)
-    sigma = 0.1
+    sigma = float(rng.choice([0.08, 0.1, 0.12]))
+    alpha = float(rng.choice([0.01, 0.05]))
     y = U @ theta + sigma * rng.standard_normal(N)
-    return {"U": U, "y": np.round(y, 4), "sigma": sigma, "alpha": 0.01}
+    return {"U": U, "y": np.round(y, 4), "sigma": sigma, "alpha": alpha}
 
 
 def statistics_properties(d, value):
@@ -38,6 +39,12 @@ def statistics_properties(d, value):
             bool(v.shape == (3,) and np.all(v >= 0)),
         ),
     ]
+
+
+def threshold_properties(d, value):
+    """Public sanity checks of a threshold on T (they do not reveal it)."""
+    ok = np.ndim(value) == 0 and np.isfinite(float(value)) and float(value) > 0
+    return [("a positive number", bool(ok))]
 
 
 def diagnosis_properties(d, value):

@@ -34,13 +34,22 @@ def record(rng):
         "q_beta": 1e-4,
         "u": u,
         "y": y,
-        "window": 10,
-        "alpha": 0.001,
+        "window": int(rng.choice([8, 10, 12])),
+        "alpha": float(rng.choice([0.001, 0.002])),
     }
 
 
 def record_alarm_properties(d, value):
-    """Public sanity checks of the first alarm time (they do not reveal it)."""
+    """Public sanity checks of ``alarm = (threshold, first_alarm)`` (they do not reveal it)."""
     N, L = len(d["y"]), d["window"]
-    ok = np.ndim(value) == 0 and float(value) == int(value) and L - 1 <= int(value) < N
-    return [(f"an integer sample index between {L - 1} and {N - 1}", bool(ok))]
+    try:
+        threshold, first = value
+        ok_thr = np.ndim(threshold) == 0 and bool(np.isfinite(float(threshold)))
+        ok_thr = ok_thr and float(threshold) > 0
+        ok_first = np.ndim(first) == 0 and float(first) == int(first) and L - 1 <= int(first) < N
+    except (TypeError, ValueError):
+        return [("a pair (threshold, first_alarm)", False)]
+    return [
+        ("a positive, finite threshold", bool(ok_thr)),
+        (f"first_alarm: an integer sample index between {L - 1} and {N - 1}", bool(ok_first)),
+    ]

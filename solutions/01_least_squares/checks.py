@@ -5,10 +5,10 @@ are sent to the student's function only at grading time.
 """
 
 import numpy as np
-from scipy import stats
+from scipy import linalg, stats
 
 from course import lsq
-from course.grading.checks import Checks, binomial_band
+from course.grading.checks import Checks, Mistake
 
 from . import data
 
@@ -37,6 +37,17 @@ Q6 = _correlated(6, 0.4, 2.0) + np.diag(_R6.uniform(0.1, 0.5, 6))
 Y6 = A6 @ np.array([1.0, -2.0, 0.3]) + np.linalg.cholesky(Q6) @ _R6.standard_normal(6)
 Y6[2] += 9.0
 
+# The public practice survey of q6_practice and q7_practice (data.survey's design, seed 2026):
+# the largest |e| (index 6) is not the blunder, which only the w-test finds.
+Y_PRACTICE = np.array(
+    [12.320, 11.816, 10.894, 11.593, 8.132, 12.332, 18.837, 13.281, 15.585, 12.036, 14.720, 11.788]
+)
+SIGMA_PRACTICE = np.array(
+    [0.967, 0.871, 0.855, 1.291, 0.433, 0.677, 2.979, 0.798, 1.467, 1.420, 1.136, 1.253]
+)
+A_PRACTICE = np.column_stack([np.ones(12), np.arange(12.0)])
+Q_PRACTICE = np.diag(SIGMA_PRACTICE**2)
+
 CHECKS = Checks(
     "01_least_squares",
     title="Assignment 1: least-squares validation",
@@ -52,11 +63,26 @@ CHECKS = Checks(
     points=1,
     rtol=1e-8,
     atol=1e-8,
-    hint="Stack a column of ones and the times into A, then solve the least-squares problem "
-    "(np.linalg.lstsq, or lsq.fit). The chapter's answer is a round pair.",
+    hint=(
+        "Two unknowns: the position at t0 and the velocity. Which data set does q1 ask for?",
+        "Stack a column of ones and the times into A, then solve the least-squares problem "
+        "(np.linalg.lstsq, or lsq.fit). The chapter's answer is a round pair.",
+    ),
+    mistakes=[
+        Mistake("this is the estimate of day 2's data, not day 1's", lambda: _fit(Y_DAY2)),
+        Mistake(
+            "the order looks like (velocity, position): x_hat is (x1, x2) = (position at t0, "
+            "velocity), the columns of A",
+            lambda: _fit(Y_DAY1)[::-1],
+        ),
+    ],
 )
 def q1():
     return lsq.fit(A_LINE, Y_DAY1).x_hat
+
+
+def _fit(y):
+    return lsq.fit(A_LINE, y).x_hat
 
 
 @CHECKS.value(
@@ -65,8 +91,18 @@ def q1():
     points=1,
     rtol=1e-8,
     atol=1e-8,
-    hint="Residuals are observations minus adjusted observations: e = y - A x_hat, "
-    "in the order of the observations.",
+    hint=(
+        "Residuals belong to one fit: estimate x_hat from day 2's data, then compare.",
+        "Residuals are observations minus adjusted observations: e = y - A x_hat, in the order "
+        "of the observations.",
+    ),
+    mistakes=[
+        Mistake("these are the residuals of day 1", lambda: lsq.fit(A_LINE, Y_DAY1).e_hat),
+        Mistake(
+            "day 2's data minus day 1's fit: x_hat must come from the same data",
+            lambda: Y_DAY2 - A_LINE @ lsq.fit(A_LINE, Y_DAY1).x_hat,
+        ),
+    ],
 )
 def q2():
     return lsq.fit(A_LINE, Y_DAY2).e_hat
@@ -79,21 +115,60 @@ def q2():
     rtol=1e-6,
     atol=1e-8,
     forbid=["course.lsq.overall_model_test", "course.lsq.fit", "course.lsq.data_snooping"],
-    hint="T = e^T Qyy^{-1} e with the WEIGHTED residuals, m - n degrees of freedom, and the "
-    "critical value scipy.stats.chi2.isf(alpha, m - n). Avoid inverting Qyy: whiten with "
-    "its Cholesky factor. Return (T, critical_value, reject).",
+    hint=(
+        "Does your T change when Qyy changes? Each residual must be weighed by the precision of "
+        "its observation.",
+        "How many degrees of freedom does T have when n parameters are estimated from m "
+        "observations? The test rejects in the upper tail only.",
+        "T = e^T Qyy^{-1} e with the WEIGHTED residuals, m - n degrees of freedom, and the "
+        "critical value scipy.stats.chi2.isf(alpha, m - n). Avoid inverting Qyy: whiten with "
+        "its Cholesky factor. Return (T, critical_value, reject).",
+    ),
+    mistakes=[
+        Mistake(
+            "T looks unweighted: Qyy was ignored (the fit and T must both use Qyy)",
+            lambda A, y, Qyy, alpha: _omt(
+                A, y, np.eye(len(y)), alpha, np.shape(A)[0] - np.shape(A)[1]
+            ),
+        ),
+        Mistake(
+            "the critical value looks like chi2 with m degrees of freedom: n parameters were "
+            "estimated",
+            lambda A, y, Qyy, alpha: _omt(A, y, Qyy, alpha, np.shape(A)[0]),
+        ),
+        Mistake(
+            "the critical value looks two-sided (alpha/2): the overall model test rejects in the "
+            "upper tail only",
+            lambda A, y, Qyy, alpha: _omt(A, y, Qyy, alpha / 2, np.shape(A)[0] - np.shape(A)[1]),
+        ),
+    ],
 )
 def q3(A, y, Qyy, alpha):
     result = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)
     return (result.statistic, result.critical_value, bool(result.reject))
 
 
+def _omt(A, y, Qyy, alpha, dof):
+    """(T, critical value, reject) with the given weights, level and degrees of freedom."""
+    stat = lsq.fit(A, y, Qyy).squared_norm
+    c = float(stats.chi2.isf(alpha, dof))
+    return (stat, c, bool(stat > c))
+
+
 q3.case(A_LINE, Y_DAY1, I4, 0.01, label="day 1 of the line fit, alpha = 0.01")
 q3.case(A_LINE, Y_DAY2, I4, 0.01, label="day 2 of the line fit, alpha = 0.01")
+q3.case(
+    A_LINE,
+    Y_DAY2,
+    np.diag([1.0, 4.0, 4.0, 1.0]),
+    0.01,
+    label="day 2 with sigma = 2 for the two middle observations (Qyy not I), alpha = 0.01",
+)
 ### BEGIN HIDDEN TESTS
 q3.case(A_SEA, Y_SEA, np.eye(5), 0.10, hidden=True)
 q3.case(A_QUAD, Y_DAY2, np.diag([1.0, 4.0, 4.0, 1.0]), 0.05, hidden=True)
 q3.case(A6, Y6, Q6, 0.05, hidden=True)
+q3.case(A_SEA, Y_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), 0.10, hidden=True)
 ### END HIDDEN TESTS
 
 
@@ -104,9 +179,20 @@ q3.case(A6, Y6, Q6, 0.05, hidden=True)
     rtol=1e-6,
     atol=1e-8,
     forbid=["course.lsq.w_tests", "course.lsq.fit", "course.lsq.data_snooping"],
-    hint="Baarda: w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii) with "
-    "Qee = Qyy - A Qxx A^T; for a diagonal Qyy this is e_i / sigma_ei. "
-    "Return one w per observation.",
+    hint=(
+        "Each residual is divided by ITS OWN standard deviation, which is smaller than that of "
+        "its observation: the fit has absorbed part of the noise.",
+        "Baarda: w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii) with "
+        "Qee = Qyy - A Qxx A^T; for a diagonal Qyy this is e_i / sigma_ei. "
+        "Return one w per observation.",
+    ),
+    mistakes=[
+        Mistake(
+            "looks like e_i / sigma_yi: divide by the residual's standard deviation (from Qee), "
+            "not the observation's",
+            lambda A, y, Qyy: lsq.fit(A, y, Qyy).e_hat / np.sqrt(np.diag(Qyy)),
+        ),
+    ],
 )
 def q4(A, y, Qyy):
     return np.asarray(lsq.w_tests(lsq.fit(A, y, Qyy), 0.05).w)
@@ -123,15 +209,69 @@ q4.case(A6, Y6, Q6, hidden=True)
     "q5",
     var="band_t2",
     points=1,
-    rtol=1e-6,
+    rtol=1e-4,  # the printed 1.96 is as right as norm.isf(0.025) = 1.959964
     atol=1e-8,
-    hint="sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
-    "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).",
+    hint=(
+        "y_hat_2 = a^T x_hat is a linear function of x_hat: propagate Qxx through a.",
+        "sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
+        "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).",
+    ),
+    mistakes=[
+        Mistake(
+            "the half-width looks one-sided (z_0.05): a 95 % interval leaves 2.5 % in each tail",
+            lambda: (_sigma_t2(), float(stats.norm.isf(0.05)) * _sigma_t2()),
+        ),
+        Mistake(
+            "looks like the variance a^T Qxx a, not its square root",
+            lambda: (_sigma_t2() ** 2, float(stats.norm.isf(0.025)) * _sigma_t2() ** 2),
+        ),
+    ],
 )
 def q5():
     f = lsq.fit(A_LINE, Y_DAY1)
     _, half = lsq.confidence_band(f, np.array([[1.0, 2.0]]), level=0.95)
     return (float(f.sigma_y_hat[1]), float(half[0]))
+
+
+def _sigma_t2():
+    return float(lsq.fit(A_LINE, Y_DAY1).sigma_y_hat[1])
+
+
+@CHECKS.value(
+    "q6_practice",
+    var="T_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-8,
+    hint="The same computation as q6, on the public survey of the notebook: fit with its "
+    "(diagonal, not identity) Qyy and take the overall model test statistic.",
+    mistakes=[
+        Mistake(
+            "T looks unweighted: Qyy was ignored",
+            lambda: lsq.fit(A_PRACTICE, Y_PRACTICE).squared_norm,
+        )
+    ],
+)
+def q6_practice():
+    return lsq.overall_model_test(lsq.fit(A_PRACTICE, Y_PRACTICE, Q_PRACTICE), 0.01).statistic
+
+
+@CHECKS.value(
+    "q7_practice",
+    var="suspect_practice",
+    points=1,
+    hint="Data snooping on the public survey: the observation with the largest |w| (each residual "
+    "divided by ITS OWN standard deviation), as a 0-based index.",
+    mistakes=[
+        Mistake(
+            "this is the largest |e|, not the largest |w|: a residual is large or small only "
+            "relative to its own standard deviation",
+            lambda: int(np.argmax(np.abs(lsq.fit(A_PRACTICE, Y_PRACTICE, Q_PRACTICE).e_hat))),
+        )
+    ],
+)
+def q7_practice():
+    return int(lsq.data_snooping(A_PRACTICE, Y_PRACTICE, Q_PRACTICE, alpha=0.01).removed[0])
 
 
 @CHECKS.value(
@@ -144,9 +284,28 @@ def q5():
     atol=1e-8,
     hint="Fit mine['A'], mine['y'] with mine['Qyy'] (weighted!) and take the overall model "
     "test statistic of the full data set.",
+    mistakes=[
+        Mistake(
+            "T looks unweighted: mine['Qyy'] was ignored",
+            lambda d: lsq.fit(d["A"], d["y"]).squared_norm,
+        )
+    ],
 )
 def q6(d):
     return lsq.overall_model_test(lsq.fit(d["A"], d["y"], d["Qyy"]), d["alpha"]).statistic
+
+
+@CHECKS.choice(
+    "q6b",
+    var="verdict_mine",
+    options=["accepted", "rejected"],
+    points=1,
+    data="survey",
+    hint='Answer "accepted" or "rejected".',
+)
+def q6b(d):
+    result = lsq.overall_model_test(lsq.fit(d["A"], d["y"], d["Qyy"]), d["alpha"])
+    return "rejected" if result.reject else "accepted"
 
 
 @CHECKS.value(
@@ -157,6 +316,12 @@ def q6(d):
     properties="survey_index_properties",
     hint="Data snooping at mine['alpha'] removes the observation with the largest rejected |w| "
     "first; give its 0-based index as an int.",
+    mistakes=[
+        Mistake(
+            "this is the largest |e|, not the largest |w|",
+            lambda d: int(np.argmax(np.abs(lsq.fit(d["A"], d["y"], d["Qyy"]).e_hat))),
+        )
+    ],
 )
 def q7(d):
     return int(lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).removed[0])
@@ -167,20 +332,49 @@ def q7(d):
     func="rejection_rate",
     points=2,
     timeout=30,
-    hint="Simulate n_runs data sets y = A x + bias + noise with noise ~ N(0, Qyy) (Cholesky factor "
-    "times standard normals, rng = np.random.default_rng(seed)), apply the overall model test to "
-    "each and return the fraction rejected. Without a bias it is close to alpha; with a bias it "
-    "estimates the power of the test.",
+    atol=0.1 / 20000,  # the same count of rejections: a fraction k / n_runs, exactly
+    rtol=0.0,
+    hint=(
+        "Follow the recipe exactly: rng = np.random.default_rng(seed), ONE call "
+        "Z = rng.standard_normal((n_runs, m)) (row r for data set r), L = np.linalg.cholesky(Qyy), "
+        "and data set r is bias + L z_r.",
+        "Then fit each data set with the weights Qyy, compute its T and count T > "
+        "stats.chi2.isf(alpha, m - n). Return the fraction of the n_runs data sets rejected.",
+    ),
+    mistakes=[
+        Mistake(
+            "this is the exact rejection probability (a formula), not the simulated rate",
+            lambda A, Qyy, alpha, n_runs, seed, bias: _exact_rate(A, Qyy, alpha, bias),
+        ),
+        Mistake(
+            "returns alpha: that is what the test promises, not what the simulation measures",
+            lambda A, Qyy, alpha, n_runs, seed, bias: float(alpha),
+        ),
+    ],
 )
 def q8(A, Qyy, alpha, n_runs, seed, bias):
-    # Under a bias b, T ~ chi2(m - n, lambda) with lambda = ||Q2^T L^{-1} b||^2, the weighted squared norm
-    # of the residuals of fitting b itself; lambda = 0 gives the false-alarm rate alpha. Any correct
-    # simulation lands in the binomial band around that rejection probability except with probability 1e-4,
-    # while "return alpha" fails every biased case.
+    # The simulation the question prescribes, run with the case's seed: a correct answer counts
+    # exactly the same rejections however it computes T, while the exact probability (ncx2),
+    # alpha, a wrong dof, ignoring Qyy or the bias, or another random sample all differ from it.
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    L = np.linalg.cholesky(Qyy)
+    Z = np.random.default_rng(seed).standard_normal((n_runs, m))
+    Y = np.asarray(bias, dtype=float) + Z @ L.T  # row r: data set r
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    Y_w = linalg.solve_triangular(L, Y.T, lower=True)  # whitened data sets as columns
+    Q, _ = np.linalg.qr(A_w)
+    R = Y_w - Q @ (Q.T @ Y_w)
+    stats_ = np.sum(R * R, axis=0)
+    return float(np.mean(stats_ > stats.chi2.isf(alpha, m - n)))
+
+
+def _exact_rate(A, Qyy, alpha, bias):
+    """The exact rejection probability: T ~ chi2(m - n, lambda), lambda the weighted squared norm
+    of the residuals of fitting the bias itself."""
     m, n = np.shape(A)
     lam = lsq.fit(A, bias, Qyy).squared_norm
-    p = alpha if lam < 1e-12 else float(stats.ncx2.sf(stats.chi2.isf(alpha, m - n), m - n, lam))
-    return binomial_band(n_runs, p, miss=1e-4)
+    return alpha if lam < 1e-12 else float(stats.ncx2.sf(stats.chi2.isf(alpha, m - n), m - n, lam))
 
 
 q8.case(

@@ -5,9 +5,10 @@ are sent to the student's function only at grading time.
 """
 
 import numpy as np
+from scipy import stats
 
 from course import diagnosis as dg
-from course.grading.checks import Checks, binomial_band
+from course.grading.checks import Checks, Mistake
 
 from . import data
 
@@ -30,6 +31,10 @@ Y_RECORD = U @ np.array([1.0, 1.3, 1.0]) + SIGMA * np.random.default_rng(2).stan
 N_GB = 20
 U_GB = np.linspace(0.0, 2.0, N_GB)
 Y_GB = 1.0 * U_GB + 0.4 + 0.05 * np.random.default_rng(5).standard_normal(N_GB)
+
+# The public practice record of q7_practice and q8_practice: a small F2 fault (theta2 = 1.1)
+# that T3 detects only just; with chi2(N) or alpha / 2, the diagnosis changes.
+Y_NEAR = U @ np.array([1.0, 1.1, 1.0]) + SIGMA * np.random.default_rng(148).standard_normal(N)
 
 _R = np.random.default_rng(20240502)
 _A, _B = _R.standard_normal(12), _R.standard_normal(12)
@@ -90,8 +95,12 @@ def q2():
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
     ],
-    hint="Minimise sum (y - th1 u1 - u2 - u3)^2 over th1: the minimiser is a ratio of two sums. "
-    "If u1 is identically zero every th1 gives the same sum: do not divide by zero.",
+    hint=(
+        "Set the derivative of the sum with respect to th1 to zero: what is left is a ratio of "
+        "two sums. What happens to that ratio when u1 is identically zero?",
+        "Minimise sum (y - th1 u1 - u2 - u3)^2 over th1: the minimiser is a ratio of two sums. "
+        "If u1 is identically zero every th1 gives the same sum: do not divide by zero.",
+    ),
 )
 def q3(y, u1, u2, u3):
     return float(dg.prediction_error(y, np.column_stack([u1, u2, u3]), NOMINAL, free=[0]).statistic)
@@ -139,7 +148,20 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
     points=1,
     rtol=1e-8,
     atol=1e-12,
-    hint="T = (1/N) sum (y - u - b_hat)^2 with b_hat the mean of y - u (the lecture's 1/N form).",
+    hint=(
+        "Estimate the bias first, then measure what is left: the lecture's form is a mean, not a sum.",
+        "T = (1/N) sum (y - u - b_hat)^2 with b_hat the mean of y - u (the lecture's 1/N form).",
+    ),
+    mistakes=[
+        Mistake(
+            "the bias was not removed: subtract its estimate b_hat before squaring",
+            lambda: float(np.mean((Y_GB - U_GB) ** 2)),
+        ),
+        Mistake(
+            "looks like the sample variance with 1/(N - 1): the lecture's T divides by N",
+            lambda: float(np.var(Y_GB - U_GB, ddof=1)),
+        ),
+    ],
 )
 def q5():
     b_hat = np.mean(Y_GB - U_GB)
@@ -152,9 +174,22 @@ def q5():
     points=2,
     rtol=1e-6,
     atol=1e-9,
-    hint="Under H0, T1/sigma^2 ~ chi2(N - 1): J = sigma^2 chi2.isf(alpha, N - 1). Under F2, "
-    "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
-    "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
+    hint=(
+        "J is a threshold on T1 itself, not on T1/sigma^2; and one gain is estimated.",
+        "Under H0, T1/sigma^2 ~ chi2(N - 1): J = sigma^2 chi2.isf(alpha, N - 1). Under F2, "
+        "T1/sigma^2 is non-central chi2 with lambda = ||(I - P1) U2 (theta2 - 1)||^2 / sigma^2, "
+        "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
+    ),
+    mistakes=[
+        Mistake(
+            "looks like chi2 with N degrees of freedom: T1 estimates one gain, so N - 1",
+            lambda: _threshold_and_power(N, 0.01),
+        ),
+        Mistake(
+            "looks two-sided (alpha/2): the test alarms in the upper tail only",
+            lambda: _threshold_and_power(N - 1, 0.005),
+        ),
+    ],
 )
 def q6():
     J = dg.residual_threshold(N - 1, 0.01, sigma=SIGMA)
@@ -162,8 +197,71 @@ def q6():
     return (J, power)
 
 
+def _threshold_and_power(dof, alpha):
+    """(J, power) of q6 with other degrees of freedom or level (the mistakes)."""
+    J = float(SIGMA**2 * stats.chi2.isf(alpha, dof))
+    d = 0.15 * U2
+    d_perp = d - U1 * (U1 @ d) / (U1 @ U1)
+    return (J, float(stats.ncx2.sf(J / SIGMA**2, dof, (d_perp @ d_perp) / SIGMA**2)))
+
+
 def _three_statistics(d):
     return dg.linear_test_statistics(d["y"], d["U"], NOMINAL, [(0,), (1,), (2,)])[0]
+
+
+def _diagnosis(statistics, n, sigma, alpha):
+    alarms = statistics > dg.residual_threshold(n - 1, alpha, sigma=sigma)
+    return list(dg.diagnoses(dg.DecisionStructure(LECTURE, modes=MODES), alarms))
+
+
+def _conclusion(diagnosis):
+    if len(diagnosis) == len(MODES):
+        return "no fault detected"
+    if len(diagnosis) == 1:
+        return diagnosis[0]
+    return "several faults fit"
+
+
+@CHECKS.choice(
+    "q5b",
+    var="bias_decoupled",
+    options=["yes", "no"],
+    points=1,
+    hint='Answer "yes" or "no".',
+)
+def q5b():
+    return "yes"
+
+
+@CHECKS.value(
+    "q7_practice",
+    var="T_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-9,
+    hint="The three test quantities of q7, on the public record y_near: T_k leaves theta_k free "
+    "and fixes the other two gains at 1.",
+)
+def q7_practice():
+    return _three_statistics({"y": Y_NEAR, "U": U})
+
+
+@CHECKS.value(
+    "q8_practice",
+    var="diagnosis_practice",
+    points=1,
+    hint="Each test alarms when T_k exceeds sigma^2 times the upper alpha quantile of the chi2 law "
+    "of T_k / sigma^2: how many degrees of freedom does T_k have when one gain is estimated?",
+    mistakes=[
+        Mistake(
+            "the alarms look like a threshold with chi2(N) or at alpha/2: one test sees this "
+            "small fault only just, so the threshold must be exactly sigma^2 chi2_alpha(N - 1)",
+            lambda: _diagnosis(_three_statistics({"y": Y_NEAR, "U": U}), N + 1, SIGMA, 0.01),
+        ),
+    ],
+)
+def q8_practice():
+    return _diagnosis(_three_statistics({"y": Y_NEAR, "U": U}), N, SIGMA, 0.01)
 
 
 @CHECKS.value(
@@ -182,18 +280,55 @@ def q7(d):
 
 
 @CHECKS.value(
+    "q8a",
+    var="J_mine",
+    points=1,
+    data="record",
+    properties="threshold_properties",
+    rtol=1e-6,
+    atol=1e-12,
+    hint="The threshold on T_k for false-alarm rate mine['alpha']: sigma^2 times the upper alpha "
+    "quantile of the chi2 law of T_k / sigma^2, with your sigma. How many degrees of freedom?",
+    mistakes=[
+        Mistake(
+            "looks like chi2 with N degrees of freedom: T_k estimates one gain, so N - 1",
+            lambda d: float(dg.residual_threshold(d["y"].size, d["alpha"], sigma=d["sigma"])),
+        ),
+        Mistake(
+            "looks two-sided (alpha/2): the test alarms in the upper tail only",
+            lambda d: float(
+                dg.residual_threshold(d["y"].size - 1, d["alpha"] / 2, sigma=d["sigma"])
+            ),
+        ),
+    ],
+)
+def q8a(d):
+    return float(dg.residual_threshold(d["y"].size - 1, d["alpha"], sigma=d["sigma"]))
+
+
+@CHECKS.value(
     "q8",
     var="diagnosis_mine",
     points=1,
     data="record",
     properties="diagnosis_properties",
-    hint="Each test alarms when T_k > sigma^2 chi2.isf(alpha, N - 1) with mine['sigma'] and "
-    "mine['alpha']; then apply your single_fault_diagnoses to the lecture structure.",
+    hint="Each test alarms when T_k > J_mine; then apply your single_fault_diagnoses to the "
+    "lecture structure LECTURE.",
 )
 def q8(d):
-    N_d = d["y"].size
-    alarms = _three_statistics(d) > dg.residual_threshold(N_d - 1, d["alpha"], sigma=d["sigma"])
-    return list(dg.diagnoses(dg.DecisionStructure(LECTURE, modes=MODES), alarms))
+    return _diagnosis(_three_statistics(d), d["y"].size, d["sigma"], d["alpha"])
+
+
+@CHECKS.choice(
+    "q8b",
+    var="mode_mine",
+    options=["NF", "F1", "F2", "F3", "no fault detected", "several faults fit"],
+    points=1,
+    data="record",
+    hint="Answer with one of the options exactly as written.",
+)
+def q8b(d):
+    return _conclusion(_diagnosis(_three_statistics(d), d["y"].size, d["sigma"], d["alpha"]))
 
 
 @CHECKS.function(
@@ -201,16 +336,48 @@ def q8(d):
     func="detection_rate",
     points=2,
     timeout=30,
-    hint="Simulate n_runs records y = U theta + sigma * noise (rng = np.random.default_rng(seed); "
-    "all runs at once as the rows of an (n_runs, N) array), compute T1 for each, and return the "
-    "fraction above the threshold of q6 at this alpha. It should match the power formula.",
+    atol=0.1 / 20000,  # the same count of detections: a fraction k / n_runs, exactly
+    rtol=0.0,
+    hint=(
+        "Follow the recipe exactly: rng = np.random.default_rng(seed) and ONE call "
+        "rng.standard_normal((n_runs, N)), row r the noise of record r.",
+        "Then T1 of every record (theta1 free) and the fraction above the threshold of q6 at "
+        "this alpha and sigma.",
+    ),
+    mistakes=[
+        Mistake(
+            "this is the exact power (the formula of q6), not the simulated rate",
+            lambda U_, theta, sigma, alpha, n_runs, seed: dg.prediction_error_power(
+                U_, NOMINAL, [0], theta, sigma=sigma, alpha=alpha
+            ),
+        ),
+        Mistake(
+            "returns alpha: the promised false-alarm rate, not the simulated rate",
+            lambda U_, theta, sigma, alpha, n_runs, seed: float(alpha),
+        ),
+    ],
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):
-    p = dg.prediction_error_power(U_, NOMINAL, [0], theta, sigma=sigma, alpha=alpha)
-    return binomial_band(n_runs, p, miss=1e-4)
+    # The simulation the question prescribes, run with the case's seed: a correct answer counts
+    # exactly the same detections (any vectorisation), while the exact power (the formula, not
+    # a simulation) or another random sample differs from it by a Monte Carlo error.
+    U_ = np.asarray(U_, dtype=float)
+    rng = np.random.default_rng(seed)
+    Y = U_ @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, U_.shape[0]))
+    t1 = _t1_many(U_, Y)
+    return float(np.mean(t1 > dg.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
+
+
+def _t1_many(U_, Y):
+    """T1 of every row of Y (theta1 free, theta2 = theta3 = 1)."""
+    target = Y - U_[:, 1] - U_[:, 2]
+    u = U_[:, 0]
+    R = target - np.outer(target @ u, u) / (u @ u)
+    return np.sum(R**2, axis=1)
 
 
 q9.case(U, np.array([1.0, 1.15, 1.0]), SIGMA, 0.01, 20000, 2024, label="F2 of size 0.15")
+q9.case(U, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 4000, 8, label="no fault, alpha = 0.05")
 q9.case(U, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 20000, 7, hidden=True)
 q9.case(U, np.array([1.8, 1.0, 1.0]), SIGMA, 0.05, 20000, 11, hidden=True)
 q9.case(U, np.array([1.0, 1.0, 1.1]), SIGMA, 0.01, 20000, 13, hidden=True)

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import stats
 
 from course import diagnosis as dg
-from course.grading.checks import Checks, binomial_band
+from course.grading.checks import Checks, Mistake
 
 from . import data
 
@@ -50,11 +50,25 @@ CHECKS = Checks(
         "course.diagnosis.estimate_parameters",
         "course.diagnosis.parameter_estimate_test",
     ],
-    hint="Regress y - u3 on [u1, u2] (QR or lstsq); the covariance of the estimate is "
-    "sigma^2 (Phi^T Phi)^{-1} = sigma^2 R^{-1} R^{-T}. Reject when |theta2_hat - 1| > "
-    "std * stats.norm.isf(alpha / 2). Return (theta2_hat, std, reject).",
+    hint=(
+        "Both gains are estimated together (theta1 too, that is what decouples F1); theta3 is "
+        "fixed at 1. The test is two-sided: a fault may raise or lower theta2.",
+        "Regress y - u3 on [u1, u2] (QR or lstsq); the covariance of the estimate is "
+        "sigma^2 (Phi^T Phi)^{-1} = sigma^2 R^{-1} R^{-T}. Reject when |theta2_hat - 1| > "
+        "std * stats.norm.isf(alpha / 2). Return (theta2_hat, std, reject).",
+    ),
+    mistakes=[
+        Mistake(
+            "the decision looks one-sided: z_alpha instead of z_alpha/2",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, 2 * alpha),
+        ),
+    ],
 )
 def q1(U_, y, sigma, alpha):
+    return _joint(U_, y, sigma, alpha)
+
+
+def _joint(U_, y, sigma, alpha):
     est = dg.estimate_parameters(y, U_, NOMINAL, [0, 1], sigma=sigma)
     std = float(est.std[1])
     theta2 = float(est.theta[1])
@@ -63,6 +77,14 @@ def q1(U_, y, sigma, alpha):
 
 q1.case(U, _record([1.0, 1.0, 1.0], 1), SIGMA, 0.05, label="no fault")
 q1.case(U, _record([1.5, 1.0, 1.0], 2), SIGMA, 0.05, label="F1: theta1 = 1.5 (decoupled)")
+q1.case(
+    U,
+    _record([1.0, 1.08, 1.0], 37),
+    SIGMA,
+    0.05,
+    label="a small F2: |theta2_hat - 1| / s lies between z_alpha and z_alpha/2",
+)
+q1.case(U, _record([1.0, 1.08, 1.0], 27), SIGMA, 0.10, hidden=True)  # also between them
 q1.case(U, _record([1.0, 1.2, 1.0], 3), SIGMA, 0.05, hidden=True)
 q1.case(U, _record([1.0, 1.0, 1.4], 4), SIGMA, 0.01, hidden=True)
 q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
@@ -74,8 +96,18 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
     points=1,
     rtol=1e-8,
     atol=1e-10,
-    hint="With theta1 fixed at 1 the estimate of theta2 regresses the data minus u1 - u3 on u2; "
-    "take the expectation with theta1 = 1.3: E theta2_hat = 1 + 0.3 u2'u1 / u2'u2.",
+    hint=(
+        "Here theta1 is NOT estimated: it is fixed at 1, so the unmodelled part 0.3 u1 of the "
+        "data stays in what the regression on u2 sees.",
+        "Regress the noise-free data minus u1 - u3 on u2 alone: the estimate is the ratio "
+        "u2'(data - u1 - u3) / u2'u2, with data = U (1.3, 1, 1).",
+    ),
+    mistakes=[
+        Mistake(
+            "1 is what the JOINT estimate gives (it decouples F1); here theta1 is fixed at 1",
+            lambda: 1.0,
+        ),
+    ],
 )
 def q2():
     return float(1.0 + 0.3 * (U2 @ U1) / (U2 @ U2))
@@ -87,15 +119,46 @@ def q2():
     points=2,
     rtol=1e-6,
     atol=1e-9,
-    hint="Parameter test: b = 0.1, s = std of theta2_hat (joint estimate), power = "
-    "Phi(b/s - z) + Phi(-b/s - z) with z = norm.isf(alpha/2). Prediction-error test T1 (theta1 "
-    "free): non-central chi2(N - 1) with lambda = ||(I - P1) u2 0.1||^2 / sigma^2.",
+    hint=(
+        "Under the fault, theta2_hat - 1 is normal with mean 0.1 and the std s of q1; the test "
+        "rejects in BOTH tails. T1/sigma^2 is non-central chi2 under the fault.",
+        "Parameter test: b = 0.1, s = std of theta2_hat (joint estimate), power = "
+        "Phi(b/s - z) + Phi(-b/s - z) with z = norm.isf(alpha/2). Prediction-error test T1 "
+        "(theta1 free): non-central chi2(N - 1) with lambda = ||(I - P1) u2 0.1||^2 / sigma^2.",
+    ),
+    mistakes=[
+        Mistake(
+            "the parameter test's power looks like one tail only: it rejects in both",
+            lambda: (_one_tail_power(), _q3_pe_power()),
+        ),
+    ],
 )
 def q3():
     theta = [1.0, 1.1, 1.0]
     p_param = dg.parameter_estimate_power(U, NOMINAL, [0, 1], 1, theta, sigma=SIGMA, alpha=0.05)
     p_pe = dg.prediction_error_power(U, NOMINAL, [0], theta, sigma=SIGMA, alpha=0.05)
     return (p_param, p_pe)
+
+
+def _q3_pe_power():
+    return dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.1, 1.0], sigma=SIGMA, alpha=0.05)
+
+
+def _one_tail_power():
+    s = _joint(U, U @ NOMINAL, SIGMA, 0.05)[1]
+    return float(stats.norm.sf(stats.norm.isf(0.025) - 0.1 / s))
+
+
+CHECKS.short_answer(
+    "q3b",
+    points=1,
+    rubric="1 point: says the parameter-estimate test is more powerful (larger power) AND why: it "
+    "targets the one direction theta2 of the fault (one degree of freedom; all of the fault's "
+    "signal is in its statistic), while T1 spreads the same non-centrality over N - 1 = 39 "
+    "degrees of freedom, so its threshold is far above the mean shift. 0.5: right order, no or "
+    "vague reason. 0: says the prediction-error test is more powerful.",
+    hint="Compare how many degrees of freedom each statistic spreads the fault's signal over.",
+)
 
 
 @CHECKS.function(
@@ -107,6 +170,14 @@ def q3():
     forbid=["course.diagnosis.normal_likelihood", "course.diagnosis.normal_log_likelihood"],
     hint="L(theta | z) is the product over the observations of the N(theta, sigma^2) density at "
     "z_i; return one value per theta (an array shaped like theta).",
+    mistakes=[
+        Mistake(
+            "looks like the log-likelihood: return the likelihood itself",
+            lambda theta, z, sigma: np.asarray(
+                dg.normal_log_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma)
+            ),
+        ),
+    ],
 )
 def q4(theta, z, sigma):
     return np.asarray(dg.normal_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma))
@@ -124,8 +195,17 @@ q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
     points=1,
     rtol=1e-6,
     atol=1e-9,
-    hint="Maximise L(theta | 3, 5) for N(theta, 1): the maximiser is the sample mean; give "
-    "(theta_ml, L(theta_ml | 3, 5)).",
+    hint=(
+        "Maximise L(theta | 3, 5) for N(theta, 1); your likelihood function of q4 evaluates it.",
+        "The maximiser is the sample mean; give (theta_ml, L(theta_ml | 3, 5)), the likelihood "
+        "itself, not its logarithm.",
+    ),
+    mistakes=[
+        Mistake(
+            "the second value looks like the log-likelihood at the maximum",
+            lambda: (4.0, float(-1.0 - np.log(2 * np.pi))),
+        ),
+    ],
 )
 def q5():
     return (4.0, float(np.exp(-1.0) / (2 * np.pi)))
@@ -142,13 +222,28 @@ def q5():
         "course.diagnosis.glr_test",
         "course.diagnosis.prediction_error",
     ],
-    hint="-2 log Lambda = (T0 - T1)/sigma^2 with T0 = ||y - u1 - u2 - u3||^2 (NF) and T1 the "
-    "smallest prediction error with theta2 free (others 1). It is chi2(1) under NF: "
-    "return (statistic, stats.chi2.sf(statistic, 1)).",
+    hint=(
+        "T0 and T1 are the smallest sums of squared prediction errors under NF and under F2; "
+        "the statistic is measured in units of sigma^2.",
+        "-2 log Lambda = (T0 - T1)/sigma^2 with T0 = ||y - u1 - u2 - u3||^2 (NF) and T1 the "
+        "smallest prediction error with theta2 free (others 1). It is chi2(1) under NF: "
+        "return (statistic, stats.chi2.sf(statistic, 1)).",
+    ),
+    mistakes=[
+        Mistake(
+            "the p-value looks like the cdf: a p-value is the upper tail, sf",
+            lambda U_, y, sigma: _glr_cdf(U_, y, sigma),
+        ),
+    ],
 )
 def q6(U_, y, sigma):
     r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[1], sigma=sigma)
     return (r.statistic, r.pvalue)
+
+
+def _glr_cdf(U_, y, sigma):
+    r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[1], sigma=sigma)
+    return (r.statistic, float(stats.chi2.cdf(r.statistic, 1)))
 
 
 q6.case(U, _record([1.0, 1.0, 1.0], 11), SIGMA, label="no fault")
@@ -163,8 +258,20 @@ q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
     points=2,
     rtol=1e-7,
     atol=1e-10,
-    hint="log Q is N(-d^2/2, d^2) under H0 and N(d^2/2, d^2) under H1 with "
-    "d = sqrt(n) |theta1 - theta0| / sigma, so the power is Phi(d - z_alpha).",
+    hint=(
+        "The likelihood-ratio test of two simple hypotheses thresholds the sample mean; the "
+        "test is one-sided, towards theta1.",
+        "log Q is N(-d^2/2, d^2) under H0 and N(d^2/2, d^2) under H1 with "
+        "d = sqrt(n) |theta1 - theta0| / sigma, so the power is Phi(d - z_alpha).",
+    ),
+    mistakes=[
+        Mistake(
+            "looks two-sided (z_alpha/2): Neyman-Pearson for simple hypotheses is one-sided",
+            lambda n, theta0, theta1, sigma, alpha: float(
+                stats.norm.sf(stats.norm.isf(alpha / 2) - np.sqrt(n) * abs(theta1 - theta0) / sigma)
+            ),
+        ),
+    ],
 )
 def q7(n, theta0, theta1, sigma, alpha):
     z = np.zeros(int(n))
@@ -184,18 +291,66 @@ q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
     func="boundary_false_alarm",
     points=2,
     timeout=30,
-    hint="Simulate n_runs samples of n N(0, 1) values (rng = np.random.default_rng(seed)), "
-    "compute -2 log Lambda = n max(0, mean)^2 for the one-sided fault b >= 0, and return the "
-    "fraction above stats.chi2.isf(alpha, 1). Wilks does not hold on the boundary.",
+    atol=0.1 / 20000,  # the same count of alarms: a fraction k / n_runs, exactly
+    rtol=0.0,
+    hint=(
+        "Follow the recipe exactly: rng = np.random.default_rng(seed) and ONE call "
+        "rng.standard_normal((n_runs, n)), row r the sample r.",
+        "-2 log Lambda = n max(0, mean)^2 of each row; return the fraction above "
+        "stats.chi2.isf(alpha, 1).",
+    ),
+    mistakes=[
+        Mistake(
+            "this is the theoretical rate alpha/2, not the simulated one",
+            lambda n, alpha, n_runs, seed: alpha / 2,
+        ),
+        Mistake(
+            "returns alpha: that is what Wilks promises, not what the simulation measures",
+            lambda n, alpha, n_runs, seed: float(alpha),
+        ),
+    ],
 )
 def q8(n, alpha, n_runs, seed):
-    # -2 log Lambda is 0 with probability 1/2, chi2(1) otherwise: the rate is alpha / 2.
-    return binomial_band(n_runs, alpha / 2, miss=1e-4)
+    # The simulation the question prescribes, with the case's seed: a correct answer counts
+    # exactly the same alarms; the theoretical rate alpha / 2 (-2 log Lambda is 0 with
+    # probability 1/2, chi2(1) otherwise) or another random sample differs by a Monte Carlo error.
+    zbar = np.random.default_rng(seed).standard_normal((n_runs, n)).mean(axis=1)
+    return float(np.mean(n * np.maximum(zbar, 0.0) ** 2 > stats.chi2.isf(alpha, 1)))
 
 
 q8.case(25, 0.05, 20000, 2024, label="n = 25, alpha = 0.05")
 q8.case(5, 0.10, 20000, 7, hidden=True)
 q8.case(40, 0.01, 20000, 11, hidden=True)
+
+
+# The public practice record of q9_practice: the notebook's signals, a fault F2 of 0.25.
+Y_MODES = _record([1.0, 1.25, 1.0], 31)
+PRIORS = np.array([0.7, 0.1, 0.1, 0.1])
+
+
+def _posterior(y, U_, sigma, tau, priors):
+    logl = dg.mode_log_likelihoods(y, U_, NOMINAL, MODES, sigma=sigma, prior_std=tau)
+    post = dg.bayes_ranking(logl, dict(zip(MODES, priors))).as_dict()
+    return np.array([post[m] for m in MODES])
+
+
+@CHECKS.value(
+    "q9_practice",
+    var="posterior_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-300,
+    hint="The marginal likelihood integrates the faulty gain out: under Fi, y ~ N(U 1, sigma^2 I + "
+    "tau^2 u_i u_i^T). Maximising over the gain instead is a different (and here wrong) quantity.",
+    mistakes=[
+        Mistake(
+            "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
+            lambda: _maximised(Y_MODES, U, SIGMA, PRIORS),
+        ),
+    ],
+)
+def q9_practice():
+    return _posterior(Y_MODES, U, SIGMA, 0.3, PRIORS)
 
 
 @CHECKS.value(
@@ -205,15 +360,30 @@ q8.case(40, 0.01, 20000, 11, hidden=True)
     data="modes",
     properties="posterior_properties",
     rtol=1e-6,
-    atol=1e-9,
+    # relative only: a decisive record has posteriors like 1e-13, and the maximised likelihood
+    # (a wrong method) differs there by orders of magnitude, within any absolute tolerance
+    atol=1e-300,
     hint="Under Fi, y ~ N(U 1, sigma^2 I + tau^2 u_i u_i^T); under NF, y ~ N(U 1, sigma^2 I) "
     "(stats.multivariate_normal.logpdf). Combine with mine['priors'] by Bayes' rule, in the "
     "log domain, and return the four posteriors in the order NF, F1, F2, F3.",
+    mistakes=[
+        Mistake(
+            "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
+            lambda d: _maximised(d["y"], d["U"], d["sigma"], d["priors"]),
+        ),
+    ],
 )
 def q9(d):
-    logl = dg.mode_log_likelihoods(
-        d["y"], d["U"], NOMINAL, MODES, sigma=d["sigma"], prior_std=d["tau"]
-    )
-    ranking = dg.bayes_ranking(logl, dict(zip(MODES, d["priors"])))
-    post = ranking.as_dict()
-    return np.array([post[m] for m in MODES])
+    return _posterior(d["y"], d["U"], d["sigma"], d["tau"], d["priors"])
+
+
+def _maximised(y, U_, sigma, priors):
+    """Posteriors from the maximised instead of the marginal likelihood (the mistake)."""
+    r0 = y - U_ @ NOMINAL
+    log_l = [-(r0 @ r0) / (2 * sigma**2)]
+    for i in range(3):
+        u = U_[:, i]
+        r = r0 - u * (u @ r0) / (u @ u)
+        log_l.append(-(r @ r) / (2 * sigma**2))
+    log_post = np.array(log_l) + np.log(priors)
+    return np.exp(log_post - np.logaddexp.reduce(log_post))

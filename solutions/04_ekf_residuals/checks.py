@@ -10,11 +10,12 @@ import numpy as np
 from scipy import stats
 
 from course import filters as kf
-from course.grading.checks import Band, Checks, binomial_band
+from course.grading.checks import Band, Checks, Mistake, binomial_band
 
 from . import data
 
-# The fixed record of q7: the notebook's context cell builds the same one with the same seed.
+# The fixed record of q7: the notebook's context cell builds the same one with the same seed
+# (4062: a threshold with L - 1 degrees of freedom counts 19 false alarms instead of 14).
 TS, Q_X, R = 0.1, 1e-4, 2.5e-3
 N7, T_FAULT7 = 200, 150
 _t7 = np.arange(N7)
@@ -23,12 +24,28 @@ BETA7 = 0.8 + 0.6 * _t7 / N7
 _, Y7 = kf.simulate_beta_system(
     BETA7,
     U7,
-    np.random.default_rng(4042),
+    np.random.default_rng(4062),
     Ts=TS,
     q_x=Q_X,
     r=R,
     x0=0.5,
     fault=np.where(_t7 >= T_FAULT7, 0.2, 0.0),
+)
+
+# The public practice record of q5_practice (built the same way in the notebook's context
+# cell): a smaller sensor offset (0.2) at t = 120, so the windowed NIS crosses the threshold
+# gradually and a threshold with L - 1 degrees of freedom, or the window's first sample
+# instead of its last, gives another first alarm (121 is right; 120 and 112 are not).
+T_FAULT_PRACTICE = 120
+_, Y_PRACTICE = kf.simulate_beta_system(
+    BETA7,
+    U7,
+    np.random.default_rng(126),
+    Ts=TS,
+    q_x=Q_X,
+    r=R,
+    x0=0.5,
+    fault=np.where(_t7 >= T_FAULT_PRACTICE, 0.2, 0.0),
 )
 
 # Records for the function questions (scalar model x(t+1) = a x(t) + w, y = x + v).
@@ -71,15 +88,28 @@ _NO_FILTERS = [
 ]
 
 
+_Q1_MISTAKES = [
+    Mistake(
+        "looks like the FILTERED variance P(t|t): the question asks for the prediction "
+        "variance P(t|t-1), the fixed point of update + predict",
+        lambda: (float((np.sqrt(5) - 1) / 2 * (1 + np.sqrt(5)) / 2), float((np.sqrt(5) - 1) / 2)),
+    ),
+]
+
+
 @CHECKS.value(
     "q1",
     var="steady",
+    mistakes=_Q1_MISTAKES,
     points=1,
     rtol=1e-8,
     atol=1e-10,
-    hint="For x(t+1) = x(t) + w, y = x + v the Riccati recursion is "
-    "P <- P - P^2/(P + r) + q. Set P equal on both sides and solve the quadratic; "
-    "then K = P/(P + r). Return (P, K).",
+    hint=[
+        "P is the PREDICTION variance P(t|t-1), the fixed point of one full update + predict "
+        "step of the recursion above; K follows from it. Return the pair in the order (P, K).",
+        "With a = 1: P = P - P^2/(P + r) + q. Set q = r = 1 and solve the quadratic for its "
+        "positive root; then K = P/(P + r).",
+    ],
 )
 def q1():
     model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]])
@@ -94,9 +124,14 @@ def q1():
     rtol=1e-7,
     atol=1e-9,
     forbid=_NO_FILTERS,
-    hint="Per sample: eps = y - xhat, S = P + r, K = P/S, xhat <- xhat + K eps, "
-    "P <- (1-K)^2 P + K^2 r, then predict xhat <- a xhat, P <- a^2 P + q. "
-    "Start with xhat = m0, P = p0 and update BEFORE predicting. Return eps/sqrt(S).",
+    hint=[
+        "Follow the equations above the question in their order: the first innovation uses "
+        "x(0|-1) = m0 and P(0|-1) = p0, so update with y_t BEFORE predicting.",
+        "Normalise each innovation by the square root of its own variance S_t = P(t|t-1) + r "
+        "(not by S_t, not by P). Return one value per sample.",
+        "Per sample: innovation and S, gain, measurement update of x and P, then the time "
+        "update with a and q.",
+    ],
 )
 def q2(y, a, q, r, m0, p0):
     return _scalar_filter(y, a, q, r, m0, p0).normalized_innovations()[:, 0]
@@ -116,8 +151,12 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     rtol=1e-9,
     atol=1e-12,
     forbid=["course.filters.windowed_sum", "course.filters.windowed_nis"],
-    hint="T[k] = z[k]^2 + ... + z[k+L-1]^2 for k = 0, ..., N-L: N-L+1 values. "
-    "np.cumsum or np.convolve do it without a Python loop.",
+    hint=[
+        "Squares, summed (not averaged), over full windows only: how many full windows of "
+        "length L fit in N samples?",
+        "T[k] = z[k]^2 + ... + z[k+L-1]^2 for k = 0, ..., N-L. np.cumsum or np.convolve do "
+        "it without a Python loop.",
+    ],
 )
 def q3(z, L):
     return kf.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1 :]
@@ -137,33 +176,102 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
     points=1,
     rtol=1e-6,
     atol=1e-8,
-    hint="A sum of L squared independent N(0, 1) values is chi2(L); the threshold for a "
-    "false-alarm probability alpha is its upper alpha quantile, scipy.stats.chi2.isf.",
+    mistakes=[
+        Mistake(
+            "L - 1 degrees of freedom: nothing is estimated from the window, so a sum of L "
+            "squares keeps all L",
+            lambda: float(stats.chi2.isf(0.001, 9)),
+        ),
+        Mistake(
+            "looks two-sided: only LARGE sums alarm, so all of alpha belongs in the upper tail",
+            lambda: float(stats.chi2.isf(0.0005, 10)),
+        ),
+        Mistake(
+            "a lower-tail quantile: the alarm is for large sums (isf, not ppf)",
+            lambda: float(stats.chi2.ppf(0.001, 10)),
+        ),
+    ],
+    hint=[
+        "Which law does a sum of L squared independent N(0, 1) values follow under H0, "
+        "and with how many degrees of freedom?",
+        "The test alarms only for LARGE sums (one upper tail): the threshold is the upper "
+        "alpha quantile, scipy.stats.chi2.isf.",
+    ],
 )
 def q4():
     return float(stats.chi2.isf(0.001, 10))
 
 
+def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None, shift=0):
+    """(threshold, first alarm) of the windowed NIS of the beta-drift EKF; -1: no alarm.
+
+    ``dof`` and ``shift`` make the declared mistakes (another dof, the window's first sample).
+    """
+    model = kf.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
+    T = kf.windowed_nis(kf.extended_kalman_filter(model, y, u), window)
+    if dof is None:
+        threshold = kf.windowed_nis_threshold(window, alpha)
+    else:
+        threshold = float(stats.chi2.isf(alpha, dof))
+    with np.errstate(invalid="ignore"):
+        alarms = np.flatnonzero(threshold < T)
+    return (float(threshold), int(alarms[0]) + shift if alarms.size else -1)
+
+
+def _alarm_mistakes(record):
+    """The declared mistakes of q5_practice / q5; ``record(d)`` gives (y, u, window, alpha)."""
+    return [
+        Mistake(
+            "threshold with L - 1 degrees of freedom: a window of L squared normalised "
+            "innovations is chi2 with L degrees of freedom",
+            lambda *d: _first_alarm(*record(*d)[:3], record(*d)[3], dof=record(*d)[2] - 1),
+        ),
+        Mistake(
+            "looks like the index of the window's FIRST sample: a window belongs to its last one",
+            lambda *d: _first_alarm(*record(*d), shift=1 - record(*d)[2]),
+        ),
+    ]
+
+
+_HINT_ALARM = [
+    "Three steps: the EKF's normalised innovations, their window sums, the first window "
+    "above the threshold. Which sample does kf.windowed_nis(result, L)[t] belong to?",
+    "A window of L squared normalised innovations (one output) is chi2 with L degrees of "
+    "freedom under H0 -- not L - 1: nothing is estimated from the window. "
+    "kf.windowed_nis(result, L)[t] is the window that ENDS at t (NaN before L - 1); report that t.",
+    "threshold = stats.chi2.isf(alpha, L) (or kf.windowed_nis_threshold(L, alpha)); "
+    "first_alarm = the first t with T[t] > threshold (np.flatnonzero), as an int.",
+]
+
+
+@CHECKS.value(
+    "q5_practice",
+    var="alarm_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-8,
+    hint=_HINT_ALARM,
+    mistakes=_alarm_mistakes(lambda: (Y_PRACTICE, U7, 10, 0.001)),
+)
+def q5_practice():
+    return _first_alarm(Y_PRACTICE, U7, 10, 0.001)
+
+
 @CHECKS.value(
     "q5",
-    var="first_alarm",
+    var="alarm",
     points=2,
+    rtol=1e-6,
+    atol=1e-8,
     data="record",
     properties="record_alarm_properties",
-    hint="Build kf.beta_drift_model(Ts=mine['Ts'], q_beta=mine['q_beta'], q_x=mine['q_x'], "
-    "r=mine['r'], x0_mean=(1.0, 0.5)), run kf.extended_kalman_filter on (y, u), "
-    "take kf.windowed_nis with L = mine['window'] and return the first sample index "
-    "t where it exceeds the chi2 threshold for mine['alpha'], as an int.",
+    hint=["Do q5_practice first: the same code must pass its public check there.", *_HINT_ALARM],
+    mistakes=_alarm_mistakes(lambda d: (d["y"], d["u"], d["window"], d["alpha"])),
 )
 def q5(d):
-    model = kf.beta_drift_model(
-        Ts=d["Ts"], q_beta=d["q_beta"], q_x=d["q_x"], r=d["r"], x0_mean=(1.0, 0.5)
+    return _first_alarm(
+        d["y"], d["u"], d["window"], d["alpha"], d["Ts"], d["q_beta"], d["q_x"], d["r"]
     )
-    res = kf.extended_kalman_filter(model, d["y"], d["u"])
-    T = kf.windowed_nis(res, d["window"])
-    with np.errstate(invalid="ignore"):
-        alarms = np.flatnonzero(kf.windowed_nis_threshold(d["window"], d["alpha"]) < T)
-    return int(alarms[0]) if alarms.size else -1
 
 
 def _band_around(p_ref, n_ref, n_runs, miss):
@@ -194,11 +302,14 @@ def _run_false_alarm_probability(a, q, r, N, L, alpha, n_ref=200_000, seed=20240
     func="false_alarm_rates",
     points=2,
     timeout=30,
-    hint="Simulate n_runs records with rng = np.random.default_rng(seed) "
-    "(x0 ~ N(0, 1)), filter them with the correct model (all runs at once: the gains "
-    "do not depend on the data) and form the window sums of squared normalised "
-    "innovations (full windows only). Return (fraction of runs whose LAST window "
-    "exceeds chi2.isf(alpha, L), fraction of runs with AT LEAST ONE window above it).",
+    hint=[
+        "Simulate the scalar model itself (x0 ~ N(0, 1), then x and y sample by sample) for "
+        "all runs at once; rates are fractions of RUNS, each between 0 and 1.",
+        "Filter with the correct model (kf.kalman_filter on all runs at once: the gains do "
+        "not depend on the data), window sums of the squared normalised innovations (full "
+        "windows only), threshold chi2.isf(alpha, L). Return (fraction of runs whose LAST "
+        "window exceeds it, fraction of runs with AT LEAST ONE window above it).",
+    ],
 )
 def q6(a, q, r, N, L, alpha, n_runs, seed):
     # The last window holds L independent N(0,1) squares under H0: its rate is exactly alpha.
@@ -222,10 +333,13 @@ q6.case(1.0, 0.01, 0.5, 30, 5, 0.01, 20000, 7, hidden=True)
     rtol=0,
     atol=0,
     public=False,
-    hint="Run kf.extended_kalman_filter with kf.beta_drift_model(..., q_beta=0.0, ...) and "
-    "with q_beta=1e-4 on the same (y7, u7); count the samples t < t_fault7 where "
-    "kf.windowed_nis(result, 10) exceeds kf.windowed_nis_threshold(10, 0.001). "
-    "Return (count_constant, count_random_walk) as ints.",
+    hint=[
+        "Count alarms only BEFORE the fault (t < t_fault7): every one of them is false. "
+        "The first L - 1 values of kf.windowed_nis are NaN (no full window yet).",
+        "Run kf.extended_kalman_filter with q_beta=0.0 and with q_beta=1e-4 on the same "
+        "(y7, u7); count the samples t < t_fault7 where kf.windowed_nis(result, 10) exceeds "
+        "kf.windowed_nis_threshold(10, 0.001). Return (count_constant, count_random_walk).",
+    ],
 )
 def q7():
     thr = kf.windowed_nis_threshold(10, 0.001)
@@ -245,9 +359,12 @@ def q7():
     rtol=1e-9,
     atol=1e-12,
     forbid=_NO_FILTERS,
-    hint="RLS is the Kalman measurement update with H = phi^T and a constant parameter: "
-    "S = phi^T P phi + r, K = P phi / S, theta <- theta + K (y - phi^T theta), "
-    "P <- P - K phi^T P (or the Joseph form). Return (theta_new, P_new).",
+    hint=[
+        "RLS is the Kalman measurement update with H = phi^T and no time update (the "
+        "parameter is constant): no F, no Q.",
+        "S = phi^T P phi + r, K = P phi / S, theta <- theta + K (y - phi^T theta), "
+        "P <- P - K phi^T P (or the Joseph form). Return (theta_new, P_new).",
+    ],
 )
 def q8(theta, P, phi, y, r):
     x, Pn, _, _, _ = kf.kf_update(

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import stats
 
 from course import nis
-from course.grading.checks import Checks, binomial_band
+from course.grading.checks import Checks, Mistake, binomial_band
 
 from . import data
 
@@ -30,6 +30,29 @@ EPS_C = np.einsum("kij,kj->ki", np.linalg.cholesky(S_C), _rng.standard_normal((4
 EPS_D = _rng.standard_normal((80, 2)) @ np.linalg.cholesky(np.array([[1.0, 0.8], [0.8, 1.0]])).T
 S_D = np.eye(2)
 EPS_E = _rng.standard_normal((30, 2)) @ np.linalg.cholesky(S_A).T
+
+
+def _record_with_eigenvalues(targets, S, rng):
+    """Innovations (K of them, targets = (K, eigenvalues)) whose NIS matrix has exactly the eigenvalues ``targets``.
+
+    Whitened innovations z (K, m) are rotated and rescaled along the eigenvectors of their
+    NIS matrix z^T z / K = V diag(l) V^T: z V diag(sqrt(t / l)) V^T has NIS matrix
+    V diag(t) V^T. Used to put an extreme eigenvalue between the thresholds at alpha and at
+    alpha/2, where a one-sided test and the two-sided test disagree.
+    """
+    K, m = targets[0], len(targets[1])
+    white = rng.standard_normal((K, m))
+    lam, V = np.linalg.eigh(white.T @ white / K)
+    white = white @ V @ np.diag(np.sqrt(np.asarray(targets[1]) / lam)) @ V.T
+    return white @ np.linalg.cholesky(np.asarray(S, dtype=float)).T
+
+
+# m = 2, K = 12, alpha = 0.05: thresholds (0.2377, 2.3303) at alpha/2, (0.2834, 2.1343) at alpha.
+EPS_GAP_HI = _record_with_eigenvalues((12, [0.8, 2.23]), S_A, _rng)
+EPS_GAP_LO = _record_with_eigenvalues((12, [0.26, 1.3]), np.eye(2), _rng)
+# m = 3, K = 10, alpha = 0.1: upper thresholds 2.5966 (alpha/2) and 2.3504 (alpha).
+S_F = np.array([[1.5, 0.3, 0.0], [0.3, 1.0, -0.2], [0.0, -0.2, 0.7]])
+EPS_GAP_3 = _record_with_eigenvalues((10, [0.6, 1.0, 2.47]), S_F, _rng)
 
 CHECKS = Checks(
     "05_nis_wishart",
@@ -95,8 +118,23 @@ q2.case(EPS_C, S_C, hidden=True)
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.consistency_interval", "course.nis.nis_critical_values"],
-    hint="With the poster's 1/K, K * eps_bar ~ chi2(m K): take the chi2(60) quantiles "
-    "at 0.025 and 0.975 and divide them by K = 20.",
+    mistakes=[
+        Mistake(
+            "the poster's law: eps_bar itself is not chi2(mK) -- with the 1/K average, K times "
+            "eps_bar is",
+            lambda: (float(stats.chi2(60).ppf(0.025)), float(stats.chi2(60).isf(0.025))),
+        ),
+        Mistake(
+            "alpha not split: a two-sided 95 % interval leaves 2.5 % in each tail",
+            lambda: (float(stats.chi2(60).ppf(0.05)) / 20, float(stats.chi2(60).isf(0.05)) / 20),
+        ),
+    ],
+    hint=[
+        "The poster's 1/K hides a factor: is eps_bar itself chi-square, or a multiple of it?",
+        "Find a two-sided interval (alpha/2 in each tail) for the chi-square variable first, "
+        "then turn it into an interval for eps_bar.",
+        "K * eps_bar ~ chi2(m K): divide the two quantiles of chi2(m K) by K.",
+    ],
 )
 def q3():
     law = stats.chi2(60)
@@ -110,9 +148,17 @@ def q3():
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.nis_matrix_critical_values"],
-    hint="Split alpha equally: the lower threshold is the alpha/2 quantile (ppf) of the "
-    "law of lambda_min, the upper one the alpha/2 upper quantile (isf) of the law of "
-    "lambda_max: nis.extreme_eigenvalue(2, 30, 'min' / 'max').",
+    mistakes=[
+        Mistake(
+            "alpha not split: each of the two thresholds gets alpha/2",
+            lambda: tuple(float(v) for v in nis.nis_matrix_critical_values(2, 30, 0.1)),
+        ),
+    ],
+    hint=[
+        "Two thresholds share alpha: each tail gets half of it.",
+        "The lower threshold is a quantile of the law of lambda_min (ppf), the upper one an "
+        "upper quantile of the law of lambda_max (isf): nis.extreme_eigenvalue(m, K, which).",
+    ],
 )
 def q4():
     return nis.nis_matrix_critical_values(2, 30, 0.05)
@@ -125,10 +171,19 @@ def q4():
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.nis_matrix_test"],
-    hint="lmin and lmax are the extreme eigenvalues (np.linalg.eigvalsh) of your "
-    "nis_matrix(eps, S); reject when lmin < ppf_min(alpha/2) or "
-    "lmax > isf_max(alpha/2) of the exact laws with m = eps.shape[1], "
-    "K = eps.shape[0]. Return (lmin, lmax, reject) with reject a bool.",
+    mistakes=[
+        Mistake(
+            "the decision looks one-sided: thresholds at alpha instead of alpha/2",
+            lambda eps, S, alpha: q5.reference(eps, S, 2 * alpha),
+        ),
+    ],
+    hint=[
+        "The test of q4 at level alpha: a two-sided test with two thresholds; m and K come "
+        "from eps.shape (K rows, m columns).",
+        "lmin and lmax are the extreme eigenvalues (np.linalg.eigvalsh) of your "
+        "nis_matrix(eps, S); reject when lmin is below the lower threshold or lmax above the "
+        "upper one, each threshold at alpha/2. Return (lmin, lmax, reject) with reject a bool.",
+    ],
 )
 def q5(eps, S, alpha):
     result = nis.nis_matrix_test(eps, S, alpha)
@@ -137,11 +192,53 @@ def q5(eps, S, alpha):
 
 
 q5.case(EPS_A, S_A, 0.05, label="K = 5, m = 2, alpha = 0.05")
+q5.case(EPS_GAP_HI, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, lmax near the upper threshold")
 ### BEGIN HIDDEN TESTS
+q5.case(EPS_GAP_LO, np.eye(2), 0.05, hidden=True)
+q5.case(EPS_GAP_3, S_F, 0.1, hidden=True)
 q5.case(EPS_D, S_D, 0.05, hidden=True)
 q5.case(EPS_C, S_C, 0.1, hidden=True)
 q5.case(EPS_E, S_A, 0.01, hidden=True)
 ### END HIDDEN TESTS
+
+
+# The practice record of q6_practice: the notebook's context cell builds the same one.
+S_PRACTICE = np.array([[1.2, 0.3], [0.3, 0.8]])
+_mix = np.linalg.cholesky(np.array([[1.0, 0.6], [0.6, 1.0]]))
+EPS_PRACTICE = (
+    np.random.default_rng(5050).standard_normal((60, 2)) @ _mix.T @ np.linalg.cholesky(S_PRACTICE).T
+)
+
+
+def _pvalues(eps, S, alpha):
+    p_nis = nis.nis_test(eps, S, alpha).pvalue
+    p_matrix = nis.nis_matrix_test(eps, S, alpha).pvalue
+    return (float(p_nis), float(p_matrix))
+
+
+@CHECKS.value(
+    "q6_practice",
+    var="pvalues_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-9,
+    mistakes=[
+        Mistake(
+            "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)",
+            lambda: (
+                float(stats.chi2(120).sf(np.sum(nis.nis(EPS_PRACTICE, S_PRACTICE)))),
+                _pvalues(EPS_PRACTICE, S_PRACTICE, 0.05)[1],
+            ),
+        ),
+    ],
+    hint=[
+        "Both p-values are two-sided: 2 min(F, 1 - F), capped at 1 for the matrix test.",
+        "p_nis uses the chi2(m K) law of the NIS SUM K * eps_bar (not of the average); "
+        "p_matrix uses F_min at lmin and 1 - F_max at lmax of nis.extreme_eigenvalue(m, K, ...).",
+    ],
+)
+def q6_practice():
+    return _pvalues(EPS_PRACTICE, S_PRACTICE, 0.05)
 
 
 @CHECKS.value(
@@ -152,14 +249,44 @@ q5.case(EPS_E, S_A, 0.01, hidden=True)
     atol=1e-9,
     data="record",
     properties="record_properties",
-    hint="p_nis = 2 min(F, 1 - F) of chi2(m K) at the NIS sum K * eps_bar; "
-    "p_matrix = min(1, 2 min(F_min(lmin), 1 - F_max(lmax))) with the exact laws "
-    "of nis.extreme_eigenvalue. nis.nis_test and nis.nis_matrix_test compute both.",
+    hint=[
+        "Do q6_practice first: the same code must pass its public check there.",
+        "p_nis = 2 min(F, 1 - F) of chi2(m K) at the NIS sum K * eps_bar; "
+        "p_matrix = min(1, 2 min(F_min(lmin), 1 - F_max(lmax))) with the exact laws "
+        "of nis.extreme_eigenvalue. nis.nis_test and nis.nis_matrix_test compute both.",
+    ],
 )
 def q6(d):
-    p_nis = nis.nis_test(d["eps"], d["S"], d["alpha"]).pvalue
-    p_matrix = nis.nis_matrix_test(d["eps"], d["S"], d["alpha"]).pvalue
-    return (float(p_nis), float(p_matrix))
+    return _pvalues(d["eps"], d["S"], d["alpha"])
+
+
+WHICH_OPTIONS = ["neither", "only the NIS test", "only the matrix test", "both"]
+
+
+@CHECKS.choice(
+    "q6_which",
+    var="which_rejects",
+    options=WHICH_OPTIONS,
+    points=1,
+    data="record",
+    hint="Copy one of the options exactly (a string).",
+)
+def q6_which(d):
+    p_nis, p_matrix = _pvalues(d["eps"], d["S"], d["alpha"])
+    return WHICH_OPTIONS[int(p_nis < d["alpha"]) + 2 * int(p_matrix < d["alpha"])]
+
+
+CHECKS.short_answer(
+    "q6_why",
+    points=1,
+    rubric="Full marks (1): names the kind of error -- the filter's S has the right overall "
+    "size (trace) but the wrong SHAPE, e.g. a correlation between the two outputs that S "
+    "ignores (or variances too large in one direction and too small in another) -- AND says "
+    "why the tests differ: the NIS sum only sees the trace of the NIS matrix (the sum of its "
+    "eigenvalues), which such an error leaves about unchanged, while the extreme eigenvalues "
+    "spread apart. Half (0.5): only one of the two parts. 0: 'too few samples', 'bad luck' "
+    "alone, or a wrong scale of S as the reason (both tests see a scale error).",
+)
 
 
 @CHECKS.function(
@@ -168,11 +295,20 @@ def q6(d):
     points=2,
     timeout=30,
     forbid=["course.nis.simulate_extreme_eigenvalues", "course.nis.prob_eigenvalues_within"],
-    hint="rng = np.random.default_rng(seed); draw innovations of shape (n_runs, K, m) "
-    "from N(0, I) (any S would do after whitening), form the NIS matrices of all "
-    "runs at once (np.einsum), take their extreme eigenvalues (np.linalg.eigvalsh "
-    "works on stacks) and return the fraction of runs outside the thresholds of "
-    "nis.nis_matrix_critical_values(m, K, alpha).",
+    mistakes=[
+        Mistake(
+            "the nominal alpha: for small K the test's size is below alpha -- simulate it",
+            lambda m, K, alpha, n_runs, seed: float(alpha),
+        ),
+    ],
+    hint=[
+        "Simulate, do not predict: with small K the rate is not alpha (both extreme "
+        "eigenvalues can fall outside at once).",
+        "rng = np.random.default_rng(seed); draw innovations of shape (n_runs, K, m) from "
+        "N(0, I) (any S would do after whitening), form the NIS matrices of all runs at once "
+        "(np.einsum), take their extreme eigenvalues (np.linalg.eigvalsh works on stacks) and "
+        "return the fraction of runs outside the thresholds.",
+    ],
 )
 def q7(m, K, alpha, n_runs, seed):
     # The exact false-alarm rate is 1 - P(all eigenvalues inside the thresholds).
@@ -182,8 +318,11 @@ def q7(m, K, alpha, n_runs, seed):
 
 
 q7.case(2, 30, 0.05, 20000, 2024, label="m = 2, K = 30, alpha = 0.05, 20000 runs")
+# With K = m = 3 the exact size is 0.281, not alpha = 0.3: "return alpha" lies outside the band.
+q7.case(3, 3, 0.3, 20000, 11, label="m = 3, K = 3, alpha = 0.3, 20000 runs")
 ### BEGIN HIDDEN TESTS
 q7.case(3, 10, 0.1, 20000, 7, hidden=True)
+q7.case(4, 4, 0.4, 20000, 5, hidden=True)
 ### END HIDDEN TESTS
 
 
@@ -194,8 +333,18 @@ q7.case(3, 10, 0.1, 20000, 7, hidden=True)
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.consistency_interval"],
-    hint="N times the run-averaged NEES is chi2(n N) with n = 4 states and N = 50 runs: "
-    "divide the chi2(200) quantiles at 0.025 and 0.975 by N.",
+    mistakes=[
+        Mistake(
+            "quantiles of chi2(nN) for the SUM: the run average is that sum divided by N",
+            lambda: (float(stats.chi2(200).ppf(0.025)), float(stats.chi2(200).isf(0.025))),
+        ),
+    ],
+    hint=[
+        "Averaging over N runs works like averaging over K steps in q3: which multiple of "
+        "the average is chi-square, and with how many degrees of freedom?",
+        "Each run's NEES is chi2(n); the sum over N independent runs is chi2(n N).",
+        "Take the two-sided 95 % quantiles of chi2(n N) and divide them by N.",
+    ],
 )
 def q8():
     law = stats.chi2(200)

@@ -11,14 +11,18 @@ import numpy as np
 def record(rng):
     """K = 60 innovations of a two-output filter, with the filter's covariance S.
 
-    The filter believes eps_k ~ N(0, S). Whether that is true in your record is for you to test.
+    The filter believes eps_k ~ N(0, S). Whether that is true in your record is for you to test:
+    the truth may be S itself, a covariance with a correlation between the outputs that S
+    ignores, or S at the wrong scale.
     """
     m, K = 2, 60
     a, b = rng.uniform(0.5, 2.0, size=2)
     c = rng.uniform(-0.4, 0.4) * np.sqrt(a * b)
     S = np.array([[a, c], [c, b]])
-    rho = rng.choice([-1.0, 1.0]) * rng.uniform(0.45, 0.7)
-    mix = np.linalg.cholesky(np.array([[1.0, rho], [rho, 1.0]]))
+    kind = rng.choice(["correlation", "consistent", "scale"], p=[0.4, 0.3, 0.3])
+    rho = rng.choice([-1.0, 1.0]) * rng.uniform(0.45, 0.7) if kind == "correlation" else 0.0
+    scale = rng.uniform(1.35, 1.7) if kind == "scale" else 1.0
+    mix = np.sqrt(scale) * np.linalg.cholesky(np.array([[1.0, rho], [rho, 1.0]]))
     z = rng.standard_normal((K, m)) @ mix.T
     eps = z @ np.linalg.cholesky(S).T
     return {"eps": eps, "S": S, "alpha": 0.05}

@@ -7,7 +7,7 @@ are sent to the student's function only at grading time.
 import numpy as np
 
 from course import filters, mismatched
-from course.grading.checks import Checks
+from course.grading.checks import Checks, Mistake
 from course.quadform import WeightedChiSquare
 
 from . import data
@@ -79,8 +79,21 @@ def _augmented(F0, H0, F1, H1, K):
     rtol=1e-10,
     atol=1e-12,
     forbid=_FORBID_MOMENTS,
-    hint="F~ = [[F0, 0], [F1 K H0, F1 (I - K H1)]] with a zero upper-right block "
-    "(n0 x n1) and H~ = [H0, -H1] (np.hstack): r = H0 x - H1 xhat + v.",
+    mistakes=[
+        Mistake(
+            "the paper's misprint: the residual is H0 x - H1 xhat, so H~ = [H0, -H1]",
+            lambda F0, H0, F1, H1, K: (
+                q1.reference(F0, H0, F1, H1, K)[0],
+                np.hstack([np.asarray(H0, float), np.asarray(H1, float)]),
+            ),
+        ),
+    ],
+    hint=[
+        "The filter may have fewer states than the true model: the blocks have shapes "
+        "(n0, n0), (n0, n1), (n1, n0), (n1, n1). Mind the sign in H~: r = H0 x - H1 xhat + v.",
+        "F~ = [[F0, 0], [F1 K H0, F1 (I - K H1)]] (np.block or slices of a zero matrix) and "
+        "H~ = [H0, -H1] (np.hstack).",
+    ],
 )
 def q1(F0, H0, F1, H1, K):
     return _augmented(
@@ -93,6 +106,15 @@ def q1(F0, H0, F1, H1, K):
 
 
 q1.case(F0_A, H0_A, F1_A, H1_A, K_A[0], label="2 true states, 1 filter state, p = 1")
+# two filter states: the order of F1 and (I - K H1) matters (it does not for one state)
+q1.case(
+    np.array(_B0.F),
+    np.array(_B0.H),
+    np.array(_B1.F),
+    np.array(_B1.H),
+    K_B[1],
+    label="2 true states, 2 filter states, p = 2",
+)
 ### BEGIN HIDDEN TESTS
 q1.case(np.array(_B0.F), np.array(_B0.H), np.array(_B1.F), np.array(_B1.H), K_B[2], hidden=True)
 q1.case(np.array(_C0.F), np.array(_C0.H), np.array(_C1.F), np.array(_C1.H), K_C[4], hidden=True)
@@ -120,10 +142,12 @@ def _model_args(m0, m1, K):
     rtol=1e-9,
     atol=1e-12,
     forbid=_FORBID_MOMENTS,
-    hint="Psi~_0 = blockdiag(Psi0, 0); for t = 0..N-1: P_t = H~ Psi~_t H~^T + R0, then "
-    "Psi~_{t+1} = F~_t Psi~_t F~_t^T + G~_t blockdiag(Q0, R0) G~_t^T with "
-    "G~_t = [[G0, 0], [0, F1 K_t]] -- no Q1 block: the filter's process noise is "
-    "not a random input of the filter.",
+    hint=[
+        "Record P_t BEFORE propagating Psi~ to t + 1 (P_0 comes from Psi~_0), and use the "
+        "gain of the same step, K[t]. The filter's own process noise is not a random input.",
+        "P_t = H~ Psi~_t H~^T + R0, then Psi~_{t+1} = F~_t Psi~_t F~_t^T + G~_t "
+        "blockdiag(Q0, R0) G~_t^T with G~_t = [[G0, 0], [0, F1 K_t]].",
+    ],
 )
 def q2(F0, G0, Q0, H0, R0, Psi0, F1, H1, K):
     n0, n1 = F0.shape[0], F1.shape[0]
@@ -157,8 +181,18 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
     points=1,
     rtol=1e-9,
     atol=1e-12,
-    hint="The sample mean is subtracted, so c_j = tr(Pbar_j) with divisor M has expectation "
-    "(M - 1)/M tr(P_j), not tr(P_j).",
+    mistakes=[
+        Mistake(
+            "tr(P_j) would be the expectation around the TRUE mean; the sample mean is "
+            "subtracted here",
+            lambda: float(np.trace(P_Q3)),
+        ),
+    ],
+    hint=[
+        "The sample mean is subtracted before squaring: how many independent deviations are "
+        "left out of M?",
+        "E[c_j] = (M - 1)/M tr(P_j): the divisor is M, but only M - 1 degrees of freedom remain.",
+    ],
 )
 def q3():
     return 3.0 / 4.0 * float(np.trace(P_Q3))
@@ -181,10 +215,13 @@ R_C = _rng.normal(size=(3, 7, 3))
         "course.mismatched.covariance_statistic",
         "course.mismatched.correlation_statistic",
     ],
-    hint="rbar_j = residuals[:, j].mean(axis=0); mean statistic rbar_j @ rbar_j (the "
-    "squared norm); covariance statistic mean over records of |r_ij - rbar_j|^2; "
-    "correlation statistic mean over records of (r_ij - rbar_j) . (r_ik - rbar_k). "
-    "Divide by M, not M - 1.",
+    hint=[
+        "Averages run over the RECORDS (axis 0), at fixed times j and k; the mean statistic "
+        "is a squared norm; divide by M, not M - 1.",
+        "rbar_j = residuals[:, j].mean(axis=0); covariance statistic: mean over records of "
+        "|r_ij - rbar_j|^2; correlation statistic: mean over records of "
+        "(r_ij - rbar_j) . (r_ik - rbar_k).",
+    ],
 )
 def q4(residuals, j, k):
     r = np.asarray(residuals, float)
@@ -209,9 +246,33 @@ q4.case(R_C, 6, 1, hidden=True)
     rtol=1e-7,
     atol=1e-10,
     forbid=_FORBID_TESTS,
-    hint="c_j = sum of eig(P_j)/M times independent chi2(M - 1): use "
-    "course.quadform.WeightedChiSquare(np.linalg.eigvalsh(P) / M, dof=M - 1) and "
-    "return (law.ppf(alpha/2), law.isf(alpha/2)).",
+    mistakes=[
+        Mistake(
+            "M degrees of freedom: subtracting the sample mean leaves M - 1",
+            lambda P, M, alpha: (
+                float(
+                    WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, float)) / M, dof=M).ppf(
+                        alpha / 2
+                    )
+                ),
+                float(
+                    WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, float)) / M, dof=M).isf(
+                        alpha / 2
+                    )
+                ),
+            ),
+        ),
+        Mistake(
+            "alpha not split: a two-sided test puts alpha/2 in each tail",
+            lambda P, M, alpha: _covariance_critical_values(P, M, 2 * alpha),
+        ),
+    ],
+    hint=[
+        "Two-sided: alpha is split between the two tails.",
+        "The weights of the weighted chi-square sum are the eigenvalues of P divided by M; "
+        "each carries M - 1 degrees of freedom (not M).",
+        "course.quadform.WeightedChiSquare(weights, dof=...) has ppf and isf.",
+    ],
 )
 def q5(P, M, alpha):
     return _covariance_critical_values(P, M, alpha)
@@ -229,6 +290,41 @@ q5.case(np.diag([3.0, 1.0, 0.2]), 6, 0.01, hidden=True)
 ### END HIDDEN TESTS
 
 
+# The public practice experiment of q6_practice (the notebook's context cell builds the same):
+# records of the null pair itself, so both p-values are moderate and every mistake shows.
+J_PRACTICE = 4
+R_PRACTICE = mismatched.simulate_records(data.M0, data.M1, 30, 12, np.random.default_rng(601))
+NULL_PRACTICE = mismatched.residual_moments(data.M0, data.M1, 12)
+
+
+def _pvalues(residuals, j, k, null, alpha):
+    p_mean = mismatched.mean_test(residuals, j, null, alpha).pvalue
+    p_corr = mismatched.correlation_test(residuals, j, k, null, alpha).pvalue
+    return (float(p_mean), float(p_corr))
+
+
+_HINT_PVALUES = [
+    "Both p-values are two-sided: 2 min(cdf, sf) of the statistic's exact law, capped at 1. "
+    "Compare your statistics with q4's section_statistics.",
+    "Mean test: rbar_j ~ N(m_j, P_j / M): the law of its squared norm is a QuadraticForm "
+    "with that mean and covariance. Correlation test: the weights of the quadratic form in the "
+    "question, each weight with M - 1 degrees of freedom (the sample means are subtracted).",
+]
+
+
+@CHECKS.value(
+    "q6_practice",
+    var="pvalues_practice",
+    points=1,
+    rtol=1e-6,
+    atol=1e-9,
+    forbid=_FORBID_TESTS,
+    hint=_HINT_PVALUES,
+)
+def q6_practice():
+    return _pvalues(R_PRACTICE, J_PRACTICE, J_PRACTICE + 1, NULL_PRACTICE, 0.05)
+
+
 @CHECKS.value(
     "q6",
     var="pvalues",
@@ -238,16 +334,41 @@ q5.case(np.diag([3.0, 1.0, 0.2]), 6, 0.01, hidden=True)
     data="experiment",
     properties="experiment_properties",
     forbid=_FORBID_TESTS,
-    hint="Mean test: rbar_j ~ N(m_j, P_j/M), so ||rbar_j||^2 is "
-    "QuadraticForm(np.eye(1), m_j, P_j / M); correlation test: the weights of "
-    "QuadraticForm([[0, 1], [1, 0]] / (2M), cov=[[P_j, C], [C, P_k]]), each with "
-    "M - 1 degrees of freedom (WeightedChiSquare). Two-sided p = min(1, 2 min(cdf, sf)).",
+    hint=["Do q6_practice first: the same code must pass its public check there.", *_HINT_PVALUES],
 )
 def q6(d):
     null = mismatched.ResidualMoments(d["mean"], d["cov"], d["cross_cov"])
-    p_mean = mismatched.mean_test(d["residuals"], d["j"], null, d["alpha"]).pvalue
-    p_corr = mismatched.correlation_test(d["residuals"], d["j"], d["k"], null, d["alpha"]).pvalue
-    return (float(p_mean), float(p_corr))
+    return _pvalues(d["residuals"], d["j"], d["k"], null, d["alpha"])
+
+
+WHICH_OPTIONS = ["neither", "only the mean test", "only the correlation test", "both"]
+
+
+@CHECKS.choice(
+    "q6_which",
+    var="which_rejects",
+    options=WHICH_OPTIONS,
+    points=1,
+    data="experiment",
+    hint="Copy one of the options exactly (a string).",
+)
+def q6_which(d):
+    null = mismatched.ResidualMoments(d["mean"], d["cov"], d["cross_cov"])
+    p_mean, p_corr = _pvalues(d["residuals"], d["j"], d["k"], null, d["alpha"])
+    return WHICH_OPTIONS[int(p_mean < d["alpha"]) + 2 * int(p_corr < d["alpha"])]
+
+
+CHECKS.short_answer(
+    "q6_why",
+    points=1,
+    rubric="Full marks (1): (a) the alternative that data.py may draw -- a wrong initial mean "
+    "of the drift state -- moves the MEAN of the residuals (m_j), not their covariances; "
+    "(b) the covariance and correlation statistics subtract the sample mean of each section, "
+    "so a common shift of all records cancels: they cannot see it, while the mean test "
+    "compares rbar_j with m_j directly. Accept any wording of 'mean shift, centred statistics "
+    "are blind to it'. Half (0.5): only (a) or only (b). 0: 'more records needed' or "
+    "'the correlation test is less powerful' without the reason.",
+)
 
 
 P0_Q7 = np.array([[1.5, 0.4], [0.4, 1.0]])
@@ -261,9 +382,18 @@ P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
     rtol=1e-6,
     atol=1e-9,
     forbid=_FORBID_TESTS,
-    hint="Critical values (lower, upper) from the law under P0 (your q5), then "
-    "power = F2(lower) + 1 - F2(upper) with F2 the law of c_j under P2 "
-    "(weights eig(P2)/M, M - 1 degrees of freedom).",
+    mistakes=[
+        Mistake(
+            "looks like 1 - power: the probability that the test does NOT reject",
+            lambda: 1.0 - q7.reference(),
+        ),
+    ],
+    hint=[
+        "Thresholds come from the NULL law (P0); the probability of crossing them from the "
+        "ALTERNATIVE's law (P2). Both tails count.",
+        "power = F2(lower) + 1 - F2(upper), with (lower, upper) from your q5 under P0 and F2 "
+        "the law of c_j under P2.",
+    ],
 )
 def q7():
     lower, upper = _covariance_critical_values(P0_Q7, 20, 0.05)

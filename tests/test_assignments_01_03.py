@@ -1,0 +1,137 @@
+"""Issue 13, assignments 01-03: the holes the wrong-answer suite cannot see from one student.
+
+02 q8 passes for a fault-free student; the personal data make the methods taught matter
+(the largest |e| is not the blunder, the maximised likelihood is not the marginal one) for
+essentially every student ID, not only for the suite's; every personal value question has a
+public practice twin; the Monte Carlo questions repeat the student's seeded simulation.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from course import lsq
+from course.grading.checks import load_checks
+from course.grading.compare import compare
+from course.grading.selfcheck import Assignment
+
+ROOT = Path(__file__).resolve().parents[1]
+SOLUTIONS = ROOT / "solutions"
+EXERCISES = ROOT / "exercises"
+IDS = [f"s{i:03d}" for i in range(120)]
+
+
+@pytest.fixture(scope="module")
+def checks():
+    return {
+        name: load_checks(SOLUTIONS / name)
+        for name in ("01_least_squares", "02_test_quantities", "03_estimation_and_likelihood")
+    }
+
+
+# -- 02 q8: a right answer never fails a public check ------------------------------------
+@pytest.mark.parametrize("sid", ["s011", "s013"])  # fault-free records: nothing alarms
+def test_02_q8_passes_for_a_fault_free_student(checks, capsys, sid, monkeypatch):
+    """Old code: the public type check came from the demo student's ['F2'] and said
+    'expected a sequence of length 1' to the right ['NF', 'F1', 'F2', 'F3']."""
+    c = checks["02_test_quantities"]
+    right = c.questions["q8"].expected(data=c.data_for("record", sid))
+    assert right == ["NF", "F1", "F2", "F3"]  # the ID really is fault-free
+    monkeypatch.chdir(EXERCISES / "02_test_quantities")
+    check = Assignment.load("02_test_quantities", student_id=sid)
+    check("q8", right)
+    out = capsys.readouterr().out
+    assert "FAIL" not in out and "PASS: type and shape" in out, out
+    check("q8", "F1")  # not a list of names: still caught
+    assert "FAIL: type and shape" in capsys.readouterr().out
+
+
+# -- personal data where the wrong method gives another answer --------------------------
+def _share(pairs) -> float:
+    pairs = list(pairs)
+    return sum(pairs) / len(pairs)
+
+
+def test_01_survey_largest_residual_is_not_the_blunder(checks):
+    c = checks["01_least_squares"]
+    same_e, same_unweighted = [], []
+    for sid in IDS:
+        d = c.data_for("survey", sid)
+        truth = c.questions["q7"].expected(data=d)
+        fit = lsq.fit(d["A"], d["y"], d["Qyy"])
+        same_e.append(int(np.argmax(np.abs(fit.e_hat))) == truth)
+        unweighted = lsq.data_snooping(d["A"], d["y"], np.eye(len(d["y"])), alpha=d["alpha"])
+        same_unweighted.append(int(unweighted.removed[0]) == truth)
+    assert _share(same_e) <= 0.02 and _share(same_unweighted) <= 0.03
+
+
+def test_03_maximised_likelihood_never_passes_q9(checks):
+    c = checks["03_estimation_and_likelihood"]
+    q = c.questions["q9"]
+    mod = sys.modules[q.reference.__module__]
+    for sid in IDS[:60]:
+        d = c.data_for("modes", sid)
+        wrong = mod._maximised(d["y"], d["U"], d["sigma"], d["priors"])
+        assert not compare(q.expected(data=d), wrong, q.rtol, q.atol).ok, sid
+
+
+def test_02_threshold_is_personal(checks):
+    """chi2(N) and alpha/2 lose q8a for every student (not only near a threshold)."""
+    c = checks["02_test_quantities"]
+    q = c.questions["q8a"]
+    values = set()
+    for sid in IDS[:30]:
+        d = c.data_for("record", sid)
+        J = q.expected(data=d)
+        values.add(round(J, 12))
+        for message, wrong in q.mistaken(data=d):
+            assert not compare(J, wrong, q.rtol, q.atol).ok, (sid, message)
+    assert len(values) >= 4  # sigma and alpha differ between students
+
+
+# -- item 3: a public practice twin for every personal value question --------------------
+TWINS = {
+    "01_least_squares": {"q6": "q6_practice", "q7": "q7_practice"},
+    "02_test_quantities": {"q7": "q7_practice", "q8a": "q8_practice", "q8": "q8_practice"},
+    "03_estimation_and_likelihood": {"q9": "q9_practice"},
+}
+
+
+@pytest.mark.parametrize("name", sorted(TWINS))
+def test_every_personal_value_question_has_a_public_twin(checks, name):
+    c = checks[name]
+    personal = {q.id for q in c.questions.values() if q.data is not None and q.kind == "value"}
+    assert personal == set(TWINS[name])
+    for twin in TWINS[name].values():
+        q = c.questions[twin]
+        assert q.kind == "value" and q.public and q.data is None
+
+
+# -- Monte Carlo: the seeded simulation itself, not its law ------------------------------
+@pytest.mark.parametrize(
+    "name, qid",
+    [
+        ("01_least_squares", "q8"),
+        ("02_test_quantities", "q9"),
+        ("03_estimation_and_likelihood", "q8"),
+    ],
+)
+def test_monte_carlo_answers_repeat_the_seeded_simulation(checks, name, qid):
+    """The theoretical value (declared as a mistake) and a simulation with another seed both
+    fail every case; the reference itself is a fraction of the runs."""
+    q = checks[name].questions[qid]
+    for case in q.cases:
+        expected = q.expected(case)
+        n_runs = case.args[-2] if name != "01_least_squares" else case.args[3]
+        assert float(expected) * n_runs == pytest.approx(round(float(expected) * n_runs))
+        for message, wrong in q.mistaken(case):
+            assert not compare(expected, wrong, q.rtol, q.atol).ok, (case.label, message)
+        args = list(case.args)
+        seed_at = -1 if name == "02_test_quantities" else (4 if name == "01_least_squares" else 3)
+        args[seed_at] = int(args[seed_at]) + 1
+        other = q.reference(*args)
+        assert not compare(expected, other, q.rtol, q.atol).ok, case.label

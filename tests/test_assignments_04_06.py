@@ -1,0 +1,95 @@
+"""Assignments 04-06 (issue 13): practice twins, distinguishable mistakes, near-threshold cases.
+
+The wrong-answer suite (tests/test_wrong_answers.py) grades whole submissions; these tests pin
+the properties of the checks that make those grades possible, cheaply and with clear messages.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from course import nis
+from course.grading.checks import load_checks
+from course.grading.compare import compare
+
+ROOT = Path(__file__).resolve().parents[1]
+NAMES = ["04_ekf_residuals", "05_nis_wishart", "06_mismatched_filters"]
+
+
+@pytest.fixture(scope="module", params=NAMES)
+def checks(request):
+    return load_checks(ROOT / "solutions" / request.param)
+
+
+def test_every_personal_question_has_a_public_practice_twin(checks):
+    personal = [q for q in checks.questions.values() if q.kind == "value" and q.data is not None]
+    assert personal, "each of 04-06 has a question on personal data"
+    for q in personal:
+        twin = checks.questions.get(f"{q.id}_practice")
+        assert twin is not None, f"{q.id} has no practice twin"
+        assert twin.kind == "value" and twin.public and twin.data is None
+        assert twin.target == f"{q.target}_practice"
+        assert list(checks.questions).index(twin.id) < list(checks.questions).index(q.id)
+
+
+def test_declared_mistakes_differ_from_the_right_answer(checks):
+    """A value question's mistake never equals its right answer (it would name a right answer a
+    mistake); a function question's mistake differs on some public case, so the self-check can
+    name it before grading (on other cases it may coincide: the right answer wins there)."""
+    n = 0
+    for q in checks.questions.values():
+        if not getattr(q, "mistakes", ()) or q.data is not None:
+            continue
+        cases = q.cases if q.kind == "function" else [None]
+        for m in q.mistakes:
+            differs = []
+            for case in cases:
+                args, kwargs = (case.args, case.kwargs) if case is not None else ((), {})
+                right = q.reference(*args, **kwargs)
+                wrong = m.reference(*args, **kwargs)
+                differs.append(not compare(right, wrong, q.rtol, q.atol).ok)
+            if q.kind == "value":
+                assert all(differs), (q.id, m.message)
+            else:
+                assert any(d for d, c in zip(differs, cases) if not c.hidden), (q.id, m.message)
+            n += 1
+    assert n > 0
+
+
+def test_personal_alarm_mistakes_change_the_answer_for_many_students():
+    """04 q5 grades the threshold as well as the first alarm, so an L - 1 dof threshold or the
+    window's first sample loses points for every student (not only near the threshold)."""
+    checks = load_checks(ROOT / "solutions" / "04_ekf_residuals")
+    q = checks.questions["q5"]
+    for sid in ("a1", "b2", "c3"):
+        d = checks.data_for("record", sid)
+        right = q.expected(data=d)
+        for m in q.mistakes:
+            assert not compare(right, m.reference(d), q.rtol, q.atol).ok, (sid, m.message)
+
+
+def test_matrix_test_has_cases_between_the_one_sided_and_two_sided_thresholds():
+    """05 q5: a test at alpha instead of alpha/2 flips the decision in a public case and in
+    hidden cases (issue 13: it used to keep full marks)."""
+    checks = load_checks(ROOT / "solutions" / "05_nis_wishart")
+    q = checks.questions["q5"]
+    flips = {"public": 0, "hidden": 0}
+    for case in q.cases:
+        eps, S, alpha = case.args
+        K, m = np.shape(eps)
+        lmin, lmax, reject = q.reference(eps, S, alpha)
+        lo, hi = nis.nis_matrix_critical_values(m, K, 2 * alpha)
+        if bool(lmin < lo or lmax > hi) != reject:
+            flips["hidden" if case.hidden else "public"] += 1
+    assert flips["public"] >= 1 and flips["hidden"] >= 2, flips
+
+
+def test_small_k_false_alarm_case_excludes_the_nominal_alpha():
+    """05 q7: returning alpha without simulating falls outside the band of a public case."""
+    checks = load_checks(ROOT / "solutions" / "05_nis_wishart")
+    q = checks.questions["q7"]
+    outside = [c for c in q.cases if not compare(q.reference(*c.args), float(c.args[2])).ok]
+    assert any(not c.hidden for c in outside) and any(c.hidden for c in outside)

@@ -1,0 +1,331 @@
+"""The wrong-answer suite: plausible wrong answers lose points, right answers keep full marks.
+
+Each assignment has one plain-data module ``tests/wrong_answers/answers_NN.py`` (NN = the
+assignment's number, ``answers_01.py`` for ``01_least_squares``)::
+
+    ASSIGNMENT = "01_least_squares"  # its folder under solutions/
+    STUDENT = "wa01"                 # submissions are graded as STUDENT-1, STUDENT-2, ... (never
+                                     # the demo ID, so answers copied from the demo student differ)
+    DEPENDS = {"q6": ["q3"]}         # optional: q6's solution cell uses q3's answer (its function)
+    WRONG = {                        # per question id: answers a class would plausibly write;
+        "q1": [                      # each must score LESS than the question's points
+            ("unweighted fit", "x_hat_day1 = np.linalg.lstsq(A, y_day2, rcond=None)[0]"),
+        ],
+    }
+    RIGHT = {                        # per question id: correct answers written differently
+        "q1": [("lsq.fit", "x_hat_day1 = lsq.fit(A, y_day1).x_hat")],  # must keep FULL marks
+    }
+    MANUAL = ["q6_why"]              # optional: questions graded by hand (short answers)
+
+A ``source`` is the complete replacement text of that question's answer cell in the solution
+notebook: no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
+the protected cells define and, for a question listed in ``DEPENDS``, the answers of the
+questions it depends on (the suite only places such a variant in a notebook where those are
+right). Wrong answers of a question that other questions depend on are placed where no
+dependent question is graded.
+
+To stay cheap, the suite packs the variants of different questions into few notebooks
+(questions are graded independently; a notebook holds at most one variant per question, every
+other answer cell keeps the solution) and grades each assignment's notebooks in one batch with
+the real grader, ``course.grading.driver.grade``.
+
+``python tests/test_wrong_answers.py [NN ...]`` prints the table of every variant's score.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib.util
+import json
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from course.grading.checks import load_checks
+from course.grading.driver import GradeOptions, grade
+from course.grading.notebook import _STUDENT_ID_LINE
+
+ROOT = Path(__file__).resolve().parents[1]
+SOLUTIONS = ROOT / "solutions"
+ANSWERS = Path(__file__).resolve().parent / "wrong_answers"
+ANSWER_FILES = sorted(ANSWERS.glob("answers_*.py"))
+
+
+@dataclass(frozen=True)
+class Variant:
+    qid: str
+    right: bool
+    label: str
+    source: str
+
+
+@dataclass
+class Spec:
+    assignment: str
+    student: str
+    depends: dict
+    wrong: dict
+    right: dict
+    manual: list
+
+    @property
+    def variants(self) -> list[Variant]:
+        out = []
+        for right, table in ((False, self.wrong), (True, self.right)):
+            for qid, entries in table.items():
+                out += [Variant(qid, right, label, src) for label, src in entries]
+        return out
+
+
+def load_spec(path: Path) -> Spec:
+    """Read one ``answers_NN.py`` data module."""
+    spec = importlib.util.spec_from_file_location(f"_wrong_answers_{path.stem}", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return Spec(
+        assignment=mod.ASSIGNMENT,
+        student=mod.STUDENT,
+        depends={k: list(v) for k, v in getattr(mod, "DEPENDS", {}).items()},
+        wrong=dict(mod.WRONG),
+        right=dict(mod.RIGHT),
+        manual=list(getattr(mod, "MANUAL", [])),
+    )
+
+
+def _defined(source: str) -> set[str]:
+    """The names an answer cell defines at top level (functions and assigned variables)."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return set()
+    names: set[str] = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names |= {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)}
+    return names
+
+
+def _mentions(source: str, names: set[str]) -> bool:
+    try:
+        used = {n.id for n in ast.walk(ast.parse(source)) if isinstance(n, ast.Name)}
+    except SyntaxError:
+        return True
+    return bool(used & names)
+
+
+class _Needs:
+    """Which answers a cell's source relies on, given the batch it runs in.
+
+    ``DEPENDS`` says which questions' answers a question may use; a source relies on one only
+    when it uses a name that question's solution cell defines (so a self-contained variant can
+    share a notebook with a wrong prerequisite). An answer left at the solution relies on what
+    the solution's cell uses, transitively. Without the solution sources every listed
+    dependency counts.
+    """
+
+    def __init__(self, depends: dict, solutions: dict):
+        self.depends = depends
+        self.solutions = solutions
+        self.defined = {
+            p: _defined(solutions[p]) if p in solutions else None
+            for deps in depends.values()
+            for p in deps
+        }
+
+    def __call__(self, qid: str, source: str, batch: dict, seen: frozenset = frozenset()) -> set:
+        out: set = set()
+        for p in self.depends.get(qid, []):
+            names = self.defined.get(p)
+            if p in seen or (names is not None and not _mentions(source, names)):
+                continue
+            out.add(p)
+            if p in batch and not batch[p].right:
+                continue
+            src = batch[p].source if p in batch else self.solutions.get(p, "")
+            out |= self(p, src, batch, seen | {qid})
+        return out
+
+
+def pack(spec: Spec, solutions: dict | None = None) -> list[dict[str, Variant]]:
+    """First-fit packing of the variants into notebooks (one variant per question per notebook).
+
+    A variant joins a notebook only when no answer graded there relies (directly, or through a
+    solution cell) on a wrong variant. ``solutions``: question -> the solution's answer source.
+    """
+    needs = _Needs(spec.depends, solutions or {})
+    batches: list[dict[str, Variant]] = []
+    for v in spec.variants:
+        for batch in batches:
+            if v.qid in batch:
+                continue
+            trial = {**batch, v.qid: v}
+            if any(
+                p in trial and not trial[p].right
+                for r in trial
+                for p in needs(r, trial[r].source, trial)
+            ):
+                continue
+            batch[v.qid] = v
+            break
+        else:
+            batches.append({v.qid: v})
+    return batches
+
+
+def _solution_sources(solution_nb) -> dict[str, str]:
+    return {
+        c.metadata["course"]["question"]: c.source
+        for c in solution_nb.cells
+        if c.get("metadata", {}).get("course", {}).get("role") == "answer"
+    }
+
+
+def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
+    """A copy of the solution notebook with the answer cells of ``batch`` replaced."""
+    nb = nbformat.from_dict(json.loads(json.dumps(solution_nb)))
+    seen = set()
+    for cell in nb.cells:
+        meta = cell.get("metadata", {}).get("course", {})
+        if meta.get("role") == "setup":
+            cell.source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student_id}"', cell.source, 1)
+        if meta.get("role") == "answer" and meta.get("question") in batch:
+            cell.source = batch[meta["question"]].source
+            seen.add(meta["question"])
+    missing = set(batch) - seen
+    assert not missing, f"no answer cell for {sorted(missing)} in the solution notebook"
+    return nb
+
+
+def grade_spec(spec: Spec, tmp: Path) -> list[tuple[Variant, dict]]:
+    """Grade every variant of ``spec``; return (variant, that question's result row) pairs."""
+    solution_dir = SOLUTIONS / spec.assignment
+    solution_nb = nbformat.read(solution_dir / f"{spec.assignment}.ipynb", as_version=4)
+    subs = tmp / "subs"
+    subs.mkdir(parents=True)
+    batches = pack(spec, _solution_sources(solution_nb))
+    ids = [f"{spec.student}-{k + 1}" for k in range(len(batches))]
+    for sid, batch in zip(ids, batches):
+        nbformat.write(build_notebook(solution_nb, batch, sid), subs / f"{sid}.ipynb")
+    grade(solution_dir, subs, tmp / "out", GradeOptions(jobs=2, progress=False))
+    rows = {}
+    for line in (tmp / "out" / "results.jsonl").read_text().splitlines():
+        row = json.loads(line)
+        rows[row["student"]] = row
+    out = []
+    for sid, batch in zip(ids, batches):
+        for v in batch.values():
+            out.append((v, rows[sid]["questions"][v.qid] | {"student": sid}))
+    return out
+
+
+SPECS = {p.stem.removeprefix("answers_"): p for p in ANSWER_FILES}
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    cache: dict[str, list] = {}
+
+    def get(key: str):
+        if key not in cache:
+            cache[key] = grade_spec(load_spec(SPECS[key]), tmp_path_factory.mktemp(f"wa{key}"))
+        return cache[key]
+
+    return get
+
+
+def _describe(v: Variant, r: dict) -> str:
+    return f"{v.qid} {v.label!r} ({r['student']}): {r['points']:g}/{r['max']:g} {r['status']} {r['message'][:160]}"
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_answers_cover_every_question(key):
+    spec = load_spec(SPECS[key])
+    checks = load_checks(SOLUTIONS / spec.assignment)
+    assert spec.student != "demo"
+    known = set(checks.questions)
+    named = set(spec.wrong) | set(spec.right) | set(spec.depends) | set(spec.manual)
+    assert named <= known, f"unknown questions {sorted(named - known)}"
+    auto = known - set(spec.manual)
+    assert not auto - set(spec.wrong), (
+        f"questions without wrong answers: {sorted(auto - set(spec.wrong))}"
+    )
+    assert not auto - set(spec.right), (
+        f"questions without right answers: {sorted(auto - set(spec.right))}"
+    )
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_wrong_answers_lose_points(graded, key):
+    kept = [_describe(v, r) for v, r in graded(key) if not v.right and r["points"] >= r["max"]]
+    assert not kept, "wrong answers with full marks:\n" + "\n".join(kept)
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_right_answers_keep_full_marks(graded, key):
+    lost = [_describe(v, r) for v, r in graded(key) if v.right and r["points"] < r["max"]]
+    assert not lost, "right answers that lost points:\n" + "\n".join(lost)
+
+
+def test_every_assignment_has_answers():
+    """Every assignment gets a wrong-answer file (04-06 are added in their own branch)."""
+    names = {load_spec(p).assignment for p in ANSWER_FILES}
+    missing = [n for n in sorted(p.name for p in SOLUTIONS.iterdir()) if n not in names]
+    missing = [n for n in missing if (SOLUTIONS / n / "checks.py").is_file()]
+    if missing:
+        pytest.skip(f"no wrong-answer file yet for {missing}")
+
+
+def test_packing_respects_dependencies():
+    spec = Spec(
+        "x",
+        "s",
+        {"q6": ["q3"], "q7": ["q6"]},
+        {"q3": [("w3", "")], "q6": [("w6a", ""), ("w6b", "")], "q7": [("w7", "")]},
+        {"q3": [("r3", "")], "q6": [("r6", "")], "q7": [("r7", "")]},
+        [],
+    )
+    batches = pack(spec)
+    for batch in batches:
+        for q, p in (("q6", "q3"), ("q7", "q6"), ("q7", "q3")):  # q7 needs q3 through q6
+            if q in batch and p in batch:
+                assert batch[p].right, batch
+    assert sum(len(b) for b in batches) == 7
+    # with the solutions known, a variant that does not use q3's function may join a wrong q3
+    spec.wrong["q6"] = [("w6a", "T = 1.0"), ("w6b", "T = f(2)")]
+    solutions = {"q3": "def f(x):\n    return x", "q6": "T = f(1)", "q7": "u = T"}
+    batches = pack(spec, solutions)
+    assert any("q3" in b and not b["q3"].right and b.get("q6", None) for b in batches)
+    for batch in batches:
+        if "q6" in batch and "q3" in batch and "f(" in batch["q6"].source:
+            assert batch["q3"].right
+        if "q7" in batch and "q3" in batch and "q6" not in batch:  # q7 -> solution q6 -> q3
+            assert batch["q3"].right
+
+
+def _natural(qid: str) -> list:
+    return [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", qid)]
+
+
+def main(keys) -> None:
+    """Print the score of every variant (markdown table)."""
+    import tempfile
+
+    for key in keys or sorted(SPECS):
+        with tempfile.TemporaryDirectory() as tmp:
+            rows = grade_spec(load_spec(SPECS[key]), Path(tmp))
+        print(f"\n### {key}\n\n| q | kind | answer | points |\n|---|---|---|---|")
+        for v, r in sorted(rows, key=lambda x: (_natural(x[0].qid), x[0].right)):
+            kind = "right" if v.right else "wrong"
+            print(f"| {v.qid} | {kind} | {v.label} | {r['points']:g}/{r['max']:g} |")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,409 @@
+"""Wrong and right answers of assignment 01_least_squares (data for tests/test_wrong_answers.py).
+
+WRONG[q]: answers a class would plausibly write; each must lose points at grading.
+RIGHT[q]: correct answers written differently; each must keep full marks.
+Each source replaces the whole answer cell of q in the solution notebook (format: see the
+docstring of tests/test_wrong_answers.py).
+"""
+
+ASSIGNMENT = "01_least_squares"
+STUDENT = "wa01"
+DEPENDS = {"q6": ["q3"], "q6_practice": ["q3"], "q6b": ["q6"]}
+
+# The demo student's personal answers, as a student copying them from a classmate's screen
+# (or from the solution run as "demo") would hard-code them.
+DEMO_T = "65.20560537845853"
+DEMO_SUSPECT = "6"
+
+_Q3_HEAD = """def overall_model_test_stat(A, y, Qyy, alpha):
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    m, n = A.shape
+"""
+_Q3_WEIGHTED = """    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, y, lower=True)
+    x = np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    T = float(np.sum((y_w - A_w @ x) ** 2))
+"""
+_Q4_HEAD = """def w_statistics(A, y, Qyy):
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    Qyy = np.asarray(Qyy, dtype=float)
+    W = np.linalg.inv(Qyy)
+    Qxx = np.linalg.inv(A.T @ W @ A)
+    e = y - A @ (Qxx @ A.T @ W @ y)
+    Qee = Qyy - A @ Qxx @ A.T
+"""
+_Q8_HEAD = """def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):
+    rng = np.random.default_rng(seed)
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    L = np.linalg.cholesky(Qyy)
+"""
+_Q8_SIM = """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_normal((n_runs, m)).T
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    Y_w = linalg.solve_triangular(L, Y, lower=True)
+    X = np.linalg.lstsq(A_w, Y_w, rcond=None)[0]
+    T = np.sum((Y_w - A_w @ X) ** 2, axis=0)
+"""
+
+WRONG = {
+    "q1": [
+        ("day 2's data", "x_hat_day1 = np.linalg.lstsq(A, y_day2, rcond=None)[0]"),
+        ("(slope, intercept) order", "x_hat_day1 = np.polyfit(t, y_day1, 1)"),
+        ("no intercept column", "x_hat_day1 = np.linalg.lstsq(t[:, None], y_day1, rcond=None)[0]"),
+        ("mean and zero slope", "x_hat_day1 = np.array([y_day1.mean(), 0.0])"),
+    ],
+    "q2": [
+        (
+            "sign: A x_hat - y",
+            "e_hat_day2 = A @ np.linalg.lstsq(A, y_day2, rcond=None)[0] - y_day2",
+        ),
+        (
+            "day 1's residuals",
+            "e_hat_day2 = y_day1 - A @ np.linalg.lstsq(A, y_day1, rcond=None)[0]",
+        ),
+        (
+            "day 1's estimate on day 2's data",
+            "e_hat_day2 = y_day2 - A @ np.linalg.lstsq(A, y_day1, rcond=None)[0]",
+        ),
+        (
+            "squared residuals",
+            "e_hat_day2 = (y_day2 - A @ np.linalg.lstsq(A, y_day2, rcond=None)[0]) ** 2",
+        ),
+        (
+            "sorted residuals",
+            "e_hat_day2 = np.sort(y_day2 - A @ np.linalg.lstsq(A, y_day2, rcond=None)[0])",
+        ),
+    ],
+    "q3": [
+        (
+            "Qyy ignored (unweighted T)",
+            _Q3_HEAD
+            + """    x = np.linalg.lstsq(A, y, rcond=None)[0]
+    T = float(np.sum((y - A @ x) ** 2))
+    c = float(stats.chi2.isf(alpha, m - n))
+    return T, c, T > c
+""",
+        ),
+        (
+            "dof m instead of m - n",
+            _Q3_HEAD
+            + _Q3_WEIGHTED
+            + "    c = float(stats.chi2.isf(alpha, m))\n    return T, c, T > c\n",
+        ),
+        (
+            "two-sided: alpha / 2",
+            _Q3_HEAD
+            + _Q3_WEIGHTED
+            + "    c = float(stats.chi2.isf(alpha / 2, m - n))\n    return T, c, T > c\n",
+        ),
+        (
+            "T / (m - n) (the variance factor)",
+            _Q3_HEAD
+            + _Q3_WEIGHTED
+            + "    T = T / (m - n)\n    c = float(stats.chi2.isf(alpha, m - n))\n    return T, c, T > c\n",
+        ),
+        (
+            "public answers hard-coded",
+            """def overall_model_test_stat(A, y, Qyy, alpha):
+    if np.asarray(y)[0] == 14.0:
+        return 6.0, 9.21034, False
+    return 216.0, 9.21034, True
+""",
+        ),
+    ],
+    "q4": [
+        ("sigma of y instead of sigma of e", _Q4_HEAD + "    return e / np.sqrt(np.diag(Qyy))\n"),
+        ("sign flipped", _Q4_HEAD + "    return -(W @ e) / np.sqrt(np.diag(W @ Qee @ W))\n"),
+        (
+            "e_i / sigma_ei also for a correlated Qyy",
+            _Q4_HEAD + "    return e / np.sqrt(np.diag(Qee))\n",
+        ),
+    ],
+    "q5": [
+        (
+            "one-sided 95 %: norm.isf(0.05)",
+            """Qxx = np.linalg.inv(A.T @ A)
+a = np.array([1.0, 2.0])
+s = float(np.sqrt(a @ Qxx @ a))
+band_t2 = (s, float(stats.norm.isf(0.05)) * s)
+""",
+        ),
+        (
+            "variance instead of sigma",
+            """Qxx = np.linalg.inv(A.T @ A)
+a = np.array([1.0, 2.0])
+v = float(a @ Qxx @ a)
+band_t2 = (v, float(stats.norm.isf(0.025)) * v)
+""",
+        ),
+        ("sigma of the observation (1)", "band_t2 = (1.0, float(stats.norm.isf(0.025)))"),
+        (
+            "t = 1 instead of t = 2 (first row of A)",
+            """Qxx = np.linalg.inv(A.T @ A)
+a = A[0]
+s = float(np.sqrt(a @ Qxx @ a))
+band_t2 = (s, float(stats.norm.isf(0.025)) * s)
+""",
+        ),
+        (
+            "Student t with 2 dof instead of the normal",
+            """Qxx = np.linalg.inv(A.T @ A)
+a = np.array([1.0, 2.0])
+s = float(np.sqrt(a @ Qxx @ a))
+band_t2 = (s, float(stats.t.isf(0.025, 2)) * s)
+""",
+        ),
+    ],
+    "q6": [
+        (
+            "unweighted T (Qyy ignored)",
+            """x_mine = np.linalg.lstsq(mine["A"], mine["y"], rcond=None)[0]
+T_mine = float(np.sum((mine["y"] - mine["A"] @ x_mine) ** 2))
+""",
+        ),
+        (
+            "divided by sigma instead of sigma^2",
+            """fit_mine = lsq.fit(mine["A"], mine["y"], mine["Qyy"])
+T_mine = float(np.sum(fit_mine.e_hat**2 / np.sqrt(np.diag(mine["Qyy"]))))
+""",
+        ),
+        (
+            "T / (m - n)",
+            """T_mine, critical_mine, reject_mine = overall_model_test_stat(mine["A"], mine["y"], mine["Qyy"], mine["alpha"])
+T_mine = T_mine / 10
+""",
+        ),
+        ("the demo student's T hard-coded", "T_mine = " + DEMO_T),
+    ],
+    "q7": [
+        (
+            "1-based index",
+            """snooping = lsq.data_snooping(mine["A"], mine["y"], mine["Qyy"], alpha=mine["alpha"])
+suspect_mine = int(snooping.removed[0]) + 1
+""",
+        ),
+        (
+            "largest |e| instead of the largest |w|",
+            """fit_mine = lsq.fit(mine["A"], mine["y"], mine["Qyy"])
+suspect_mine = int(np.argmax(np.abs(fit_mine.e_hat)))
+""",
+        ),
+        (
+            "snooping without the weights",
+            """snooping = lsq.data_snooping(mine["A"], mine["y"], np.eye(len(mine["y"])), alpha=mine["alpha"])
+suspect_mine = int(snooping.removed[0])
+""",
+        ),
+        ("the demo student's index hard-coded", "suspect_mine = " + DEMO_SUSPECT),
+    ],
+    "q8": [
+        (
+            "returns alpha (the promise, not a simulation)",
+            "def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n    return float(alpha)\n",
+        ),
+        (
+            "dof m instead of m - n",
+            _Q8_HEAD + _Q8_SIM + "    return float(np.mean(T > stats.chi2.isf(alpha, m)))\n",
+        ),
+        (
+            "bias forgotten",
+            _Q8_HEAD
+            + _Q8_SIM.replace("np.asarray(bias, dtype=float)[:, None] + ", "")
+            + "    return float(np.mean(T > stats.chi2.isf(alpha, m - n)))\n",
+        ),
+        (
+            "Qyy ignored in the test",
+            _Q8_HEAD
+            + """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_normal((n_runs, m)).T
+    X = np.linalg.lstsq(A, Y, rcond=None)[0]
+    T = np.sum((Y - A @ X) ** 2, axis=0)
+    return float(np.mean(T > stats.chi2.isf(alpha, m - n)))
+""",
+        ),
+        (
+            "the exact probability (ncx2), not a simulation",
+            """def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    lam = lsq.fit(A, np.asarray(bias, dtype=float), Qyy).squared_norm
+    c = stats.chi2.isf(alpha, m - n)
+    return float(stats.ncx2.sf(c, m - n, lam)) if lam > 0 else float(alpha)
+""",
+        ),
+        (
+            "noise drawn as (m, n_runs): another random sample",
+            _Q8_HEAD
+            + _Q8_SIM.replace(
+                "rng.standard_normal((n_runs, m)).T", "rng.standard_normal((m, n_runs))"
+            )
+            + "    return float(np.mean(T > stats.chi2.isf(alpha, m - n)))\n",
+        ),
+    ],
+}
+
+WRONG["q6b"] = [
+    ("the decision read backwards", 'verdict_mine = "accepted" if reject_mine else "rejected"'),
+]
+WRONG["q6_practice"] = [
+    (
+        "unweighted T (Qyy ignored)",
+        """x_p = np.linalg.lstsq(A_practice, y_practice, rcond=None)[0]
+T_practice = float(np.sum((y_practice - A_practice @ x_p) ** 2))
+""",
+    ),
+    (
+        "divided by sigma instead of sigma^2",
+        """f_p = lsq.fit(A_practice, y_practice, Q_practice)
+T_practice = float(np.sum(f_p.e_hat**2 / sigma_practice))
+""",
+    ),
+]
+WRONG["q7_practice"] = [
+    (
+        "1-based index",
+        """suspect_practice = int(lsq.data_snooping(A_practice, y_practice, Q_practice, alpha=alpha_practice).removed[0]) + 1""",
+    ),
+    (
+        "largest |e| instead of the largest |w|",
+        """suspect_practice = int(np.argmax(np.abs(lsq.fit(A_practice, y_practice, Q_practice).e_hat)))""",
+    ),
+    (
+        "snooping without the weights",
+        """suspect_practice = int(lsq.data_snooping(A_practice, y_practice, np.eye(12), alpha=0.01).removed[0])""",
+    ),
+]
+
+RIGHT = {
+    "q1": [
+        ("lsq.fit, with a print", "x_hat_day1 = lsq.fit(A, y_day1).x_hat\nprint(x_hat_day1)"),
+        (
+            "normal equations, as a list",
+            "x_hat_day1 = list(np.linalg.solve(A.T @ A, A.T @ y_day1))",
+        ),
+        ("polyfit reversed", "x_hat_day1 = np.polyfit(t, y_day1, 1)[::-1]"),
+    ],
+    "q2": [
+        ("lsq.fit", "e_hat_day2 = lsq.fit(A, y_day2).e_hat"),
+        ("projector, as a list", "e_hat_day2 = list((np.eye(4) - A @ np.linalg.pinv(A)) @ y_day2)"),
+    ],
+    "q3": [
+        (
+            "explicit inverse, list and numpy bool",
+            _Q3_HEAD
+            + """    W = np.linalg.inv(Qyy)
+    x = np.linalg.solve(A.T @ W @ A, A.T @ W @ y)
+    e = y - A @ x
+    T = e @ W @ e
+    c = stats.chi2.isf(alpha, m - n)
+    return [T, c, np.bool_(T > c)]
+""",
+        ),
+        (
+            "cho_factor / cho_solve",
+            _Q3_HEAD
+            + """    cf = linalg.cho_factor(Qyy)
+    N = A.T @ linalg.cho_solve(cf, A)
+    x = np.linalg.solve(N, A.T @ linalg.cho_solve(cf, y))
+    e = y - A @ x
+    T = float(e @ linalg.cho_solve(cf, e))
+    c = float(stats.chi2.ppf(1 - alpha, m - n))
+    print("T =", round(T, 3))
+    return T, c, bool(T > c)
+""",
+        ),
+    ],
+    "q4": [
+        ("explicit inverses", _Q4_HEAD + "    return (W @ e) / np.sqrt(np.diag(W @ Qee @ W))\n"),
+        (
+            "as a list, via the redundancy matrix",
+            _Q4_HEAD
+            + "    R = W @ Qee @ W\n    return [float(v) for v in (W @ e) / np.sqrt(np.diag(R))]\n",
+        ),
+    ],
+    "q5": [
+        (
+            "lsq.confidence_band",
+            """f1 = lsq.fit(A, y_day1)
+_, half = lsq.confidence_band(f1, np.array([[1.0, 2.0]]), level=0.95)
+band_t2 = [float(f1.sigma_y_hat[1]), float(half[0])]
+""",
+        ),
+        (
+            "explicit inverse and norm.ppf(0.975)",
+            """Qxx = np.linalg.inv(A.T @ A)
+a = np.array([1.0, 2.0])
+s = np.sqrt(a @ Qxx @ a)
+band_t2 = (s, stats.norm.ppf(0.975) * s)
+""",
+        ),
+    ],
+    "q6": [
+        (
+            "lsq",
+            """T_mine = lsq.overall_model_test(lsq.fit(mine["A"], mine["y"], mine["Qyy"]), mine["alpha"]).statistic""",
+        ),
+        (
+            "weights 1/sigma^2 by hand, numpy scalar",
+            """w = 1 / np.diag(mine["Qyy"])
+sw = np.sqrt(w)
+x_mine = np.linalg.lstsq(mine["A"] * sw[:, None], mine["y"] * sw, rcond=None)[0]
+T_mine = np.sum(w * (mine["y"] - mine["A"] @ x_mine) ** 2)
+print(T_mine)
+""",
+        ),
+    ],
+    "q7": [
+        (
+            "largest |w| by hand (numpy int)",
+            """Q = mine["Qyy"]
+W = np.linalg.inv(Q)
+Ai = mine["A"]
+Qxx = np.linalg.inv(Ai.T @ W @ Ai)
+e = mine["y"] - Ai @ (Qxx @ Ai.T @ W @ mine["y"])
+w = (W @ e) / np.sqrt(np.diag(W @ (Q - Ai @ Qxx @ Ai.T) @ W))
+suspect_mine = np.argmax(np.abs(w))
+""",
+        ),
+        (
+            "lsq.w_tests",
+            """res = lsq.w_tests(lsq.fit(mine["A"], mine["y"], mine["Qyy"]), mine["alpha"])
+suspect_mine = int(np.argmax(np.abs(res.w)))
+""",
+        ),
+    ],
+    "q8": [
+        (
+            "runs as rows, explicit projector",
+            _Q8_HEAD
+            + """    A_w = linalg.solve_triangular(L, A, lower=True)
+    P = np.eye(m) - A_w @ np.linalg.pinv(A_w)
+    Z = rng.standard_normal((n_runs, m))
+    Y_w = linalg.solve_triangular(L, np.asarray(bias, dtype=float), lower=True) + Z
+    R = Y_w @ P
+    T = np.einsum("ij,ij->i", R, R)
+    return np.mean(T > stats.chi2.isf(alpha, m - n))
+""",
+        ),
+    ],
+}
+RIGHT["q6b"] = [
+    (
+        "own comparison, capitalised",
+        'verdict_mine = "Rejected" if T_mine > stats.chi2.isf(mine["alpha"], 10) else "Accepted"',
+    ),
+]
+RIGHT["q6_practice"] = [
+    (
+        "lsq",
+        "T_practice = lsq.overall_model_test(lsq.fit(A_practice, y_practice, Q_practice), 0.01).statistic",
+    ),
+]
+RIGHT["q7_practice"] = [
+    (
+        "largest |w| (numpy int)",
+        """suspect_practice = np.argmax(np.abs(lsq.w_tests(lsq.fit(A_practice, y_practice, Q_practice), 0.01).w))""",
+    ),
+]

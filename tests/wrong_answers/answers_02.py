@@ -1,0 +1,417 @@
+"""Wrong and right answers of assignment 02_test_quantities (data for tests/test_wrong_answers.py).
+
+WRONG[q]: answers a class would plausibly write; each must lose points at grading.
+RIGHT[q]: correct answers written differently; each must keep full marks.
+Each source replaces the whole answer cell of q in the solution notebook (format: see the
+docstring of tests/test_wrong_answers.py).
+"""
+
+ASSIGNMENT = "02_test_quantities"
+STUDENT = "wa02"
+DEPENDS = {
+    "q7_practice": ["q4"],
+    "q8_practice": ["q1", "q7_practice"],
+    "q7": ["q4", "q7_practice"],
+    "q8": ["q1", "q7", "q8a"],
+    "q8b": ["q8"],
+}
+
+# The demo student's T_mine, as a student copying a classmate's (or the demo's) output would
+# hard-code it.
+DEMO_T = "np.array([5.503664327062542, 0.44364052036632473, 5.0548576396959755])"
+
+_T1 = """def T1_statistic(y, u1, u2, u3):
+    y, u1, u2, u3 = (np.asarray(a, dtype=float) for a in (y, u1, u2, u3))
+    target = y - u2 - u3
+"""
+_T_ALL = """def _T(U_, y_, k):
+    others = [j for j in range(3) if j != k]
+    target = y_ - U_[:, others].sum(axis=1)
+    u = U_[:, k]
+    r = target - u * (u @ target) / (u @ u)
+    return float(r @ r)
+
+"""
+_Q9 = """def detection_rate(U, theta, sigma, alpha, n_runs, seed):
+    rng = np.random.default_rng(seed)
+    U = np.asarray(U, dtype=float)
+    n = U.shape[0]
+"""
+_Q9_T = """    target = Y - U[:, 1] - U[:, 2]
+    u = U[:, 0]
+    R = target - np.outer(target @ u, u) / (u @ u)
+    T = np.sum(R**2, axis=1)
+"""
+
+WRONG = {
+    "q1": [
+        (
+            "an alarm keeps the modes with a 0 (inverted)",
+            """def single_fault_diagnoses(sensitivity, modes, alarms):
+    S = np.asarray(sensitivity, dtype=bool)
+    a = np.asarray(alarms, dtype=bool)
+    return [m for m, ok in zip(modes, np.all(~S[a], axis=0)) if ok]
+""",
+        ),
+        (
+            "a silent test also rules out its X modes",
+            """def single_fault_diagnoses(sensitivity, modes, alarms):
+    S = np.asarray(sensitivity, dtype=bool)
+    a = np.asarray(alarms, dtype=bool)
+    ok = np.all(S[a], axis=0) & ~np.any(S[~a], axis=0)
+    return [m for m, keep in zip(modes, ok) if keep]
+""",
+        ),
+        (
+            "any alarmed row instead of every alarmed row",
+            """def single_fault_diagnoses(sensitivity, modes, alarms):
+    S = np.asarray(sensitivity, dtype=bool)
+    a = np.asarray(alarms, dtype=bool)
+    ok = np.any(S[a], axis=0) if a.any() else np.ones(len(modes), bool)
+    return [m for m, keep in zip(modes, ok) if keep]
+""",
+        ),
+        (
+            "a boolean mask instead of the names",
+            """def single_fault_diagnoses(sensitivity, modes, alarms):
+    S = np.asarray(sensitivity, dtype=bool)
+    return np.all(S[np.asarray(alarms, dtype=bool)], axis=0)
+""",
+        ),
+    ],
+    "q2": [
+        ("H0 and H1 swapped", 'hypotheses_T2 = (["F2", "F3"], ["NF", "F1", "F4"])'),
+        ("NF forgotten in H0", 'hypotheses_T2 = (["F1", "F4"], ["F2", "F3"])'),
+        ("row T1 read instead of T2", 'hypotheses_T2 = (["NF", "F3", "F4"], ["F1", "F2"])'),
+    ],
+    "q3": [
+        (
+            "u1 = 0 divides by zero (nan)",
+            _T1
+            + "    th = (target @ u1) / (u1 @ u1)\n    r = target - th * u1\n    return float(r @ r)\n",
+        ),
+        (
+            "theta1 fixed at 1 (not minimised)",
+            _T1 + "    r = target - u1\n    return float(r @ r)\n",
+        ),
+        (
+            "mean instead of sum",
+            _T1
+            + "    e = u1 @ u1\n    th = (target @ u1) / e if e > 0 else 0.0\n"
+            + "    return float(np.mean((target - th * u1) ** 2))\n",
+        ),
+        (
+            "ratio upside down",
+            _T1
+            + "    e = target @ u1\n    th = (u1 @ u1) / e if e != 0 else 0.0\n"
+            + "    r = target - th * u1\n    return float(r @ r)\n",
+        ),
+    ],
+    "q4": [
+        (
+            "dof = N - number of columns (rank ignored)",
+            """def regression_residual(Phi, Y):
+    Phi = np.asarray(Phi, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    theta = np.linalg.lstsq(Phi, Y, rcond=None)[0]
+    r = Y - Phi @ theta
+    return float(r @ r), Phi.shape[0] - Phi.shape[1]
+""",
+        ),
+        (
+            "normal equations with pinv, dof N - rank - 1",
+            """def regression_residual(Phi, Y):
+    Phi = np.asarray(Phi, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    r = Y - Phi @ (np.linalg.pinv(Phi) @ Y)
+    return float(r @ r), Phi.shape[0] - np.linalg.matrix_rank(Phi) - 1
+""",
+        ),
+        (
+            "returns the estimate's residual norm, not its square",
+            """def regression_residual(Phi, Y):
+    Phi = np.asarray(Phi, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    r = Y - Phi @ (np.linalg.pinv(Phi) @ Y)
+    return float(np.linalg.norm(r)), Phi.shape[0] - np.linalg.matrix_rank(Phi)
+""",
+        ),
+    ],
+    "q5": [
+        (
+            "sum instead of mean (1/N forgotten)",
+            "b_hat = np.mean(y_gb - u_gb)\nT_bias_free = float(np.sum((y_gb - u_gb - b_hat) ** 2))",
+        ),
+        ("bias not removed", "T_bias_free = float(np.mean((y_gb - u_gb) ** 2))"),
+        (
+            "sample variance with 1/(N - 1)",
+            "T_bias_free = float(np.var(y_gb - u_gb, ddof=1))",
+        ),
+    ],
+    "q5b": [("no", 'bias_decoupled = "no"')],
+    "q6": [
+        (
+            "dof N instead of N - 1",
+            """J = sigma**2 * stats.chi2.isf(0.01, N)
+d = 0.15 * u2
+d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
+lam = (d_perp @ d_perp) / sigma**2
+threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N, lam)))
+""",
+        ),
+        (
+            "threshold not scaled by sigma^2",
+            """J = stats.chi2.isf(0.01, N - 1)
+d = 0.15 * u2
+d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
+lam = (d_perp @ d_perp) / sigma**2
+threshold_and_power = (float(J), float(stats.ncx2.sf(J, N - 1, lam)))
+""",
+        ),
+        (
+            "lambda without projecting out u1",
+            """J = sigma**2 * stats.chi2.isf(0.01, N - 1)
+d = 0.15 * u2
+lam = (d @ d) / sigma**2
+threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N - 1, lam)))
+""",
+        ),
+        (
+            "alpha / 2",
+            """J = sigma**2 * stats.chi2.isf(0.005, N - 1)
+d = 0.15 * u2
+d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
+lam = (d_perp @ d_perp) / sigma**2
+threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N - 1, lam)))
+""",
+        ),
+    ],
+    "q7_practice": [
+        (
+            "all three gains fixed (no gain estimated)",
+            "T_practice = np.array([float(np.sum((y_near - U.sum(axis=1)) ** 2))] * 3)",
+        ),
+        (
+            "T_k estimates all three gains",
+            """r = y_near - U @ np.linalg.lstsq(U, y_near, rcond=None)[0]
+T_practice = np.array([r @ r] * 3)
+""",
+        ),
+    ],
+    "q8_practice": [
+        (
+            "chi2(N) instead of chi2(N - 1)",
+            """J_practice = sigma**2 * stats.chi2.isf(0.01, N)
+diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_practice)
+""",
+        ),
+        (
+            "alpha / 2",
+            """J_practice = sigma**2 * stats.chi2.isf(0.005, N - 1)
+diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_practice)
+""",
+        ),
+    ],
+    "q7": [
+        (
+            "the practice record instead of mine",
+            "T_mine = np.array([decoupled_T(U, y_near, k) for k in range(3)])",
+        ),
+        (
+            "tests in the wrong order (T3, T2, T1)",
+            'T_mine = np.array([decoupled_T(mine["U"], mine["y"], k) for k in (2, 1, 0)])',
+        ),
+        (
+            "divided by sigma^2",
+            'T_mine = np.array([decoupled_T(mine["U"], mine["y"], k) for k in range(3)]) / mine["sigma"] ** 2',
+        ),
+        ("the demo student's T hard-coded", "T_mine = " + DEMO_T),
+    ],
+    "q8a": [
+        (
+            "chi2(N) instead of chi2(N - 1)",
+            'J_mine = mine["sigma"] ** 2 * stats.chi2.isf(mine["alpha"], len(mine["y"]))',
+        ),
+        (
+            "alpha / 2",
+            'J_mine = mine["sigma"] ** 2 * stats.chi2.isf(mine["alpha"] / 2, len(mine["y"]) - 1)',
+        ),
+        ("not scaled by sigma^2", 'J_mine = stats.chi2.isf(mine["alpha"], len(mine["y"]) - 1)'),
+        (
+            "sigma instead of sigma^2",
+            'J_mine = mine["sigma"] * stats.chi2.isf(mine["alpha"], len(mine["y"]) - 1)',
+        ),
+        (
+            "the practice threshold (sigma = 0.2, alpha = 0.01)",
+            "J_mine = 0.2**2 * stats.chi2.isf(0.01, N - 1)",
+        ),
+    ],
+    "q8": [
+        (
+            "the modes whose tests alarm (rows read as columns)",
+            "diagnosis_mine = [MODES[k + 1] for k in range(3) if T_mine[k] > J_mine]",
+        ),
+        (
+            "the practice record's diagnosis",
+            "diagnosis_mine = single_fault_diagnoses(LECTURE, MODES, T_practice > 0.2**2 * stats.chi2.isf(0.01, N - 1))",
+        ),
+    ],
+    "q8b": [
+        ("NF always", 'mode_mine = "NF"'),
+        ("F1 (first fault, a guess)", 'mode_mine = "F1"'),
+    ],
+    "q9": [
+        (
+            "the exact power (formula, not a simulation)",
+            """def detection_rate(U, theta, sigma, alpha, n_runs, seed):
+    U = np.asarray(U, dtype=float)
+    n = U.shape[0]
+    d = U @ (np.asarray(theta, dtype=float) - 1.0)
+    u = U[:, 0]
+    d_perp = d - u * (u @ d) / (u @ u)
+    lam = (d_perp @ d_perp) / sigma**2
+    return float(stats.ncx2.sf(stats.chi2.isf(alpha, n - 1), n - 1, lam))
+""",
+        ),
+        (
+            "records in columns: another random sample",
+            _Q9
+            + "    Y = (U @ np.asarray(theta, dtype=float))[:, None] + sigma * rng.standard_normal((n, n_runs))\n"
+            + "    Y = Y.T\n"
+            + _Q9_T
+            + "    return float(np.mean(T > sigma**2 * stats.chi2.isf(alpha, n - 1)))\n",
+        ),
+        (
+            "dof N instead of N - 1",
+            _Q9
+            + "    Y = U @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, n))\n"
+            + _Q9_T
+            + "    return float(np.mean(T > sigma**2 * stats.chi2.isf(alpha, n)))\n",
+        ),
+        (
+            "threshold not scaled by sigma^2",
+            _Q9
+            + "    Y = U @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, n))\n"
+            + _Q9_T
+            + "    return float(np.mean(T > stats.chi2.isf(alpha, n - 1)))\n",
+        ),
+        (
+            "returns alpha",
+            "def detection_rate(U, theta, sigma, alpha, n_runs, seed):\n    return alpha\n",
+        ),
+    ],
+}
+
+RIGHT = {
+    "q1": [
+        (
+            "loops, as a tuple",
+            """def single_fault_diagnoses(sensitivity, modes, alarms):
+    out = []
+    for j, m in enumerate(modes):
+        if all(sensitivity[k][j] for k in range(len(alarms)) if alarms[k]):
+            out.append(m)
+    return tuple(out)
+""",
+        ),
+    ],
+    "q2": [
+        (
+            "tuples and a print",
+            'hypotheses_T2 = [("NF", "F1", "F4"), ("F2", "F3")]\nprint(hypotheses_T2)',
+        )
+    ],
+    "q3": [
+        (
+            "np.linalg.lstsq on one column",
+            _T1
+            + "    if not np.any(u1):\n        return float(target @ target)\n"
+            + "    th = np.linalg.lstsq(u1[:, None], target, rcond=None)[0]\n"
+            + "    return float(np.sum((target - u1 * th) ** 2))\n",
+        ),
+    ],
+    "q4": [
+        (
+            "np.linalg.lstsq reports the rank",
+            """def regression_residual(Phi, Y):
+    Phi = np.asarray(Phi, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    theta, _, rank, _ = np.linalg.lstsq(Phi, Y, rcond=None)
+    r = Y - Phi @ theta
+    return [r @ r, np.int64(Phi.shape[0] - rank)]
+""",
+        ),
+    ],
+    "q5": [
+        ("np.var (1/N)", "T_bias_free = np.var(y_gb - u_gb)"),
+    ],
+    "q5b": [("Yes, with spaces and capitals", 'bias_decoupled = " Yes "')],
+    "q6": [
+        (
+            "dg.residual_threshold and a projector",
+            """J = dg.residual_threshold(N - 1, 0.01, sigma=sigma)
+P = np.eye(N) - np.outer(u1, u1) / (u1 @ u1)
+lam = np.sum((P @ (0.15 * u2)) ** 2) / sigma**2
+threshold_and_power = [J, stats.ncx2.sf(J / sigma**2, N - 1, lam)]
+""",
+        ),
+    ],
+    "q7_practice": [
+        ("by hand, as a list", _T_ALL + "T_practice = [_T(U, y_near, k) for k in range(3)]\n"),
+    ],
+    "q8_practice": [
+        (
+            "alarms by hand, as a tuple",
+            """J_p = sigma**2 * stats.chi2.ppf(0.99, N - 1)
+alarms_p = [bool(T > J_p) for T in T_practice]
+diagnosis_practice = tuple(single_fault_diagnoses(LECTURE, MODES, alarms_p))
+""",
+        ),
+    ],
+    "q7": [
+        (
+            "by hand, as a list",
+            _T_ALL + 'T_mine = [_T(mine["U"], mine["y"], k) for k in range(3)]\n',
+        ),
+    ],
+    "q8a": [
+        (
+            "dg.residual_threshold",
+            'J_mine = dg.residual_threshold(len(mine["y"]) - 1, mine["alpha"], sigma=mine["sigma"])',
+        ),
+    ],
+    "q8": [
+        (
+            "self-contained, with a print",
+            _T_ALL
+            + """T_own = np.array([_T(mine["U"], mine["y"], k) for k in range(3)])
+J_own = mine["sigma"] ** 2 * stats.chi2.isf(mine["alpha"], len(mine["y"]) - 1)
+alarmed = LECTURE[T_own > J_own].astype(bool)
+diagnosis_mine = [m for j, m in enumerate(MODES) if alarmed[:, j].all()]
+print(diagnosis_mine)
+""",
+        ),
+    ],
+    "q8b": [
+        (
+            "from a dictionary",
+            """conclusion = {1: diagnosis_mine[0], 4: "no fault detected"}
+mode_mine = conclusion.get(len(diagnosis_mine), "several faults fit")
+""",
+        ),
+    ],
+    "q9": [
+        (
+            "projector matrix, one matrix product",
+            _Q9
+            + """    E = rng.standard_normal((n_runs, n))
+    u = U[:, 0]
+    P = np.eye(n) - np.outer(u, u) / (u @ u)
+    base = U @ np.asarray(theta, dtype=float) - U[:, 1] - U[:, 2]
+    R = (base + sigma * E) @ P
+    T = np.einsum("ij,ij->i", R, R)
+    return np.mean(T > dg.residual_threshold(n - 1, alpha, sigma=sigma))
+""",
+        ),
+    ],
+}

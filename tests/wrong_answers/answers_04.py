@@ -1,0 +1,432 @@
+"""Wrong and right answers of assignment 04_ekf_residuals (data for tests/test_wrong_answers.py).
+
+WRONG[q]: answers a class would plausibly write; each must lose points at grading.
+RIGHT[q]: correct answers written differently; each must keep full marks.
+Each source replaces the whole answer cell of q in the solution notebook (format: see the
+docstring of tests/test_wrong_answers.py). The k-th variant of a question is graded as student
+wa04-k: wa04-1 has window 10 and alpha 0.001 (the practice record's settings), wa04-2 window 8.
+"""
+
+ASSIGNMENT = "04_ekf_residuals"
+STUDENT = "wa04"
+
+# The demo student's personal answer (window 8, alpha 0.001: a false alarm at t = 11), as a
+# student copying a classmate's screen would hard-code it.
+DEMO_ALARM = "(26.124481558376143, 11)"
+
+_Q2_HEAD = """def normalized_innovations(y, a, q, r, m0, p0):
+    y = np.asarray(y, dtype=float)
+    x, P = float(m0), float(p0)
+    z = np.empty(y.shape)
+"""
+_Q2_RIGHT_LOOP = """    for t, y_t in enumerate(y):
+        S = P + r
+        K = P / S
+        eps = y_t - x
+        z[t] = eps / np.sqrt(S)
+        x = x + K * eps
+        P = (1 - K) ** 2 * P + K**2 * r
+        x, P = a * x, a**2 * P + q
+    return z
+"""
+
+
+def _q2(body: str) -> str:
+    return _Q2_HEAD + body
+
+
+_Q3_HEAD = "def windowed_statistic(z, L):\n    z = np.asarray(z, dtype=float)\n"
+
+_Q5P_T = """model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+T_practice = kf.windowed_nis(kf.extended_kalman_filter(model, y_practice, u_practice), 10)
+"""
+_Q5_T = """model = kf.beta_drift_model(Ts=mine["Ts"], q_beta=mine["q_beta"], q_x=mine["q_x"],
+                            r=mine["r"], x0_mean=(1.0, 0.5))
+L, alpha = mine["window"], mine["alpha"]
+T_mine = kf.windowed_nis(kf.extended_kalman_filter(model, mine["y"], mine["u"]), L)
+"""
+_FIRST = "int(np.flatnonzero(np.nan_to_num({T}) > {thr})[0])"
+
+_Q6_HEAD = """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal(n_runs)
+    y = np.empty((n_runs, N))
+    for t in range(N):
+        y[:, t] = x + np.sqrt(r) * rng.standard_normal(n_runs)
+        x = a * x + np.sqrt(q) * rng.standard_normal(n_runs)
+    model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
+    z = kf.kalman_filter(model, y[..., None]).normalized_innovations()[..., 0]
+    c = np.concatenate([np.zeros((n_runs, 1)), np.cumsum(z**2, axis=1)], axis=1)
+    T = c[:, L:] - c[:, :-L]
+"""
+
+_Q7_HEAD = """T7 = {}
+for q_beta in (0.0, 1e-4):
+    m7 = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+    T7[q_beta] = np.nan_to_num(kf.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10))
+thr7 = kf.windowed_nis_threshold(10, 0.001)
+"""
+
+_Q8_HEAD = """def rls_update(theta, P, phi, y, r):
+    theta, P, phi = (np.asarray(v, dtype=float) for v in (theta, P, phi))
+    Pphi = P @ phi
+    S = phi @ Pphi + r
+    K = Pphi / S
+"""
+
+WRONG = {
+    "q1": [
+        (
+            "filtered variance P(t|t) instead of the prediction variance",
+            "P_pred = (1 + np.sqrt(5)) / 2\nK = P_pred / (P_pred + 1)\nsteady = ((1 - K) * P_pred, K)",
+        ),
+        (
+            "(K, P) order",
+            "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf / (P_inf + 1), P_inf)",
+        ),
+        (
+            "the negative root",
+            "P_inf = (1 - np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / (P_inf + 1))",
+        ),
+        ("one Riccati step from P = 1", "P = 1.0 - 1.0 / 2.0 + 1.0\nsteady = (P, P / (P + 1))"),
+        ("gain P/r without the sum", "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / 1.0)"),
+    ],
+    "q2": [
+        (
+            "predicts before the first update",
+            _q2(
+                """    for t, y_t in enumerate(y):
+        x, P = a * x, a**2 * P + q
+        S = P + r
+        K = P / S
+        eps = y_t - x
+        z[t] = eps / np.sqrt(S)
+        x = x + K * eps
+        P = (1 - K) * P
+    return z
+"""
+            ),
+        ),
+        ("innovations not normalised", _q2(_Q2_RIGHT_LOOP.replace("eps / np.sqrt(S)", "eps"))),
+        ("divided by S, not sqrt(S)", _q2(_Q2_RIGHT_LOOP.replace("eps / np.sqrt(S)", "eps / S"))),
+        ("S = P without r", _q2(_Q2_RIGHT_LOOP.replace("eps / np.sqrt(S)", "eps / np.sqrt(P)"))),
+        (
+            "residual after the update instead of the innovation",
+            _q2(
+                """    for t, y_t in enumerate(y):
+        S = P + r
+        K = P / S
+        x = x + K * (y_t - x)
+        z[t] = (y_t - x) / np.sqrt(S)
+        P = (1 - K) * P
+        x, P = a * x, a**2 * P + q
+    return z
+"""
+            ),
+        ),
+        (
+            "first sample dropped (off by one)",
+            _q2(_Q2_RIGHT_LOOP.replace("    return z\n", "    return z[1:]\n")),
+        ),
+    ],
+    "q3": [
+        (
+            "sums of z, not of z^2",
+            _Q3_HEAD + "    c = np.concatenate([[0.0], np.cumsum(z)])\n    return c[L:] - c[:-L]\n",
+        ),
+        (
+            "window means (1/L)",
+            _Q3_HEAD
+            + "    c = np.concatenate([[0.0], np.cumsum(z**2)])\n    return (c[L:] - c[:-L]) / L\n",
+        ),
+        (
+            "N - L windows (last one missing)",
+            _Q3_HEAD
+            + "    return np.array([np.sum(z[k:k + L] ** 2) for k in range(len(z) - L)])\n",
+        ),
+        (
+            "N values with partial windows at the start",
+            _Q3_HEAD
+            + "    c = np.cumsum(z**2)\n    return c - np.concatenate([np.zeros(L), c[:-L]])\n",
+        ),
+    ],
+    "q4": [
+        ("lower tail chi2.ppf(alpha)", "threshold = stats.chi2.ppf(0.001, 10)"),
+        ("two-sided alpha/2", "threshold = stats.chi2.isf(0.0005, 10)"),
+        ("L - 1 degrees of freedom", "threshold = stats.chi2.isf(0.001, 9)"),
+        ("normal approximation", "threshold = 10 + stats.norm.isf(0.001) * np.sqrt(2 * 10)"),
+        ("divided by L (mean scale)", "threshold = stats.chi2.isf(0.001, 10) / 10"),
+    ],
+    "q5_practice": [
+        (
+            "L - 1 degrees of freedom",
+            _Q5P_T
+            + "thr = stats.chi2.isf(0.001, 9)\n"
+            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')})",
+        ),
+        (
+            "window-start index",
+            _Q5P_T
+            + "thr = stats.chi2.isf(0.001, 10)\n"
+            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')} - 9)",
+        ),
+        (
+            "two-sided alpha/2",
+            _Q5P_T
+            + "thr = stats.chi2.isf(0.0005, 10)\n"
+            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')})",
+        ),
+        (
+            "1-based sample number",
+            _Q5P_T
+            + "thr = stats.chi2.isf(0.001, 10)\n"
+            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')} + 1)",
+        ),
+        (
+            "the fault onset instead of the alarm",
+            "alarm_practice = (stats.chi2.isf(0.001, 10), t_fault_practice)",
+        ),
+    ],
+    "q5": [
+        (
+            "L - 1 degrees of freedom",
+            _Q5_T
+            + "thr = stats.chi2.isf(alpha, L - 1)\n"
+            + f"alarm = (thr, {_FIRST.format(T='T_mine', thr='thr')})",
+        ),
+        (
+            "the practice record's window and alpha instead of mine",
+            _Q5_T.replace('mine["window"], mine["alpha"]', "10, 0.001")
+            + "thr = stats.chi2.isf(alpha, L)\n"
+            + f"alarm = (thr, {_FIRST.format(T='T_mine', thr='thr')})",
+        ),
+        (
+            "window-start index",
+            _Q5_T
+            + "thr = stats.chi2.isf(alpha, L)\n"
+            + f"alarm = (thr, {_FIRST.format(T='T_mine', thr='thr')} - (L - 1))",
+        ),
+        ("the demo student's answer hard-coded", f"alarm = {DEMO_ALARM}"),
+        ("the practice answer hard-coded", "alarm = (29.58829844507442, 121)"),
+        (
+            "one-sided mix-up: alpha/2",
+            _Q5_T
+            + "thr = stats.chi2.isf(alpha / 2, L)\n"
+            + f"alarm = (thr, {_FIRST.format(T='T_mine', thr='thr')})",
+        ),
+    ],
+    "q6": [
+        (
+            "threshold with L - 1 degrees of freedom",
+            _Q6_HEAD
+            + "    alarm = T > stats.chi2.isf(alpha, L - 1)\n"
+            + "    return float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1)))\n",
+        ),
+        (
+            "counts of runs, not fractions",
+            _Q6_HEAD
+            + "    alarm = T > stats.chi2.isf(alpha, L)\n"
+            + "    return int(np.sum(alarm[:, -1])), int(np.sum(alarm.any(axis=1)))\n",
+        ),
+        (
+            "rates swapped",
+            _Q6_HEAD
+            + "    alarm = T > stats.chi2.isf(alpha, L)\n"
+            + "    return float(np.mean(alarm.any(axis=1))), float(np.mean(alarm[:, -1]))\n",
+        ),
+        (
+            "any-window rate over all windows (mean, not any)",
+            _Q6_HEAD
+            + "    alarm = T > stats.chi2.isf(alpha, L)\n"
+            + "    return float(np.mean(alarm[:, -1])), float(np.mean(alarm))\n",
+        ),
+        (
+            "unnormalised innovations (z * sqrt(S))",
+            _Q6_HEAD.replace(".normalized_innovations()[..., 0]", ".innovations[..., 0]")
+            + "    alarm = T > stats.chi2.isf(alpha, L)\n"
+            + "    return float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1)))\n",
+        ),
+    ],
+    "q7": [
+        (
+            "counts over the whole record (after the fault too)",
+            _Q7_HEAD + "false_alarms = tuple(int(np.sum(T7[qb] > thr7)) for qb in (0.0, 1e-4))",
+        ),
+        (
+            "order swapped",
+            _Q7_HEAD
+            + "false_alarms = tuple(int(np.sum(T7[qb][:t_fault7] > thr7)) for qb in (1e-4, 0.0))",
+        ),
+        (
+            "threshold with L - 1 degrees of freedom",
+            _Q7_HEAD.replace("kf.windowed_nis_threshold(10, 0.001)", "stats.chi2.isf(0.001, 9)")
+            + "false_alarms = tuple(int(np.sum(T7[qb][:t_fault7] > thr7)) for qb in (0.0, 1e-4))",
+        ),
+        (
+            "windows that start before the fault",
+            _Q7_HEAD + "false_alarms = tuple(int(np.sum(T7[qb][:t_fault7 + 9] > thr7)) "
+            "for qb in (0.0, 1e-4))",
+        ),
+    ],
+    "q8": [
+        (
+            "covariance update with a plus sign",
+            _Q8_HEAD + "    return theta + K * (y - phi @ theta), P + np.outer(K, Pphi)\n",
+        ),
+        (
+            "gain without dividing by S",
+            _Q8_HEAD.replace("K = Pphi / S", "K = Pphi")
+            + "    return theta + K * (y - phi @ theta), P - np.outer(K, Pphi)\n",
+        ),
+        (
+            "S without r",
+            _Q8_HEAD.replace("S = phi @ Pphi + r", "S = phi @ Pphi")
+            + "    return theta + K * (y - phi @ theta), P - np.outer(K, Pphi)\n",
+        ),
+        (
+            "old covariance returned",
+            _Q8_HEAD + "    return theta + K * (y - phi @ theta), P\n",
+        ),
+        (
+            "innovation sign flipped",
+            _Q8_HEAD + "    return theta + K * (phi @ theta - y), P - np.outer(K, Pphi)\n",
+        ),
+    ],
+}
+
+RIGHT = {
+    "q1": [
+        (
+            "kf.steady_state",
+            "ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]]))\n"
+            "steady = (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))",
+        ),
+        (
+            "iterate the recursion (list)",
+            "P = 1.0\nfor _ in range(200):\n    P = P - P**2 / (P + 1) + 1\n"
+            "steady = [P, P / (P + 1)]",
+        ),
+        (
+            "np.roots, numpy scalars, extra print",
+            "P = max(np.roots([1.0, -1.0, -1.0]))\nsteady = (P, P / (P + 1))\nprint(steady)",
+        ),
+    ],
+    "q2": [
+        (
+            "short covariance update (1 - K) P, list output",
+            _q2(
+                _Q2_RIGHT_LOOP.replace("P = (1 - K) ** 2 * P + K**2 * r", "P = (1 - K) * P")
+            ).replace("    return z\n", "    return list(z)\n"),
+        ),
+        (
+            "information form P r / (P + r), **0.5",
+            _q2(
+                _Q2_RIGHT_LOOP.replace("P = (1 - K) ** 2 * P + K**2 * r", "P = P * r / (P + r)")
+            ).replace("np.sqrt(S)", "S**0.5"),
+        ),
+    ],
+    "q3": [
+        (
+            "Python loop",
+            _Q3_HEAD
+            + "    return np.array([sum(v * v for v in z[k:k + L]) for k in range(len(z) - L + 1)])\n",
+        ),
+        ("np.convolve", _Q3_HEAD + "    return np.convolve(z**2, np.ones(L), mode='valid')\n"),
+        (
+            "sliding_window_view",
+            _Q3_HEAD + "    return np.lib.stride_tricks.sliding_window_view(z**2, L).sum(axis=1)\n",
+        ),
+    ],
+    "q4": [
+        ("ppf(1 - alpha)", "threshold = stats.chi2.ppf(1 - 0.001, 10)"),
+        ("kf.windowed_nis_threshold", "threshold = kf.windowed_nis_threshold(10, 0.001)"),
+        (
+            "numpy scalar with a print",
+            "threshold = np.float64(stats.chi2.isf(0.001, 10))\nprint(round(threshold, 2))",
+        ),
+    ],
+    "q5_practice": [
+        (
+            "kf.windowed_nis_threshold and np.argmax, list",
+            _Q5P_T
+            + "thr = kf.windowed_nis_threshold(10, 0.001)\n"
+            + "alarm_practice = [thr, int(np.argmax(np.nan_to_num(T_practice) > thr))]",
+        ),
+        (
+            "loop, numpy int",
+            _Q5P_T
+            + "thr = stats.chi2.isf(0.001, 10)\n"
+            + "first = next(t for t in range(len(T_practice)) if T_practice[t] > thr)\n"
+            + "alarm_practice = (thr, np.int64(first))",
+        ),
+    ],
+    "q5": [
+        (
+            "kf.windowed_nis_threshold and np.argmax",
+            _Q5_T
+            + "thr = kf.windowed_nis_threshold(L, alpha)\n"
+            + "alarm = (thr, int(np.argmax(np.nan_to_num(T_mine) > thr)))",
+        ),
+        (
+            "loop with a print, numpy int",
+            _Q5_T
+            + "thr = stats.chi2.ppf(1 - alpha, L)\n"
+            + "first = next(t for t in range(len(T_mine)) if T_mine[t] > thr)\n"
+            + "print('first alarm at', first)\n"
+            + "alarm = [thr, np.int64(first)]",
+        ),
+    ],
+    "q6": [
+        (
+            "own vectorised filter, noise drawn up front",
+            """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
+    rng = np.random.default_rng(seed)
+    x0, w, v = rng.standard_normal(n_runs), rng.standard_normal((N, n_runs)), rng.standard_normal((N, n_runs))
+    xs, xh, P = x0, np.zeros(n_runs), 1.0
+    z2 = np.empty((N, n_runs))
+    for t in range(N):
+        y = xs + np.sqrt(r) * v[t]
+        S = P + r
+        z2[t] = (y - xh) ** 2 / S
+        K = P / S
+        xh = a * (xh + K * (y - xh))
+        P = a**2 * (1 - K) * P + q
+        xs = a * xs + np.sqrt(q) * w[t]
+    T = np.lib.stride_tricks.sliding_window_view(z2, L, axis=0).sum(axis=-1)
+    alarm = T > stats.chi2.isf(alpha, L)
+    return float(alarm[-1].mean()), float(alarm.any(axis=0).mean())
+""",
+        ),
+    ],
+    "q7": [
+        (
+            "np.count_nonzero with errstate, list",
+            """counts = []
+for q_beta in (0.0, 1e-4):
+    m7 = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+    T7 = kf.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10)
+    with np.errstate(invalid="ignore"):
+        counts.append(np.count_nonzero(T7[:t_fault7] > stats.chi2.isf(0.001, 10)))
+false_alarms = counts""",
+        ),
+    ],
+    "q8": [
+        (
+            "short covariance form, lists",
+            _Q8_HEAD
+            + "    return list(theta + K * (y - phi @ theta)), (P - np.outer(K, Pphi)).tolist()\n",
+        ),
+        (
+            "np.linalg.solve for the 1x1 S",
+            """def rls_update(theta, P, phi, y, r):
+    theta, P = np.asarray(theta, float), np.asarray(P, float)
+    H = np.asarray(phi, float)[None, :]
+    S = H @ P @ H.T + r
+    K = np.linalg.solve(S, H @ P).T
+    theta_new = theta + (K @ (np.atleast_1d(y) - H @ theta))
+    P_new = P - K @ H @ P
+    return theta_new, (P_new + P_new.T) / 2
+""",
+        ),
+    ],
+}

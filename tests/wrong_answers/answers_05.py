@@ -1,0 +1,398 @@
+"""Wrong and right answers of assignment 05_nis_wishart (data for tests/test_wrong_answers.py).
+
+WRONG[q]: answers a class would plausibly write; each must lose points at grading.
+RIGHT[q]: correct answers written differently; each must keep full marks.
+Each source replaces the whole answer cell of q in the solution notebook (format: see the
+docstring of tests/test_wrong_answers.py).
+"""
+
+ASSIGNMENT = "05_nis_wishart"
+STUDENT = "wa05"
+DEPENDS = {
+    "q5": ["q2"],
+    "q6_practice": ["q1", "q2"],
+    "q6": ["q1", "q2", "q5"],
+    "q6_which": ["q1", "q2", "q5", "q6"],
+}
+MANUAL = ["q6_why"]
+
+# The demo student's personal answers, as a student copying a classmate's screen would
+# hard-code them.
+DEMO_PVALUES = "(0.9038436160901426, 0.0005367395161279529)"
+PRACTICE_PVALUES = "(0.8153062197833431, 0.00028331731260571296)"
+
+_WHITEN = """    eps = np.asarray(eps, dtype=float)
+    K, m = eps.shape
+    B = np.linalg.cholesky(np.broadcast_to(np.asarray(S, dtype=float), (K, m, m)))
+    z = np.linalg.solve(B, eps[:, :, None])[:, :, 0]
+"""
+_Q1 = "def nis_per_step(eps, S):\n"
+_Q2 = "def nis_matrix(eps, S):\n"
+_Q5 = """def matrix_test(eps, S, alpha):
+    K, m = np.shape(eps)
+    values = np.linalg.eigvalsh(nis_matrix(eps, S))
+    lmin, lmax = float(values[0]), float(values[-1])
+"""
+_Q5_RIGHT_THRESHOLDS = """    lower = float(nis.extreme_eigenvalue(m, K, "min").ppf(alpha / 2))
+    upper = float(nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2))
+"""
+_Q5_DECIDE = "    return (lmin, lmax, bool(lmin < lower or lmax > upper))\n"
+
+_P6 = """K, m = {eps}.shape
+total = float(np.sum(nis_per_step({eps}, {S})))
+values = np.linalg.eigvalsh(nis_matrix({eps}, {S}))
+F_min = nis.extreme_eigenvalue(m, K, "min").cdf(values[0])
+sf_max = nis.extreme_eigenvalue(m, K, "max").sf(values[-1])
+p_matrix = float(min(1.0, 2 * min(F_min, sf_max)))
+"""
+_P6_NIS = (
+    "p_nis = float(min(1.0, 2 * min(stats.chi2(m * K).cdf(total), stats.chi2(m * K).sf(total))))\n"
+)
+_PRACTICE = _P6.format(eps="eps_practice", S="S_practice")
+_MINE = _P6.format(eps='mine["eps"]', S='mine["S"]')
+
+_Q7 = """def false_alarm_rate(m, K, alpha, n_runs, seed):
+    rng = np.random.default_rng(seed)
+    z = rng.standard_normal((n_runs, K, m))
+    Pi = np.einsum("rki,rkj->rij", z, z) / K
+    values = np.linalg.eigvalsh(Pi)
+"""
+
+WRONG = {
+    "q1": [
+        (
+            "quadratic form with S, not its inverse",
+            _Q1
+            + "    eps = np.asarray(eps, float)\n"
+            + "    S = np.broadcast_to(np.asarray(S, float), (len(eps),) + np.shape(S)[-2:])\n"
+            + "    return np.einsum('ki,kij,kj->k', eps, S, eps)\n",
+        ),
+        (
+            "upper factor: solve(B^T, eps)",
+            _Q1
+            + _WHITEN.replace("np.linalg.solve(B, ", "np.linalg.solve(np.swapaxes(B, -1, -2), ")
+            + "    return np.sum(z * z, axis=1)\n",
+        ),
+        ("the sum over steps", _Q1 + _WHITEN + "    return float(np.sum(z * z))\n"),
+        ("divided by m", _Q1 + _WHITEN + "    return np.sum(z * z, axis=1) / m\n"),
+        (
+            "diagonal of S only",
+            _Q1
+            + "    eps = np.asarray(eps, float)\n"
+            + "    d = np.diagonal(np.broadcast_to(np.asarray(S, float), (len(eps),) + np.shape(S)[-2:]), axis1=1, axis2=2)\n"
+            + "    return np.sum(eps**2 / d, axis=1)\n",
+        ),
+    ],
+    "q2": [
+        ("sum, not mean (factor K)", _Q2 + _WHITEN + "    return z.T @ z\n"),
+        ("divided by K - 1", _Q2 + _WHITEN + "    return z.T @ z / (K - 1)\n"),
+        ("not whitened", _Q2 + _WHITEN + "    return eps.T @ eps / K\n"),
+        (
+            "upper factor: B^-T eps",
+            _Q2
+            + _WHITEN.replace("np.linalg.solve(B, ", "np.linalg.solve(np.swapaxes(B, -1, -2), ")
+            + "    return z.T @ z / K\n",
+        ),
+        ("outer products in the wrong order (K x K)", _Q2 + _WHITEN + "    return z @ z.T / K\n"),
+    ],
+    "q3": [
+        (
+            "the poster's law: chi2(mK) for eps_bar itself",
+            "eps_bar_interval = (stats.chi2(60).ppf(0.025), stats.chi2(60).isf(0.025))",
+        ),
+        (
+            "alpha not split (0.05 in each tail)",
+            "eps_bar_interval = (stats.chi2(60).ppf(0.05) / 20, stats.chi2(60).isf(0.05) / 20)",
+        ),
+        (
+            "divided by m K",
+            "eps_bar_interval = (stats.chi2(60).ppf(0.025) / 60, stats.chi2(60).isf(0.025) / 60)",
+        ),
+        (
+            "dof m K - 1",
+            "eps_bar_interval = (stats.chi2(59).ppf(0.025) / 20, stats.chi2(59).isf(0.025) / 20)",
+        ),
+        (
+            "chi2(m) per step, divided by K",
+            "eps_bar_interval = (stats.chi2(3).ppf(0.025) / 20, stats.chi2(3).isf(0.025) / 20)",
+        ),
+    ],
+    "q4": [
+        (
+            "alpha not split",
+            'thresholds = (float(nis.extreme_eigenvalue(2, 30, "min").ppf(0.05)),\n'
+            '              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.05)))',
+        ),
+        (
+            "both from the law of lambda_max",
+            'thresholds = (float(nis.extreme_eigenvalue(2, 30, "max").ppf(0.025)),\n'
+            '              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.025)))',
+        ),
+        (
+            "chi2(m K)/K thresholds of the NIS test",
+            "thresholds = (stats.chi2(60).ppf(0.025) / 30, stats.chi2(60).isf(0.025) / 30)",
+        ),
+        (
+            "upper tail for the lower threshold",
+            'thresholds = (float(nis.extreme_eigenvalue(2, 30, "min").isf(0.025)),\n'
+            '              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.025)))',
+        ),
+    ],
+    "q5": [
+        (
+            "one-sided thresholds at alpha instead of alpha/2",
+            _Q5 + _Q5_RIGHT_THRESHOLDS.replace("alpha / 2", "alpha") + _Q5_DECIDE,
+        ),
+        (
+            "eigenvalues of K * Pi",
+            _Q5.replace("nis_matrix(eps, S))", "K * nis_matrix(eps, S))")
+            + _Q5_RIGHT_THRESHOLDS
+            + _Q5_DECIDE,
+        ),
+        (
+            "only the upper tail, at alpha",
+            _Q5
+            + '    upper = float(nis.extreme_eigenvalue(m, K, "max").isf(alpha))\n'
+            + "    return (lmin, lmax, bool(lmax > upper))\n",
+        ),
+        (
+            "m and K swapped",
+            _Q5.replace("K, m = np.shape(eps)", "m, K = np.shape(eps)")
+            + _Q5_RIGHT_THRESHOLDS
+            + _Q5_DECIDE,
+        ),
+        (
+            "(lmax, lmin) order",
+            _Q5
+            + _Q5_RIGHT_THRESHOLDS
+            + "    return (lmax, lmin, bool(lmin < lower or lmax > upper))\n",
+        ),
+    ],
+    "q6_practice": [
+        (
+            "one-sided NIS p-value (sf)",
+            _PRACTICE + "pvalues_practice = (float(stats.chi2(m * K).sf(total)), p_matrix)",
+        ),
+        (
+            "chi2(mK) at the average, not the sum",
+            _PRACTICE.replace("total = float(np.sum(", "total = float(np.mean(")
+            + _P6_NIS
+            + "pvalues_practice = (p_nis, p_matrix)",
+        ),
+        (
+            "no factor 2 in p_matrix",
+            _PRACTICE.replace("2 * min(F_min, sf_max)", "min(F_min, sf_max)")
+            + _P6_NIS
+            + "pvalues_practice = (p_nis, p_matrix)",
+        ),
+        ("(p_matrix, p_nis) order", _PRACTICE + _P6_NIS + "pvalues_practice = (p_matrix, p_nis)"),
+    ],
+    "q6": [
+        ("the demo student's answer hard-coded", f"pvalues = {DEMO_PVALUES}"),
+        ("the practice answer hard-coded", f"pvalues = {PRACTICE_PVALUES}"),
+        (
+            "one-sided NIS p-value (sf)",
+            _MINE + "pvalues = (float(stats.chi2(m * K).sf(total)), p_matrix)",
+        ),
+        (
+            "chi2(mK) at the average, not the sum",
+            _MINE.replace("total = float(np.sum(", "total = float(np.mean(")
+            + _P6_NIS
+            + "pvalues = (p_nis, p_matrix)",
+        ),
+        ("(p_matrix, p_nis) order", _MINE + _P6_NIS + "pvalues = (p_matrix, p_nis)"),
+    ],
+    "q6_which": [
+        (
+            "decision inverted (rejects when p > alpha)",
+            "p_nis, p_matrix = pvalues\n"
+            'which_rejects = ["neither", "only the NIS test", "only the matrix test", "both"][\n'
+            '    int(p_nis > mine["alpha"]) + 2 * int(p_matrix > mine["alpha"])]',
+        ),
+        # The demo student's verdict hard-coded is not listed: with four options it is the
+        # right verdict for a share of the class, and a copied choice that happens to be
+        # right cannot be told from a right one (q6 grades the p-values behind it).
+    ],
+    "q7": [
+        ("the nominal alpha (no simulation)", _Q7 + "    return alpha\n"),
+        (
+            "one-sided thresholds at alpha",
+            _Q7
+            + "    lower, upper = nis.nis_matrix_critical_values(m, K, 2 * alpha)\n"
+            + "    return float(np.mean((values[:, 0] < lower) | (values[:, -1] > upper)))\n",
+        ),
+        (
+            "sum, not mean (factor K)",
+            _Q7.replace(") / K\n", ")\n")
+            + "    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)\n"
+            + "    return float(np.mean((values[:, 0] < lower) | (values[:, -1] > upper)))\n",
+        ),
+        (
+            "only lambda_max tested",
+            _Q7
+            + "    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)\n"
+            + "    return float(np.mean(values[:, -1] > upper))\n",
+        ),
+        (
+            "count of rejections, not the fraction",
+            _Q7
+            + "    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)\n"
+            + "    return int(np.sum((values[:, 0] < lower) | (values[:, -1] > upper)))\n",
+        ),
+    ],
+    "q8": [
+        (
+            "chi2(n N) not divided by N",
+            "nees_interval = (stats.chi2(200).ppf(0.025), stats.chi2(200).isf(0.025))",
+        ),
+        (
+            "chi2(n) of one run",
+            "nees_interval = (stats.chi2(4).ppf(0.025), stats.chi2(4).isf(0.025))",
+        ),
+        (
+            "divided by n N",
+            "nees_interval = (stats.chi2(200).ppf(0.025) / 200, stats.chi2(200).isf(0.025) / 200)",
+        ),
+        (
+            "alpha not split",
+            "nees_interval = (stats.chi2(200).ppf(0.05) / 50, stats.chi2(200).isf(0.05) / 50)",
+        ),
+        (
+            "dof n N - 1",
+            "nees_interval = (stats.chi2(199).ppf(0.025) / 50, stats.chi2(199).isf(0.025) / 50)",
+        ),
+    ],
+}
+
+RIGHT = {
+    "q1": [
+        (
+            "np.linalg.solve with S, list",
+            _Q1
+            + "    eps = np.asarray(eps, float)\n"
+            + "    S = np.broadcast_to(np.asarray(S, float), (len(eps),) + np.shape(S)[-2:])\n"
+            + "    return [float(e @ np.linalg.solve(s, e)) for e, s in zip(eps, S)]\n",
+        ),
+        (
+            "scipy cho_factor per step",
+            _Q1
+            + "    from scipy import linalg\n"
+            + "    eps = np.asarray(eps, float)\n"
+            + "    S = np.broadcast_to(np.asarray(S, float), (len(eps),) + np.shape(S)[-2:])\n"
+            + "    out = np.empty(len(eps))\n"
+            + "    for k in range(len(eps)):\n"
+            + "        out[k] = eps[k] @ linalg.cho_solve(linalg.cho_factor(S[k]), eps[k])\n"
+            + "    return out\n",
+        ),
+    ],
+    "q2": [
+        (
+            "einsum of outer products",
+            _Q2 + _WHITEN + "    return np.einsum('ki,kj->ij', z, z) / K\n",
+        ),
+        (
+            "loop with solve_triangular",
+            _Q2
+            + "    from scipy import linalg\n"
+            + "    eps = np.asarray(eps, float)\n"
+            + "    K, m = eps.shape\n"
+            + "    S = np.broadcast_to(np.asarray(S, float), (K, m, m))\n"
+            + "    Pi = np.zeros((m, m))\n"
+            + "    for k in range(K):\n"
+            + "        z = linalg.solve_triangular(np.linalg.cholesky(S[k]), eps[k], lower=True)\n"
+            + "        Pi += np.outer(z, z)\n"
+            + "    return Pi / K\n",
+        ),
+    ],
+    "q3": [
+        (
+            "chi2.interval",
+            "eps_bar_interval = tuple(np.array(stats.chi2(60).interval(0.95)) / 20)",
+        ),
+        (
+            "the gamma law of eps_bar, list",
+            "law = stats.gamma(a=30, scale=2 / 20)\n"
+            "eps_bar_interval = [law.ppf(0.025), law.ppf(0.975)]",
+        ),
+    ],
+    "q4": [
+        (
+            "ppf(1 - alpha/2) for the upper one, list",
+            'thresholds = [nis.extreme_eigenvalue(2, 30, "min").ppf(0.025),\n'
+            '              nis.extreme_eigenvalue(2, 30, "max").ppf(0.975)]',
+        ),
+    ],
+    "q5": [
+        (
+            "nis_matrix_critical_values and numpy types",
+            "def matrix_test(eps, S, alpha):\n"
+            + "    K, m = np.shape(eps)\n"
+            + "    values = np.linalg.eigvalsh(nis_matrix(eps, S))\n"
+            + "    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)\n"
+            + "    return (values[0], values[-1], np.bool_(values[0] < lower or values[-1] > upper))\n",
+        ),
+        (
+            "sorted np.linalg.eigvals, list",
+            _Q5.replace(
+                "np.linalg.eigvalsh(nis_matrix(eps, S))",
+                "np.sort(np.linalg.eigvals(nis_matrix(eps, S)).real)",
+            )
+            + _Q5_RIGHT_THRESHOLDS
+            + "    return [lmin, lmax, lmin < lower or lmax > upper]\n",
+        ),
+    ],
+    "q6_practice": [
+        (
+            "nis.nis_test and nis.nis_matrix_test",
+            "pvalues_practice = (nis.nis_test(eps_practice, S_practice, 0.05).pvalue,\n"
+            "                    nis.nis_matrix_test(eps_practice, S_practice, 0.05).pvalue)",
+        ),
+        (
+            "list with a print",
+            _PRACTICE + _P6_NIS + "pvalues_practice = [p_nis, p_matrix]\nprint(pvalues_practice)",
+        ),
+    ],
+    "q6": [
+        (
+            "nis.nis_test and nis.nis_matrix_test",
+            'pvalues = (nis.nis_test(mine["eps"], mine["S"], mine["alpha"]).pvalue,\n'
+            '           nis.nis_matrix_test(mine["eps"], mine["S"], mine["alpha"]).pvalue)',
+        ),
+        ("list with a print", _MINE + _P6_NIS + "pvalues = [p_nis, p_matrix]\nprint(pvalues)"),
+    ],
+    "q6_which": [
+        (
+            "if/else, other spacing and case",
+            "p_nis, p_matrix = pvalues\n"
+            'a = mine["alpha"]\n'
+            "if p_nis < a and p_matrix < a:\n"
+            '    which_rejects = "Both"\n'
+            "elif p_nis < a:\n"
+            '    which_rejects = " only the NIS test"\n'
+            "elif p_matrix < a:\n"
+            '    which_rejects = "only the matrix test "\n'
+            "else:\n"
+            '    which_rejects = "neither"',
+        ),
+    ],
+    "q7": [
+        (
+            "draws of shape (K, n_runs, m), eigh",
+            """def false_alarm_rate(m, K, alpha, n_runs, seed):
+    rng = np.random.default_rng(seed)
+    z = rng.standard_normal((K, n_runs, m))
+    Pi = np.einsum("kri,krj->rij", z, z) / K
+    values = np.linalg.eigh(Pi)[0]
+    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
+    inside = (values[:, 0] >= lower) & (values[:, -1] <= upper)
+    return 1.0 - inside.mean()
+""",
+        ),
+    ],
+    "q8": [
+        (
+            "chi2.interval, list",
+            "nees_interval = list(np.array(stats.chi2(200).interval(0.95)) / 50)",
+        ),
+    ],
+}
