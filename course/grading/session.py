@@ -451,22 +451,34 @@ class StudentSession:
         result["answer"] = text[:MAX_SHORT_ANSWER]
         return result
 
-    def _grade_choice(self, q) -> dict:
+    def _read_variable(self, q) -> tuple[dict, dict | None]:
+        """Ask the child for the answer variable of ``q``: ``(reply, None)``, or a finished
+        question result when the child failed or the variable is missing or still a stub."""
         g = self.g
         try:
             reply = self._request(q.id, Op.VALUE, 30, name=q.target)
         except (ChildTimeout, ChildDied) as exc:
             self._drop_child()
-            return g._question_result(
+            return {}, g._question_result(
                 q,
                 GradeStatus.CRASH,
                 f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})",
             )
         status = reply.get("status")
         if status == ReplyStatus.UNDEFINED:
-            return self._missing(q, f"no variable {q.target}")
+            return reply, self._missing(q, f"no variable {q.target}")
         if status == ReplyStatus.STUB:
-            return g._question_result(q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ...")
+            return reply, g._question_result(
+                q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ..."
+            )
+        return reply, None
+
+    def _grade_choice(self, q) -> dict:
+        g = self.g
+        reply, early = self._read_variable(q)
+        if early is not None:
+            return early
+        status = reply.get("status")
         try:
             got = decode(reply.get("value"), allow_band=False) if status == ReplyStatus.OK else None
         except (EncodingError, TypeError, ValueError, KeyError):
@@ -488,20 +500,10 @@ class StudentSession:
 
     def _grade_value(self, q) -> dict:
         g = self.g
-        try:
-            reply = self._request(q.id, Op.VALUE, 30, name=q.target)
-        except (ChildTimeout, ChildDied) as exc:
-            self._drop_child()
-            return g._question_result(
-                q,
-                GradeStatus.CRASH,
-                f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})",
-            )
+        reply, early = self._read_variable(q)
+        if early is not None:
+            return early
         status = reply.get("status")
-        if status == ReplyStatus.UNDEFINED:
-            return self._missing(q, f"no variable {q.target}")
-        if status == ReplyStatus.STUB:
-            return g._question_result(q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ...")
         if status != ReplyStatus.OK:
             return g._question_result(
                 q,
