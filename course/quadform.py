@@ -615,8 +615,11 @@ class _Side:
         bound = (k1 + xp.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * xp.maximum(x, 1e-300))
         if self.sigma2:
             bound = xp.minimum(bound, math.sqrt(k1 / self.sigma2))
-        # far below the weights the bound is the saddle itself
-        return -bound, hi, xp.where(x * self.k < 0.1 * self.mean, -bound, guess)
+        # far below the weights the bound is the saddle itself; nearer the mean
+        # Newton starts at the geometric mean of it and the Gaussian guess (on
+        # Davies' points and random positive forms, a fifth to a third fewer steps)
+        far_below = x * self.k < 0.1 * self.mean
+        return -bound, hi, xp.where(far_below, -bound, -xp.sqrt(bound * -guess))
 
 
 def _saddle(x, side, upper, pole):
