@@ -5,6 +5,7 @@ are sent to the student's function only at grading time.
 """
 
 import functools
+from collections import namedtuple
 
 import numpy as np
 from scipy import stats
@@ -13,6 +14,14 @@ from course import filters as kf
 from course.grading.checks import Band, Checks, Mistake, binomial_band
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+SteadyState = namedtuple("SteadyState", "P K")
+Alarm = namedtuple("Alarm", "threshold first_alarm")
+FalseAlarms = namedtuple("FalseAlarms", "count_constant count_random_walk")
+RLSUpdate = namedtuple("RLSUpdate", "theta_new P_new")
 
 # The fixed record of q7: the notebook's context cell builds the same one with the same seed
 # (4062: a threshold with L - 1 degrees of freedom counts 19 false alarms instead of 14).
@@ -114,7 +123,7 @@ _Q1_MISTAKES = [
 def q1():
     model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]])
     ss = kf.steady_state(model)
-    return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
+    return SteadyState(float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
 
 
 @CHECKS.function(
@@ -215,7 +224,7 @@ def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None
         threshold = float(stats.chi2.isf(alpha, dof))
     with np.errstate(invalid="ignore"):
         alarms = np.flatnonzero(threshold < T)
-    return (float(threshold), int(alarms[0]) + shift if alarms.size else -1)
+    return Alarm(float(threshold), int(alarms[0]) + shift if alarms.size else -1)
 
 
 def _alarm_mistakes(record):
@@ -349,7 +358,7 @@ def q7():
         T = kf.windowed_nis(kf.extended_kalman_filter(model, Y7, U7), 10)
         with np.errstate(invalid="ignore"):
             counts.append(int(np.sum(T[:T_FAULT7] > thr)))
-    return tuple(counts)
+    return FalseAlarms(*counts)
 
 
 @CHECKS.function(
@@ -374,7 +383,7 @@ def q8(theta, P, phi, y, r):
         np.asarray(phi, float)[None, :],
         np.array([[float(r)]]),
     )
-    return (x, Pn)
+    return RLSUpdate(x, Pn)
 
 
 q8.case(

@@ -407,3 +407,26 @@ RIGHT["q7_practice"] = [
         """suspect_practice = np.argmax(np.abs(lsq.w_tests(lsq.fit(A_practice, y_practice, Q_practice), 0.01).w))""",
     ),
 ]
+
+# q5's reference is a named tuple (sigma, half_width); a student's list, or a named tuple of
+# their own with other field names, is as right as a plain tuple.
+RIGHT["q5"] += [
+    (
+        "a list of numpy floats",
+        """fit_day1 = lsq.fit(A, y_day1)
+a = np.array([1.0, 2.0])
+s = np.sqrt(a @ fit_day1.Qxx @ a)
+band_t2 = [s, stats.norm.isf(0.025) * s]
+""",
+    ),
+    (
+        "a named tuple of the student's own",
+        """from collections import namedtuple
+Band = namedtuple("Band", "sd hw")
+fit_day1 = lsq.fit(A, y_day1)
+a = np.array([1.0, 2.0])
+s = float(np.sqrt(a @ fit_day1.Qxx @ a))
+band_t2 = Band(s, float(stats.norm.isf(0.025)) * s)
+""",
+    ),
+]
