@@ -12,7 +12,7 @@ DEPENDS = {"q6": ["q3"], "q6_practice": ["q3"], "q6b": ["q6"]}
 
 # The demo student's personal answers, as a student copying them from a classmate's screen
 # (or from the solution run as "demo") would hard-code them.
-DEMO_T = "65.20560537845853"
+DEMO_T = "22.57078379203652"
 DEMO_SUSPECT = "6"
 
 _Q3_HEAD = """def overall_model_test_stat(A, y, Qyy, alpha):
@@ -244,8 +244,15 @@ suspect_mine = int(snooping.removed[0])
     ],
 }
 
+# q6b: the survey puts T within 1.35 of its critical value, so a wrong threshold flips the
+# verdict of every rejected survey (the suite's students; ignoring Qyy flips the accepted ones,
+# see tests/test_assignments_01_03.py) and a hard-coded verdict is right for half of the class.
+_VERDICT = 'verdict_mine = "rejected" if T_mine > stats.chi2.isf({level}, {dof}) else "accepted"'
 WRONG["q6b"] = [
     ("the decision read backwards", 'verdict_mine = "accepted" if reject_mine else "rejected"'),
+    ("chi2 with m degrees of freedom", _VERDICT.format(level='mine["alpha"]', dof=12)),
+    ("chi2 with m - 1 degrees of freedom", _VERDICT.format(level='mine["alpha"]', dof=11)),
+    ("two-sided: alpha / 2", _VERDICT.format(level='mine["alpha"] / 2', dof=10)),
 ]
 WRONG["q6_practice"] = [
     (
