@@ -1,6 +1,6 @@
 """Monte Carlo studies of a set of tests: simulated records, statistics, isolation rates.
 
-The example models are the LiU lecture's on test quantities (full reference in the course
+The example models come from the LiU lecture on test quantities (full reference in the course
 bibliography, :doc:`/docs/bibliography`).
 """
 
