@@ -19,8 +19,9 @@ from test_notebooks_text import SOURCE_PATH
 ROOT = Path(__file__).resolve().parents[1]
 BIBLIOGRAPHY = ROOT / "docs" / "bibliography.md"
 MODULES = sorted((ROOT / "course").rglob("*.py"))
-# the pages of the website; docs/api/modules/ is generated from the docstrings (checked below)
-DOC_PAGES = sorted(
+# the README and the pages of the website; docs/api/modules/ is generated from the docstrings
+# (checked below)
+DOC_PAGES = sorted(ROOT.glob("*.md")) + sorted(
     p
     for p in (ROOT / "docs").rglob("*")
     if p.suffix in {".md", ".rst", ".txt"} and (ROOT / "docs" / "api" / "modules") not in p.parents
