@@ -626,7 +626,8 @@ def _cmp_numbers(node: dict, got, ctx: _Ctx, where: str, label: str) -> Verdict:
         return Verdict(False, text, text)
     at = np.unravel_index(bad[0], shape) if shape else ()
     count = (
-        f"{len(bad)} of {len(flat)} elements wrong, the first at {_where(at, shape).strip()[3:]}; "
+        f"{len(bad)} of {len(flat)} elements wrong, the {'worst' if len(bad) == 1 else 'first'}"
+        f" at {_where(at, shape).strip()[3:]}; "
         if len(flat) > 1
         else ""
     )
