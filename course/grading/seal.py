@@ -14,7 +14,9 @@ The grid of a float element
 Let ``tol(e) = atol + rtol*|e|`` be the question's tolerance. The magnitude of ``e`` is
 rounded up to a quarter binade, ``q = ceil(4*log2|e|)`` (clipped below at the magnitude where
 ``atol`` dominates), and the grid step is ``h(q) = 2*(atol + rtol*2**(q/4))``, so that
-``tol(e) <= h/2``. The element is sealed as ``hash(q, floor(e/h))``. Neither ``q`` nor ``h``
+``tol(e) <= h/2`` (``rtol`` taken at least ``2**-39``, about 1.8e-12: finer tolerances are
+not resolved, and ``e/h`` stays below ``2**38`` so that it is computed far more precisely than
+the cells need). The element is sealed as ``hash(q, floor(e/h))``. Neither ``q`` nor ``h``
 is stored: the self-check derives the candidate ``q`` from the student's own number ``s``
 (the one or two quarter binades that a right answer's ``e`` can lie in), and for each ``q``
 tries the cell of ``s/h`` and its two neighbours at distance ``h/2``. Hence:
@@ -131,8 +133,12 @@ FACTORS = tuple(
 ) + (Fraction(4, 3), Fraction(3, 4))
 #: Largest 1-D array for which another order (a permutation) is tried.
 _MAX_PERMUTATION = 6
-# a guard on the cells tried around s/h: rounding of s/h cannot drop the right cell
-_EPS = 1e-6
+# a guard on the cells tried around s/h: the rounding of s/h (|s/h| < 2**38, so an error
+# below 2**-14) cannot drop the right cell
+_EPS = 1e-3
+#: The finest relative grid: tolerances below it are not resolved (float64 round-off is
+#: 1.1e-16; the public checks use rtol >= 1e-10).
+_MIN_RTOL = 2.0**-39
 
 
 def make_salt(*parts: Any) -> str:
@@ -170,20 +176,26 @@ def _exact(rtol: float, atol: float) -> bool:
     return rtol <= 0.0 and atol <= 0.0
 
 
+def _grid_rtol(rtol: float) -> float:
+    """``rtol`` as the grid uses it: at least :data:`_MIN_RTOL`, so that ``|e/h| < 2**38``
+    and ``e/h`` is computed to far better than the margin of the cells tried."""
+    return max(rtol, _MIN_RTOL)
+
+
 def _q_floor(rtol: float, atol: float) -> int | None:
     """The smallest quarter binade: below it ``atol`` dominates the grid (None: no floor)."""
     if atol <= 0.0:
         return None
-    return math.floor(_STEPS_PER_BINADE * math.log2(atol / rtol)) - _STEPS_PER_BINADE
+    return math.floor(_STEPS_PER_BINADE * math.log2(atol / _grid_rtol(rtol))) - _STEPS_PER_BINADE
 
 
 def _q_of(x: float, rtol: float, atol: float) -> int | None:
-    """The quarter binade of magnitude ``x >= 0`` (None: one grid for all, ``rtol == 0``)."""
-    if rtol <= 0.0:
-        return None
+    """The quarter binade of magnitude ``x >= 0`` (None: beyond the float range)."""
     floor = _q_floor(rtol, atol)
-    if x <= 0.0 or not math.isfinite(x):
-        return floor if x <= 0.0 else None
+    if not math.isfinite(x):
+        return None
+    if x <= 0.0:
+        return floor
     q = math.ceil(_STEPS_PER_BINADE * math.log2(x))
     return q if floor is None else max(q, floor)
 
@@ -191,12 +203,12 @@ def _q_of(x: float, rtol: float, atol: float) -> int | None:
 def _step(q: int | None, rtol: float, atol: float) -> float:
     """Grid step ``h(q) = 2*(atol + rtol*2**(q/4))`` (inf or 0 when out of range)."""
     if q is None:
-        return 2.0 * atol
+        return math.inf
     try:
         scale = math.ldexp(2.0 ** ((q % _STEPS_PER_BINADE) / _STEPS_PER_BINADE), q // 4)
     except OverflowError:
         return math.inf
-    return 2.0 * (atol + rtol * scale)
+    return 2.0 * (atol + _grid_rtol(rtol) * scale)
 
 
 def _usable(h: float, x: float) -> bool:
@@ -239,16 +251,13 @@ def _float_candidates(s: float, rtol: float, atol: float) -> list[str]:
     if atol <= 0.0 and s == 0.0:
         return ["zero"]
     out: list[str] = []
-    if rtol <= 0.0:
-        qs: list[int | None] = [None]
-    else:
-        # |e| of a right answer lies within t of |s|: its quarter binade is in this range
-        t = 1.01 * (atol + rtol * (abs(s) + atol) / (1.0 - min(rtol, 0.5))) + 1e-300
-        low = max(abs(s) - t, abs(s) / 2.0 if atol <= 0.0 else 0.0)
-        q_lo, q_hi = _q_of(low, rtol, atol), _q_of(abs(s) + t, rtol, atol)
-        if q_lo is None or q_hi is None:  # s beyond the float range
-            return [f"x|{s!r}"]
-        qs = list(range(q_lo, min(q_hi, q_lo + 8) + 1))
+    # |e| of a right answer lies within t of |s|: its quarter binade is in this range
+    t = 1.01 * (atol + rtol * (abs(s) + atol) / (1.0 - min(rtol, 0.5))) + 1e-300
+    low = max(abs(s) - t, abs(s) / 2.0 if atol <= 0.0 else 0.0)
+    q_lo, q_hi = _q_of(low, rtol, atol), _q_of(abs(s) + t, rtol, atol)
+    if q_lo is None or q_hi is None:  # s beyond the float range
+        return [f"x|{s!r}"]
+    qs = list(range(q_lo, min(q_hi, q_lo + 8) + 1))
     for q in qs:
         h = _step(q, rtol, atol)
         if not _usable(h, s):
@@ -318,8 +327,9 @@ def _complex_candidates(s: complex, rtol: float, atol: float) -> list[str]:
     q_lo = _q_of(max(mag - t, mag / 2.0 if atol <= 0.0 else 0.0), rtol, atol)
     q_hi = _q_of(mag + t, rtol, atol)
     out: list[str] = []
-    qs = [None] if rtol <= 0.0 else list(range(q_lo, min(q_hi, q_lo + 8) + 1))  # type: ignore[arg-type]
-    for q in qs:
+    if q_lo is None or q_hi is None:
+        return [_complex_payload(s, rtol, atol)]
+    for q in range(q_lo, min(q_hi, q_lo + 8) + 1):
         h = _step(q, rtol, atol)
         cells = []
         for part in (s.real, s.imag):
@@ -538,7 +548,8 @@ def _kind_of_wrong(node: dict, g: np.ndarray, ctx: _Ctx, where: str) -> str:
 
 def _diagnose(node, g, ctx, where) -> str:
     try:
-        return _kind_of_wrong(node, g, ctx, where)
+        with np.errstate(all="ignore"):
+            return _kind_of_wrong(node, g, ctx, where)
     except Exception:  # a diagnosis must never break a verdict
         return ""
 
