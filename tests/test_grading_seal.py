@@ -378,3 +378,24 @@ def test_guaranteed_band_passes_stated_band_fails(e, u, far, rtol, atol, sign):
     outside = e + sign * far * stated_band(e, rtol, atol)
     assume(abs(outside - e) > stated_band(e, rtol, atol))
     assert not sealed_compare(sealed, outside).ok
+
+
+@pytest.mark.parametrize("rtol, atol", [(1e-8, 1e-10), (1e-6, 0.0), (0.0, 5e-6), (1e-4, 1e-8)])
+@pytest.mark.parametrize("magnitude", [3.0e-7, 0.75, 1.0, 12.0, 4096.0, 6.02e23])
+def test_expected_exactly_on_a_grid_line(rtol, atol, magnitude):
+    """e = k*h exactly (the edge of its cell): s one ulp below and above, and s at the
+    tolerance's edge on either side, all pass; values beyond the stated band fail."""
+    from course.grading import seal as sealing
+
+    for sign in (1.0, -1.0):
+        q = sealing._q_of(magnitude, rtol, atol)
+        h = sealing._step(q, rtol, atol)
+        e = sign * math.floor(magnitude / h) * h
+        if e == 0.0 or sealing._q_of(abs(e), rtol, atol) != q:
+            continue
+        sealed = seal(e, rtol, atol, SALT)
+        tol = atol + rtol * abs(e)
+        for s in (np.nextafter(e, -np.inf), np.nextafter(e, np.inf), e - tol, e + tol):
+            assert sealed_compare(sealed, float(s)).ok, (e, s, h)
+        far = stated_band(e, rtol, atol) * 1.01
+        assert not sealed_compare(sealed, e + far).ok and not sealed_compare(sealed, e - far).ok
