@@ -25,7 +25,8 @@ tries the cell of ``s/h`` and its two neighbours at distance ``h/2``. Hence:
   1/2 of ``s/h``, so its cell is among the cells tried, whatever side of a grid line it is;
 * **stated band** -- a pass needs the same ``q`` and a cell at most one away, so
   ``|s - e| < 1.5*h(q)``, which is at most ``6*tol(e)`` (``3.6*tol(e)`` unless ``atol``
-  dominates); :func:`stated_band` gives the exact bound. Between the two bands the self-check
+  dominates; with ``rtol`` below ``2**-39`` read ``2**-39`` for it); :func:`stated_band`
+  gives the exact bound. Between the two bands the self-check
   may say PASS where grading, with the exact tolerance, says FAIL.
 
 Each element is hashed on its own (the salt names the element), so one failing element does
