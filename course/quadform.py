@@ -11,7 +11,8 @@ where the ``lambda_r`` are the eigenvalues of ``Sigma^{1/2} A Sigma^{1/2}``
 means along the eigenvectors (Imhof 1961, section 2; Baram 1980, (3.16)-(3.17)).
 The normal term ``sigma Z`` and the constant ``q_0`` appear only when
 ``Sigma`` is singular and the mean has a component outside its range that
-``A`` couples to the random part.
+``A`` couples to the random part.  Full references to Imhof (1961), Davies (1980), Liu, Tang
+and Zhang (2009) and Baram (1980) are in the course bibliography, :doc:`/docs/bibliography`.
 
 Public API
 ----------
