@@ -87,13 +87,31 @@ def _number_regex(text: str) -> re.Pattern:
     return re.compile(rf"(?<![\w.]){re.escape(text)}(?![\d])")
 
 
-def public_values(spec) -> dict[str, list]:
+@functools.cache
+def references(name: str) -> dict[str, list[tuple]]:
+    """Question id -> ``(expected, [(message, wrong value), ...])`` per public case, computed
+    from ``solutions/<name>/checks.py`` in the order of ``checks.json`` (which ships them
+    sealed: the student's file holds no value to read them from)."""
+    from course.grading.checks import load_checks
+    from course.grading.vocabulary import DEMO_STUDENT_ID
+
+    checks = load_checks(ROOT / "solutions" / name)
+    out: dict[str, list[tuple]] = {}
+    for q in checks.questions.values():
+        if q.kind == "function":
+            out[q.id] = [(q.expected(c), list(q.mistaken(c))) for c in q.public_cases]
+        elif q.kind == "value" and q.public:
+            data = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
+            out[q.id] = [(q.expected(data=data), list(q.mistaken(data=data)))]
+    return out
+
+
+def public_values(name: str) -> dict[str, list]:
     """Question id -> the leaves of every public expected value of that question."""
     out: dict[str, list] = {}
-    for q in spec.questions:
-        for case in q.cases:
-            out.setdefault(q.id, [])
-            _leaves(decode(case.expected), out[q.id])
+    for qid, cases in references(name).items():
+        for expected, _ in cases:
+            _leaves(expected, out.setdefault(qid, []))
     return out
 
 
@@ -203,15 +221,16 @@ def _key(args, kwargs) -> str:
     return json.dumps(encode([list(args), kwargs]), sort_keys=True)
 
 
-def _answers(q):
-    """(label, answer) pairs for a public question: values, or functions over its cases."""
+def _answers(q, refs):
+    """(label, answer) pairs for a public question: values, or functions over its cases.
+    ``refs``: the question's ``(expected, mistakes)`` per public case (:func:`references`)."""
     for label, transform in TRANSFORMS.items():
         if q.kind == "value":
-            yield label, transform(decode(q.cases[0].expected))
+            yield label, transform(refs[0][0])
         else:
             table = {
-                _key(decode(c.args), decode(c.kwargs)): transform(decode(c.expected))
-                for c in q.cases
+                _key(decode(c.args), decode(c.kwargs)): transform(ref[0])
+                for c, ref in zip(q.cases, refs)
             }
 
             def answer(*args, _table=table, **kwargs):
@@ -219,13 +238,14 @@ def _answers(q):
 
             yield label, answer
     # the declared mistakes of the public cases
-    declared = getattr(q.cases[0], "mistakes", []) if q.cases else []  # (absent before issue 13)
+    declared = refs[0][1] if refs else []
     for k, (message, _) in enumerate(declared):
         if q.kind == "value":
-            yield f"mistake {message!r}", decode(q.cases[0].mistakes[k][1])
+            yield f"mistake {message!r}", refs[0][1][k][1]
         else:
             table = {
-                _key(decode(c.args), decode(c.kwargs)): decode(c.mistakes[k][1]) for c in q.cases
+                _key(decode(c.args), decode(c.kwargs)): ref[1][k][1]
+                for c, ref in zip(q.cases, refs)
             }
 
             def mistaken(*args, _table=table, **kwargs):
@@ -272,7 +292,9 @@ def run_self_checks(name: str, exercises: Path = EXERCISES) -> list[tuple[str, s
     for q in check.spec.questions:
         if q.kind in ("choice", "short_answer"):  # never right/wrong in the self-check
             continue
-        answers = list(_answers(q)) if q.cases else list(_private_answers(q))
+        answers = (
+            list(_answers(q, references(name)[q.id])) if q.cases else list(_private_answers(q))
+        )
         repeats = max(3, len(q.hints) if hasattr(q, "hints") else 1)
         for label, answer in answers:
             buf = io.StringIO()
@@ -295,7 +317,7 @@ def leaks(name: str, exercises: Path = EXERCISES) -> list[str]:
     from course.grading.vocabulary import PublicSpec
 
     spec = PublicSpec.read(exercises / name)
-    values = public_values(spec)
+    values = public_values(name)
     # a choice's options are public text (mode names such as 'F2'), not an answer shown
     options = {str(o) for q in spec.questions for o in (getattr(q, "options", None) or ())}
     patterns = sorted(

@@ -256,6 +256,7 @@ def test_self_check_function_and_stub(check, capsys):
 
 
 def test_staged_hints_count_failures_in_the_kernel(tmp_path, capsys):
+    from course.grading.seal import seal
     from course.grading.vocabulary import PublicCase, PublicQuestion, PublicSpec
 
     spec = PublicSpec(
@@ -269,9 +270,16 @@ def test_staged_hints_count_failures_in_the_kernel(tmp_path, capsys):
                 "x",
                 1.0,
                 hint=["a nudge", "the idea", "the formula"],
-                cases=[PublicCase("x", encode(0.75))],
+                cases=[PublicCase("x", seal(0.75, 1e-7, 1e-9, "salt 1"))],
             ),
-            PublicQuestion("q2", "value", "y", 1.0, hint="one stage", cases=[PublicCase("y", 1.0)]),
+            PublicQuestion(
+                "q2",
+                "value",
+                "y",
+                1.0,
+                hint="one stage",
+                cases=[PublicCase("y", seal(1.0, 1e-7, 1e-9, "salt 2"))],
+            ),
         ],
     )
     spec = PublicSpec.loads(spec.text())  # as shipped in checks.json

@@ -109,7 +109,28 @@ def test_shipped_hidden_cases_would_be_caught(tmp_path, needles):
     assert {("hidden input", "01_least_squares q3 hidden case 3")} <= {
         (h.needle.kind, h.needle.where) for h in hits
     }
-    assert "hidden expected" in {h.needle.kind for h in hits}
+    # their expected values ship sealed (course.grading.seal), like every public case's
+    assert "hidden expected" not in {h.needle.kind for h in hits}
+    assert "public expected" not in {h.needle.kind for h in hits}
+
+
+def test_values_shipped_in_the_clear_would_be_caught(tmp_path, needles):
+    """checks.json as format 1 wrote it (expected values encoded, not sealed) is caught."""
+    from course.grading.codec import encode
+    from course.grading.release import public_spec
+
+    checks = load_checks(SOLUTIONS / "01_least_squares")
+    spec = public_spec(checks)
+    for entry in spec.questions:
+        q = checks.questions[entry.id]
+        if q.kind == "function":
+            for case, public in zip(q.public_cases, entry.cases):
+                public.expected = encode(q.expected(case))
+        elif entry.cases and q.data is None:
+            entry.cases[0].expected = encode(q.expected())
+    spec.write(tmp_path)
+    hits = scan([tmp_path], needles["public"])
+    assert "public expected" in {h.needle.kind for h in hits}
 
 
 @pytest.mark.parametrize("edition", ["public_edition", "class_edition"])

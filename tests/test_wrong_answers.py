@@ -35,8 +35,12 @@ the real grader, ``course.grading.driver.grade``.
 from __future__ import annotations
 
 import ast
+import contextlib
+import functools
 import importlib.util
+import io
 import json
+import os
 import re
 import sys
 from dataclasses import dataclass
@@ -272,6 +276,56 @@ def test_wrong_answers_lose_points(graded, key):
 def test_right_answers_keep_full_marks(graded, key):
     lost = [_describe(v, r) for v, r in graded(key) if v.right and r["points"] < r["max"]]
     assert not lost, "right answers that lost points:\n" + "\n".join(lost)
+
+
+@functools.cache
+def _solution_namespace(assignment: str, student: str) -> dict:
+    """The namespace of the solution notebook run in this process as ``student`` (its check
+    cells skipped): what a student's kernel holds when every answer is right."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    nb = nbformat.read(SOLUTIONS / assignment / f"{assignment}.ipynb", as_version=4)
+    ns: dict = {"__name__": "__main__"}
+    here = Path.cwd()
+    try:
+        os.chdir(ROOT / "exercises" / assignment)  # the self-check finds checks.json from here
+        with contextlib.redirect_stdout(io.StringIO()):
+            for cell in nb.cells:
+                role = cell.get("metadata", {}).get("course", {}).get("role")
+                if cell.cell_type != "code" or role == "check":
+                    continue
+                source = cell.source
+                if role == "setup":
+                    source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student}"', source, 1)
+                exec(compile(source, f"<{assignment}>", "exec"), ns)
+    finally:
+        os.chdir(here)
+    return ns
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_right_answers_pass_the_public_self_check(key):
+    """Every right variant of the suite, self-checked in a kernel where the other answers are
+    the solution's, against the released (sealed) checks.json: no FAIL, and PASS where the
+    question has public cases. A right answer never fails a public check."""
+    spec = load_spec(SPECS[key])
+    ns = _solution_namespace(spec.assignment, f"{spec.student}-self")
+    check = ns["check"]
+    failed = []
+    for v in spec.variants:
+        q = check.spec.question(v.qid)
+        if not v.right or q.kind in ("choice", "short_answer"):
+            continue
+        mine = dict(ns)
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            exec(compile(v.source, f"<{v.qid} {v.label}>", "exec"), mine)
+            check(v.qid, mine[q.target])
+        out = buf.getvalue()
+        if "FAIL" in out or (q.cases and "PASS" not in out):
+            failed.append(f"{v.qid} {v.label!r}:\n{out}")
+    assert not failed, "right answers failing the self-check:\n" + "\n".join(failed)
 
 
 def test_every_assignment_has_answers():

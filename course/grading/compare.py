@@ -1,7 +1,8 @@
 """Compare a student's value with an expected value and explain the difference compactly.
 
-Used by both the self-check (in the student's kernel, against public expected values) and the
-grader (in the trusted parent). Never compares printed text.
+Used by the grader (in the trusted parent, against the true references). The student's
+self-check compares against SEALED expected values with the same messages, see
+:mod:`course.grading.seal`. Never compares printed text.
 """
 
 from __future__ import annotations

@@ -4,8 +4,9 @@ The needles of an assignment are what only the instructor may hold:
 
 - the text of every solution region of the solution notebook (whole, and each distinctive
   line), and each distinctive line of ``checks.py`` (the references);
-- each hidden case's inputs and expected value, and each unpublished expected value, in the
-  forms a leak would take: the plain-data JSON of ``checks.json``, the base64 of an array,
+- each hidden case's inputs and expected value, each unpublished expected value, and each
+  public expected value (``checks.json`` ships them sealed, :mod:`course.grading.seal`), in
+  the forms a leak would take: the plain-data JSON of ``checks.json``, the base64 of an array,
   the ``repr`` of a distinctive float and its 6-digit display;
 - with a secret: the key itself, and the source lines of the data generators (in a graded
   class students receive data, not generators: a generator's code alone can give a truth
@@ -46,7 +47,7 @@ _INSTRUCTOR_PATH = re.compile(r"(^|[/!])(solutions(/|$)|\d\d_[^/!]+/checks\.py$)
 
 @dataclass(frozen=True)
 class Needle:
-    kind: str  # "solution", "reference", "hidden input", "hidden expected", "secret", "generator"
+    kind: str  # "solution", "reference", "hidden input", "hidden/public expected", "secret", ...
     where: str  # e.g. "01_least_squares q3 hidden case 2"
     text: str
 
@@ -147,7 +148,7 @@ def _value_texts(value, per_value: int = 6) -> list[str]:
 def public_corpus(root: Path, releases: dict[str, dict[str, bytes]]) -> str:
     """The course material that is public by design, normalised: the library's source, the
     teaching notebooks, and of each release (``{name: release_files(...)}``) the cells that
-    are not answers and the public expected values. A needle found here gives nothing away (the library implements what
+    are not answers, and checks.json (whose expected values are sealed). A needle found here gives nothing away (the library implements what
     some exercises ask for; the textbook examples are worked in the notebooks)."""
     root = Path(root)
     parts = []
@@ -160,11 +161,8 @@ def public_corpus(root: Path, releases: dict[str, dict[str, bytes]]) -> str:
         for cell in nb["cells"]:
             if cell.get("metadata", {}).get("course", {}).get("role") != "answer":
                 parts.append("".join(cell["source"]))
+        # checks.json itself (inputs, hints): its expected values are sealed, never public
         parts.append(files["checks.json"].decode("utf-8"))
-        spec = json.loads(files["checks.json"])
-        for q in spec["questions"]:
-            for case in q["cases"]:
-                parts.extend(_value_texts(decode(case["expected"]), per_value=10**6))
     return _norm("\n".join(parts))
 
 
@@ -206,9 +204,15 @@ def needles_for(solution_dir: Path, secret: Secret | None = None, public: str = 
                     out.append(Needle("hidden input", where, text))
                 for text in _value_texts(q.expected(case)):
                     out.append(Needle("hidden expected", where, text))
+            for i, case in enumerate(q.public_cases, 1):  # shipped sealed, never in the clear
+                for text in _value_texts(q.expected(case)):
+                    out.append(Needle("public expected", f"{name} {q.id} public case {i}", text))
         elif q.kind == "value" and not q.public and q.data is None:
             for text in _value_texts(q.expected()):
                 out.append(Needle("hidden expected", f"{name} {q.id}", text))
+        elif q.kind == "value" and q.data is None:  # shipped sealed, never in the clear
+            for text in _value_texts(q.expected()):
+                out.append(Needle("public expected", f"{name} {q.id}", text))
     if secret is not None:
         out.append(Needle("secret", "the instructor's key", secret.key.hex()))
         data_py = solution_dir / "data.py"

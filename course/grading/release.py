@@ -1,8 +1,9 @@
 """``course release``: generate ``exercises/<name>/`` from ``solutions/<name>/``.
 
 The release holds the student notebook (stubs, no outputs, no hidden tests), ``checks.json``
-(public cases with precomputed expected values: data, never reference code), and the public
-``data.py`` plus any extra files the assignment lists. The output is byte-for-byte
+(public cases with SEALED expected values, see :mod:`course.grading.seal`: type, shape and
+field names in the clear, every number a salted slow hash of its tolerance cell; never a value,
+never reference code), and the public ``data.py`` plus any extra files the assignment lists. The output is byte-for-byte
 deterministic for a given solution, library version and platform.
 """
 
@@ -18,6 +19,7 @@ from course.grading.codec import encode
 from course.grading.compare import signature
 from course.grading.items import right_options
 from course.grading.notebook import Release, make_release
+from course.grading.seal import make_salt, seal
 from course.grading.vocabulary import (
     CHECKS_FILE,
     DEMO_STUDENT_ID,
@@ -64,8 +66,23 @@ def load_assignment(solution_dir: Path) -> tuple[Checks, Release]:
     return checks, rel
 
 
+def _sealer(checks: Checks):
+    """``sealer(q, case_index, what, value)``: the sealed value, salted per assignment (its
+    checks.py), question, case and what it is (the expected value or mistake k)."""
+    digest = checks.name
+    if checks.solution_dir is not None and (checks.solution_dir / "checks.py").is_file():
+        digest = hashlib.sha256((checks.solution_dir / "checks.py").read_bytes()).hexdigest()
+
+    def sealer(q, index: int, what: str, value):
+        salt = make_salt(digest, checks.name, q.id, index, what)
+        return seal(value, q.rtol, q.atol, salt)
+
+    return sealer
+
+
 def public_spec(checks: Checks) -> PublicSpec:
-    """The public part of the checks: what the self-check needs, with expected values precomputed."""
+    """The public part of the checks: what the self-check needs, expected values sealed."""
+    sealed = _sealer(checks)
     questions = []
     for q in checks.questions.values():
         entry = PublicQuestion(
@@ -90,14 +107,17 @@ def public_spec(checks: Checks) -> PublicSpec:
             entry.options = encode(list(q.options))
             entry.hidden_cases = 1
         elif q.kind == "function":
-            for case in q.public_cases:
+            for i, case in enumerate(q.public_cases):
                 entry.cases.append(
                     PublicCase(
                         label=case.label,
                         args=encode(case.args),
                         kwargs=encode(case.kwargs),
-                        expected=encode(q.expected(case)),
-                        mistakes=[(m, encode(v)) for m, v in q.mistaken(case)],
+                        expected=sealed(q, i, "expected", q.expected(case)),
+                        mistakes=[
+                            (m, sealed(q, i, f"mistake {k}", v))
+                            for k, (m, v) in enumerate(q.mistaken(case))
+                        ],
                     )
                 )
             entry.hidden_cases = len(q.hidden_cases)
@@ -108,8 +128,11 @@ def public_spec(checks: Checks) -> PublicSpec:
                 entry.cases.append(
                     PublicCase(
                         label=q.target,
-                        expected=encode(value),
-                        mistakes=[(m, encode(v)) for m, v in q.mistaken(data=data)],
+                        expected=sealed(q, 0, "expected", value),
+                        mistakes=[
+                            (m, sealed(q, 0, f"mistake {k}", v))
+                            for k, (m, v) in enumerate(q.mistaken(data=data))
+                        ],
                     )
                 )
             else:

@@ -1,7 +1,7 @@
 """The student's self-check: ``check = Assignment.load(name, student_id=STUDENT_ID)``.
 
 ``check("q1")`` finds the answer (variable or function) in the notebook, runs the PUBLIC cases
-shipped in ``checks.json`` and prints, per case, pass or fail: on failure a hint (staged: a nudge
+shipped in ``checks.json`` (their expected values sealed: :mod:`course.grading.seal`) and prints, per case, pass or fail: on failure a hint (staged: a nudge
 first, more after repeated failures, counted in this kernel) and what is wrong IN KIND (shape,
 NaN, sign, a constant factor, transposed, off by one, another order, a declared mistake) with the
 tolerance. It never prints an expected value, never shows test code, and says how many hidden
@@ -24,10 +24,11 @@ from pathlib import Path
 from typing import Any
 
 from course.grading.codec import decode, encode
-from course.grading.compare import check_signature, compare, describe
+from course.grading.compare import check_signature, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
 from course.grading.personal import PersonalData
+from course.grading.seal import sealed_compare
 from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
 
@@ -271,14 +272,7 @@ class Assignment:
             return
         if q.cases:
             case = q.cases[0]
-            verdict = compare(
-                decode(case.expected),
-                got,
-                q.rtol,
-                q.atol,
-                path=q.target,
-                mistakes=[(m, decode(v)) for m, v in case.mistakes],
-            )
+            verdict = _compare_case(case, got, q, path=q.target)
             if verdict.ok:
                 print("  PASS")
                 return 1.0
@@ -340,13 +334,7 @@ class Assignment:
                 if got is Ellipsis:
                     return self._not_answered(q, f"{q.target} returns ...")
                 try:
-                    verdict = compare(
-                        decode(case.expected),
-                        decode(encode(got)),
-                        q.rtol,
-                        q.atol,
-                        mistakes=[(m, decode(v)) for m, v in case.mistakes],
-                    )
+                    verdict = _compare_case(case, decode(encode(got)), q)
                     message = verdict.message
                 except TypeError as exc:
                     verdict, message = (
@@ -383,6 +371,12 @@ class Assignment:
             print(line)
         print(f"  {passed} of {n} public case{'s pass' if n != 1 else ' passes'}{more}.")
         return passed / n if q.partial or passed == n else 0.0
+
+
+def _compare_case(case, got, q, path: str = ""):
+    """The student's ``got`` against a public case's SEALED expected value (and its declared
+    mistakes): the file holds no value to compare with, see :mod:`course.grading.seal`."""
+    return sealed_compare(case.expected, got, path=path, mistakes=case.mistakes)
 
 
 def public_summary(spec: PublicSpec, earned: dict) -> str:

@@ -89,9 +89,10 @@ def check_student_id(student_id, where: str = "STUDENT_ID") -> str:
     return sid
 
 
-#: The public file of a release, and the version of its format.
+#: The public file of a release, and the version of its format (2: expected values sealed,
+#: see :mod:`course.grading.seal`; 1 shipped them in the clear and is refused).
 CHECKS_FILE = "checks.json"
-PUBLIC_FORMAT = 1
+PUBLIC_FORMAT = 2
 
 
 class CellRole(_Word):
@@ -196,8 +197,9 @@ class SubmissionStatus(_Word):
 # --------------------------------------------------------------------------------------
 @dataclass
 class PublicCase:
-    """One public case: the encoded arguments (function questions) and expected value, and
-    the declared mistakes as ``[message, encoded wrong value]`` pairs."""
+    """One public case: the encoded arguments (function questions), the sealed expected value
+    and the declared mistakes as ``[message, sealed wrong value]`` pairs (sealed values:
+    :func:`course.grading.seal.seal`)."""
 
     label: str
     expected: Any
@@ -296,8 +298,9 @@ class PublicQuestion:
 
 @dataclass
 class PublicSpec:
-    """The content of ``exercises/<name>/checks.json``: public cases with precomputed expected
-    values (plain data from :mod:`course.grading.codec`, never code).
+    """The content of ``exercises/<name>/checks.json``: public cases with sealed expected values
+    (:mod:`course.grading.seal`) and plain-data inputs (:mod:`course.grading.codec`), never
+    code, never an expected value in the clear.
 
     Built by :func:`course.grading.release.public_spec`, read by the student's self-check.
     """
@@ -329,6 +332,13 @@ class PublicSpec:
             raise ValueError(
                 f"checks.json format {d['format']} is newer than this course package "
                 f"understands ({PUBLIC_FORMAT}); upgrade the course package"
+            )
+        if d.get("format", 1) < PUBLIC_FORMAT:
+            raise ValueError(
+                f"checks.json format {d.get('format', 1)} is from an older release, which "
+                "shipped the expected values themselves; this course package self-checks only "
+                f"sealed checks (format {PUBLIC_FORMAT}). Ask your instructor for the current "
+                "release of the exercises (instructors: run `course release --all`)."
             )
         return cls(
             assignment=d["assignment"],
