@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from course.grading.checks import load_checks
-from course.grading.compare import compare
+from course.grading.compare import check_signature, compare, signature
+from course.grading.seal import make_salt, seal, sealed_compare
 
 ROOT = Path(__file__).resolve().parents[1]
 NAMES = sorted(p.name for p in (ROOT / "solutions").iterdir() if (p / "checks.py").is_file())
@@ -103,14 +104,36 @@ def test_a_plain_tuple_or_list_in_order_is_right(name):
     assert n > 0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="course/grading/compare.py refuses an ndarray where the reference is a tuple (before "
-    "the named tuples too); a 1-d float array in the same order is a right answer to a pair of "
-    "floats. Remove this mark when the grader accepts it.",
-)
 def test_a_numpy_array_in_order_is_right_for_a_pair_of_floats():
+    # np.array([lo, hi]) for (lower, upper) is a right answer written differently: at grading
+    # (true reference) and in the sealed self-check a student runs
     checks = load_checks(ROOT / "solutions" / "05_nis_wishart")
     q = checks.questions["q3"]
     expected = q.expected()
-    assert compare(expected, np.array(expected), q.rtol, q.atol).ok
+    answer = np.array(expected)
+    assert compare(expected, answer, q.rtol, q.atol).ok
+    sealed = seal(expected, q.rtol, q.atol, make_salt("test", "q3"))
+    assert sealed_compare(sealed, answer).ok
+    assert check_signature(signature(expected), answer).ok
+    wrong = answer * np.array([1.0, 2.0])
+    assert not compare(expected, wrong, q.rtol, q.atol).ok
+    verdict = sealed_compare(sealed, wrong)
+    assert not verdict.ok and verdict.message.startswith(f"{expected._fields[1]}:")
+
+
+def test_an_answer_of_the_wrong_type_is_told_the_fields_not_a_class_name():
+    checks = load_checks(ROOT / "solutions" / "05_nis_wishart")
+    q = checks.questions["q3"]
+    expected = q.expected()
+    wanted = f"expected a tuple ({', '.join(expected._fields)})"
+    sealed = seal(expected, q.rtol, q.atol, make_salt("test", "q3"))
+    for verdict in (
+        compare(expected, 1.0, q.rtol, q.atol),
+        sealed_compare(sealed, 1.0),
+        check_signature(signature(expected), 1.0),
+    ):
+        assert not verdict.ok and wanted in verdict.message, verdict.message
+    # an array cannot stand for results of mixed kinds (a decision is not a number)
+    q5 = checks.questions["q5"]
+    mixed = q5.expected(q5.public_cases[0])  # (lmin, lmax, reject)
+    assert not compare(mixed, np.array(mixed, dtype=float), q5.rtol, q5.atol).ok

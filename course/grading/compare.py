@@ -89,6 +89,39 @@ def describe(value: Any) -> str:
     return f"a {type(value).__name__}"
 
 
+def _is_plain_number(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+        value, (bool, np.bool_)
+    )
+
+
+def sequence_items(expected, got):
+    """``got`` as the items answering the sequence ``expected``, or None when it cannot.
+
+    A tuple or list answers as itself. A 1-D real array answers a sequence of plain numbers:
+    ``np.array([lo, hi])`` for ``(lower, upper)`` is a right answer written differently.
+    """
+    if isinstance(got, (tuple, list)):
+        return got
+    if (
+        isinstance(got, np.ndarray)
+        and got.ndim == 1
+        and got.dtype.kind in "iuf"
+        and len(expected) > 0
+        and all(_is_plain_number(e) for e in expected)
+    ):
+        return list(got)
+    return None
+
+
+def sequence_text(expected) -> str:
+    """What a student should return, by field names when the result has them."""
+    fields = getattr(type(expected), "_fields", None)
+    if isinstance(fields, tuple) and len(fields) == len(expected):
+        return f"a tuple ({', '.join(fields)})"
+    return f"a {'list' if isinstance(expected, list) else 'tuple'} of length {len(expected)}"
+
+
 def _numeric(value):
     """``value`` as a numeric ndarray, or None when it is not numeric data."""
     if isinstance(value, (str, bytes, dict)) or value is None:
@@ -464,9 +497,11 @@ def _compare(expected: Any, got: Any, rtol: float, atol: float, path: str) -> Ve
             return Verdict(False, f"{label}: differs only in upper/lower case or spaces", detail)
         return Verdict(False, f"{label}: not the right string", detail)
     if isinstance(expected, (tuple, list)):
-        if not isinstance(got, (tuple, list)):
-            text = f"{label}: expected a {type(expected).__name__} of length {len(expected)}, got {describe(got)}"
+        items = sequence_items(expected, got)
+        if items is None:
+            text = f"{label}: expected {sequence_text(expected)}, got {describe(got)}"
             return Verdict(False, text, text)
+        got = items
         if len(got) != len(expected):
             text = f"{label}: expected length {len(expected)}, got length {len(got)}"
             more = ""
@@ -571,10 +606,21 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
         )
     if "sequence" in sig:
         items = sig["sequence"]
+        if (
+            isinstance(got, np.ndarray)
+            and got.ndim == 1
+            and got.dtype.kind in "iuf"
+            and items
+            and all(s.get("kind") in ("int", "float") and s.get("shape") == [] for s in items)
+        ):
+            got = list(got)  # a 1-D array answers a sequence of plain numbers
         if not isinstance(got, (tuple, list)) or len(got) != len(items):
-            return Verdict(
-                False, f"{label}: expected a sequence of length {len(items)}, got {describe(got)}"
+            wanted = (
+                f"a tuple ({', '.join(sig['fields'])})"
+                if sig.get("fields")
+                else f"a sequence of length {len(items)}"
             )
+            return Verdict(False, f"{label}: expected {wanted}, got {describe(got)}")
         fields = sig.get("fields") or getattr(type(got), "_fields", None)
         for i, (s, g) in enumerate(zip(items, got)):
             if isinstance(fields, (list, tuple)) and len(fields) == len(items):

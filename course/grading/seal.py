@@ -102,6 +102,8 @@ from course.grading.compare import (
     _tolerance_text,
     _where,
     describe,
+    sequence_items,
+    sequence_text,
 )
 
 __all__ = [
@@ -715,9 +717,11 @@ def _cmp(node: dict, got, ctx: _Ctx, where: str, path: str) -> Verdict:
     if "seq" in node:
         items = node["seq"]
         expected = _skeleton(node)
-        if not isinstance(got, (tuple, list)):
-            text = f"{label}: expected a {'list' if node.get('type') == 'list' else 'tuple'} of length {len(items)}, got {describe(got)}"
+        answered = sequence_items(expected, got)
+        if answered is None:
+            text = f"{label}: expected {sequence_text(expected)}, got {describe(got)}"
             return Verdict(False, text, text)
+        got = answered
         if len(got) != len(items):
             text = f"{label}: expected length {len(items)}, got length {len(got)}"
             more = ""
