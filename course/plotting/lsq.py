@@ -595,8 +595,11 @@ def plot_w_tests(w_result, ax=None, index=None, xlabel="observation"):
     ax.axhspan(k, 10 * top, color=REJECT.light, alpha=0.35, lw=0, label="critical region")
     ax.axhspan(-10 * top, -k, color=REJECT.light, alpha=0.35, lw=0)
     ax.bar(x, np.nan_to_num(w), color=colors, width=0.7, zorder=3)
-    ax.bar([np.nan], [0], color=REJECT.dark, label="rejected")
-    ax.bar([np.nan], [0], color=pair(0).dark, label="accepted")
+    # legend entries only for what the bars show: no "rejected" when nothing is
+    if reject.any():
+        ax.bar([np.nan], [0], color=REJECT.dark, label="rejected")
+    if not reject.all():
+        ax.bar([np.nan], [0], color=pair(0).dark, label="accepted")
     threshold_line(
         ax,
         k,
