@@ -455,7 +455,7 @@ def test_sum_of_squares_axis_names_its_unit():
 
 
 def test_consistency_marks_points_outside_with_one_legend_entry():
-    fig, ax = plt.subplots()
+    _, ax = plt.subplots()
     times = np.arange(5)
     pn.plot_consistency(times, [1.0, 3.0, 1.0, 1.0, 1.0], (0.5, 2.0), ax=ax, label="a")
     pn.plot_consistency(times, [1.0, 1.0, 0.1, 1.0, 1.0], (0.5, 2.0), ax=ax, label="b", color=1)
