@@ -47,6 +47,13 @@ plotting
 grading
     Releasing and grading the auto-graded assignments.
 
+Sources
+-------
+The course follows published sources (a surveying textbook chapter, a lecture on test
+quantities, a poster on the NIS matrix, Baram's paper on mismatched filters) and the results
+it uses from Imhof, Davies, Chiani, Johnstone and others; each module names its sources, and
+the course bibliography, :doc:`/docs/bibliography`, lists them all in full.
+
 Conventions
 -----------
 Written once here; every public function follows them.

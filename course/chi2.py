@@ -16,6 +16,10 @@ when a fault shifts its mean.  This module is the one home of that idea:
     The ``lambda`` at which the test reaches a given power (the inverse of
     :func:`chi2_power`), for minimal detectable biases.
 
+The chi-square laws follow from Cochran's theorem (Cochran 1934); the minimal detectable
+bias is Baarda's (1968), with Teunissen (2000): full references in the course bibliography,
+:doc:`/docs/bibliography`.
+
 Conventions: the law's parameters come first, ``alpha`` after them, scale
 parameters (``sigma``) are keyword-only.
 

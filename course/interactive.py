@@ -22,7 +22,7 @@ sliders (``continuous_update=False``: the figure is redrawn when the slider
 is released) to the update function. ipywidgets is imported only by the
 builders; it comes with the ``notebooks`` extra and is not needed by the
 library or the tests. The sources of the examples are listed in the course
-bibliography (``docs/bibliography.md``).
+bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

@@ -37,6 +37,10 @@ their arguments (:mod:`course.validation`); the library's hot loops call
 unchecked private twins (``_symmetrize``, ``_whiten_vectors``, ...) on arrays
 it has already validated.
 
+The diagonal of a banded covariance comes from the recurrence of Takahashi, Fagan and Chin
+(1973), listed with the course's other sources in the course bibliography,
+:doc:`/docs/bibliography`.
+
 The input checks (``as_float_array``, ``as_covariance``, ``check_alpha``,
 ...) live in :mod:`course.validation`; they are re-exported here because
 they were importable from this module before.

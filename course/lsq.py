@@ -2,7 +2,7 @@
 
 This module follows Chapter 10 "Validation" of Tiberius, van der Marel,
 Reudink and van Leijen (2021), *Surveying and Mapping*, TU Delft Open
-Textbook (full reference in the course bibliography, docs/bibliography.md):
+Textbook (full reference in the course bibliography, :doc:`/docs/bibliography`):
 the model of observation equations
 
 .. math:: E(\\underline{y}) = A x, \\qquad D(\\underline{y}) = Q_{yy},

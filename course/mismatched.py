@@ -5,7 +5,7 @@ validate (fewer states, other noise levels).  Its residuals are then
 correlated, non-zero mean and non-stationary *even when the model is right*,
 so whiteness and chi-square tests do not apply.  Y. Baram (1980), "Model
 validation using mismatched filters" (full reference in the course
-bibliography, docs/bibliography.md), uses many independent data records
+bibliography, :doc:`/docs/bibliography`), uses many independent data records
 instead: at a fixed time ``j`` the residuals of different records (a
 *cross-record section*) are independent and identically distributed, and the
 mean, covariance and correlation statistics of a section are quadratic forms

@@ -11,7 +11,8 @@ where the ``lambda_r`` are the eigenvalues of ``Sigma^{1/2} A Sigma^{1/2}``
 means along the eigenvectors (Imhof 1961, section 2; Baram 1980, (3.16)-(3.17)).
 The normal term ``sigma Z`` and the constant ``q_0`` appear only when
 ``Sigma`` is singular and the mean has a component outside its range that
-``A`` couples to the random part.
+``A`` couples to the random part.  Full references to Imhof (1961), Davies (1980), Liu, Tang
+and Zhang (2009) and Baram (1980) are in the course bibliography, :doc:`/docs/bibliography`.
 
 Public API
 ----------
@@ -64,8 +65,8 @@ exact to double precision and is used instead (``imhof_cdf(1e-300,
 from __future__ import annotations
 
 import functools
-import itertools
 import math
+import operator
 import warnings
 
 import numpy as np
@@ -129,9 +130,15 @@ _MIN_RTOL = 1e-15
 # Up to this many terms, one point's saddle is found in Python floats.
 _PYTHON_TERMS = 24
 # Python numbers taken without numpy (bool, numpy scalars and the rest go through numpy).
-_PLAIN_NUMBERS = (float, int)
+_PLAIN_NUMBERS = frozenset((float, int))
 # Beyond this many factors the integrand takes logarithms in real arithmetic.
 _COMPLEX_LOG_SIZE = 2000
+# One point's trapezoid nodes are read from a table of u = j _GRID, 0 <= u <=
+# _GRID_SPAN (see _grid_nodes): the step is rounded down to a multiple of
+# _GRID_MULTIPLE grid spacings (at most 3% finer, so never less accurate).
+_GRID = 2.0**-10
+_GRID_SPAN = 16.0
+_GRID_MULTIPLE = 4
 
 
 # ---------------------------------------------------------------------------
@@ -173,7 +180,7 @@ def _finite_vector(value, name, size=None):
 
 def _finite_scalar(value, name):
     """A finite Python float."""
-    if isinstance(value, (float, int)) and not isinstance(value, bool):
+    if type(value) is float or type(value) is int:  # (bool is not int here: it is refused)
         number = float(value)
     else:
         array = _real_array(value, name)
@@ -229,9 +236,9 @@ def _validated(weights, dof, noncentrality, sigma=0.0):
             rows = [row for row in rows if row[0] != 0]
             if not rows:
                 return [], [], [], sigma
-        tol = _MERGE_RTOL * max(-rows[0][0], rows[-1][0])
-        weights = [row[0] for row in rows]
-        if any(b - a <= tol for a, b in itertools.pairwise(weights)):
+        w, h, d = map(list, zip(*rows))
+        tol = _MERGE_RTOL * max(-w[0], w[-1])
+        if len(w) > 1 and min(map(operator.sub, w[1:], w)) <= tol:
             groups = [[rows[0]]]
             for row in rows[1:]:
                 if row[0] - groups[-1][-1][0] > tol:
@@ -239,8 +246,8 @@ def _validated(weights, dof, noncentrality, sigma=0.0):
                 else:
                     groups[-1].append(row)
             rows = [_merge(group) if len(group) > 1 else group[0] for group in groups]
-            weights = [row[0] for row in rows]
-        return weights, [row[1] for row in rows], [row[2] for row in rows], sigma
+            w, h, d = map(list, zip(*rows))
+        return w, h, d, sigma
     _check_terms(h.min(), d.min())
     keep = w != 0
     w, h, d = w[keep], h[keep], d[keep]
@@ -283,11 +290,11 @@ def _short_column(value, size=None):
     if kind is list or kind is tuple:
         if len(value) > _PYTHON_TERMS:
             return None
-        try:
-            column = [float(v) for v in value if type(v) in _PLAIN_NUMBERS]
-        except OverflowError:  # an int beyond the doubles
+        if not _PLAIN_NUMBERS.issuperset(map(type, value)):
             return None
-        if len(column) != len(value):
+        try:
+            column = list(map(float, value))
+        except OverflowError:  # an int beyond the doubles
             return None
     elif kind is np.ndarray:
         if value.ndim != 1 or value.dtype.kind not in "fiu" or value.size > _PYTHON_TERMS:
@@ -336,7 +343,7 @@ _SCALAR = _ScalarMath()
 
 
 def _term_constants(w, h, d):
-    """Per-term summands of the constants of :class:`_Side` (arrays; lists: :func:`_term_sums`).
+    """Per-term summands of the constants of :class:`_Side` (arrays; lists: :func:`_term_rows`).
 
     ``d/2``; ``h/2`` (k); ``w (h + d)`` (mean); ``2 w^2 (h + 2d)`` (variance);
     ``-h/2 log(2|w|) - d/4`` (log D of the truncation bound, see :func:`_plan`);
@@ -368,22 +375,38 @@ def _derivative_factors(w, h, d):
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
-def _term_sums(w, h, d):
-    """The sums of :func:`_term_constants` over a few terms given as lists (one Python loop)."""
-    half_d = k = mean = var = log_d = d_over_w = zero_slope = log_c = 0.0
+def _term_rows(w, h, d):
+    """The sums of :func:`_term_constants` and the per-term rows of :class:`_Side`, in one loop.
+
+    For a few terms given as lists of Python floats.  Returns the sums, the
+    rows of :meth:`_Side.derivatives_at` (see :func:`_derivative_factors`)
+    and of :meth:`_Side.cgf_at`, the list of ``2 w`` and the exponent's
+    weights ``-h/2`` and ``d/2`` (see :attr:`_Side.exponent_weights`).
+    """
+    mean = var = log_d = d_over_w = zero_slope = log_c = 0.0
+    rows = []
+    log2 = math.log(2.0)
     for wi, hi, di in zip(w, h, d):
-        half_d += 0.5 * di
-        k += 0.5 * hi
-        mean += wi * (hi + di)
-        var += 2.0 * wi * wi * (hi + di + di)
-        log_2w = math.log(2.0 * abs(wi))
-        log_d -= 0.5 * hi * log_2w + 0.25 * di
+        w2, hw, dw, ww = wi + wi, hi * wi, di * wi, wi * wi
+        rows.append((w2, hw, dw, w2 * hw, 8.0 * ww * hw, 4.0 * wi * dw, 24.0 * ww * dw))
+        mean += hw + dw
+        var += 2.0 * ww * (hi + di + di)
         if wi > 0:
+            log_2w = math.log(wi) + log2
             quarter = 0.25 / wi
             d_over_w += di * quarter
             zero_slope += (hi + di) * quarter
             log_c -= 0.5 * hi * log_2w
-    return half_d, k, mean, var, log_d, d_over_w, zero_slope, log_c
+        else:
+            log_2w = math.log(-wi) + log2
+        log_d -= 0.5 * hi * log_2w + 0.25 * di
+    # the rest by C-level map and zip (cheaper than Python steps per term)
+    w2_list = list(map(operator.add, w, w))
+    log_weights = list(map((-0.5).__mul__, h))
+    inverse_weights = list(map((0.5).__mul__, d))
+    cgf_rows = list(zip(w2_list, map((0.5).__mul__, h), inverse_weights))
+    sums = 0.5 * sum(d), 0.5 * sum(h), mean, var, log_d, d_over_w, zero_slope, log_c
+    return sums, rows, cgf_rows, w2_list, log_weights, inverse_weights
 
 
 # ---------------------------------------------------------------------------
@@ -413,16 +436,7 @@ class _Side:
             # a few terms: every constant in one loop of Python floats (numpy
             # calls cost more); the arrays of the numpy versions on first use
             self._columns = w, h, d
-            sums = _term_sums(w, h, d)
-            self.rows, self.cgf_rows = rows, cgf_rows = [], []
-            self.w2_list = w2_list = []
-            for wi, hi, di in zip(w, h, d):
-                w2, hw, dw = wi + wi, hi * wi, di * wi
-                rows.append(
-                    (w2, hw, dw, w2 * hw, 8.0 * wi * wi * hw, 4.0 * wi * dw, 24.0 * wi * wi * dw)
-                )
-                cgf_rows.append((w2, 0.5 * hi, 0.5 * di))
-                w2_list.append(w2)
+            sums, self.rows, self.cgf_rows, self.w2_list, *exponent_lists = _term_rows(w, h, d)
             ends = [(w[0], w[-1]), (h[0], h[-1]), (d[0], d[-1])] if r else [(0.0, 0.0)] * 3
             smallest = min(map(abs, w)) if r else 1.0
         else:
@@ -452,6 +466,16 @@ class _Side:
         self.log_c0 = log_c - half_d - math.lgamma(self.k + 1.0)
         # rows of the path matrix (see _path_coefficients)
         self.rows_of_path = (2 * r if self.noncentral else r) + 3
+        # weights W of the rows of the path matrix in the exponent (see _integrand):
+        # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1
+        if self.rows is not None:
+            log_weights, inverse_weights = exponent_lists
+            row = log_weights + inverse_weights if self.noncentral else log_weights
+            row.append(1.0)
+            self.exponent_weights = np.array(row, dtype=complex)
+        else:
+            parts = [-0.5 * h, 0.5 * d] if self.noncentral else [-0.5 * h]
+            self.exponent_weights = np.concatenate(parts + [[1.0]]).astype(complex)
 
     # the arrays of the numpy versions (for a few terms given as lists: made on first use)
     @functools.cached_property
@@ -480,23 +504,6 @@ class _Side:
     def factors(self):
         """Per-term factors of the derivatives of ``K`` (for the numpy version)."""
         return _derivative_factors(self.w, self.h, self.d)
-
-    @functools.cached_property
-    def exponent_weights(self):
-        """Weights ``W`` of the rows of the path matrix in the exponent (see :func:`_integrand`).
-
-        ``log z_r``: ``-h_r/2``; ``1/z_r``: ``d_r/2`` (noncentral laws only);
-        the linear part: 1.
-        """
-        if self.rows is not None:
-            h, d = self._columns[1], self._columns[2]
-            row = [-0.5 * v for v in h]
-            if self.noncentral:
-                row += [0.5 * v for v in d]
-            row.append(1.0)
-            return np.array(row, dtype=complex)
-        parts = [-0.5 * self.h, 0.5 * self.d] if self.noncentral else [-0.5 * self.h]
-        return np.concatenate(parts + [[1.0]]).astype(complex)
 
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
@@ -530,12 +537,20 @@ class _Side:
             g = self.derivatives(np.array([s]), x, pole)
             return float(g[0][0]), float(g[1][0]), float(g[2][0])
         g1, g2, g3 = self.sigma2 * s - x, self.sigma2, 0.0
-        for w2, hw, dw, c2, c3, n2, n3 in self.rows:
-            t = 1.0 / (1.0 - s * w2)
-            t2 = t * t
-            g1 += t * hw + t2 * dw
-            g2 += t2 * (c2 + t * n2)
-            g3 += t2 * t * (c3 + t * n3)
+        if self.noncentral:
+            for w2, hw, dw, c2, c3, n2, n3 in self.rows:
+                t = 1.0 / (1.0 - s * w2)
+                t2 = t * t
+                g1 += t * hw + t2 * dw
+                g2 += t2 * (c2 + t * n2)
+                g3 += t2 * t * (c3 + t * n3)
+        else:  # (the noncentral factors are 0: fewer operations in the hot loop)
+            for w2, hw, _, c2, c3, _, _ in self.rows:
+                t = 1.0 / (1.0 - s * w2)
+                t2 = t * t
+                g1 += t * hw
+                g2 += t2 * c2
+                g3 += t2 * t * c3
         if pole:
             inv = 1.0 / s
             g1 -= inv
@@ -601,8 +616,11 @@ class _Side:
         bound = (k1 + xp.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * xp.maximum(x, 1e-300))
         if self.sigma2:
             bound = xp.minimum(bound, math.sqrt(k1 / self.sigma2))
-        # far below the weights the bound is the saddle itself
-        return -bound, hi, xp.where(x * self.k < 0.1 * self.mean, -bound, guess)
+        # far below the weights the bound is the saddle itself; nearer the mean
+        # Newton starts at the geometric mean of it and the Gaussian guess (on
+        # Davies' points and random positive forms, a fifth to a third fewer steps)
+        far_below = x * self.k < 0.1 * self.mean
+        return -bound, hi, xp.where(far_below, -bound, -xp.sqrt(bound * -guess))
 
 
 def _saddle(x, side, upper, pole):
@@ -778,7 +796,7 @@ def _path_coefficients(x, side, s0, a, b, k0):
     coefficients with the nodes' basis gives them all.  Rows: ``z_1 .. z_r``
     (their logarithms), ``z_1 .. z_r`` again for the noncentral terms (their
     reciprocals), the linear part, ``s'``, ``s`` (see
-    :meth:`_Side.exponent_weights`).  Floats give one point's matrix (built
+    :attr:`_Side.exponent_weights`).  Floats give one point's matrix (built
     in Python for a few terms), 1-D arrays one matrix per point ``(points,
     rows, 3)``.
     """
@@ -812,7 +830,7 @@ def _integrand(basis, coef, side, pole):
     ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes.  One
     point gives shape (nodes,), many (points, nodes).  The exponent is one
     product ``W . [log z, 1/z, linear]`` with the weights ``W = (-h/2, d/2,
-    1)`` of :meth:`_Side.exponent_weights`: about ten numpy calls whatever the
+    1)`` of :attr:`_Side.exponent_weights`: about ten numpy calls whatever the
     number of terms (on the few dozen nodes of one point their overhead, and
     the complex logarithms, are the cost).  ``Im z = -2 w Im s`` keeps every
     ``log z`` off its cut along the path; ``E - E0`` is built from ``s -
@@ -846,6 +864,27 @@ def _integrand(basis, coef, side, pole):
     if pole:
         value /= s
     return value.imag
+
+
+_GRID_TABLE = []
+
+
+def _grid_nodes(k, count, odd):
+    """:func:`_nodes`' basis at ``u = k _GRID j`` (j < count) or ``k _GRID (2j + 1)``, or None.
+
+    Views of one table of the fine grid ``u = j _GRID`` up to ``_GRID_SPAN``,
+    computed once on first use (it depends on nothing but the module's
+    constants, so it is no memo of a law or a tolerance); None where the
+    nodes leave the table.
+    """
+    start, stride = (k, 2 * k) if odd else (0, k)
+    stop = start + stride * (count - 1) + 1
+    if not _GRID_TABLE:
+        _GRID_TABLE.append(_nodes.__wrapped__(_GRID, round(_GRID_SPAN / _GRID) + 1, False)[1])
+    table = _GRID_TABLE[0]
+    if stop > table.shape[1]:
+        return None
+    return table[:, start:stop:stride]
 
 
 def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
@@ -1080,10 +1119,15 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
     if e0 + math.log(b / abs(s0) if pole else b) <= _LOG_UNDERFLOW:
         return 0.0, 0.0, True
     converged = U <= _U_MAX
-    h = 0.5 * step
+    # the fine step as a multiple k of the table's grid (rounded down: never coarser)
+    k = max(_GRID_MULTIPLE, int(0.5 * step / _GRID) // _GRID_MULTIPLE * _GRID_MULTIPLE)
+    h = k * _GRID
     n = math.ceil(min(U, _U_MAX) / h)
+    nodes = _grid_nodes(k, n + 1, False)
+    if nodes is None:
+        nodes = _nodes(h, n + 1, False)[1]
     coef = _path_coefficients(x, side, s0, a, b, k0)
-    f = _integrand(_nodes(h, n + 1, False)[1], coef, side, pole).tolist()
+    f = _integrand(nodes, coef, side, pole).tolist()
     if not max(map(abs, f)) <= _BLOWUP * abs(f[0]):
         if opening is None:
             return _contour_at(x, side, upper, pole, atol, rtol, _SAFE_OPENING)
@@ -1099,7 +1143,12 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
             converged = False
             break
         h *= 0.5
-        f = _integrand(_nodes(h, n, True)[1], coef, side, pole).tolist()
+        # the table holds the odd nodes while k is even; then every later level is computed
+        k = k // 2 if k and k % 2 == 0 else 0
+        nodes = _grid_nodes(k, n, True) if k else None
+        if nodes is None:
+            nodes = _nodes(h, n, True)[1]
+        f = _integrand(nodes, coef, side, pole).tolist()
         n *= 2
         refined = 0.5 * total + h * math.fsum(f)
         diff, total = abs(refined - total), refined
@@ -1688,28 +1737,35 @@ class WeightedChiSquare(FrozenDistribution):
     def __init__(
         self, weights, dof=None, noncentrality=None, sigma=0.0, offset=0.0, atol=ATOL, rtol=RTOL
     ):
-        w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
+        w, h, d, sigma = _validated(weights, dof, noncentrality, sigma)
         self._set_terms(w, h, d, sigma, offset, atol, rtol)
 
     def _set_terms(self, w, h, d, sigma, offset, atol=ATOL, rtol=RTOL):
+        """Store validated terms (sorted, merged): lists of floats (a few) or arrays."""
         offset = _finite_scalar(offset, "offset")
-        if w.size == 0 and sigma == 0:
+        if len(w) == 0 and sigma == 0:
             raise ValueError(
                 "the law is a point mass (no chi-square term and no normal term); "
                 "a constant has no distribution to compute"
             )
+        # a few terms also as Python floats for one point (see _at)
+        if type(w) is list:
+            self._few = w, h, d
+            w, h, d = np.array(w, dtype=float), np.array(h, dtype=float), np.array(d, dtype=float)
+        else:
+            self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
         for array in (w, h, d):
             array.setflags(write=False)
         self.weights, self.dof, self.noncentrality = w, h, d
         self.sigma, self.offset = float(sigma), offset
         self.atol, self.rtol = _tolerances(atol, rtol)
-        # the normalised terms of each tail, built on first use; a few terms
-        # also as Python floats for one point (see _at)
+        # the normalised terms of each tail, built on first use
         self._sides, self._density_sides = {}, {}
-        self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
-        lower = offset if (sigma == 0 and np.all(w > 0)) else -np.inf
-        upper = offset if (sigma == 0 and np.all(w < 0)) else np.inf
-        self.support = (lower, upper)
+        # the weights are sorted increasingly: one-signed when the first (last) is
+        one_signed = sigma == 0 and len(w) > 0
+        lower = offset if one_signed and w[0] > 0 else -math.inf
+        upper = offset if one_signed and w[-1] < 0 else math.inf
+        self._bounds = (lower, upper)
 
     def __repr__(self) -> str:
         return f"WeightedChiSquare(terms={self.weights.size}, dof={_fmt(np.sum(self.dof))})"

@@ -69,6 +69,36 @@ def test_01_survey_largest_residual_is_not_the_blunder(checks):
     assert _share(same_e) <= 0.02 and _share(same_unweighted) <= 0.03
 
 
+def test_01_q6b_verdict_depends_on_the_data_and_the_method(checks):
+    """Old code: the blunder made T several times its critical value, so "rejected" was right
+    for every student and the point was free. Now about half of the class is on each side, and
+    each plausible wrong method flips the verdict on one side of it: a threshold with m or
+    m - 1 degrees of freedom or at alpha/2 for every rejected survey, ignoring Qyy for every
+    accepted one."""
+    from scipy import stats
+
+    c = checks["01_least_squares"]
+    q = c.questions["q6b"]
+    rejected, flipped = [], {"dof m": [], "dof m - 1": [], "alpha / 2": [], "Qyy ignored": []}
+    for sid in IDS:
+        d = c.data_for("survey", sid)
+        m, n = d["A"].shape
+        right = q.reference(d) == "rejected"
+        rejected.append(right)
+        T = lsq.fit(d["A"], d["y"], d["Qyy"]).squared_norm
+        T_unweighted = lsq.fit(d["A"], d["y"]).squared_norm
+        for name, stat, dof, level in (
+            ("dof m", T, m, d["alpha"]),
+            ("dof m - 1", T, m - 1, d["alpha"]),
+            ("alpha / 2", T, m - n, d["alpha"] / 2),
+            ("Qyy ignored", T_unweighted, m - n, d["alpha"]),
+        ):
+            flipped[name].append((stat > stats.chi2.isf(level, dof)) != right)
+    assert 0.35 <= _share(rejected) <= 0.65
+    for name, flips in flipped.items():
+        assert _share(flips) >= 0.35, name
+
+
 def test_03_maximised_likelihood_never_passes_q9(checks):
     c = checks["03_estimation_and_likelihood"]
     q = c.questions["q9"]

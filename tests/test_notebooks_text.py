@@ -188,28 +188,3 @@ def test_the_negative_zero_pattern():
     assert NEGATIVE_ZERO.search("x_hat = [-0.0, 1.0]") and NEGATIVE_ZERO.search("shift -0 samples")
     for fine in ("-0.0542", "-0.003", "e_hat = -0.5", "t - 0.05", "10-0.0", "1e-05", "-0.07"):
         assert not NEGATIVE_ZERO.search(fine), fine
-
-
-# names of the sources in docs/bibliography.md that a docstring may cite
-CITED = re.compile(
-    r"\b(Tiberius|Baarda|Teunissen|Wilks|Neyman|Bar-Shalom|Forsling|Chiani|de Bruijn|Johnstone"
-    r"|Tracy|Marchenko|Imhof|Davies|Liu, Tang|Baram|Keeling|Parlett|Cochran)\b"
-)
-
-
-@pytest.mark.parametrize(
-    "path",
-    sorted((ROOT / "course" / "plotting").glob("*.py")) + [ROOT / "course" / "interactive.py"],
-    ids=lambda p: str(p.relative_to(ROOT)),
-)
-def test_a_module_that_cites_a_source_links_the_bibliography(path):
-    import ast
-
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    nodes = [tree] + [n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.ClassDef))]
-    docs = " ".join(ast.get_docstring(n) or "" for n in nodes)
-    if CITED.search(docs):
-        assert "bibliography" in (ast.get_docstring(tree) or ""), (
-            f"{path.name} cites {CITED.search(docs).group(0)}: its module docstring must point "
-            "at the course bibliography (docs/bibliography.md)"
-        )

@@ -578,7 +578,7 @@ def test_inversion_integrands_refuses_a_nan_point():
 # ---------------------------------------------------------------------------
 # accuracy on demand
 # ---------------------------------------------------------------------------
-@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8, 1e-12])
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8, quadform.RTOL, 1e-12])
 def test_requested_relative_accuracy_is_met_on_davies_cases(rtol):
     # the smaller tail is the one integrated: its relative error is below rtol
     for (weights, dof, nc), values in DAVIES_CASES.items():
@@ -590,7 +590,27 @@ def test_requested_relative_accuracy_is_met_on_davies_cases(rtol):
         assert np.all(np.abs(got - small) <= rtol * small + 2e-16)
         # one point at a time takes the scalar path: the same accuracy
         scalar = np.array([imhof_cdf(ci, weights, dof, nc, rtol=rtol) for ci in c])
-        assert np.all(np.abs(scalar - cdf) <= 2 * rtol * small + 2e-16)
+        got = np.where(ref < 0.5, scalar, 1 - scalar)
+        assert np.all(np.abs(got - small) <= rtol * small + 2e-16)
+
+
+def test_one_points_nodes_from_the_table_are_the_computed_nodes(monkeypatch):
+    # one point reads its trapezoid nodes from a fixed table (no cosh/sinh per
+    # call): the views must be the nodes themselves, at every level
+    for k, count, odd in [(128, 33, False), (64, 32, True), (76, 50, False), (19, 40, True)]:
+        table = quadform._grid_nodes(k, count, odd)
+        computed = quadform._nodes(k * quadform._GRID, count, odd)[1]
+        assert table.shape == computed.shape
+        assert np.array_equal(table, computed)
+    span = round(quadform._GRID_SPAN / quadform._GRID)
+    assert quadform._grid_nodes(128, span // 128 + 2, False) is None
+    # off the table (a long path, a level past the table's halvings) the nodes
+    # are computed: the same numbers
+    points = [(1.0, (6, 3, 1)), (45.0, (6, 3, 1, 12, 6, 2)), (-40.0, (7, 3, -7, -3))]
+    table_path = [imhof_cdf(c, w, rtol=1e-6) for c, w in points]
+    monkeypatch.setattr(quadform, "_grid_nodes", lambda k, count, odd: None)
+    computed_path = [imhof_cdf(c, w, rtol=1e-6) for c, w in points]
+    assert np.allclose(table_path, computed_path, rtol=1e-14, atol=0)
 
 
 def test_a_frozen_law_at_one_python_number_agrees_with_its_array_path():

@@ -2,7 +2,7 @@
 
 This package follows a Linköping University fault-diagnosis lecture on test
 quantities ("the LiU lecture", Swedish slides; full reference in the course
-bibliography, docs/bibliography.md).  Its one idea: a *test quantity* is a measure of how
+bibliography, :doc:`/docs/bibliography`).  Its one idea: a *test quantity* is a measure of how
 well the model *under the null hypothesis* of a test explains the data.  It
 is zero (or small) when that model can be true and large otherwise.
 

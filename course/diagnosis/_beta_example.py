@@ -1,7 +1,7 @@
 """The lecture's example: a first-order system whose parameter beta drifts slowly.
 
 Source: the LiU lecture on test quantities (Linköping University, Swedish
-slides; full reference in the course bibliography, docs/bibliography.md),
+slides; full reference in the course bibliography, :doc:`/docs/bibliography`),
 slide "Exempel på EKF som residualgenerator".
 """
 

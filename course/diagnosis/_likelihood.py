@@ -1,7 +1,7 @@
 """Test quantities from the likelihood: ML, GLR, Neyman-Pearson, Bayes ranking of faults.
 
 Source: the LiU lecture on test quantities (Linköping University, Swedish
-slides; full reference in the course bibliography, docs/bibliography.md),
+slides; full reference in the course bibliography, :doc:`/docs/bibliography`),
 slides "Likelihood-funktionen" to "Likelihood och Bayes".
 """
 

@@ -1,4 +1,8 @@
-"""Monte Carlo studies of a set of tests: simulated records, statistics, isolation rates."""
+"""Monte Carlo studies of a set of tests: simulated records, statistics, isolation rates.
+
+The example models come from the LiU lecture on test quantities (full reference in the course
+bibliography, :doc:`/docs/bibliography`).
+"""
 
 from __future__ import annotations
 

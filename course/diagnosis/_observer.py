@@ -1,7 +1,7 @@
 """An observer with parameter adaptation as a residual generator (Euler-discretised).
 
 Source: the LiU lecture on test quantities (Linköping University, Swedish
-slides; full reference in the course bibliography, docs/bibliography.md),
+slides; full reference in the course bibliography, :doc:`/docs/bibliography`),
 slide "Mer generella dynamiska fall".
 """
 

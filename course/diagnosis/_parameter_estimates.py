@@ -1,7 +1,7 @@
 """Test quantities from parameter estimates: estimate, compare with nominal, power.
 
 Source: the LiU lecture on test quantities (Linköping University, Swedish
-slides; full reference in the course bibliography, docs/bibliography.md),
+slides; full reference in the course bibliography, :doc:`/docs/bibliography`),
 slide "Teststorheter baserade på parameterskattningar".
 """
 

@@ -1,7 +1,7 @@
 """Test quantities from prediction errors: linear regressions and general models.
 
 Source: the LiU lecture on test quantities (Linköping University, Swedish
-slides; full reference in the course bibliography, docs/bibliography.md),
+slides; full reference in the course bibliography, :doc:`/docs/bibliography`),
 slides "Teststorhet baserad på prediktionsfelen" and "Linjär regression".
 """
 

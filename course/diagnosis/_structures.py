@@ -1,7 +1,7 @@
 """Decision structures: which tests may alarm in which fault modes, and the diagnoses.
 
 Source: the LiU lecture on test quantities (Linköping University, Swedish
-slides; full reference in the course bibliography, docs/bibliography.md),
+slides; full reference in the course bibliography, :doc:`/docs/bibliography`),
 slide "Teststorheten är ett modellvalideringsmått".
 """
 

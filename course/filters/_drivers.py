@@ -2,7 +2,7 @@
 
 Source: the LiU lecture on test quantities, slide "Extended Kalman Filter";
 Y. Baram (1980), "Model validation using mismatched filters", (A17)-(A18)
-(full references in the course bibliography, docs/bibliography.md).
+(full references in the course bibliography, :doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Sources: the LiU lecture on test quantities (slide "Extended Kalman Filter")
 and Y. Baram (1980), "Model validation using mismatched filters", eqs.
-(2.1)-(2.2); full references in the course bibliography, docs/bibliography.md.
+(2.1)-(2.2); full references in the course bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Source: the LiU lecture on test quantities, slide "Linjär regression -
 rekursiv lösare" (full reference in the course bibliography,
-docs/bibliography.md).
+:doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations

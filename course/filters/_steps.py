@@ -1,7 +1,7 @@
 """One step of the (extended) Kalman filter: measurement update and time update.
 
 Source: the LiU lecture on test quantities, slide "Extended Kalman Filter"
-(full reference in the course bibliography, docs/bibliography.md).
+(full reference in the course bibliography, :doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations

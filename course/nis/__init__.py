@@ -40,7 +40,7 @@ References
 ----------
 .. [F] R. Forsling, "Matrix-Valued Statistics for Detecting Complex Model
    Errors in State Estimation", poster, eqs. (2)-(4) (full reference in the
-   course bibliography, docs/bibliography.md).
+   course bibliography, :doc:`/docs/bibliography`).
 .. [C14] M. Chiani, "Distribution of the largest eigenvalue for real Wishart
    and Gaussian random matrices and a simple approximation for the
    Tracy-Widom distribution", J. Multivariate Anal. 129 (2014) 69-81.

@@ -2,7 +2,7 @@
 
 The last link of the NIS chain: the LiU lecture on test quantities leaves
 threshold selection and the quality of a test to its next lecture (last
-slide; full reference in the course bibliography, docs/bibliography.md);
+slide; full reference in the course bibliography, :doc:`/docs/bibliography`);
 these are their Monte Carlo estimates.
 """
 

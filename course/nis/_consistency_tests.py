@@ -3,7 +3,7 @@
 Sources: R. Forsling, poster "Matrix-Valued Statistics for Detecting Complex
 Model Errors in State Estimation", eqs. (3)-(4) ([F]); Bar-Shalom, Li and
 Kirubarajan (2001), Sec. 5.4 ([BS]); full references in the course
-bibliography, docs/bibliography.md.
+bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

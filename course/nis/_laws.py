@@ -1,7 +1,7 @@
 """Exact and approximate laws of the extreme eigenvalues of the NIS matrix under H0.
 
 References ([C14], [C17], [J]) are listed in :mod:`course.nis`; the course's
-own sources are in the course bibliography, docs/bibliography.md.
+own sources are in the course bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

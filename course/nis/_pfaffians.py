@@ -1,4 +1,9 @@
-"""Pfaffian numerics of Chiani's closed forms, in a standardised basis that keeps its digits."""
+"""Pfaffian numerics of Chiani's closed forms, in a standardised basis that keeps its digits.
+
+Sources: Chiani (2014, 2017) for the Pfaffians, de Bruijn (1955) for the integration formula
+behind them, Parlett and Reid (1970) for the elimination that evaluates a Pfaffian; full
+references in the course bibliography, :doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ user passes, and :func:`_nis` (no input checks, undefined samples allowed)
 for the filter results of :mod:`course.filters`, whose ``nis()`` methods
 delegate here.  Source: R. Forsling, poster "Matrix-Valued Statistics for
 Detecting Complex Model Errors in State Estimation", eqs. (2)-(4) (full
-reference in the course bibliography, docs/bibliography.md).
+reference in the course bibliography, :doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 The window is the discrete form of the LiU lecture's windowed test quantity
 ``T(t) = int_{t-L}^{t} r(tau)^2 dtau`` (slide "Mer generella dynamiska
-fall"; full reference in the course bibliography, docs/bibliography.md).
+fall"; full reference in the course bibliography, :doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ raises a ``ValueError`` naming the argument.  One submodule per topic:
 
 Matplotlib is imported lazily inside the functions, so importing
 :mod:`course` never loads it. The figures follow the course's sources, which
-are listed in full in the course bibliography (``docs/bibliography.md``).
+are listed in full in the course bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

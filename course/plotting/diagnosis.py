@@ -3,7 +3,8 @@
 Every function takes ``ax=None`` (a new figure when None), returns the axes
 it drew on and draws in the course style (:mod:`course.plotting.style`):
 fault modes keep their colour pair (``pair("F2")``) in every figure.
-Matplotlib is imported lazily, inside the functions.
+Matplotlib is imported lazily, inside the functions. The figures follow the LiU lecture on
+test quantities (full reference in the course bibliography, :doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations
@@ -71,7 +72,7 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     ``U2`` is parallel to ``U1`` the perpendicular vanishes: the fault is
     invisible (the LiU lecture on test quantities, the geometric slide of
     ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``; full reference in
-    the course bibliography, docs/bibliography.md).
+    the course bibliography, :doc:`/docs/bibliography`).
     """
     u1 = _checks.array("U1", U1, what="signal samples")
     u2 = _checks.array("U2", U2, what="signal samples")

@@ -5,7 +5,7 @@ the axes it drew on and draws in the course style
 (:mod:`course.plotting.style`). Matplotlib (and scipy for densities) are
 imported inside the functions, so importing this module is cheap. The figures follow
 Tiberius et al. (2021, Chapter 10) and Baarda (1968), listed in full in the course bibliography
-(``docs/bibliography.md``).
+:doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

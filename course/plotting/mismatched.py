@@ -6,7 +6,7 @@ returns the axes it drew on and draws in the course style
 keep pairs 0, 1 and 2 in every figure.  The numbers come from
 :mod:`course.mismatched` and :mod:`course.quadform`; nothing here computes
 a statistic. The figures follow Baram (1980) and Imhof (1961), listed in full in the course
-bibliography (``docs/bibliography.md``).
+bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

@@ -4,6 +4,8 @@ Each decorated function is the trusted reference the grader runs; cases with ``h
 are sent to the student's function only at grading time.
 """
 
+from collections import namedtuple
+
 import numpy as np
 from scipy import linalg, stats
 
@@ -11,6 +13,12 @@ from course import lsq
 from course.grading.checks import Checks, Mistake
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+OverallModelTest = namedtuple("OverallModelTest", "T critical_value reject")
+Band95 = namedtuple("Band95", "sigma half_width")
 
 # Chapter 10's line fit: t = 1..4 s, Qyy = I (days 1 and 2).
 T_LINE = np.arange(1.0, 5.0)
@@ -145,7 +153,7 @@ def q2():
 )
 def q3(A, y, Qyy, alpha):
     result = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)
-    return (result.statistic, result.critical_value, bool(result.reject))
+    return OverallModelTest(result.statistic, result.critical_value, bool(result.reject))
 
 
 def _omt(A, y, Qyy, alpha, dof):
@@ -230,7 +238,7 @@ q4.case(A6, Y6, Q6, hidden=True)
 def q5():
     f = lsq.fit(A_LINE, Y_DAY1)
     _, half = lsq.confidence_band(f, np.array([[1.0, 2.0]]), level=0.95)
-    return (float(f.sigma_y_hat[1]), float(half[0]))
+    return Band95(float(f.sigma_y_hat[1]), float(half[0]))
 
 
 def _sigma_t2():

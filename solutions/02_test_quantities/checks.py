@@ -4,6 +4,8 @@ Each decorated function is the trusted reference the grader runs; cases with ``h
 are sent to the student's function only at grading time.
 """
 
+from collections import namedtuple
+
 import numpy as np
 from scipy import stats
 
@@ -11,6 +13,13 @@ from course import diagnosis as dg
 from course.grading.checks import Checks, Mistake
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+Hypotheses = namedtuple("Hypotheses", "modes_H0 modes_H1")
+RegressionResidual = namedtuple("RegressionResidual", "T dof")
+ThresholdAndPower = namedtuple("ThresholdAndPower", "J power")
 
 # The notebook's context: the three-gain model of the lecture and its signals.
 N = 40
@@ -81,7 +90,7 @@ q1.case(STRUCTURE5, MODES5, [False, True, False, True], hidden=True)
     "Give (list_H0, list_H1), each in column order.",
 )
 def q2():
-    return (["NF", "F1", "F4"], ["F2", "F3"])
+    return Hypotheses(["NF", "F1", "F4"], ["F2", "F3"])
 
 
 @CHECKS.function(
@@ -130,7 +139,7 @@ q3.case(np.arange(5.0), np.array([1.0, 0, 2, 0, 1]), np.ones(5), np.zeros(5), hi
 )
 def q4(Phi, Y):
     fit = dg.least_squares_residual(Phi, Y)
-    return (float(fit.statistic), int(fit.dof))
+    return RegressionResidual(float(fit.statistic), int(fit.dof))
 
 
 q4.case(U, Y_RECORD, label="full column rank")
@@ -194,7 +203,7 @@ def q5():
 def q6():
     J = dg.residual_threshold(N - 1, 0.01, sigma=SIGMA)
     power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
-    return (J, power)
+    return ThresholdAndPower(J, power)
 
 
 def _threshold_and_power(dof, alpha):

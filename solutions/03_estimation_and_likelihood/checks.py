@@ -4,6 +4,8 @@ Each decorated function is the trusted reference the grader runs; cases with ``h
 are sent to the student's function only at grading time.
 """
 
+from collections import namedtuple
+
 import numpy as np
 from scipy import stats
 
@@ -11,6 +13,14 @@ from course import diagnosis as dg
 from course.grading.checks import Checks, Mistake
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+JointParameterTest = namedtuple("JointParameterTest", "theta2_hat s reject")
+PowerPair = namedtuple("PowerPair", "power_parameter_test power_prediction_error_test")
+MaximumLikelihood = namedtuple("MaximumLikelihood", "theta_ml L_max")
+GLR = namedtuple("GLR", "statistic pvalue")
 
 # The notebook's context: the three-gain model with u2 partly driven by u1.
 N = 40
@@ -72,7 +82,9 @@ def _joint(U_, y, sigma, alpha):
     est = dg.estimate_parameters(y, U_, NOMINAL, [0, 1], sigma=sigma)
     std = float(est.std[1])
     theta2 = float(est.theta[1])
-    return (theta2, std, bool(abs(theta2 - 1.0) > std * stats.norm.isf(alpha / 2)))
+    return JointParameterTest(
+        theta2, std, bool(abs(theta2 - 1.0) > std * stats.norm.isf(alpha / 2))
+    )
 
 
 q1.case(U, _record([1.0, 1.0, 1.0], 1), SIGMA, 0.05, label="no fault")
@@ -137,7 +149,7 @@ def q3():
     theta = [1.0, 1.1, 1.0]
     p_param = dg.parameter_estimate_power(U, NOMINAL, [0, 1], 1, theta, sigma=SIGMA, alpha=0.05)
     p_pe = dg.prediction_error_power(U, NOMINAL, [0], theta, sigma=SIGMA, alpha=0.05)
-    return (p_param, p_pe)
+    return PowerPair(p_param, p_pe)
 
 
 def _q3_pe_power():
@@ -208,7 +220,7 @@ q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
     ],
 )
 def q5():
-    return (4.0, float(np.exp(-1.0) / (2 * np.pi)))
+    return MaximumLikelihood(4.0, float(np.exp(-1.0) / (2 * np.pi)))
 
 
 @CHECKS.function(
@@ -238,7 +250,7 @@ def q5():
 )
 def q6(U_, y, sigma):
     r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[1], sigma=sigma)
-    return (r.statistic, r.pvalue)
+    return GLR(r.statistic, r.pvalue)
 
 
 def _glr_cdf(U_, y, sigma):

@@ -4,15 +4,23 @@ Each decorated function is the trusted reference the grader runs; cases with ``h
 are sent to the student's function only at grading time.
 """
 
-import functools
+from collections import namedtuple
 
 import numpy as np
 from scipy import stats
 
 from course import filters as kf
-from course.grading.checks import Band, Checks, Mistake, binomial_band
+from course.grading.checks import Band, Checks, Mistake
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+SteadyState = namedtuple("SteadyState", "P K")
+Alarm = namedtuple("Alarm", "threshold first_alarm")
+FalseAlarms = namedtuple("FalseAlarms", "count_constant count_random_walk")
+RLSUpdate = namedtuple("RLSUpdate", "theta_new P_new")
 
 # The fixed record of q7: the notebook's context cell builds the same one with the same seed
 # (4062: a threshold with L - 1 degrees of freedom counts 19 false alarms instead of 14).
@@ -114,7 +122,7 @@ _Q1_MISTAKES = [
 def q1():
     model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]])
     ss = kf.steady_state(model)
-    return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
+    return SteadyState(float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
 
 
 @CHECKS.function(
@@ -215,7 +223,7 @@ def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None
         threshold = float(stats.chi2.isf(alpha, dof))
     with np.errstate(invalid="ignore"):
         alarms = np.flatnonzero(threshold < T)
-    return (float(threshold), int(alarms[0]) + shift if alarms.size else -1)
+    return Alarm(float(threshold), int(alarms[0]) + shift if alarms.size else -1)
 
 
 def _alarm_mistakes(record):
@@ -274,27 +282,23 @@ def q5(d):
     )
 
 
-def _band_around(p_ref, n_ref, n_runs, miss):
-    """Band for a student's rate from n_runs runs around a reference estimate from n_ref runs.
-
-    The binomial band of the student's rate at the reference value, widened on each side by
-    the reference's own Monte Carlo error (z * its standard error), so a correct simulation
-    fails with probability about ``2 * miss`` whatever its seed.
-    """
-    band = binomial_band(n_runs, p_ref, miss=miss)
-    pad = stats.norm.isf(miss / 2) * np.sqrt(p_ref * (1.0 - p_ref) / n_ref)
-    return Band(max(0.0, band.lo - pad), min(1.0, band.hi + pad))
+FalseAlarmRates = namedtuple("FalseAlarmRates", "rate_last rate_any")
 
 
-@functools.lru_cache(maxsize=8)
-def _run_false_alarm_probability(a, q, r, N, L, alpha, n_ref=200_000, seed=20240605):
-    """Reference: fraction of fault-free runs with at least one full window above chi2.isf(alpha, L)."""
+def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
+    """(rate_last, rate_any) of the prescribed simulation: x0, W, V drawn in this order."""
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal(n_runs)
+    W = rng.standard_normal((N, n_runs))
+    V = rng.standard_normal((N, n_runs))
+    y = np.empty((n_runs, N, 1))
+    for t in range(N):
+        y[:, t, 0] = x + np.sqrt(r) * V[t]
+        x = a * x + np.sqrt(q) * W[t]
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
-    _, y = model.simulate(int(N), np.random.default_rng(seed), batch=n_ref)
-    T = kf.windowed_nis(kf.kalman_filter(model, y), int(L))
-    return kf.alarm_statistics(
-        T, kf.windowed_nis_threshold(int(L), alpha)
-    ).run_false_alarm_probability
+    sums = kf.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1 :]  # full windows only
+    alarm = sums > stats.chi2.isf(alpha, L)
+    return FalseAlarmRates(float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1))))
 
 
 @CHECKS.function(
@@ -302,22 +306,40 @@ def _run_false_alarm_probability(a, q, r, N, L, alpha, n_ref=200_000, seed=20240
     func="false_alarm_rates",
     points=2,
     timeout=30,
+    rtol=0.0,
+    atol=0.1 / 20000,  # the same counts of runs: fractions k / n_runs, exactly
     hint=[
-        "Simulate the scalar model itself (x0 ~ N(0, 1), then x and y sample by sample) for "
-        "all runs at once; rates are fractions of RUNS, each between 0 and 1.",
-        "Filter with the correct model (kf.kalman_filter on all runs at once: the gains do "
-        "not depend on the data), window sums of the squared normalised innovations (full "
-        "windows only), threshold chi2.isf(alpha, L). Return (fraction of runs whose LAST "
-        "window exceeds it, fraction of runs with AT LEAST ONE window above it).",
+        "Follow the recipe exactly: the same seed and the same draws in the same order give "
+        "the same runs, so a right simulation counts exactly the same alarms.",
+        "rng = np.random.default_rng(seed); x0 = rng.standard_normal(n_runs); then "
+        "W = rng.standard_normal((N, n_runs)) and V = rng.standard_normal((N, n_runs)); "
+        "y_t = x_t + sqrt(r) V[t], x_(t+1) = a x_t + sqrt(q) W[t]. Filter with the correct "
+        "model, window sums of the squared normalised innovations (full windows only), "
+        "threshold chi2.isf(alpha, L). Return (fraction of runs whose LAST window exceeds it, "
+        "fraction of runs with AT LEAST ONE window above it).",
+    ],
+    mistakes=[
+        Mistake(
+            "rate_last is alpha itself: that is what the test promises for one window, not what "
+            "your simulation measured",
+            lambda a, q, r, N, L, alpha, n_runs, seed: (float(alpha), Band(0.0, 1.0)),
+        ),
+        Mistake(
+            "rate_any looks like 1 - (1 - alpha)^(number of windows): that holds for independent "
+            "windows, but overlapping windows share innovations",
+            lambda a, q, r, N, L, alpha, n_runs, seed: (
+                Band(0.0, 1.0),
+                float(1.0 - (1.0 - alpha) ** (N - L + 1)),
+            ),
+        ),
     ],
 )
 def q6(a, q, r, N, L, alpha, n_runs, seed):
-    # The last window holds L independent N(0,1) squares under H0: its rate is exactly alpha.
-    # "Any window" has no closed form (overlapping windows are dependent): a large reference
-    # simulation with its own seed fixes it.
-    miss = 5e-5  # per component: about 1e-4 for the pair
-    p_any = _run_false_alarm_probability(float(a), float(q), float(r), int(N), int(L), float(alpha))
-    return (binomial_band(n_runs, alpha, miss=miss), _band_around(p_any, 200_000, n_runs, miss))
+    # The simulation the question prescribes, run with the case's seed: a right answer counts
+    # exactly the same alarms however it filters, while alpha (the last window's promised rate),
+    # an independence formula for "any window", another random sample or a wrong threshold all
+    # differ from it.
+    return _false_alarm_rates(a, q, r, int(N), int(L), alpha, int(n_runs), seed)
 
 
 q6.case(0.9, 0.1, 1.0, 40, 10, 0.05, 10000, 2024, label="a = 0.9, q = 0.1, r = 1, N = 40, L = 10")
@@ -349,7 +371,21 @@ def q7():
         T = kf.windowed_nis(kf.extended_kalman_filter(model, Y7, U7), 10)
         with np.errstate(invalid="ignore"):
             counts.append(int(np.sum(T[:T_FAULT7] > thr)))
-    return tuple(counts)
+    return FalseAlarms(*counts)
+
+
+@CHECKS.choice(
+    "q7_why",
+    var="false_alarm_cause",
+    options=["model", "threshold", "fault", "noise"],
+    points=1,
+    hint='Answer one of "model", "threshold", "fault" or "noise". Which of the two filters '
+    "raises the alarms, and what differs between the two?",
+)
+def q7_why():
+    # Both filters share the threshold, r and the data, and every counted window ends before
+    # the fault: only the model of beta differs, and only the constant-beta filter alarms.
+    return "model"
 
 
 @CHECKS.function(
@@ -374,7 +410,7 @@ def q8(theta, P, phi, y, r):
         np.asarray(phi, float)[None, :],
         np.array([[float(r)]]),
     )
-    return (x, Pn)
+    return RLSUpdate(x, Pn)
 
 
 q8.case(

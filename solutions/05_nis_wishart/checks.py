@@ -4,6 +4,8 @@ Each decorated function is the trusted reference the grader runs; cases with ``h
 are sent to the student's function only at grading time.
 """
 
+from collections import namedtuple
+
 import numpy as np
 from scipy import stats
 
@@ -11,6 +13,13 @@ from course import nis
 from course.grading.checks import Checks, Mistake, binomial_band
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+Interval = namedtuple("Interval", "lower upper")
+MatrixTest = namedtuple("MatrixTest", "lmin lmax reject")
+PValues = namedtuple("PValues", "p_nis p_matrix")
 
 _rng = np.random.default_rng(20250605)
 
@@ -138,7 +147,7 @@ q2.case(EPS_C, S_C, hidden=True)
 )
 def q3():
     law = stats.chi2(60)
-    return (float(law.ppf(0.025)) / 20, float(law.isf(0.025)) / 20)
+    return Interval(float(law.ppf(0.025)) / 20, float(law.isf(0.025)) / 20)
 
 
 @CHECKS.value(
@@ -188,7 +197,7 @@ def q4():
 def q5(eps, S, alpha):
     result = nis.nis_matrix_test(eps, S, alpha)
     lmin, lmax = result.statistic
-    return (lmin, lmax, bool(result.reject))
+    return MatrixTest(lmin, lmax, bool(result.reject))
 
 
 q5.case(EPS_A, S_A, 0.05, label="K = 5, m = 2, alpha = 0.05")
@@ -213,7 +222,7 @@ EPS_PRACTICE = (
 def _pvalues(eps, S, alpha):
     p_nis = nis.nis_test(eps, S, alpha).pvalue
     p_matrix = nis.nis_matrix_test(eps, S, alpha).pvalue
-    return (float(p_nis), float(p_matrix))
+    return PValues(float(p_nis), float(p_matrix))
 
 
 @CHECKS.value(
@@ -348,4 +357,4 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
 )
 def q8():
     law = stats.chi2(200)
-    return (float(law.ppf(0.025)) / 50, float(law.isf(0.025)) / 50)
+    return Interval(float(law.ppf(0.025)) / 50, float(law.isf(0.025)) / 50)

@@ -4,6 +4,8 @@ Each decorated function is the trusted reference the grader runs; cases with ``h
 are sent to the student's function only at grading time.
 """
 
+from collections import namedtuple
+
 import numpy as np
 
 from course import filters, mismatched
@@ -11,6 +13,14 @@ from course.grading.checks import Checks, Mistake
 from course.quadform import WeightedChiSquare
 
 from . import data
+
+# Results with several parts are named tuples: feedback names the part that is wrong
+# (``critical_value``, not ``item [1]``). A student's plain tuple or list in the same order
+# is just as right (the grader compares item by item).
+Augmented = namedtuple("Augmented", "F_tilde H_tilde")
+SectionStatistics = namedtuple("SectionStatistics", "mean_sq_norm c_j c_jk")
+CriticalValues = namedtuple("CriticalValues", "lower upper")
+PValues = namedtuple("PValues", "p_mean p_corr")
 
 _FORBID_MOMENTS = [
     "course.mismatched.residual_moments",
@@ -69,7 +79,7 @@ def _augmented(F0, H0, F1, H1, K):
     F[:n0, :n0] = F0
     F[n0:, :n0] = F1 @ K @ H0
     F[n0:, n0:] = F1 @ (np.eye(n1) - K @ H1)
-    return F, np.hstack([H0, -H1])
+    return Augmented(F, np.hstack([H0, -H1]))
 
 
 @CHECKS.function(
@@ -225,7 +235,7 @@ R_C = _rng.normal(size=(3, 7, 3))
 )
 def q4(residuals, j, k):
     r = np.asarray(residuals, float)
-    return (
+    return SectionStatistics(
         mismatched.mean_statistic(r, j),
         mismatched.covariance_statistic(r, j),
         mismatched.correlation_statistic(r, j, k),
@@ -280,7 +290,7 @@ def q5(P, M, alpha):
 
 def _covariance_critical_values(P, M, alpha):
     law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, float)) / M, dof=M - 1.0)
-    return (float(law.ppf(alpha / 2)), float(law.isf(alpha / 2)))
+    return CriticalValues(float(law.ppf(alpha / 2)), float(law.isf(alpha / 2)))
 
 
 q5.case(P_Q3, 10, 0.05, label="P = [[2, .5], [.5, 1]], M = 10, alpha = 0.05")
@@ -300,7 +310,7 @@ NULL_PRACTICE = mismatched.residual_moments(data.M0, data.M1, 12)
 def _pvalues(residuals, j, k, null, alpha):
     p_mean = mismatched.mean_test(residuals, j, null, alpha).pvalue
     p_corr = mismatched.correlation_test(residuals, j, k, null, alpha).pvalue
-    return (float(p_mean), float(p_corr))
+    return PValues(float(p_mean), float(p_corr))
 
 
 _HINT_PVALUES = [

@@ -28,8 +28,10 @@ cold calls (warm ones are printed beside them): per scalar call at least
 20x faster than the baseline at ``rtol=1e-6`` and 5x at the default
 accuracy (ratio of the total times over the 39 points), the same for the
 frozen law, and 5x with 500 weights.  Times are the minimum over repeated
-calls of process CPU time (the machine is shared).  Exits with status 1
-when a target is missed or an accuracy is not met.
+calls of process CPU time (the machine is shared); the baseline's calls and
+the new cold ones alternate within each round of repeats, so a passing load
+slows both sides of a ratio alike.  Exits with status 1 when a target is
+missed or an accuracy is not met.
 """
 
 from __future__ import annotations
@@ -123,6 +125,29 @@ def cold_time(func, repeat=15, module=quadform):
     return best
 
 
+def interleaved_times(baseline, candidates, rounds=5, per_round=3):
+    """Minimum CPU time of one call of ``baseline`` and of each of ``candidates`` (cold).
+
+    The calls alternate within each round (``baseline`` once, then each
+    candidate ``per_round`` times with every cache of ``course.quadform``
+    cleared first), so that a load that comes and goes on a shared machine
+    weighs on both sides of a ratio alike instead of on whichever was timed
+    during it.  The baseline keeps no cache, so its calls are cold too.
+    """
+    best = [np.inf] * (1 + len(candidates))
+    for _ in range(rounds):
+        start = time.process_time()
+        baseline()
+        best[0] = min(best[0], time.process_time() - start)
+        for i, func in enumerate(candidates, 1):
+            for _ in range(per_round):
+                clear_caches()
+                start = time.process_time()
+                func()
+                best[i] = min(best[i], time.process_time() - start)
+    return best
+
+
 def relative_error(p, ref):
     small = min(ref, 1.0 - ref)
     got = p if ref < 0.5 else 1.0 - p
@@ -150,13 +175,16 @@ def main():
         name = f"w={weights}"[:21]
         for c, ref in values:
             today = functools.partial(old.imhof_cdf, c, weights, dof, nc)
-            t_old = cpu_time(today, repeat=3, number=2)
+            calls = [
+                functools.partial(quadform.imhof_cdf, c, weights, dof, nc, rtol=rtol)
+                for rtol in rtols.values()
+            ]
+            t_old, *t_colds = interleaved_times(today, calls)
             e_old = abs(today() - ref)
             totals["today"] += t_old
             row = f"{name:<22}{c:>5g}{ref:>10.6f} | {1e3 * t_old:>8.3f}{e_old:>8.0e} |"
-            for key, rtol in rtols.items():
-                call = functools.partial(quadform.imhof_cdf, c, weights, dof, nc, rtol=rtol)
-                t_cold, t_warm = cold_time(call), cpu_time(call)
+            for (key, rtol), call, t_cold in zip(rtols.items(), calls, t_colds):
+                t_warm = cpu_time(call)
                 err = relative_error(call(), ref)
                 ok &= err <= rtol
                 totals[key + " cold"] += t_cold
@@ -172,13 +200,15 @@ def main():
             name = ""
             # the frozen law, built and asked once (a law a user makes for one number)
             terms = (weights, dof, nc)
-            law_totals["today"] += cpu_time(
-                lambda t=terms, c=c: old.WeightedChiSquare(*t).cdf(c), repeat=3, number=1
-            )
-            for key, rtol in rtols.items():
-                law_totals[key] += cold_time(
+            laws = interleaved_times(
+                lambda t=terms, c=c: old.WeightedChiSquare(*t).cdf(c),
+                [
                     lambda t=terms, c=c, r=rtol: quadform.WeightedChiSquare(*t, rtol=r).cdf(c)
-                )
+                    for rtol in rtols.values()
+                ],
+            )
+            for key, t_law in zip(law_totals, laws):
+                law_totals[key] += t_law
     print("-" * len(header))
 
     # many points in one call: no Python loop over the points

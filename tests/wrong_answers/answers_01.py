@@ -12,7 +12,7 @@ DEPENDS = {"q6": ["q3"], "q6_practice": ["q3"], "q6b": ["q6"]}
 
 # The demo student's personal answers, as a student copying them from a classmate's screen
 # (or from the solution run as "demo") would hard-code them.
-DEMO_T = "65.20560537845853"
+DEMO_T = "22.57078379203652"
 DEMO_SUSPECT = "6"
 
 _Q3_HEAD = """def overall_model_test_stat(A, y, Qyy, alpha):
@@ -244,8 +244,15 @@ suspect_mine = int(snooping.removed[0])
     ],
 }
 
+# q6b: the survey puts T within 1.35 of its critical value, so a wrong threshold flips the
+# verdict of every rejected survey (the suite's students; ignoring Qyy flips the accepted ones,
+# see tests/test_assignments_01_03.py) and a hard-coded verdict is right for half of the class.
+_VERDICT = 'verdict_mine = "rejected" if T_mine > stats.chi2.isf({level}, {dof}) else "accepted"'
 WRONG["q6b"] = [
     ("the decision read backwards", 'verdict_mine = "accepted" if reject_mine else "rejected"'),
+    ("chi2 with m degrees of freedom", _VERDICT.format(level='mine["alpha"]', dof=12)),
+    ("chi2 with m - 1 degrees of freedom", _VERDICT.format(level='mine["alpha"]', dof=11)),
+    ("two-sided: alpha / 2", _VERDICT.format(level='mine["alpha"] / 2', dof=10)),
 ]
 WRONG["q6_practice"] = [
     (
@@ -405,5 +412,28 @@ RIGHT["q7_practice"] = [
     (
         "largest |w| (numpy int)",
         """suspect_practice = np.argmax(np.abs(lsq.w_tests(lsq.fit(A_practice, y_practice, Q_practice), 0.01).w))""",
+    ),
+]
+
+# q5's reference is a named tuple (sigma, half_width); a student's list, or a named tuple of
+# their own with other field names, is as right as a plain tuple.
+RIGHT["q5"] += [
+    (
+        "a list of numpy floats",
+        """fit_day1 = lsq.fit(A, y_day1)
+a = np.array([1.0, 2.0])
+s = np.sqrt(a @ fit_day1.Qxx @ a)
+band_t2 = [s, stats.norm.isf(0.025) * s]
+""",
+    ),
+    (
+        "a named tuple of the student's own",
+        """from collections import namedtuple
+Band = namedtuple("Band", "sd hw")
+fit_day1 = lsq.fit(A, y_day1)
+a = np.array([1.0, 2.0])
+s = float(np.sqrt(a @ fit_day1.Qxx @ a))
+band_t2 = Band(s, float(stats.norm.isf(0.025)) * s)
+""",
     ),
 ]

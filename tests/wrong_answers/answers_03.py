@@ -433,3 +433,8 @@ power_pair = [
         ),
     ],
 }
+
+# q5's reference is a named tuple (theta_ml, L_max): a list in the same order is right too.
+RIGHT["q5"] += [
+    ("a list", "ml_35 = [4.0, np.exp(-1.0) / (2 * np.pi)]\n"),
+]

@@ -50,10 +50,12 @@ _FIRST = "int(np.flatnonzero(np.nan_to_num({T}) > {thr})[0])"
 _Q6_HEAD = """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
     rng = np.random.default_rng(seed)
     x = rng.standard_normal(n_runs)
+    W = rng.standard_normal((N, n_runs))
+    V = rng.standard_normal((N, n_runs))
     y = np.empty((n_runs, N))
     for t in range(N):
-        y[:, t] = x + np.sqrt(r) * rng.standard_normal(n_runs)
-        x = a * x + np.sqrt(q) * rng.standard_normal(n_runs)
+        y[:, t] = x + np.sqrt(r) * V[t]
+        x = a * x + np.sqrt(q) * W[t]
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
     z = kf.kalman_filter(model, y[..., None]).normalized_innovations()[..., 0]
     c = np.concatenate([np.zeros((n_runs, 1)), np.cumsum(z**2, axis=1)], axis=1)
@@ -430,3 +432,60 @@ false_alarms = counts""",
         ),
     ],
 }
+
+# q6 is graded by a seeded-sample identity (the prescribed draws give everyone the same runs):
+# the value the test promises, a formula for dependent windows, or the same simulation with the
+# draws in another order (another sample) must all lose the points.
+_Q6_RATES = "    return float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1)))\n"
+WRONG["q6"] += [
+    (
+        "return alpha (the theoretical value of the last window)",
+        _Q6_HEAD + "    alarm = T > stats.chi2.isf(alpha, L)\n"
+        "    return alpha, float(np.mean(alarm.any(axis=1)))\n",
+    ),
+    (
+        "theoretical values: alpha and 1 - (1 - alpha)^(windows)",
+        """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
+    return alpha, 1 - (1 - alpha) ** (N - L + 1)
+""",
+    ),
+    (
+        "draws interleaved sample by sample (another sample than prescribed)",
+        _Q6_HEAD.replace(
+            """    W = rng.standard_normal((N, n_runs))
+    V = rng.standard_normal((N, n_runs))
+""",
+            "",
+        )
+        .replace("np.sqrt(r) * V[t]", "np.sqrt(r) * rng.standard_normal(n_runs)")
+        .replace("np.sqrt(q) * W[t]", "np.sqrt(q) * rng.standard_normal(n_runs)")
+        + "    alarm = T > stats.chi2.isf(alpha, L)\n"
+        + _Q6_RATES,
+    ),
+]
+RIGHT["q6"] += [
+    (
+        "kf.windowed_nis on the library filter, a list",
+        """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
+    rng = np.random.default_rng(seed)
+    x0 = rng.standard_normal(n_runs)
+    W = rng.standard_normal((N, n_runs))
+    V = rng.standard_normal((N, n_runs))
+    x = np.empty((N, n_runs))
+    x[0] = x0
+    for t in range(N - 1):
+        x[t + 1] = a * x[t] + np.sqrt(q) * W[t]
+    y = (x + np.sqrt(r) * V).T[..., None]
+    model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
+    T = kf.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1:]
+    alarm = T > stats.chi2.isf(alpha, L)
+    return [alarm[:, -1].mean(), alarm.any(axis=1).mean()]
+""",
+    ),
+]
+
+# q7_why: the "why?" of q7 as a choice graded automatically; every other option loses the point.
+WRONG["q7_why"] = [
+    (option, f'false_alarm_cause = "{option}"') for option in ("threshold", "fault", "noise")
+]
+RIGHT["q7_why"] = [("capitals and spaces", 'false_alarm_cause = " Model "')]

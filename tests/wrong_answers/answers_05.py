@@ -396,3 +396,15 @@ RIGHT = {
         ),
     ],
 }
+
+# q3's reference is a named tuple (lower, upper): a named tuple of the student's own with other
+# field names is as right as a plain tuple or a list.
+RIGHT["q3"] += [
+    (
+        "a named tuple of the student's own",
+        """from collections import namedtuple
+Iv = namedtuple("Iv", "lo hi")
+eps_bar_interval = Iv(*(v / 20 for v in stats.chi2(60).interval(0.95)))
+""",
+    ),
+]
