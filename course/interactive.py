@@ -207,6 +207,10 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
     )
     ax_T.set_xlabel("overall model test statistic $T$")
     ax_T.set_ylabel("density")
+    ax_T.set_title(
+        rf"overall model test: $T$ = {omt.statistic:.1f} against $\chi^2({dof})$"
+        f" → {'reject' if omt.reject else 'accept'}"
+    )
     legend_outside(ax_T)
     from .plotting.lsq import plot_w_tests
 

@@ -844,3 +844,32 @@ def test_plot_functions_return_axes():
         assert ax.has_data()
     assert axes[5].get_title() == "3 detected, 1 missed"
     plt.close("all")
+
+
+def test_ekf_batch_equals_its_parts_filtered_apart():
+    # Notebook 04 filters several Monte Carlo sweeps as one batch: that is honest only
+    # if each run's numbers do not depend on the batch it is filtered in (to the bit).
+    model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3)
+    u = np.where((np.arange(60) // 20) % 2 == 0, 0.5, 1.5)
+    _, y = model.simulate(60, np.random.default_rng(12), batch=5, u=u)
+    together = kf.extended_kalman_filter(model, y, u)
+    for part in (slice(0, 2), slice(2, 5)):
+        apart = kf.extended_kalman_filter(model, y[part], u)
+        for name in ("eps", "S", "x_filt", "P_filt", "K"):
+            np.testing.assert_array_equal(getattr(together, name)[part], getattr(apart, name))
+
+
+def test_stacked_products_match_matmul():
+    # the fast stacked products (entry by entry, stored entry-major) against numpy's matmul
+    from course.filters._stacked import _mm, _mv
+
+    rng = np.random.default_rng(13)
+    A, B, x = (
+        rng.standard_normal((7, 2, 3)),
+        rng.standard_normal((7, 3, 2)),
+        rng.standard_normal((7, 3)),
+    )
+    np.testing.assert_allclose(_mm(A, B), A @ B, rtol=1e-14)
+    np.testing.assert_allclose(_mm(A, B[0]), A @ B[0], rtol=1e-14)
+    np.testing.assert_allclose(_mv(A, x), (A @ x[..., None])[..., 0], rtol=1e-14)
+    assert _mm(A, B).shape == (7, 2, 2) and _mv(A, x).shape == (7, 2)

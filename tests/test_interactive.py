@@ -135,3 +135,20 @@ def test_widget_builders_wire_sliders_that_redraw_on_release(capsys):
     assert "Figure" in capsys.readouterr().out
     U = _signals()
     assert interactive.power_widget(U=U, nominal=np.ones(3), free=[0]) is not None
+
+
+def test_omt_view_legend_shows_only_what_is_drawn_and_both_panels_have_titles():
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2)
+    view = interactive.omt_view(alpha=0.05, outlier=0.0, axes=axes)
+    assert not view["w_reject"]
+    labels = [text.get_text() for text in axes[1].get_legend().get_texts()]
+    assert "rejected" not in labels and "accepted" in labels
+    assert axes[0].get_title() and axes[1].get_title()
+    plt.close(fig)
+    fig, axes = plt.subplots(1, 2)
+    interactive.omt_view(alpha=0.05, outlier=15.0, axes=axes)
+    labels = [text.get_text() for text in axes[1].get_legend().get_texts()]
+    assert "rejected" in labels and "reject" in axes[0].get_title()
+    plt.close(fig)

@@ -440,3 +440,28 @@ def test_two_dimensional_T_is_refused_at_once():
 def test_other_bad_arguments(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_sum_of_squares_axis_names_its_unit():
+    t = np.arange(6.0)
+    A, y = np.column_stack([np.ones_like(t), t]), 1.0 + 0.5 * t + 0.1 * np.sin(t)
+    grid = np.linspace(0.0, 2.0, 5)
+    ax = pl.plot_sum_of_squares(A, y, grid, grid, surface=True)
+    assert "m$^2$" in ax.get_zlabel()
+    fig, ax = plt.subplots()
+    pl.plot_sum_of_squares(A, y, grid, grid, log10=True, ax=ax)
+    assert "m$^2$" in fig.axes[-1].get_ylabel()  # the colour bar
+    plt.close("all")
+
+
+def test_consistency_marks_points_outside_with_one_legend_entry():
+    _, ax = plt.subplots()
+    times = np.arange(5)
+    pn.plot_consistency(times, [1.0, 3.0, 1.0, 1.0, 1.0], (0.5, 2.0), ax=ax, label="a")
+    pn.plot_consistency(times, [1.0, 1.0, 0.1, 1.0, 1.0], (0.5, 2.0), ax=ax, label="b", color=1)
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert labels.count("outside the interval") == 1
+    _, ax = plt.subplots()
+    pn.plot_consistency(times, np.ones(5), (0.5, 2.0), ax=ax, label="inside")
+    assert "outside the interval" not in [t.get_text() for t in ax.get_legend().get_texts()]
+    plt.close("all")

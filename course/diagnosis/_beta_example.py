@@ -13,6 +13,7 @@ import numpy as np
 
 from course import _deprecation
 from course.filters._models import NonlinearModel, Simulation, _batch_shape
+from course.filters._stacked import _component_major
 from course.validation import as_finite, as_float_array, as_generator, as_positive, as_variance
 
 
@@ -70,15 +71,21 @@ def beta_drift_model(
 
     def g(z, u):
         beta, x = z[..., 0], z[..., 1]
-        return np.stack([beta, x - Ts * beta * x + Ts * u[..., 0]], axis=-1)
+        # stored entry by entry (see course.filters._stacked): the filter's next
+        # products read each component of the batch as one contiguous run
+        out = _component_major(np.shape(z)[:-1], (2,), z)
+        out[..., 0] = beta
+        out[..., 1] = x - Ts * beta * x + Ts * u[..., 0]
+        return out
 
     def h(z):
         return z[..., 1:2]
 
     def jac_g(z, u):
         beta, x = z[..., 0], z[..., 1]
-        J = np.zeros(np.shape(z)[:-1] + (2, 2))
+        J = _component_major(np.shape(z)[:-1], (2, 2), z)
         J[..., 0, 0] = 1.0
+        J[..., 0, 1] = 0.0
         J[..., 1, 0] = -Ts * x
         J[..., 1, 1] = 1.0 - Ts * beta
         return J

@@ -27,9 +27,7 @@ def _mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
         for inner in range(1, k):
             stacked = stacked + A[..., :, inner, None] * B[..., None, inner, :]
         return stacked
-    out = np.empty(
-        np.broadcast_shapes(A.shape[:-2], B.shape[:-2]) + (m, n), dtype=np.result_type(A, B)
-    )
+    out = _component_major(_batch_shape(A.shape[:-2], B.shape[:-2]), (m, n), A, B)
     for i in range(m):
         for j in range(n):
             entry = A[..., i, 0] * B[..., 0, j]
@@ -44,15 +42,34 @@ def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     m, k = A.shape[-2:]
     if k > 4 or (A.ndim <= 2 and x.ndim <= 1):
         return (A @ x[..., None])[..., 0]
-    out = np.empty(
-        np.broadcast_shapes(A.shape[:-2], x.shape[:-1]) + (m,), dtype=np.result_type(A, x)
-    )
+    out = _component_major(_batch_shape(A.shape[:-2], x.shape[:-1]), (m,), A, x)
     for i in range(m):
         entry = A[..., i, 0] * x[..., 0]
         for inner in range(1, k):
             entry = entry + A[..., i, inner] * x[..., inner]
         out[..., i] = entry
     return out
+
+
+def _batch_shape(a: tuple, b: tuple) -> tuple:
+    """The broadcast of two batch shapes (equal shapes, the usual case, without a call)."""
+    return a if a == b else np.broadcast_shapes(a, b)
+
+
+def _component_major(batch: tuple, entries: tuple, *operands) -> np.ndarray:
+    """An empty ``(*batch, *entries)`` array stored entry by entry: each entry contiguous.
+
+    A view of a ``(*entries, *batch)`` block.  ``_mm`` and ``_mv`` read and
+    write one entry over the whole batch at a time; in the default layout
+    such an entry is a strided column (stride ``n * n`` doubles), here it is
+    a contiguous run, and the products and sums of the next step read it at
+    full speed (elementwise ufuncs keep the layout of their inputs).  The
+    values are the same as in any layout: only memory order changes.
+    """
+    block = np.empty(entries + batch, dtype=np.result_type(*operands))
+    k, nb = len(entries), len(batch)
+    # a transpose, not np.moveaxis: this runs a dozen times per filter step
+    return block.transpose(tuple(range(k, k + nb)) + tuple(range(k)))
 
 
 def _T(A: np.ndarray) -> np.ndarray:

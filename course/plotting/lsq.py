@@ -446,6 +446,7 @@ def plot_sum_of_squares(
     ax=None,
     minimum=None,
     labels=(r"$x(t_0)$ [m]", r"$\dot x$ [m/s]"),
+    value_unit=r"m$^2$",
 ):
     """The least-squares criterion over two parameters (Figure 10.2).
 
@@ -464,6 +465,9 @@ def plot_sum_of_squares(
         Where to mark the minimum (e.g. ``fit.x_hat``), with dotted lines.
     labels : (str, str)
         Axis labels of the two parameters, with units.
+    value_unit : str
+        Unit of the sum of squares (the unit of ``y`` squared) for the colour
+        or z axis; unused when ``Qyy`` weights it into a pure number.
 
     Returns
     -------
@@ -474,7 +478,14 @@ def plot_sum_of_squares(
     S = sum_of_squares_grid(A, y, x1_values, x2_values, Qyy)
     Z = np.log10(S) if log10 else S
     X1, X2 = np.meshgrid(np.asarray(x1_values, float), np.asarray(x2_values, float))
-    zlabel = r"$\log_{10}$ sum of squares" if log10 else "sum of squared residuals"
+    if Qyy is None:  # plain sum of squares: the unit of y squared
+        zlabel = (
+            rf"$\log_{{10}}$(sum of squares / 1 {value_unit})"
+            if log10
+            else f"sum of squared residuals [{value_unit}]"
+        )
+    else:  # weighted by Q_yy^-1: a pure number
+        zlabel = r"$\log_{10}$ weighted sum of squares" if log10 else "weighted sum of squares"
     if minimum is not None:
         minimum = _checks.array("minimum", minimum, what="parameter values")
         if minimum.size != 2:
@@ -595,8 +606,11 @@ def plot_w_tests(w_result, ax=None, index=None, xlabel="observation"):
     ax.axhspan(k, 10 * top, color=REJECT.light, alpha=0.35, lw=0, label="critical region")
     ax.axhspan(-10 * top, -k, color=REJECT.light, alpha=0.35, lw=0)
     ax.bar(x, np.nan_to_num(w), color=colors, width=0.7, zorder=3)
-    ax.bar([np.nan], [0], color=REJECT.dark, label="rejected")
-    ax.bar([np.nan], [0], color=pair(0).dark, label="accepted")
+    # legend entries only for what the bars show: no "rejected" when nothing is
+    if reject.any():
+        ax.bar([np.nan], [0], color=REJECT.dark, label="rejected")
+    if not reject.all():
+        ax.bar([np.nan], [0], color=pair(0).dark, label="accepted")
     threshold_line(
         ax,
         k,

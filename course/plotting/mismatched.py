@@ -354,7 +354,8 @@ def plot_imhof_integrands(u, real_axis, contour, ax=None):
     ax.plot(u, contour, color=pair(0).dark, lw=2, label="integrand on the saddle-point hyperbola")
     ax.axhline(0.0, color="k", lw=0.5)
     ax.set_xlabel("integration variable $u$")
-    ax.set_ylabel(r"integrand $\sin\theta(u)\,/\,(u\,\rho(u))$")
+    # one axis for two different integrands: name the quantity, and Imhof's form
+    ax.set_ylabel(r"integrand at $u$ (Imhof: $\sin\theta(u)\,/\,(u\,\rho(u))$)")
     legend_outside(ax, where="below")
     return ax
 

@@ -248,7 +248,19 @@ def plot_consistency(times, averages, interval, ax=None, label=None, ylabel="ave
         band._course_band = True
     ax.plot(times, averages, lw=1.2, color=colours.dark, label=label)
     outside = (averages < lower) | (averages > upper)
-    ax.plot(times[outside], averages[outside], "o", color=REJECT.dark, ms=3, ls="none")
+    # the marked points get one legend entry per axes, however many sequences are drawn
+    _, labels = ax.get_legend_handles_labels()
+    first = outside.any() and "outside the interval" not in labels
+    marker_label = "outside the interval" if first else None
+    ax.plot(
+        times[outside],
+        averages[outside],
+        "o",
+        color=REJECT.dark,
+        ms=3,
+        ls="none",
+        label=marker_label,
+    )
     ax.set_xlabel("time step")
     ax.set_ylabel(ylabel)
     legend_outside(ax)
