@@ -866,7 +866,7 @@ def _integrand(basis, coef, side, pole):
     return value.imag
 
 
-_GRID_TABLE = []
+_GRID_TABLE: list[np.ndarray] = []
 
 
 def _grid_nodes(k, count, odd):
@@ -1750,7 +1750,7 @@ class WeightedChiSquare(FrozenDistribution):
             )
         # a few terms also as Python floats for one point (see _at)
         if type(w) is list:
-            self._few = w, h, d
+            self._few: tuple[list, list, list] | None = (w, h, d)
             w, h, d = np.array(w, dtype=float), np.array(h, dtype=float), np.array(d, dtype=float)
         else:
             self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
