@@ -114,6 +114,15 @@ def sequence_items(expected, got):
     return None
 
 
+def length_mismatch(label: str, expected: int, got: int) -> Verdict:
+    """A sequence of the wrong length, saying "one item too many/few" when it is one off."""
+    text = f"{label}: expected length {expected}, got length {got}"
+    more = (
+        f": one item too {'many' if got > expected else 'few'}" if abs(got - expected) == 1 else ""
+    )
+    return Verdict(False, text + more, text)
+
+
 def sequence_text(expected) -> str:
     """What a student should return, by field names when the result has them."""
     fields = getattr(type(expected), "_fields", None)
@@ -503,11 +512,7 @@ def _compare(expected: Any, got: Any, rtol: float, atol: float, path: str) -> Ve
             return Verdict(False, text, text)
         got = items
         if len(got) != len(expected):
-            text = f"{label}: expected length {len(expected)}, got length {len(got)}"
-            more = ""
-            if abs(len(got) - len(expected)) == 1:
-                more = f": one item too {'many' if len(got) > len(expected) else 'few'}"
-            return Verdict(False, text + more, text)
+            return length_mismatch(label, len(expected), len(got))
         first = None
         for k, (e, g) in enumerate(zip(expected, got)):
             v = _compare(e, g, rtol, atol, _item_path(path, expected, got, k))

@@ -102,6 +102,7 @@ from course.grading.compare import (
     _tolerance_text,
     _where,
     describe,
+    length_mismatch,
     sequence_items,
     sequence_text,
 )
@@ -723,11 +724,7 @@ def _cmp(node: dict, got, ctx: _Ctx, where: str, path: str) -> Verdict:
             return Verdict(False, text, text)
         got = answered
         if len(got) != len(items):
-            text = f"{label}: expected length {len(items)}, got length {len(got)}"
-            more = ""
-            if abs(len(got) - len(items)) == 1:
-                more = f": one item too {'many' if len(got) > len(items) else 'few'}"
-            return Verdict(False, text + more, text)
+            return length_mismatch(label, len(items), len(got))
         for k, (n, g) in enumerate(zip(items, got)):
             v = _cmp(n, g, ctx, f"{where}.{k}", _item_path(path, expected, got, k))
             if not v.ok:
