@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from value_leaves import leaves
 
 from course.grading.codec import Band, decode, encode
 from course.grading.release import find_solutions
@@ -46,25 +47,6 @@ _EXPECTED_VALUE = re.compile(r"\bexpected:?\s+(?:[-+]?\d|\.\d|'|\"|True\b|False\
 
 
 # -- the values a student must never see ----------------------------------------------------
-def _leaves(value, out: list) -> list:
-    """The scalar leaves of an expected value (arrays capped at 500 elements)."""
-    if isinstance(value, Band):
-        _leaves(value.lo, out)
-        _leaves(value.hi, out)
-    elif isinstance(value, dict):
-        for v in value.values():
-            _leaves(v, out)
-    elif isinstance(value, (tuple, list)):
-        for v in value:
-            _leaves(v, out)
-    elif isinstance(value, np.ndarray):
-        for v in value.ravel()[:500].tolist():
-            _leaves(v, out)
-    elif isinstance(value, (float, int, complex, str, bool, np.generic)) or value is None:
-        out.append(value.item() if isinstance(value, np.generic) else value)
-    return out
-
-
 def _patterns(leaf) -> list[str]:
     """The printed forms of one expected leaf that must not appear in the output."""
     if isinstance(leaf, bool) or leaf is None:
@@ -111,7 +93,7 @@ def public_values(name: str) -> dict[str, list]:
     out: dict[str, list] = {}
     for qid, cases in references(name).items():
         for expected, _ in cases:
-            _leaves(expected, out.setdefault(qid, []))
+            leaves(expected, out.setdefault(qid, []), limit=500)
     return out
 
 
@@ -432,11 +414,11 @@ def _graded_values(checks, sid: str) -> list:
             continue  # marked by the instructor: no expected value
         if q.kind == "function":
             for case in q.cases:
-                _leaves(q.expected(case), out)
+                leaves(q.expected(case), out, limit=500)
         elif q.data is not None:
-            _leaves(q.expected(data=checks.data_for(q.data, sid)), out)
+            leaves(q.expected(data=checks.data_for(q.data, sid)), out, limit=500)
         else:
-            _leaves(q.expected(), out)
+            leaves(q.expected(), out, limit=500)
     return out
 
 

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+from value_leaves import leaves
 
 from course.grading.codec import Band, decode
 from course.grading.release import find_solutions
@@ -38,32 +39,12 @@ _CODEC_TAGS = ("__ndarray__", "__float__", "__complex__")
 
 
 # -- the scan ---------------------------------------------------------------------------------
-def _leaves(value, out: list) -> list:
-    if isinstance(value, Band):
-        _leaves(value.lo, out)
-        _leaves(value.hi, out)
-    elif isinstance(value, dict):
-        for v in value.values():
-            _leaves(v, out)
-    elif isinstance(value, (tuple, list)):
-        for v in value:
-            _leaves(v, out)
-    elif isinstance(value, np.ndarray):
-        for v in value.ravel().tolist():
-            _leaves(v, out)
-    elif isinstance(value, np.generic):
-        out.append(value.item())
-    else:
-        out.append(value)
-    return out
-
-
 def file_leaves(data) -> list:
     """Every number and string of a checks.json, codec-tagged arrays and floats decoded."""
     out: list = []
     if isinstance(data, dict):
         if len(data) == 1 and next(iter(data)) in _CODEC_TAGS:
-            return _leaves(decode(data), out)
+            return leaves(decode(data), out)
         for key, v in data.items():
             if key == "step" and "band" in data:
                 continue  # a sealed band's cell width: (hi - lo)/16, public by design
@@ -113,14 +94,14 @@ def graded_references(name: str) -> list[tuple[str, object, float, float]]:
 def answers_in_file(name: str, folder: Path) -> list[str]:
     """Every reference value of ``name`` found among the leaves of ``folder/checks.json``."""
     data = json.loads((folder / "checks.json").read_text("utf-8"))
-    leaves = file_leaves(data)
+    shipped = file_leaves(data)
     numbers = np.array(
-        [float(x) for x in leaves if isinstance(x, (int, float)) and not isinstance(x, bool)]
-        + [c.real for c in leaves if isinstance(c, complex)]
+        [float(x) for x in shipped if isinstance(x, (int, float)) and not isinstance(x, bool)]
+        + [c.real for c in shipped if isinstance(c, complex)]
     )
-    strings = {x for x in leaves if isinstance(x, str)}
+    strings = {x for x in shipped if isinstance(x, str)}
     options = {
-        str(o) for q in data["questions"] for o in _leaves(decode(q.get("options") or []), [])
+        str(o) for q in data["questions"] for o in leaves(decode(q.get("options") or []), [])
     }
     # a function case's inputs are public by construction: an expected number equal to one of
     # its own question's inputs (a variance that is an input squared back) gives nothing away
@@ -138,7 +119,7 @@ def answers_in_file(name: str, folder: Path) -> list[str]:
     found = []
     for where, value, rtol, atol in graded_references(name):
         own = inputs.get(where.split()[0], np.array([]))
-        for leaf in _leaves(value, []):
+        for leaf in leaves(value, []):
             if isinstance(leaf, str):
                 if len(leaf) >= 2 and leaf in strings and leaf not in options:
                     found.append(f"{where}: the string {leaf!r}")
@@ -174,7 +155,7 @@ def test_the_scan_finds_answers_shipped_in_the_clear(name, tmp_path):
     checks = load_checks(ROOT / "solutions" / name)
     data = json.loads((ROOT / "exercises" / name / "checks.json").read_text("utf-8"))
     options = {
-        str(o) for q in data["questions"] for o in _leaves(decode(q.get("options") or []), [])
+        str(o) for q in data["questions"] for o in leaves(decode(q.get("options") or []), [])
     }  # public text (mode names): the scan leaves them out
     wanted = set()
     for entry in data["questions"]:
@@ -186,7 +167,7 @@ def test_the_scan_finds_answers_shipped_in_the_clear(name, tmp_path):
                 (len(x) >= 2 and x not in options)
                 if isinstance(x, str)
                 else _distinctive(float(x), q.atol + q.rtol * abs(x) + 1e-12 * abs(x))
-                for x in _leaves(value, [])
+                for x in leaves(value, [])
                 if not isinstance(x, (bool, complex)) and x is not None
             ):
                 wanted.add(q.id)
