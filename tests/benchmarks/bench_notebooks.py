@@ -103,6 +103,17 @@ def stalls(executed: Path, end: float) -> list[tuple[float, int]]:
     return found
 
 
+def busy_seconds(executed: Path) -> float:
+    """Seconds the kernel spent running the notebook's cells (busy to idle, summed)."""
+    total = 0.0
+    for cell in json.loads(executed.read_text())["cells"]:
+        timing = cell.get("metadata", {}).get("execution", {})
+        busy, idle = _stamp(timing, "iopub.status.busy"), _stamp(timing, "iopub.status.idle")
+        if busy is not None and idle is not None:
+            total += idle - busy
+    return total
+
+
 def slowest_cells(executed: Path, k: int) -> list[tuple[float, int, str]]:
     """The ``k`` slowest code cells as (seconds, index, first line)."""
     nb = json.loads(executed.read_text())
@@ -168,7 +179,10 @@ def main() -> int:
                     continue
                 stalled = stalls(executed, end)
                 mark = "ok " if wall < TARGET_S and not stalled else "MISS"
-                print(f"{mark} {path.name:45s} {wall:5.1f} s  ({wall / base:4.1f}x baseline)")
+                print(
+                    f"{mark} {path.name:45s} {wall:5.1f} s  ({wall / base:4.1f}x baseline; "
+                    f"cells {busy_seconds(executed):5.1f} s)"
+                )
                 for sec, i in stalled:
                     print(f"        STALL after cell {i:3d}: runner idle {sec:5.1f} s")
                 for sec, i, first in slowest_cells(executed, args.cells):
