@@ -1764,15 +1764,16 @@ class WeightedChiSquare(FrozenDistribution):
                 "the law is a point mass (no chi-square term and no normal term); "
                 "a constant has no distribution to compute"
             )
-        # a few terms also as Python floats for one point (see _at)
+        # a few terms also as Python floats for one point (see _at); given as
+        # such, their arrays are made on first use (a law built for one
+        # probability never reads them, and three arrays cost ~10% of its call)
         if type(w) is list:
             self._few: tuple[list, list, list] | None = (w, h, d)
-            w, h, d = np.array(w, dtype=float), np.array(h, dtype=float), np.array(d, dtype=float)
         else:
             self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
-        for array in (w, h, d):
-            array.setflags(write=False)
-        self.weights, self.dof, self.noncentrality = w, h, d
+            for array in (w, h, d):
+                array.setflags(write=False)
+            self._arrays = (w, h, d)
         self.sigma, self.offset = float(sigma), offset
         self.atol, self.rtol = _tolerances(atol, rtol)
         # the normalised terms of each tail, built on first use
@@ -1782,6 +1783,30 @@ class WeightedChiSquare(FrozenDistribution):
         lower = offset if one_signed and w[0] > 0 else -math.inf
         upper = offset if one_signed and w[-1] < 0 else math.inf
         self._bounds = (lower, upper)
+
+    @functools.cached_property
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(weights, dof, noncentrality)`` as read-only arrays, made from ``_few``."""
+        assert self._few is not None  # (terms given as arrays set this in _set_terms)
+        arrays = tuple(np.array(column, dtype=float) for column in self._few)
+        for array in arrays:
+            array.setflags(write=False)
+        return arrays[0], arrays[1], arrays[2]
+
+    @property
+    def weights(self) -> np.ndarray:
+        """The weights after dropping zeros and merging equal ones (sorted, read-only)."""
+        return self._arrays[0]
+
+    @property
+    def dof(self) -> np.ndarray:
+        """The degrees of freedom of the terms of :attr:`weights` (read-only)."""
+        return self._arrays[1]
+
+    @property
+    def noncentrality(self) -> np.ndarray:
+        """The noncentrality parameters of the terms of :attr:`weights` (read-only)."""
+        return self._arrays[2]
 
     def __repr__(self) -> str:
         return f"WeightedChiSquare(terms={self.weights.size}, dof={_fmt(np.sum(self.dof))})"
