@@ -127,12 +127,12 @@ _NEGLIGIBLE = 1e-17
 _NEAR_ZERO = 1e-17
 # Relative tolerances below this cannot be met in double precision.
 _MIN_RTOL = 1e-15
+# Beyond this many factors the integrand takes logarithms in real arithmetic.
+_COMPLEX_LOG_SIZE = 2000
 # Up to this many terms, one point's saddle is found in Python floats.
 _PYTHON_TERMS = 24
 # Python numbers taken without numpy (bool, numpy scalars and the rest go through numpy).
 _PLAIN_NUMBERS = frozenset((float, int))
-# Beyond this many factors the integrand takes logarithms in real arithmetic.
-_COMPLEX_LOG_SIZE = 2000
 # One point's trapezoid nodes are read from a table of u = j _GRID, 0 <= u <=
 # _GRID_SPAN (see _grid_nodes): the step is rounded down to a multiple of
 # _GRID_MULTIPLE grid spacings (at most 3% finer, so never less accurate).
@@ -323,9 +323,10 @@ def _check_terms(smallest_dof, smallest_noncentrality):
 
 def _merge(group):
     """One term from chi-square terms with (nearly) equal weights."""
-    h = math.fsum(row[1] for row in group)
-    w = math.fsum(row[0] * row[1] for row in group) / h
-    return w, h, math.fsum(row[2] for row in group)
+    # (columns and C-level map: generator expressions cost more than the sums)
+    ws, hs, ds = zip(*group)
+    h = math.fsum(hs)
+    return math.fsum(map(operator.mul, ws, hs)) / h, h, math.fsum(ds)
 
 
 class _ScalarMath:
@@ -467,12 +468,15 @@ class _Side:
         # rows of the path matrix (see _path_coefficients)
         self.rows_of_path = (2 * r if self.noncentral else r) + 3
         # weights W of the rows of the path matrix in the exponent (see _integrand):
-        # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1
+        # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1.
+        # A few terms keep them as floats: one point's path coefficients take
+        # them into the same array (one numpy call less per point)
+        self.exponent_row: list | None = None
         if self.rows is not None:
             log_weights, inverse_weights = exponent_lists
             row = log_weights + inverse_weights if self.noncentral else log_weights
             row.append(1.0)
-            self.exponent_weights = np.array(row, dtype=complex)
+            self.exponent_row = row
         else:
             parts = [-0.5 * h, 0.5 * d] if self.noncentral else [-0.5 * h]
             self.exponent_weights = np.concatenate(parts + [[1.0]]).astype(complex)
@@ -489,6 +493,11 @@ class _Side:
     @functools.cached_property
     def d(self):
         return np.array(self._columns[2], dtype=float)
+
+    @functools.cached_property
+    def exponent_weights(self):
+        """The weights ``W`` of :func:`_integrand` as an array (see :meth:`__init__`)."""
+        return np.array(self.exponent_row, dtype=complex)
 
     @functools.cached_property
     def w2(self):
@@ -795,10 +804,11 @@ def _path_coefficients(x, side, s0, a, b, k0):
     are linear in ``(1, cosh u - 1, sinh u)``: one matrix product of these
     coefficients with the nodes' basis gives them all.  Rows: ``z_1 .. z_r``
     (their logarithms), ``z_1 .. z_r`` again for the noncentral terms (their
-    reciprocals), the linear part, ``s'``, ``s`` (see
-    :attr:`_Side.exponent_weights`).  Floats give one point's matrix (built
-    in Python for a few terms), 1-D arrays one matrix per point ``(points,
-    rows, 3)``.
+    reciprocals), the linear part, ``s'``, ``s``.  Returns the matrix and the
+    weights of its rows in the exponent (:attr:`_Side.exponent_weights`).
+    Floats give one point's matrix (built in Python for a few terms, in one
+    array with the weights), 1-D arrays one matrix per point ``(points, rows,
+    3)``.
     """
     ib = 1j * b
     c0 = k0 + side.half_d_sum  # the noncentral terms' -d/2 (0 when central)
@@ -809,7 +819,9 @@ def _path_coefficients(x, side, s0, a, b, k0):
             z += (1.0 - v * s0, -v * a, -v * ib)
         flat = z + z if side.noncentral else z
         flat += (-c0, -x * a, -x * ib, ib, ib, a, s0, a, ib)
-        return np.array(flat, dtype=complex).reshape(-1, 3)
+        size = len(flat)
+        both = np.array(flat + side.exponent_row, dtype=complex)
+        return both[:size].reshape(-1, 3), both[size:]
     path = np.stack(np.broadcast_arrays(s0, a, ib), axis=-1)
     r = side.r
     coef = np.empty(path.shape[:-1] + (side.rows_of_path, 3), dtype=complex)
@@ -820,11 +832,13 @@ def _path_coefficients(x, side, s0, a, b, k0):
     coef[..., -3, :] = np.stack(np.broadcast_arrays(-c0, -x * a, -x * ib), axis=-1)
     coef[..., -2, :] = np.stack(np.broadcast_arrays(ib, ib, a), axis=-1)
     coef[..., -1, :] = path
-    return coef
+    return coef, side.exponent_weights
 
 
 def _integrand(basis, coef, side, pole):
     """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola, from :func:`_path_coefficients`.
+
+    ``coef`` is what :func:`_path_coefficients` returns (matrix, weights).
 
     ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
     ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes.  One
@@ -837,7 +851,8 @@ def _integrand(basis, coef, side, pole):
     s0`` (the coefficients), so no digits cancel when ``s0 x`` is large.
     """
     r = side.r
-    path = coef @ basis
+    matrix, weights = coef
+    path = matrix @ basis
     logs = path[..., :r, :]
     if logs.size > _COMPLEX_LOG_SIZE:
         # numpy's complex log costs ~100 ns a value, this real split ~45
@@ -849,7 +864,7 @@ def _integrand(basis, coef, side, pole):
     if side.noncentral:
         inverse = path[..., r : 2 * r, :]
         np.reciprocal(inverse, out=inverse)
-    e = side.exponent_weights @ path[..., :-2, :]
+    e = weights @ path[..., :-2, :]
     s = path[..., -1, :]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
@@ -1128,7 +1143,8 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
         nodes = _nodes(h, n + 1, False)[1]
     coef = _path_coefficients(x, side, s0, a, b, k0)
     f = _integrand(nodes, coef, side, pole).tolist()
-    if not max(map(abs, f)) <= _BLOWUP * abs(f[0]):
+    bound = _BLOWUP * abs(f[0])
+    if not (max(f) <= bound and min(f) >= -bound):  # (also true of a NaN first value)
         if opening is None:
             return _contour_at(x, side, upper, pole, atol, rtol, _SAFE_OPENING)
         return 0.0, math.inf, False
@@ -1748,15 +1764,16 @@ class WeightedChiSquare(FrozenDistribution):
                 "the law is a point mass (no chi-square term and no normal term); "
                 "a constant has no distribution to compute"
             )
-        # a few terms also as Python floats for one point (see _at)
+        # a few terms also as Python floats for one point (see _at); given as
+        # such, their arrays are made on first use (a law built for one
+        # probability never reads them, and three arrays cost ~10% of its call)
         if type(w) is list:
             self._few: tuple[list, list, list] | None = (w, h, d)
-            w, h, d = np.array(w, dtype=float), np.array(h, dtype=float), np.array(d, dtype=float)
         else:
             self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
-        for array in (w, h, d):
-            array.setflags(write=False)
-        self.weights, self.dof, self.noncentrality = w, h, d
+            for array in (w, h, d):
+                array.setflags(write=False)
+            self._arrays = (w, h, d)
         self.sigma, self.offset = float(sigma), offset
         self.atol, self.rtol = _tolerances(atol, rtol)
         # the normalised terms of each tail, built on first use
@@ -1766,6 +1783,30 @@ class WeightedChiSquare(FrozenDistribution):
         lower = offset if one_signed and w[0] > 0 else -math.inf
         upper = offset if one_signed and w[-1] < 0 else math.inf
         self._bounds = (lower, upper)
+
+    @functools.cached_property
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(weights, dof, noncentrality)`` as read-only arrays, made from ``_few``."""
+        assert self._few is not None  # (terms given as arrays set this in _set_terms)
+        arrays = tuple(np.array(column, dtype=float) for column in self._few)
+        for array in arrays:
+            array.setflags(write=False)
+        return arrays[0], arrays[1], arrays[2]
+
+    @property
+    def weights(self) -> np.ndarray:
+        """The weights after dropping zeros and merging equal ones (sorted, read-only)."""
+        return self._arrays[0]
+
+    @property
+    def dof(self) -> np.ndarray:
+        """The degrees of freedom of the terms of :attr:`weights` (read-only)."""
+        return self._arrays[1]
+
+    @property
+    def noncentrality(self) -> np.ndarray:
+        """The noncentrality parameters of the terms of :attr:`weights` (read-only)."""
+        return self._arrays[2]
 
     def __repr__(self) -> str:
         return f"WeightedChiSquare(terms={self.weights.size}, dof={_fmt(np.sum(self.dof))})"

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import pytest
 
+from course.grading.checks import load_checks
 from course.grading.driver import GradeOptions, grade
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -216,9 +217,10 @@ def _submissions(env) -> dict[str, object]:
             "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).w"
         ),
     )
-    subs["copied_numbers"] = _with_answer(
-        "q6", "T_mine = 76.50528606174367  # the demo student's value"
-    )
+    # the demo student's right T, computed (a hard-coded number went stale when the data changed)
+    checks = load_checks(SOLUTION_DIR)
+    demo_t = checks.questions["q6"].expected(data=checks.data_for("survey", "demo"))
+    subs["copied_numbers"] = _with_answer("q6", f"T_mine = {float(demo_t)!r}  # the demo student's")
     # a Monte Carlo answer that does not simulate: what the test promises, not what it does
     subs["constant_rate"] = _with_answer(
         "q8", ("def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):\n    return alpha")
