@@ -100,23 +100,57 @@ def _slider(kind, description, value, lo, hi, step, **kwargs):
     return cls(**options)
 
 
+def _display_data(obj) -> dict:
+    """``obj`` as a display_data output, formatted as the running IPython shows it."""
+    from IPython import get_ipython
+
+    shell = get_ipython()
+    if shell is None:  # plain Python (a script, the tests): no front end to show an image
+        data, metadata = {"text/plain": repr(obj)}, {}
+    else:
+        data, metadata = shell.display_formatter.format(obj)
+    return {"output_type": "display_data", "data": data, "metadata": metadata}
+
+
 def _build(update, sliders: dict):
-    """Sliders above an output area that ``update(**values)`` redraws on release."""
+    """Sliders above an output area that ``update(**values)`` redraws on release.
+
+    The figure goes into the output area as the Output widget's state, set in the kernel, not
+    by ``with output: display(figure)``. Output routed through ``with output:`` makes a
+    notebook runner without a browser (nbconvert, ``jupyter execute``, the website build: all
+    nbclient) send each output back to the kernel on the shell socket while it waits for the
+    cell's reply on that socket; that send can swallow the reply's wake-up (jupyter_client
+    sends through a blocking shadow of the asyncio socket), and the run then sits idle for the
+    whole cell timeout (https://github.com/jupyter/nbclient/issues/312).
+    """
     widgets = _ipywidgets()
     import matplotlib.pyplot as plt
-    from IPython.display import display
 
     output = widgets.Output()
 
-    def redraw(**values):
-        with output:
-            output.clear_output(wait=True)
-            update(**values)
-            figure = plt.gcf()
-            display(figure)
-            plt.close(figure)
+    def draw():
+        open_before = set(plt.get_fignums())
+        try:
+            update(**{name: slider.value for name, slider in sliders.items()})
+            return _display_data(plt.gcf())
+        finally:  # the figure lives on in the output area only
+            for number in set(plt.get_fignums()) - open_before:
+                plt.close(number)
 
-    widgets.interactive_output(redraw, sliders)
+    def redraw(change):
+        try:
+            shown = draw()
+        except Exception as error:  # shown where the figure would be, as `with output:` did
+            shown = {
+                "output_type": "stream",
+                "name": "stderr",
+                "text": f"{type(error).__name__}: {error}\n",
+            }
+        output.outputs = (shown,)
+
+    output.outputs = (draw(),)  # the first figure; a bad fixed argument raises here
+    for slider in sliders.values():
+        slider.observe(redraw, names="value")
     rows = list(sliders.values())
     return widgets.VBox([widgets.HBox(rows[:2]), widgets.HBox(rows[2:]), output])
 

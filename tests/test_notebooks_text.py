@@ -152,6 +152,18 @@ def test_sliders_never_run_under_the_tests(path):
             assert not cell.outputs, f"{path.name}, cell {index}: store widget cells without output"
 
 
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_sliders_come_only_from_course_interactive(path):
+    """ipywidgets' own interact()/Output capture make a runner without a browser (nbconvert, the
+    website build) send outputs back to the kernel mid-cell, which can stall the run for the
+    whole cell timeout (nbclient#312); course.interactive's builders do not."""
+    for index, cell in enumerate(_read(path).cells):
+        if cell.cell_type == "code":
+            assert not re.search(r"ipywidgets|\binteract(ive)?\(|Output\(", cell.source), (
+                f"{path.name}, cell {index}: build sliders with course.interactive"
+            )
+
+
 # a number printed in scientific notation whose exponent says "round-off of an O(1) quantity"
 ROUND_OFF = re.compile(r"\b\d(?:\.\d+)?e-1[3-7]\b")
 # a rounded zero that kept the sign of its round-off ("-0.0000"): the sign flips between machines

@@ -9,7 +9,16 @@ processes for the duration of the run (the loaded 2-core machine of issue 16)
 and ends them afterwards.  ``--cells K`` prints the K slowest cells of each
 notebook (from the execution timestamps nbclient records).
 
-Target: every notebook under 30 s wall.  Exits non-zero when one misses it.
+The runner is watched too: the kernel stamps when each cell starts and ends, so a
+runner sitting idle between the kernel's reply and the next cell (or the end of
+the run) shows as a gap, reported as STALL.  Such a stall lasts exactly the cell
+timeout (nbclient's wait for the reply misses its wake-up when the runner sends on
+the same socket meanwhile, https://github.com/jupyter/nbclient/issues/312; the
+course's sliders once triggered it) and passes silently in nbconvert, so the
+timeout here is short enough to measure it, and a stall is a miss.
+
+Target: every notebook under 30 s wall, without a stall.  Exits non-zero when one
+misses it.
 
 Usage::
 
@@ -30,15 +39,21 @@ from datetime import datetime
 from pathlib import Path
 
 TARGET_S = 30.0
-# nbconvert has been seen waiting forever on an idle kernel on a loaded machine: a notebook
-# still running after this long is reported as hung (a miss) instead of stalling the benchmark
+# per cell; a missed wake-up of nbclient's reply wait costs exactly this (see above)
+CELL_TIMEOUT_S = 60
+# the runner idle this long between the kernel's idle of one cell and the next cell (or the
+# end of the run: kernel shutdown and writing the notebook included) is a stall
+STALL_GAP_S, STALL_TAIL_S = 10.0, 20.0
+# a notebook still running after this long is reported as hung (a miss) instead of stalling
+# the benchmark
 HANG_S = 300.0
 ROOT = Path(__file__).resolve().parents[2]
 BUSY_LOOP = "while True: pass"
 
 
-def execute(path: Path, out_dir: Path) -> tuple[float, Path]:
-    """Wall seconds of executing ``path`` in a fresh kernel, and the executed copy."""
+def execute(path: Path, out_dir: Path) -> tuple[float, Path, float]:
+    """Wall seconds of executing ``path`` in a fresh kernel, the executed copy, and the end
+    (epoch seconds)."""
     out = out_dir / path.name
     start = time.perf_counter()
     subprocess.run(
@@ -50,7 +65,7 @@ def execute(path: Path, out_dir: Path) -> tuple[float, Path]:
             "--to",
             "notebook",
             "--execute",
-            "--ExecutePreprocessor.timeout=600",
+            f"--ExecutePreprocessor.timeout={CELL_TIMEOUT_S}",
             "--output-dir",
             str(out_dir),
             str(path),
@@ -60,7 +75,43 @@ def execute(path: Path, out_dir: Path) -> tuple[float, Path]:
         capture_output=True,
         timeout=HANG_S,
     )
-    return time.perf_counter() - start, out
+    return time.perf_counter() - start, out, time.time()
+
+
+def _stamp(timing: dict, key: str) -> float | None:
+    """Epoch seconds of one of nbclient's execution timestamps (kernel clock), if recorded."""
+    if key not in timing:
+        return None
+    return datetime.fromisoformat(timing[key].replace("Z", "+00:00")).timestamp()
+
+
+def stalls(executed: Path, end: float) -> list[tuple[float, int]]:
+    """(seconds, cell index) of each time the runner sat idle after a cell had finished."""
+    nb = json.loads(executed.read_text())
+    found, previous = [], None
+    for i, cell in enumerate(nb["cells"]):
+        timing = cell.get("metadata", {}).get("execution", {})
+        busy = _stamp(timing, "iopub.status.busy")
+        if busy is None:
+            continue
+        if previous is not None and busy - previous[0] >= STALL_GAP_S:
+            found.append((busy - previous[0], previous[1]))
+        ends = [_stamp(timing, k) for k in ("iopub.status.idle", "shell.execute_reply")]
+        previous = (max((t for t in ends if t is not None), default=busy), i)
+    if previous is not None and end - previous[0] >= STALL_TAIL_S:
+        found.append((end - previous[0], previous[1]))
+    return found
+
+
+def busy_seconds(executed: Path) -> float:
+    """Seconds the kernel spent running the notebook's cells (busy to idle, summed)."""
+    total = 0.0
+    for cell in json.loads(executed.read_text())["cells"]:
+        timing = cell.get("metadata", {}).get("execution", {})
+        busy, idle = _stamp(timing, "iopub.status.busy"), _stamp(timing, "iopub.status.idle")
+        if busy is not None and idle is not None:
+            total += idle - busy
+    return total
 
 
 def slowest_cells(executed: Path, k: int) -> list[tuple[float, int, str]]:
@@ -90,7 +141,7 @@ def baseline(out_dir: Path) -> float:
     }
     path = out_dir / "baseline_import_course.ipynb"
     nbformat.write(nb, path)
-    wall, _ = execute(path, out_dir / "done")
+    wall, _, _ = execute(path, out_dir / "done")
     return wall
 
 
@@ -116,16 +167,27 @@ def main() -> int:
             print(f"baseline (fresh kernel, import course): {base:5.1f} s")
             for path in notebooks:
                 try:
-                    wall, executed = execute(path.resolve(), out_dir / "done")
+                    wall, executed, end = execute(path.resolve(), out_dir / "done")
                 except subprocess.TimeoutExpired:
                     print(f"HUNG {path.name:45s} no result after {HANG_S:.0f} s")
                     missed.append(path.name)
                     continue
-                mark = "ok " if wall < TARGET_S else "MISS"
-                print(f"{mark} {path.name:45s} {wall:5.1f} s  ({wall / base:4.1f}x baseline)")
+                except subprocess.CalledProcessError as error:
+                    tail = error.stderr.decode(errors="replace").strip().splitlines()[-1:]
+                    print(f"FAIL {path.name:45s} {' '.join(tail)}")
+                    missed.append(path.name)
+                    continue
+                stalled = stalls(executed, end)
+                mark = "ok " if wall < TARGET_S and not stalled else "MISS"
+                print(
+                    f"{mark} {path.name:45s} {wall:5.1f} s  ({wall / base:4.1f}x baseline; "
+                    f"cells {busy_seconds(executed):5.1f} s)"
+                )
+                for sec, i in stalled:
+                    print(f"        STALL after cell {i:3d}: runner idle {sec:5.1f} s")
                 for sec, i, first in slowest_cells(executed, args.cells):
                     print(f"        cell {i:3d} {sec:5.1f} s  {first}")
-                if wall >= TARGET_S:
+                if wall >= TARGET_S or stalled:
                     missed.append(path.name)
     finally:
         for proc in busy:
