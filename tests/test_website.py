@@ -27,27 +27,12 @@ from pathlib import Path
 from urllib.parse import unquote, urldefrag, urlparse
 
 import pytest
+from browser import CHROMIUM_ARGS, chromium_or_skip
 
 pytestmark = pytest.mark.browser
 
 ROOT = Path(__file__).resolve().parent.parent
-CHROMIUM = os.environ.get("COURSE_CHROMIUM") or shutil.which("chromium") or ""
-# Chromium on a machine without network: no background connections, no GPU, no sandbox (root).
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-
-if not CHROMIUM:
-    reason = "no Chromium installed (apt-get install chromium, or set COURSE_CHROMIUM)"
-    if os.environ.get("COURSE_REQUIRE_BROWSER"):  # set by .ci/run, which installs one
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
+CHROMIUM = chromium_or_skip()
 pytest.importorskip("sphinx", reason='the docs extra is not installed (pip install -e ".[docs]")')
 sync_api = pytest.importorskip(
     "playwright.sync_api", reason='the docs extra is not installed (pip install -e ".[docs]")'

@@ -1,0 +1,141 @@
+"""A course slider in a real JupyterLab, moved in a real browser, redraws its figure.
+
+The sliders of ``course.interactive`` put their figure into the output area as the Output
+widget's state, set in the kernel (so that nbclient runners do not stall, see
+``course.interactive._build``). The unit tests check the widget's state in Python; this test
+checks what a student sees: JupyterLab started as ``course open`` starts it, the notebook's
+slider cell run, the second slider moved with the keyboard, and the figure in the output area
+replaced by a new one (one figure, never a second copy below the first).
+
+Skipped, with the reason, when Chromium or Playwright is missing (see ``tests/browser.py``).
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+
+import nbformat
+import pytest
+from browser import CHROMIUM_ARGS, chromium_or_skip
+
+pytestmark = pytest.mark.browser
+
+CHROMIUM = chromium_or_skip()
+sync_api = pytest.importorskip(
+    "playwright.sync_api", reason='the docs extra is not installed (pip install -e ".[docs]")'
+)
+pytest.importorskip("ipywidgets", reason="the sliders need ipywidgets (the notebooks extra)")
+pytest.importorskip("jupyterlab", reason="JupyterLab is not installed (the tests extra)")
+
+SLIDER_CELL = "%matplotlib inline\nfrom course import interactive\ninteractive.omt_widget()"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    """JupyterLab serving a folder with one notebook (its kernel named, so Lab asks nothing)."""
+    folder = tmp_path_factory.mktemp("lab")
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
+    nb.cells = [nbformat.v4.new_code_cell(SLIDER_CELL)]
+    nbformat.write(nb, folder / "sliders.ipynb")
+    port, token = _free_port(), secrets.token_hex(16)
+    command = [
+        sys.executable,
+        "-m",
+        "jupyterlab",
+        "--no-browser",
+        f"--port={port}",
+        "--ip=127.0.0.1",
+        f"--IdentityProvider.token={token}",
+        f"--ServerApp.root_dir={folder}",
+        "--LabApp.news_url=",  # no "get notified about Jupyter news?" prompt over the figure
+    ]
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        command.append("--allow-root")
+    home = tmp_path_factory.mktemp("home")  # a fresh Lab workspace: no restored layout
+    env = {**os.environ, "JUPYTER_CONFIG_DIR": str(home / "config"), "MPLBACKEND": "Agg"}
+    log = (folder / "lab.log").open("w")
+    server = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 90
+        while True:
+            try:
+                urllib.request.urlopen(f"{base}/api/status?token={token}", timeout=2).close()
+                break
+            except OSError:
+                if server.poll() is not None or time.monotonic() > deadline:
+                    log.flush()
+                    pytest.fail(f"JupyterLab did not start:\n{(folder / 'lab.log').read_text()}")
+                time.sleep(0.5)
+        yield f"{base}/lab/tree/sliders.ipynb?token={token}", folder
+    finally:
+        server.terminate()
+        try:
+            server.wait(15)
+        except subprocess.TimeoutExpired:
+            server.kill()
+        log.close()
+
+
+def _figure(page) -> str:
+    """The ``src`` of the one image in the slider cell's output area."""
+    images = page.query_selector_all(".jp-OutputArea-output img")
+    assert len(images) == 1, f"expected one figure in the output area, found {len(images)}"
+    return images[0].get_attribute("src") or ""
+
+
+def test_moving_a_slider_in_jupyterlab_redraws_the_figure(lab):
+    url, folder = lab
+    with sync_api.sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.goto(url)
+            page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=90_000)
+            # the kernel is idle before the cell runs (else Shift+Enter may be queued and lost)
+            page.wait_for_selector(
+                ".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=90_000
+            )
+            page.click(".jp-Cell .jp-InputArea-editor")
+            page.keyboard.press("Shift+Enter")
+            page.wait_for_selector(".widget-slider", timeout=90_000)
+            page.wait_for_function(
+                "document.querySelectorAll('.jp-OutputArea-output img').length > 0",
+                timeout=60_000,
+            )
+            first = _figure(page)
+            readouts = page.locator(".widget-readout")
+            assert readouts.nth(1).inner_text() == "15.00"  # the outlier slider's default
+            handle = page.locator(".widget-slider .noUi-handle").nth(1)
+            handle.focus()
+            for _ in range(10):  # 10 steps of 0.5: outlier 15 -> 10
+                page.keyboard.press("ArrowLeft")
+            page.wait_for_function(
+                "([old]) => { const i = document.querySelectorAll("
+                "'.jp-OutputArea-output img'); return i.length === 1 && i[0].src !== old; }",
+                arg=[first],
+                timeout=60_000,
+            )
+            assert readouts.nth(1).inner_text() == "10.00"
+            second = _figure(page)
+            assert second != first and second.startswith("data:image/png")
+            page.screenshot(path=str(folder / "after.png"))
+        finally:
+            browser.close()
