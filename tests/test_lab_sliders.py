@@ -109,12 +109,20 @@ def test_moving_a_slider_in_jupyterlab_redraws_the_figure(lab):
             page = browser.new_page(viewport={"width": 1400, "height": 1000})
             page.goto(url)
             page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=90_000)
-            # the kernel is idle before the cell runs (else Shift+Enter may be queued and lost)
-            page.wait_for_selector(
-                ".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=90_000
-            )
-            page.click(".jp-Cell .jp-InputArea-editor")
-            page.keyboard.press("Shift+Enter")
+            # Lab drops a run request made before its kernel connection is up (the cell
+            # moves on and stays "[ ]"), so: run, and run again until the cell has started
+            for _attempt in range(6):
+                page.locator(".jp-Cell .jp-InputArea-editor").first.click()
+                page.keyboard.press("Shift+Enter")
+                try:
+                    page.wait_for_function(
+                        "/\\[(\\*|\\d+)\\]/.test(document.querySelector("
+                        "'.jp-Cell .jp-InputPrompt').textContent)",
+                        timeout=10_000,
+                    )
+                    break
+                except sync_api.TimeoutError:
+                    continue
             page.wait_for_selector(".widget-slider", timeout=90_000)
             page.wait_for_function(
                 "document.querySelectorAll('.jp-OutputArea-output img').length > 0",
@@ -136,6 +144,12 @@ def test_moving_a_slider_in_jupyterlab_redraws_the_figure(lab):
             assert readouts.nth(1).inner_text() == "10.00"
             second = _figure(page)
             assert second != first and second.startswith("data:image/png")
-            page.screenshot(path=str(folder / "after.png"))
+        except Exception:
+            # what the student would have seen, and the server's side of it
+            page.screenshot(path=str(folder / "failure.png"))
+            outputs = page.locator(".jp-OutputArea").all_inner_texts()
+            log = (folder / "lab.log").read_text()[-3000:]
+            print(f"screenshot: {folder / 'failure.png'}\noutput areas: {outputs}\nlab.log:\n{log}")
+            raise
         finally:
             browser.close()
