@@ -95,6 +95,11 @@ def _is_plain_number(value) -> bool:
     )
 
 
+def _is_number_vector(value) -> bool:
+    """A 1-D real array: it answers a sequence of plain numbers (see :func:`sequence_items`)."""
+    return isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf"
+
+
 def sequence_items(expected, got):
     """``got`` as the items answering the sequence ``expected``, or None when it cannot.
 
@@ -103,13 +108,7 @@ def sequence_items(expected, got):
     """
     if isinstance(got, (tuple, list)):
         return got
-    if (
-        isinstance(got, np.ndarray)
-        and got.ndim == 1
-        and got.dtype.kind in "iuf"
-        and len(expected) > 0
-        and all(_is_plain_number(e) for e in expected)
-    ):
+    if _is_number_vector(got) and len(expected) > 0 and all(_is_plain_number(e) for e in expected):
         return list(got)
     return None
 
@@ -612,9 +611,7 @@ def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
     if "sequence" in sig:
         items = sig["sequence"]
         if (
-            isinstance(got, np.ndarray)
-            and got.ndim == 1
-            and got.dtype.kind in "iuf"
+            _is_number_vector(got)
             and items
             and all(s.get("kind") in ("int", "float") and s.get("shape") == [] for s in items)
         ):
