@@ -902,6 +902,12 @@ def _grid_nodes(k, count, odd):
     return table[:, start:stop:stride]
 
 
+def _point_nodes(k, h, count, odd):
+    """One point's node basis at step ``h``: from the table when ``k`` > 0 and it holds them."""
+    nodes = _grid_nodes(k, count, odd) if k else None
+    return _nodes(h, count, odd)[1] if nodes is None else nodes
+
+
 def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     """``(1/pi) int_0^U Im[...] du`` by the trapezoidal rule; (value, error, converged).
 
@@ -1138,9 +1144,7 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
     k = max(_GRID_MULTIPLE, int(0.5 * step / _GRID) // _GRID_MULTIPLE * _GRID_MULTIPLE)
     h = k * _GRID
     n = math.ceil(min(U, _U_MAX) / h)
-    nodes = _grid_nodes(k, n + 1, False)
-    if nodes is None:
-        nodes = _nodes(h, n + 1, False)[1]
+    nodes = _point_nodes(k, h, n + 1, False)
     coef = _path_coefficients(x, side, s0, a, b, k0)
     f = _integrand(nodes, coef, side, pole).tolist()
     bound = _BLOWUP * abs(f[0])
@@ -1161,9 +1165,7 @@ def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
         h *= 0.5
         # the table holds the odd nodes while k is even; then every later level is computed
         k = k // 2 if k and k % 2 == 0 else 0
-        nodes = _grid_nodes(k, n, True) if k else None
-        if nodes is None:
-            nodes = _nodes(h, n, True)[1]
+        nodes = _point_nodes(k, h, n, True)
         f = _integrand(nodes, coef, side, pole).tolist()
         n *= 2
         refined = 0.5 * total + h * math.fsum(f)
