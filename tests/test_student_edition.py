@@ -9,6 +9,7 @@ finding its solutions, so the same scan passing on the export means something.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -35,6 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
 ASSIGNMENTS = find_solutions(SOLUTIONS)
 IDS = [f"s{i:03d}" for i in range(1, 9)] + ["98765"]
+FIXED_SECRET = Secret(hashlib.sha256(b"course tests: a fixed class key").digest(), "tests")
 PERSONAL = [name for name in ASSIGNMENTS if load_checks(SOLUTIONS / name).data_keys()]
 
 
@@ -239,8 +241,19 @@ def test_with_a_secret_the_public_files_do_not_rebuild_the_truth(class_files):
         for key in checks.data_keys():
             for sid in IDS[:6]:
                 assert not _same(_reconstructed(name, key, sid), checks.data_for(key, sid, secret))
-    matches = _matches(secret)
-    # discrete answers (a blunder index, a fault list) can agree by chance; none reliably
+
+
+def test_with_a_secret_discrete_answers_agree_only_by_chance():
+    """A discrete answer (a blunder index, a fault list) rebuilt from the public generator can
+    agree with a student's true one by chance, never reliably (a working rebuild agrees for
+    all six students).
+
+    The key is fixed, not drawn per run: 01's blunder index has four possible values, so
+    under a random key these bounds fail by chance for about one key in eight (7 of 60
+    random keys measured; a fresh-clone CI once failed so). A fixed key keeps the test
+    deterministic and it still fails when the public files rebuild the truth.
+    """
+    matches = _matches(FIXED_SECRET)
     assert all(n <= 3 for n in matches.values()), matches
     assert sum(matches.values()) <= len(matches), matches
 
