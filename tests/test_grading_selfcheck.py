@@ -520,7 +520,7 @@ def test_a_forbidden_call_fails_the_self_check(mistakes_demo, capsys):
     assert "FAIL: your answer uses scipy.stats.norm" in out and "PASS" not in out
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True, database=None)
 @given(
     expected=hnp.arrays(
         np.float64,
