@@ -139,6 +139,11 @@ _PLAIN_NUMBERS = frozenset((float, int))
 _GRID = 2.0**-10
 _GRID_SPAN = 16.0
 _GRID_MULTIPLE = 4
+# Constants of _plan's bounds: sqrt(2 pi); the share of the tolerance left to
+# the truncation (log 0.01); log of sqrt(2)/pi (rounded up to 1.42/pi).
+_SQRT_2PI = math.sqrt(2.0 * math.pi)
+_LOG_TRUNCATION_SHARE = math.log(0.01)
+_LOG_SQRT2_OVER_PI = math.log(1.42 / math.pi)
 
 
 # ---------------------------------------------------------------------------
@@ -740,14 +745,14 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
     a = ratio * b
     e0 = k0 - s0 * x
     vertex = b / xp.abs(s0) if pole else b
-    log_tol = (math.log(rtol * math.sqrt(2.0 * math.pi)) if rtol else -math.inf) + xp.log(vertex)
+    log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + xp.log(vertex)
     if atol > 0:
         log_tol = xp.maximum(log_tol, math.log(atol * math.pi) - e0)
     # -- truncation (bounds in Y = Im s = b sinh u: see the docstring) ------------
     k_e = side.k + (1.0 if pole else 0.0)
-    log_tol_t = log_tol + math.log(0.01)
+    log_tol_t = log_tol + _LOG_TRUNCATION_SHARE
     # |s'| <= sqrt(2) dY/du (a <= b) and |s| >= Y
-    log_rhs = side.log_d_y + math.log(1.42 / math.pi) - e0 - log_tol_t
+    log_rhs = side.log_d_y + _LOG_SQRT2_OVER_PI - e0 - log_tol_t
     # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
     y_positive = xp.maximum(a - s0, 0.0) / ratio
     log_y_need = 700.0
@@ -853,7 +858,10 @@ def _integrand(basis, coef, side, pole):
     r = side.r
     matrix, weights = coef
     path = matrix @ basis
-    logs = path[..., :r, :]
+    # the rows along the first axis (one point's path already has them there):
+    # plain first-axis indexing is cheaper than path[..., i, :]
+    rows = path if path.ndim == 2 else path.transpose(1, 0, 2)
+    logs = rows[:r]
     if logs.size > _COMPLEX_LOG_SIZE:
         # numpy's complex log costs ~100 ns a value, this real split ~45
         angle = np.arctan2(logs.imag, logs.real)
@@ -862,10 +870,10 @@ def _integrand(basis, coef, side, pole):
     else:
         np.log(logs, out=logs)
     if side.noncentral:
-        inverse = path[..., r : 2 * r, :]
+        inverse = rows[r : 2 * r]
         np.reciprocal(inverse, out=inverse)
     e = weights @ path[..., :-2, :]
-    s = path[..., -1, :]
+    s = rows[-1]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
         e += (0.5 * side.sigma2) * (s * s)
@@ -875,7 +883,7 @@ def _integrand(basis, coef, side, pole):
     real = e.real
     np.minimum(real, 600.0, out=real)
     value = np.exp(e, out=e)
-    value *= path[..., -2, :]
+    value *= rows[-2]
     if pole:
         value /= s
     return value.imag
@@ -2164,6 +2172,8 @@ def _warn_unconverged(conv, err, stacklevel=4):
 
 def _squeeze(a):
     """A 0-d result as a scalar, others (and floats) unchanged."""
+    if type(a) is float:  # (one point's answer: no attribute lookup that fails)
+        return a
     return a[()] if getattr(a, "ndim", None) == 0 else a
 
 
