@@ -144,6 +144,7 @@ _GRID_MULTIPLE = 4
 _SQRT_2PI = math.sqrt(2.0 * math.pi)
 _LOG_TRUNCATION_SHARE = math.log(0.01)
 _LOG_SQRT2_OVER_PI = math.log(1.42 / math.pi)
+_LOG2 = math.log(2.0)
 
 
 # ---------------------------------------------------------------------------
@@ -286,11 +287,18 @@ def _short_columns(weights, dof, noncentrality):
     d = [0.0] * r if noncentrality is None else _short_column(noncentrality, r)
     if h is None or d is None:
         return None
+    # one test of all three: a sum of floats is finite only if every one is
+    # (finite ones whose sum overflows take the numpy way, which accepts them)
+    if not math.isfinite(sum(w) + sum(h) + sum(d)):
+        return None
     return w, h, d
 
 
 def _short_column(value, size=None):
-    """A short list/tuple of Python numbers or 1-D real array as finite floats (None if not)."""
+    """A short list/tuple of Python numbers or 1-D real array as floats (None if not).
+
+    Finiteness is tested once for the three columns by :func:`_short_columns`.
+    """
     kind = type(value)
     if kind is list or kind is tuple:
         if len(value) > _PYTHON_TERMS:
@@ -314,7 +322,7 @@ def _short_column(value, size=None):
         return None
     if size is not None and len(column) != size:
         return None
-    return column if all(map(math.isfinite, column)) else None
+    return column
 
 
 def _check_terms(smallest_dof, smallest_noncentrality):
@@ -390,21 +398,21 @@ def _term_rows(w, h, d):
     weights ``-h/2`` and ``d/2`` (see :attr:`_Side.exponent_weights`).
     """
     mean = var = log_d = d_over_w = zero_slope = log_c = 0.0
-    rows = []
-    log2 = math.log(2.0)
+    rows: list[tuple] = []
+    append, log, log2 = rows.append, math.log, _LOG2  # (local names: cheaper lookups in the loop)
     for wi, hi, di in zip(w, h, d):
         w2, hw, dw, ww = wi + wi, hi * wi, di * wi, wi * wi
-        rows.append((w2, hw, dw, w2 * hw, 8.0 * ww * hw, 4.0 * wi * dw, 24.0 * ww * dw))
+        append((w2, hw, dw, w2 * hw, 8.0 * ww * hw, 4.0 * wi * dw, 24.0 * ww * dw))
         mean += hw + dw
         var += 2.0 * ww * (hi + di + di)
         if wi > 0:
-            log_2w = math.log(wi) + log2
+            log_2w = log(wi) + log2
             quarter = 0.25 / wi
             d_over_w += di * quarter
             zero_slope += (hi + di) * quarter
             log_c -= 0.5 * hi * log_2w
         else:
-            log_2w = math.log(-wi) + log2
+            log_2w = log(-wi) + log2
         log_d -= 0.5 * hi * log_2w + 0.25 * di
     # the rest by C-level map and zip (cheaper than Python steps per term)
     w2_list = list(map(operator.add, w, w))
