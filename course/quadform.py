@@ -265,7 +265,13 @@ def _validated(weights, dof, noncentrality, sigma=0.0):
         breaks = np.flatnonzero(np.diff(w) > _MERGE_RTOL * scale) + 1
         if breaks.size < w.size - 1:
             members = np.split(np.arange(w.size), breaks)
-            w = np.array([np.average(w[g], weights=h[g]) for g in members])
+            with np.errstate(over="ignore"):
+                merged = np.array([np.average(w[g], weights=h[g]) for g in members])
+            for i in np.flatnonzero(np.isinf(merged)):
+                # weights near the largest double (w h overflows): the mean from the first's offsets
+                g = members[i]
+                merged[i] = w[g[0]] + np.average(w[g] - w[g[0]], weights=h[g])
+            w = merged
             h = np.array([h[g].sum() for g in members])
             d = np.array([d[g].sum() for g in members])
     return w, h, d, sigma
@@ -354,7 +360,14 @@ def _merge(group):
     # (columns and C-level map: generator expressions cost more than the sums)
     ws, hs, ds = zip(*group)
     h = math.fsum(hs)
-    return math.fsum(map(operator.mul, ws, hs)) / h, h, math.fsum(ds)
+    try:
+        w = math.fsum(map(operator.mul, ws, hs)) / h
+    except OverflowError:
+        w = math.inf
+    if math.isinf(w):
+        # weights near the largest double (w h overflows): the mean from the first's offsets
+        w = ws[0] + math.fsum([(v - ws[0]) * k for v, k in zip(ws, hs)]) / h
+    return w, h, math.fsum(ds)
 
 
 class _ScalarMath:

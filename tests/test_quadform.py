@@ -513,6 +513,23 @@ def test_laws_are_scale_invariant_down_to_the_limits_of_doubles(scale):
 
 
 @pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("terms", [2, 30])  # merged in Python floats (a few terms) and in numpy
+def test_equal_weights_near_the_largest_double_merge(terms):
+    # OverflowError ("intermediate overflow in fsum") or an overflow warning and an
+    # infinite weight before: the merged weight was sum(w h) / sum(h), and w h overflowed
+    scale = 1e308 if terms == 2 else 1e307
+    weights = np.full(terms, scale)
+    weights[0] *= 1 - 1e-14  # nearly equal weights merge too
+    x = np.array([0.2, 0.5, 1.5]) if terms == 2 else np.array([5.0, 10.0, 15.0])  # x scale finite
+    reference = stats.chi2.cdf(x, terms)
+    assert np.allclose(imhof_cdf(x * scale, weights), reference, rtol=1e-9)
+    assert np.allclose(imhof_cdf(x * scale, list(weights)), reference, rtol=1e-9)
+    law = WeightedChiSquare(list(weights))
+    assert law.weights.size == 1 and law.weights[0] == pytest.approx(scale, rel=1e-13)
+    assert law.dof[0] == terms
+
+
+@pytest.mark.filterwarnings("error")
 @pytest.mark.parametrize("scale", SCALES)
 def test_quadratic_form_is_scale_invariant_in_A_and_cov(scale):
     rng = np.random.default_rng(4)
