@@ -893,10 +893,11 @@ def _integrand(basis, coef, side, pole):
     """
     r = side.r
     matrix, weights = coef
-    path = matrix @ basis
+    one = matrix.ndim == 2  # one point: ndarray.dot costs less than the @ ufunc machinery
+    path = matrix.dot(basis) if one else matrix @ basis
     # the rows along the first axis (one point's path already has them there):
     # plain first-axis indexing is cheaper than path[..., i, :]
-    rows = path if path.ndim == 2 else path.transpose(1, 0, 2)
+    rows = path if one else path.transpose(1, 0, 2)
     logs = rows[:r]
     if logs.size > _COMPLEX_LOG_SIZE:
         # numpy's complex log costs ~100 ns a value, this real split ~45
@@ -908,7 +909,7 @@ def _integrand(basis, coef, side, pole):
     if side.noncentral:
         inverse = rows[r : 2 * r]
         np.reciprocal(inverse, out=inverse)
-    e = weights @ path[..., :-2, :]
+    e = weights.dot(path[:-2]) if one else weights @ path[..., :-2, :]
     s = rows[-1]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
