@@ -100,15 +100,23 @@ def _is_number_vector(value) -> bool:
     return isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf"
 
 
+def _is_one_number(expected) -> bool:
+    """A plain number, or a band around one (a Monte Carlo rate): an array element answers it."""
+    if isinstance(expected, Band):
+        return np.ndim(expected.lo) == 0
+    return _is_plain_number(expected)
+
+
 def sequence_items(expected, got):
     """``got`` as the items answering the sequence ``expected``, or None when it cannot.
 
-    A tuple or list answers as itself. A 1-D real array answers a sequence of plain numbers:
-    ``np.array([lo, hi])`` for ``(lower, upper)`` is a right answer written differently.
+    A tuple or list answers as itself. A 1-D real array answers a sequence of plain numbers
+    (or bands of one number, as :func:`check_signature` reads them): ``np.array([lo, hi])``
+    for ``(lower, upper)`` is a right answer written differently.
     """
     if isinstance(got, (tuple, list)):
         return got
-    if _is_number_vector(got) and len(expected) > 0 and all(_is_plain_number(e) for e in expected):
+    if _is_number_vector(got) and len(expected) > 0 and all(_is_one_number(e) for e in expected):
         return list(got)
     return None
 
