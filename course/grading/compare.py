@@ -2,7 +2,9 @@
 
 Used by the grader (in the trusted parent, against the true references). The student's
 self-check compares against SEALED expected values with the same messages, see
-:mod:`course.grading.seal`. Never compares printed text.
+:mod:`course.grading.seal`: both walk the structure with :class:`StructuralWalk` (types,
+shapes, lengths, keys and what is said of them) and differ only in their leaves. Never
+compares printed text.
 """
 
 from __future__ import annotations
@@ -356,6 +358,7 @@ def numbers_wrong(label, wrong, size, which, index, shape, kind, rtol, atol) -> 
 
 
 def outside_band(label: str, where: str) -> str:
+    """A value outside an accepted band: what that says of the method, never the band."""
     return (
         f"{label}: outside the accepted band{where} (the band allows for the Monte Carlo "
         "spread of a right answer: the method or its parameters differ)"

@@ -72,6 +72,10 @@ release stays byte-for-byte reproducible.
 
 Diagnostics
 -----------
+The structure -- types, shapes, lengths, field names, dict keys, and every message about
+them -- is walked by :class:`course.grading.compare.StructuralWalk`, the same walk as
+grading's; only the leaves here compare hashes instead of numbers and strings.
+
 The automatic kind-of-wrong messages need no expected value: the self-check tries transforms
 of the STUDENT's value against the seal -- ``-s``, ``s.T``, ``s[::-1]``, a permutation
 (small arrays), ``s -+ 1`` for integers, ``s/f`` for a fixed list of factors
