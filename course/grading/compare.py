@@ -395,51 +395,51 @@ class StructuralWalk:
 
     def walk(self, expected, got, path: str = "") -> Verdict:
         label = _label(path)
-        shape = self.stand_in(expected)
-        if isinstance(shape, Band):
+        like = self.stand_in(expected)  # a value of its type and shape
+        if isinstance(like, Band):
             arr = _numeric(got)
             if arr is None or arr.dtype.kind == "c":
                 text = f"{label}: expected a real number, got {describe(got)}"
                 return Verdict(False, text, text)
             return self.band(expected, arr, label)
-        if shape is None:
+        if like is None:
             text = "" if got is None else f"{label}: expected None, got {describe(got)}"
             return Verdict(got is None, text, text)
-        if isinstance(shape, str):
+        if isinstance(like, str):
             if not isinstance(got, str):
                 return self.not_a_string(expected, got, label)
             return self.string(expected, got, label)
-        if isinstance(shape, (tuple, list)):
-            return self._sequence(expected, shape, got, path, label)
-        if isinstance(shape, dict):
+        if isinstance(like, (tuple, list)):
+            return self._sequence(expected, like, got, path, label)
+        if isinstance(like, dict):
             if not isinstance(got, dict):
-                text = f"{label}: expected a dict with keys {sorted(shape)}, got {describe(got)}"
+                text = f"{label}: expected a dict with keys {sorted(like)}, got {describe(got)}"
                 return Verdict(False, text, text)
-            if set(got) != set(shape):
-                text = f"{label}: expected keys {sorted(shape)}, got {sorted(map(str, got))[:10]}"
+            if set(got) != set(like):
+                text = f"{label}: expected keys {sorted(like)}, got {sorted(map(str, got))[:10]}"
                 return Verdict(False, text, text)
-            for k in sorted(shape):
+            for k in sorted(like):
                 v = self.walk(self.value_at(expected, k), got[k], _key_path(path, k))
                 if not v.ok:
                     return v
             return Verdict(True)
-        exp = _numeric(shape)
+        exp = _numeric(like)
         if exp is None:
-            raise TypeError(f"cannot compare against expected value of type {type(shape).__name__}")
+            raise TypeError(f"cannot compare against expected value of type {type(like).__name__}")
         arr = _numeric(got)
         if arr is None:
-            text = f"{label}: expected {describe(shape)}, got {describe(got)}"
+            text = f"{label}: expected {describe(like)}, got {describe(got)}"
             return Verdict(False, text, text)
         if arr.shape != exp.shape:
             return self._shape_mismatch(expected, exp, arr, label)
         s = "s" if exp.ndim else ""
-        if _is_boolish(shape):
+        if _is_boolish(like):
             if arr.dtype.kind not in "biu" or (
                 arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1))
             ):
                 text = f"{label}: expected bool{s}, got {describe(got)}"
                 return Verdict(False, text, text)
-        elif _is_intish(shape):
+        elif _is_intish(like):
             if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
                 text = f"{label}: expected integer{s}, got {describe(got)}"
                 return Verdict(False, text, text)
@@ -448,15 +448,15 @@ class StructuralWalk:
             return Verdict(False, text, text)
         return self.numbers(expected, exp, arr, label)
 
-    def _sequence(self, expected, shape, got, path: str, label: str) -> Verdict:
-        items = sequence_items(shape, got)
+    def _sequence(self, expected, like, got, path: str, label: str) -> Verdict:
+        items = sequence_items(like, got)
         if items is None:
-            text = f"{label}: expected {sequence_text(shape)}, got {describe(got)}"
+            text = f"{label}: expected {sequence_text(like)}, got {describe(got)}"
             return Verdict(False, text, text)
-        if len(items) != len(shape):
-            return length_mismatch(label, len(shape), len(items))
+        if len(items) != len(like):
+            return length_mismatch(label, len(like), len(items))
         for k, g in enumerate(items):
-            first = self.walk(self.item(expected, k), g, _item_path(path, shape, items, k))
+            first = self.walk(self.item(expected, k), g, _item_path(path, like, items, k))
             if not first.ok:
                 if self.in_another_order(expected, items):
                     text = f"{label}: the right items in another order"
