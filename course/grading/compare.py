@@ -2,7 +2,9 @@
 
 Used by the grader (in the trusted parent, against the true references). The student's
 self-check compares against SEALED expected values with the same messages, see
-:mod:`course.grading.seal`. Never compares printed text.
+:mod:`course.grading.seal`: both walk the structure with :class:`StructuralWalk` (types,
+shapes, lengths, keys and what is said of them) and differ only in their leaves. Never
+compares printed text.
 """
 
 from __future__ import annotations
@@ -100,15 +102,23 @@ def _is_number_vector(value) -> bool:
     return isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf"
 
 
+def _is_one_number(expected) -> bool:
+    """A plain number, or a band around one (a Monte Carlo rate): an array element answers it."""
+    if isinstance(expected, Band):
+        return np.ndim(expected.lo) == 0
+    return _is_plain_number(expected)
+
+
 def sequence_items(expected, got):
     """``got`` as the items answering the sequence ``expected``, or None when it cannot.
 
-    A tuple or list answers as itself. A 1-D real array answers a sequence of plain numbers:
-    ``np.array([lo, hi])`` for ``(lower, upper)`` is a right answer written differently.
+    A tuple or list answers as itself. A 1-D real array answers a sequence of plain numbers
+    (or bands of one number, as :func:`check_signature` reads them): ``np.array([lo, hi])``
+    for ``(lower, upper)`` is a right answer written differently.
     """
     if isinstance(got, (tuple, list)):
         return got
-    if _is_number_vector(got) and len(expected) > 0 and all(_is_plain_number(e) for e in expected):
+    if _is_number_vector(got) and len(expected) > 0 and all(_is_one_number(e) for e in expected):
         return list(got)
     return None
 
@@ -302,16 +312,162 @@ def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> st
     return ""
 
 
-def _compare_numbers(exp: np.ndarray, arr: np.ndarray, expected, got, rtol, atol, label) -> Verdict:
-    """Numbers and arrays of the same kind as ``expected`` (shapes may differ)."""
-    if arr.shape != exp.shape:
+# -- the messages both comparisons give about wrong elements ---------------------------------
+def _first_at(index, shape) -> str:
+    return _where(index, shape).strip()[3:]
+
+
+def decisions_wrong(label: str, wrong: int, size: int, first, shape) -> str:
+    """Bools that differ: the opposite decision, every decision, or how many and the first."""
+    if not shape:
+        return f"{label}: the opposite of the right decision"
+    if wrong == size:
+        return f"{label}: every decision is the opposite (a comparison the wrong way round?)"
+    return f"{label}: {wrong} of {size} wrong, first at {_first_at(first, shape)}"
+
+
+def integers_wrong(label: str, wrong: int, size: int, first, shape, kind: str) -> str:
+    """Integers that differ: how many and the first (arrays), and the kind of wrong."""
+    where = "" if not shape else f" {wrong} of {size} wrong, first at {_first_at(first, shape)};"
+    s = "s" if shape else ""
+    return f"{label}:{where} {kind or 'not the right integer' + s} (integers must match exactly)"
+
+
+def not_finite(label: str, g: np.ndarray, bad: np.ndarray) -> str:
+    """'got NaN' or 'got inf' at the first such wrong element of ``g``; '' when there is none."""
+    nan = np.isnan(g) & bad
+    if np.any(nan):
+        j = tuple(np.argwhere(nan)[0]) if g.ndim else ()
+        return f"{label}: got NaN{_where(j, g.shape)} (a 0/0, or an empty mean?)"
+    inf = np.isinf(g) & bad
+    if np.any(inf):
+        j = tuple(np.argwhere(inf)[0]) if g.ndim else ()
+        return f"{label}: got inf{_where(j, g.shape)} (a division by zero?)"
+    return ""
+
+
+def numbers_wrong(label, wrong, size, which, index, shape, kind, rtol, atol) -> str:
+    """Floats outside the tolerance: how many and ``which`` one (arrays), the kind of wrong."""
+    count = (
+        f"{wrong} of {size} elements wrong, the {which} at {_first_at(index, shape)}; "
+        if size > 1
+        else ""
+    )
+    kind = kind or "not within the tolerance"
+    return f"{label}: {count}{kind}; {_tolerance_text(rtol, atol)}"
+
+
+def outside_band(label: str, where: str) -> str:
+    """A value outside an accepted band: what that says of the method, never the band."""
+    return (
+        f"{label}: outside the accepted band{where} (the band allows for the Monte Carlo "
+        "spread of a right answer: the method or its parameters differ)"
+    )
+
+
+# -- the structural walk ---------------------------------------------------------------------
+class StructuralWalk:
+    """``got`` against an expected value, walked in parallel: one place for the structure.
+
+    The walk checks what the expected value's type and shape say -- None, a string, a
+    sequence (its length; a 1-D real array may answer a sequence of numbers), a dict (its
+    keys), numbers (a number at all, the shape, bools, integers, real or complex) -- with the
+    messages about it, and recurses into items and dict values (first wrong one wins). A
+    subclass supplies the leaves: how numbers, strings and bands are compared, whether a
+    transposed matrix or another order of the items would match, and their messages. Used by
+    :func:`compare` (the expected value in the clear) and by
+    :func:`course.grading.seal.sealed_compare` (sealed: there the expected value is a node of
+    the sealed tree, and :meth:`stand_in` gives a value of its type and shape).
+    """
+
+    #: the record of "the right items in another order" keeps the first wrong item's detail
+    order_detail = True
+
+    def stand_in(self, expected):
+        """A value with the type, shape and field names of ``expected``."""
+        return expected
+
+    def item(self, expected, k: int):
+        return expected[k]
+
+    def value_at(self, expected, key):
+        return expected[key]
+
+    def walk(self, expected, got, path: str = "") -> Verdict:
+        label = _label(path)
+        like = self.stand_in(expected)  # a value of its type and shape
+        if isinstance(like, Band):
+            arr = _numeric(got)
+            if arr is None or arr.dtype.kind == "c":
+                text = f"{label}: expected a real number, got {describe(got)}"
+                return Verdict(False, text, text)
+            return self.band(expected, arr, label)
+        if like is None:
+            text = "" if got is None else f"{label}: expected None, got {describe(got)}"
+            return Verdict(got is None, text, text)
+        if isinstance(like, str):
+            if not isinstance(got, str):
+                return self.not_a_string(expected, got, label)
+            return self.string(expected, got, label)
+        if isinstance(like, (tuple, list)):
+            return self._sequence(expected, like, got, path, label)
+        if isinstance(like, dict):
+            if not isinstance(got, dict):
+                text = f"{label}: expected a dict with keys {sorted(like)}, got {describe(got)}"
+                return Verdict(False, text, text)
+            if set(got) != set(like):
+                text = f"{label}: expected keys {sorted(like)}, got {sorted(map(str, got))[:10]}"
+                return Verdict(False, text, text)
+            for k in sorted(like):
+                v = self.walk(self.value_at(expected, k), got[k], _key_path(path, k))
+                if not v.ok:
+                    return v
+            return Verdict(True)
+        exp = _numeric(like)
+        if exp is None:
+            raise TypeError(f"cannot compare against expected value of type {type(like).__name__}")
+        arr = _numeric(got)
+        if arr is None:
+            text = f"{label}: expected {describe(like)}, got {describe(got)}"
+            return Verdict(False, text, text)
+        if arr.shape != exp.shape:
+            return self._shape_mismatch(expected, exp, arr, label)
+        s = "s" if exp.ndim else ""
+        if _is_boolish(like):
+            if arr.dtype.kind not in "biu" or (
+                arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1))
+            ):
+                text = f"{label}: expected bool{s}, got {describe(got)}"
+                return Verdict(False, text, text)
+        elif _is_intish(like):
+            if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
+                text = f"{label}: expected integer{s}, got {describe(got)}"
+                return Verdict(False, text, text)
+        elif arr.dtype.kind == "c" and exp.dtype.kind != "c":
+            text = f"{label}: expected real numbers, got complex"
+            return Verdict(False, text, text)
+        return self.numbers(expected, exp, arr, label)
+
+    def _sequence(self, expected, like, got, path: str, label: str) -> Verdict:
+        items = sequence_items(like, got)
+        if items is None:
+            text = f"{label}: expected {sequence_text(like)}, got {describe(got)}"
+            return Verdict(False, text, text)
+        if len(items) != len(like):
+            return length_mismatch(label, len(like), len(items))
+        for k, g in enumerate(items):
+            first = self.walk(self.item(expected, k), g, _item_path(path, like, items, k))
+            if not first.ok:
+                if self.in_another_order(expected, items):
+                    text = f"{label}: the right items in another order"
+                    return Verdict(False, text, first.detail if self.order_detail else text)
+                return first
+        return Verdict(True)
+
+    def _shape_mismatch(self, expected, exp: np.ndarray, arr: np.ndarray, label: str) -> Verdict:
         hint = ""
         if arr.size == exp.size and arr.size > 0:
-            if (
-                exp.ndim == 2
-                and arr.shape == exp.shape[::-1]
-                and _close(exp.astype(float), arr.T.astype(float), max(rtol, 1e-7), atol)
-            ):
+            if exp.ndim == 2 and arr.shape == exp.shape[::-1] and self.transposed(expected, arr):
                 hint = ": transposed, rows and columns are swapped"
             else:
                 hint = " (the right number of elements: reshape, ravel or a missing [:, 0]?)"
@@ -322,94 +478,147 @@ def _compare_numbers(exp: np.ndarray, arr: np.ndarray, expected, got, rtol, atol
             )
         detail = f"{label}: expected shape {tuple(exp.shape)}, got shape {tuple(arr.shape)}"
         return Verdict(False, detail + hint, detail)
-    s = "s" if exp.ndim else ""
-    if _is_boolish(expected):
-        if arr.dtype.kind not in "biu" or (
-            arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1))
-        ):
-            text = f"{label}: expected bool{s}, got {describe(got)}"
+
+    # -- the leaves: a subclass's ------------------------------------------------------------
+    def band(self, expected, arr: np.ndarray, label: str) -> Verdict:
+        """``arr`` (real numbers) against an accepted band."""
+        raise NotImplementedError
+
+    def not_a_string(self, expected, got, label: str) -> Verdict:
+        text = f"{label}: expected a string, got {describe(got)}"
+        return Verdict(False, text, text)
+
+    def string(self, expected, got: str, label: str) -> Verdict:
+        raise NotImplementedError
+
+    def numbers(self, expected, exp: np.ndarray, arr: np.ndarray, label: str) -> Verdict:
+        """``arr`` against numbers of its shape and of an agreeing kind; ``exp`` is the stand-in
+        as an array."""
+        raise NotImplementedError
+
+    def transposed(self, expected, arr: np.ndarray) -> bool:
+        """Whether ``arr.T`` matches (``arr`` has the transposed shape of a matrix)."""
+        raise NotImplementedError
+
+    def in_another_order(self, expected, items) -> bool:
+        """Whether the sequence ``items`` (not a match) holds the right items in another order."""
+        raise NotImplementedError
+
+
+class _Clear(StructuralWalk):
+    """The comparison with the expected value in the clear, with the exact tolerance."""
+
+    def __init__(self, rtol: float, atol: float):
+        self.rtol, self.atol = rtol, atol
+
+    def band(self, expected: Band, arr: np.ndarray, label: str) -> Verdict:
+        lo, hi = np.asarray(expected.lo, float), np.asarray(expected.hi, float)
+        try:
+            arr_b, lo_b, hi_b = np.broadcast_arrays(arr.astype(float), lo, hi)
+        except ValueError:
+            text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
             return Verdict(False, text, text)
-        diff = arr.astype(bool) != exp
-        if not np.any(diff):
-            return Verdict(True)
-        i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
-        g_bool = bool(arr[i]) if arr.ndim else bool(arr[()])
-        if exp.ndim == 0:
-            message = f"{label}: the opposite of the right decision"
-        elif bool(np.all(diff)):
-            message = f"{label}: every decision is the opposite (a comparison the wrong way round?)"
-        else:
-            message = f"{label}: {int(np.sum(diff))} of {diff.size} wrong, first at {_where(i, diff.shape).strip()[3:]}"
-        return Verdict(
-            False, message, f"{label}{_where(i, diff.shape)}: expected {not g_bool}, got {g_bool}"
-        )
-    if _is_intish(expected):
-        if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
-            text = f"{label}: expected integer{s}, got {describe(got)}"
+        if arr.shape != np.broadcast_shapes(arr.shape, lo.shape):
+            text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
             return Verdict(False, text, text)
-        diff = arr != exp
-        if not np.any(diff):
+        inside = (arr_b >= lo_b) & (arr_b <= hi_b)
+        if bool(np.all(inside)):
             return Verdict(True)
-        i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
-        e_i, g_i = (exp[i], arr[i]) if exp.ndim else (exp[()], arr[()])
-        kind = _diagnose(exp, arr, 0.0, 0.0)
-        where = (
-            ""
-            if exp.ndim == 0
-            else f" {int(np.sum(diff))} of {diff.size} wrong, first at {_where(i, diff.shape).strip()[3:]};"
-        )
-        message = (
-            f"{label}:{where} {kind or 'not the right integer' + s} (integers must match exactly)"
-        )
+        bad = np.argwhere(~inside)[0] if arr_b.ndim else ()
+        at = tuple(bad)
+        g = arr_b[at] if arr_b.ndim else arr_b[()]
+        low = float(lo_b[at] if lo_b.ndim else lo_b[()])
+        high = float(hi_b[at] if hi_b.ndim else hi_b[()])
+        where = _where(at, arr_b.shape)
+        if np.isnan(g):
+            return Verdict(False, f"{label}: got NaN{where}", f"{label}: got NaN{where}")
         return Verdict(
             False,
-            message,
-            f"{label}{_where(i, diff.shape)}: expected {int(e_i)}, got {_fmt(float(g_i))}",
+            outside_band(label, where),
+            f"{label}: got {_fmt(float(g))}{where}, outside the accepted [{_fmt(low)}, {_fmt(high)}]",
         )
 
-    # floats / complex
-    if arr.dtype.kind == "c" and exp.dtype.kind != "c":
-        text = f"{label}: expected real numbers, got complex"
-        return Verdict(False, text, text)
-    e = exp.astype(complex if exp.dtype.kind == "c" else float)
-    g = arr.astype(e.dtype)
-    both_nan = np.isnan(e) & np.isnan(g)
-    with np.errstate(invalid="ignore", over="ignore"):
-        err = np.abs(g - e)
-        tol = atol + rtol * np.abs(e)
-        same_inf = np.isinf(e) & (g == e)
-        good = both_nan | same_inf | (err <= tol)
-    if bool(np.all(good)):
-        return Verdict(True)
-    bad = ~good
-    score = np.where(bad, np.nan_to_num(err - tol, nan=np.inf, posinf=np.inf), -np.inf)
-    i = np.unravel_index(int(np.argmax(score)), score.shape) if score.ndim else ()
-    ei = e[i] if e.ndim else e[()]
-    gi = g[i] if g.ndim else g[()]
-    a, b = _digits_apart(
-        ei if e.dtype.kind == "c" else ei.real, gi if g.dtype.kind == "c" else gi.real
-    )
-    detail = f"{label}{_where(i, e.shape)}: expected {a}, got {b} (largest error {_fmt(float(err[i] if err.ndim else err[()]))})"
-    tolerance = _tolerance_text(rtol, atol)
-    if np.any(np.isnan(g) & bad):
-        j = tuple(np.argwhere(np.isnan(g) & bad)[0]) if g.ndim else ()
-        return Verdict(
-            False, f"{label}: got NaN{_where(j, g.shape)} (a 0/0, or an empty mean?)", detail
+    def not_a_string(self, expected: str, got, label: str) -> Verdict:
+        message = super().not_a_string(expected, got, label).message
+        return Verdict(False, message, _string_detail(expected, got, label))
+
+    def string(self, expected: str, got: str, label: str) -> Verdict:
+        if got == expected:
+            return Verdict(True)
+        detail = _string_detail(expected, got, label)
+        if got.strip().casefold() == expected.strip().casefold():
+            return Verdict(False, f"{label}: differs only in upper/lower case or spaces", detail)
+        return Verdict(False, f"{label}: not the right string", detail)
+
+    def transposed(self, expected, arr: np.ndarray) -> bool:
+        exp = _numeric(expected)
+        return _close(exp.astype(float), arr.T.astype(float), max(self.rtol, 1e-7), self.atol)
+
+    def in_another_order(self, expected, items) -> bool:
+        return len(expected) > 1 and _is_permutation(self, expected, items)
+
+    def numbers(self, expected, exp: np.ndarray, arr: np.ndarray, label: str) -> Verdict:
+        rtol, atol = self.rtol, self.atol
+        if _is_boolish(expected):
+            diff = arr.astype(bool) != exp
+            if not np.any(diff):
+                return Verdict(True)
+            i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
+            g_bool = bool(arr[i]) if arr.ndim else bool(arr[()])
+            message = decisions_wrong(label, int(np.sum(diff)), diff.size, i, diff.shape)
+            return Verdict(
+                False,
+                message,
+                f"{label}{_where(i, diff.shape)}: expected {not g_bool}, got {g_bool}",
+            )
+        if _is_intish(expected):
+            diff = arr != exp
+            if not np.any(diff):
+                return Verdict(True)
+            i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
+            e_i, g_i = (exp[i], arr[i]) if exp.ndim else (exp[()], arr[()])
+            kind = _diagnose(exp, arr, 0.0, 0.0)
+            message = integers_wrong(label, int(np.sum(diff)), diff.size, i, diff.shape, kind)
+            return Verdict(
+                False,
+                message,
+                f"{label}{_where(i, diff.shape)}: expected {int(e_i)}, got {_fmt(float(g_i))}",
+            )
+        # floats / complex
+        e = exp.astype(complex if exp.dtype.kind == "c" else float)
+        g = arr.astype(e.dtype)
+        both_nan = np.isnan(e) & np.isnan(g)
+        with np.errstate(invalid="ignore", over="ignore"):
+            err = np.abs(g - e)
+            tol = atol + rtol * np.abs(e)
+            same_inf = np.isinf(e) & (g == e)
+            good = both_nan | same_inf | (err <= tol)
+        if bool(np.all(good)):
+            return Verdict(True)
+        bad = ~good
+        score = np.where(bad, np.nan_to_num(err - tol, nan=np.inf, posinf=np.inf), -np.inf)
+        i = np.unravel_index(int(np.argmax(score)), score.shape) if score.ndim else ()
+        ei = e[i] if e.ndim else e[()]
+        gi = g[i] if g.ndim else g[()]
+        a, b = _digits_apart(
+            ei if e.dtype.kind == "c" else ei.real, gi if g.dtype.kind == "c" else gi.real
         )
-    if np.any(np.isinf(g) & bad):
-        j = tuple(np.argwhere(np.isinf(g) & bad)[0]) if g.ndim else ()
-        return Verdict(False, f"{label}: got inf{_where(j, g.shape)} (a division by zero?)", detail)
-    count = (
-        f"{int(np.sum(bad))} of {bad.size} elements wrong, the worst at {_where(i, e.shape).strip()[3:]}; "
-        if bad.size > 1
-        else ""
-    )
-    kind = _diagnose(e, g, rtol, atol)
-    if not kind and bad.size > 1 and 0 < int(np.sum(bad)) < bad.size:
-        sub = _diagnose(e[bad], g[bad], rtol, atol)
-        kind = f"on the wrong elements {sub}" if sub else ""
-    kind = kind or "not within the tolerance"
-    return Verdict(False, f"{label}: {count}{kind}; {tolerance}", detail)
+        detail = f"{label}{_where(i, e.shape)}: expected {a}, got {b} (largest error {_fmt(float(err[i] if err.ndim else err[()]))})"
+        unfinished = not_finite(label, g, bad)
+        if unfinished:
+            return Verdict(False, unfinished, detail)
+        kind = _diagnose(e, g, rtol, atol)
+        if not kind and bad.size > 1 and 0 < int(np.sum(bad)) < bad.size:
+            sub = _diagnose(e[bad], g[bad], rtol, atol)
+            kind = f"on the wrong elements {sub}" if sub else ""
+        message = numbers_wrong(
+            label, int(np.sum(bad)), bad.size, "worst", i, e.shape, kind, rtol, atol
+        )
+        return Verdict(False, message, detail)
+
+
+def _string_detail(expected: str, got, label: str) -> str:
+    return f"{label}: expected {expected!r}, got {got!r}"[:300]
 
 
 def _match_mistake(mistakes, got, rtol, atol) -> str | None:
@@ -437,7 +646,8 @@ def compare(
     element-wise (NaN only matches NaN). Bools and ints: exact. Strings and None: exact.
     Tuples/lists: same length (either container type), element by element; items of named
     tuples are named by their fields. Dicts: same keys. :class:`Band`: every element of
-    ``got`` inside ``[lo, hi]``.
+    ``got`` inside ``[lo, hi]``. The structure is walked by :class:`StructuralWalk`, which
+    the sealed self-check shares.
 
     The verdict's ``message`` never contains an expected value: it says what is wrong in kind
     (type, shape or length, NaN, the sign, a constant factor, transposed, another order, off
@@ -451,7 +661,7 @@ def compare(
     >>> compare(2.0, 4.0).message
     'value: too large by a factor ≈ 2.0; tolerance |got - expected| <= atol 1e-09 + rtol 1e-07·|expected|'
     """
-    verdict = _compare(expected, got, rtol, atol, path)
+    verdict = _Clear(rtol, atol).walk(expected, got, path)
     if verdict.ok:
         return verdict
     named = _match_mistake(mistakes, got, rtol, atol) if mistakes else None
@@ -459,94 +669,7 @@ def compare(
     return Verdict(False, message, verdict.detail if reveal else verdict.message)
 
 
-def _compare(expected: Any, got: Any, rtol: float, atol: float, path: str) -> Verdict:
-    label = _label(path)
-    if isinstance(expected, Band):
-        arr = _numeric(got)
-        if arr is None or arr.dtype.kind == "c":
-            text = f"{label}: expected a real number, got {describe(got)}"
-            return Verdict(False, text, text)
-        lo, hi = np.asarray(expected.lo, float), np.asarray(expected.hi, float)
-        try:
-            arr_b, lo_b, hi_b = np.broadcast_arrays(arr.astype(float), lo, hi)
-        except ValueError:
-            text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
-            return Verdict(False, text, text)
-        if arr.shape != np.broadcast_shapes(arr.shape, lo.shape):
-            text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
-            return Verdict(False, text, text)
-        inside = (arr_b >= lo_b) & (arr_b <= hi_b)
-        if bool(np.all(inside)):
-            return Verdict(True)
-        bad = np.argwhere(~inside)[0] if arr_b.ndim else ()
-        at = tuple(bad)
-        g = arr_b[at] if arr_b.ndim else arr_b[()]
-        low = float(lo_b[at] if lo_b.ndim else lo_b[()])
-        high = float(hi_b[at] if hi_b.ndim else hi_b[()])
-        where = _where(at, arr_b.shape)
-        if np.isnan(g):
-            return Verdict(False, f"{label}: got NaN{where}", f"{label}: got NaN{where}")
-        return Verdict(
-            False,
-            f"{label}: outside the accepted band{where} (the band allows for the Monte Carlo "
-            "spread of a right answer: the method or its parameters differ)",
-            f"{label}: got {_fmt(float(g))}{where}, outside the accepted [{_fmt(low)}, {_fmt(high)}]",
-        )
-    if expected is None:
-        text = "" if got is None else f"{label}: expected None, got {describe(got)}"
-        return Verdict(got is None, text, text)
-    if isinstance(expected, str):
-        if got == expected:
-            return Verdict(True)
-        detail = f"{label}: expected {expected!r}, got {got!r}"[:300]
-        if not isinstance(got, str):
-            return Verdict(False, f"{label}: expected a string, got {describe(got)}", detail)
-        if got.strip().casefold() == expected.strip().casefold():
-            return Verdict(False, f"{label}: differs only in upper/lower case or spaces", detail)
-        return Verdict(False, f"{label}: not the right string", detail)
-    if isinstance(expected, (tuple, list)):
-        items = sequence_items(expected, got)
-        if items is None:
-            text = f"{label}: expected {sequence_text(expected)}, got {describe(got)}"
-            return Verdict(False, text, text)
-        got = items
-        if len(got) != len(expected):
-            return length_mismatch(label, len(expected), len(got))
-        first = None
-        for k, (e, g) in enumerate(zip(expected, got)):
-            v = _compare(e, g, rtol, atol, _item_path(path, expected, got, k))
-            if not v.ok:
-                first = v
-                break
-        if first is None:
-            return Verdict(True)
-        if len(expected) > 1 and _is_permutation(expected, got, rtol, atol):
-            return Verdict(False, f"{label}: the right items in another order", first.detail)
-        return first
-    if isinstance(expected, dict):
-        if not isinstance(got, dict):
-            text = f"{label}: expected a dict with keys {sorted(expected)}, got {describe(got)}"
-            return Verdict(False, text, text)
-        if set(got) != set(expected):
-            text = f"{label}: expected keys {sorted(expected)}, got {sorted(map(str, got))[:10]}"
-            return Verdict(False, text, text)
-        for k in sorted(expected):
-            v = _compare(expected[k], got[k], rtol, atol, _key_path(path, k))
-            if not v.ok:
-                return v
-        return Verdict(True)
-
-    exp = _numeric(expected)
-    if exp is None:
-        raise TypeError(f"cannot compare against expected value of type {type(expected).__name__}")
-    arr = _numeric(got)
-    if arr is None:
-        text = f"{label}: expected {describe(expected)}, got {describe(got)}"
-        return Verdict(False, text, text)
-    return _compare_numbers(exp, arr, expected, got, rtol, atol, label)
-
-
-def _is_permutation(expected, got, rtol, atol) -> bool:
+def _is_permutation(walk: _Clear, expected, got) -> bool:
     """Every item of ``got`` matches a distinct item of ``expected`` (small sequences only)."""
     if len(expected) > 50:
         return False
@@ -554,7 +677,7 @@ def _is_permutation(expected, got, rtol, atol) -> bool:
     for g in got:
         for j in left:
             try:
-                if _compare(expected[j], g, rtol, atol, "").ok:
+                if walk.walk(expected[j], g, "").ok:
                     left.remove(j)
                     break
             except TypeError:

@@ -72,6 +72,10 @@ release stays byte-for-byte reproducible.
 
 Diagnostics
 -----------
+The structure -- types, shapes, lengths, field names, dict keys, and every message about
+them -- is walked by :class:`course.grading.compare.StructuralWalk`, the same walk as
+grading's; only the leaves here compare hashes instead of numbers and strings.
+
 The automatic kind-of-wrong messages need no expected value: the self-check tries transforms
 of the STUDENT's value against the seal -- ``-s``, ``s.T``, ``s[::-1]``, a permutation
 (small arrays), ``s -+ 1`` for integers, ``s/f`` for a fixed list of factors
@@ -93,18 +97,18 @@ import numpy as np
 
 from course.grading.codec import Band
 from course.grading.compare import (
+    StructuralWalk,
     Verdict,
     _factor_text,
-    _item_path,
     _key_path,
     _label,
     _numeric,
-    _tolerance_text,
     _where,
-    describe,
-    length_mismatch,
-    sequence_items,
-    sequence_text,
+    decisions_wrong,
+    integers_wrong,
+    not_finite,
+    numbers_wrong,
+    outside_band,
 )
 
 __all__ = [
@@ -451,7 +455,7 @@ def _skeleton(node: dict):
     if "str" in node:
         return ""
     if "band" in node:
-        return np.zeros(node["band"]) if node["band"] else 0.0
+        return Band(np.zeros(node["band"]), np.zeros(node["band"]))
     if "seq" in node:
         items = [_skeleton(n) for n in node["seq"]]
         if node.get("fields"):
@@ -564,193 +568,111 @@ def _diagnose(node, g, ctx, where) -> str:
         return ""
 
 
-def _cmp_numbers(node: dict, got, ctx: _Ctx, where: str, label: str) -> Verdict:
-    expected = _skeleton(node)
-    arr = _numeric(got)
-    if arr is None:
-        text = f"{label}: expected {describe(expected)}, got {describe(got)}"
-        return Verdict(False, text, text)
-    shape, kind = tuple(node["shape"]), node["num"]
-    if arr.shape != shape:
-        hint = ""
-        size = math.prod(shape)
-        if arr.size == size and size > 0:
-            if (
-                len(shape) == 2
-                and arr.shape == shape[::-1]
-                and arr.dtype.kind != "c"
-                and _all_match(node, arr.T.astype(float), ctx, where)
+class _Sealed(StructuralWalk):
+    """The structural walk against a sealed value; the leaves compare hashes.
+
+    ``expected`` is a pair ``(node, where)``: a node of the sealed tree and its place, which
+    the salt of its hashes names."""
+
+    order_detail = False  # the self-check's record is its message: no expected value to show
+
+    def __init__(self, ctx: _Ctx):
+        self.ctx = ctx
+
+    def stand_in(self, expected):
+        return _skeleton(expected[0])
+
+    def item(self, expected, k: int):
+        node, where = expected
+        return node["seq"][k], f"{where}.{k}"
+
+    def value_at(self, expected, key):
+        node, where = expected
+        return node["dict"][key], _key_path(where, key)
+
+    def band(self, expected, arr: np.ndarray, label: str) -> Verdict:
+        node, where = expected
+        shape = tuple(node["band"])
+        if shape and arr.shape != shape:  # a scalar band holds every element of an array
+            text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
+            return Verdict(False, text, text)
+        for i, x in enumerate(arr.astype(float).ravel().tolist()):
+            j = i if shape else 0
+            at = _where(np.unravel_index(i, arr.shape) if arr.ndim else (), arr.shape)
+            if math.isnan(x):
+                text = f"{label}: got NaN{at}"
+                return Verdict(False, text, text)
+            h = node["step"][j]
+            inside = math.isfinite(x) and abs(x / h) < 2.0**62
+            if not inside or self.ctx.hash(f"{where}#{j}", f"k|{math.floor(x / h)}") not in set(
+                node["cells"][j]
             ):
-                hint = ": transposed, rows and columns are swapped"
-            else:
-                hint = " (the right number of elements: reshape, ravel or a missing [:, 0]?)"
-        elif len(shape) == arr.ndim == 1 and abs(arr.shape[0] - shape[0]) == 1:
-            hint = (
-                f": one element too {'many' if arr.shape[0] > shape[0] else 'few'}"
-                " (off by one in a range or slice?)"
-            )
-        detail = f"{label}: expected shape {shape}, got shape {tuple(arr.shape)}"
-        return Verdict(False, detail + hint, detail)
-    s = "s" if shape else ""
-    flat = arr.ravel().tolist()
-    if not ctx.explain:
-        if kind == "b" and (arr.dtype.kind not in "biu" or np.any((arr != 0) & (arr != 1))):
-            return Verdict(False)
-        if kind != "c" and arr.dtype.kind == "c":
-            return Verdict(False)
-        return Verdict(_all_match(node, arr, ctx, where))
-    if kind == "b":
-        if arr.dtype.kind not in "biu" or (
-            arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1))
-        ):
-            text = f"{label}: expected bool{s}, got {describe(got)}"
-            return Verdict(False, text, text)
-        bad = [i for i, x in enumerate(flat) if not _element_ok(node, i, bool(x), ctx, where)]
-        if not bad:
-            return Verdict(True)
-        if not shape:
-            message = f"{label}: the opposite of the right decision"
-        elif len(bad) == len(flat):
-            message = f"{label}: every decision is the opposite (a comparison the wrong way round?)"
-        else:
-            at = np.unravel_index(bad[0], shape)
-            message = f"{label}: {len(bad)} of {len(flat)} wrong, first at {_where(at, shape).strip()[3:]}"
-        return Verdict(False, message, message)
-    if kind == "i":
-        if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
-            text = f"{label}: expected integer{s}, got {describe(got)}"
-            return Verdict(False, text, text)
-        bad = [i for i, x in enumerate(flat) if not _element_ok(node, i, x, ctx, where)]
-        if not bad:
-            return Verdict(True)
-        at = np.unravel_index(bad[0], shape) if shape else ()
-        kind_text = _diagnose(node, arr, ctx, where)
-        place = (
-            ""
-            if not shape
-            else f" {len(bad)} of {len(flat)} wrong, first at {_where(at, shape).strip()[3:]};"
-        )
-        message = f"{label}:{place} {kind_text or 'not the right integer' + s} (integers must match exactly)"
-        return Verdict(False, message, message)
-    # floats / complex
-    if arr.dtype.kind == "c" and kind != "c":
-        text = f"{label}: expected real numbers, got complex"
-        return Verdict(False, text, text)
-    bad = [i for i, x in enumerate(flat) if not _element_ok(node, i, x, ctx, where)]
-    if not bad:
+                text = outside_band(label, at)
+                return Verdict(False, text, text)
         return Verdict(True)
-    g = arr.astype(complex if kind == "c" else float)
-    gflat = g.ravel()
-    nan = [i for i in bad if np.isnan(gflat[i])]
-    if nan:
-        at = np.unravel_index(nan[0], shape) if shape else ()
-        text = f"{label}: got NaN{_where(at, shape)} (a 0/0, or an empty mean?)"
-        return Verdict(False, text, text)
-    inf = [i for i in bad if np.isinf(gflat[i])]
-    if inf:
-        at = np.unravel_index(inf[0], shape) if shape else ()
-        text = f"{label}: got inf{_where(at, shape)} (a division by zero?)"
-        return Verdict(False, text, text)
-    at = np.unravel_index(bad[0], shape) if shape else ()
-    count = (
-        f"{len(bad)} of {len(flat)} elements wrong, the {'worst' if len(bad) == 1 else 'first'}"
-        f" at {_where(at, shape).strip()[3:]}; "
-        if len(flat) > 1
-        else ""
-    )
-    kind_text = _diagnose(node, g, ctx, where) or "not within the tolerance"
-    message = f"{label}: {count}{kind_text}; {_tolerance_text(ctx.rtol, ctx.atol)}"
-    return Verdict(False, message, message)
 
-
-def _cmp_band(node: dict, got, ctx: _Ctx, where: str, label: str) -> Verdict:
-    arr = _numeric(got)
-    if arr is None or arr.dtype.kind == "c":
-        text = f"{label}: expected a real number, got {describe(got)}"
-        return Verdict(False, text, text)
-    shape = tuple(node["band"])
-    if shape and arr.shape != shape:  # a scalar band holds every element of an array
-        text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
-        return Verdict(False, text, text)
-    flat = arr.astype(float).ravel().tolist()
-    for i, x in enumerate(flat):
-        j = i if shape else 0
-        at = np.unravel_index(i, arr.shape) if arr.ndim else ()
-        if math.isnan(x):
-            text = f"{label}: got NaN{_where(at, arr.shape)}"
-            return Verdict(False, text, text)
-        h = node["step"][j]
-        inside = math.isfinite(x) and abs(x / h) < 2.0**62
-        if not inside or ctx.hash(f"{where}#{j}", f"k|{math.floor(x / h)}") not in set(
-            node["cells"][j]
-        ):
-            text = (
-                f"{label}: outside the accepted band{_where(at, arr.shape)} (the band allows for "
-                "the Monte Carlo spread of a right answer: the method or its parameters differ)"
-            )
-            return Verdict(False, text, text)
-    return Verdict(True)
-
-
-def _cmp(node: dict, got, ctx: _Ctx, where: str, path: str) -> Verdict:
-    label = _label(path)
-    if "band" in node:
-        return _cmp_band(node, got, ctx, where, label)
-    if "none" in node:
-        text = "" if got is None else f"{label}: expected None, got {describe(got)}"
-        return Verdict(got is None, text, text)
-    if "str" in node:
-        if not isinstance(got, str):
-            text = f"{label}: expected a string, got {describe(got)}"
-            return Verdict(False, text, text)
-        if ctx.hash(where, f"s|{got}") == node["str"]:
+    def string(self, expected, got: str, label: str) -> Verdict:
+        node, where = expected
+        if self.ctx.hash(where, f"s|{got}") == node["str"]:
             return Verdict(True)
-        if not ctx.explain:
+        if not self.ctx.explain:
             return Verdict(False)
         variants = dict.fromkeys(
             v(got.strip()) for v in (str, str.lower, str.upper, str.title, str.capitalize)
         )
-        if any(ctx.hash(where, f"s|{v}") == node["str"] for v in variants if v != got):
+        if any(self.ctx.hash(where, f"s|{v}") == node["str"] for v in variants if v != got):
             text = f"{label}: differs only in upper/lower case or spaces"
         else:
             text = f"{label}: not the right string"
         return Verdict(False, text, text)
-    if "seq" in node:
-        items = node["seq"]
-        expected = _skeleton(node)
-        answered = sequence_items(expected, got)
-        if answered is None:
-            text = f"{label}: expected {sequence_text(expected)}, got {describe(got)}"
-            return Verdict(False, text, text)
-        got = answered
-        if len(got) != len(items):
-            return length_mismatch(label, len(items), len(got))
-        for k, (n, g) in enumerate(zip(items, got)):
-            v = _cmp(n, g, ctx, f"{where}.{k}", _item_path(path, expected, got, k))
-            if not v.ok:
-                if (
-                    ctx.explain
-                    and 1 < len(items) <= 4
-                    and _is_item_permutation(items, got, ctx, where)
-                ):
-                    text = f"{label}: the right items in another order"
-                    return Verdict(False, text, text)
-                return v
-        return Verdict(True)
-    if "dict" in node:
-        keys = node["dict"]
-        if not isinstance(got, dict):
-            text = f"{label}: expected a dict with keys {sorted(keys)}, got {describe(got)}"
-            return Verdict(False, text, text)
-        if set(got) != set(keys):
-            text = f"{label}: expected keys {sorted(keys)}, got {sorted(map(str, got))[:10]}"
-            return Verdict(False, text, text)
-        for k in sorted(keys):
-            v = _cmp(keys[k], got[k], ctx, _key_path(where, k), _key_path(path, k))
-            if not v.ok:
-                return v
-        return Verdict(True)
-    return _cmp_numbers(node, got, ctx, where, label)
+
+    def transposed(self, expected, arr: np.ndarray) -> bool:
+        node, where = expected
+        return arr.dtype.kind != "c" and _all_match(node, arr.T.astype(float), self.ctx, where)
+
+    def in_another_order(self, expected, items) -> bool:
+        node, where = expected
+        return (
+            self.ctx.explain
+            and 1 < len(node["seq"]) <= 4
+            and _is_item_permutation(node["seq"], items, self.ctx, where)
+        )
+
+    def numbers(self, expected, exp: np.ndarray, arr: np.ndarray, label: str) -> Verdict:
+        node, where = expected
+        ctx = self.ctx
+        if not ctx.explain:
+            return Verdict(_all_match(node, arr, ctx, where))
+        shape, kind = tuple(node["shape"]), node["num"]
+        flat = arr.ravel().tolist()
+        if kind == "b":
+            flat = [bool(x) for x in flat]
+        bad = [i for i, x in enumerate(flat) if not _element_ok(node, i, x, ctx, where)]
+        if not bad:
+            return Verdict(True)
+        first = np.unravel_index(bad[0], shape) if shape else ()
+        if kind == "b":
+            message = decisions_wrong(label, len(bad), len(flat), first, shape)
+        elif kind == "i":
+            message = integers_wrong(
+                label, len(bad), len(flat), first, shape, _diagnose(node, arr, ctx, where)
+            )
+        else:
+            g = arr.astype(complex if kind == "c" else float)
+            wrong = np.zeros(g.size, dtype=bool)
+            wrong[bad] = True
+            message = not_finite(label, g, wrong.reshape(g.shape)) or numbers_wrong(
+                label,
+                len(bad),
+                len(flat),
+                "worst" if len(bad) == 1 else "first",  # the seal cannot tell the worst
+                first,
+                shape,
+                _diagnose(node, g, ctx, where),
+                ctx.rtol,
+                ctx.atol,
+            )
+        return Verdict(False, message, message)
 
 
 def _is_item_permutation(items, got, ctx, where) -> bool:
@@ -770,7 +692,7 @@ def _is_item_permutation(items, got, ctx, where) -> bool:
 
 def _quiet(node, got, ctx, where) -> bool:
     try:
-        return _cmp(node, got, ctx.quiet(), where, "").ok
+        return _Sealed(ctx.quiet()).walk((node, where), got).ok
     except Exception:
         return False
 
@@ -789,7 +711,7 @@ def sealed_compare(sealed: dict, got: Any, path: str = "", mistakes=()) -> Verdi
     no expected value: the self-check has none.
     """
     node, ctx = _open(sealed)
-    verdict = _cmp(node, got, ctx, "", path)
+    verdict = _Sealed(ctx).walk((node, ""), got, path)
     if verdict.ok:
         return verdict
     for message, wrong in mistakes:
