@@ -2,9 +2,10 @@
 
 Used by the grader (in the trusted parent, against the true references). The student's
 self-check compares against SEALED expected values with the same messages, see
-:mod:`course.grading.seal`: both walk the structure with :class:`StructuralWalk` (types,
-shapes, lengths, keys and what is said of them) and differ only in their leaves. Never
-compares printed text.
+:mod:`course.grading.seal`, or, where the student's copy holds no expected value, checks only
+its type and shape (:func:`check_signature`): all three walk the structure with
+:class:`StructuralWalk` (types, shapes, lengths, keys and what is said of them) and differ only
+in their leaves. Never compares printed text.
 """
 
 from __future__ import annotations
@@ -377,7 +378,8 @@ class StructuralWalk:
     transposed matrix or another order of the items would match, and their messages. Used by
     :func:`compare` (the expected value in the clear) and by
     :func:`course.grading.seal.sealed_compare` (sealed: there the expected value is a node of
-    the sealed tree, and :meth:`stand_in` gives a value of its type and shape).
+    the sealed tree, and :meth:`stand_in` gives a value of its type and shape), and by
+    :func:`check_signature` (there it is a :func:`signature`, which holds no value).
     """
 
     #: the record of "the right items in another order" keeps the first wrong item's detail
@@ -699,10 +701,13 @@ def signature(value: Any) -> Any:
         # a list of names (a diagnosis): its length is part of the answer, not of its type
         return {"names": True}
     if isinstance(value, (tuple, list)):
+        out: dict[str, Any] = {"sequence": [signature(v) for v in value]}
         fields = getattr(type(value), "_fields", None)
         if isinstance(fields, tuple) and len(fields) == len(value):
-            return {"sequence": [signature(v) for v in value], "fields": list(fields)}
-        return {"sequence": [signature(v) for v in value]}
+            out["fields"] = list(fields)
+        elif isinstance(value, list):
+            out["type"] = "list"  # so that a wrong answer is told "a list", as at grading
+        return out
     if isinstance(value, dict):
         return {"dict": {str(k): signature(v) for k, v in value.items()}}
     arr = _numeric(value)
@@ -712,77 +717,102 @@ def signature(value: Any) -> Any:
     return {"kind": kind, "shape": list(arr.shape)}
 
 
-def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
-    """Whether ``got`` has the type and shape of ``sig`` (and is finite where numeric)."""
-    label = path or "value"
+def _signature_stand_in(sig: dict):
+    """A value of the type, shape and field names ``sig`` records (zeros), for the walk."""
     if "band" in sig:
-        sig = {"kind": "float", "shape": sig["band"]}
+        zeros = np.zeros(sig["band"])
+        return Band(zeros, zeros)
     if "none" in sig:
-        return Verdict(
-            got is None, "" if got is None else f"{label}: expected None, got {describe(got)}"
-        )
+        return None
     if "str" in sig:
-        return Verdict(
-            isinstance(got, str),
-            "" if isinstance(got, str) else f"{label}: expected a string, got {describe(got)}",
-        )
+        return ""
     if "names" in sig:
-        ok = isinstance(got, (tuple, list)) and all(isinstance(v, str) for v in got)
-        return Verdict(
-            ok, "" if ok else f"{label}: expected a list of strings, got {describe(got)}"
-        )
+        return []  # never walked (see _Signature.walk): its length is not known
     if "sequence" in sig:
-        items = sig["sequence"]
-        if (
-            _is_number_vector(got)
-            and items
-            and all(s.get("kind") in ("int", "float") and s.get("shape") == [] for s in items)
-        ):
-            got = list(got)  # a 1-D array answers a sequence of plain numbers
-        if not isinstance(got, (tuple, list)) or len(got) != len(items):
-            wanted = (
-                f"a tuple ({', '.join(sig['fields'])})"
-                if sig.get("fields")
-                else f"a sequence of length {len(items)}"
-            )
-            return Verdict(False, f"{label}: expected {wanted}, got {describe(got)}")
-        fields = sig.get("fields") or getattr(type(got), "_fields", None)
-        for i, (s, g) in enumerate(zip(items, got)):
-            if isinstance(fields, (list, tuple)) and len(fields) == len(items):
-                name = f"{path}.{fields[i]}" if path else str(fields[i])
-            else:
-                name = f"{path}[{i}]" if path else f"item [{i}]"
-            v = check_signature(s, g, name)
-            if not v.ok:
-                return v
-        return Verdict(True)
+        items = [_signature_stand_in(s) for s in sig["sequence"]]
+        if sig.get("fields"):
+            from collections import namedtuple
+
+            return namedtuple("Result", sig["fields"])(*items)
+        return items if sig.get("type") == "list" else tuple(items)
     if "dict" in sig:
-        keys = sig["dict"]
-        if not isinstance(got, dict) or set(got) != set(keys):
-            return Verdict(
-                False, f"{label}: expected a dict with keys {sorted(keys)}, got {describe(got)}"
-            )
-        for k in sorted(keys):
-            v = check_signature(keys[k], got[k], _key_path(path, k))
-            if not v.ok:
-                return v
+        return {k: _signature_stand_in(s) for k, s in sig["dict"].items()}
+    if not sig["shape"]:
+        return {"bool": False, "int": 0, "float": 0.0, "complex": 0j}[sig["kind"]]
+    dtype = {"bool": bool, "int": np.int64, "float": float, "complex": complex}[sig["kind"]]
+    return np.zeros(sig["shape"], dtype=dtype)
+
+
+class _Signature(StructuralWalk):
+    """The structural walk against a signature: any value of the right kind and shape is
+    right, except NaN or inf (a signature holds no value, so it can tell no other mistake)."""
+
+    def stand_in(self, expected):
+        return _signature_stand_in(expected)
+
+    def item(self, expected, k: int):
+        return expected["sequence"][k]
+
+    def value_at(self, expected, key):
+        return expected["dict"][key]
+
+    def walk(self, expected, got, path: str = "") -> Verdict:
+        if "names" not in expected:
+            return super().walk(expected, got, path)
+        # a list of names of any length: the length of a diagnosis is part of the answer
+        if not isinstance(got, (tuple, list)):
+            text = f"{_label(path)}: expected a list of strings, got {describe(got)}"
+            return Verdict(False, text, text)
+        for k, name in enumerate(got):
+            if not isinstance(name, str):
+                return self.not_a_string(expected, name, _item_path(path, got, got, k))
         return Verdict(True)
-    arr = _numeric(got)
-    shape = tuple(sig["shape"])
-    kind = sig["kind"]
-    noun = "a number" if not shape else f"an array of shape {shape}"
-    if arr is None:
-        return Verdict(False, f"{label}: expected {noun}, got {describe(got)}")
-    if arr.shape != shape:
-        return Verdict(False, f"{label}: expected shape {shape}, got shape {tuple(arr.shape)}")
-    if kind == "bool" and arr.dtype.kind != "b":
-        return Verdict(False, f"{label}: expected bool{'s' if shape else ''}, got {describe(got)}")
-    if kind in ("float", "int") and arr.dtype.kind == "c":
-        return Verdict(False, f"{label}: expected real numbers, got complex")
-    if kind == "int" and arr.dtype.kind == "f" and not np.all(np.mod(arr, 1) == 0):
-        return Verdict(
-            False, f"{label}: expected integer{'s' if shape else ''}, got {describe(got)}"
-        )
-    if arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
-        return Verdict(False, f"{label}: contains NaN or inf")
-    return Verdict(True)
+
+    def band(self, expected, arr: np.ndarray, label: str) -> Verdict:
+        shape = tuple(expected["band"])
+        if shape and arr.shape != shape:  # a scalar band holds every element of an array
+            text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
+            return Verdict(False, text, text)
+        g = arr.astype(float)
+        bad = ~np.isfinite(g)
+        if not np.any(bad):
+            return Verdict(True)
+        first = tuple(np.argwhere(bad)[0]) if g.ndim else ()
+        where = _where(first, g.shape)
+        # as at grading: NaN is told as such, inf is outside any band
+        text = f"{label}: got NaN{where}" if np.isnan(g[first]) else outside_band(label, where)
+        return Verdict(False, text, text)
+
+    def string(self, expected, got: str, label: str) -> Verdict:
+        return Verdict(True)
+
+    def numbers(self, expected, exp: np.ndarray, arr: np.ndarray, label: str) -> Verdict:
+        if arr.dtype.kind not in "fc":
+            return Verdict(True)  # bools and integers are finite (the walk checked the kind)
+        if expected["kind"] == "int" and not np.all(arr == np.floor(arr)):
+            got = arr.item() if arr.ndim == 0 else arr
+            text = f"{label}: expected integer{'s' if arr.ndim else ''}, got {describe(got)}"
+            return Verdict(False, text, text)
+        text = not_finite(label, arr, ~np.isfinite(arr))
+        return Verdict(not text, text, text)
+
+    def transposed(self, expected, arr: np.ndarray) -> bool:
+        return False  # no value to tell
+
+    def in_another_order(self, expected, items) -> bool:
+        return False
+
+
+def check_signature(sig: Any, got: Any, path: str = "") -> Verdict:
+    """Whether ``got`` has the type and shape of ``sig`` (and is finite where numeric).
+
+    ``sig`` comes from :func:`signature`. The structure is walked by :class:`StructuralWalk`,
+    so a structural mistake reads as in :func:`compare`; the leaves accept any number of the
+    right kind and shape except NaN or inf, and any string.
+
+    Examples
+    --------
+    >>> check_signature(signature((1.5, 2.5)), (1.5, 2.5, 3.5)).message
+    'value: expected length 2, got length 3: one item too many'
+    """
+    return _Signature().walk(sig, got, path)
