@@ -1,11 +1,14 @@
-"""One structural walk for both comparisons (course.grading.compare.StructuralWalk).
+"""One structural walk for the three checks (course.grading.compare.StructuralWalk).
 
 Grading compares with the expected value in the clear (:func:`compare`), the student's
-self-check with a sealed one (:func:`sealed_compare`). Both walk the structure the same way:
-here the same structural mismatch must give the same message through both -- a fixed list of
-cases, and a hypothesis property that breaks the structure of a random nested value at a
-random place -- so that the two cannot drift apart. The messages that differ on purpose
-(the seal has no near miss and cannot tell the worst element) are pinned as different.
+self-check with a sealed one (:func:`sealed_compare`) or, where the student's copy holds no
+expected value, with its type and shape only (:func:`check_signature`). All three walk the
+structure the same way: here the same structural mismatch must give the same message through
+each -- a fixed list of cases, and a hypothesis property that breaks the structure of a random
+nested value at a random place -- so that they cannot drift apart. The messages that differ on
+purpose (the seal has no near miss and cannot tell the worst element; a signature holds no
+value, so it sees no mistake of value and no transposed matrix, and not the length of a list
+of names) are pinned as different.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from course.grading.codec import Band
-from course.grading.compare import compare
+from course.grading.compare import check_signature, compare, signature
 from course.grading.seal import make_salt, seal, sealed_compare
 
 RTOL, ATOL = 1e-8, 1e-10
@@ -36,6 +39,26 @@ def both(expected, got, path="r", mistakes=()):
         mistakes=[(m, seal(w, RTOL, ATOL, SALT + m, iterations=10)) for m, w in mistakes],
     )
     return clear, sealed
+
+
+def by_signature(expected, got, path="r"):
+    """The verdict of the self-check of a question whose expected value is not shipped."""
+    return check_signature(signature(expected), got, path)
+
+
+#: mistakes of value: a signature (type and shape, no value) cannot see them
+VALUE_MISTAKES = {
+    "differs only in upper/lower case or spaces",
+    "the right items in another order",
+    "transposed, rows and columns are swapped",
+    "every decision",
+    "1 of 3 wrong, first at",
+    "the opposite of the right decision",
+    "off by one: every element is one too large",
+    "1 of 3 wrong, first at [2]; not the right",
+    "the sign is flipped",
+    "r[1]: outside the accepted band",
+}
 
 
 MATRIX = np.array([[1.5, 2.0, 3.5], [3.0, 4.5, 6.25]])
@@ -87,6 +110,40 @@ def test_a_mismatch_reads_the_same_in_grading_and_in_the_self_check(expected, go
     assert not clear.ok and not sealed.ok
     assert words in clear.message, clear.message
     assert sealed.message == clear.message
+    if words not in VALUE_MISTAKES:
+        assert by_signature(expected, got).message == clear.message
+
+
+@pytest.mark.parametrize(
+    "expected, got",
+    [
+        (["F1", "F3"], ["F1", 3]),
+        ({"d": ["F1"], "x": 1.0}, {"d": [None], "x": 1.0}),
+        ([1.5, 2.75], 1.5),
+        ([[1.5, 2.0], 3], [[1.5], 3]),
+        ((np.arange(2), 1), (np.arange(2.0), "1")),
+        ((np.arange(2), 1), (np.arange(2.0), 1j)),
+    ],
+)
+def test_a_signature_reads_a_mismatch_as_grading_does(expected, got):
+    """More structures through all three: lists of names, plain lists, integers."""
+    clear, sealed = both(expected, got)
+    sig = by_signature(expected, got)
+    assert not clear.ok and not sig.ok
+    assert sig.message == sealed.message == clear.message
+
+
+def test_a_signature_accepts_what_grading_accepts_of_its_kind():
+    """check_signature refused 0/1 integers for a decision, an array for a tuple of Monte
+    Carlo rates and an array of rates for one rate, which grading's walk accepts."""
+    for expected, right in [
+        (True, 1),
+        (np.array([True, False]), np.array([1, 0])),
+        ((Band(0.04, 0.06), Band(0.30, 0.35)), np.array([0.05, 0.32])),
+        (Band(0.04, 0.06), np.array([0.05, 0.05])),
+    ]:
+        assert all(v.ok for v in both(expected, right))
+        assert by_signature(expected, right).ok
 
 
 def test_the_messages_that_differ_on_purpose():
@@ -98,6 +155,20 @@ def test_the_messages_that_differ_on_purpose():
     clear, sealed = both(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.5, 3.9]))
     assert "2 of 3 elements wrong, the worst at [2]" in clear.message
     assert "2 of 3 elements wrong, the first at [1]" in sealed.message
+    # a signature holds no value: a transposed matrix is a reshape to it
+    clear, sealed = both(MATRIX, MATRIX.T)
+    assert "transposed" in clear.message and sealed.message == clear.message
+    assert by_signature(MATRIX, MATRIX.T).message == (
+        "r: expected shape (2, 3), got shape (3, 2) (the right number of elements: reshape, "
+        "ravel or a missing [:, 0]?)"
+    )
+    # nor the length of a list of names (the length of a diagnosis is part of the answer)
+    assert by_signature(["F1", "F3"], ["F2"]).ok
+    assert by_signature(["F1", "F3"], "F1").message == "r: expected a list of strings, got a string"
+    assert "expected a list of length 2, got a string" in compare(["F1", "F3"], "F1").message
+    # a fraction where an integer is asked is not an integer at all, whatever the value
+    assert by_signature(3, 2.5).message == "r: expected integer, got a float"
+    assert by_signature(np.arange(3), [0, 1.5, 2]).message.startswith("r: expected integers")
 
 
 def test_a_string_answered_by_an_array_is_a_message_not_a_crash():
@@ -198,6 +269,11 @@ def _broken(value, how: int):
     return [str(value), None, complex(value, 1.0), np.array([value, value])][how % 4]
 
 
+def _names(node) -> bool:
+    """A list of names: its signature holds no length (see compare.signature)."""
+    return isinstance(node, (tuple, list)) and bool(node) and all(isinstance(v, str) for v in node)
+
+
 def _replace(value, at, new):
     if not at:
         return new
@@ -217,7 +293,18 @@ def test_a_broken_structure_reads_the_same_in_grading_and_in_the_self_check(valu
     node = value
     for k in at:
         node = node[k]
-    got = _replace(value, at, _broken(node, data.draw(st.integers(0, 3), label="how")))
+    broken = _broken(node, data.draw(st.integers(0, 3), label="how"))
+    got = _replace(value, at, broken)
     clear, sealed = both(value, got)
     assert not clear.ok and not sealed.ok, (clear, sealed)
     assert sealed.message == clear.message
+    assert by_signature(value, _right(value)).ok
+    sig = by_signature(value, got)
+    if _names(node):  # its signature holds no length: any list of strings is of its type
+        names = isinstance(broken, (tuple, list)) and all(isinstance(v, str) for v in broken)
+        assert sig.ok == names, sig
+        return
+    if isinstance(node, Band) and isinstance(broken, np.ndarray):
+        assert sig.ok  # an array of rates for one rate: outside the band, not a wrong kind
+        return
+    assert sig.message == clear.message
