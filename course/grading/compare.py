@@ -114,8 +114,8 @@ def sequence_items(expected, got):
     """``got`` as the items answering the sequence ``expected``, or None when it cannot.
 
     A tuple or list answers as itself. A 1-D real array answers a sequence of plain numbers
-    (or bands of one number, as :func:`check_signature` reads them): ``np.array([lo, hi])``
-    for ``(lower, upper)`` is a right answer written differently.
+    (or bands of one number, Monte Carlo rates): ``np.array([lo, hi])`` for ``(lower, upper)``
+    is a right answer written differently.
     """
     if isinstance(got, (tuple, list)):
         return got
