@@ -133,7 +133,6 @@ _COMPLEX_LOG_SIZE = 2000
 _PYTHON_TERMS = 24
 # Python numbers taken without numpy (bool, numpy scalars and the rest go through numpy).
 _PLAIN_NUMBERS = frozenset((float, int))
-_SEQUENCES = frozenset((list, tuple))
 # One point's trapezoid nodes are read from a table of u = j _GRID, 0 <= u <=
 # _GRID_SPAN (see _grid_nodes): the step is rounded down to a multiple of
 # _GRID_MULTIPLE grid spacings (at most 3% finer, so never less accurate).
@@ -286,20 +285,6 @@ def _short_columns(weights, dof, noncentrality):
     and every bad value, returns None and takes the numpy validation, which
     words the error.
     """
-    if _SEQUENCES.issuperset((type(weights), type(dof), type(noncentrality))):
-        # three lists or tuples (the common input): one pass over all the numbers
-        r = len(weights)
-        if r == 0 or r > _PYTHON_TERMS or len(dof) != r or len(noncentrality) != r:
-            return None
-        numbers = (*weights, *dof, *noncentrality)
-        if not _PLAIN_NUMBERS.issuperset(map(type, numbers)):
-            return None
-        try:
-            floats = list(map(float, numbers))
-        except OverflowError:  # an int beyond the doubles
-            return None
-        w, h, d = floats[:r], floats[r : 2 * r], floats[2 * r :]
-        return (w, h, d) if math.isfinite(sum(floats)) else None
     w = _short_column(weights)
     if not w:
         return None
