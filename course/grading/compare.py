@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from course.grading.codec import Band
+from course.grading.codec import Band, _named_type
 
 __all__ = ["Verdict", "binomial_band", "compare", "describe"]
 
@@ -731,9 +731,7 @@ def _signature_stand_in(sig: dict):
     if "sequence" in sig:
         items = [_signature_stand_in(s) for s in sig["sequence"]]
         if sig.get("fields"):
-            from collections import namedtuple
-
-            return namedtuple("Result", sig["fields"])(*items)
+            return _named_type(tuple(sig["fields"]))(*items)
         return items if sig.get("type") == "list" else tuple(items)
     if "dict" in sig:
         return {k: _signature_stand_in(s) for k, s in sig["dict"].items()}

@@ -95,7 +95,7 @@ from typing import Any
 
 import numpy as np
 
-from course.grading.codec import Band
+from course.grading.codec import Band, _named_type
 from course.grading.compare import (
     StructuralWalk,
     Verdict,
@@ -459,9 +459,7 @@ def _skeleton(node: dict):
     if "seq" in node:
         items = [_skeleton(n) for n in node["seq"]]
         if node.get("fields"):
-            import collections
-
-            return collections.namedtuple("Result", node["fields"])(*items)
+            return _named_type(tuple(node["fields"]))(*items)
         return items if node.get("type") == "list" else tuple(items)
     if "dict" in node:
         return {k: _skeleton(n) for k, n in node["dict"].items()}
