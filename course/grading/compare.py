@@ -366,6 +366,15 @@ def outside_band(label: str, where: str) -> str:
     )
 
 
+def band_shape_wrong(label: str, shape: tuple, arr: np.ndarray) -> Verdict | None:
+    """A band stored per cell needs an answer of its ``shape``; a band of one number (shape
+    ``()``) holds every element of an array. The refusal, or None when the shape is right."""
+    if shape and arr.shape != shape:
+        text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
+        return Verdict(False, text, text)
+    return None
+
+
 # -- the structural walk ---------------------------------------------------------------------
 class StructuralWalk:
     """``got`` against an expected value, walked in parallel: one place for the structure.
@@ -767,10 +776,9 @@ class _Signature(StructuralWalk):
         return Verdict(True)
 
     def band(self, expected, arr: np.ndarray, label: str) -> Verdict:
-        shape = tuple(expected["band"])
-        if shape and arr.shape != shape:  # a scalar band holds every element of an array
-            text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
-            return Verdict(False, text, text)
+        wrong_shape = band_shape_wrong(label, tuple(expected["band"]), arr)
+        if wrong_shape is not None:
+            return wrong_shape
         g = arr.astype(float)
         bad = ~np.isfinite(g)
         if not np.any(bad):

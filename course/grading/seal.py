@@ -104,6 +104,7 @@ from course.grading.compare import (
     _label,
     _numeric,
     _where,
+    band_shape_wrong,
     decisions_wrong,
     integers_wrong,
     not_finite,
@@ -591,9 +592,9 @@ class _Sealed(StructuralWalk):
     def band(self, expected, arr: np.ndarray, label: str) -> Verdict:
         node, where = expected
         shape = tuple(node["band"])
-        if shape and arr.shape != shape:  # a scalar band holds every element of an array
-            text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
-            return Verdict(False, text, text)
+        wrong_shape = band_shape_wrong(label, shape, arr)
+        if wrong_shape is not None:
+            return wrong_shape
         for i, x in enumerate(arr.astype(float).ravel().tolist()):
             j = i if shape else 0
             at = _where(np.unravel_index(i, arr.shape) if arr.ndim else (), arr.shape)
