@@ -264,13 +264,9 @@ def _validated(weights, dof, noncentrality, sigma=0.0):
         breaks = np.flatnonzero(np.diff(w) > _MERGE_RTOL * scale) + 1
         if breaks.size < w.size - 1:
             members = np.split(np.arange(w.size), breaks)
-            with np.errstate(over="ignore"):
-                merged = np.array([np.average(w[g], weights=h[g]) for g in members])
-            for i in np.flatnonzero(np.isinf(merged)):
-                # weights near the largest double (w h overflows): the mean from the first's offsets
-                g = members[i]
-                merged[i] = w[g[0]] + np.average(w[g] - w[g[0]], weights=h[g])
-            w = merged
+            # the mean of a group as its first weight plus the mean offset: w h would
+            # overflow for weights near the largest double
+            w = np.array([w[g[0]] + np.average(w[g] - w[g[0]], weights=h[g]) for g in members])
             h = np.array([h[g].sum() for g in members])
             d = np.array([d[g].sum() for g in members])
     return w, h, d, sigma
@@ -342,16 +338,11 @@ def _check_terms(smallest_dof, smallest_noncentrality):
 
 def _merge(group):
     """One term from chi-square terms with (nearly) equal weights."""
-    # (columns and C-level map: generator expressions cost more than the sums)
     ws, hs, ds = zip(*group)
     h = math.fsum(hs)
-    try:
-        w = math.fsum(map(operator.mul, ws, hs)) / h
-    except OverflowError:
-        w = math.inf
-    if math.isinf(w):
-        # weights near the largest double (w h overflows): the mean from the first's offsets
-        w = ws[0] + math.fsum([(v - ws[0]) * k for v, k in zip(ws, hs)]) / h
+    # the first weight plus the mean offset: w h would overflow near the largest double
+    first = ws[0]
+    w = first + math.fsum([(v - first) * k for v, k in zip(ws, hs)]) / h
     return w, h, math.fsum(ds)
 
 
