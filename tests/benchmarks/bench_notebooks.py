@@ -85,9 +85,8 @@ def _stamp(timing: dict, key: str) -> float | None:
     return datetime.fromisoformat(timing[key].replace("Z", "+00:00")).timestamp()
 
 
-def stalls(executed: Path, end: float) -> list[tuple[float, int]]:
+def stalls(nb: dict, end: float) -> list[tuple[float, int]]:
     """(seconds, cell index) of each time the runner sat idle after a cell had finished."""
-    nb = json.loads(executed.read_text())
     found, previous = [], None
     for i, cell in enumerate(nb["cells"]):
         timing = cell.get("metadata", {}).get("execution", {})
@@ -103,10 +102,10 @@ def stalls(executed: Path, end: float) -> list[tuple[float, int]]:
     return found
 
 
-def busy_seconds(executed: Path) -> float:
+def busy_seconds(nb: dict) -> float:
     """Seconds the kernel spent running the notebook's cells (busy to idle, summed)."""
     total = 0.0
-    for cell in json.loads(executed.read_text())["cells"]:
+    for cell in nb["cells"]:
         timing = cell.get("metadata", {}).get("execution", {})
         busy, idle = _stamp(timing, "iopub.status.busy"), _stamp(timing, "iopub.status.idle")
         if busy is not None and idle is not None:
@@ -114,17 +113,15 @@ def busy_seconds(executed: Path) -> float:
     return total
 
 
-def slowest_cells(executed: Path, k: int) -> list[tuple[float, int, str]]:
+def slowest_cells(nb: dict, k: int) -> list[tuple[float, int, str]]:
     """The ``k`` slowest code cells as (seconds, index, first line)."""
-    nb = json.loads(executed.read_text())
     cells = []
     for i, cell in enumerate(nb["cells"]):
         timing = cell.get("metadata", {}).get("execution", {})
-        if "iopub.execute_input" in timing and "shell.execute_reply" in timing:
-            t0 = datetime.fromisoformat(timing["iopub.execute_input"].replace("Z", "+00:00"))
-            t1 = datetime.fromisoformat(timing["shell.execute_reply"].replace("Z", "+00:00"))
+        t0, t1 = _stamp(timing, "iopub.execute_input"), _stamp(timing, "shell.execute_reply")
+        if t0 is not None and t1 is not None:
             first = "".join(cell["source"]).strip().splitlines()[0][:60]
-            cells.append(((t1 - t0).total_seconds(), i, first))
+            cells.append((t1 - t0, i, first))
     return sorted(cells, reverse=True)[:k]
 
 
@@ -177,15 +174,16 @@ def main() -> int:
                     print(f"FAIL {path.name:45s} {' '.join(tail)}")
                     missed.append(path.name)
                     continue
-                stalled = stalls(executed, end)
+                nb = json.loads(executed.read_text())
+                stalled = stalls(nb, end)
                 mark = "ok " if wall < TARGET_S and not stalled else "MISS"
                 print(
                     f"{mark} {path.name:45s} {wall:5.1f} s  ({wall / base:4.1f}x baseline; "
-                    f"cells {busy_seconds(executed):5.1f} s)"
+                    f"cells {busy_seconds(nb):5.1f} s)"
                 )
                 for sec, i in stalled:
                     print(f"        STALL after cell {i:3d}: runner idle {sec:5.1f} s")
-                for sec, i, first in slowest_cells(executed, args.cells):
+                for sec, i, first in slowest_cells(nb, args.cells):
                     print(f"        cell {i:3d} {sec:5.1f} s  {first}")
                 if wall >= TARGET_S or stalled:
                     missed.append(path.name)
