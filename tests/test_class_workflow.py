@@ -16,13 +16,13 @@ import pytest
 
 from course.cli import main as course_main
 from course.grading import Assignment
-from course.grading.checks import load_checks, load_data_module, student_rng
-from course.grading.driver import GradeOptions, Submission, grade
-from course.grading.identity import resolve_identities
-from course.grading.personal import PERSONAL_FILE, PersonalData, build_personal_data
-from course.grading.roster import RosterError, read_roster
-from course.grading.secret import Secret
-from course.grading.submit import make_submission
+from course.grading.authoring.checks import load_checks, load_data_module, student_rng
+from course.grading.authoring.personal import PERSONAL_FILE, PersonalData, build_personal_data
+from course.grading.authoring.secret import Secret
+from course.grading.batch.driver import GradeOptions, Submission, grade
+from course.grading.batch.identity import resolve_identities
+from course.grading.batch.roster import RosterError, read_roster
+from course.grading.student.submit import make_submission
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"

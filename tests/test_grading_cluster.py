@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from course.grading.driver import GradeOptions, grade
+from course.grading.batch.driver import GradeOptions, grade
 
 distributed = pytest.importorskip("distributed")
 

@@ -10,7 +10,7 @@ Modules
 vocabulary
     The shared words: cell roles, student IDs, protocol operations, statuses, ``checks.json``.
 checks
-    The authoring vocabulary of ``checks.py`` (:class:`~course.grading.checks.Checks`).
+    The authoring vocabulary of ``checks.py`` (:class:`~course.grading.authoring.checks.Checks`).
 items, marks
     Choice and short-answer questions; the short-answer marking file and its re-import.
 authoring
@@ -46,12 +46,12 @@ from importlib import import_module
 __all__ = ["Assignment", "Band", "Checks", "Mistake", "binomial_band", "student_rng"]
 
 _LAZY = {
-    "Assignment": "course.grading.selfcheck",
-    "Checks": "course.grading.checks",
-    "Mistake": "course.grading.checks",
+    "Assignment": "course.grading.student.selfcheck",
+    "Checks": "course.grading.authoring.checks",
+    "Mistake": "course.grading.authoring.checks",
     "Band": "course.grading.codec",
     "binomial_band": "course.grading.compare",
-    "student_rng": "course.grading.checks",
+    "student_rng": "course.grading.authoring.checks",
 }
 
 

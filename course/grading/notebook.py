@@ -120,7 +120,7 @@ def strip_markers(
                 if not allow_solution:
                     raise MarkerError(
                         f"{where}, line {n}: a SOLUTION region outside an answer cell; "
-                        "tag the cell as an answer (course.grading.authoring.answer_cell)"
+                        "tag the cell as an answer (course.grading.authoring.notebooks.answer_cell)"
                     )
                 indent = line[: len(line) - len(line.lstrip())]
                 state = ("solution", indent, n, [])
@@ -305,7 +305,7 @@ def points_cell_text(questions: dict) -> str:
 def make_release(solution_nb, name: str, questions: dict | None = None) -> Release:
     """Build the student release of a solution notebook (see the module docstring).
 
-    ``questions`` maps question id -> :class:`~course.grading.checks.Question`; when given, every
+    ``questions`` maps question id -> :class:`~course.grading.authoring.checks.Question`; when given, every
     question must have exactly one answer cell (and vice versa) and its variable or function
     must be defined there.
     """
@@ -387,7 +387,7 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
         if first_code and role != CellRole.SETUP:
             raise MarkerError(
                 f"{where}: the first code cell must be the setup cell with STUDENT_ID "
-                "(course.grading.authoring.setup_cell)"
+                "(course.grading.authoring.notebooks.setup_cell)"
             )
         first_code = False
         if role in (CellRole.ANSWER, CellRole.CHECK) and not question:
@@ -436,7 +436,7 @@ def make_release(solution_nb, name: str, questions: dict | None = None) -> Relea
                 raise MarkerError(
                     f"{where_nb}: the answer cell of {qid} must be a "
                     + (
-                        "markdown cell (a short answer; course.grading.authoring.short_answer_cell)"
+                        "markdown cell (a short answer; course.grading.authoring.notebooks.short_answer_cell)"
                         if q.kind == QuestionKind.SHORT_ANSWER
                         else "code cell"
                     )

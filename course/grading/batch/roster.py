@@ -24,7 +24,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.reports import csv_text
+from course.grading.batch.reports import csv_text
 from course.grading.vocabulary import STUDENT_ID_RULE, is_student_id
 
 __all__ = [

@@ -3,11 +3,11 @@
 Each submission runs in its OWN process (never the grader's), started in one of two ways:
 
 ``fork`` (default on Linux)
-    A warm *fork server* (:mod:`course.grading.forkserver`) imports numpy, scipy, matplotlib,
+    A warm *fork server* (:mod:`course.grading.sandbox.forkserver`) imports numpy, scipy, matplotlib,
     IPython and the whole course library once; each child is ``os.fork()``-ed from it and
     starts in milliseconds. The server never runs student code.
 ``spawn``
-    ``python -m course.grading.runner`` per submission: slower (every child imports the
+    ``python -m course.grading.sandbox.runner`` per submission: slower (every child imports the
     scientific stack), works wherever ``subprocess`` works.
 
 With bubblewrap, the fork server (or each spawned child) lives in namespaces of its own: a root
@@ -15,15 +15,15 @@ that holds only the Python installation, the course package and the children's t
 folders, no network, its own PID space. Each child then, before any student code, confines
 itself with Landlock (it may read Python and the course's data, write only its own temporary
 folder), switches to ``nobody`` when the grader is root, sets resource limits and installs a
-seccomp filter; see :mod:`course.grading.isolation` for what each layer enforces and the
-order in which :func:`~course.grading.isolation.detect` falls back.
+seccomp filter; see :mod:`course.grading.sandbox.isolation` for what each layer enforces and the
+order in which :func:`~course.grading.sandbox.isolation.detect` falls back.
 
 The parent enforces a wall-clock limit on every request and, on expiry, kills the child with
 SIGKILL through a pidfd (valid across PID namespaces). Fork server and children also ask the
 kernel to kill them when their parent dies, so an interrupted grader leaves nothing running.
 Requests and replies are JSON lines on two dedicated pipes (not stdout/stderr), each reply
 echoing a random nonce; numpy arrays travel as dtype/shape/base64, never pickle. A third pipe
-carries reports of forbidden library calls (:mod:`course.grading.tripwire`), read by the parent
+carries reports of forbidden library calls (:mod:`course.grading.sandbox.tripwire`), read by the parent
 as they happen. Hidden inputs are sent only after the student's cells ran, and references are
 computed and compared only in the parent.
 
@@ -48,8 +48,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.isolation import Isolation, detect
-from course.grading.tripwire import parse_events
+from course.grading.sandbox.isolation import Isolation, detect
+from course.grading.sandbox.tripwire import parse_events
 from course.grading.vocabulary import Op, ReplyStatus
 
 __all__ = [
@@ -62,7 +62,7 @@ __all__ = [
     "describe_exit",
 ]
 
-_PACKAGE_PARENT = str(Path(__file__).resolve().parents[2])
+_PACKAGE_PARENT = str(Path(__file__).resolve().parents[3])
 MAX_REPLY_BYTES = 64_000_000
 
 
@@ -331,9 +331,9 @@ class Sandbox:
         working directory are added. With bubblewrap or Landlock they are unreachable anyway
         (allow-lists); the audit hook names them in its error messages.
     forbid : sequence of str
-        Dotted names of forbidden library functions to instrument (:mod:`~course.grading.tripwire`).
+        Dotted names of forbidden library functions to instrument (:mod:`~course.grading.sandbox.tripwire`).
     isolation : Isolation, optional
-        The layers to use (default: :func:`~course.grading.isolation.detect`).
+        The layers to use (default: :func:`~course.grading.sandbox.isolation.detect`).
     """
 
     def __init__(
@@ -356,7 +356,7 @@ class Sandbox:
         self.mode = mode
         self.limits = limits or Limits()
         self.isolation = isolation if isolation is not None else detect()
-        from course.grading.runner import PRELOAD
+        from course.grading.sandbox.runner import PRELOAD
 
         self.preload = tuple(dict.fromkeys(PRELOAD + tuple(preload)))
         self.forbid = tuple(sorted(set(forbid)))
@@ -380,7 +380,7 @@ class Sandbox:
     # -- launching ------------------------------------------------------------------------
     def _config(self) -> dict:
         """What the fork server (or a spawned runner) needs before any student code."""
-        from course.grading.isolation.paths import DEVICES, landlock_paths
+        from course.grading.sandbox.isolation.paths import DEVICES, landlock_paths
 
         iso = self.isolation
         return {
@@ -399,8 +399,8 @@ class Sandbox:
     def _wrap(self, argv: list[str]) -> list[str]:
         if not self.isolation.bwrap:
             return argv
-        from course.grading.isolation.namespaces import bwrap_command
-        from course.grading.isolation.paths import mount_paths
+        from course.grading.sandbox.isolation.namespaces import bwrap_command
+        from course.grading.sandbox.isolation.paths import mount_paths
 
         read_only = mount_paths(self.protected)
         return bwrap_command(self.isolation.bwrap, read_only, [self._rundir], "/") + argv
@@ -411,7 +411,7 @@ class Sandbox:
         argv = [
             sys.executable,
             "-m",
-            "course.grading.forkserver",
+            "course.grading.sandbox.forkserver",
             str(child_sock.fileno()),
             json.dumps(self._config()),
         ]
@@ -491,7 +491,7 @@ class Sandbox:
                 argv = [
                     sys.executable,
                     "-m",
-                    "course.grading.runner",
+                    "course.grading.sandbox.runner",
                     str(req_r),
                     str(resp_w),
                     str(event_w),

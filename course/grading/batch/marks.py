@@ -12,7 +12,7 @@ an answer changed since the file was written refuses the import, line by line, a
 nothing. Accepted marks are kept in ``OUT/short_answer_marks.json`` (so a regrade keeps them,
 as long as the answer is the same: ``answer_id`` is a digest of its text) and merged into
 ``grades.csv``, ``results.jsonl`` and the feedback. Text cells are written spreadsheet-safe
-(:func:`course.grading.reports.csv_text`).
+(:func:`course.grading.batch.reports.csv_text`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import json
 import math
 from pathlib import Path
 
-from course.grading.reports import csv_text
+from course.grading.batch.reports import csv_text
 from course.grading.vocabulary import GradeStatus, QuestionKind
 
 __all__ = [

@@ -2,7 +2,7 @@
 
 :class:`AssignmentGrader` holds what does not depend on the student (the checks, the release,
 references computed once, the sandbox); :class:`StudentSession` runs one student's plan in a
-sandboxed child (:mod:`course.grading.sandbox`), asks the child for values and function
+sandboxed child (:mod:`course.grading.sandbox.parent`), asks the child for values and function
 results and compares them with references computed here, in the parent. A timeout or crash
 costs only the question it happened in: the child is killed, a fresh one re-runs the cells
 (skipping the bad one) and grading continues.
@@ -16,6 +16,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from course.grading.authoring.release import checks_digest, load_assignment
+from course.grading.authoring.secret import public_key_id
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
@@ -25,9 +27,7 @@ from course.grading.notebook import (
     forbidden_mentions,
     read_submission,
 )
-from course.grading.release import checks_digest, load_assignment
-from course.grading.sandbox import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
-from course.grading.secret import public_key_id
+from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -41,7 +41,7 @@ from course.grading.vocabulary import (
 )
 
 if TYPE_CHECKING:
-    from course.grading.driver import GradeOptions
+    from course.grading.batch.driver import GradeOptions
 
 __all__ = ["AssignmentGrader", "StudentSession"]
 
@@ -62,7 +62,7 @@ class AssignmentGrader:
 
     def __init__(self, solution_dir: Path, options: GradeOptions | None = None, deny_read=()):
         if options is None:
-            from course.grading.driver import GradeOptions
+            from course.grading.batch.driver import GradeOptions
 
             options = GradeOptions()
         self.options = options
@@ -346,7 +346,7 @@ class StudentSession:
 
     def _request(self, question: str | None, op: Op, timeout: float, **fields) -> dict:
         """One request to the child; forbidden calls it reported meanwhile count against
-        ``question`` (they reached the parent as they happened, see course.grading.tripwire)."""
+        ``question`` (they reached the parent as they happened, see course.grading.sandbox.tripwire)."""
         child = self.child
         assert child is not None, "ensure_child() first"
         try:

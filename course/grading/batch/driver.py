@@ -2,8 +2,8 @@
 
 It finds the submissions, skips students already graded with the same checks and library
 version (``results.jsonl`` makes a run resumable), grades the others in parallel, one
-:class:`~course.grading.session.StudentSession` each, and writes the reports
-(:mod:`course.grading.reports`) as students finish.
+:class:`~course.grading.batch.session.StudentSession` each, and writes the reports
+(:mod:`course.grading.batch.reports`) as students finish.
 
 Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status),
 ``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from course.grading.identity import resolve_identities
-from course.grading.isolation import Isolation, detect
-from course.grading.marks import (
+from course.grading.authoring.secret import Secret, public_key_id
+from course.grading.batch.identity import resolve_identities
+from course.grading.batch.marks import (
     SHORT_ANSWERS_FILE,
     MarksError,
     apply_marks,
@@ -37,16 +37,16 @@ from course.grading.marks import (
     validate_marks,
     write_short_answers,
 )
-from course.grading.reports import (
+from course.grading.batch.reports import (
     Summary,
     append_result,
     feedback_markdown,
     read_results,
     write_csv,
 )
-from course.grading.roster import Roster, write_canvas_csv, write_moodle_csv
-from course.grading.secret import Secret, public_key_id
-from course.grading.session import AssignmentGrader
+from course.grading.batch.roster import Roster, write_canvas_csv, write_moodle_csv
+from course.grading.batch.session import AssignmentGrader
+from course.grading.sandbox.isolation import Isolation, detect
 
 __all__ = [
     "GradeOptions",
@@ -93,7 +93,7 @@ class GradeOptions:
     roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
     missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
     lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
-    short_answers: Path | None = None  # a filled marking file to merge (course.grading.marks)
+    short_answers: Path | None = None  # a filled marking file to merge (course.grading.batch.marks)
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""
@@ -275,7 +275,7 @@ def grade(
             else None
         )
         if options.cluster:
-            from course.grading.cluster import grade_on_cluster
+            from course.grading.batch.cluster import grade_on_cluster
 
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:

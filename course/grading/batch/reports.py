@@ -116,7 +116,7 @@ class Summary:
     flags: list = field(default_factory=list)  # doubts about who submitted what (identity)
     missing: list | None = None  # roster IDs without a submission (None: no roster)
     unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
-    marking: str = ""  # what happened to the short answers (course.grading.marks)
+    marking: str = ""  # what happened to the short answers (course.grading.batch.marks)
 
     def class_text(self) -> str:
         """The identity flags, deleted answer cells, the roster's missing and unknown
