@@ -19,8 +19,9 @@ from course.grading import Assignment
 from course.grading.authoring.checks import load_checks, load_data_module, student_rng
 from course.grading.authoring.personal import PERSONAL_FILE, PersonalData, build_personal_data
 from course.grading.authoring.secret import Secret
-from course.grading.batch.driver import GradeOptions, Submission, grade
+from course.grading.batch.driver import Submission, grade
 from course.grading.batch.identity import resolve_identities
+from course.grading.batch.options import GradeOptions
 from course.grading.batch.roster import RosterError, read_roster
 from course.grading.student.submit import make_submission
 

@@ -430,7 +430,8 @@ def test_grading_feedback_shows_no_expected_value(tmp_path):
 
     import nbformat
 
-    from course.grading.batch.driver import GradeOptions, grade
+    from course.grading.batch.driver import grade
+    from course.grading.batch.options import GradeOptions
 
     def graded(name):
         nb, checks = _wrong_submission(name)

@@ -23,7 +23,8 @@ from course.grading.authoring.notebooks import (
     setup_cell,
 )
 from course.grading.authoring.release import find_solutions, release_files
-from course.grading.batch.driver import GradeOptions, grade
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
 from course.grading.notebook import MarkerError, make_release, strip_markers
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -358,7 +358,8 @@ def test_seccomp_blocks_fork_but_not_threads():
 
 
 def test_spawn_mode_grades_like_fork_mode(tmp_path):
-    from course.grading.batch.driver import GradeOptions, grade
+    from course.grading.batch.driver import grade
+    from course.grading.batch.options import GradeOptions
 
     subs = tmp_path / "subs"
     subs.mkdir()

@@ -50,7 +50,8 @@ import nbformat
 import pytest
 
 from course.grading.authoring.checks import load_checks
-from course.grading.batch.driver import GradeOptions, grade
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
 from course.grading.notebook import _STUDENT_ID_LINE
 
 ROOT = Path(__file__).resolve().parents[1]

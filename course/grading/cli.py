@@ -78,8 +78,9 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.grading.batch.driver import GradeOptions, available_cpus, grade
+    from course.grading.batch.driver import grade
     from course.grading.batch.marks import MarksError
+    from course.grading.batch.options import GradeOptions, available_cpus
     from course.grading.sandbox.isolation import IsolationError
 
     solutions = _folder(args, "solutions")

@@ -52,7 +52,8 @@ def make_submissions(folder: Path, n: int) -> None:
 
 
 def run_ours(subs: Path, out: Path, **options) -> float:
-    from course.grading.batch.driver import GradeOptions, grade
+    from course.grading.batch.driver import grade
+    from course.grading.batch.options import GradeOptions
 
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
@@ -182,7 +183,7 @@ def run_nbgrader(subs: Path, work: Path, log) -> float:
 
 
 def main(argv=None) -> int:
-    from course.grading.batch.driver import available_cpus
+    from course.grading.batch.options import available_cpus
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=40, help="number of submissions (default 40)")

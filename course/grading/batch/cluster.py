@@ -21,6 +21,8 @@ import tempfile
 import threading
 from pathlib import Path
 
+from course.grading.batch.options import GradeOptions
+from course.grading.batch.session import AssignmentGrader
 from course.grading.notebook import SubmissionError, read_notebook_bytes
 
 __all__ = ["grade_on_cluster"]
@@ -45,9 +47,6 @@ _LOCK = threading.Lock()
 
 def _worker_grader(bundle: dict, name: str, options: dict):
     """This worker process's grader for the assignment (created on its first student)."""
-    from course.grading.batch.driver import GradeOptions
-    from course.grading.batch.session import AssignmentGrader
-
     key = (name, hashlib.sha256(repr(sorted(bundle.items())).encode()).hexdigest(), repr(options))
     with _LOCK:
         grader = _GRADERS.get(key)

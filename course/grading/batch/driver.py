@@ -13,17 +13,15 @@ finish; a rerun skips students already graded with the same checks and library v
 from __future__ import annotations
 
 import hashlib
-import os
 import sys
 import threading
 import time
-from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from course.grading.authoring.secret import Secret, public_key_id
+from course.grading.authoring.secret import public_key_id
+from course.grading.batch.cluster import grade_on_cluster
 from course.grading.batch.identity import resolve_identities
 from course.grading.batch.marks import (
     SHORT_ANSWERS_FILE,
@@ -37,6 +35,7 @@ from course.grading.batch.marks import (
     validate_marks,
     write_short_answers,
 )
+from course.grading.batch.options import GradeOptions
 from course.grading.batch.reports import (
     Summary,
     append_result,
@@ -44,62 +43,15 @@ from course.grading.batch.reports import (
     read_results,
     write_csv,
 )
-from course.grading.batch.roster import Roster, write_canvas_csv, write_moodle_csv
+from course.grading.batch.roster import write_canvas_csv, write_moodle_csv
 from course.grading.batch.session import AssignmentGrader
-from course.grading.sandbox.isolation import Isolation, detect
 
 __all__ = [
-    "GradeOptions",
     "Submission",
     "Summary",
-    "available_cpus",
     "find_submissions",
     "grade",
 ]
-
-
-def available_cpus() -> int:
-    """The CPUs this process may actually run on: its affinity mask, capped by a cgroup CPU
-    quota (containers), at least 1. ``os.cpu_count()`` counts the machine's cores instead."""
-    try:
-        cpus = len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        cpus = os.cpu_count() or 1
-    try:
-        quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
-        if quota != "max":
-            cpus = min(cpus, max(1, int(-(-int(quota) // int(period)))))
-    except (OSError, ValueError):
-        pass
-    return max(1, cpus)
-
-
-@dataclass
-class GradeOptions:
-    jobs: int = field(default_factory=available_cpus)
-    timeout: float | None = None  # overrides every question's time limit
-    memory_mb: int = 1024
-    mode: str = "auto"
-    regrade: bool = False
-    progress: bool = True
-    ready_timeout: float = 60.0
-    student_budget: float | None = None  # wall-clock seconds for one student, all attempts
-    unsafe_no_isolation: bool = False  # grade even where the kernel offers no file-system walls
-    namespaces: bool = True  # use bubblewrap when installed
-    landlock: bool = True  # use Landlock when the kernel has it
-    announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
-    cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
-    secret: Secret | None = None  # the instructor's key of personal data (None: public data)
-    roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
-    missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
-    lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
-    short_answers: Path | None = None  # a filled marking file to merge (course.grading.batch.marks)
-
-    def isolation(self) -> Isolation:
-        """The sandbox layers (raises IsolationError where none walls off the file system)."""
-        return detect(
-            namespaces=self.namespaces, landlock=self.landlock, unsafe=self.unsafe_no_isolation
-        )
 
 
 @dataclass(frozen=True)
@@ -275,8 +227,6 @@ def grade(
             else None
         )
         if options.cluster:
-            from course.grading.batch.cluster import grade_on_cluster
-
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
             if options.announce is not None:

@@ -14,10 +14,10 @@ import re
 import threading
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from course.grading.authoring.release import checks_digest, load_assignment
 from course.grading.authoring.secret import public_key_id
+from course.grading.batch.options import GradeOptions
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
@@ -40,9 +40,6 @@ from course.grading.vocabulary import (
     answer_cell_id,
 )
 
-if TYPE_CHECKING:
-    from course.grading.batch.driver import GradeOptions
-
 __all__ = ["AssignmentGrader", "StudentSession"]
 
 
@@ -61,11 +58,7 @@ class AssignmentGrader:
     """Grades submissions of one assignment (thread-safe: one :meth:`grade_one` per thread)."""
 
     def __init__(self, solution_dir: Path, options: GradeOptions | None = None, deny_read=()):
-        if options is None:
-            from course.grading.batch.driver import GradeOptions
-
-            options = GradeOptions()
-        self.options = options
+        self.options = options if options is not None else GradeOptions()
         self.solution_dir = Path(solution_dir).resolve()
         self.checks, self.release = load_assignment(self.solution_dir)
         self.name = self.checks.name

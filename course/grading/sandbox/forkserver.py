@@ -28,8 +28,8 @@ __all__: list[str] = []
 
 
 def _server_main(sock_fd: int, config_json: str) -> None:
-    from course.grading.sandbox.isolation import seccomp
     from course.grading.sandbox import runner
+    from course.grading.sandbox.isolation import seccomp
     from course.grading.vocabulary import Op, ReplyStatus
 
     seccomp.die_with_parent()

@@ -425,9 +425,9 @@ class Setup:
 
 def prepare(config: dict) -> Setup:
     """Everything before any child exists (trusted; once per fork server or spawned runner)."""
+    from course.grading.sandbox import tripwire
     from course.grading.sandbox.isolation import landlock, privileges
     from course.grading.sandbox.isolation.paths import python_paths
-    from course.grading.sandbox import tripwire
 
     drop_to = tuple(config["drop_to"]) if config.get("drop_to") else None
     unprivileged = os.geteuid() != 0
