@@ -170,12 +170,12 @@ def graded(tmp_path_factory):
 
 
 def _row(summary, sid):
-    return next(r for r in summary.rows if r["student"] == sid)
+    return next(r.to_json() for r in summary.rows if r.student == sid)
 
 
 def test_grader_uses_the_secret_data_and_the_metadata_id(graded):
     summary, _ = graded
-    assert sorted(r["student"] for r in summary.rows) == ["s002", "s003", "s006", "s007", "zz9"]
+    assert sorted(r.student for r in summary.rows) == ["s002", "s003", "s006", "s007", "zz9"]
     row = _row(summary, "s002")
     assert row["total"] == row["max"], {q: r["message"] for q, r in row["questions"].items()}
     assert row["data_key"] == SECRET.key_id and row["file"]["name"].startswith("doejane_102_")

@@ -248,7 +248,7 @@ def test_marking_file_round_trip(graded, course):
         out,
         GradeOptions(jobs=1, progress=False, regrade=True),
     )
-    assert {r["student"]: r["total"] for r in summary.rows}["right"] == 4.5
+    assert {r.student: r.total for r in summary.rows}["right"] == 4.5
     assert {r["student"]: r["points"] for r in _marking_rows(out)}["right"] == "1.5"
 
 

@@ -20,7 +20,6 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.authoring.secret import public_key_id
 from course.grading.batch.cluster import grade_on_cluster
 from course.grading.batch.identity import resolve_identities
 from course.grading.batch.marks import (
@@ -43,6 +42,7 @@ from course.grading.batch.reports import (
     read_results,
     write_csv,
 )
+from course.grading.batch.results import StudentResult
 from course.grading.batch.roster import write_canvas_csv, write_moodle_csv
 from course.grading.batch.session import AssignmentGrader
 
@@ -185,15 +185,15 @@ def grade(
         )
         todo = identity.entries
         previous = read_results(results_path)
-        rows: dict[str, dict] = {}
+        rows: dict[str, StudentResult] = {}
         pending = []
         for sub in todo:
             old = previous.get(sub.student)
             if (
-                old
-                and old.get("checks_sha256") == grader.digest
-                and old.get("version") == grader.version
-                and old.get("data_key", public_key_id) == grader.data_key
+                old is not None
+                and old.checks_sha256 == grader.digest
+                and old.version == grader.version
+                and old.data_key == grader.data_key
             ):
                 rows[sub.student] = old
             else:
@@ -202,14 +202,14 @@ def grade(
 
         paths = {sub.student: sub.path for sub in todo}
 
-        def finish(row: dict) -> None:
+        def finish(row: StudentResult) -> None:
             with lock:
-                row["file"] = _file_record(paths.get(row["student"]), submissions)
+                row.record_file(_file_record(paths.get(row.student), submissions))
                 append_result(row, results_path)
-                (out / "feedback" / f"{row['student']}.md").write_text(
+                (out / "feedback" / f"{row.student}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
                 )
-                rows[row["student"]] = row
+                rows[row.student] = row
 
         try:
             from tqdm import tqdm
@@ -240,7 +240,7 @@ def grade(
         if bar is not None:
             bar.close()
         for row in rows.values():  # feedback of resumed students too (cheap, keeps OUT complete)
-            fb = out / "feedback" / f"{row['student']}.md"
+            fb = out / "feedback" / f"{row.student}.md"
             if not fb.exists():
                 fb.write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
         qids = [q.id for q in grader.questions]
@@ -271,7 +271,7 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
     marks = load_marks(out)
     imported = 0
     if entries is not None:
-        new = validate_marks(Path(options.short_answers), entries, {r["student"]: r for r in final})
+        new = validate_marks(Path(options.short_answers), entries, {r.student: r for r in final})
         for sid, by_q in new.items():
             marks.setdefault(sid, {}).update(by_q)
             imported += len(by_q)
@@ -279,7 +279,7 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
     for row in final:
         if apply_marks(row, checks, marks):
             append_result(row, results_path)
-        (out / "feedback" / f"{row['student']}.md").write_text(
+        (out / "feedback" / f"{row.student}.md").write_text(
             feedback_markdown(row, checks), encoding="utf-8"
         )
     path = out / SHORT_ANSWERS_FILE
@@ -322,7 +322,7 @@ def _class_files(summary: Summary, grader, options: GradeOptions, out: Path) -> 
     """Missing and unknown submissions against the roster, and the LMS grade files."""
     roster = options.roster
     assert roster is not None
-    by_id = {row["student"]: row for row in summary.rows}
+    by_id = {row.student: row for row in summary.rows}
     summary.missing = [s.id for s in roster.students if s.id not in by_id]
     known = set(roster.ids)
     summary.unknown = sorted(sid for sid in by_id if sid not in known)
