@@ -22,12 +22,13 @@ from course.grading.authoring.notebooks import (
     setup_cell,
     short_answer_cell,
 )
+from course.grading.authoring.passes import make_release
 from course.grading.authoring.release import find_solutions, release, release_files
 from course.grading.batch.driver import grade
 from course.grading.batch.marks import MarksError
 from course.grading.batch.options import GradeOptions
 from course.grading.items import SHORT_ANSWER_STUB
-from course.grading.notebook import MarkerError, build_plan, make_release
+from course.grading.notebook import MarkerError, build_plan
 from course.grading.student.selfcheck import Assignment
 
 ROOT = Path(__file__).resolve().parents[1]

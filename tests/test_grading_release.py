@@ -22,10 +22,11 @@ from course.grading.authoring.notebooks import (
     new_assignment_notebook,
     setup_cell,
 )
+from course.grading.authoring.passes import make_release
 from course.grading.authoring.release import find_solutions, release_files
 from course.grading.batch.driver import grade
 from course.grading.batch.options import GradeOptions
-from course.grading.notebook import MarkerError, make_release, strip_markers
+from course.grading.notebook import MarkerError, strip_markers
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"

@@ -15,11 +15,12 @@ from pathlib import Path
 import nbformat
 
 from course.grading.authoring.checks import Checks, load_checks
+from course.grading.authoring.passes import make_release
 from course.grading.authoring.seal import make_salt, seal
 from course.grading.codec import encode
 from course.grading.compare import signature
 from course.grading.items import right_options
-from course.grading.notebook import Release, make_release
+from course.grading.notebook import Release
 from course.grading.vocabulary import (
     CHECKS_FILE,
     DEMO_STUDENT_ID,
