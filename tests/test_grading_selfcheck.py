@@ -357,23 +357,6 @@ def test_seccomp_blocks_fork_but_not_threads():
     assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
 
 
-def test_spawn_mode_grades_like_fork_mode(tmp_path):
-    from course.grading.batch.driver import grade
-    from course.grading.batch.options import GradeOptions
-
-    subs = tmp_path / "subs"
-    subs.mkdir()
-    (subs / "s1.ipynb").write_bytes((ROOT / "solutions" / NAME / f"{NAME}.ipynb").read_bytes())
-    grade(
-        ROOT / "solutions" / NAME,
-        subs,
-        tmp_path / "out",
-        GradeOptions(jobs=1, mode="spawn", progress=False),
-    )
-    row = json.loads((tmp_path / "out" / "results.jsonl").read_text())
-    assert row["total"] == row["max"] == 17.0, row
-
-
 def test_old_package_name_still_works_for_one_release():
     # student notebooks handed out before the rename import course.exercises, and instructors'
     # checks.py files import course.exercises.spec: both keep working, with a warning

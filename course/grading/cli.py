@@ -108,7 +108,6 @@ def _grade(args) -> int:
         jobs=args.jobs or available_cpus(),
         timeout=args.timeout,
         memory_mb=args.memory,
-        mode=args.mode,
         regrade=args.regrade,
         progress=not args.no_progress,
         unsafe_no_isolation=args.unsafe_no_isolation,
@@ -337,12 +336,6 @@ def add_commands(subparsers) -> None:
         type=int,
         default=1024,
         help="memory budget per student in MB (default: %(default)s)",
-    )
-    p_gr.add_argument(
-        "--mode",
-        choices=["auto", "fork", "spawn"],
-        default="auto",
-        help="fork: children forked from a warm server (fast, Linux); spawn: a fresh interpreter per student",
     )
     p_gr.add_argument(
         "--regrade",

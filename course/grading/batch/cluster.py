@@ -31,7 +31,6 @@ __all__ = ["grade_on_cluster"]
 _WORKER_OPTIONS = (
     "timeout",
     "memory_mb",
-    "mode",
     "ready_timeout",
     "student_budget",
     "unsafe_no_isolation",

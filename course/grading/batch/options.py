@@ -38,7 +38,6 @@ class GradeOptions:
     jobs: int = field(default_factory=available_cpus)
     timeout: float | None = None  # overrides every question's time limit
     memory_mb: int = 1024
-    mode: str = "auto"
     regrade: bool = False
     progress: bool = True
     ready_timeout: float = 60.0

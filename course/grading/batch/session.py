@@ -106,7 +106,6 @@ class AssignmentGrader:
         with self._sandbox_lock:
             if self._sandbox is None:
                 self._sandbox = Sandbox(
-                    mode=self.options.mode,
                     limits=Limits(
                         memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5
                     ),

@@ -1,7 +1,6 @@
 """The sandboxed child that runs ONE student's notebook for the grader.
 
-It is forked from the warm fork server (:mod:`course.grading.sandbox.forkserver`), or started as
-``python -m course.grading.sandbox.runner REQ_FD RESP_FD EVENT_FD CONFIG`` (spawn mode). Either way:
+It is forked from the warm fork server (:mod:`course.grading.sandbox.forkserver`):
 
 1. :func:`prepare` (once per fork server) imports the library, instruments forbidden
    functions and opens the Landlock allow-list;
@@ -409,7 +408,7 @@ class RequestLoop:
 
 @dataclass
 class Setup:
-    """What :func:`prepare` made ready for every child of one fork server (or spawned runner)."""
+    """What :func:`prepare` made ready for every child of one fork server."""
 
     event_fd: int
     landlock_abi: int = 0
@@ -424,7 +423,7 @@ class Setup:
 
 
 def prepare(config: dict) -> Setup:
-    """Everything before any child exists (trusted; once per fork server or spawned runner)."""
+    """Everything before any child exists (trusted; once per fork server)."""
     from course.grading.sandbox import tripwire
     from course.grading.sandbox.isolation import landlock, privileges
     from course.grading.sandbox.isolation.paths import python_paths
@@ -525,17 +524,3 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
             pass
     finally:
         os._exit(code)
-
-
-def main(argv=None) -> None:
-    """Spawn mode: ``python -m course.grading.sandbox.runner REQ_FD RESP_FD EVENT_FD TMPDIR CONFIG``."""
-    argv = sys.argv[1:] if argv is None else argv
-    req_fd, resp_fd, event_w = int(argv[0]), int(argv[1]), int(argv[2])
-    setup = prepare(json.loads(argv[4]))
-    os.dup2(event_w, setup.event_fd)
-    os.close(event_w)
-    child_main(req_fd, resp_fd, argv[3], setup)
-
-
-if __name__ == "__main__":
-    main()
