@@ -96,7 +96,7 @@ def test_tripwire_reports_calls_that_do_not_come_from_the_library():
         import os, types
         import numpy as np
         import course.lsq as lsq
-        from course.grading.sandbox import tripwire
+        from course.grading import tripwire
         r, w = os.pipe()
         os.set_blocking(r, False)
         how = tripwire.instrument(["course.lsq.w_tests", "course.lsq.fit"], w)
@@ -131,7 +131,7 @@ def test_tripwire_reports_calls_that_do_not_come_from_the_library():
 
 
 def test_events_are_found_whatever_a_submission_writes_around_them():
-    from course.grading.sandbox.tripwire import EVENT, parse_events
+    from course.grading.tripwire import EVENT, parse_events
 
     stream = b"\x1ecourse-forb" + EVENT % b"course.lsq.fit" + b"garbage\x1e" + EVENT % b"a.b"
     names, tail = parse_events(stream[:-3])

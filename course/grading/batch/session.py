@@ -322,7 +322,7 @@ class StudentSession:
 
     def _request(self, question: str | None, op: Op, timeout: float, **fields) -> dict:
         """One request to the child; forbidden calls it reported meanwhile count against
-        ``question`` (they reached the parent as they happened, see course.grading.sandbox.tripwire)."""
+        ``question`` (they reached the parent as they happened, see course.grading.tripwire)."""
         child = self.child
         assert child is not None, "ensure_child() first"
         try:

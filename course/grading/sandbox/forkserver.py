@@ -5,7 +5,7 @@ it prepares everything that does not depend on the student, once:
 
 1. switches to ``nobody`` when the grader is root and the namespaces make that possible;
 2. imports the scientific stack and every course module;
-3. instruments the forbidden library functions (:mod:`course.grading.sandbox.tripwire`) to report to a
+3. instruments the forbidden library functions (:mod:`course.grading.tripwire`) to report to a
    descriptor number reserved now;
 4. opens the Landlock allow-list (descriptors of the folders children may read).
 

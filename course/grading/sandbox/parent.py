@@ -24,7 +24,7 @@ SIGKILL through a pidfd (valid across PID namespaces). Fork server and children 
 kernel to kill them when their parent dies, so an interrupted grader leaves nothing running.
 Requests and replies are JSON lines on two dedicated pipes (not stdout/stderr), each reply
 echoing a random nonce; numpy arrays travel as dtype/shape/base64, never pickle. A third pipe
-carries reports of forbidden library calls (:mod:`course.grading.sandbox.tripwire`), read by the parent
+carries reports of forbidden library calls (:mod:`course.grading.tripwire`), read by the parent
 as they happen. Hidden inputs are sent only after the student's cells ran, and references are
 computed and compared only in the parent.
 
@@ -50,7 +50,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from course.grading.sandbox.isolation import Isolation, detect
-from course.grading.sandbox.tripwire import parse_events
+from course.grading.tripwire import parse_events
 from course.grading.vocabulary import Op, ReplyStatus
 
 __all__ = [
@@ -326,7 +326,7 @@ class Sandbox:
         working directory are added. With bubblewrap or Landlock they are unreachable anyway
         (allow-lists); the audit hook names them in its error messages.
     forbid : sequence of str
-        Dotted names of forbidden library functions to instrument (:mod:`~course.grading.sandbox.tripwire`).
+        Dotted names of forbidden library functions to instrument (:mod:`~course.grading.tripwire`).
     isolation : Isolation, optional
         The layers to use (default: :func:`~course.grading.sandbox.isolation.detect`).
     """

@@ -424,7 +424,7 @@ class Setup:
 
 def prepare(config: dict) -> Setup:
     """Everything before any child exists (trusted; once per fork server)."""
-    from course.grading.sandbox import tripwire
+    from course.grading import tripwire
     from course.grading.sandbox.isolation import landlock, privileges
     from course.grading.sandbox.isolation.paths import python_paths
 

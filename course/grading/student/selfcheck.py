@@ -29,7 +29,7 @@ from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
-from course.grading.sandbox.tripwire import wrap_forbidden
+from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]

@@ -3,7 +3,7 @@
 Shared by the two file-system layers: bubblewrap mounts :func:`mount_paths` read-only into an
 otherwise empty root, and Landlock allows reading beneath :func:`landlock_paths` only. Neither
 list contains the course's sources (they are imported before student code runs, so a child
-cannot re-import a library module to get around :mod:`course.grading.sandbox.tripwire`), the course
+cannot re-import a library module to get around :mod:`course.grading.tripwire`), the course
 folders (solutions, submissions, output), the home folder or the working directory.
 """
 

@@ -15,7 +15,7 @@ Installed in the child right before student code runs, it makes the KERNEL refus
   ``open_by_handle_at``,
 - closing or replacing one pinned descriptor (``close``, ``dup2``/``dup3``, ``close_range``):
   the pipe on which forbidden library calls are reported to the grader
-  (:mod:`course.grading.sandbox.tripwire`).
+  (:mod:`course.grading.tripwire`).
 
 This is the layer that still holds when the Python audit hook is bypassed (for instance through
 ``_posixsubprocess`` or ctypes) and when the grader runs as root, where ``RLIMIT_NPROC`` is not
