@@ -1,4 +1,5 @@
-"""No import cycle anywhere in ``course/``, counting the imports written inside functions.
+"""The structure of ``course/``: no import cycle anywhere, counting the imports written inside
+functions; the grader's rooms import downward only; the grader's docstring names every module.
 
 An import inside a function hides a cycle from Python at import time but not from a reader:
 the two modules still cannot be understood, moved or tested apart. The graph is built from the
@@ -9,6 +10,7 @@ source (every ``import`` and ``from ... import`` node of every module, at any de
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -104,6 +106,54 @@ def test_no_import_cycle_in_course():
     assert not cycles, "import cycles (imports inside functions count):\n" + "\n".join(
         " <-> ".join(c) for c in cycles
     )
+
+
+#: The grader's rooms, lowest first: a module imports from its own room or a lower one.
+ROOMS = ("", "authoring", "student", "sandbox", "batch", "cli")  # "": the shared words; cli: the
+# entry points, above every room
+#: Imports that go up, each with its reason (see course/grading/__init__.py).
+UPWARD = {
+    ("course.grading.authoring.export", "course.grading.batch.roster"),  # export reads the class
+}
+
+
+def _room(module: str) -> str | None:
+    parts = module.split(".")
+    if parts[:2] != ["course", "grading"]:
+        return None
+    if module == "course.grading.cli":
+        return "cli"
+    return parts[2] if len(parts) > 3 and parts[2] in ROOMS else ""
+
+
+def test_the_graders_rooms_import_downward():
+    graph = import_graph()
+    upward = {
+        (a, b)
+        for a, deps in graph.items()
+        for b in deps
+        if _room(a) is not None
+        and _room(b) is not None
+        and ROOMS.index(_room(b) or "") > ROOMS.index(_room(a) or "")
+    }
+    assert upward == UPWARD, (
+        f"imports up the rooms {' < '.join(r or 'shared' for r in ROOMS)}: "
+        f"{sorted(upward - UPWARD)}; no longer there: {sorted(UPWARD - upward)}"
+    )
+
+
+def test_the_graders_docstring_names_every_module():
+    import course.grading
+
+    doc = course.grading.__doc__ or ""
+    grading = PACKAGE / "grading"
+    names = {
+        p.stem if p.name != "__init__.py" else p.parent.name
+        for p in grading.rglob("*.py")
+        if p.parent != grading or p.name != "__init__.py"
+    }
+    missing = sorted(n for n in names if not re.search(rf"\b{re.escape(n)}\b", doc))
+    assert not missing, f"course/grading/__init__.py's docstring does not name {missing}"
 
 
 @pytest.mark.parametrize(
