@@ -27,8 +27,9 @@ from course.grading.authoring.release import find_solutions, release, release_fi
 from course.grading.batch.driver import grade
 from course.grading.batch.marks import MarksError
 from course.grading.batch.options import GradeOptions
+from course.grading.batch.plan import build_plan
 from course.grading.items import SHORT_ANSWER_STUB
-from course.grading.notebook import MarkerError, build_plan
+from course.grading.notebook import MarkerError
 from course.grading.student.selfcheck import Assignment
 
 ROOT = Path(__file__).resolve().parents[1]

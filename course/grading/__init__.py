@@ -20,7 +20,7 @@ The flow
 4. ``course grade`` (:mod:`.batch.driver`, options in :mod:`.batch.options`) finds the
    submissions and whose each is (:mod:`.batch.identity`, :mod:`.batch.roster`), grades each
    student in a session (:mod:`.batch.session`) that matches the notebook against the release
-   (:func:`.notebook.build_plan`) and runs it in a sandboxed child (:mod:`.sandbox.parent`,
+   (:mod:`.batch.plan`) and runs it in a sandboxed child (:mod:`.sandbox.parent`,
    :mod:`.sandbox.forkserver`, :mod:`.sandbox.runner`, :mod:`.sandbox.isolation`; forbidden
    calls reported by :mod:`.tripwire`), compares in the trusted parent (:mod:`.compare`), and
    records a
@@ -39,7 +39,7 @@ codec, compare
 items
     Choice and short-answer questions (what the release, the self-check and the grader share).
 notebook
-    Solution markers, reading a submission, the release's cells and the grading plan.
+    Solution markers, the release's cells, reading a submission.
 tripwire
     Forbidden library functions: a warning in the self-check, a report from a grading child.
 cli
@@ -54,7 +54,8 @@ cli
     selfcheck (``check(...)``), submit (``check.submit()``).
 ``batch/`` ``course grade`` in the trusted parent
     driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
-    student), results (the typed results), reports (feedback, grades, results log), marks
+    student), plan (which of a submission's cells run, in which order), results (the typed
+    results), reports (feedback, grades, results log), marks
     (short answers), identity (whose submission is whose), roster (the class, LMS grade files),
     cluster (Dask).
 ``sandbox/`` the sandboxed children

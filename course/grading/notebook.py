@@ -1,4 +1,4 @@
-"""Notebooks: solution markers, reading a submission, the release's cells and the grading plan.
+"""Notebooks: solution markers, the release's cells, and reading a submission.
 
 The solution notebook's code cells have roles (``metadata.course.role``):
 
@@ -8,8 +8,8 @@ The solution notebook's code cells have roles (``metadata.course.role``):
 ``context``  any other code cell (protected: the release version runs at grading)
 
 :func:`~course.grading.authoring.passes.make_release` turns it into the student notebook
-(a :class:`Release`); :func:`build_plan` matches a submitted notebook against the release and
-lists what the grader runs, in which order.
+(a :class:`Release`); :func:`~course.grading.batch.plan.build_plan` matches a submitted
+notebook against the release and lists what the grader runs, in which order.
 """
 
 from __future__ import annotations
@@ -20,25 +20,20 @@ import json
 import os
 import re
 import stat
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import nbformat
 
 from course.grading.vocabulary import (
-    CellOrigin,
     CellRole,
-    answer_cell_id,
 )
 
 __all__ = [
     "MarkerError",
-    "Plan",
-    "PlanCell",
     "Release",
     "ReleaseCell",
     "SubmissionError",
-    "build_plan",
     "forbidden_mentions",
     "read_notebook_bytes",
     "read_submission",
@@ -255,29 +250,6 @@ def read_submission(source) -> dict:
     return nb
 
 
-@dataclass
-class PlanCell:
-    """One cell the grader runs: its source, the question it belongs to, a label for messages."""
-
-    source: str
-    question: str | None
-    origin: CellOrigin
-    label: str
-
-
-@dataclass
-class Plan:
-    cells: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
-    answered: set = field(default_factory=set)  # questions with at least one answer cell
-    answer_sources: dict = field(default_factory=dict)  # question -> source of its slot
-    notebook_student_id: str | None = None
-    texts: dict = field(default_factory=dict)  # short-answer question -> its markdown text
-    #: question -> "adopted" (answer cell deleted, an added cell defines the answer and is
-    #: graded instead) or "missing" (answer cell deleted, nothing found)
-    deleted: dict = field(default_factory=dict)
-
-
 def student_id_in(source: str) -> str | None:
     """The literal string assigned to STUDENT_ID in ``source`` (None if absent or not literal)."""
     try:
@@ -293,161 +265,6 @@ def student_id_in(source: str) -> str | None:
         ):
             return node.value.value
     return None
-
-
-def _normalise(source: str) -> str:
-    return "\n".join(line.rstrip() for line in source.strip().split("\n"))
-
-
-def setup_source(release: Release, student_id: str) -> str:
-    return _STUDENT_ID_LINE.sub(
-        lambda _m: f"STUDENT_ID = {json.dumps(student_id)}", release.setup.source, count=1
-    )
-
-
-def build_plan(release: Release, nb: dict, student_id: str, targets: dict | None = None) -> Plan:
-    """Match a submitted notebook against the release and list the cells to run, in order.
-
-    Protected cells (setup, context) always run in their RELEASE version, at their release
-    position, even when the student deleted or edited them (edits are noted). Answer cells are
-    matched by cell id (``<question>-answer``), then by ``metadata.course``, wherever the student
-    moved them; every copy runs, in the student's order, at the question's position. Cells the
-    student added run right after the matched cell that precedes them in the student's notebook
-    (answers they follow count as part of that answer). Check cells and copies of protected
-    cells are not run. Short answers (markdown answer cells) are collected in ``plan.texts``.
-
-    When a question's answer cell is missing (deleted, or retyped in a new cell), the added
-    cells that define its variable or function (``targets``: question -> name) are graded as
-    its answer, and ``plan.deleted`` and a note say so; otherwise it counts as not answered.
-    """
-    plan = Plan()
-    by_id = release.by_id()
-    text_answers = {
-        c.question for c in release.cells if c.role == CellRole.ANSWER and c.cell_type == "markdown"
-    }
-    code_cells = [c for c in release.cells if c.cell_type == "code"]
-    slots: dict[Any, list] = {c.index: [] for c in code_cells}
-    answer_slot = {c.question: c.index for c in code_cells if c.role == CellRole.ANSWER}
-    used_ids = set()
-    anchor = release.setup.index
-    n_extra = 0
-    for pos, cell in enumerate(nb.get("cells", [])):
-        if isinstance(cell, dict) and cell.get("cell_type") == "markdown":
-            cid = cell.get("id") if isinstance(cell.get("id"), str) else None
-            meta = _course_meta(cell)
-            if cid in by_id and by_id[cid].question in text_answers:
-                qid = by_id[cid].question
-            elif meta.get("role") == CellRole.ANSWER and meta.get("question") in text_answers:
-                qid = meta["question"]
-            else:
-                continue
-            plan.texts[qid] = (plan.texts.get(qid, "") + "\n\n" + _source(cell)).strip()
-            plan.answered.add(qid)
-            continue
-        if not isinstance(cell, dict) or cell.get("cell_type") != "code":
-            continue
-        src = _source(cell)
-        cid = cell.get("id") if isinstance(cell.get("id"), str) else None
-        meta = _course_meta(cell)
-        match = None
-        if cid in by_id and cid not in used_ids and by_id[cid].cell_type == "code":
-            match = by_id[cid]
-            used_ids.add(cid)
-        elif meta.get("role") == CellRole.ANSWER and meta.get("question") in answer_slot:
-            match = next(c for c in code_cells if c.index == answer_slot[meta["question"]])
-        elif meta.get("role") in (CellRole.SETUP, CellRole.CONTEXT, CellRole.CHECK):
-            plan.notes.append(
-                f"Ignored a copy of a protected cell (notebook cell {pos + 1}); protected cells run as released."
-            )
-            continue
-        if match is None:
-            n_extra += 1
-            slots[anchor].append(
-                PlanCell(src, None, CellOrigin.EXTRA, f"your added cell at position {pos + 1}")
-            )
-            continue
-        if match.role == CellRole.ANSWER:
-            slots[match.index].append(
-                PlanCell(src, match.question, CellOrigin.ANSWER, f"answer cell of {match.question}")
-            )
-            plan.answered.add(match.question)
-        elif match.role == CellRole.SETUP:
-            plan.notebook_student_id = student_id_in(src)
-            if _normalise(_STUDENT_ID_LINE.sub("", src)) != _normalise(
-                _STUDENT_ID_LINE.sub("", match.source)
-            ):
-                plan.notes.append("The setup cell was edited; the released version was used.")
-        elif match.role == CellRole.CONTEXT and _normalise(src) != _normalise(match.source):
-            plan.notes.append(
-                f"Protected cell {match.id!r} was edited; the released version was used."
-            )
-        anchor = match.index
-
-    for qid in sorted(text_answers - plan.answered):
-        plan.deleted[qid] = "missing"
-        plan.notes.append(
-            f"The answer cell of {qid} (id {answer_cell_id(qid)!r}) is missing from the "
-            f"notebook (deleted?): {qid} counts as not answered."
-        )
-    _adopt_added_answers(plan, slots, answer_slot, targets or {})
-
-    for cell in code_cells:
-        if cell.role == CellRole.SETUP:
-            plan.cells.append(
-                PlanCell(setup_source(release, student_id), None, CellOrigin.SETUP, "setup cell")
-            )
-            plan.cells.extend(slots[cell.index])
-        elif cell.role == CellRole.CONTEXT:
-            plan.cells.append(
-                PlanCell(cell.source, None, CellOrigin.CONTEXT, f"protected cell {cell.id!r}")
-            )
-            plan.cells.extend(slots[cell.index])
-        elif cell.role == CellRole.CHECK:
-            plan.cells.extend(slots[cell.index])
-        else:
-            q = cell.question
-            own = [item for item in slots[cell.index] if item.question in (None, q)]
-            for item in slots[cell.index]:
-                plan.cells.append(
-                    PlanCell(item.source, item.question or q, item.origin, item.label)
-                )
-            if q not in plan.deleted:
-                plan.answer_sources[q] = "\n\n".join(item.source for item in own)
-    return plan
-
-
-def _adopt_added_answers(plan: Plan, slots: dict, answer_slot: dict, targets: dict) -> None:
-    """For each question whose answer cell is missing: grade the added cells that define its
-    variable or function as its answer (and say so), or note that it is not answered."""
-    added = [
-        item
-        for cells in slots.values()
-        for item in cells
-        if item.origin == CellOrigin.EXTRA and item.question is None
-    ]
-    for qid in answer_slot:
-        if qid in plan.answered:
-            continue
-        where = (
-            f"The answer cell of {qid} (id {answer_cell_id(qid)!r}) is missing from the notebook"
-        )
-        target = targets.get(qid)
-        mine = [item for item in added if target and target in _defined_names(item.source)]
-        if not mine:
-            plan.deleted[qid] = "missing"
-            plan.notes.append(f"{where} (deleted?): {qid} counts as not answered.")
-            continue
-        for item in mine:
-            item.question = qid
-            added.remove(item)
-        plan.deleted[qid] = "adopted"
-        plan.answered.add(qid)
-        plan.answer_sources[qid] = "\n\n".join(item.source for item in mine)
-        plan.notes.append(
-            f"{where} (deleted?); {', '.join(item.label for item in mine)} "
-            f"defines {target} and was graded as the answer of {qid}. Keep answers in their "
-            "answer cells: JupyterLab does not let you delete them."
-        )
 
 
 def forbidden_mentions(source: str, forbid) -> list[str]:

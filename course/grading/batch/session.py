@@ -19,16 +19,12 @@ from pathlib import Path
 from course.grading.authoring.release import checks_digest, load_assignment
 from course.grading.authoring.secret import public_key_id
 from course.grading.batch.options import GradeOptions
+from course.grading.batch.plan import build_plan
 from course.grading.batch.results import CaseResult, QuestionResult, StudentResult
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
-from course.grading.notebook import (
-    SubmissionError,
-    build_plan,
-    forbidden_mentions,
-    read_submission,
-)
+from course.grading.notebook import SubmissionError, forbidden_mentions, read_submission
 from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
 from course.grading.vocabulary import (
     ABNORMAL,
