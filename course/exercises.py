@@ -29,9 +29,13 @@ warnings.warn(
 
 #: old submodule -> the module(s) that now hold its names (the first one is the module itself)
 _RENAMED = {
-    "spec": ("course.grading.checks",),
-    "grader": ("course.grading.driver", "course.grading.session", "course.grading.reports"),
-    "seccomp": ("course.grading.isolation.seccomp",),
+    "spec": ("course.grading.authoring.checks",),
+    "grader": (
+        "course.grading.batch.driver",
+        "course.grading.batch.session",
+        "course.grading.batch.reports",
+    ),
+    "seccomp": ("course.grading.sandbox.isolation.seccomp",),
 }
 _OLD_NAMES = {"Grader": "AssignmentGrader", "_read_results": "read_results"}
 

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from course import lsq
-from course.grading.checks import load_checks
+from course.grading.authoring.checks import load_checks
 from course.grading.compare import compare
-from course.grading.selfcheck import Assignment
+from course.grading.student.selfcheck import Assignment
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from course import nis
-from course.grading.checks import load_checks
+from course.grading.authoring.checks import load_checks
 from course.grading.compare import compare
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from course.grading.checks import load_checks
+from course.grading.authoring.checks import load_checks
+from course.grading.authoring.seal import make_salt, seal, sealed_compare
 from course.grading.compare import check_signature, compare, signature
-from course.grading.seal import make_salt, seal, sealed_compare
 
 ROOT = Path(__file__).resolve().parents[1]
 NAMES = sorted(p.name for p in (ROOT / "solutions").iterdir() if (p / "checks.py").is_file())

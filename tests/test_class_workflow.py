@@ -16,13 +16,14 @@ import pytest
 
 from course.cli import main as course_main
 from course.grading import Assignment
-from course.grading.checks import load_checks, load_data_module, student_rng
-from course.grading.driver import GradeOptions, Submission, grade
-from course.grading.identity import resolve_identities
-from course.grading.personal import PERSONAL_FILE, PersonalData, build_personal_data
-from course.grading.roster import RosterError, read_roster
-from course.grading.secret import Secret
-from course.grading.submit import make_submission
+from course.grading.authoring.checks import load_checks, load_data_module, student_rng
+from course.grading.authoring.personal import PERSONAL_FILE, PersonalData, build_personal_data
+from course.grading.authoring.secret import Secret
+from course.grading.batch.driver import Submission, grade
+from course.grading.batch.identity import resolve_identities
+from course.grading.batch.options import GradeOptions
+from course.grading.batch.roster import RosterError, read_roster
+from course.grading.student.submit import make_submission
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
@@ -169,12 +170,12 @@ def graded(tmp_path_factory):
 
 
 def _row(summary, sid):
-    return next(r for r in summary.rows if r["student"] == sid)
+    return next(r.to_json() for r in summary.rows if r.student == sid)
 
 
 def test_grader_uses_the_secret_data_and_the_metadata_id(graded):
     summary, _ = graded
-    assert sorted(r["student"] for r in summary.rows) == ["s002", "s003", "s006", "s007", "zz9"]
+    assert sorted(r.student for r in summary.rows) == ["s002", "s003", "s006", "s007", "zz9"]
     row = _row(summary, "s002")
     assert row["total"] == row["max"], {q: r["message"] for q, r in row["questions"].items()}
     assert row["data_key"] == SECRET.key_id and row["file"]["name"].startswith("doejane_102_")

@@ -30,9 +30,9 @@ import numpy as np
 import pytest
 from value_leaves import leaves
 
+from course.grading.authoring.release import find_solutions
 from course.grading.codec import Band, decode, encode
-from course.grading.release import find_solutions
-from course.grading.selfcheck import Assignment
+from course.grading.student.selfcheck import Assignment
 
 ROOT = Path(__file__).resolve().parents[1]
 EXERCISES = ROOT / "exercises"
@@ -74,7 +74,7 @@ def references(name: str) -> dict[str, list[tuple]]:
     """Question id -> ``(expected, [(message, wrong value), ...])`` per public case, computed
     from ``solutions/<name>/checks.py`` in the order of ``checks.json`` (which ships them
     sealed: the student's file holds no value to read them from)."""
-    from course.grading.checks import load_checks
+    from course.grading.authoring.checks import load_checks
     from course.grading.vocabulary import DEMO_STUDENT_ID
 
     checks = load_checks(ROOT / "solutions" / name)
@@ -380,7 +380,7 @@ def _wrong_submission(name: str):
     """The solution notebook with every answer made wrong by a cell the student added."""
     import nbformat
 
-    from course.grading.checks import load_checks
+    from course.grading.authoring.checks import load_checks
 
     checks = load_checks(ROOT / "solutions" / name)
     nb = nbformat.read(ROOT / "solutions" / name / f"{name}.ipynb", as_version=4)
@@ -430,7 +430,8 @@ def test_grading_feedback_shows_no_expected_value(tmp_path):
 
     import nbformat
 
-    from course.grading.driver import GradeOptions, grade
+    from course.grading.batch.driver import grade
+    from course.grading.batch.options import GradeOptions
 
     def graded(name):
         nb, checks = _wrong_submission(name)

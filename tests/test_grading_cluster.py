@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from course.grading.driver import GradeOptions, grade
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
 
 distributed = pytest.importorskip("distributed")
 

@@ -26,8 +26,9 @@ from pathlib import Path
 
 import pytest
 
-from course.grading.checks import load_checks
-from course.grading.driver import GradeOptions, grade
+from course.grading.authoring.checks import load_checks
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from course.grading.isolation import IsolationError, detect, landlock, seccomp
+from course.grading.sandbox.isolation import IsolationError, detect, landlock, seccomp
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -38,7 +38,7 @@ def test_landlock_allows_exactly_the_policy(tmp_path):
     out = _run(
         f"""
         import os, socket, sysconfig
-        from course.grading.isolation import landlock as L
+        from course.grading.sandbox.isolation import landlock as L
         p = L.Policy()
         p.allow(sysconfig.get_paths()["stdlib"], L.READ_ONLY)
         p.allow({str(tmp_path / "work")!r}, L.READ_WRITE)
@@ -72,7 +72,7 @@ def test_seccomp_refuses_sockets_and_pins_the_report_pipe():
     out = _run(
         """
         import os, socket
-        from course.grading.isolation import seccomp
+        from course.grading.sandbox.isolation import seccomp
         r, w = os.pipe()
         assert seccomp.install(pinned_fd=w)
         def attempt(f):

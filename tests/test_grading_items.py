@@ -13,7 +13,8 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from course.grading.authoring import (
+from course.grading.authoring.checks import Checks, load_checks
+from course.grading.authoring.notebooks import (
     answer_cell,
     check_cell,
     md,
@@ -21,18 +22,20 @@ from course.grading.authoring import (
     setup_cell,
     short_answer_cell,
 )
-from course.grading.checks import Checks, load_checks
-from course.grading.driver import GradeOptions, grade
+from course.grading.authoring.passes import make_release
+from course.grading.authoring.release import find_solutions, release, release_files
+from course.grading.batch.driver import grade
+from course.grading.batch.marks import MarksError
+from course.grading.batch.options import GradeOptions
+from course.grading.batch.plan import build_plan
 from course.grading.items import SHORT_ANSWER_STUB
-from course.grading.marks import MarksError
-from course.grading.notebook import MarkerError, build_plan, make_release
-from course.grading.release import find_solutions, release, release_files
-from course.grading.selfcheck import Assignment
+from course.grading.notebook import MarkerError
+from course.grading.student.selfcheck import Assignment
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "00_items"
 CHECKS_PY = """
-from course.grading.checks import Checks
+from course.grading.authoring.checks import Checks
 CHECKS = Checks("00_items", title="Items")
 
 
@@ -247,7 +250,7 @@ def test_marking_file_round_trip(graded, course):
         out,
         GradeOptions(jobs=1, progress=False, regrade=True),
     )
-    assert {r["student"]: r["total"] for r in summary.rows}["right"] == 4.5
+    assert {r.student: r.total for r in summary.rows}["right"] == 4.5
     assert {r["student"]: r["points"] for r in _marking_rows(out)}["right"] == "1.5"
 
 
@@ -335,7 +338,7 @@ def test_moved_answer_cells_are_found_by_id(graded):
 
 
 def test_plan_grades_an_added_cell_only_when_it_defines_the_answer(course):
-    from course.grading.release import load_assignment
+    from course.grading.authoring.release import load_assignment
 
     _, rel = load_assignment(course / "solutions" / NAME)
     nb = _student(course, RIGHT, delete=["q1"])
@@ -419,7 +422,7 @@ def test_selfcheck_notes_an_answer_set_outside_its_answer_cell():
 
 
 def test_submit_lists_an_unanswered_short_answer(course):
-    from course.grading.submit import unanswered_questions
+    from course.grading.student.submit import unanswered_questions
 
     assert unanswered_questions(_student(course, {"q1": "x = 2.0"})) == ["q2", "q3"]
     assert unanswered_questions(_student(course, RIGHT)) == []

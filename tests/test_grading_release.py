@@ -13,7 +13,8 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from course.grading.authoring import (
+from course.grading.authoring.checks import load_checks
+from course.grading.authoring.notebooks import (
     answer_cell,
     check_cell,
     code,
@@ -21,10 +22,11 @@ from course.grading.authoring import (
     new_assignment_notebook,
     setup_cell,
 )
-from course.grading.checks import load_checks
-from course.grading.driver import GradeOptions, grade
-from course.grading.notebook import MarkerError, make_release, strip_markers
-from course.grading.release import find_solutions, release_files
+from course.grading.authoring.passes import make_release
+from course.grading.authoring.release import find_solutions, release_files
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
+from course.grading.notebook import MarkerError, strip_markers
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
@@ -275,7 +277,7 @@ def test_cli_release_fails_clearly_on_unclosed_marker(tmp_path):
         sol / "00_bad.ipynb",
     )
     (sol / "checks.py").write_text(
-        "from course.grading.checks import Checks\nCHECKS = Checks('00_bad')\n"
+        "from course.grading.authoring.checks import Checks\nCHECKS = Checks('00_bad')\n"
         "@CHECKS.value('q1', var='x', points=1)\ndef q1():\n    return 1\n"
     )
     proc = subprocess.run(

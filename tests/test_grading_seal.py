@@ -1,4 +1,4 @@
-"""Sealed public checks (course.grading.seal): ``checks.json`` holds no answer.
+"""Sealed public checks (course.grading.authoring.seal): ``checks.json`` holds no answer.
 
 - a scan of every released ``exercises/*/checks.json``: every tagged value decoded, no
   reference value of any graded question (public, hidden or the demo student's, and no
@@ -22,9 +22,8 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from value_leaves import leaves
 
-from course.grading.codec import Band, decode
-from course.grading.release import find_solutions
-from course.grading.seal import (
+from course.grading.authoring.release import find_solutions
+from course.grading.authoring.seal import (
     is_sealed,
     make_salt,
     matches,
@@ -32,6 +31,7 @@ from course.grading.seal import (
     sealed_compare,
     stated_band,
 )
+from course.grading.codec import Band, decode
 
 ROOT = Path(__file__).resolve().parents[1]
 ASSIGNMENTS = find_solutions(ROOT / "solutions")
@@ -72,7 +72,7 @@ def graded_references(name: str) -> list[tuple[str, object, float, float]]:
     """(where, value, rtol, atol) for every reference a grade depends on: each case of every
     function question, every value question (with the demo student's data where personal),
     and every declared mistake's value."""
-    from course.grading.checks import load_checks
+    from course.grading.authoring.checks import load_checks
     from course.grading.vocabulary import DEMO_STUDENT_ID
 
     checks = load_checks(ROOT / "solutions" / name)
@@ -148,7 +148,7 @@ def test_released_checks_hold_no_graded_answer(name):
 def test_the_scan_finds_answers_shipped_in_the_clear(name, tmp_path):
     """The scan is not blind: with the public values encoded by the codec, as format 1 shipped
     them, it finds every public value question that has a distinctive number or string."""
-    from course.grading.checks import load_checks
+    from course.grading.authoring.checks import load_checks
     from course.grading.codec import encode
     from course.grading.vocabulary import DEMO_STUDENT_ID
 
@@ -187,7 +187,7 @@ def test_every_public_case_is_sealed():
 
 
 def test_older_format_is_refused_with_a_clear_message(tmp_path):
-    from course.grading.selfcheck import Assignment
+    from course.grading.student.selfcheck import Assignment
 
     data = json.loads((ROOT / "exercises" / "01_least_squares" / "checks.json").read_text())
     data["format"] = 1
@@ -348,7 +348,7 @@ def test_a_right_answer_costs_about_one_hash_per_number(monkeypatch):
     """The price of a check is its hashes (about a millisecond each; the timing itself is
     tests/benchmarks/bench_seal.py): a right answer of n numbers needs n to 3n of them, a
     wrong one a bounded number more for the diagnoses."""
-    from course.grading import seal as sealing
+    from course.grading.authoring import seal as sealing
 
     calls = []
     real = sealing._digest.__wrapped__
@@ -398,7 +398,7 @@ def test_guaranteed_band_passes_stated_band_fails(e, u, far, rtol, atol, sign):
 def test_expected_exactly_on_a_grid_line(rtol, atol, magnitude):
     """e = k*h exactly (the edge of its cell): s one ulp below and above, and s at the
     tolerance's edge on either side, all pass; values beyond the stated band fail."""
-    from course.grading import seal as sealing
+    from course.grading.authoring import seal as sealing
 
     for sign in (1.0, -1.0):
         q = sealing._q_of(magnitude, rtol, atol)

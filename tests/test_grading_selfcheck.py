@@ -16,10 +16,10 @@ import pytest
 from hypothesis import given, settings
 from scipy.stats import chi2
 
-from course.grading.checks import load_checks, student_rng
+from course.grading.authoring.checks import load_checks, student_rng
 from course.grading.codec import Band, EncodingError, decode, encode, loads
 from course.grading.compare import binomial_band, check_signature, compare, signature
-from course.grading.selfcheck import Assignment
+from course.grading.student.selfcheck import Assignment
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
@@ -175,7 +175,7 @@ def test_student_rng_is_a_stable_hash_of_the_id():
     a = student_rng(NAME, "survey", "s123").standard_normal(3)
     assert np.array_equal(a, student_rng(NAME, "survey", " s123 ").standard_normal(3))
     assert not np.array_equal(a, student_rng(NAME, "survey", "s124").standard_normal(3))
-    code = "from course.grading.checks import student_rng; print(student_rng('a', 'b', 'c').integers(1 << 62))"
+    code = "from course.grading.authoring.checks import student_rng; print(student_rng('a', 'b', 'c').integers(1 << 62))"
     outs = {
         subprocess.run(
             [sys.executable, "-c", code],
@@ -256,7 +256,7 @@ def test_self_check_function_and_stub(check, capsys):
 
 
 def test_staged_hints_count_failures_in_the_kernel(tmp_path, capsys):
-    from course.grading.seal import seal
+    from course.grading.authoring.seal import seal
     from course.grading.vocabulary import PublicCase, PublicQuestion, PublicSpec
 
     spec = PublicSpec(
@@ -331,13 +331,13 @@ def test_self_check_matches_grader_data():
 
 # -- sandbox layers -------------------------------------------------------------------------
 def test_seccomp_blocks_fork_but_not_threads():
-    from course.grading.isolation import seccomp
+    from course.grading.sandbox.isolation import seccomp
 
     if not seccomp.available():
         pytest.skip("seccomp filter not available on this platform")
     code = textwrap.dedent("""
         import os, threading
-        from course.grading.isolation import seccomp
+        from course.grading.sandbox.isolation import seccomp
         assert seccomp.install()
         t = threading.Thread(target=lambda: None); t.start(); t.join()
         import _posixsubprocess  # the audit hook does not see this path; the kernel does
@@ -357,22 +357,6 @@ def test_seccomp_blocks_fork_but_not_threads():
     assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
 
 
-def test_spawn_mode_grades_like_fork_mode(tmp_path):
-    from course.grading.driver import GradeOptions, grade
-
-    subs = tmp_path / "subs"
-    subs.mkdir()
-    (subs / "s1.ipynb").write_bytes((ROOT / "solutions" / NAME / f"{NAME}.ipynb").read_bytes())
-    grade(
-        ROOT / "solutions" / NAME,
-        subs,
-        tmp_path / "out",
-        GradeOptions(jobs=1, mode="spawn", progress=False),
-    )
-    row = json.loads((tmp_path / "out" / "results.jsonl").read_text())
-    assert row["total"] == row["max"] == 17.0, row
-
-
 def test_old_package_name_still_works_for_one_release():
     # student notebooks handed out before the rename import course.exercises, and instructors'
     # checks.py files import course.exercises.spec: both keep working, with a warning
@@ -389,9 +373,9 @@ def test_old_package_name_still_works_for_one_release():
         from course.exercises.spec import Checks as C2, student_rng
         from course.exercises.grader import GradeOptions, Grader, grade, feedback_markdown
         import course.grading as g
-        from course.grading.session import AssignmentGrader
+        from course.grading.batch.session import AssignmentGrader
         print(Assignment is g.Assignment, Checks is C2, Grader is AssignmentGrader)
-        print(grade is __import__("course.grading.driver", fromlist=["x"]).grade)
+        print(grade is __import__("course.grading.batch.driver", fromlist=["x"]).grade)
         """
     )
     out = subprocess.run(
@@ -414,7 +398,7 @@ def test_public_spec_round_trips_the_committed_checks_json():
 _MISTAKE_CHECKS = """
 from scipy.stats import norm
 
-from course.grading.checks import Checks, Mistake
+from course.grading.authoring.checks import Checks, Mistake
 
 CHECKS = Checks("mistakes_demo")
 
@@ -445,7 +429,7 @@ q2.case(0.01, hidden=True)
 
 @pytest.fixture()
 def mistakes_demo(tmp_path):
-    from course.grading.release import public_spec
+    from course.grading.authoring.release import public_spec
     from course.grading.vocabulary import PublicSpec
 
     folder = tmp_path / "mistakes_demo"
@@ -477,7 +461,7 @@ def test_declared_mistakes_ship_for_public_cases_and_are_named(mistakes_demo, ca
 
 
 def test_mistake_and_hint_arguments_are_validated():
-    from course.grading.checks import Checks, Mistake
+    from course.grading.authoring.checks import Checks, Mistake
 
     with pytest.raises(ValueError, match="message must be a non-empty string"):
         Mistake("", lambda: 1.0)

@@ -20,9 +20,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from course.grading.authoring.seal import make_salt, seal, sealed_compare
 from course.grading.codec import Band
 from course.grading.compare import check_signature, compare, signature
-from course.grading.seal import make_salt, seal, sealed_compare
 
 RTOL, ATOL = 1e-8, 1e-10
 SALT = make_salt("tests", "walk")

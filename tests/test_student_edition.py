@@ -23,14 +23,14 @@ import numpy as np
 import pytest
 
 from course.cli import main as course_main
-from course.grading.checks import load_checks, student_rng
+from course.grading.authoring.checks import load_checks, student_rng
+from course.grading.authoring.export import ExportError, export
+from course.grading.authoring.leaks import needles_for, public_corpus, scan
+from course.grading.authoring.personal import PERSONAL_FILE, PersonalData
+from course.grading.authoring.release import find_solutions, release_files
+from course.grading.authoring.secret import Secret, load_secret, new_secret
+from course.grading.batch.roster import read_roster
 from course.grading.compare import compare
-from course.grading.export import ExportError, export
-from course.grading.leaks import needles_for, public_corpus, scan
-from course.grading.personal import PERSONAL_FILE, PersonalData
-from course.grading.release import find_solutions, release_files
-from course.grading.roster import read_roster
-from course.grading.secret import Secret, load_secret, new_secret
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
@@ -100,7 +100,7 @@ def test_a_clone_leaks_everything(needles):
 
 def test_shipped_hidden_cases_would_be_caught(tmp_path, needles):
     """A release that wrongly published its hidden cases is caught by their values."""
-    from course.grading.release import public_spec
+    from course.grading.authoring.release import public_spec
 
     checks = load_checks(SOLUTIONS / "01_least_squares")
     for q in checks.questions.values():
@@ -111,15 +111,15 @@ def test_shipped_hidden_cases_would_be_caught(tmp_path, needles):
     assert {("hidden input", "01_least_squares q3 hidden case 3")} <= {
         (h.needle.kind, h.needle.where) for h in hits
     }
-    # their expected values ship sealed (course.grading.seal), like every public case's
+    # their expected values ship sealed (course.grading.authoring.seal), like every public case's
     assert "hidden expected" not in {h.needle.kind for h in hits}
     assert "public expected" not in {h.needle.kind for h in hits}
 
 
 def test_values_shipped_in_the_clear_would_be_caught(tmp_path, needles):
     """checks.json as format 1 wrote it (expected values encoded, not sealed) is caught."""
+    from course.grading.authoring.release import public_spec
     from course.grading.codec import encode
-    from course.grading.release import public_spec
 
     checks = load_checks(SOLUTIONS / "01_least_squares")
     spec = public_spec(checks)
@@ -205,7 +205,7 @@ def _same(a, b) -> bool:
 
 def _reconstructed(name: str, key: str, sid: str):
     """The obvious attack: the published data.py's generator, run with one's own ID."""
-    from course.grading.checks import load_data_module
+    from course.grading.authoring.checks import load_data_module
 
     module = load_data_module(ROOT / "exercises" / name / "data.py", name)
     return getattr(module, key)(student_rng(name, key, sid))
@@ -472,7 +472,7 @@ def _tiny_course(root: Path, leak: str | None) -> None:
     the text ``leak``."""
     import nbformat
 
-    from course.grading.authoring import (
+    from course.grading.authoring.notebooks import (
         answer_cell,
         check_cell,
         md,
@@ -488,7 +488,7 @@ def _tiny_course(root: Path, leak: str | None) -> None:
     solution = root / "solutions" / "01_tiny"
     solution.mkdir(parents=True)
     (solution / "checks.py").write_text(
-        "from course.grading.checks import Checks\n\n"
+        "from course.grading.authoring.checks import Checks\n\n"
         'CHECKS = Checks("01_tiny")\n\n\n'
         '@CHECKS.value("q1", var="answer", points=1)\n'
         "def q1():\n    return 42.0\n"

@@ -27,7 +27,7 @@ dependent question is graded.
 To stay cheap, the suite packs the variants of different questions into few notebooks
 (questions are graded independently; a notebook holds at most one variant per question, every
 other answer cell keeps the solution) and grades each assignment's notebooks in one batch with
-the real grader, ``course.grading.driver.grade``.
+the real grader, ``course.grading.batch.driver.grade``.
 
 ``python tests/test_wrong_answers.py [NN ...]`` prints the table of every variant's score.
 """
@@ -49,8 +49,9 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from course.grading.checks import load_checks
-from course.grading.driver import GradeOptions, grade
+from course.grading.authoring.checks import load_checks
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
 from course.grading.notebook import _STUDENT_ID_LINE
 
 ROOT = Path(__file__).resolve().parents[1]

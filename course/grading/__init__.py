@@ -5,40 +5,70 @@ student_id=STUDENT_ID)`` in the first cell, then ``check("q1")``). Instructors a
 assignments in ``solutions/<name>/`` (see ``docs/instructors/authoring.md``), release them with
 ``course release`` and grade a class with ``course grade``.
 
+The flow
+--------
+1. An instructor writes ``solutions/<name>/``: ``checks.py`` (:mod:`.authoring.checks`), the
+   solution notebook (helpers: :mod:`.authoring.notebooks`) and ``data.py``.
+2. ``course release`` (:mod:`.authoring.release`) builds the student notebook by the passes of
+   :mod:`.authoring.passes` and ``checks.json``, whose expected values are sealed
+   (:mod:`.authoring.seal`), into ``exercises/<name>/``; ``course export``
+   (:mod:`.authoring.export`) packs the student edition, personal data included
+   (:mod:`.authoring.personal`, drawn with :mod:`.authoring.secret`), after the leak scan of
+   :mod:`.authoring.leaks`.
+3. A student runs ``check("q1")`` (:mod:`.student.selfcheck`) against the sealed values and
+   hands in with ``check.submit()`` (:mod:`.student.submit`).
+4. ``course grade`` (:mod:`.batch.driver`, options in :mod:`.batch.options`) finds the
+   submissions and whose each is (:mod:`.batch.identity`, :mod:`.batch.roster`), grades each
+   student in a session (:mod:`.batch.session`) that matches the notebook against the release
+   (:mod:`.batch.plan`) and runs it in a sandboxed child (:mod:`.sandbox.parent`,
+   :mod:`.sandbox.forkserver`, :mod:`.sandbox.runner`, :mod:`.sandbox.isolation`; forbidden
+   calls reported by :mod:`.tripwire`), compares in the trusted parent (:mod:`.compare`), and
+   records a
+   :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`), the short
+   answers' marking file (:mod:`.batch.marks`) and the LMS files (:mod:`.batch.roster`) are
+   written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers.
+
 Modules
 -------
+The words every room shares (a room imports them, never another room's module to get them):
+
 vocabulary
-    The shared words: cell roles, student IDs, protocol operations, statuses, ``checks.json``.
-checks
-    The authoring vocabulary of ``checks.py`` (:class:`~course.grading.checks.Checks`).
-items, marks
-    Choice and short-answer questions; the short-answer marking file and its re-import.
-authoring
-    Helpers that build solution notebooks with the right cell metadata.
-notebook
-    Markers, the student release and the grading plan of a submitted notebook.
+    Cell roles, student IDs, protocol operations, statuses, ``checks.json``.
 codec, compare
     Plain-data values across process boundaries, and comparing them with a tolerance.
-release
-    ``course release``.
-selfcheck
-    The student's ``check(...)``.
-driver, session, reports
-    ``course grade``: the batch, one student's session in the trusted parent, the outputs.
-sandbox, forkserver, runner
-    The parent's handle on sandboxed children, the warm fork server, the child itself.
-isolation
-    The isolation layers of a child, one per module.
+items
+    Choice and short-answer questions (what the release, the self-check and the grader share).
+notebook
+    Solution markers, the release's cells, reading a submission.
 tripwire
-    Forbidden library functions.
-secret, personal
-    A graded class's instructor secret, and the personal data issued from it.
-submit, identity, roster
-    Handing in (``check.submit()``), whose submission is whose, the roster and LMS grade files.
-export, leaks
-    ``course export`` (the student edition) and the scan that keeps solutions out of it.
+    Forbidden library functions: a warning in the self-check, a report from a grading child.
+cli
+    ``course release | grade | export | secret | submit``: the entry points into the rooms.
 
-``course.exercises`` is the old name of this package; it still works for one release.
+``authoring/`` what the instructor writes and hands out
+    checks (the vocabulary of ``checks.py``), notebooks (solution-notebook helpers), passes
+    (the student release, pass by pass), release (``course release``), seal (sealed expected
+    values), secret (the instructor's key), personal (personal data drawn from it), leaks (the
+    scan that keeps solutions out), export (``course export``).
+``student/`` what runs in the student's kernel
+    selfcheck (``check(...)``), submit (``check.submit()``).
+``batch/`` ``course grade`` in the trusted parent
+    driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
+    student), plan (which of a submission's cells run, in which order), results (the typed
+    results), reports (feedback, grades, results log), marks
+    (short answers), identity (whose submission is whose), roster (the class, LMS grade files),
+    cluster (Dask).
+``sandbox/`` the sandboxed children
+    parent (the grader's handle), forkserver (the warm process children fork from), runner
+    (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,
+    privileges, limits, audit, paths).
+
+Rooms import downward only, in the order shared words, authoring, student, sandbox, batch: the
+self-check opens seals and reads personal data (authoring); a grading child runs the
+self-check's grading stand-in (student); the batch loads the release (authoring), reads the
+submission receipts (student) and starts children (sandbox). One crossing goes up: ``course
+export`` reads the class roster (:mod:`.batch.roster`). No module imports one that imports it
+back. ``tests/test_import_cycles.py`` checks both.
 """
 
 from importlib import import_module
@@ -46,12 +76,12 @@ from importlib import import_module
 __all__ = ["Assignment", "Band", "Checks", "Mistake", "binomial_band", "student_rng"]
 
 _LAZY = {
-    "Assignment": "course.grading.selfcheck",
-    "Checks": "course.grading.checks",
-    "Mistake": "course.grading.checks",
+    "Assignment": "course.grading.student.selfcheck",
+    "Checks": "course.grading.authoring.checks",
+    "Mistake": "course.grading.authoring.checks",
     "Band": "course.grading.codec",
     "binomial_band": "course.grading.compare",
-    "student_rng": "course.grading.checks",
+    "student_rng": "course.grading.authoring.checks",
 }
 
 

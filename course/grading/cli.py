@@ -38,8 +38,8 @@ def _folder(args, name: str) -> Path:
 
 
 def _release(args) -> int:
+    from course.grading.authoring.release import find_solutions, release
     from course.grading.notebook import MarkerError
-    from course.grading.release import find_solutions, release
 
     solutions = _folder(args, "solutions")
     exercises = _folder(args, "exercises")
@@ -78,9 +78,10 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.grading.driver import GradeOptions, available_cpus, grade
-    from course.grading.isolation import IsolationError
-    from course.grading.marks import MarksError
+    from course.grading.batch.driver import grade
+    from course.grading.batch.marks import MarksError
+    from course.grading.batch.options import GradeOptions, available_cpus
+    from course.grading.sandbox.isolation import IsolationError
 
     solutions = _folder(args, "solutions")
     name = Path(args.assignment).name
@@ -107,7 +108,6 @@ def _grade(args) -> int:
         jobs=args.jobs or available_cpus(),
         timeout=args.timeout,
         memory_mb=args.memory,
-        mode=args.mode,
         regrade=args.regrade,
         progress=not args.no_progress,
         unsafe_no_isolation=args.unsafe_no_isolation,
@@ -134,8 +134,8 @@ def _grade(args) -> int:
 
 def _class_options(args) -> dict | None:
     """The secret and the roster of ``course grade`` (None after printing why not)."""
-    from course.grading.roster import RosterError, read_roster
-    from course.grading.secret import SecretError, load_secret
+    from course.grading.authoring.secret import SecretError, load_secret
+    from course.grading.batch.roster import RosterError, read_roster
 
     try:
         secret = load_secret(args.secret)
@@ -161,9 +161,9 @@ def _class_options(args) -> dict | None:
 
 
 def _export(args) -> int:
-    from course.grading.export import ExportError, export
-    from course.grading.roster import RosterError, read_roster
-    from course.grading.secret import SecretError, load_secret
+    from course.grading.authoring.export import ExportError, export
+    from course.grading.authoring.secret import SecretError, load_secret
+    from course.grading.batch.roster import RosterError, read_roster
 
     try:
         secret = None if args.no_secret else load_secret(args.secret)
@@ -193,8 +193,8 @@ def _export(args) -> int:
 
 
 def _submit(args) -> int:
-    from course.grading.personal import PersonalData
-    from course.grading.submit import Refused, make_submission, unanswered_questions
+    from course.grading.authoring.personal import PersonalData
+    from course.grading.student.submit import Refused, make_submission, unanswered_questions
 
     notebook = Path(args.notebook)
     if not notebook.is_file():
@@ -219,7 +219,7 @@ def _submit(args) -> int:
 
 
 def _secret(args) -> int:
-    from course.grading.secret import SecretError, load_secret, new_secret
+    from course.grading.authoring.secret import SecretError, load_secret, new_secret
 
     try:
         secret = new_secret(args.file) if args.action == "new" else load_secret(args.file)
@@ -336,12 +336,6 @@ def add_commands(subparsers) -> None:
         type=int,
         default=1024,
         help="memory budget per student in MB (default: %(default)s)",
-    )
-    p_gr.add_argument(
-        "--mode",
-        choices=["auto", "fork", "spawn"],
-        default="auto",
-        help="fork: children forked from a warm server (fast, Linux); spawn: a fresh interpreter per student",
     )
     p_gr.add_argument(
         "--regrade",

@@ -2,7 +2,7 @@
 
 Used by the grader (in the trusted parent, against the true references). The student's
 self-check compares against SEALED expected values with the same messages, see
-:mod:`course.grading.seal`, or, where the student's copy holds no expected value, checks only
+:mod:`course.grading.authoring.seal`, or, where the student's copy holds no expected value, checks only
 its type and shape (:func:`check_signature`): all three walk the structure with
 :class:`StructuralWalk` (types, shapes, lengths, keys and what is said of them) and differ only
 in their leaves. Never compares printed text.
@@ -386,7 +386,7 @@ class StructuralWalk:
     subclass supplies the leaves: how numbers, strings and bands are compared, whether a
     transposed matrix or another order of the items would match, and their messages. Used by
     :func:`compare` (the expected value in the clear) and by
-    :func:`course.grading.seal.sealed_compare` (sealed: there the expected value is a node of
+    :func:`course.grading.authoring.seal.sealed_compare` (sealed: there the expected value is a node of
     the sealed tree, and :meth:`stand_in` gives a value of its type and shape), and by
     :func:`check_signature` (there it is a :func:`signature`, which holds no value).
     """

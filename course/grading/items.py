@@ -7,7 +7,7 @@ with the reference's option(s).
 
 A *short-answer* question (``CHECKS.short_answer``) is a markdown answer cell that the
 instructor marks: ``course grade`` exports every answer with the rubric into a CSV
-(:mod:`course.grading.marks`) and merges the filled CSV back into the grades.
+(:mod:`course.grading.batch.marks`) and merges the filled CSV back into the grades.
 """
 
 from __future__ import annotations

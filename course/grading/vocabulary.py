@@ -90,7 +90,7 @@ def check_student_id(student_id, where: str = "STUDENT_ID") -> str:
 
 
 #: The public file of a release, and the version of its format (2: expected values sealed,
-#: see :mod:`course.grading.seal`; 1 shipped them in the clear and is refused).
+#: see :mod:`course.grading.authoring.seal`; 1 shipped them in the clear and is refused).
 CHECKS_FILE = "checks.json"
 PUBLIC_FORMAT = 2
 
@@ -199,7 +199,7 @@ class SubmissionStatus(_Word):
 class PublicCase:
     """One public case: the encoded arguments (function questions), the sealed expected value
     and the declared mistakes as ``[message, sealed wrong value]`` pairs (sealed values:
-    :func:`course.grading.seal.seal`)."""
+    :func:`course.grading.authoring.seal.seal`)."""
 
     label: str
     expected: Any
@@ -299,10 +299,10 @@ class PublicQuestion:
 @dataclass
 class PublicSpec:
     """The content of ``exercises/<name>/checks.json``: public cases with sealed expected values
-    (:mod:`course.grading.seal`) and plain-data inputs (:mod:`course.grading.codec`), never
+    (:mod:`course.grading.authoring.seal`) and plain-data inputs (:mod:`course.grading.codec`), never
     code, never an expected value in the clear.
 
-    Built by :func:`course.grading.release.public_spec`, read by the student's self-check.
+    Built by :func:`course.grading.authoring.release.public_spec`, read by the student's self-check.
     """
 
     assignment: str

@@ -10,7 +10,7 @@ import numpy as np
 from scipy import linalg, stats
 
 from course import lsq
-from course.grading.checks import Checks, Mistake
+from course.grading.authoring.checks import Checks, Mistake
 
 from . import data
 

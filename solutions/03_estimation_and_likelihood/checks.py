@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import diagnosis as dg
-from course.grading.checks import Checks, Mistake
+from course.grading.authoring.checks import Checks, Mistake
 
 from . import data
 

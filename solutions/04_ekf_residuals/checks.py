@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import filters as kf
-from course.grading.checks import Band, Checks, Mistake
+from course.grading.authoring.checks import Band, Checks, Mistake
 
 from . import data
 

@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import nis
-from course.grading.checks import Checks, Mistake, binomial_band
+from course.grading.authoring.checks import Checks, Mistake, binomial_band
 
 from . import data
 

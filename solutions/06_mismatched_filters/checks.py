@@ -9,7 +9,7 @@ from collections import namedtuple
 import numpy as np
 
 from course import filters, mismatched
-from course.grading.checks import Checks, Mistake
+from course.grading.authoring.checks import Checks, Mistake
 from course.quadform import WeightedChiSquare
 
 from . import data

@@ -2,7 +2,7 @@
 
 Run:  python tests/benchmarks/bench_grading.py [--n 40] [--jobs N] [--skip-nbgrader]
 
-Ours: ``course.grading.driver.grade`` on N submissions of 01_least_squares (mostly full
+Ours: ``course.grading.batch.driver.grade`` on N submissions of 01_least_squares (mostly full
 solutions, some answers left unanswered; seeded), every isolation layer on, default --jobs (the
 CPUs this process may use). Also printed: the per-student overhead of the kernel isolation
 (the same run with Landlock and namespaces off), and the scaling with --jobs.
@@ -52,7 +52,8 @@ def make_submissions(folder: Path, n: int) -> None:
 
 
 def run_ours(subs: Path, out: Path, **options) -> float:
-    from course.grading.driver import GradeOptions, grade
+    from course.grading.batch.driver import grade
+    from course.grading.batch.options import GradeOptions
 
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
@@ -66,7 +67,7 @@ def run_ours(subs: Path, out: Path, **options) -> float:
 def _test_source(q) -> str:
     """An nbgrader autograder cell checking question ``q`` as course grade does."""
     head = (
-        "from course.grading.checks import load_checks\n"
+        "from course.grading.authoring.checks import load_checks\n"
         "from course.grading.codec import decode, encode\n"
         "from course.grading.compare import compare\n"
         f"_q = load_checks({str(SOLUTION_DIR)!r}).questions[{q.id!r}]\n"
@@ -134,7 +135,7 @@ def nbgrader_source(checks) -> dict:
 
 
 def run_nbgrader(subs: Path, work: Path, log) -> float:
-    from course.grading.checks import load_checks
+    from course.grading.authoring.checks import load_checks
 
     checks = load_checks(SOLUTION_DIR)
     course = work / "nbgrader-course"
@@ -182,7 +183,7 @@ def run_nbgrader(subs: Path, work: Path, log) -> float:
 
 
 def main(argv=None) -> int:
-    from course.grading.driver import available_cpus
+    from course.grading.batch.options import available_cpus
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=40, help="number of submissions (default 40)")
@@ -200,7 +201,7 @@ def main(argv=None) -> int:
         subs.mkdir()
         make_submissions(subs, args.n)
         n = args.n
-        from course.grading.isolation import detect
+        from course.grading.sandbox.isolation import detect
 
         print(f"{n} submissions of {NAME}; {cpus} CPU(s) available; --jobs {jobs}")
         print(detect().describe())

@@ -3,7 +3,7 @@
 For every assignment, every public case (the sealed ``checks.json`` of a fresh release) is
 compared with the right answer (the reference from ``solutions/``) and with a wrong one (the
 reference doubled, which runs the diagnoses), once through
-:func:`course.grading.seal.sealed_compare` (what a student's ``check.all()`` pays) and once
+:func:`course.grading.authoring.seal.sealed_compare` (what a student's ``check.all()`` pays) and once
 through :func:`course.grading.compare.compare` on the value in the clear (the baseline, what
 format 1 did). The seal is deliberately slow (a PBKDF2 hash per number), so the ratio is large
 by design; the targets are absolute:
@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from course.grading.checks import load_checks
+from course.grading.authoring.checks import load_checks
+from course.grading.authoring.release import find_solutions, public_spec
+from course.grading.authoring.seal import _digest, sealed_compare
 from course.grading.codec import Band
 from course.grading.compare import compare
-from course.grading.release import find_solutions, public_spec
-from course.grading.seal import _digest, sealed_compare
 from course.grading.vocabulary import DEMO_STUDENT_ID
 
 ROOT = Path(__file__).resolve().parents[2]

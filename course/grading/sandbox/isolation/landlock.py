@@ -17,7 +17,7 @@ descriptors opened once in the warm fork server. The three system calls are smal
 What Landlock does not govern: ``stat`` and ``readlink`` (a child can learn that a path exists,
 not read or list it), files opened before :func:`confine`, connecting to named UNIX sockets, and
 UDP. The seccomp filter refuses sockets altogether, and the namespaces of bubblewrap, when
-available, hide the rest of the file system (:mod:`course.grading.isolation`).
+available, hide the rest of the file system (:mod:`course.grading.sandbox.isolation`).
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """``course grade ... --cluster ADDRESS``: one task per student on a Dask distributed scheduler.
 
-For a class of thousands, the batch driver (:mod:`course.grading.driver`) stays where it is:
+For a class of thousands, the batch driver (:mod:`course.grading.batch.driver`) stays where it is:
 it finds the submissions, reads each notebook (refusing links), and writes ``grades.csv``,
 ``feedback/`` and the resumable ``results.jsonl`` as rows stream back. The grading itself runs
 on the cluster's workers: each task carries one student's notebook bytes, and each worker
-process keeps its own warm :class:`~course.grading.session.AssignmentGrader` (checks loaded
+process keeps its own warm :class:`~course.grading.batch.session.AssignmentGrader` (checks loaded
 once, references computed once, one fork server with every isolation layer) for all the
 students it is given. The assignment's authoring files travel once per worker, as bytes, and
 are written to a private temporary folder there (no shared file system needed).
@@ -21,6 +21,8 @@ import tempfile
 import threading
 from pathlib import Path
 
+from course.grading.batch.options import GradeOptions
+from course.grading.batch.session import AssignmentGrader
 from course.grading.notebook import SubmissionError, read_notebook_bytes
 
 __all__ = ["grade_on_cluster"]
@@ -29,7 +31,6 @@ __all__ = ["grade_on_cluster"]
 _WORKER_OPTIONS = (
     "timeout",
     "memory_mb",
-    "mode",
     "ready_timeout",
     "student_budget",
     "unsafe_no_isolation",
@@ -45,9 +46,6 @@ _LOCK = threading.Lock()
 
 def _worker_grader(bundle: dict, name: str, options: dict):
     """This worker process's grader for the assignment (created on its first student)."""
-    from course.grading.driver import GradeOptions
-    from course.grading.session import AssignmentGrader
-
     key = (name, hashlib.sha256(repr(sorted(bundle.items())).encode()).hexdigest(), repr(options))
     with _LOCK:
         grader = _GRADERS.get(key)

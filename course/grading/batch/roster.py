@@ -24,7 +24,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.reports import csv_text
+from course.grading.batch.reports import csv_text
+from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import STUDENT_ID_RULE, is_student_id
 
 __all__ = [
@@ -196,14 +197,14 @@ def _write(rows: list[list[str]], path: Path) -> None:
     path.write_text(buf.getvalue(), encoding="utf-8")
 
 
-def _score(row: dict | None, missing_as_zero: bool) -> str:
+def _score(row: StudentResult | None, missing_as_zero: bool) -> str:
     if row is None:
         return "0" if missing_as_zero else ""
-    return _points(row["total"])
+    return _points(row.total)
 
 
 def write_canvas_csv(
-    rows: dict[str, dict],
+    rows: dict[str, StudentResult],
     roster: Roster,
     column: str,
     max_points: float,
@@ -230,20 +231,18 @@ def write_canvas_csv(
     _write(table, path)
 
 
-def _feedback(row: dict | None) -> str:
+def _feedback(row: StudentResult | None) -> str:
     if row is None:
         return "No submission received."
-    parts = [
-        f"{qid} {_points(r['points'])}/{_points(r['max'])}" for qid, r in row["questions"].items()
-    ]
-    text = f"{_points(row['total'])} of {_points(row['max'])} points ({'; '.join(parts)})."
-    if row.get("status") not in (None, "ok"):
-        text += f" Status: {row['status']}."
+    parts = [f"{qid} {_points(r.points)}/{_points(r.max)}" for qid, r in row.questions.items()]
+    text = f"{_points(row.total)} of {_points(row.max)} points ({'; '.join(parts)})."
+    if row.status != "ok":
+        text += f" Status: {row.status}."
     return text
 
 
 def write_moodle_csv(
-    rows: dict[str, dict],
+    rows: dict[str, StudentResult],
     roster: Roster,
     column: str,
     path: Path,

@@ -21,8 +21,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from course.grading.authoring.secret import Secret
 from course.grading.codec import decode, encode
-from course.grading.secret import Secret
 
 __all__ = [
     "PERSONAL_FILE",

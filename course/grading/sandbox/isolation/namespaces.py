@@ -10,7 +10,7 @@ The grader starts its fork server (or, in spawn mode, each child) under ``bwrap`
 - a network namespace with nothing but a loopback interface, and new PID, IPC and UTS
   namespaces (the grader's processes are invisible, System V IPC is private);
 - run as root, no user namespace: all capabilities dropped except switching to ``nobody``,
-  which the fork server does at once (:mod:`course.grading.isolation.privileges`); run as an
+  which the fork server does at once (:mod:`course.grading.sandbox.isolation.privileges`); run as an
   ordinary user, a user namespace that maps that user.
 
 bubblewrap is the well-kept tool that Flatpak builds on (Debian package ``bubblewrap``).

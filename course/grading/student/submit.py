@@ -8,7 +8,7 @@ missing, placeholder, demo or malformed ID, or an ID the class's personal data d
 is refused with one message and nothing is written.
 
 The grader takes the ID from this metadata when a learning-management system renamed the
-file (``Doe_John_98765_02_test_quantities.ipynb``); see :mod:`course.grading.identity`.
+file (``Doe_John_98765_02_test_quantities.ipynb``); see :mod:`course.grading.batch.identity`.
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
+from course.grading.authoring.personal import PersonalData
+from course.grading.authoring.secret import public_key_id
 from course.grading.items import is_unanswered_text
 from course.grading.notebook import SubmissionError, read_submission, student_id_in
-from course.grading.personal import PersonalData
-from course.grading.secret import public_key_id
 from course.grading.vocabulary import CellRole, check_student_id
 
 __all__ = [

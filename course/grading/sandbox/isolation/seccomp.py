@@ -19,7 +19,7 @@ Installed in the child right before student code runs, it makes the KERNEL refus
 
 This is the layer that still holds when the Python audit hook is bypassed (for instance through
 ``_posixsubprocess`` or ctypes) and when the grader runs as root, where ``RLIMIT_NPROC`` is not
-enforced. Files are Landlock's and the namespaces' business (:mod:`course.grading.isolation`).
+enforced. Files are Landlock's and the namespaces' business (:mod:`course.grading.sandbox.isolation`).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Memory is limited as address space (``RLIMIT_AS``, a budget on top of what the warm process has
 already mapped), CPU time per process, the size of any one file, and no core files. The seccomp
-filter (:mod:`course.grading.isolation.seccomp`) keeps the child from raising them again.
+filter (:mod:`course.grading.sandbox.isolation.seccomp`) keeps the child from raising them again.
 """
 
 from __future__ import annotations

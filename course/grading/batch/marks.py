@@ -12,7 +12,7 @@ an answer changed since the file was written refuses the import, line by line, a
 nothing. Accepted marks are kept in ``OUT/short_answer_marks.json`` (so a regrade keeps them,
 as long as the answer is the same: ``answer_id`` is a digest of its text) and merged into
 ``grades.csv``, ``results.jsonl`` and the feedback. Text cells are written spreadsheet-safe
-(:func:`course.grading.reports.csv_text`).
+(:func:`course.grading.batch.reports.csv_text`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ import json
 import math
 from pathlib import Path
 
-from course.grading.reports import csv_text
+from course.grading.batch.reports import csv_text
+from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import GradeStatus, QuestionKind
 
 __all__ = [
@@ -75,27 +76,27 @@ def _fmt(x: float) -> str:
     return f"{round(float(x), 4):g}"
 
 
-def write_short_answers(rows: list[dict], checks, path: Path, marks: dict) -> int:
+def write_short_answers(rows: list[StudentResult], checks, path: Path, marks: dict) -> int:
     """Write the marking file of ``rows``; returns how many answers are still to mark."""
     shorts = short_questions(checks)
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(COLUMNS)
     to_mark = 0
-    for row in sorted(rows, key=lambda r: r["student"]):
+    for row in sorted(rows, key=lambda r: r.student):
         for qid, q in shorts.items():
-            result = row["questions"].get(qid, {})
-            if "answer" not in result:
+            result = row.questions.get(qid)
+            if result is None or result.answer is None:
                 continue  # not answered: nothing to mark
-            aid = answer_id(result["answer"])
-            mark = marks.get(row["student"], {}).get(qid)
+            aid = answer_id(result.answer)
+            mark = marks.get(row.student, {}).get(qid)
             if mark is None or mark.get("answer_id") != aid:
                 mark, to_mark = {}, to_mark + 1
             writer.writerow(
                 [
-                    csv_text(row["student"]),
+                    csv_text(row.student),
                     csv_text(qid),
-                    csv_text(result["answer"]),
+                    csv_text(result.answer),
                     _fmt(q.points),
                     _fmt(mark["points"]) if "points" in mark else "",
                     csv_text(q.rubric),
@@ -195,7 +196,7 @@ def parse_marks_csv(path: Path, checks) -> dict:
     return out
 
 
-def validate_marks(path: Path, entries: dict, rows: dict) -> dict:
+def validate_marks(path: Path, entries: dict, rows: dict[str, StudentResult]) -> dict:
     """Check ``entries`` against the graded ``rows`` (student -> row): unknown students, answers
     not given or changed since the file was written. Returns the marks to keep."""
     errors: list[str] = []
@@ -206,7 +207,8 @@ def validate_marks(path: Path, entries: dict, rows: dict) -> dict:
         if row is None:
             errors.append(f"line {line}: unknown student {sid!r} (no graded submission)")
             continue
-        answer = row["questions"].get(qid, {}).get("answer")
+        result = row.questions.get(qid)
+        answer = result.answer if result is not None else None
         if answer is None:
             errors.append(f"line {line}: {sid} gave no answer to {qid}: nothing to mark")
             continue
@@ -254,27 +256,27 @@ def save_marks(out: Path, marks: dict) -> None:
     tmp.replace(path)
 
 
-def apply_marks(row: dict, checks, marks: dict) -> bool:
+def apply_marks(row: StudentResult, checks, marks: dict) -> bool:
     """Put the instructor's marks into ``row`` (in place); True when the row changed."""
-    before = json.dumps(row, sort_keys=True, default=str)
-    mine = marks.get(row["student"], {})
+    before = json.dumps(row.to_json(), sort_keys=True, default=str)
+    mine = marks.get(row.student, {})
     for qid in short_questions(checks):
-        result = row["questions"].get(qid)
-        if not result or "answer" not in result:
+        result = row.questions.get(qid)
+        if result is None or result.answer is None:
             continue
         mark = mine.get(qid)
-        if mark is not None and mark.get("answer_id") == answer_id(result["answer"]):
-            result["points"] = round(float(mark["points"]), 4)
-            result["status"] = GradeStatus.MARKED
-            result["message"] = mark.get("comment") or "marked by your instructor"
+        if mark is not None and mark.get("answer_id") == answer_id(result.answer):
+            result.points = round(float(mark["points"]), 4)
+            result.status = GradeStatus.MARKED
+            result.message = mark.get("comment") or "marked by your instructor"
         else:
-            result["points"] = 0.0
-            result["status"] = GradeStatus.TO_MARK
-            result["message"] = "your instructor marks this answer" + (
+            result.points = 0.0
+            result.status = GradeStatus.TO_MARK
+            result.message = "your instructor marks this answer" + (
                 " again: it changed since it was marked" if mark is not None else ""
             )
-    row["total"] = round(sum(r["points"] for r in row["questions"].values()), 4)
-    return json.dumps(row, sort_keys=True, default=str) != before
+    row.add_total()
+    return json.dumps(row.to_json(), sort_keys=True, default=str) != before
 
 
 def unimported_edits(path: Path, marks: dict) -> int:

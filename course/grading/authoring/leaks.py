@@ -5,7 +5,7 @@ The needles of an assignment are what only the instructor may hold:
 - the text of every solution region of the solution notebook (whole, and each distinctive
   line), and each distinctive line of ``checks.py`` (the references);
 - each hidden case's inputs and expected value, each unpublished expected value, and each
-  public expected value (``checks.json`` ships them sealed, :mod:`course.grading.seal`), in
+  public expected value (``checks.json`` ships them sealed, :mod:`course.grading.authoring.seal`), in
   the forms a leak would take: the plain-data JSON of ``checks.json``, the base64 of an array,
   the ``repr`` of a distinctive float and its 6-digit display;
 - with a secret: the key itself, and the source lines of the data generators (in a graded
@@ -33,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
+from course.grading.authoring.secret import Secret
 from course.grading.codec import decode, encode
 from course.grading.notebook import BEGIN_SOLUTION, END_SOLUTION
-from course.grading.secret import Secret
 
 __all__ = ["Hit", "Needle", "needles_for", "scan"]
 
@@ -170,7 +170,7 @@ def needles_for(solution_dir: Path, secret: Secret | None = None, public: str = 
     """Everything of one assignment that a student distribution must not contain; needles
     found in ``public`` (:func:`public_corpus`) are left out, except the secret and whole
     multi-line solutions."""
-    from course.grading.release import load_assignment
+    from course.grading.authoring.release import load_assignment
 
     solution_dir = Path(solution_dir)
     name = solution_dir.name

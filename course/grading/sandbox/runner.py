@@ -1,7 +1,6 @@
 """The sandboxed child that runs ONE student's notebook for the grader.
 
-It is forked from the warm fork server (:mod:`course.grading.forkserver`), or started as
-``python -m course.grading.runner REQ_FD RESP_FD EVENT_FD CONFIG`` (spawn mode). Either way:
+It is forked from the warm fork server (:mod:`course.grading.sandbox.forkserver`):
 
 1. :func:`prepare` (once per fork server) imports the library, instruments forbidden
    functions and opens the Landlock allow-list;
@@ -43,8 +42,8 @@ from builtins import (  # bound now, so a student patching builtins cannot break
 from dataclasses import dataclass, field
 
 from course.grading import codec
-from course.grading.isolation.audit import close_leaked, make_audit_hook, open_fds
-from course.grading.isolation.limits import set_limits
+from course.grading.sandbox.isolation.audit import close_leaked, make_audit_hook, open_fds
+from course.grading.sandbox.isolation.limits import set_limits
 from course.grading.vocabulary import Op, ReplyStatus
 
 _dumps = json.dumps
@@ -243,14 +242,14 @@ PRELOAD = (
     "course.results",
     "course.linalg",
     "course.lsq",
-    "course.grading.selfcheck",
+    "course.grading.student.selfcheck",
 )
 
 
 def course_modules() -> list[str]:
     """Every module of the course library (not the grader's own, which pull in nbformat):
     imported before student code, because a child may not read the library's sources
-    (:mod:`course.grading.isolation.paths`)."""
+    (:mod:`course.grading.sandbox.isolation.paths`)."""
     import pkgutil
 
     import course
@@ -409,7 +408,7 @@ class RequestLoop:
 
 @dataclass
 class Setup:
-    """What :func:`prepare` made ready for every child of one fork server (or spawned runner)."""
+    """What :func:`prepare` made ready for every child of one fork server."""
 
     event_fd: int
     landlock_abi: int = 0
@@ -424,10 +423,10 @@ class Setup:
 
 
 def prepare(config: dict) -> Setup:
-    """Everything before any child exists (trusted; once per fork server or spawned runner)."""
+    """Everything before any child exists (trusted; once per fork server)."""
     from course.grading import tripwire
-    from course.grading.isolation import landlock, privileges
-    from course.grading.isolation.paths import python_paths
+    from course.grading.sandbox.isolation import landlock, privileges
+    from course.grading.sandbox.isolation.paths import python_paths
 
     drop_to = tuple(config["drop_to"]) if config.get("drop_to") else None
     unprivileged = os.geteuid() != 0
@@ -472,8 +471,8 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
         if not init or init.get("op") != Op.INIT.value:
             os._exit(3)
         limits = init.get("limits", {})
-        from course.grading import selfcheck
-        from course.grading.isolation import landlock, privileges, seccomp
+        from course.grading.sandbox.isolation import landlock, privileges, seccomp
+        from course.grading.student import selfcheck
 
         if setup.drop_child is not None:
             privileges.drop(setup.drop_child)
@@ -525,17 +524,3 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
             pass
     finally:
         os._exit(code)
-
-
-def main(argv=None) -> None:
-    """Spawn mode: ``python -m course.grading.runner REQ_FD RESP_FD EVENT_FD TMPDIR CONFIG``."""
-    argv = sys.argv[1:] if argv is None else argv
-    req_fd, resp_fd, event_w = int(argv[0]), int(argv[1]), int(argv[2])
-    setup = prepare(json.loads(argv[4]))
-    os.dup2(event_w, setup.event_fd)
-    os.close(event_w)
-    child_main(req_fd, resp_fd, argv[3], setup)
-
-
-if __name__ == "__main__":
-    main()

@@ -17,8 +17,8 @@
 Never included: ``solutions/``, any ``checks.py``, hidden cases, reference code, the tests,
 the instructor's secret. With ``secret`` and ``roster`` (a graded class), each assignment with
 personal data ships ``personal_data.json`` (the roster's data, drawn with the secret) and only
-the public part of ``data.py`` (see :mod:`course.grading.personal`). Before anything is handed
-over, every file (archives included) is scanned for the needles of :mod:`course.grading.leaks`;
+the public part of ``data.py`` (see :mod:`course.grading.authoring.personal`). Before anything is handed
+over, every file (archives included) is scanned for the needles of :mod:`course.grading.authoring.leaks`;
 a hit aborts the export. A failed export leaves ``DEST`` as it was.
 """
 
@@ -37,16 +37,16 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from course.grading.checks import load_checks
-from course.grading.leaks import Hit, needles_for, public_corpus, scan
-from course.grading.personal import PERSONAL_FILE, build_personal_data, public_data_source
-from course.grading.release import find_solutions, release_files
-from course.grading.roster import Roster
-from course.grading.secret import Secret, public_key_id
+from course.grading.authoring.checks import load_checks
+from course.grading.authoring.leaks import Hit, needles_for, public_corpus, scan
+from course.grading.authoring.personal import PERSONAL_FILE, build_personal_data, public_data_source
+from course.grading.authoring.release import find_solutions, release_files
+from course.grading.authoring.secret import Secret, public_key_id
+from course.grading.batch.roster import Roster
 
 __all__ = ["DIST_NAME", "ExportError", "ExportResult", "export"]
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+REPO_ROOT = Path(__file__).resolve().parents[3]
 DIST_NAME = "residual-validation-course"
 _WHEEL_NAME = DIST_NAME.replace("-", "_")
 STUDENT_PAGE = Path("docs/students/install-and-submit.md")

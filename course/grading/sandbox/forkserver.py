@@ -1,6 +1,6 @@
-"""The warm fork server: ``python -m course.grading.forkserver SOCK_FD CONFIG_JSON``.
+"""The warm fork server: ``python -m course.grading.sandbox.forkserver SOCK_FD CONFIG_JSON``.
 
-Started once per :class:`~course.grading.sandbox.Sandbox` (inside bubblewrap when available),
+Started once per :class:`~course.grading.sandbox.parent.Sandbox` (inside bubblewrap when available),
 it prepares everything that does not depend on the student, once:
 
 1. switches to ``nobody`` when the grader is root and the namespaces make that possible;
@@ -12,7 +12,7 @@ it prepares everything that does not depend on the student, once:
 Then it forks one child per request of the grader, received on a UNIX socket together with the
 child's three pipe ends, and answers with the child's pid and a pidfd (which the grader can
 signal across PID namespaces). It never runs student code itself; its children run
-:func:`course.grading.runner.child_main` and never return.
+:func:`course.grading.sandbox.runner.child_main` and never return.
 """
 
 from __future__ import annotations
@@ -28,8 +28,8 @@ __all__: list[str] = []
 
 
 def _server_main(sock_fd: int, config_json: str) -> None:
-    from course.grading import runner
-    from course.grading.isolation import seccomp
+    from course.grading.sandbox import runner
+    from course.grading.sandbox.isolation import seccomp
     from course.grading.vocabulary import Op, ReplyStatus
 
     seccomp.die_with_parent()

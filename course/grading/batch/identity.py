@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from course.grading.notebook import MAX_NOTEBOOK_BYTES
-from course.grading.submit import saved_student_id
+from course.grading.student.submit import saved_student_id
 from course.grading.vocabulary import DEMO_STUDENT_ID, PLACEHOLDER_ID, is_student_id
 
 __all__ = ["Identity", "resolve_identities"]
@@ -29,7 +29,7 @@ __all__ = ["Identity", "resolve_identities"]
 
 @dataclass
 class Identity:
-    """The resolved submissions (:class:`~course.grading.driver.Submission`, each with the
+    """The resolved submissions (:class:`~course.grading.batch.driver.Submission`, each with the
     student ID decided here) and the console's flags."""
 
     entries: list = field(default_factory=list)

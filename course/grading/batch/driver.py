@@ -2,8 +2,8 @@
 
 It finds the submissions, skips students already graded with the same checks and library
 version (``results.jsonl`` makes a run resumable), grades the others in parallel, one
-:class:`~course.grading.session.StudentSession` each, and writes the reports
-(:mod:`course.grading.reports`) as students finish.
+:class:`~course.grading.batch.session.StudentSession` each, and writes the reports
+(:mod:`course.grading.batch.reports`) as students finish.
 
 Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status),
 ``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
@@ -13,19 +13,16 @@ finish; a rerun skips students already graded with the same checks and library v
 from __future__ import annotations
 
 import hashlib
-import os
 import sys
 import threading
 import time
-from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from course.grading.identity import resolve_identities
-from course.grading.isolation import Isolation, detect
-from course.grading.marks import (
+from course.grading.batch.cluster import grade_on_cluster
+from course.grading.batch.identity import resolve_identities
+from course.grading.batch.marks import (
     SHORT_ANSWERS_FILE,
     MarksError,
     apply_marks,
@@ -37,69 +34,24 @@ from course.grading.marks import (
     validate_marks,
     write_short_answers,
 )
-from course.grading.reports import (
+from course.grading.batch.options import GradeOptions
+from course.grading.batch.reports import (
     Summary,
     append_result,
     feedback_markdown,
     read_results,
     write_csv,
 )
-from course.grading.roster import Roster, write_canvas_csv, write_moodle_csv
-from course.grading.secret import Secret, public_key_id
-from course.grading.session import AssignmentGrader
+from course.grading.batch.results import StudentResult
+from course.grading.batch.roster import write_canvas_csv, write_moodle_csv
+from course.grading.batch.session import AssignmentGrader
 
 __all__ = [
-    "GradeOptions",
     "Submission",
     "Summary",
-    "available_cpus",
     "find_submissions",
     "grade",
 ]
-
-
-def available_cpus() -> int:
-    """The CPUs this process may actually run on: its affinity mask, capped by a cgroup CPU
-    quota (containers), at least 1. ``os.cpu_count()`` counts the machine's cores instead."""
-    try:
-        cpus = len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        cpus = os.cpu_count() or 1
-    try:
-        quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
-        if quota != "max":
-            cpus = min(cpus, max(1, int(-(-int(quota) // int(period)))))
-    except (OSError, ValueError):
-        pass
-    return max(1, cpus)
-
-
-@dataclass
-class GradeOptions:
-    jobs: int = field(default_factory=available_cpus)
-    timeout: float | None = None  # overrides every question's time limit
-    memory_mb: int = 1024
-    mode: str = "auto"
-    regrade: bool = False
-    progress: bool = True
-    ready_timeout: float = 60.0
-    student_budget: float | None = None  # wall-clock seconds for one student, all attempts
-    unsafe_no_isolation: bool = False  # grade even where the kernel offers no file-system walls
-    namespaces: bool = True  # use bubblewrap when installed
-    landlock: bool = True  # use Landlock when the kernel has it
-    announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
-    cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
-    secret: Secret | None = None  # the instructor's key of personal data (None: public data)
-    roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
-    missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
-    lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
-    short_answers: Path | None = None  # a filled marking file to merge (course.grading.marks)
-
-    def isolation(self) -> Isolation:
-        """The sandbox layers (raises IsolationError where none walls off the file system)."""
-        return detect(
-            namespaces=self.namespaces, landlock=self.landlock, unsafe=self.unsafe_no_isolation
-        )
 
 
 @dataclass(frozen=True)
@@ -233,15 +185,15 @@ def grade(
         )
         todo = identity.entries
         previous = read_results(results_path)
-        rows: dict[str, dict] = {}
+        rows: dict[str, StudentResult] = {}
         pending = []
         for sub in todo:
             old = previous.get(sub.student)
             if (
-                old
-                and old.get("checks_sha256") == grader.digest
-                and old.get("version") == grader.version
-                and old.get("data_key", public_key_id) == grader.data_key
+                old is not None
+                and old.checks_sha256 == grader.digest
+                and old.version == grader.version
+                and old.data_key == grader.data_key
             ):
                 rows[sub.student] = old
             else:
@@ -250,14 +202,14 @@ def grade(
 
         paths = {sub.student: sub.path for sub in todo}
 
-        def finish(row: dict) -> None:
+        def finish(row: StudentResult) -> None:
             with lock:
-                row["file"] = _file_record(paths.get(row["student"]), submissions)
+                row.record_file(_file_record(paths.get(row.student), submissions))
                 append_result(row, results_path)
-                (out / "feedback" / f"{row['student']}.md").write_text(
+                (out / "feedback" / f"{row.student}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
                 )
-                rows[row["student"]] = row
+                rows[row.student] = row
 
         try:
             from tqdm import tqdm
@@ -275,8 +227,6 @@ def grade(
             else None
         )
         if options.cluster:
-            from course.grading.cluster import grade_on_cluster
-
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
             if options.announce is not None:
@@ -290,7 +240,7 @@ def grade(
         if bar is not None:
             bar.close()
         for row in rows.values():  # feedback of resumed students too (cheap, keeps OUT complete)
-            fb = out / "feedback" / f"{row['student']}.md"
+            fb = out / "feedback" / f"{row.student}.md"
             if not fb.exists():
                 fb.write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
         qids = [q.id for q in grader.questions]
@@ -321,7 +271,7 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
     marks = load_marks(out)
     imported = 0
     if entries is not None:
-        new = validate_marks(Path(options.short_answers), entries, {r["student"]: r for r in final})
+        new = validate_marks(Path(options.short_answers), entries, {r.student: r for r in final})
         for sid, by_q in new.items():
             marks.setdefault(sid, {}).update(by_q)
             imported += len(by_q)
@@ -329,7 +279,7 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
     for row in final:
         if apply_marks(row, checks, marks):
             append_result(row, results_path)
-        (out / "feedback" / f"{row['student']}.md").write_text(
+        (out / "feedback" / f"{row.student}.md").write_text(
             feedback_markdown(row, checks), encoding="utf-8"
         )
     path = out / SHORT_ANSWERS_FILE
@@ -372,7 +322,7 @@ def _class_files(summary: Summary, grader, options: GradeOptions, out: Path) -> 
     """Missing and unknown submissions against the roster, and the LMS grade files."""
     roster = options.roster
     assert roster is not None
-    by_id = {row["student"]: row for row in summary.rows}
+    by_id = {row.student: row for row in summary.rows}
     summary.missing = [s.id for s in roster.students if s.id not in by_id]
     known = set(roster.ids)
     summary.unknown = sorted(sid for sid in by_id if sid not in known)

@@ -2,7 +2,7 @@
 
 :class:`AssignmentGrader` holds what does not depend on the student (the checks, the release,
 references computed once, the sandbox); :class:`StudentSession` runs one student's plan in a
-sandboxed child (:mod:`course.grading.sandbox`), asks the child for values and function
+sandboxed child (:mod:`course.grading.sandbox.parent`), asks the child for values and function
 results and compares them with references computed here, in the parent. A timeout or crash
 costs only the question it happened in: the child is killed, a fresh one re-runs the cells
 (skipping the bad one) and grading continues.
@@ -13,21 +13,19 @@ from __future__ import annotations
 import re
 import threading
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+from course.grading.authoring.release import checks_digest, load_assignment
+from course.grading.authoring.secret import public_key_id
+from course.grading.batch.options import GradeOptions
+from course.grading.batch.plan import build_plan
+from course.grading.batch.results import CaseResult, QuestionResult, StudentResult
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
-from course.grading.notebook import (
-    SubmissionError,
-    build_plan,
-    forbidden_mentions,
-    read_submission,
-)
-from course.grading.release import checks_digest, load_assignment
-from course.grading.sandbox import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
-from course.grading.secret import public_key_id
+from course.grading.notebook import SubmissionError, forbidden_mentions, read_submission
+from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -39,9 +37,6 @@ from course.grading.vocabulary import (
     SubmissionStatus,
     answer_cell_id,
 )
-
-if TYPE_CHECKING:
-    from course.grading.driver import GradeOptions
 
 __all__ = ["AssignmentGrader", "StudentSession"]
 
@@ -61,11 +56,7 @@ class AssignmentGrader:
     """Grades submissions of one assignment (thread-safe: one :meth:`grade_one` per thread)."""
 
     def __init__(self, solution_dir: Path, options: GradeOptions | None = None, deny_read=()):
-        if options is None:
-            from course.grading.driver import GradeOptions
-
-            options = GradeOptions()
-        self.options = options
+        self.options = options if options is not None else GradeOptions()
         self.solution_dir = Path(solution_dir).resolve()
         self.checks, self.release = load_assignment(self.solution_dir)
         self.name = self.checks.name
@@ -111,7 +102,6 @@ class AssignmentGrader:
         with self._sandbox_lock:
             if self._sandbox is None:
                 self._sandbox = Sandbox(
-                    mode=self.options.mode,
                     limits=Limits(
                         memory_mb=self.options.memory_mb, cpu_seconds=int(self.budget()) + 5
                     ),
@@ -150,28 +140,16 @@ class AssignmentGrader:
         return max(60.0, 2.0 * per_q + 30.0)
 
     # -- one student ----------------------------------------------------------------------
-    def _row(self, sid: str) -> dict:
-        return {
-            "student": sid,
-            "assignment": self.name,
-            "checks_sha256": self.digest,
-            "version": self.version,
-            "data_key": self.data_key,
-            "questions": {},
-            "notes": [],
-            "total": 0.0,
-            "max": self.checks.max_points,
-            "status": SubmissionStatus.OK,
-        }
-
-    def _question_result(self, q, status, message="", points=0.0, cases=None) -> dict:
-        return {
-            "points": round(float(points), 4),
-            "max": q.points,
-            "status": status,
-            "message": message,
-            "cases": cases or [],
-        }
+    def _row(self, sid: str) -> StudentResult:
+        return StudentResult(
+            student=sid,
+            assignment=self.name,
+            checks_sha256=self.digest,
+            version=self.version,
+            data_key=self.data_key,
+            max=self.checks.max_points,
+            status=SubmissionStatus.OK,
+        )
 
     def grade_one(
         self,
@@ -180,7 +158,7 @@ class AssignmentGrader:
         problem: str | None = None,
         refused: bool = False,
         raw: bytes | None = None,
-    ) -> dict:
+    ) -> StudentResult:
         """Grade one submission (its notebook at ``path``, or its bytes ``raw``); never raises
         (a grader failure is recorded in the row). ``wall_seconds`` says how long it took."""
         start = time.monotonic()
@@ -189,27 +167,25 @@ class AssignmentGrader:
             self._grade(row, sid, path, problem, refused, raw)
         except Exception as exc:  # a bug or sandbox failure must not abort the batch
             for q in self.questions:
-                row["questions"].setdefault(
-                    q.id, self._question_result(q, GradeStatus.GRADER_ERROR, "not graded")
+                row.questions.setdefault(
+                    q.id, _question_result(q, GradeStatus.GRADER_ERROR, "not graded")
                 )
-            row["notes"].append(
+            row.notes.append(
                 f"The grader failed on this submission ({type(exc).__name__}: {exc}); please tell your instructor."
             )
-            row["status"] = SubmissionStatus.GRADER_ERROR
-        row["total"] = round(sum(r["points"] for r in row["questions"].values()), 4)
+            row.status = SubmissionStatus.GRADER_ERROR
+        row.add_total()
         abnormal = [
-            f"{qid}: {r['status']}"
-            for qid, r in row["questions"].items()
-            if r["status"] in ABNORMAL
+            f"{qid}: {r.status}" for qid, r in row.questions.items() if r.status in ABNORMAL
         ]
-        if row["status"] == SubmissionStatus.OK and abnormal:
-            row["status"] = "; ".join(abnormal)
-        row["wall_seconds"] = round(time.monotonic() - start, 3)
+        if row.status == SubmissionStatus.OK and abnormal:
+            row.status = "; ".join(abnormal)
+        row.wall_seconds = round(time.monotonic() - start, 3)
         return row
 
     def _grade(
         self,
-        row: dict,
+        row: StudentResult,
         sid: str,
         path: Path | None,
         problem: str | None,
@@ -217,46 +193,44 @@ class AssignmentGrader:
         raw: bytes | None = None,
     ) -> None:
         if problem and path is None and raw is None:
-            row["status"] = (
-                SubmissionStatus.REFUSED if refused else SubmissionStatus.INVALID_NOTEBOOK
-            )
-            row["notes"].append(problem[0].upper() + problem[1:] + ".")
+            row.status = SubmissionStatus.REFUSED if refused else SubmissionStatus.INVALID_NOTEBOOK
+            row.notes.append(problem[0].upper() + problem[1:] + ".")
             for q in self.questions:
-                row["questions"][q.id] = self._question_result(q, GradeStatus.NOT_ANSWERED, problem)
+                row.questions[q.id] = _question_result(q, GradeStatus.NOT_ANSWERED, problem)
             return
         if problem:
-            row["notes"].append(problem[0].upper() + problem[1:] + ".")
+            row.notes.append(problem[0].upper() + problem[1:] + ".")
         try:
             nb = read_submission(raw if raw is not None else path)
         except SubmissionError as exc:
-            row["status"] = SubmissionStatus.INVALID_NOTEBOOK
-            row["notes"].append(f"The submission could not be read: {exc}.")
+            row.status = SubmissionStatus.INVALID_NOTEBOOK
+            row.notes.append(f"The submission could not be read: {exc}.")
             for q in self.questions:
-                row["questions"][q.id] = self._question_result(
+                row.questions[q.id] = _question_result(
                     q, GradeStatus.NOT_ANSWERED, "not graded: the notebook could not be read"
                 )
             return
         plan = build_plan(self.release, nb, sid, {q.id: q.target for q in self.questions})
-        row["notes"].extend(plan.notes)
+        row.notes.extend(plan.notes)
         if plan.deleted:
-            row["deleted_answers"] = dict(plan.deleted)
+            row.deleted_answers = dict(plan.deleted)
         nb_id = plan.notebook_student_id
         if nb_id is not None and nb_id.strip() == PLACEHOLDER_ID:
-            row["notes"].append(
+            row.notes.append(
                 f"STUDENT_ID was not set in the notebook; graded as {sid!r} (the submission's name)."
             )
         elif nb_id is not None and nb_id.strip() != sid:
-            row["notes"].append(
+            row.notes.append(
                 f"STUDENT_ID in the notebook is {nb_id!r}, but the submission is named {sid!r}: "
                 f"graded as {sid!r}, with the data of {sid!r}."
             )
         if not plan.answered and not any(c.origin == CellOrigin.EXTRA for c in plan.cells):
             for q in self.questions:
-                row["questions"][q.id] = self._question_result(
+                row.questions[q.id] = _question_result(
                     q, GradeStatus.NOT_ANSWERED, "no answer cell found"
                 )
             if not nb.get("cells"):
-                row["notes"].append("The notebook is empty.")
+                row.notes.append("The notebook is empty.")
             return
         StudentSession(self, row, sid, plan).run()
 
@@ -264,7 +238,7 @@ class AssignmentGrader:
 class StudentSession:
     """Runs one student's plan, with restarts after timeouts and crashes."""
 
-    def __init__(self, grader: AssignmentGrader, row: dict, sid: str, plan):
+    def __init__(self, grader: AssignmentGrader, row: StudentResult, sid: str, plan):
         self.g = grader
         self.row = row
         self.sid = sid
@@ -339,9 +313,7 @@ class StudentSession:
         if cell.question:
             self.hard.setdefault(cell.question, (status, message))
         else:
-            self.row["notes"].append(
-                f"{message[0].upper() + message[1:]}; it was skipped ({status})."
-            )
+            self.row.notes.append(f"{message[0].upper() + message[1:]}; it was skipped ({status}).")
         self._drop_child()
 
     def _request(self, question: str | None, op: Op, timeout: float, **fields) -> dict:
@@ -384,11 +356,11 @@ class StudentSession:
             for q in self.g.questions:
                 result = self._grade_question(q)
                 if self.plan.deleted.get(q.id) == "adopted":
-                    result["message"] = (
+                    result.message = (
                         f"graded from your added cell (the answer cell of {q.id} was deleted)"
-                        + (f"; {result['message']}" if result["message"] else "")
+                        + (f"; {result.message}" if result.message else "")
                     )
-                self.row["questions"][q.id] = result
+                self.row.questions[q.id] = result
         finally:
             self._drop_child()
 
@@ -400,10 +372,9 @@ class StudentSession:
         ]
         return errors[-1] if errors else None
 
-    def _grade_question(self, q) -> dict:
-        g = self.g
+    def _grade_question(self, q) -> QuestionResult:
         if q.id not in self.plan.answered:
-            return g._question_result(
+            return _question_result(
                 q,
                 GradeStatus.NOT_ANSWERED,
                 f"the answer cell of {q.id} (id {answer_cell_id(q.id)!r}) is missing from the "
@@ -414,20 +385,20 @@ class StudentSession:
             return self._grade_short_answer(q)
         static = forbidden_mentions(self.plan.answer_sources.get(q.id, ""), q.forbid)
         if static:
-            return g._question_result(
+            return _question_result(
                 q,
                 GradeStatus.FORBIDDEN,
                 f"the answer uses {', '.join(static)}, which this question forbids",
             )
         if not self.ensure_child():
-            return g._question_result(
+            return _question_result(
                 q, GradeStatus.SKIPPED, "not graded: the time budget for this submission ran out"
             )
         if q.id in self.hard:
             status, message = self.hard[q.id]
-            return g._question_result(q, status, message)
+            return _question_result(q, status, message)
         if self.hits.get(q.id):
-            return g._question_result(
+            return _question_result(
                 q,
                 GradeStatus.FORBIDDEN,
                 f"the answer calls {', '.join(sorted(self.hits[q.id]))}, which this question forbids",
@@ -438,28 +409,25 @@ class StudentSession:
             return self._grade_value(q)
         return self._grade_function(q)
 
-    def _grade_short_answer(self, q) -> dict:
+    def _grade_short_answer(self, q) -> QuestionResult:
         """A short answer waits for the instructor's mark (course grade --short-answers)."""
         text = self.plan.texts.get(q.id, "")
         if is_unanswered_text(text):
-            return self.g._question_result(
+            return _question_result(
                 q, GradeStatus.NOT_ANSWERED, "the answer cell still holds its placeholder"
             )
-        result = self.g._question_result(
-            q, GradeStatus.TO_MARK, "your instructor marks this answer", 0.0
-        )
-        result["answer"] = text[:MAX_SHORT_ANSWER]
+        result = _question_result(q, GradeStatus.TO_MARK, "your instructor marks this answer")
+        result.answer = text[:MAX_SHORT_ANSWER]
         return result
 
-    def _read_variable(self, q) -> tuple[dict, dict | None]:
+    def _read_variable(self, q) -> tuple[dict, QuestionResult | None]:
         """Ask the child for the answer variable of ``q``: ``(reply, None)``, or a finished
         question result when the child failed or the variable is missing or still a stub."""
-        g = self.g
         try:
             reply = self._request(q.id, Op.VALUE, 30, name=q.target)
         except (ChildTimeout, ChildDied) as exc:
             self._drop_child()
-            return {}, g._question_result(
+            return {}, _question_result(
                 q,
                 GradeStatus.CRASH,
                 f"reading {q.target} failed ({getattr(exc, 'cause', 'timeout')})",
@@ -468,13 +436,10 @@ class StudentSession:
         if status == ReplyStatus.UNDEFINED:
             return reply, self._missing(q, f"no variable {q.target}")
         if status == ReplyStatus.STUB:
-            return reply, g._question_result(
-                q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ..."
-            )
+            return reply, _question_result(q, GradeStatus.NOT_ANSWERED, f"{q.target} is still ...")
         return reply, None
 
-    def _grade_choice(self, q) -> dict:
-        g = self.g
+    def _grade_choice(self, q) -> QuestionResult:
         reply, early = self._read_variable(q)
         if early is not None:
             return early
@@ -485,27 +450,27 @@ class StudentSession:
             got = None
         expected = q.expected(data=self.data[q.data] if q.data is not None else None)
         ok, message = choice_verdict(q.id, q.options, expected, got)
-        case = {"label": q.target, "ok": ok, "message": message}
+        case = CaseResult(q.target, ok, message)
         if ok:
-            return g._question_result(q, GradeStatus.PASS, "", q.points, [case])
-        return g._question_result(q, GradeStatus.FAIL, message, 0.0, [case])
+            return _question_result(q, GradeStatus.PASS, "", q.points, [case])
+        return _question_result(q, GradeStatus.FAIL, message, 0.0, [case])
 
-    def _missing(self, q, what: str) -> dict:
+    def _missing(self, q, what: str) -> QuestionResult:
         err = self._answer_cell_error(q.id)
         if err is None or err.get("type") == "NotImplementedError":
-            return self.g._question_result(q, GradeStatus.NOT_ANSWERED, what)
-        return self.g._question_result(
+            return _question_result(q, GradeStatus.NOT_ANSWERED, what)
+        return _question_result(
             q, GradeStatus.ERROR, f"your answer cell raised {self._err_text(err)}"
         )
 
-    def _grade_value(self, q) -> dict:
+    def _grade_value(self, q) -> QuestionResult:
         g = self.g
         reply, early = self._read_variable(q)
         if early is not None:
             return early
         status = reply.get("status")
         if status != ReplyStatus.OK:
-            return g._question_result(
+            return _question_result(
                 q,
                 GradeStatus.ERROR,
                 f"{q.target} must be plain data (numbers, arrays, bools, strings): "
@@ -514,7 +479,7 @@ class StudentSession:
         try:
             got = decode(reply.get("value"), allow_band=False)
         except (EncodingError, TypeError, ValueError, KeyError):
-            return g._question_result(q, GradeStatus.ERROR, f"{q.target} could not be read")
+            return _question_result(q, GradeStatus.ERROR, f"{q.target} could not be read")
         if q.data is not None:
             expected = q.expected(data=self.data[q.data])
             mistakes = q.mistaken(data=self.data[q.data]) if q.mistakes else []
@@ -523,127 +488,171 @@ class StudentSession:
             mistakes = g.value_mistakes[q.id]
         # message: for the student, never an expected value; detail: the instructor's records
         verdict = compare(expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes)
-        case = {"label": q.target, "ok": verdict.ok, "message": verdict.message}
+        case = CaseResult(q.target, verdict.ok, verdict.message)
         if not verdict.ok:
-            case["detail"] = verdict.detail
+            case.detail = verdict.detail  # instructor only (results.jsonl)
         if verdict.ok:
-            return g._question_result(q, GradeStatus.PASS, "", q.points, [case])
+            return _question_result(q, GradeStatus.PASS, "", q.points, [case])
         message = verdict.message
         err = self._answer_cell_error(q.id)
         if err is not None:
             message += f" (your answer cell also raised {self._err_text(err)})"
-        return g._question_result(q, GradeStatus.FAIL, message, 0.0, [case])
+        return _question_result(q, GradeStatus.FAIL, message, 0.0, [case])
 
-    def _grade_function(self, q) -> dict:
+    def _grade_function(self, q) -> QuestionResult:
+        """Call the student's function on every case, in order; a timeout, crash, stub or the
+        end of the time budget stops the run (later cases are "not run")."""
         g = self.g
         cases = q.public_cases + q.hidden_cases
-        expected = g.case_expected[q.id]
-        results = []
-        status = None
-        first_message = ""
-        n_hidden = 0
-        for case, exp, mistakes in zip(cases, expected, g.case_mistakes[q.id]):
-            if case.hidden:
-                n_hidden += 1
-                label = f"hidden case {n_hidden}"
+        run = _CaseRun()
+        for case, label, expected, mistakes in zip(
+            cases, _case_labels(cases), g.case_expected[q.id], g.case_mistakes[q.id]
+        ):
+            if run.stopped:
+                run.results.append(CaseResult(label, False, "not run"))
+            elif self.child is None and not self.ensure_child():
+                run.stop(GradeStatus.SKIPPED, "the time budget for this submission ran out", True)
+                run.results.append(CaseResult(label, False, "not run"))
             else:
-                label = case.label
-            if status in (
-                GradeStatus.TIMEOUT,
-                GradeStatus.CRASH,
-                GradeStatus.MEMORY,
-                GradeStatus.NOT_ANSWERED,
-                GradeStatus.SKIPPED,
-            ):
-                results.append({"label": label, "ok": False, "message": "not run"})
-                continue
-            if self.child is None and not self.ensure_child():
-                status = GradeStatus.SKIPPED
-                first_message = first_message or "the time budget for this submission ran out"
-                results.append({"label": label, "ok": False, "message": "not run"})
-                continue
-            limit = g.timeout_for(q.id)
-            try:
-                reply = self._request(
-                    q.id,
-                    Op.CALL,
-                    limit,
-                    name=q.target,
-                    args=encode(case.args),
-                    kwargs=encode(case.kwargs),
-                )
-            except ChildTimeout:
-                status = GradeStatus.TIMEOUT
-                first_message = (
-                    f"{q.target} did not return within {limit:g} s on {label} and was stopped"
-                )
-                results.append({"label": label, "ok": False, "message": "timeout"})
-                self._drop_child()
-                continue
-            except ChildDied as exc:
-                status = self._failure_status(exc.cause)
-                first_message = f"calling {q.target} on {label} stopped the process: {exc.cause}"
-                results.append({"label": label, "ok": False, "message": exc.cause})
-                self._drop_child()
-                continue
-            rstatus = reply.get("status")
-            if rstatus == ReplyStatus.UNDEFINED:
-                return self._missing(q, f"no function {q.target}")
-            if rstatus == ReplyStatus.STUB:
-                status = GradeStatus.NOT_ANSWERED
-                first_message = f"{q.target} raises NotImplementedError"
-                results.append({"label": label, "ok": False, "message": "not answered"})
-                continue
-            if rstatus == ReplyStatus.NOT_CALLABLE:
-                return g._question_result(q, GradeStatus.ERROR, f"{q.target} is not a function")
-            if rstatus == ReplyStatus.ERROR:
-                err = reply.get("error") or {}
-                text = f"raised {self._err_text(err)}"
-                if err.get("type") == "MemoryError":
-                    status = GradeStatus.MEMORY
-                results.append({"label": label, "ok": False, "message": text})
-                first_message = first_message or f"{label}: {text}"
-                continue
-            if rstatus != ReplyStatus.OK:
-                text = f"returned something that is not plain data ({self._err_text(reply.get('error') or {})})"
-                results.append({"label": label, "ok": False, "message": text})
-                first_message = first_message or f"{label}: {text}"
-                continue
-            try:
-                got = decode(reply.get("value"), allow_band=False)
-            except (EncodingError, TypeError, ValueError, KeyError):
-                results.append({"label": label, "ok": False, "message": "unreadable result"})
-                continue
-            verdict = compare(exp, got, q.rtol, q.atol, mistakes=mistakes)
-            results.append({"label": label, "ok": verdict.ok, "message": verdict.message})
-            if not verdict.ok:
-                results[-1]["detail"] = verdict.detail  # instructor only (results.jsonl)
-            if not verdict.ok:
-                first_message = first_message or f"{label}: {verdict.message}"
+                early = self._call_case(q, run, case, label, expected, mistakes)
+                if early is not None:
+                    return early
         if self.hits.get(q.id):
-            return g._question_result(
+            return _question_result(
                 q,
                 GradeStatus.FORBIDDEN,
                 f"the answer calls {', '.join(sorted(self.hits[q.id]))}, "
                 "which this question forbids",
                 0.0,
-                results,
+                run.results,
             )
-        passed = sum(1 for r in results if r["ok"])
-        if status == GradeStatus.NOT_ANSWERED and passed == 0:
-            return g._question_result(q, GradeStatus.NOT_ANSWERED, first_message, 0.0, results)
-        fraction = passed / len(results) if q.partial else float(passed == len(results))
-        points = q.points * fraction
+        return run.result(q)
+
+    def _call_case(
+        self, q, run: _CaseRun, case, label: str, expected, mistakes
+    ) -> QuestionResult | None:
+        """Run one case into ``run``; a finished question result when the function is missing
+        or not a function."""
+        limit = self.g.timeout_for(q.id)
+        try:
+            reply = self._request(
+                q.id,
+                Op.CALL,
+                limit,
+                name=q.target,
+                args=encode(case.args),
+                kwargs=encode(case.kwargs),
+            )
+        except ChildTimeout:
+            self._drop_child()
+            run.stop(
+                GradeStatus.TIMEOUT,
+                f"{q.target} did not return within {limit:g} s on {label} and was stopped",
+            )
+            run.results.append(CaseResult(label, False, "timeout"))
+            return None
+        except ChildDied as exc:
+            self._drop_child()
+            run.stop(
+                self._failure_status(exc.cause),
+                f"calling {q.target} on {label} stopped the process: {exc.cause}",
+            )
+            run.results.append(CaseResult(label, False, exc.cause))
+            return None
+        status = reply.get("status")
+        if status == ReplyStatus.UNDEFINED:
+            return self._missing(q, f"no function {q.target}")
+        if status == ReplyStatus.NOT_CALLABLE:
+            return _question_result(q, GradeStatus.ERROR, f"{q.target} is not a function")
+        if status == ReplyStatus.STUB:
+            run.stop(GradeStatus.NOT_ANSWERED, f"{q.target} raises NotImplementedError")
+            run.results.append(CaseResult(label, False, "not answered"))
+        elif status == ReplyStatus.ERROR:
+            err = reply.get("error") or {}
+            if err.get("type") == "MemoryError":
+                run.status = GradeStatus.MEMORY  # stops the run; the message stays the first
+            run.fail(CaseResult(label, False, f"raised {self._err_text(err)}", raised=True))
+        elif status != ReplyStatus.OK:
+            text = f"returned something that is not plain data ({self._err_text(reply.get('error') or {})})"
+            run.fail(CaseResult(label, False, text))
+        else:
+            try:
+                got = decode(reply.get("value"), allow_band=False)
+            except (EncodingError, TypeError, ValueError, KeyError):
+                run.results.append(CaseResult(label, False, "unreadable result"))
+                return None
+            verdict = compare(expected, got, q.rtol, q.atol, mistakes=mistakes)
+            if verdict.ok:
+                run.results.append(CaseResult(label, True, verdict.message))
+            else:  # detail: the instructor's records only (results.jsonl)
+                run.fail(CaseResult(label, False, verdict.message, detail=verdict.detail))
+        return None
+
+
+def _question_result(q, status, message="", points=0.0, cases=None) -> QuestionResult:
+    return QuestionResult(round(float(points), 4), q.points, status, message, cases or [])
+
+
+def _case_labels(cases) -> list[str]:
+    """A public case's own label; hidden cases are numbered ("hidden case 2")."""
+    labels, n_hidden = [], 0
+    for case in cases:
+        n_hidden += bool(case.hidden)
+        labels.append(f"hidden case {n_hidden}" if case.hidden else case.label)
+    return labels
+
+
+#: After one of these, the remaining cases of a function question are not run.
+_STOPPING = frozenset(
+    {
+        GradeStatus.TIMEOUT,
+        GradeStatus.CRASH,
+        GradeStatus.MEMORY,
+        GradeStatus.NOT_ANSWERED,
+        GradeStatus.SKIPPED,
+    }
+)
+
+
+@dataclass
+class _CaseRun:
+    """The cases of one function question so far: their results, the status that stopped the
+    run (``None``: none did) and the message the student sees."""
+
+    results: list[CaseResult] = field(default_factory=list)
+    status: GradeStatus | None = None
+    message: str = ""
+
+    @property
+    def stopped(self) -> bool:
+        return self.status in _STOPPING
+
+    def stop(self, status: GradeStatus, message: str, keep_first: bool = False) -> None:
+        """The run stops with ``status``; its message replaces the first failure's unless
+        ``keep_first``."""
+        self.status = status
+        self.message = (self.message or message) if keep_first else message
+
+    def fail(self, case: CaseResult) -> None:
+        """A failed case; the first failure's message is the one the student sees."""
+        self.results.append(case)
+        self.message = self.message or f"{case.label}: {case.message}"
+
+    def result(self, q) -> QuestionResult:
+        """Points by the fraction of cases passed (all or nothing unless ``q.partial``); the
+        status: the one that stopped the run, else pass, error (every failed case raised and
+        none passed), partial or fail."""
+        passed = sum(1 for r in self.results if r.ok)
+        if self.status == GradeStatus.NOT_ANSWERED and passed == 0:
+            return _question_result(q, self.status, self.message, 0.0, self.results)
+        everything = passed == len(self.results)
+        points = q.points * (passed / len(self.results) if q.partial else float(everything))
+        status = self.status
         if status is None:
-            if passed == len(results):
+            if everything:
                 status = GradeStatus.PASS
-            elif (
-                all(str(r["message"]).startswith("raised ") for r in results if not r["ok"])
-                and passed == 0
-            ):
+            elif passed == 0 and all(r.raised for r in self.results if not r.ok):
                 status = GradeStatus.ERROR
             else:
                 status = GradeStatus.PARTIAL if points > 0 else GradeStatus.FAIL
-        return g._question_result(
-            q, status, "" if passed == len(results) else first_message, points, results
-        )
+        return _question_result(q, status, "" if everything else self.message, points, self.results)

@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from course.grading.authoring.secret import Secret
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
-from course.grading.secret import Secret
 from course.grading.vocabulary import DEMO_STUDENT_ID, QuestionKind
 
 __all__ = [
@@ -50,7 +50,7 @@ def student_rng(
 
     Without ``secret`` (self-learners): seeded with the first 128 bits of
     ``sha256(assignment NUL key NUL student_id)``, so anyone with the ID rebuilds the data.
-    With the instructor's :class:`~course.grading.secret.Secret`: seeded with
+    With the instructor's :class:`~course.grading.authoring.secret.Secret`: seeded with
     ``HMAC-SHA256(secret, ...)``, which nothing in the student distribution determines.
     Surrounding whitespace of the ID is ignored; the seed is the same on every machine and in
     every process (Python's ``hash`` is salted per process and is never used).
@@ -285,7 +285,7 @@ class Checks:
         if not all(isinstance(m, Mistake) for m in question.mistakes):
             raise ValueError(
                 f"{question.id}: mistakes=[Mistake('message', reference), ...] (from "
-                "course.grading.checks import Mistake)"
+                "course.grading.authoring.checks import Mistake)"
             )
         for name in question.forbid:
             if "." not in name:
@@ -477,7 +477,7 @@ class Checks:
 
         The student writes a few sentences in the question's markdown answer cell (in the
         solution notebook: a markdown cell with ``metadata.course = {"role": "answer",
-        "question": qid}``, see :func:`course.grading.authoring.short_answer_cell`; its text
+        "question": qid}``, see :func:`course.grading.authoring.notebooks.short_answer_cell`; its text
         is the model answer and never ships). ``course grade`` scores it "to mark" (0 points)
         and writes every answer, with ``rubric`` and blank points/comment columns, into
         ``OUT/short_answers.csv``; ``course grade ... --short-answers FILE`` merges the filled

@@ -18,6 +18,8 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from course.grading.batch.results import StudentResult
+
 __all__ = [
     "Summary",
     "append_result",
@@ -33,45 +35,40 @@ def _fmt_points(x: float) -> str:
     return f"{round(float(x), 2):g}"
 
 
-def feedback_markdown(row: dict, checks) -> str:
+def feedback_markdown(row: StudentResult, checks) -> str:
     """The student's feedback: per question points, status, message and hint.
 
     It never shows an expected value (a case's ``detail`` stays in results.jsonl, for the
     instructor) and only the first stage of staged hints."""
-    lines = [f"# {checks.title}: feedback for {row['student']}", ""]
+    lines = [f"# {checks.title}: feedback for {row.student}", ""]
     lines.append(
-        f"**Total: {_fmt_points(row['total'])} / {_fmt_points(row['max'])}**"
-        + ("" if row["status"] == "ok" else f"  (status: {row['status']})")
+        f"**Total: {_fmt_points(row.total)} / {_fmt_points(row.max)}**"
+        + ("" if row.status == "ok" else f"  (status: {row.status})")
     )
     lines += ["", "| question | points | status |", "|---|---|---|"]
-    for qid, r in row["questions"].items():
-        lines.append(
-            f"| {qid} | {_fmt_points(r['points'])} / {_fmt_points(r['max'])} | {r['status']} |"
-        )
-    for qid, r in row["questions"].items():
+    for qid, r in row.questions.items():
+        lines.append(f"| {qid} | {_fmt_points(r.points)} / {_fmt_points(r.max)} | {r.status} |")
+    for qid, r in row.questions.items():
         q = checks.questions.get(qid)
-        lines += [
-            "",
-            f"## {qid}: {_fmt_points(r['points'])} / {_fmt_points(r['max'])} ({r['status']})",
-        ]
-        if r["message"]:
+        lines += ["", f"## {qid}: {_fmt_points(r.points)} / {_fmt_points(r.max)} ({r.status})"]
+        if r.message:
             lines.append("")
-            lines.append(r["message"])
-        if r["cases"] and len(r["cases"]) > 1 and r["status"] != "not answered":
+            lines.append(r.message)
+        if len(r.cases) > 1 and r.status != "not answered":
             lines.append("")
-            for case in r["cases"]:
+            for case in r.cases:
                 lines.append(
-                    f"- {'PASS' if case['ok'] else 'FAIL'} {case['label']}"
-                    + (f": {case['message']}" if case["message"] and not case["ok"] else "")
+                    f"- {'PASS' if case.ok else 'FAIL'} {case.label}"
+                    + (f": {case.message}" if case.message and not case.ok else "")
                 )
-        if q is not None and q.hints and r["points"] < r["max"] and r["status"] != "to mark":
+        if q is not None and q.hints and not r.full_marks and r.status != "to mark":
             # the first stage only: the later ones (the formula) stay in the self-check
             lines += ["", f"Hint: {q.hints[0]}"]
-    if row["notes"]:
-        lines += ["", "## Notes", ""] + [f"- {n}" for n in row["notes"]]
+    if row.notes:
+        lines += ["", "## Notes", ""] + [f"- {n}" for n in row.notes]
     lines.append("")
     lines.append(
-        f"<sub>{row['assignment']} · checks {row['checks_sha256'][:12]} · course {row['version']}</sub>"
+        f"<sub>{row.assignment} · checks {row.checks_sha256[:12]} · course {row.version}</sub>"
     )
     return "\n".join(lines) + "\n"
 
@@ -87,18 +84,21 @@ def csv_text(value) -> str:
     return "'" + text if text.startswith(_FORMULA_START) else text
 
 
-def write_csv(rows: list[dict], question_ids: list[str], path: Path) -> None:
+def write_csv(rows: list[StudentResult], question_ids: list[str], path: Path) -> None:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(["student", *(csv_text(q) for q in question_ids), "total", "max", "status"])
-    for row in sorted(rows, key=lambda r: r["student"]):
+    for row in sorted(rows, key=lambda r: r.student):
         writer.writerow(
             [
-                csv_text(row["student"]),
-                *(_fmt_points(row["questions"].get(q, {}).get("points", 0)) for q in question_ids),
-                _fmt_points(row["total"]),
-                _fmt_points(row["max"]),
-                csv_text(row["status"]),
+                csv_text(row.student),
+                *(
+                    _fmt_points(row.questions[q].points if q in row.questions else 0)
+                    for q in question_ids
+                ),
+                _fmt_points(row.total),
+                _fmt_points(row.max),
+                csv_text(row.status),
             ]
         )
     path.write_text(buf.getvalue(), encoding="utf-8")
@@ -106,7 +106,7 @@ def write_csv(rows: list[dict], question_ids: list[str], path: Path) -> None:
 
 @dataclass
 class Summary:
-    rows: list
+    rows: list[StudentResult]
     question_ids: list
     max_points: dict
     graded: int
@@ -116,21 +116,21 @@ class Summary:
     flags: list = field(default_factory=list)  # doubts about who submitted what (identity)
     missing: list | None = None  # roster IDs without a submission (None: no roster)
     unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
-    marking: str = ""  # what happened to the short answers (course.grading.marks)
+    marking: str = ""  # what happened to the short answers (course.grading.batch.marks)
 
     def class_text(self) -> str:
         """The identity flags, deleted answer cells, the roster's missing and unknown
         submissions and the short answers to mark."""
         lines = []
         deleted = [
-            f"{r['student']} ("
+            f"{r.student} ("
             + ", ".join(
                 f"{qid}: {'graded from an added cell' if how == 'adopted' else 'not answered'}"
-                for qid, how in sorted(r["deleted_answers"].items())
+                for qid, how in sorted(r.deleted_answers.items())
             )
             + ")"
             for r in self.rows
-            if r.get("deleted_answers")
+            if r.deleted_answers
         ]
         if deleted:
             lines.append(f"Answer cells deleted in {len(deleted)} submission(s):")
@@ -164,22 +164,17 @@ class Summary:
             return "\n".join([lines[0], self.class_text()]).rstrip()
         lines.append(f"{'question':<10}{'max':>6}{'mean':>8}{'full marks':>12}")
         for qid in self.question_ids:
-            pts = [r["questions"][qid]["points"] for r in self.rows if qid in r["questions"]]
-            full = sum(
-                1
-                for r in self.rows
-                if qid in r["questions"]
-                and r["questions"][qid]["points"] >= r["questions"][qid]["max"]
-            )
+            pts = [r.questions[qid].points for r in self.rows if qid in r.questions]
+            full = sum(1 for r in self.rows if qid in r.questions and r.questions[qid].full_marks)
             mean = sum(pts) / len(pts) if pts else 0.0
             lines.append(
                 f"{qid:<10}{_fmt_points(self.max_points[qid]):>6}{mean:>8.2f}{100 * full / n:>11.0f}%"
             )
-        total = sum(r["total"] for r in self.rows) / n
+        total = sum(r.total for r in self.rows) / n
         lines.append(f"{'total':<10}{_fmt_points(sum(self.max_points.values())):>6}{total:>8.2f}")
         statuses: dict[str, int] = {}
         for r in self.rows:
-            statuses[r["status"]] = statuses.get(r["status"], 0) + 1
+            statuses[r.status] = statuses.get(r.status, 0) + 1
         lines.append(
             "status: "
             + ", ".join(
@@ -188,41 +183,42 @@ class Summary:
         )
         slow = slowest(self.rows)
         if slow:
-            times = sorted(float(r["wall_seconds"]) for r in self.rows if "wall_seconds" in r)
+            times = sorted(r.wall_seconds for r in self.rows if r.wall_seconds is not None)
             median = times[len(times) // 2]
             lines.append(
                 "slowest: "
-                + ", ".join(f"{r['student']} ({float(r['wall_seconds']):.1f} s)" for r in slow)
+                + ", ".join(f"{r.student} ({float(r.wall_seconds or 0):.1f} s)" for r in slow)
                 + f"; median {median:.2f} s per student"
             )
         extra = self.class_text()
         return "\n".join(lines + ([extra] if extra else []))
 
 
-def slowest(rows: list[dict], n: int = 3) -> list[dict]:
+def slowest(rows: list[StudentResult], n: int = 3) -> list[StudentResult]:
     """The ``n`` rows with the longest ``wall_seconds`` (the students worth a look)."""
-    timed = [r for r in rows if isinstance(r.get("wall_seconds"), (int, float))]
-    return sorted(timed, key=lambda r: (-float(r["wall_seconds"]), r["student"]))[:n]
+    timed = [r for r in rows if isinstance(r.wall_seconds, (int, float))]
+    return sorted(timed, key=lambda r: (-float(r.wall_seconds or 0), r.student))[:n]
 
 
-def read_results(path: Path) -> dict[str, dict]:
-    """The rows of ``results.jsonl`` by student (the last row of a student wins)."""
-    rows: dict[str, dict] = {}
+def read_results(path: Path) -> dict[str, StudentResult]:
+    """The rows of ``results.jsonl`` by student (the last row of a student wins; a row that
+    is not one, e.g. a line cut short by an interrupted run, is skipped: that student is
+    graded again)."""
+    rows: dict[str, StudentResult] = {}
     if not path.is_file():
         return rows
     with open(path, encoding="utf-8") as f:
         for line in f:
             try:
-                row = json.loads(line)
-            except ValueError:
-                continue  # e.g. a line cut short by an interrupted run
-            if isinstance(row, dict) and "student" in row:
-                rows[row["student"]] = row
+                row = StudentResult.from_json(json.loads(line))
+            except (ValueError, KeyError, TypeError, AttributeError):
+                continue
+            rows[row.student] = row
     return rows
 
 
-def append_result(row: dict, path: Path) -> None:
+def append_result(row: StudentResult, path: Path) -> None:
     """Append one row to ``results.jsonl`` (and flush, so an interrupted run keeps it)."""
     with open(path, "a", encoding="utf-8") as f:
-        f.write(json.dumps(row, sort_keys=True, ensure_ascii=False) + "\n")
+        f.write(json.dumps(row.to_json(), sort_keys=True, ensure_ascii=False) + "\n")
         f.flush()

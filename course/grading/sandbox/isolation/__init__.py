@@ -94,9 +94,9 @@ def detect(*, namespaces: bool = True, landlock: bool = True, unsafe: bool = Fal
     Raises :class:`IsolationError` when neither file-system layer is available, unless
     ``unsafe``.
     """
-    from course.grading.isolation import landlock as _landlock
-    from course.grading.isolation import namespaces as _namespaces
-    from course.grading.isolation import privileges, seccomp
+    from course.grading.sandbox.isolation import landlock as _landlock
+    from course.grading.sandbox.isolation import namespaces as _namespaces
+    from course.grading.sandbox.isolation import privileges, seccomp
 
     iso = Isolation(
         landlock=_landlock.abi_version() if landlock else 0,

@@ -1,7 +1,7 @@
 """``course release``: generate ``exercises/<name>/`` from ``solutions/<name>/``.
 
 The release holds the student notebook (stubs, no outputs, no hidden tests), ``checks.json``
-(public cases with SEALED expected values, see :mod:`course.grading.seal`: type, shape and
+(public cases with SEALED expected values, see :mod:`course.grading.authoring.seal`: type, shape and
 field names in the clear, every number a salted slow hash of its tolerance cell; never a value,
 never reference code), and the public ``data.py`` plus any extra files the assignment lists. The output is byte-for-byte
 deterministic for a given solution, library version and platform.
@@ -14,12 +14,13 @@ from pathlib import Path
 
 import nbformat
 
-from course.grading.checks import Checks, load_checks
+from course.grading.authoring.checks import Checks, load_checks
+from course.grading.authoring.passes import make_release
+from course.grading.authoring.seal import make_salt, seal
 from course.grading.codec import encode
 from course.grading.compare import signature
 from course.grading.items import right_options
-from course.grading.notebook import Release, make_release
-from course.grading.seal import make_salt, seal
+from course.grading.notebook import Release
 from course.grading.vocabulary import (
     CHECKS_FILE,
     DEMO_STUDENT_ID,

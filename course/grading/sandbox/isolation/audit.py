@@ -2,7 +2,7 @@
 
 Code in the same interpreter can switch an audit hook off (for instance by rewriting its
 closure variables found through :mod:`gc`), so nothing here is relied upon for safety: the
-kernel layers (:mod:`course.grading.isolation`) are. The hook stays because it turns what the
+kernel layers (:mod:`course.grading.sandbox.isolation`) are. The hook stays because it turns what the
 kernel would refuse anyway into a clear ``PermissionError: not allowed while grading: ...``.
 """
 

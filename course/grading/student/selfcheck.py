@@ -1,7 +1,7 @@
 """The student's self-check: ``check = Assignment.load(name, student_id=STUDENT_ID)``.
 
 ``check("q1")`` finds the answer (variable or function) in the notebook, runs the PUBLIC cases
-shipped in ``checks.json`` (their expected values sealed: :mod:`course.grading.seal`) and prints, per case, pass or fail: on failure a hint (staged: a nudge
+shipped in ``checks.json`` (their expected values sealed: :mod:`course.grading.authoring.seal`) and prints, per case, pass or fail: on failure a hint (staged: a nudge
 first, more after repeated failures, counted in this kernel) and what is wrong IN KIND (shape,
 NaN, sign, a constant factor, transposed, off by one, another order, a declared mistake) with the
 tolerance. It never prints an expected value, never shows test code, and says how many hidden
@@ -9,7 +9,7 @@ cases run at grading. A forbidden library call is a FAIL, as it scores 0 at grad
 value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
 
 In the grader's sandbox the same setup cell returns a silent stand-in (no checks run in the
-student's process); see :mod:`course.grading.runner`.
+student's process); see :mod:`course.grading.sandbox.runner`.
 """
 
 from __future__ import annotations
@@ -23,12 +23,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from course.grading.authoring.personal import PersonalData
+from course.grading.authoring.seal import sealed_compare
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
-from course.grading.personal import PersonalData
-from course.grading.seal import sealed_compare
 from course.grading.tripwire import wrap_forbidden
 from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
 
@@ -122,8 +122,8 @@ class Assignment:
         kind, folder = _locate(name, path)
         if kind == "json":
             return cls(PublicSpec.read(folder), folder, student_id)
-        from course.grading.checks import load_checks
-        from course.grading.release import public_spec
+        from course.grading.authoring.checks import load_checks
+        from course.grading.authoring.release import public_spec
 
         checks = load_checks(folder)
         spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
@@ -134,7 +134,7 @@ class Assignment:
         if self._data_module is None:
             if not self.spec.data_file:
                 raise KeyError(f"assignment {self.name} has no per-student data")
-            from course.grading.checks import load_data_module
+            from course.grading.authoring.checks import load_data_module
 
             self._data_module = load_data_module(self.folder / self.spec.data_file, self.name)
         return self._data_module
@@ -149,7 +149,7 @@ class Assignment:
         if self.personal is not None:
             return self.personal.data(str(self.student_id), key)
         if key not in self._data_cache:
-            from course.grading.checks import student_rng
+            from course.grading.authoring.checks import student_rng
 
             func = getattr(self._data_mod(), key)
             self._data_cache[key] = encode(func(student_rng(self.name, key, str(self.student_id))))
@@ -170,7 +170,7 @@ class Assignment:
         saved notebook (found automatically in Jupyter and VS Code); ``out`` the folder to
         write to (default: beside the notebook). Returns the path written, or None.
         """
-        from course.grading.submit import submit_from_kernel
+        from course.grading.student.submit import submit_from_kernel
 
         return submit_from_kernel(self, sys._getframe(1).f_globals, notebook, out)
 
@@ -375,7 +375,7 @@ class Assignment:
 
 def _compare_case(case, got, q, path: str = ""):
     """The student's ``got`` against a public case's SEALED expected value (and its declared
-    mistakes): the file holds no value to compare with, see :mod:`course.grading.seal`."""
+    mistakes): the file holds no value to compare with, see :mod:`course.grading.authoring.seal`."""
     return sealed_compare(case.expected, got, path=path, mistakes=case.mistakes)
 
 

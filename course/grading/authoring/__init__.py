@@ -1,0 +1,1 @@
+"""Authoring room: what the instructor writes and hands out (checks, release, seals, export)."""
