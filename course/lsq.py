@@ -1097,7 +1097,9 @@ def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> Co
         )
     y_new = A_new @ fit.x_hat
     G = sla.solve_triangular(fit._R, A_new.T, trans="T", lower=False, check_finite=False)
-    sigma = np.sqrt(np.sum(G * G, axis=0))
+    # column norms scaled by a power of two (exact): rows ~1e160 square past double precision
+    scale = np.ldexp(1.0, np.frexp(np.max(np.abs(G), axis=0, initial=0.0))[1])
+    sigma = scale * np.sqrt(np.sum((G / scale) ** 2, axis=0))
     return ConfidenceBand(y_new, stats.norm.isf((1.0 - level) / 2) * sigma)
 
 

@@ -268,6 +268,11 @@ def test_confidence_band_matches_dense_formula():
         lsq.confidence_band(f, A_new[:, :2])
     with pytest.raises(ValueError, match="level must lie strictly between 0 and 1"):
         lsq.confidence_band(f, A_new, level=95)
+    # rows ~1e160: the half-width ~1e160 is representable, its square is not (it was inf)
+    for c in (1e160, 1e-160):
+        big = lsq.confidence_band(f, A_new * c, level=0.9)
+        np.testing.assert_allclose(big.y_new_hat / c, y_new, rtol=1e-12)
+        np.testing.assert_allclose(big.half_width / c, half, rtol=1e-12)
 
 
 # ---------------------------------------------------------------------------
