@@ -301,9 +301,20 @@ def ekf_update(model, x_pred, P_pred, y):
     (array([1.]), array([[17.]]))
     """
     _check_nonlinear(model)
-    x_pred = _state(x_pred, "x_pred")
+    x_pred = _model_state(model, x_pred, "x_pred")
     P_pred = as_covariance_stack(P_pred, "P_pred", allow_singular=True)
     return _ekf_update(model, x_pred, P_pred, _state(y, "y"))
+
+
+def _model_state(model, value, name: str) -> np.ndarray:
+    """A state ``(..., n)`` of the model's length, checked before ``g`` or ``h`` sees it."""
+    x = _state(value, name)
+    if x.shape[-1] != model.n_states:
+        raise ValueError(
+            f"{name} must have length n = {model.n_states} (the model's states, from its "
+            f"x0_mean), got shape {x.shape}"
+        )
+    return x
 
 
 def _check_nonlinear(model) -> None:
@@ -362,7 +373,7 @@ def ekf_predict(model, x_filt, P_filt, u=None):
     (array([2.]), array([[4.1]]))
     """
     _check_nonlinear(model)
-    x_filt = _state(x_filt, "x_filt")
+    x_filt = _model_state(model, x_filt, "x_filt")
     P_filt = as_covariance_stack(P_filt, "P_filt", allow_singular=True)
     if model.n_inputs == 0 and u is not None:
         raise ValueError("this model has no input (n_inputs = 0) but u was passed")
