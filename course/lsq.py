@@ -483,18 +483,18 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     values read as standard deviations (``Qyy = diag(v²)``, squared norm
     ``T₂``) give a plausible ``chi2(m - n)`` value (inside its central
     99.8 %), and the data favour that reading by a
-    likelihood ratio of at least 1000. The ratio is that of the restricted
-    likelihoods (the law of the residual contrasts, free of x) of the two
-    fully specified covariances,
+    likelihood ratio ``Λ`` of at least 1000. ``Λ`` is the ratio of the
+    restricted likelihoods (the density of the residual contrasts, free of
+    x, as in REML) of the two fully specified covariances,
 
     .. math:: \\log\\Lambda = \\tfrac12\\Big(T - T_2 - \\sum_i \\log v_i
               + \\log\\frac{\\det A^T \\operatorname{diag}(v)^{-1} A}
                          {\\det A^T \\operatorname{diag}(v^2)^{-1} A}\\Big),
 
     so it weighs both the overall scale and the residuals' pattern. Under
-    H0 its mean is 1, hence (Markov's inequality) it reaches 1000 in at
-    most 0.1 % of correct fits, whatever ``v`` and A; values near 1, where
-    the two readings barely differ, stay silent. With equal values the slip
+    H0 ``E Λ = 1`` (a density ratio), hence (Markov's inequality) ``Λ``
+    reaches 1000 in at most 0.1 % of correct fits, whatever ``v`` and A;
+    values near 1, where the two readings barely differ, stay silent. With equal values the slip
     looks exactly like a wrong variance factor, so the warning names both.
 
     Examples
