@@ -592,23 +592,6 @@ def test_empirical_threshold():
     assert kf.empirical_threshold(x, 0.1) == pytest.approx(np.quantile(x, 0.9))
     with pytest.raises(ValueError, match="no finite"):
         kf.empirical_threshold([np.nan], 0.1)
-    # a batch of windowed statistics: the undefined start (NaN in every run) is left out ...
-    batch = np.vstack([x, x[::-1]])
-    batch[:, :3] = np.nan
-    assert kf.empirical_threshold(batch, 0.1) == pytest.approx(np.quantile(batch[:, 3:], 0.9))
-    # ... but a failed run is refused, not dropped (that would bias the threshold)
-    batch[1, 500] = np.nan
-    with pytest.raises(ValueError, match=r"null_statistic is NaN at index \(1, 500\)"):
-        kf.empirical_threshold(batch, 0.1)
-
-
-def test_alarm_statistics_refuses_nan_after_the_undefined_start():
-    # a run whose filter diverged after the fault used to count as "no alarm"
-    T = np.array([[np.nan, 0.0, 0.0, 3.0, 3.0], [np.nan, 0.0, 0.0, np.nan, np.nan]])
-    with pytest.raises(ValueError, match=r"statistic is NaN at index \(1, 3\) \(2 NaN"):
-        kf.alarm_statistics(T, 1.0, fault_time=3)
-    T[1, 3:] = 0.0
-    assert kf.alarm_statistics(T, 1.0, fault_time=3).detection_probability == 0.5
 
 
 # ---------------------------------------------------------------------------

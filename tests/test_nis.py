@@ -684,3 +684,27 @@ def test_tracy_widom_error_is_what_its_docstring_says(which, m):
         assert measured == pytest.approx(documented, rel=0.1, abs=0.001), (which, m, K)
     # and it is never good enough to replace the exact law for a test threshold
     assert min(entries.values()) >= 0.004
+
+
+# ---------------------------------------------------------------------------
+# alarms: NaN only as the undefined start of a record
+# ---------------------------------------------------------------------------
+def test_empirical_threshold_leaves_out_only_the_undefined_start():
+    x = np.arange(1, 1001, dtype=float)
+    # a batch of windowed statistics: the undefined start (NaN in every run) is left out ...
+    batch = np.vstack([x, x[::-1]])
+    batch[:, :3] = np.nan
+    assert nis.empirical_threshold(batch, 0.1) == pytest.approx(np.quantile(batch[:, 3:], 0.9))
+    # ... but a failed run is refused, not dropped (that would bias the threshold)
+    batch[1, 500] = np.nan
+    with pytest.raises(ValueError, match=r"null_statistic is NaN at index \(1, 500\)"):
+        nis.empirical_threshold(batch, 0.1)
+
+
+def test_alarm_statistics_refuses_nan_after_the_undefined_start():
+    # a run whose filter diverged after the fault used to count as "no alarm"
+    T = np.array([[np.nan, 0.0, 0.0, 3.0, 3.0], [np.nan, 0.0, 0.0, np.nan, np.nan]])
+    with pytest.raises(ValueError, match=r"statistic is NaN at index \(1, 3\) \(2 NaN"):
+        nis.alarm_statistics(T, 1.0, fault_time=3)
+    T[1, 3:] = 0.0
+    assert nis.alarm_statistics(T, 1.0, fault_time=3).detection_probability == 0.5
