@@ -6,6 +6,7 @@ Source: the LiU lecture on test quantities, slide "Extended Kalman Filter"
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -157,7 +158,8 @@ def _update_core(x_pred, P_pred, eps, H, R):
     with np.errstate(over="ignore", invalid="ignore"):
         PHt = _mm(P_pred, _T(H))
         S = symmetrize(_mm(H, PHt) + R)
-    if np.all(np.isfinite(S)):
+        in_range = math.isfinite(S.sum())  # one number: the cheapest check in the loop
+    if in_range:
         K = _gain(S, PHt)
     else:
         # H P H^T beyond double precision (|H| ~ 1e160): S is, but the gain and P_filt are
