@@ -474,16 +474,27 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     evaluated as ``||ẽ||²`` with ``ẽ = L^{-1} ê`` the whitened residuals, the
     same number without ``Qyy^{-1}``.
 
-    A 1-D Qyy filled with standard deviations instead of variances is a
-    likely slip that no check of Qyy alone can see (both are positive
+    A 1-D Qyy filled with standard deviations ``s_i`` instead of variances
+    is a likely slip that no check of Qyy alone can see (both are positive
     numbers). It shows here, and only here: the variance factor is then
-    about the typical standard deviation instead of 1. A :class:`UserWarning`
-    says so when Qyy was given as a 1-D array, T falls outside the central
-    range ``[chi2_{1-α}(m - n), chi2_α(m - n)]``, the same data with Qyy's
-    entries read as standard deviations (variances ``Qyy_i²``) fall inside
-    it, and the residuals' pattern does not favour the values as variances
-    (a likelihood ratio of the two readings with a free common scale, above
-    1/10; it is 1 when all values are equal). With equal values the slip
+    about the typical ``s_i`` instead of 1. A :class:`UserWarning` says so
+    when Qyy was given as a 1-D array ``v``, T falls outside the central
+    range ``[chi2_{1-α}(m - n), chi2_α(m - n)]``, the same data with the
+    values read as standard deviations (``Qyy = diag(v²)``, squared norm
+    ``T₂``) give a plausible ``chi2(m - n)`` value (inside its central
+    99.8 %), and the data favour that reading by a
+    likelihood ratio ``Λ`` of at least 1000. ``Λ`` is the ratio of the
+    restricted likelihoods (the density of the residual contrasts, free of
+    x, as in REML) of the two fully specified covariances,
+
+    .. math:: \\log\\Lambda = \\tfrac12\\Big(T - T_2 - \\sum_i \\log v_i
+              + \\log\\frac{\\det A^T \\operatorname{diag}(v)^{-1} A}
+                         {\\det A^T \\operatorname{diag}(v^2)^{-1} A}\\Big),
+
+    so it weighs both the overall scale and the residuals' pattern. Under
+    H0 ``E Λ = 1`` (a density ratio), hence (Markov's inequality) ``Λ``
+    reaches 1000 in at most 0.1 % of correct fits, whatever ``v`` and A;
+    values near 1, where the two readings barely differ, stay silent. With equal values the slip
     looks exactly like a wrong variance factor, so the warning names both.
 
     Examples
@@ -516,6 +527,11 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     return result
 
 
+# The likelihood ratio "standard deviations" : "variances" from which the slip is named.
+_LOG_EVIDENCE_FOR_STANDARD_DEVIATIONS = float(np.log(1000.0))
+_PLAUSIBLE_TAIL = 0.001  # each tail of chi2(m - n) outside which T with squared values is odd
+
+
 def _standard_deviation_hint(fit: LeastSquaresFit, result: TestResult) -> str:
     """A message when a 1-D Qyy of variances looks like standard deviations, else ``""``."""
     cov = fit._covariance
@@ -529,25 +545,32 @@ def _standard_deviation_hint(fit: LeastSquaresFit, result: TestResult) -> str:
     # The refit costs one more O(m n²) QR, paid only when the test is already surprising.
     A_w = np.asfortranarray(fit.A / sigma[:, None])
     y_w = fit.y / sigma
-    Q1, _ = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
+    Q1, R_alt = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
     e_w = y_w - Q1 @ (Q1.T @ y_w)
     T_alt = float(e_w @ e_w)
-    if not low <= T_alt <= high:
+    # Squaring must explain the scale: T_alt a plausible chi2(m - n) value (within its
+    # central 99.8 %, not the test's range, which would miss one slip in 10 at alpha = 0.05).
+    if not null.ppf(_PLAUSIBLE_TAIL) <= T_alt <= null.isf(_PLAUSIBLE_TAIL):
         return ""
-    # With a free common scale, the log-likelihood of "standard deviations" minus that of
-    # "variances" is (m log(T / T_alt) - sum log sigma) / 2: it compares the SHAPE of the
-    # weights, and is 0 when all values are equal. Stay silent when the residuals' pattern
-    # clearly fits the values as variances.
-    log_ratio = 0.5 * (fit.m * np.log(T / T_alt) - float(np.sum(np.log(sigma))))
-    if log_ratio < -np.log(10.0):
+    # Restricted log-likelihood of the residual contrasts under Qyy = diag(sigma²) minus that
+    # under Qyy = diag(sigma): its exponential has mean 1 under H0, so by Markov's inequality
+    # a ratio of 1000 or more happens in at most 0.1 % of correct fits. Both the scale and
+    # the pattern of the residuals count; values near 1 (readings alike) never reach it.
+    log_det_ratio = 2.0 * float(
+        np.sum(np.log(np.abs(np.diag(fit._R)))) - np.sum(np.log(np.abs(np.diag(R_alt))))
+    )
+    log_ratio = 0.5 * (T - T_alt - float(np.sum(np.log(sigma))) + log_det_ratio)
+    if log_ratio < _LOG_EVIDENCE_FOR_STANDARD_DEVIATIONS:
         return ""
     dof = fit.redundancy
     return (
         f"Qyy was given as a 1-D array of variances and the overall model test finds "
         f"T = {T:.4g}, a variance factor T/(m-n) = {T / dof:.3g}, outside the central range "
         f"[{low:.4g}, {high:.4g}] of chi2({dof}) at alpha = {alpha:g}. Read as standard "
-        f"deviations (variances Qyy**2), the same data give T = {T_alt:.4g}, inside that "
-        "range. Qyy must hold VARIANCES: if you passed standard deviations sigma, pass "
+        f"deviations (variances Qyy**2), the same data give T = {T_alt:.4g}, a plausible "
+        f"value of chi2({dof}), and are about 10^{log_ratio / np.log(10.0):.0f} times more "
+        "likely (ratio of the restricted likelihoods of the two readings). Qyy must hold "
+        "VARIANCES: if you passed standard deviations sigma, pass "
         "sigma**2 (if Qyy does hold variances, the model or the stated precision is wrong)."
     )
 
@@ -1074,7 +1097,9 @@ def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> Co
         )
     y_new = A_new @ fit.x_hat
     G = sla.solve_triangular(fit._R, A_new.T, trans="T", lower=False, check_finite=False)
-    sigma = np.sqrt(np.sum(G * G, axis=0))
+    # column norms scaled by a power of two (exact): rows ~1e160 square past double precision
+    scale = np.ldexp(1.0, np.frexp(np.max(np.abs(G), axis=0, initial=0.0))[1])
+    sigma = scale * np.sqrt(np.sum((G / scale) ** 2, axis=0))
     return ConfidenceBand(y_new, stats.norm.isf((1.0 - level) / 2) * sigma)
 
 

@@ -545,6 +545,24 @@ def _as_records(residuals) -> np.ndarray:
     return r
 
 
+def _scaled_sections(r: np.ndarray, *sections: int) -> tuple[tuple[np.ndarray, ...], float]:
+    """The sections ``r[:, j]`` divided by a power of two ``c`` near their largest value.
+
+    The statistics are quadratic: residuals near 1e154 overflow in sums of products (and
+    then give NaN) where the statistic itself does not. Scaling by a power of two is exact,
+    so at ordinary scales the statistic is the unscaled one to the last bit.
+    """
+    largest = max(float(np.max(np.abs(r[:, j]))) for j in sections)
+    c = float(np.ldexp(1.0, np.frexp(largest)[1]))
+    return tuple(r[:, j] / c for j in sections), c
+
+
+def _times_square(value: Any, c: float) -> float:
+    """``value * c**2``: inf (never NaN) where the statistic exceeds double precision."""
+    with np.errstate(over="ignore"):
+        return float(value * c * c)
+
+
 def _index(j: Any, N: int, name: str) -> int:
     return as_index(j, name, N, what="a time index")
 
@@ -637,8 +655,9 @@ def mean_statistic(residuals, j: int) -> float:
     """
     r = _as_records(residuals)
     j = _index(j, r.shape[1], "j")
-    rbar = r[:, j].mean(axis=0)
-    return float(rbar @ rbar)
+    (rj,), c = _scaled_sections(r, j)
+    rbar = rj.mean(axis=0)
+    return _times_square(rbar @ rbar, c)
 
 
 def covariance_statistic(residuals, j: int, direction=None) -> float:
@@ -675,11 +694,12 @@ def covariance_statistic(residuals, j: int, direction=None) -> float:
     """
     r = _as_records(residuals)
     j = _index(j, r.shape[1], "j")
-    dev = r[:, j] - r[:, j].mean(axis=0)
+    (rj,), c = _scaled_sections(r, j)
+    dev = rj - rj.mean(axis=0)
     if direction is None:
-        return float(np.mean(np.sum(dev * dev, axis=1)))
+        return _times_square(np.mean(np.sum(dev * dev, axis=1)), c)
     v = _unit(direction, r.shape[2], "direction")
-    return float(np.mean((dev @ v) ** 2))
+    return _times_square(np.mean((dev @ v) ** 2), c)
 
 
 def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
@@ -718,12 +738,13 @@ def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
     r = _as_records(residuals)
     N, p = r.shape[1], r.shape[2]
     j, k = _index(j, N, "j"), _index(k, N, "k")
-    dj = r[:, j] - r[:, j].mean(axis=0)
-    dk = r[:, k] - r[:, k].mean(axis=0)
+    (rj, rk), c = _scaled_sections(r, j, k)
+    dj = rj - rj.mean(axis=0)
+    dk = rk - rk.mean(axis=0)
     if directions is None:
-        return float(np.mean(np.sum(dj * dk, axis=1)))
+        return _times_square(np.mean(np.sum(dj * dk, axis=1)), c)
     u, w = _pair(directions, p)
-    return float(np.mean((dj @ u) * (dk @ w)))
+    return _times_square(np.mean((dj @ u) * (dk @ w)), c)
 
 
 def _pair(directions, p, name="directions"):

@@ -155,14 +155,14 @@ TABLE = {
     "ekf_update": case(
         kf.ekf_update,
         model=model_arg(NONLINEAR),
-        x_pred=state(),
+        x_pred=state().but(shorter=X0[:1]),
         P_pred=state_cov(),
         y=state([0.3]),
     ),
     "ekf_predict": case(
         kf.ekf_predict,
         model=model_arg(NONLINEAR),
-        x_filt=state(),
+        x_filt=state().but(shorter=X0[:1]),  # g indexes x[..., 1]: an IndexError inside
         P_filt=state_cov(),
         u=Arg(None, {"given without inputs": [1.0]}),
     ),

@@ -69,7 +69,10 @@ TABLE = {
     "TracyWidomApproximation.var": case(TW.var),
     "alarm_statistics": case(
         nis.alarm_statistics,
-        statistic=array(STATISTIC, shaped=False).but(drop=("NaN",)),
+        statistic=array(STATISTIC, shaped=False).but(
+            nan_after_fault=np.where(np.arange(5) == 3, np.nan, STATISTIC),
+            nan_in_one_run=np.where([[False] * 5, [True] + [False] * 4], np.nan, STATISTIC),
+        ),
         threshold=real(1.0),
         fault_time=index(3, 5, none_ok=True),
     ),
@@ -79,7 +82,10 @@ TABLE = {
     "empirical_threshold": case(
         nis.empirical_threshold,
         null_statistic=array(np.arange(1.0, 101.0), ndims="any", shaped=False).but(
-            drop=("NaN",), all_nan=np.full(5, np.nan)
+            drop=("NaN",),  # a leading NaN is the undefined start of a record
+            all_nan=np.full(5, np.nan),
+            nan_inside=np.where(np.arange(100) == 50, np.nan, np.arange(1.0, 101.0)),
+            nan_in_one_run=np.where(np.eye(2, 5, dtype=bool), np.nan, STATISTIC),
         ),
         alpha=probability(0.05),
     ),

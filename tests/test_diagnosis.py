@@ -408,6 +408,18 @@ def test_nonlinear_prediction_error_matches_linear_and_grid(signals):
         z, lambda th: th[0] * np.exp(-th[1] * t), [2.0, 0.5]
     ).statistic == pytest.approx(np.sum((z - 2.0 * np.exp(-0.5 * t)) ** 2))
 
+    # a prediction that is NaN where the fit starts: named, not scipy's "Residuals are not
+    # finite" (free parameters) or a NaN statistic (none)
+    def bad(th):
+        return th[0] * np.exp(-th[1] * t) / (th[1] != 0.5)
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for free in ([0], []):
+            with pytest.raises(ValueError, match=r"predict returned NaN or inf at the \w+ theta"):
+                dg.nonlinear_prediction_error(z, bad, [2.0, 0.5], free=free)
+        # a non-finite trial point is scipy's to step back from: the fit still succeeds
+        assert dg.nonlinear_prediction_error(z, bad, [2.0, 0.6], free=[0]).success
+
 
 def test_bad_input_is_refused(signals):
     y = signals @ NOMINAL

@@ -873,3 +873,41 @@ def test_stacked_products_match_matmul():
     np.testing.assert_allclose(_mm(A, B[0]), A @ B[0], rtol=1e-14)
     np.testing.assert_allclose(_mv(A, x), (A @ x[..., None])[..., 0], rtol=1e-14)
     assert _mm(A, B).shape == (7, 2, 2) and _mv(A, x).shape == (7, 2)
+
+
+# ---------------------------------------------------------------------------
+# extreme scales: the gain and the estimate are representable even where S is not
+# ---------------------------------------------------------------------------
+def test_kf_update_with_a_huge_output_matrix_still_updates():
+    # S = H P H^T + R ~ 1e320 overflows; K ~ 1/|H| and P_filt (a projection) do not.
+    h = 1e160
+    step = kf.kf_update(np.zeros(2), np.eye(2), [1.0], [[h, 0.5 * h]], [[1.0]])
+    np.testing.assert_allclose(step.x_filt * h, [0.8, 0.4], rtol=1e-12)
+    np.testing.assert_allclose(step.K[:, 0] * h, [0.8, 0.4], rtol=1e-12)
+    np.testing.assert_allclose(step.P_filt, [[0.2, -0.4], [-0.4, 0.8]], atol=1e-12)
+    assert step.S[0, 0] == np.inf  # the true S ~ 1.25e320 is beyond double precision
+    # two outputs, each scaled on its own
+    two = kf.kf_update(np.zeros(2), np.eye(2), [1.0, 2.0], np.diag([h, 1.0]), np.eye(2))
+    np.testing.assert_allclose(two.x_filt, [1.0 / h, 1.0], rtol=1e-12)
+    np.testing.assert_allclose(np.diag(two.P_filt), [0.0, 0.5], atol=1e-12)
+
+
+def test_recursive_least_squares_is_scale_equivariant_at_extreme_scales():
+    # Phi * 2^532, y * 2^498, r * 2^996 is the same problem as the ordinary one (theta and P
+    # scale by powers of two); |phi|^2 P0 ~ 1e330 used to overflow S, and theta stayed at theta0.
+    rng = np.random.default_rng(0)
+    Phi = np.column_stack([np.ones(30), np.linspace(0.0, 1.0, 30)])
+    y = Phi @ [1.0, -2.0] + rng.standard_normal(30)
+    theta0, P0 = np.array([0.5, 0.5]), 1e10 * np.eye(2)
+    ref = kf.recursive_least_squares(Phi, y, r=1.0, theta0=theta0, P0=P0)
+    b, a = 2.0**532, 2.0**498
+    big = kf.recursive_least_squares(
+        Phi * b, y * a, r=a * a, theta0=theta0 * (a / b), P0=P0 * (a / b) ** 2
+    )
+    np.testing.assert_allclose(big.theta * (b / a), ref.theta, rtol=1e-12)
+    np.testing.assert_allclose(big.P * (b / a) ** 2, ref.P, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(big.eps / a, ref.eps, rtol=1e-12)
+    # the diffuse start: regressors ~1e300 put P ~ r / |phi|^2 below double precision
+    diffuse = kf.recursive_least_squares(Phi * 2.0**1000, y, r=1.0)
+    plain = kf.recursive_least_squares(Phi, y, r=1.0)
+    np.testing.assert_allclose(diffuse.theta[1:] * 2.0**1000, plain.theta[1:], rtol=1e-12)

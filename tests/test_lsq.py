@@ -1,5 +1,7 @@
 """Tests of course.lsq: the chapter's worked numbers, dense references, errors, Monte Carlo."""
 
+import warnings
+
 import numpy as np
 import pytest
 from numpy.linalg import LinAlgError
@@ -266,6 +268,11 @@ def test_confidence_band_matches_dense_formula():
         lsq.confidence_band(f, A_new[:, :2])
     with pytest.raises(ValueError, match="level must lie strictly between 0 and 1"):
         lsq.confidence_band(f, A_new, level=95)
+    # rows ~1e160: the half-width ~1e160 is representable, its square is not (it was inf)
+    for c in (1e160, 1e-160):
+        big = lsq.confidence_band(f, A_new * c, level=0.9)
+        np.testing.assert_allclose(big.y_new_hat / c, y_new, rtol=1e-12)
+        np.testing.assert_allclose(big.half_width / c, half, rtol=1e-12)
 
 
 # ---------------------------------------------------------------------------
@@ -761,6 +768,46 @@ def test_no_standard_deviation_warning_when_it_is_not_the_likely_cause(recwarn):
     result = lsq.overall_model_test(lsq.fit(A, y, sigmas**2), 0.05)
     assert result.reject
     assert not [w for w in recwarn if issubclass(w.category, UserWarning)]
+
+
+def _warns_of_standard_deviations(f) -> bool:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lsq.overall_model_test(f, 0.05)
+    return any("Read as standard deviations" in str(w.message) for w in caught)
+
+
+def test_standard_deviation_warning_is_rare_in_correct_fits():
+    # 2,000 correct fits (variances U(0.5, 2), m = 50): the old rule (T outside the central
+    # range, T with squared values inside it, a loose pattern check) warned in ~3 % of them
+    # and in more than half of the test's own false alarms. The likelihood-ratio rule
+    # reaches its bound of 1000 in at most 0.1 % of correct fits (Markov's inequality).
+    rng = np.random.default_rng(2028)
+    m = 50
+    A = np.column_stack([np.ones(m), np.linspace(0, 10, m)])
+    warned = rejected = 0
+    for _ in range(2000):
+        v = rng.uniform(0.5, 2.0, m)
+        f = lsq.fit(A, A @ [3.0, 0.5] + np.sqrt(v) * rng.standard_normal(m), v)
+        warned += _warns_of_standard_deviations(f)
+        rejected += lsq.overall_model_test(f, 0.05).reject
+    assert 60 <= rejected <= 140  # the test's own false alarms do occur: the hint is not void
+    assert warned < 0.001 * 2000
+
+
+def test_standard_deviation_warning_fires_for_a_typical_slip():
+    # Sensor standard deviations 0.1 to 0.5 passed as Qyy: the slip is named in nearly
+    # every record (T small, the squared values give a chi2-like T).
+    rng = np.random.default_rng(2029)
+    m = 50
+    A = np.column_stack([np.ones(m), np.linspace(0, 10, m)])
+    fired = 0
+    for _ in range(200):
+        s = rng.uniform(0.1, 0.5, m)
+        fired += _warns_of_standard_deviations(
+            lsq.fit(A, A @ [3.0, 0.5] + s * rng.standard_normal(m), s)
+        )
+    assert fired >= 0.9 * 200
 
 
 # ---------------------------------------------------------------------------

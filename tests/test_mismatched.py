@@ -457,3 +457,23 @@ def test_errors_for_bad_input():
         ResidualMoments(null.mean, null.cov, null.cross_cov[0])
     with pytest.raises(ValueError, match=r"mean must have shape \(N, p\)"):
         ResidualMoments(null.mean.ravel(), null.cov, null.cross_cov)
+
+
+def test_statistics_at_extreme_scales():
+    # residuals ~1e154: the sums of products overflowed (inf, then NaN from inf - inf)
+    # where the statistics (~1e307) do not; beyond double precision they are inf, not NaN
+    r = np.random.default_rng(0).standard_normal((5, 4, 2))
+    uw = ([1.0, 0.0], [0.0, 1.0])
+    for c in (1e154, 2.0**-500):
+        assert mean_statistic(r * c, 1) / c / c == pytest.approx(mean_statistic(r, 1), rel=1e-14)
+        assert covariance_statistic(r * c, 1) / c / c == pytest.approx(
+            covariance_statistic(r, 1), rel=1e-14
+        )
+        assert correlation_statistic(r * c, 1, 2) / c / c == pytest.approx(
+            correlation_statistic(r, 1, 2), rel=1e-14
+        )
+        assert correlation_statistic(r * c, 1, 2, uw) / c / c == pytest.approx(
+            correlation_statistic(r, 1, 2, uw), rel=1e-14
+        )
+    assert correlation_statistic(r * 1e300, 1, 2) == np.inf  # true value ~4e599
+    assert covariance_statistic(r * 1e300, 1) == np.inf

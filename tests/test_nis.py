@@ -414,6 +414,27 @@ def test_nis_and_nis_matrix_against_dense_computation():
     np.testing.assert_allclose([lmin, lmax], np.linalg.eigvalsh(Pi)[[0, -1]], rtol=1e-12)
 
 
+def test_nis_matrix_near_the_overflow_threshold():
+    # innovations ~1e154: the products z z^T overflow, their average (~1e308) does not
+    rng = np.random.default_rng(3)
+    K, m = 12, 2
+    S = random_covariances(rng, K, m)
+    eps = rng.standard_normal((2, K, m))
+    eps[1] *= 1e3  # a second run at another scale: each run is scaled on its own
+    c = 2.0**511  # ~6.7e153, a power of two: the scaled answers are exact multiples
+    Pi = nis.nis_matrix(eps, S)
+    np.testing.assert_array_equal(nis.nis_matrix(eps[:1] * c, S)[0] / c / c, Pi[0])
+    np.testing.assert_array_equal(nis.nis_matrix(eps * 2.0**-500, S) * 2.0**500 * 2.0**500, Pi)
+    windows = nis.nis_matrix(eps[0], S, window=5)
+    np.testing.assert_array_equal(nis.nis_matrix(eps[0] * c, S, window=5) / c / c, windows)
+    lmin, lmax = nis.nis_matrix_eigenvalues(eps[0], S)
+    big = nis.nis_matrix_eigenvalues(eps[0] * c, S)
+    np.testing.assert_allclose([big.lmin / c / c, big.lmax / c / c], [lmin, lmax], rtol=1e-14)
+    # beyond double precision the answer is inf, never NaN
+    assert np.all(nis.nis_matrix(eps[0] * 1e160, S)[[0, 1], [0, 1]] == np.inf)
+    assert np.isposinf(nis.nis_matrix_eigenvalues(eps[0] * 1e160, S).lmax)
+
+
 def test_nis_broadcasts_over_runs_and_a_constant_S():
     rng = np.random.default_rng(2)
     eps = rng.standard_normal((7, 20, 2))
@@ -663,3 +684,27 @@ def test_tracy_widom_error_is_what_its_docstring_says(which, m):
         assert measured == pytest.approx(documented, rel=0.1, abs=0.001), (which, m, K)
     # and it is never good enough to replace the exact law for a test threshold
     assert min(entries.values()) >= 0.004
+
+
+# ---------------------------------------------------------------------------
+# alarms: NaN only as the undefined start of a record
+# ---------------------------------------------------------------------------
+def test_empirical_threshold_leaves_out_only_the_undefined_start():
+    x = np.arange(1, 1001, dtype=float)
+    # a batch of windowed statistics: the undefined start (NaN in every run) is left out ...
+    batch = np.vstack([x, x[::-1]])
+    batch[:, :3] = np.nan
+    assert nis.empirical_threshold(batch, 0.1) == pytest.approx(np.quantile(batch[:, 3:], 0.9))
+    # ... but a failed run is refused, not dropped (that would bias the threshold)
+    batch[1, 500] = np.nan
+    with pytest.raises(ValueError, match=r"null_statistic is NaN at index \(1, 500\)"):
+        nis.empirical_threshold(batch, 0.1)
+
+
+def test_alarm_statistics_refuses_nan_after_the_undefined_start():
+    # a run whose filter diverged after the fault used to count as "no alarm"
+    T = np.array([[np.nan, 0.0, 0.0, 3.0, 3.0], [np.nan, 0.0, 0.0, np.nan, np.nan]])
+    with pytest.raises(ValueError, match=r"statistic is NaN at index \(1, 3\) \(2 NaN"):
+        nis.alarm_statistics(T, 1.0, fault_time=3)
+    T[1, 3:] = 0.0
+    assert nis.alarm_statistics(T, 1.0, fault_time=3).detection_probability == 0.5

@@ -502,7 +502,8 @@ def nonlinear_prediction_error(
         Measurements (any shape; compared element-wise with the prediction).
     predict : callable
         ``predict(theta)`` returns ``yhat(theta)`` with the shape of ``y``,
-        for a full parameter vector ``theta``.
+        for a full parameter vector ``theta``; finite where the fit starts
+        (elsewhere a NaN or inf makes the optimiser take a shorter step).
     nominal : array_like, shape (p,)
         Values of the parameters that are fixed under H0.
     free : sequence of int, default ()
@@ -564,8 +565,20 @@ def nonlinear_prediction_error(
             raise ValueError(f"predict returned shape {pred.shape}, but y has shape {y.shape}")
         return (y - pred).ravel()
 
+    def finite_residual(theta_free, where: str):
+        # Checked at the start only: scipy shrinks a trial step whose prediction is not finite.
+        r = residual(theta_free)
+        if not np.all(np.isfinite(r)):
+            raise ValueError(
+                f"predict returned NaN or inf at {where} theta = {full(theta_free).tolist()} "
+                f"({int(np.sum(~np.isfinite(r)))} of {r.size} values): the prediction must be "
+                "finite where the fit starts; check predict and the parameter values "
+                "(nominal, theta_init)"
+            )
+        return r
+
     if not free:
-        r = residual(np.zeros(0))
+        r = finite_residual(np.zeros(0), "the nominal")
         return NonlinearFit(
             theta=nominal.copy(),
             residual=r,
@@ -581,6 +594,7 @@ def nonlinear_prediction_error(
     kwargs.setdefault("xtol", 1e-12)
     kwargs.setdefault("ftol", 1e-12)
     kwargs.setdefault("gtol", 1e-12)
+    finite_residual(start, "the starting")
     sol = optimize.least_squares(residual, start, **kwargs)
     r = residual(sol.x)
     return NonlinearFit(

@@ -160,7 +160,10 @@ def recursive_least_squares(
     ``0..t`` and ``P(t|t) = r (Phi_t^T Phi_t)^{-1}``, exactly in exact
     arithmetic; with a prior it equals the regularised estimate minimising
     ``||y - Phi theta||^2 / r + (theta - theta0)^T P0^{-1} (theta - theta0)``.
-    The covariances do not depend on the data, so a batch shares them.  The
+    The covariances do not depend on the data, so a batch shares them.
+    Regressors beyond ``2**±256`` are scaled by a power of two ``c`` near
+    ``sqrt(max |Phi|)`` (exact: ``theta * c``, ``P * c**2``) so that ``P``,
+    which scales as ``1 / |phi|**2``, stays within double precision.  The
     normalised innovations are independent ``N(0, 1)`` while the model holds,
     which makes :func:`windowed_nis` of the result a recursive test quantity
     (chapter 2, "recursive computation").
@@ -192,6 +195,12 @@ def recursive_least_squares(
     else:
         Qw = as_covariance(q, "q", k, allow_singular=True)
     batch = y.shape[:-1]
+    # Regressors far from 1 (|phi| ~ 1e160) put P ~ r / |phi|^2 out of range: run on
+    # Phi / c with theta * c and P * c^2 (c a power of two near sqrt|Phi|, so both stay in
+    # range; exact), and scale back. eps and S do not change. Ordinary scales: c = 1.
+    c = _regressor_scale(Phi)
+    Phi = Phi / c
+    Qw = Qw * c * c
     R = np.array([[r]])
     theta = np.full(batch + (N, k), np.nan)
     P_all = np.full((N, k, k), np.nan)
@@ -215,11 +224,20 @@ def recursive_least_squares(
         start = k0
     else:
         x = np.zeros(k) if theta0 is None else as_vector(theta0, "theta0", k)
-        P = as_covariance(P0, "P0", k, allow_singular=True)
-        x = np.broadcast_to(x, batch + (k,))
+        P = as_covariance(P0, "P0", k, allow_singular=True) * c * c
+        x = np.broadcast_to(x * c, batch + (k,))
         first = start = 0
     for t in range(start, N):
         x, P, e, S, _ = kf_update(x, P, y[..., t, None], Phi[t][None, :], R)
         theta[..., t, :], P_all[t], eps[..., t], S_all[t] = x, P, e[..., 0], S[0, 0]
         P = P + Qw
+    if c != 1.0:
+        theta, P_all = theta / c, P_all / c / c
     return RLSResult(theta=theta, P=P_all, eps=eps, S=S_all, first=first)
+
+
+def _regressor_scale(Phi: np.ndarray) -> float:
+    """A power of two near ``sqrt(max |Phi|)`` when that is beyond ``2**±256``, else 1."""
+    largest = float(np.max(np.abs(Phi)))
+    exponent = int(np.frexp(largest)[1]) if largest > 0 else 0
+    return float(np.ldexp(1.0, exponent // 2)) if abs(exponent) > 256 else 1.0

@@ -6,6 +6,7 @@ Source: the LiU lecture on test quantities, slide "Extended Kalman Filter"
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -75,6 +76,9 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     arithmetic; see the measurement update on the lecture's EKF slide
     (LiU lecture, "Extended Kalman Filter").  Inputs are
     never modified; broadcasting lets ``P`` be shared by a batch of ``x``.
+    Where ``H P H^T`` overflows (``|H| ~ 1e160``) each output is scaled by a
+    power of two first (exact), so the gain and ``P_filt`` stay right; ``S``
+    is then ``inf`` where its true value exceeds double precision.
 
     Examples
     --------
@@ -151,8 +155,38 @@ def _check_predict_shapes(x_filt, P_filt, F, GQG) -> None:
 
 def _update_core(x_pred, P_pred, eps, H, R):
     """Shared by the linear and extended filters: gain, estimate, Joseph update."""
-    PHt = _mm(P_pred, _T(H))
-    S = symmetrize(_mm(H, PHt) + R)
+    with np.errstate(over="ignore", invalid="ignore"):
+        PHt = _mm(P_pred, _T(H))
+        S = symmetrize(_mm(H, PHt) + R)
+        in_range = math.isfinite(S.sum())  # one number: the cheapest check in the loop
+    if in_range:
+        K = _gain(S, PHt)
+    else:
+        # H P H^T beyond double precision (|H| ~ 1e160): S is, but the gain and P_filt are
+        # not. Scale each output by a power of two d_i (exact): with H = D H~ and
+        # R = D R~ D, S = D S~ D and K = P H~^T S~^{-1} D^{-1}.
+        d = _output_scales(H, R)
+        H_scaled = H / d[..., :, None]
+        PHt_scaled = _mm(P_pred, _T(H_scaled))
+        R_scaled = R / d[..., :, None] / d[..., None, :]
+        S_scaled = symmetrize(_mm(H_scaled, PHt_scaled) + R_scaled)
+        K = _gain(S_scaled, PHt_scaled) / d[..., None, :]
+        with np.errstate(over="ignore"):
+            S = S_scaled * d[..., :, None] * d[..., None, :]  # inf where the true S overflows
+    x_filt = x_pred + _mv(K, eps)
+    I_KH = np.eye(P_pred.shape[-1]) - _mm(K, H)
+    P_filt = symmetrize(_mm(_mm(I_KH, P_pred), _T(I_KH)) + _mm(_mm(K, R), _T(K)))
+    return MeasurementUpdate(x_filt, P_filt, eps, S, K)
+
+
+def _output_scales(H, R):
+    """Per output a power of two ``d_i >= max(max_j |H_ij|, sqrt(R_ii))``, shape ``(..., p)``."""
+    size = np.maximum(np.max(np.abs(H), axis=-1), np.sqrt(np.diagonal(R, axis1=-2, axis2=-1)))
+    return np.ldexp(1.0, np.frexp(size)[1])
+
+
+def _gain(S, PHt):
+    """``K = P H^T S^{-1}`` by a solve with ``S``, which must be positive definite."""
     if S.shape[-1] == 1:
         # one output: the solve with a 1 x 1 S is a division
         if np.any(S <= 0):
@@ -160,22 +194,17 @@ def _update_core(x_pred, P_pred, eps, H, R):
                 "the innovation variance S = H P H^T + R is not positive; "
                 "R must be positive definite"
             )
-        K = PHt / S
-    else:
-        # the Cholesky factorisation is the positive-definiteness check a plain
-        # solve would skip (an indefinite S solves without complaint)
-        try:
-            np.linalg.cholesky(S)
-        except LinAlgError:
-            raise LinAlgError(
-                "the innovation covariance S = H P H^T + R is not positive definite; "
-                "R must be positive definite and P positive semi-definite"
-            ) from None
-        K = _T(np.linalg.solve(S, _T(PHt)))
-    x_filt = x_pred + _mv(K, eps)
-    I_KH = np.eye(P_pred.shape[-1]) - _mm(K, H)
-    P_filt = symmetrize(_mm(_mm(I_KH, P_pred), _T(I_KH)) + _mm(_mm(K, R), _T(K)))
-    return MeasurementUpdate(x_filt, P_filt, eps, S, K)
+        return PHt / S
+    # the Cholesky factorisation is the positive-definiteness check a plain
+    # solve would skip (an indefinite S solves without complaint)
+    try:
+        np.linalg.cholesky(S)
+    except LinAlgError:
+        raise LinAlgError(
+            "the innovation covariance S = H P H^T + R is not positive definite; "
+            "R must be positive definite and P positive semi-definite"
+        ) from None
+    return _T(np.linalg.solve(S, _T(PHt)))
 
 
 def kf_predict(x_filt, P_filt, F, GQG, offset=None):
@@ -274,9 +303,20 @@ def ekf_update(model, x_pred, P_pred, y):
     (array([1.]), array([[17.]]))
     """
     _check_nonlinear(model)
-    x_pred = _state(x_pred, "x_pred")
+    x_pred = _model_state(model, x_pred, "x_pred")
     P_pred = as_covariance_stack(P_pred, "P_pred", allow_singular=True)
     return _ekf_update(model, x_pred, P_pred, _state(y, "y"))
+
+
+def _model_state(model, value, name: str) -> np.ndarray:
+    """A state ``(..., n)`` of the model's length, checked before ``g`` or ``h`` sees it."""
+    x = _state(value, name)
+    if x.shape[-1] != model.n_states:
+        raise ValueError(
+            f"{name} must have length n = {model.n_states} (the model's states, from its "
+            f"x0_mean), got shape {x.shape}"
+        )
+    return x
 
 
 def _check_nonlinear(model) -> None:
@@ -335,7 +375,7 @@ def ekf_predict(model, x_filt, P_filt, u=None):
     (array([2.]), array([[4.1]]))
     """
     _check_nonlinear(model)
-    x_filt = _state(x_filt, "x_filt")
+    x_filt = _model_state(model, x_filt, "x_filt")
     P_filt = as_covariance_stack(P_filt, "P_filt", allow_singular=True)
     if model.n_inputs == 0 and u is not None:
         raise ValueError("this model has no input (n_inputs = 0) but u was passed")

@@ -17,9 +17,32 @@ from course.results import format_number
 from course.validation import as_finite, as_float_array, as_index, as_probability
 
 
-def _with_undefined(value: Any, name: str) -> np.ndarray:
-    """A float array of test quantities in which NaN marks undefined samples (inf is refused)."""
-    return as_float_array(value, name, nan=True)
+def _with_undefined_start(value: Any, name: str, consequence: str) -> tuple[np.ndarray, int]:
+    """A float array of test quantities (time on the last axis) and its undefined start.
+
+    The undefined start is the leading samples that are NaN in every run (windows not yet
+    full); any other NaN (a diverged run, a NaN in some runs only) is refused, since
+    ``consequence`` (what ignoring it would do) would happen silently. inf is refused.
+    """
+    T = as_float_array(value, name, nan=True)
+    if not np.isnan(T).any():
+        return T, 0
+    undefined = np.isnan(T).reshape(-1, T.shape[-1] if T.ndim else 1)
+    in_every_run = undefined.all(axis=0)
+    start = int(np.argmin(in_every_run)) if not in_every_run.all() else in_every_run.size
+    later = undefined[:, start:]
+    if later.any():
+        run, sample = np.argwhere(later)[0]
+        where = (*np.unravel_index(run, T.shape[:-1]), start + sample) if T.ndim else ()
+        index = tuple(int(i) for i in where)
+        raise ValueError(
+            f"{name} is NaN at index {index} ({int(later.sum())} NaN in all) after its "
+            "undefined start: only the leading samples that are NaN in every run (windows "
+            "not yet full) may be NaN. A NaN later, or in some runs only, is a failed "
+            f"computation (e.g. a diverged filter), not an undefined window, and {consequence}: "
+            "find its cause, or leave the failed runs out"
+        )
+    return T, start
 
 
 def empirical_threshold(null_statistic, alpha) -> float:
@@ -28,15 +51,23 @@ def empirical_threshold(null_statistic, alpha) -> float:
     Parameters
     ----------
     null_statistic : array_like
-        Test quantities simulated under H0, any shape (for instance a batch
-        of windowed statistics); NaN entries (undefined samples) are ignored.
+        Test quantities simulated under H0, any shape, time on the last axis
+        (for instance a batch ``(n_runs, N)`` of windowed statistics). Its
+        undefined start, the leading samples that are NaN in every run
+        (windows not yet full), is left out; any other NaN is refused.
     alpha : float
         Designed false-alarm probability.
 
     Returns
     -------
     float
-        The empirical ``1 - alpha`` quantile of the finite values.
+        The empirical ``1 - alpha`` quantile of the values after the undefined start.
+
+    Raises
+    ------
+    ValueError
+        If ``null_statistic`` holds inf, or NaN other than its undefined
+        start (a failed run: leaving it out would bias the threshold).
 
     Notes
     -----
@@ -54,8 +85,10 @@ def empirical_threshold(null_statistic, alpha) -> float:
     9.5
     """
     alpha = as_probability(alpha)
-    values = _with_undefined(null_statistic, "null_statistic")
-    values = values[~np.isnan(values)]
+    values, start = _with_undefined_start(
+        null_statistic, "null_statistic", "leaving it out would bias the threshold"
+    )
+    values = np.atleast_1d(values)[..., start:]
     if values.size == 0:
         raise ValueError("null_statistic has no finite values (all are NaN, undefined)")
     return float(np.quantile(values, 1.0 - alpha))
@@ -123,8 +156,9 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     Parameters
     ----------
     statistic : (n_runs, N) array_like
-        A test quantity per run and sample (NaN where undefined, e.g. before
-        the first full window).
+        A test quantity per run and sample. Its undefined start, the leading
+        samples that are NaN in every run (before the first full window), is
+        not counted; any other NaN is refused.
     threshold : float
         Alarm when ``statistic > threshold``.
     fault_time : int, optional
@@ -134,11 +168,18 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     -------
     AlarmStatistics
 
+    Raises
+    ------
+    ValueError
+        If ``statistic`` is not 2-D, holds inf, or holds NaN other than its
+        undefined start (a failed run: counting it as "no alarm" would bias
+        the rates and delays).
+
     Notes
     -----
-    With alarms ``a_{i,t} = [T_{i,t} > threshold]`` (NaN never alarms):
-    the false-alarm rate is ``sum a_{i,t} / #{(i, t) : t < fault_time,
-    T_{i,t} defined}``, an estimate of the per-sample ``alpha`` of
+    With alarms ``a_{i,t} = [T_{i,t} > threshold]`` and ``t_0`` the first
+    sample after the undefined start: the false-alarm rate is
+    ``sum a_{i,t} / #{(i, t) : t_0 <= t < fault_time}``, an estimate of the per-sample ``alpha`` of
     :func:`windowed_nis_threshold`; the run false-alarm probability is the
     fraction of runs with ``max_{t < fault_time} a_{i,t} = 1``, the
     quantity that grows with the record length (multiple testing); the
@@ -156,21 +197,23 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
     >>> stats.false_alarm_rate, stats.detection_probability, stats.delays
     (0.16666666666666666, 1.0, array([0., 1.]))
     """
-    T = _with_undefined(statistic, "statistic")
+    T, start = _with_undefined_start(
+        statistic, "statistic", 'counting it as "no alarm" would bias the rates and delays'
+    )
     if T.ndim != 2 or T.size == 0:
         raise ValueError(
             f"statistic must have shape (n_runs, N), got {T.shape}; "
             "for a single run pass statistic[None, :]"
         )
-    _n_runs, N = T.shape
+    n_runs, N = T.shape
     threshold = as_finite(threshold, "threshold")
     if fault_time is not None:
         fault_time = as_index(fault_time, "fault_time", N, what="the first faulty sample")
     end = N if fault_time is None else fault_time
     with np.errstate(invalid="ignore"):
-        alarms = threshold < T  # NaN compares False
+        alarms = threshold < T  # the undefined start (NaN) compares False
     before = alarms[:, :end]
-    n_checked = int(np.isfinite(T[:, :end]).sum())
+    n_checked = n_runs * max(end - start, 0)
     rate = float(before.sum() / n_checked) if n_checked else float("nan")
     run_fa = float(before.any(axis=1).mean()) if end > 0 else float("nan")
     if fault_time is None:

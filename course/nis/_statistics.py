@@ -215,15 +215,33 @@ def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
     eps, L = _innovations_and_factor(innovations, S)
     z = _whiten(L, eps)
     K = z.shape[-2]
+    if window is not None:
+        window = _check_int(window, "window", 1, "the number of steps averaged")
+        if window > K:
+            raise ValueError(f"window = {window} is longer than the {K} steps given")
+    scaled, scale = _scaled_nis_matrix(z, window)
+    if window is not None:
+        scale = scale[..., None]
+    with np.errstate(over="ignore"):
+        return scaled * scale * scale  # inf only where the true value exceeds double precision
+
+
+def _scaled_nis_matrix(z: np.ndarray, window: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(Pi / c**2, c)`` with ``c`` a power of two near the largest ``|z|`` of each record.
+
+    Products of whitened innovations near 1e154 overflow where their average does not;
+    scaling by a power of two is exact, so at ordinary scales the result is the unscaled
+    one to the last bit. ``c`` has shape ``(..., 1, 1)``.
+    """
+    largest = np.max(np.abs(z), axis=(-2, -1), keepdims=True)
+    scale = np.ldexp(1.0, np.frexp(largest)[1])
+    z = z / scale
     if window is None:
-        return np.einsum("...ki,...kj->...ij", z, z) / K
-    window = _check_int(window, "window", 1, "the number of steps averaged")
-    if window > K:
-        raise ValueError(f"window = {window} is longer than the {K} steps given")
+        return np.einsum("...ki,...kj->...ij", z, z) / z.shape[-2], scale
     outer = z[..., :, :, None] * z[..., :, None, :]
     # Exact window sums (no running-sum cancellation): a strided view, summed.
     views = np.lib.stride_tricks.sliding_window_view(outer, window, axis=-3)
-    return views.sum(axis=-1) / window
+    return views.sum(axis=-1) / window, scale
 
 
 def nis_matrix_eigenvalues(innovations: Any, S: Any) -> EigenvaluePair:
@@ -256,5 +274,17 @@ def nis_matrix_eigenvalues(innovations: Any, S: Any) -> EigenvaluePair:
     >>> float(lmin), float(lmax)
     (0.5, 2.0)
     """
-    values = np.linalg.eigvalsh(nis_matrix(innovations, S))
+    eps, L = _innovations_and_factor(innovations, S)
+    values = _nis_matrix_eigenvalues(_whiten(L, eps))
     return EigenvaluePair(values[..., 0], values[..., -1])
+
+
+def _nis_matrix_eigenvalues(z: np.ndarray) -> np.ndarray:
+    """Ascending eigenvalues of the NIS matrix of whitened innovations ``z`` (``(..., m)``).
+
+    Found from the scaled matrix (see :func:`_scaled_nis_matrix`), so that an NIS matrix
+    near the overflow threshold has finite eigenvalues, not NaN.
+    """
+    scaled, scale = _scaled_nis_matrix(z, None)
+    with np.errstate(over="ignore"):
+        return np.linalg.eigvalsh(scaled) * scale[..., 0] * scale[..., 0]
