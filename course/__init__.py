@@ -99,9 +99,8 @@ Input checks
     (:data:`course.validation.SINGULAR_RTOL`); a ``sigma`` whose square is not
     a double is refused with advice to rescale.
 Changes
-    A change to a public call keeps the old form working for one release
-    with a :class:`DeprecationWarning` that says what to write instead
-    (CHANGELOG.md lists them).
+    The public API is what the modules' ``__all__`` list; CHANGELOG.md
+    records every change to it.
 """
 
 from importlib import import_module
@@ -124,13 +123,12 @@ _SUBMODULES = {
     "plotting",
     "grading",
 }
-_DEPRECATED = {"exercises"}  # old name of course.grading, kept for one release
 
 __all__ = sorted(_SUBMODULES) + ["__version__"]
 
 
 def __getattr__(name):
-    if name in _SUBMODULES or name in _DEPRECATED:
+    if name in _SUBMODULES:
         module = import_module(f"{__name__}.{name}")
         globals()[name] = module
         return module

@@ -51,9 +51,7 @@ hypothesis, ``Theta_0 = {theta : theta_j = nominal_j for every j not in
 free}``.  Data may be one record ``y`` of shape ``(N,)`` or ``M`` records at
 once as the rows of an ``(M, N)`` array (records leading, as everywhere in
 the course); statistics then come back as length-``M`` arrays, which is what
-makes the Monte Carlo studies fast.  Records as the *columns* of an
-``(N, M)`` array, the layout of earlier releases, still work with a
-DeprecationWarning.  The test-quantity functions take the data first and the
+makes the Monte Carlo studies fast.  The test-quantity functions take the data first and the
 hypothesis ``(U, nominal, free)`` after it, as the statistical tests of
 :mod:`scipy.stats` do; :func:`least_squares_residual`, a fit, takes the
 regressors first, as :func:`course.lsq.fit` does.
@@ -78,7 +76,6 @@ from course.diagnosis._monte_carlo import (
     IsolationResult,
     isolation_monte_carlo,
     linear_test_statistics,
-    simulate_linear_regression,
     simulate_regression_records,
 )
 from course.diagnosis._observer import ObserverResult, observer_residuals
@@ -149,6 +146,5 @@ __all__ = [
     "regression_parameter_test",
     "residual_threshold",
     "simulate_beta_system",
-    "simulate_linear_regression",
     "simulate_regression_records",
 ]

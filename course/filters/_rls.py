@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 from numpy.linalg import LinAlgError
 
-from course import _deprecation
 from course.filters._steps import _kf_update as kf_update
 from course.linalg import _symmetrize as symmetrize
 from course.linalg import matrix_rank, qr_solve
@@ -108,7 +107,6 @@ def _first_full_rank(Phi: np.ndarray) -> int:
     return lo
 
 
-@_deprecation.keyword_only("r", "q", "theta0", "P0")
 def recursive_least_squares(
     Phi: Any,
     y: Any,

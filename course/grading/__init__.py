@@ -37,8 +37,6 @@ submit, identity, roster
     Handing in (``check.submit()``), whose submission is whose, the roster and LMS grade files.
 export, leaks
     ``course export`` (the student edition) and the scan that keeps solutions out of it.
-
-``course.exercises`` is the old name of this package; it still works for one release.
 """
 
 from importlib import import_module
