@@ -28,17 +28,17 @@ from typing import Any
 import numpy as np
 from scipy import integrate, optimize
 
+from course._law_inputs import _levels, _points
 from course.validation import (
     as_callable,
     as_finite,
     as_flag,
-    as_float_array,
     as_generator,
     as_law,
     as_size,
 )
 
-__all__ = ["FrozenDistribution", "TailPair", "as_generator"]
+__all__ = ["FrozenDistribution", "TailPair"]
 
 
 class FrozenDistribution:
@@ -254,19 +254,6 @@ class FrozenDistribution:
         return float(
             optimize.brentq(gap, left, right, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=500)
         )
-
-
-def _points(x: Any, name: str = "x") -> np.ndarray:
-    """Points where a law is evaluated: real numbers, +-inf allowed, NaN refused."""
-    return as_float_array(x, name, finite=False)
-
-
-def _levels(q: Any, name: str = "q") -> np.ndarray:
-    """Probabilities for ``ppf``/``isf``: real numbers in [0, 1]."""
-    q = as_float_array(q, name)
-    if np.any((q < 0) | (q > 1)):
-        raise ValueError(f"{name}: probabilities must lie in [0, 1], got {q}")
-    return q
 
 
 def _bound(value: Any, name: str) -> float:

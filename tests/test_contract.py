@@ -209,10 +209,10 @@ CASES: dict[str, list[Case]] = {
         Case(lambda rng: dg.neyman_pearson_test(rng.standard_normal(6), 0.0, 0.8), 600)
     ],
     "windowed_chi2_test": [
-        Case(lambda rng: kf.windowed_chi2_test(_kf_result(rng), 10), 300),  # two outputs
-        Case(lambda rng: kf.windowed_chi2_test(_rls_result(rng), 8), 300),
+        Case(lambda rng: nis.windowed_chi2_test(_kf_result(rng), 10), 300),  # two outputs
+        Case(lambda rng: nis.windowed_chi2_test(_rls_result(rng), 8), 300),
         Case(
-            lambda rng: kf.windowed_chi2_test(rng.chisquare(3, size=20), 6, n_outputs=3),
+            lambda rng: nis.windowed_chi2_test(rng.chisquare(3, size=20), 6, n_outputs=3),
             600,
         ),
     ],

@@ -5,7 +5,7 @@ import pytest
 from numpy.linalg import LinAlgError
 from scipy import stats
 
-from course import lsq
+from course import chi2, lsq
 
 TOL = 1e-10
 T4 = np.arange(1.0, 5.0)
@@ -202,7 +202,7 @@ def test_fit_matches_dense_reference(kind):
     assert wt.largest == int(np.argmax(np.abs(ref["w"])))
     np.testing.assert_array_equal(wt.reject, np.abs(ref["w"]) > stats.norm.isf(0.025))
     # mdb: sqrt(lambda0 / c_i^T Qyy^-1 Qee Qyy^-1 c_i)
-    lam0 = lsq.noncentrality(0.001, 0.8)
+    lam0 = chi2.noncentrality(0.001, 0.8)
     np.testing.assert_allclose(lsq.mdb(f), np.sqrt(lam0 / np.diag(ref["N"])), rtol=1e-9)
 
 
@@ -218,7 +218,7 @@ def test_w_equals_residual_over_its_std_for_diagonal_qyy():
     assert wt.critical_value == pytest.approx(stats.norm.isf(0.005), rel=1e-14)
     assert wt.null.dist.name == "norm" and wt.alpha == 0.01
     # ...and then mdb = sigma_i sqrt(lambda0 / r_i)
-    lam0 = lsq.noncentrality(0.001, 0.8)
+    lam0 = chi2.noncentrality(0.001, 0.8)
     np.testing.assert_allclose(lsq.mdb(f), sig * np.sqrt(lam0 / f.redundancy_numbers), rtol=1e-10)
 
 
@@ -445,7 +445,7 @@ def test_sea_level_data_cases():
     "alpha, power, dof", [(0.001, 0.8, 1), (0.05, 0.5, 1), (0.2, 0.3, 1), (0.01, 0.9, 3)]
 )
 def test_noncentrality_achieves_power(alpha, power, dof):
-    lam0 = lsq.noncentrality(alpha, power, dof)
+    lam0 = chi2.noncentrality(alpha, power, dof)
     k = stats.chi2.isf(alpha, dof)
     assert stats.ncx2.sf(k, dof, lam0) == pytest.approx(power, abs=1e-10)
     if dof == 1:
@@ -462,18 +462,18 @@ def test_noncentrality_achieves_power(alpha, power, dof):
 
 
 def test_noncentrality_known_value_and_monotonicity():
-    assert round(lsq.noncentrality(0.001, 0.80), 2) == 17.07  # Baarda's B-method value
-    assert lsq.noncentrality(0.001, 0.9) > lsq.noncentrality(0.001, 0.8)
-    assert lsq.noncentrality(0.01, 0.8) < lsq.noncentrality(0.001, 0.8)
-    assert lsq.noncentrality(0.001, 0.8, 2) > lsq.noncentrality(0.001, 0.8, 1)
+    assert round(chi2.noncentrality(0.001, 0.80), 2) == 17.07  # Baarda's B-method value
+    assert chi2.noncentrality(0.001, 0.9) > chi2.noncentrality(0.001, 0.8)
+    assert chi2.noncentrality(0.01, 0.8) < chi2.noncentrality(0.001, 0.8)
+    assert chi2.noncentrality(0.001, 0.8, 2) > chi2.noncentrality(0.001, 0.8, 1)
     with pytest.raises(ValueError, match=r"power .* must exceed alpha"):
-        lsq.noncentrality(0.1, 0.05)
+        chi2.noncentrality(0.1, 0.05)
     for bad in (0, 1.5, "a", True, np.inf):
         with pytest.raises(ValueError, match=r"dof must be (a positive integer|an integer), got"):
-            lsq.noncentrality(0.05, 0.8, bad)
-    assert lsq.noncentrality(0.05, 0.8, np.int64(2)) == lsq.noncentrality(0.05, 0.8, 2.0)
+            chi2.noncentrality(0.05, 0.8, bad)
+    assert chi2.noncentrality(0.05, 0.8, np.int64(2)) == chi2.noncentrality(0.05, 0.8, 2.0)
     with pytest.raises(ValueError, match="power must lie strictly between 0 and 1"):
-        lsq.noncentrality(0.05, 1.0)
+        chi2.noncentrality(0.05, 1.0)
 
 
 def test_bias_of_size_mdb_is_detected_with_the_stated_power():

@@ -422,6 +422,8 @@ def test_two_dimensional_T_is_refused_at_once():
         (lambda: pl.plot_chi2_histogram(CHI2, 0), "dof"),
         (lambda: pl.plot_chi2_histogram(CHI2, 2.5), "dof"),
         (lambda: pl.plot_chi2_histogram(CHI2, 3, alpha=1.5), "alpha"),
+        (lambda: pl.plot_chi2_histogram(CHI2, 3, alpha="0.05"), "alpha"),  # text, as validation
+        (lambda: pl.plot_chi2_histogram(CHI2, "3"), "dof"),
         (lambda: pl.plot_chi2_histogram(CHI2, 3, bins=None), "bins"),
         (lambda: pl.plot_error_bars(T4, DAY1, -1.0), "sigma"),
         (lambda: pl.plot_error_bars(T4, DAY1, [1.0, 2.0]), "sigma"),

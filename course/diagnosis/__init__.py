@@ -17,7 +17,7 @@ Decision structures (``_structures``)
 Prediction errors (``_prediction_error``)
     :class:`RegressionFit`, :func:`least_squares_residual`,
     :func:`prediction_error`, :func:`prediction_error_test`,
-    :func:`residual_threshold`, :func:`fault_noncentrality`,
+    :func:`fault_noncentrality`,
     :func:`prediction_error_power`, :class:`NonlinearFit`,
     :func:`nonlinear_prediction_error`.
 Parameter estimates (``_parameter_estimates``)
@@ -95,7 +95,6 @@ from course.diagnosis._prediction_error import (
     prediction_error,
     prediction_error_power,
     prediction_error_test,
-    residual_threshold,
 )
 from course.diagnosis._structures import (
     DecisionStructure,
@@ -144,7 +143,6 @@ __all__ = [
     "prediction_error_power",
     "prediction_error_test",
     "regression_parameter_test",
-    "residual_threshold",
     "simulate_beta_system",
     "simulate_regression_records",
 ]

@@ -11,8 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from course.filters._models import NonlinearModel, Simulation, _batch_shape
-from course.filters._stacked import _component_major
+from course._signals import _batch_shape
+from course._stacked import _component_major
+from course.filters import NonlinearModel, Simulation
 from course.validation import as_finite, as_float_array, as_generator, as_positive, as_variance
 
 

@@ -16,10 +16,11 @@ from typing import Any
 import numpy as np
 from scipy import optimize, special, stats
 
+from course._law_inputs import _levels
 from course.chi2 import residual_norm_law
 from course.diagnosis._common import _check_sigma, _indices, _model, _void_test_message
 from course.diagnosis._prediction_error import prediction_error
-from course.distributions import FrozenDistribution, _levels
+from course.distributions import FrozenDistribution
 from course.linalg import cholesky_lower, whiten
 from course.results import TestResult, format_number
 from course.validation import (

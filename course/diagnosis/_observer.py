@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from course.filters._models import _as_signal
-from course.filters._stacked import _mv
-from course.nis._windowed import windowed_sum
+from course._signals import _as_signal
+from course._stacked import _mv
+from course.nis import windowed_sum
 from course.validation import as_callable, as_float_array, as_matrix, as_positive, as_vector
 
 

@@ -22,9 +22,9 @@ w_tests
     One normalised residual per observation, two-sided normal test.
 data_snooping
     Remove the most suspicious observation and refit, until nothing is rejected.
-noncentrality, mdb
-    Non-centrality of a test with given power (:func:`course.chi2.noncentrality`,
-    re-exported here), and the minimal detectable bias.
+mdb
+    The minimal detectable bias (the non-centrality it rests on is
+    :func:`course.chi2.noncentrality`).
 confidence_band
     Fitted values at new design rows with their confidence half-widths.
 load_sea_level
@@ -47,7 +47,6 @@ diagonal Qyy; the m x m matrices ``Qee`` and ``Qyy_hat`` are computed when
 asked for.
 """
 
-from course.chi2 import noncentrality
 from course.lsq._data import load_sea_level
 from course.lsq._fit import LeastSquaresFit, fit
 from course.lsq._reliability import ConfidenceBand, confidence_band, mdb
@@ -69,7 +68,6 @@ __all__ = [
     "fit",
     "load_sea_level",
     "mdb",
-    "noncentrality",
     "overall_model_test",
     "w_tests",
 ]

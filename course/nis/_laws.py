@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from course.distributions import FrozenDistribution, _levels, _points
+from course._law_inputs import _levels, _points
+from course.distributions import FrozenDistribution
 from course.nis._pfaffians import (
     _augment,
     _bordered,
