@@ -255,7 +255,7 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
         "critical": float(omt.critical_value),
         "omt_reject": bool(omt.reject),
         "w_reject": tuple(int(i) for i in wt.rejected),
-        "w": float(wt.w[index]),
+        "w": float(wt.statistic[index]),
         "omt_power": omt_power,
         "w_power": w_power,
     }

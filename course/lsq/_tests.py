@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import html
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -152,15 +153,19 @@ def _standard_deviation_hint(fit: LeastSquaresFit, result: TestResult) -> str:
 class WTestResult:
     """Baarda's w-test applied to every observation of a fit.
 
+    Unpacks like scipy's results and :class:`~course.results.TestResult`:
+    ``w, pvalue = w_tests(fit)``.
+
     Attributes
     ----------
-    w : ndarray, shape (m,)
-        Test statistics (NaN where an observation cannot be tested).
+    statistic : ndarray, shape (m,)
+        Baarda's ``w_i``, one per observation (NaN where an observation cannot
+        be tested); the textbook writes ``w``.
     critical_value : float
         ``norm.isf(alpha / 2)``: reject observation i when ``|w_i|`` exceeds it.
     reject : ndarray of bool, shape (m,)
         Decision per observation.
-    pvalues : ndarray, shape (m,)
+    pvalue : ndarray, shape (m,)
         Two-sided p-values ``2 norm.sf(|w_i|)`` (NaN where untestable).
     largest : int
         Index (0-based) of the largest ``|w_i|``: the most suspicious observation.
@@ -173,14 +178,18 @@ class WTestResult:
         ``norm()``, the law of each ``w_i`` under H0.
     """
 
-    w: np.ndarray
+    statistic: np.ndarray
     critical_value: float
     reject: np.ndarray
-    pvalues: np.ndarray
+    pvalue: np.ndarray
     largest: int
     testable: np.ndarray
     alpha: float
     null: Any
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        """``statistic, pvalue = result``, as scipy's test results unpack."""
+        return iter((self.statistic, self.pvalue))
 
     @property
     def any_reject(self) -> bool:
@@ -194,14 +203,14 @@ class WTestResult:
 
     def test(self, i: int) -> TestResult:
         """The w-test of observation ``i`` as a :class:`~course.results.TestResult`."""
-        i = as_index(i, "i", self.w.shape[0], negative=True, what="observation index")
+        i = as_index(i, "i", self.statistic.shape[0], negative=True, what="observation index")
         if not self.testable[i]:
             raise ValueError(
                 f"observation {i} cannot be tested: it has no redundancy (its residual is "
                 "always zero), so an outlier in it is invisible"
             )
         return TestResult.from_null(
-            f"w-test, observation {i}", float(self.w[i]), self.null, self.alpha, "two-sided"
+            f"w-test, observation {i}", float(self.statistic[i]), self.null, self.alpha, "two-sided"
         )
 
     def tests(self) -> list[TestResult]:
@@ -214,21 +223,23 @@ class WTestResult:
         return (
             f"w-tests (alpha = {format_number(self.alpha)}): critical |w| = "
             f"{format_number(self.critical_value, 5)}, largest |w| = "
-            f"{format_number(abs(float(self.w[i])), 5)} at observation {i}, "
+            f"{format_number(abs(float(self.statistic[i])), 5)} at observation {i}, "
             f"rejected: {self.rejected if self.rejected else 'none'}"
         )
 
     def __repr__(self) -> str:
         i = self.largest
         return (
-            f"WTestResult(m={self.w.shape[0]}, alpha={format_number(self.alpha)}, "
+            f"WTestResult(m={self.statistic.shape[0]}, alpha={format_number(self.alpha)}, "
             f"critical_value={format_number(self.critical_value, 5)}, largest={i}, "
-            f"w_largest={format_number(float(self.w[i]), 5)}, rejected={self.rejected})"
+            f"w_largest={format_number(float(self.statistic[i]), 5)}, rejected={self.rejected})"
         )
 
     def _repr_html_(self) -> str:
         rows = []
-        for i, (w, p, r, ok) in enumerate(zip(self.w, self.pvalues, self.reject, self.testable)):
+        for i, (w, p, r, ok) in enumerate(
+            zip(self.statistic, self.pvalue, self.reject, self.testable)
+        ):
             style = " style='font-weight:bold'" if r else ""
             w_text = format_number(float(w), 4) if ok else "untestable"
             p_text = format_number(float(p), 3) if ok else ""
@@ -263,8 +274,8 @@ def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
     null = _standard_normal()
     decision = decide(null, w[testable], alpha, "two-sided")
     critical = decision.critical_value.upper
-    pvalues = np.full(m, np.nan)
-    pvalues[testable] = decision.pvalue
+    pvalue = np.full(m, np.nan)
+    pvalue[testable] = decision.pvalue
     reject = np.zeros(m, dtype=bool)
     reject[testable] = decision.reject
     largest = 0
@@ -274,10 +285,10 @@ def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
         abs_w = np.abs(w)
         largest = int(np.flatnonzero(abs_w >= (1 - _TIE_RTOL) * np.nanmax(abs_w))[0])
     return WTestResult(
-        w=_readonly(w),
+        statistic=_readonly(w),
         critical_value=critical,
         reject=_readonly(reject),
-        pvalues=_readonly(pvalues),
+        pvalue=_readonly(pvalue),
         largest=largest,
         testable=_readonly(testable),
         alpha=alpha,
@@ -298,8 +309,8 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     Returns
     -------
     WTestResult
-        ``w``, ``critical_value`` (``norm.isf(alpha/2)``), ``reject``,
-        ``pvalues``, ``largest`` (index of max ``|w|``), ``testable``,
+        ``statistic`` (the ``w_i``), ``critical_value`` (``norm.isf(alpha/2)``),
+        ``reject``, ``pvalue``, ``largest`` (index of max ``|w|``), ``testable``,
         ``alpha`` and ``null`` (``norm()``); ``.tests()`` gives one
         :class:`~course.results.TestResult` per observation.
 
@@ -338,7 +349,7 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
     >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
     >>> wt = w_tests(fit(A, y, 0.01 * np.eye(10)), alpha=0.01)
-    >>> wt.largest, wt.rejected, round(float(wt.w[6]), 2)
+    >>> wt.largest, wt.rejected, round(float(wt.statistic[6]), 2)
     (6, [6], 4.83)
     """
     fit = _check_fit(fit)
@@ -404,7 +415,7 @@ class SnoopingResult:
             action = f"remove {idx[j]}" if wt.reject[j] else "stop"
             rows.append(
                 f"<tr><td>{k + 1}</td><td>{len(idx)}</td><td>{idx[j]}</td>"
-                f"<td>{format_number(float(wt.w[j]), 4)}</td>"
+                f"<td>{format_number(float(wt.statistic[j]), 4)}</td>"
                 f"<td>{format_number(wt.critical_value, 4)}</td><td>{action}</td></tr>"
             )
         caption = html.escape(self.summary())
