@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import ast
 import importlib
+import json
 import pkgutil
+import re
 import types
 from collections import defaultdict
 from pathlib import Path
@@ -106,3 +108,141 @@ def test_no_module_reaches_into_another_packages_private_names():
             continue  # the grader's own rooms are restructured separately
         found += _private_imports(path)
     assert not found, "cross-package private imports:\n" + "\n".join(found)
+
+
+# ---------------------------------------------------------------------------
+# a topic module is wired into every place ARCHITECTURE.md's checklist names
+# ---------------------------------------------------------------------------
+#: The layers below the topics and the two packages beside them; every other public module
+#: of ``course`` is a topic module (found, not listed: a new one is checked by default).
+NOT_TOPICS = {"results", "validation", "linalg", "distributions", "chi2", "quadform"}
+NOT_TOPICS |= {"plotting", "grading"}
+
+
+def topic_modules() -> list[str]:
+    return [name for name in course.__all__ if not name.startswith("_") and name not in NOT_TOPICS]
+
+
+def _uses(text: str, topic: str) -> bool:
+    """``from course import ..., topic``, ``import course.topic``, ``course.topic.x``, ..."""
+    return bool(
+        re.search(rf"from course import [^\n]*\b{topic}\b", text)
+        or re.search(rf"\bcourse\.{topic}\b", text)
+    )
+
+
+def _code_of(path: Path) -> str:
+    if path.suffix == ".ipynb":
+        cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+        return "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+    return path.read_text(encoding="utf-8")
+
+
+def _bad_input_tables() -> set[str]:
+    """The modules whose public callables a tests/test_bad_input_*.py table covers."""
+    covered: set[str] = set()
+    for path in sorted((ROOT / "tests").glob("test_bad_input_*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if (
+                isinstance(node, ast.Call)
+                and getattr(node.func, "id", None) == "module_tests"
+                and node.args
+            ):
+                value = ast.literal_eval(node.args[0])
+                covered |= {value} if isinstance(value, str) else set(value)
+    return covered
+
+
+def test_the_topic_modules_are_found():
+    assert {"lsq", "diagnosis", "filters", "nis", "mismatched"} <= set(topic_modules())
+
+
+def test_every_public_module_has_a_bad_input_table():
+    modules = {n for n in public_namespaces() if n.count(".") == 1} - {
+        "course.plotting",
+        "course.grading",
+    }
+    missing = sorted(modules - _bad_input_tables())
+    assert not missing, f"modules without a table in tests/test_bad_input_*.py: {missing}"
+
+
+def test_every_topic_module_has_a_plotting_module():
+    missing = [
+        t for t in topic_modules() if not (ROOT / "course" / "plotting" / f"{t}.py").exists()
+    ]
+    assert not missing, f"topic modules without course/plotting/<module>.py: {missing}"
+
+
+def test_every_topic_module_is_taught_in_a_notebook_and_an_assignment():
+    notebooks = [_code_of(p) for p in sorted((ROOT / "notebooks").glob("*.ipynb"))]
+    assignments = [
+        "\n".join(_code_of(p) for p in sorted(folder.iterdir()) if p.suffix in (".py", ".ipynb"))
+        for folder in sorted((ROOT / "solutions").iterdir())
+        if folder.is_dir()
+    ]
+    for topic in topic_modules():
+        assert any(_uses(text, topic) for text in notebooks), f"no notebook uses course.{topic}"
+        assert any(_uses(text, topic) for text in assignments), f"no assignment uses course.{topic}"
+
+
+def test_every_assignment_has_a_wrong_answer_suite():
+    suites = {}
+    for path in sorted((ROOT / "tests" / "wrong_answers").glob("answers_*.py")):
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "ASSIGNMENT":
+                suites[ast.literal_eval(node.value)] = path.name
+    assignments = {p.name for p in (ROOT / "solutions").iterdir() if (p / "checks.py").exists()}
+    missing = sorted(assignments - set(suites))
+    assert not missing, f"assignments without tests/wrong_answers/answers_NN.py: {missing}"
+
+
+# ---------------------------------------------------------------------------
+# ARCHITECTURE.md names only what exists
+# ---------------------------------------------------------------------------
+_PATH = re.compile(r"^(course|tests|docs|notebooks|solutions|exercises|\.ci)/[\w./*-]*$")
+_DOTTED = re.compile(r"^course(\.\w+)+$")
+
+
+def _resolves(dotted: str) -> bool:
+    parts = dotted.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for attr in parts[i:]:
+            if not hasattr(obj, attr):
+                return False
+            obj = getattr(obj, attr)
+        return True
+    return False
+
+
+def test_architecture_map_names_only_what_exists():
+    text = (ROOT / "ARCHITECTURE.md").read_text(encoding="utf-8")
+    names = set(re.findall(r"`([^`\n]+)`", text))
+    checked, missing = 0, []
+    for name in sorted(names):
+        if "<" in name:  # a pattern such as course/plotting/<topic>.py
+            continue
+        if _DOTTED.match(name):
+            checked += 1
+            if not _resolves(name):
+                missing.append(name)
+        elif re.fullmatch(r"test_\w+", name):  # a guard the checklist relies on
+            checked += 1
+            sources = "".join(f.read_text(encoding="utf-8") for f in (ROOT / "tests").glob("*.py"))
+            if f"def {name}(" not in sources:
+                missing.append(name)
+        elif _PATH.match(name):
+            checked += 1
+            if not (any(ROOT.glob(name)) if "*" in name else (ROOT / name).exists()):
+                missing.append(name)
+    assert checked >= 20, "the map names modules and paths in backticks"
+    assert not missing, f"ARCHITECTURE.md names what does not exist: {missing}"
+
+
+def test_architecture_map_names_every_public_module():
+    text = (ROOT / "ARCHITECTURE.md").read_text(encoding="utf-8")
+    missing = [n for n in public_namespaces() if n.count(".") == 1 and n not in text]
+    assert not missing, f"public modules ARCHITECTURE.md does not place in a layer: {missing}"
