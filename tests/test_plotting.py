@@ -259,6 +259,7 @@ GOOD = {
     ),
 }
 
+
 def _plotting_modules():
     """Every public module of course.plotting but the style, found (not listed): a new
     plotting module's functions need a good call below or the test fails."""
