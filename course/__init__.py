@@ -84,9 +84,12 @@ Randomness
     seed for one; the global numpy state is never used.
 Results
     Tests return a :class:`~course.results.TestResult` built by the one
-    decision path (:meth:`~course.results.TestResult.from_null`); other
-    multi-valued results are named objects (dataclasses or named tuples that
-    unpack like the tuples of earlier releases).
+    decision path (:meth:`~course.results.TestResult.from_null`), which
+    unpacks as ``statistic, pvalue = result`` like scipy's; other
+    multi-valued results are named objects (dataclasses or named tuples).
+Names
+    Every public object has one public name, in its one home module; the
+    layers and the checklist for a new module are in ARCHITECTURE.md.
 Laws
     Null laws are frozen, scipy-compatible distributions: ``cdf``, ``sf``,
     ``ppf``, ``isf``, ``rvs(size, rng=)``, ``support()``, ``median()``,
