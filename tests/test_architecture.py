@@ -246,3 +246,16 @@ def test_architecture_map_names_every_public_module():
     text = (ROOT / "ARCHITECTURE.md").read_text(encoding="utf-8")
     missing = [n for n in public_namespaces() if n.count(".") == 1 and n not in text]
     assert not missing, f"public modules ARCHITECTURE.md does not place in a layer: {missing}"
+
+
+def test_every_library_name_an_assignment_names_resolves():
+    # Forbidden functions are dotted names: one that no longer resolves (a removed alias)
+    # would silently forbid nothing.
+    missing = []
+    for path in sorted(ROOT.glob("solutions/*/checks.py")) + sorted(
+        ROOT.glob("exercises/*/checks.json")
+    ):
+        for name in set(re.findall(r"[\"'](course(?:\.\w+)+)[\"']", path.read_text("utf-8"))):
+            if not name.startswith("course.grading") and not _resolves(name):
+                missing.append(f"{path.relative_to(ROOT)}: {name}")
+    assert not missing, f"names that do not resolve: {missing}"
