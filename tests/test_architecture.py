@@ -259,3 +259,68 @@ def test_every_library_name_an_assignment_names_resolves():
             if not name.startswith("course.grading") and not _resolves(name):
                 missing.append(f"{path.relative_to(ROOT)}: {name}")
     assert not missing, f"names that do not resolve: {missing}"
+
+
+# ---------------------------------------------------------------------------
+# no import cycle, counting imports inside functions
+# ---------------------------------------------------------------------------
+#: The grader is being split into rooms by audience, which removes its cycles; until then
+#: it is left out here (drop this once course/grading/ is acyclic).
+CYCLE_CHECK_SKIPS = ("course.grading",)
+
+
+def _import_graph() -> dict[str, set[str]]:
+    modules: dict[str, Path] = {}
+    for path in (ROOT / "course").rglob("*.py"):
+        name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+        modules[name.removesuffix(".__init__")] = path
+
+    def owner(dotted: str) -> str:
+        while dotted and dotted not in modules:
+            dotted = dotted.rpartition(".")[0]
+        return dotted
+
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        if name.startswith(CYCLE_CHECK_SKIPS):
+            continue
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):  # functions too
+            if isinstance(node, ast.Import):
+                targets |= {owner(a.name) for a in node.names if a.name.startswith("course")}
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join(anchor + ([base] if base else []))
+                if base.startswith("course"):
+                    for a in node.names:
+                        full = f"{base}.{a.name}"
+                        targets.add(full if full in modules else owner(base))
+        graph[name] = {
+            t for t in targets if t and t != name and not t.startswith(CYCLE_CHECK_SKIPS)
+        }
+    return graph
+
+
+def test_no_import_cycle_in_the_library():
+    graph = _import_graph()
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        path.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                return path[path.index(nxt) :] + [nxt]
+            if nxt not in state and (cycle := visit(nxt)):
+                return cycle
+        path.pop()
+        state[node] = 2
+        return None
+
+    for start in sorted(graph):
+        if start not in state and (cycle := visit(start)):
+            raise AssertionError("import cycle: " + " -> ".join(cycle))
