@@ -482,3 +482,20 @@ def test_package_data_comes_from_importlib_resources():
     text = resources.files("course").joinpath("data", "sea_level_mude", "Dataset_0.txt").read_text()
     t, y = lsq.load_sea_level(0)
     assert y.size == len(text.split()) == t.size == 20
+
+
+def test_named_results_unpack_as_tuples():
+    from course import filters, mismatched, nis
+
+    eps = np.random.default_rng(0).standard_normal((30, 2))
+    law_min, law_max = nis.nis_matrix_test(eps, np.eye(2)).null  # a pair of laws
+    assert law_min.which == "min" and law_max.which == "max"
+    lo, hi = nis.nis_critical_values(2, 30)
+    assert (lo, hi) == tuple(nis.nis_critical_values(2, 30))
+    x, P = filters.kf_predict([1.0], [[1.0]], [[2.0]], [[0.5]])
+    assert x[0] == 2.0 and P[0, 0] == 4.5
+    m0 = filters.LinearModel([[0.5]], [[1.0]], [[1.0]], [[1.0]])
+    moments = mismatched.residual_moments(m0, m0, 3)
+    lam, V = mismatched.principal_directions(moments, 0)
+    s, left, right = mismatched.principal_directions(moments, 0, 1)
+    assert lam.shape == s.shape == (1,) and V.shape == left.shape == right.shape == (1, 1)

@@ -52,8 +52,8 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
         as the *columns* of ``vectors``.  Otherwise
         :class:`SingularDirections` ``(values, left, right)``, the singular
         value decomposition ``C(j, k) = U diag(s) W^T``: ``left[:, g]``
-        projects ``r_j`` and ``right[:, g]`` projects ``r_k``.  Both unpack
-        like the tuples of earlier releases, ``lam, V`` and ``s, U, W``.
+        projects ``r_j`` and ``right[:, g]`` projects ``r_k``.  Both are
+        named tuples: ``lam, V = ...`` and ``s, U, W = ...``.
 
     Notes
     -----
