@@ -324,3 +324,32 @@ def test_no_import_cycle_in_the_library():
     for start in sorted(graph):
         if start not in state and (cycle := visit(start)):
             raise AssertionError("import cycle: " + " -> ".join(cycle))
+
+
+#: The layers of ARCHITECTURE.md, bottom (0) to top; a module not named here is a topic (2).
+LAYERS = {
+    0: {"results", "validation", "linalg"},  # and every shared internal module course._x
+    1: {"chi2", "quadform", "distributions"},
+    3: {"plotting", "interactive"},
+    4: {"cli", "docsite", "workspace", "grading", "__main__"},
+}
+
+
+def _layer(module: str) -> int:
+    parts = module.split(".")
+    if len(parts) == 1:
+        return 0  # the package itself: its version (it imports its modules lazily, by name)
+    first = parts[1]
+    if first.startswith("_") and first != "__main__":
+        return 0
+    return next((level for level, names in LAYERS.items() if first in names), 2)
+
+
+def test_layers_import_only_downward():
+    upward = [
+        f"{a} -> {b}"
+        for a, targets in sorted(_import_graph().items())
+        for b in sorted(targets)
+        if _layer(b) > _layer(a)
+    ]
+    assert not upward, f"imports that go up a layer (see ARCHITECTURE.md): {upward}"
