@@ -84,9 +84,12 @@ Randomness
     seed for one; the global numpy state is never used.
 Results
     Tests return a :class:`~course.results.TestResult` built by the one
-    decision path (:meth:`~course.results.TestResult.from_null`); other
-    multi-valued results are named objects (dataclasses or named tuples that
-    unpack like the tuples of earlier releases).
+    decision path (:meth:`~course.results.TestResult.from_null`), which
+    unpacks as ``statistic, pvalue = result`` like scipy's; other
+    multi-valued results are named objects (dataclasses or named tuples).
+Names
+    Every public object has one public name, in its one home module; the
+    layers and the checklist for a new module are in ARCHITECTURE.md.
 Laws
     Null laws are frozen, scipy-compatible distributions: ``cdf``, ``sf``,
     ``ppf``, ``isf``, ``rvs(size, rng=)``, ``support()``, ``median()``,
@@ -99,9 +102,8 @@ Input checks
     (:data:`course.validation.SINGULAR_RTOL`); a ``sigma`` whose square is not
     a double is refused with advice to rescale.
 Changes
-    A change to a public call keeps the old form working for one release
-    with a :class:`DeprecationWarning` that says what to write instead
-    (CHANGELOG.md lists them).
+    The public API is what the modules' ``__all__`` list; CHANGELOG.md
+    records every change to it.
 """
 
 from importlib import import_module
@@ -124,13 +126,12 @@ _SUBMODULES = {
     "plotting",
     "grading",
 }
-_DEPRECATED = {"exercises"}  # old name of course.grading, kept for one release
 
 __all__ = sorted(_SUBMODULES) + ["__version__"]
 
 
 def __getattr__(name):
-    if name in _SUBMODULES or name in _DEPRECATED:
+    if name in _SUBMODULES:
         module = import_module(f"{__name__}.{name}")
         globals()[name] = module
         return module

@@ -41,7 +41,6 @@ from typing import Any
 import numpy as np
 from scipy import optimize, stats
 
-from course import _deprecation
 from course.validation import as_count, as_float_array, as_probability, as_std
 
 __all__ = ["chi2_power", "noncentrality", "residual_norm_law", "residual_threshold"]
@@ -89,7 +88,6 @@ def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
     return _frozen_chi2(dof, sigma**2)
 
 
-@_deprecation.alpha_first("residual_threshold(dof, alpha, sigma=...)", keyword="sigma")
 def residual_threshold(dof: Any, alpha: Any = 0.05, *, sigma: Any = 1.0) -> float:
     """Threshold ``J`` on ``T = ||residual||^2`` with false-alarm rate ``alpha``.
 
@@ -111,9 +109,7 @@ def residual_threshold(dof: Any, alpha: Any = 0.05, *, sigma: Any = 1.0) -> floa
     -----
     Under H0 the residual is ``(I - P) v`` with ``v ~ N(0, sigma^2 I)`` and
     ``I - P`` an orthogonal projection of rank ``N - rank(Phi)``, so
-    ``T / sigma^2 ~ chi2(N - rank)`` (Cochran's theorem).  The order
-    ``(alpha, dof, sigma)`` of earlier releases still works, with a
-    DeprecationWarning.
+    ``T / sigma^2 ~ chi2(N - rank)`` (Cochran's theorem).
 
     Examples
     --------

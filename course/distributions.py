@@ -17,7 +17,7 @@ statistics, one per tail (the smallest and largest eigenvalue of the NIS
 matrix).
 
 Random draws take ``rng=`` (a :class:`numpy.random.Generator` or a seed), as
-everything random in the course does; ``random_state=`` is deprecated.
+everything random in the course does.
 """
 
 from __future__ import annotations
@@ -28,57 +28,17 @@ from typing import Any
 import numpy as np
 from scipy import integrate, optimize
 
-from course import _deprecation
+from course._law_inputs import _levels, _points
 from course.validation import (
     as_callable,
     as_finite,
     as_flag,
-    as_float_array,
     as_generator,
     as_law,
     as_size,
 )
 
-__all__ = ["FrozenDistribution", "TailPair", "as_generator"]
-
-_NO_STATE = object()
-
-
-def _rng_argument(rng: Any, random_state: Any, where: str) -> np.random.Generator:
-    """The generator of a call that may still use the deprecated ``random_state=``."""
-    if random_state is not _NO_STATE:
-        if rng is not None:
-            raise TypeError(f"{where}: pass rng= only (random_state= is its deprecated name)")
-        _deprecation.warn(f"{where}: random_state= is now rng=", stacklevel=4)
-        rng = random_state
-    return as_generator(rng)
-
-
-class _Support(tuple):
-    """``(lower, upper)`` that is also callable: ``law.support()`` as in scipy.
-
-    Reading it as a tuple (the old attribute form) still works, with a
-    DeprecationWarning.
-    """
-
-    def __call__(self) -> tuple[float, float]:
-        return (self._lower, self._upper)
-
-    @property
-    def _lower(self) -> float:
-        return tuple.__getitem__(self, 0)
-
-    @property
-    def _upper(self) -> float:
-        return tuple.__getitem__(self, 1)
-
-    def __iter__(self) -> Iterator[float]:
-        _deprecation.warn("law.support is a method now: write law.support()")
-        return tuple.__iter__(self)
-
-    def __getitem__(self, index: Any) -> Any:
-        _deprecation.warn("law.support is a method now: write law.support()")
-        return tuple.__getitem__(self, index)
+__all__ = ["FrozenDistribution", "TailPair"]
 
 
 class FrozenDistribution:
@@ -106,14 +66,9 @@ class FrozenDistribution:
 
     _bounds: tuple[float, float] = (0.0, np.inf)
 
-    @property
-    def support(self) -> _Support:
-        """``support()`` gives ``(lower, upper)``, the end points of the support."""
-        return _Support(self._bounds)
-
-    @support.setter
-    def support(self, bounds: tuple[float, float]) -> None:
-        self._bounds = (float(bounds[0]), float(bounds[1]))
+    def support(self) -> tuple[float, float]:
+        """``(lower, upper)``, the end points of the support (as scipy's ``support()``)."""
+        return self._bounds
 
     # -- to implement -------------------------------------------------------
     def _cdf(self, x: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
@@ -228,13 +183,9 @@ class FrozenDistribution:
             value /= float(self.cdf(ub)) - float(self.cdf(lb))
         return float(value)
 
-    def rvs(self, size: Any = None, random_state: Any = _NO_STATE, *, rng: Any = None) -> Any:
-        """Random draws from a Generator ``rng`` (or a seed for one).
-
-        ``random_state=`` is the deprecated name of ``rng=``.
-        """
-        generator = _rng_argument(rng, random_state, f"{type(self).__name__}.rvs")
-        return self._rvs(as_size(size), generator)
+    def rvs(self, size: Any = None, *, rng: Any = None) -> Any:
+        """Random draws from a Generator ``rng`` (or a seed for one)."""
+        return self._rvs(as_size(size), as_generator(rng))
 
     def __repr__(self) -> str:
         # Deterministic by default (no memory address): the class and its numeric parameters.
@@ -303,19 +254,6 @@ class FrozenDistribution:
         return float(
             optimize.brentq(gap, left, right, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=500)
         )
-
-
-def _points(x: Any, name: str = "x") -> np.ndarray:
-    """Points where a law is evaluated: real numbers, +-inf allowed, NaN refused."""
-    return as_float_array(x, name, finite=False)
-
-
-def _levels(q: Any, name: str = "q") -> np.ndarray:
-    """Probabilities for ``ppf``/``isf``: real numbers in [0, 1]."""
-    q = as_float_array(q, name)
-    if np.any((q < 0) | (q > 1)):
-        raise ValueError(f"{name}: probabilities must lie in [0, 1], got {q}")
-    return q
 
 
 def _bound(value: Any, name: str) -> float:

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plotting import _checks
 from .plotting.style import (
     REJECT,
     legend_outside,
@@ -39,6 +38,7 @@ from .plotting.style import (
     theory_grid,
     threshold_line,
 )
+from .validation import as_count, as_finite, as_positive, as_probability
 
 __all__ = [
     "ekf_view",
@@ -195,9 +195,9 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
 
     from . import lsq
 
-    alpha = _checks.probability("alpha", alpha)
-    outlier = _checks.scalar("outlier", outlier)
-    sigma = _checks.scalar("sigma", sigma, positive=True)
+    alpha = as_probability(alpha, "alpha")
+    outlier = as_finite(outlier, "outlier")
+    sigma = as_positive(sigma, "sigma")
     t, y = lsq.load_sea_level(record)
     if not isinstance(index, (int, np.integer)) or not 0 <= index < t.size:
         raise ValueError(f"index must be an observation index 0..{t.size - 1}, got {index!r}")
@@ -255,7 +255,7 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
         "critical": float(omt.critical_value),
         "omt_reject": bool(omt.reject),
         "w_reject": tuple(int(i) for i in wt.rejected),
-        "w": float(wt.w[index]),
+        "w": float(wt.statistic[index]),
         "omt_power": omt_power,
         "w_power": w_power,
     }
@@ -299,10 +299,10 @@ def power_view(size=0.2, alpha=0.05, sigma=0.2, *, U, nominal, free, ax=None, ma
     from . import diagnosis as dg
     from .plotting.diagnosis import plot_power_curves
 
-    size = _checks.scalar("size", size)
-    alpha = _checks.probability("alpha", alpha)
-    sigma = _checks.scalar("sigma", sigma, positive=True)
-    max_size = _checks.scalar("max_size", max(max_size, 1.2 * abs(size)), positive=True)
+    size = as_finite(size, "size")
+    alpha = as_probability(alpha, "alpha")
+    sigma = as_positive(sigma, "sigma")
+    max_size = as_positive(max(max_size, 1.2 * abs(size)), "max_size")
     nominal = np.asarray(nominal, dtype=float)
     grid = theory_grid(0.0, max_size)
     curves, at_size = {}, {}
@@ -385,28 +385,30 @@ def ekf_view(
         (share of runs with an alarm within ``window`` samples of the onset)
         and ``in_alarm_after`` (share of the samples after the fault in alarm).
     """
+    from . import diagnosis as dg
     from . import filters as kf
+    from . import nis
     from .plotting.filters import plot_alarm_rate, plot_estimate, plot_residual
 
-    q_beta = _checks.scalar("q_beta", q_beta)
+    q_beta = as_finite(q_beta, "q_beta")
     if q_beta < 0:
         raise ValueError(f"q_beta must be >= 0 (a variance), got {q_beta:g}")
-    fault_size = _checks.scalar("fault_size", fault_size)
-    runs = _checks.positive_int("runs", runs)
+    fault_size = as_finite(fault_size, "fault_size")
+    runs = as_count(runs, "runs")
     Ts, q_x, r, N = 0.1, 1e-4, 2.5e-3, 200
     t = np.arange(N)
     u = np.where((t // 40) % 2 == 0, 0.5, 1.5)
     beta = 0.8 + 0.6 * t / N
     fault = np.where(t >= t_fault, fault_size, 0.0)
     rng = np.random.default_rng(seed)
-    _, y = kf.simulate_beta_system(
+    _, y = dg.simulate_beta_system(
         beta, u, rng, Ts=Ts, q_x=q_x, r=r, x0=0.5, fault=fault, batch=runs
     )
-    model = kf.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
+    model = dg.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
     result = kf.extended_kalman_filter(model, y, u)  # stores the covariances it draws
     P_filt = np.asarray(result.P_filt)
-    statistic = kf.windowed_nis(result, window)
-    threshold = kf.windowed_nis_threshold(window, alpha)
+    statistic = nis.windowed_nis(result, window)
+    threshold = nis.windowed_nis_threshold(window, alpha)
     with np.errstate(invalid="ignore"):
         alarm = statistic > threshold
     before = alarm[:, window - 1 : t_fault]
@@ -494,11 +496,11 @@ def nis_view(correlation=0.6, anisotropy=1.0, K=50, *, alpha=0.05, runs=4000, se
     from . import nis
     from .plotting.nis import plot_whitened_scatter
 
-    rho = _checks.scalar("correlation", correlation)
+    rho = as_finite(correlation, "correlation")
     if not -1 < rho < 1:
         raise ValueError(f"correlation must lie strictly between -1 and 1, got {rho:g}")
-    ratio = _checks.scalar("anisotropy", anisotropy, positive=True)
-    K = _checks.positive_int("K", K)
+    ratio = as_positive(anisotropy, "anisotropy")
+    K = as_count(K, "K")
     if K < 2:
         raise ValueError("K must be at least 2 (the window of a 2-output NIS matrix)")
     a = np.sqrt(ratio)
@@ -590,10 +592,10 @@ def records_view(
     """
     from . import mismatched as mm
 
-    M = _checks.positive_int("M", M)
+    M = as_count(M, "M")
     if M < 2:
         raise ValueError("M must be at least 2 records (a sample covariance needs two)")
-    alpha = _checks.probability("alpha", alpha)
+    alpha = as_probability(alpha, "alpha")
     axs = _axes(axes, len(kinds))
     powers = {}
     for ax, kind in zip(axs, kinds):

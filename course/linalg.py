@@ -34,16 +34,12 @@ A Cholesky factorisation that succeeds only by rounding is refused too: a
 covariance is *numerically singular* when some ``L_ii**2 <= 4 eps m Q_ii``
 (:data:`course.validation.SINGULAR_RTOL`).  The public functions check
 their arguments (:mod:`course.validation`); the library's hot loops call
-unchecked private twins (``_symmetrize``, ``_whiten_vectors``, ...) on arrays
-it has already validated.
+unchecked twins (``_symmetrize``, ``_whiten_vectors``, ... in the shared
+internal module ``course._unchecked``) on arrays it has already validated.
 
 The diagonal of a banded covariance comes from the recurrence of Takahashi, Fagan and Chin
 (1973), listed with the course's other sources in the course bibliography,
 :doc:`/docs/bibliography`.
-
-The input checks (``as_float_array``, ``as_covariance``, ``check_alpha``,
-...) live in :mod:`course.validation`; they are re-exported here because
-they were importable from this module before.
 """
 
 from __future__ import annotations
@@ -57,11 +53,11 @@ from scipy import sparse
 from scipy.linalg import lapack
 from scipy.sparse import csgraph
 
+from course._pivots import _refuse_singular_pivots, _refuse_small_pivots
+from course._unchecked import _symmetrize, _whiten_vectors, _whitened_squared_norms
 from course.validation import (
     SYMMETRY_RTOL,
     InputTypeError,
-    _refuse_singular_pivots,
-    _refuse_small_pivots,
     as_count,
     as_covariance,
     as_finite,
@@ -70,20 +66,12 @@ from course.validation import (
     as_matrix,
     as_positive,
     as_vector,
-    check_alpha,
 )
 
 __all__ = [
-    "SYMMETRY_RTOL",
     "CovarianceFactor",
-    "LinAlgError",
     "MinNormSolution",
     "QRSolution",
-    "as_covariance",
-    "as_float_array",
-    "as_matrix",
-    "as_vector",
-    "check_alpha",
     "check_full_column_rank",
     "cholesky_factor",
     "cholesky_lower",
@@ -143,11 +131,6 @@ def symmetrize(P: np.ndarray) -> np.ndarray:
            [1., 1.]])
     """
     return _symmetrize(_square_stack(P, "P"))
-
-
-def _symmetrize(P: np.ndarray) -> np.ndarray:
-    """:func:`symmetrize` without input checks (for arrays the library built)."""
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
 def psd_sqrt(C: np.ndarray) -> np.ndarray:
@@ -339,17 +322,6 @@ def whiten_vectors(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     return _whiten_vectors(L, _vectors_for(L, vectors, "vectors"))
 
 
-def _whiten_vectors(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """:func:`whiten_vectors` without input checks (for arrays the library validated)."""
-    m = vectors.shape[-1]
-    shape = np.broadcast_shapes(L.shape[:-2], vectors.shape[:-1]) + (m,)
-    z = np.empty(shape)
-    for i in range(m):
-        acc = vectors[..., i] - np.einsum("...j,...j->...", L[..., i, :i], z[..., :i])
-        z[..., i] = acc / L[..., i, i]
-    return z
-
-
 def whitened_squared_norms(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """``|L_k^{-1} v_k|^2 = v_k^T S_k^{-1} v_k`` with ``S_k = L_k L_k^T``, over stacks.
 
@@ -362,12 +334,6 @@ def whitened_squared_norms(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """
     L = _lower_factor(L, "L")
     return _whitened_squared_norms(L, _vectors_for(L, vectors, "vectors"))
-
-
-def _whitened_squared_norms(L: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """:func:`whitened_squared_norms` without input checks."""
-    z = _whiten_vectors(L, vectors)
-    return np.einsum("...i,...i->...", z, z)
 
 
 def solve_spd(matrix: np.ndarray, rhs: np.ndarray, name: str = "matrix") -> np.ndarray:

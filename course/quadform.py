@@ -72,8 +72,9 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize, stats
 
-from .distributions import _NO_STATE, FrozenDistribution, _rng_argument
-from .linalg import as_covariance, as_float_array, as_matrix, as_vector, symmetrize
+from .distributions import FrozenDistribution
+from .linalg import symmetrize
+from .validation import as_covariance, as_float_array, as_generator, as_matrix, as_vector
 
 __all__ = [
     "QuadraticForm",
@@ -2127,9 +2128,9 @@ class QuadraticForm(WeightedChiSquare):
         AS = A @ S
         return self._scale * self._scale * float(2 * np.sum(AS * AS.T) + 4 * mu @ AS @ A @ mu)
 
-    def rvs_direct(self, size, random_state=_NO_STATE, *, rng=None):
+    def rvs_direct(self, size, *, rng=None):
         """Draw ``x ~ N(mean, cov)`` and return ``x^T A x`` (slow; for checks)."""
-        rng = _rng_argument(rng, random_state, "QuadraticForm.rvs_direct")
+        rng = as_generator(rng)
         shape = _sample_shape(size)
         if len(shape) != 1:
             raise ValueError(f"size must be a non-negative integer, got {size!r}")

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import html
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
@@ -392,8 +392,10 @@ class TestResult:
     -----
     Build one with :meth:`from_null`, which computes the critical value,
     p-value and decision from ``null`` (the course's one decision path,
-    :func:`decide`).  The class sets ``__test__ = False`` so that pytest
-    does not mistake it for a test class when a test module imports it.
+    :func:`decide`).  Like scipy's results it unpacks as
+    ``statistic, pvalue = result``.  The class sets ``__test__ = False`` so
+    that pytest does not mistake it for a test class when a test module
+    imports it.
 
     Examples
     --------
@@ -403,6 +405,9 @@ class TestResult:
     TestResult('overall model test', statistic=6, dof=2, alpha=0.01, critical_value=9.2103, pvalue=0.04979, reject=False, null=chi2(2))
     >>> round(r.power(stats.ncx2(2, 10.0)), 4)
     0.6148
+    >>> statistic, pvalue = r
+    >>> statistic, round(pvalue, 5)
+    (6.0, 0.04979)
     """
 
     __test__ = False
@@ -474,6 +479,10 @@ class TestResult:
                 f"details must be a mapping (a dict), got {type(self.details).__name__}"
             )
         set_(self, "details", {key: as_plain(value) for key, value in self.details.items()})
+
+    def __iter__(self) -> Iterator[Any]:
+        """``statistic, pvalue = result``, as scipy's test results unpack."""
+        return iter((self.statistic, self.pvalue))
 
     def _check_decision(self, values: tuple) -> None:
         """``reject`` must follow from statistic and critical value, and agree with the p-value."""

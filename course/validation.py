@@ -72,6 +72,9 @@ from typing import Any
 import numpy as np
 from numpy.linalg import LinAlgError
 
+from course import _pivots
+from course._pivots import _refuse_singular_pivots
+
 __all__ = [
     "SINGULAR_RTOL",
     "SYMMETRY_RTOL",
@@ -94,7 +97,6 @@ __all__ = [
     "as_std",
     "as_variance",
     "as_vector",
-    "check_alpha",
 ]
 
 #: Relative tolerance for "symmetric": ``|Q - Q^T| <= SYMMETRY_RTOL * max|Q|``.
@@ -108,7 +110,7 @@ SYMMETRY_RTOL = 1e-10
 #: The rule is scale-free (``D Q D`` is singular exactly when ``Q`` is) and, like
 #: the course's rank rule (:func:`course.linalg.rank_tolerance`), proportional to
 #: ``m * eps``.
-SINGULAR_RTOL = 4 * np.finfo(float).eps
+SINGULAR_RTOL = _pivots.SINGULAR_RTOL
 
 
 class InputTypeError(TypeError, ValueError):
@@ -423,35 +425,6 @@ def _not_definite(name: str, kind: str, smallest: float) -> LinAlgError:
     )
 
 
-def _refuse_singular_pivots(L: np.ndarray, variances: np.ndarray, name: str) -> None:
-    """Raise a LinAlgError when a Cholesky factor ``L`` of a covariance is numerically singular.
-
-    ``L`` may be a stack ``(..., m, m)`` with ``variances`` the diagonals of
-    the factored matrices ``(..., m)``; the rule is :data:`SINGULAR_RTOL`.
-    """
-    _refuse_small_pivots(np.diagonal(L, axis1=-2, axis2=-1) ** 2, variances, name)
-
-
-def _refuse_small_pivots(pivots: np.ndarray, variances: np.ndarray, name: str) -> None:
-    """The rule of :func:`_refuse_singular_pivots` on the squared pivots ``L_ii**2`` alone
-    (a banded factor stores only its bands)."""
-    m = pivots.shape[-1]
-    tolerance = SINGULAR_RTOL * m * variances
-    singular = ~(pivots > tolerance)
-    if not singular.any():
-        return
-    where = tuple(int(i) for i in np.argwhere(singular)[0])
-    *stack, i = where
-    share = float(pivots[where] / variances[where]) if variances[where] > 0 else 0.0
-    place = f" (matrix {tuple(stack)} of the stack)" if stack else ""
-    previous = f"variables 0..{i - 1}" if i else "nothing (its variance is 0)"
-    raise LinAlgError(
-        f"{name} is numerically singular{place}: variable {i} is a linear combination of "
-        f"{previous} up to rounding (1 - R^2 = {share:.2g} < {SINGULAR_RTOL * m:.2g}); "
-        "remove the redundant variable or add its independent variance"
-    )
-
-
 def _shape_text(shape: tuple[int | None, ...]) -> str:
     return "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
 
@@ -726,10 +699,6 @@ def as_probability(value: Any, name: str = "alpha") -> float:
     if not 0.0 < number < 1.0:
         raise ValueError(f"{name} must lie strictly between 0 and 1, got {value!r}")
     return number
-
-
-#: The historical name of :func:`as_probability`.
-check_alpha = as_probability
 
 
 # ---------------------------------------------------------------------------

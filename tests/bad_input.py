@@ -331,7 +331,6 @@ class Case:
     call: Callable[..., Any]
     args: Mapping[str, Arg]
     nan_ok: bool = False  # the answer legitimately holds NaN (e.g. windows not yet filled)
-    deprecated: bool = False  # the call itself warns (a deprecated function)
 
     def kwargs(self, **replace: Any) -> dict[str, Any]:
         out = {name: arg.value for name, arg in self.args.items()}
@@ -339,12 +338,10 @@ class Case:
         return out
 
 
-def case(
-    call: Callable[..., Any], *, nan_ok: bool = False, deprecated: bool = False, **args: Any
-) -> Case:
+def case(call: Callable[..., Any], *, nan_ok: bool = False, **args: Any) -> Case:
     """``case(f, x=vector([1.0]), name="t")``: plain values are :func:`fixed`."""
     args = {k: v if isinstance(v, Arg) else fixed(v) for k, v in args.items()}
-    return Case(call, args, nan_ok, deprecated)
+    return Case(call, args, nan_ok)
 
 
 def params(table: Mapping[str, Case], xfail: Mapping[str, str] | None = None) -> dict:
@@ -392,8 +389,6 @@ def check_valid(entry: Case) -> Any:
     """The valid call runs without a warning and answers without NaN."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        if entry.deprecated:
-            warnings.simplefilter("ignore", DeprecationWarning)
         out = entry.call(**entry.kwargs())
     if not entry.nan_ok:
         assert_no_nan(out)
@@ -402,10 +397,8 @@ def check_valid(entry: Case) -> Any:
 
 def check_refused(entry: Case, arg_name: str, bad: Any) -> None:
     """One bad argument: a ValueError/LinAlgError that names it."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        with pytest.raises(REFUSALS) as info:
-            entry.call(**entry.kwargs(**{arg_name: bad}))
+    with pytest.raises(REFUSALS) as info:
+        entry.call(**entry.kwargs(**{arg_name: bad}))
     _assert_names(info.value, entry, arg_name)
 
 
@@ -413,7 +406,6 @@ def check_extreme(entry: Case, arg_name: str, value: Any) -> None:
     """A valid extreme value: a finite answer or a clear refusal; never NaN or overflow."""
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
-        warnings.simplefilter("ignore", DeprecationWarning)
         try:
             out = entry.call(**entry.kwargs(**{arg_name: value}))
         except REFUSALS as exc:

@@ -86,8 +86,8 @@ LAW = dg.LogLikelihoodLaw(3, -1.0)
 
 
 def records(value=Y):
-    """One record ``(N,)`` or records as rows ``(M, N)``."""
-    return array(value, ndims=(1, 2))
+    """One record ``(N,)`` or records as rows ``(M, N)``; records as columns are refused."""
+    return array(value, ndims=(1, 2)).but(as_columns=Y_RECORDS.T)
 
 
 def regressors(value=U):
@@ -103,8 +103,8 @@ def free(value=(0,), size=3):
 
 
 def parameter_rows(value):
-    """Parameter vectors: ``(p,)`` or rows ``(K, p)``."""
-    return array(value, ndims=(1, 2))
+    """Parameter vectors: ``(p,)`` or rows ``(K, p)``; vectors as columns are refused."""
+    return array(value, ndims=(1, 2)).but(as_columns=np.asarray(value).T)
 
 
 def alarms_arg(value):
@@ -396,15 +396,6 @@ TABLE = {
         U=regressors(),
         theta=nominal(),
         sigma=scale(0.1),
-        n_records=count(3),
-        rng=generator(),
-    ),
-    "simulate_linear_regression": case(
-        dg.simulate_linear_regression,
-        deprecated=True,
-        U=regressors(),
-        theta=nominal(),
-        sigma=positive(0.1),
         n_records=count(3),
         rng=generator(),
     ),

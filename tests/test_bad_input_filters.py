@@ -218,6 +218,7 @@ EXEMPT = {
     "FilterResult": "a result the library returns",
     "RLSResult": "a result the library returns",
     "RiccatiResult": "a result the library returns",
+    "Simulation": "a result the library returns",
 }
 
 (

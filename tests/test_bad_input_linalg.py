@@ -131,9 +131,6 @@ TABLE = {
         value=value_named_y(0.05, {**REAL_BAD, "one": 1.0, "zero": 0.0}),
         name="y",
     ),
-    "check_alpha": case(
-        validation.check_alpha, value=value_named_y(0.05, {**REAL_BAD, "one": 1.0}), name="y"
-    ),
     "as_generator": case(validation.as_generator, rng=generator()),
     # -- linalg ---------------------------------------------------------------------
     "readonly": case(linalg.readonly, array=Arg(np.zeros(2), {"list": [1.0], "None": None})),

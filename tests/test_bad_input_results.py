@@ -143,6 +143,7 @@ TABLE = {
     "FrozenDistribution.pdf": case(LAW.pdf, x=law_point()),
     "FrozenDistribution.ppf": case(LAW.ppf, q=quantile_level()),
     "FrozenDistribution.isf": case(LAW.isf, q=quantile_level()),
+    "FrozenDistribution.support": case(LAW.support),
     "FrozenDistribution.median": case(LAW.median),
     "FrozenDistribution.interval": case(LAW.interval, confidence=quantile_level(0.9)),
     "FrozenDistribution.mean": case(LAW.mean),

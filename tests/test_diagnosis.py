@@ -14,6 +14,7 @@ from conftest import assert_rate, binomial_band
 from numpy.linalg import LinAlgError
 from scipy import optimize, stats
 
+from course import chi2
 from course import diagnosis as dg
 from course.results import TestResult
 
@@ -312,10 +313,10 @@ def test_rank_deficient_threshold_uses_N_minus_rank():
     Y = dg.simulate_regression_records(U, [1.0, 1.0, 1.0], sigma=sigma, n_records=M, rng=rng)
     fit = dg.prediction_error(Y, U, NOMINAL, free=[0, 1])
     assert fit.dof == N - 1
-    J = dg.residual_threshold(fit.dof, alpha, sigma=sigma)
+    J = chi2.residual_threshold(fit.dof, alpha, sigma=sigma)
     assert_rate(np.mean(fit.statistic > J), M, alpha)
     # the wrong dof (N - number of free parameters) would give a visibly wrong rate
-    wrong = dg.residual_threshold(N - 2, alpha, sigma=sigma)
+    wrong = chi2.residual_threshold(N - 2, alpha, sigma=sigma)
     assert np.mean(fit.statistic > wrong) > binomial_band(M, alpha)[1]
 
 
@@ -340,7 +341,7 @@ def test_prediction_error_test_result_and_calibration(signals):
     for mode, theta in (("NF", NOMINAL), ("F1", [2.5, 1, 1])):
         Y = dg.simulate_regression_records(signals, theta, sigma=sigma, n_records=M, rng=rng)
         stat = dg.linear_test_statistics(Y, signals, NOMINAL, TESTS)
-        J = dg.residual_threshold(N - 1, alpha, sigma=sigma)
+        J = chi2.residual_threshold(N - 1, alpha, sigma=sigma)
         assert_rate(np.mean(stat[:, 0] > J), M, alpha)
         if mode == "NF":
             for k in (1, 2):
@@ -356,7 +357,7 @@ def test_power_against_fault_size_matches_monte_carlo(signals):
         p_theory = dg.prediction_error_power(signals, NOMINAL, [0], theta, sigma=sigma, alpha=alpha)
         Y = dg.simulate_regression_records(signals, theta, sigma=sigma, n_records=M, rng=rng)
         T = dg.prediction_error(Y, signals, NOMINAL, [0]).statistic
-        assert_rate(np.mean(dg.residual_threshold(N - 1, alpha, sigma=sigma) < T), M, p_theory)
+        assert_rate(np.mean(chi2.residual_threshold(N - 1, alpha, sigma=sigma) < T), M, p_theory)
     assert (
         dg.prediction_error_power(signals, NOMINAL, [0], [1, 1, 1], sigma=sigma, alpha=alpha)
         == alpha
@@ -436,10 +437,10 @@ def test_bad_input_is_refused(signals):
     with pytest.raises(ValueError, match="no redundancy"):
         dg.prediction_error_test(y[:3], signals[:3], NOMINAL, [0, 1, 2], sigma=1.0)
     with pytest.raises(ValueError, match=r"dof .* must be a positive integer"):
-        dg.residual_threshold(0, 0.05)
+        chi2.residual_threshold(0, 0.05)
     for bad in ("a", None, 2.5, np.inf):
         with pytest.raises(ValueError, match=r"dof .* must be an integer"):
-            dg.residual_threshold(bad, 0.05)
+            chi2.residual_threshold(bad, 0.05)
     with pytest.raises(ValueError, match=r"n_records .* must be an integer"):
         dg.simulate_regression_records(
             signals, NOMINAL, sigma=1.0, n_records=2.5, rng=np.random.default_rng(0)
@@ -699,7 +700,7 @@ def test_isolation_monte_carlo(structure, signals):
             signals, thetas[mode], sigma=sigma, n_records=n, rng=g
         )
 
-    J = np.full(3, dg.residual_threshold(N - 1, alpha, sigma=sigma))
+    J = np.full(3, chi2.residual_threshold(N - 1, alpha, sigma=sigma))
     res = dg.isolation_monte_carlo(
         structure,
         simulate,

@@ -41,14 +41,14 @@ def test_names_used_follow_aliases_across_cells():
     assert not any("numpy" in name for name in used)
 
 
-def test_teaching_map_matches_objects_through_private_modules_and_reexports(tmp_path):
+def test_teaching_map_matches_objects_through_private_modules(tmp_path):
     notebook = tmp_path / "nb.ipynb"
-    # windowed_nis is defined in a private module of course.nis and re-exported by filters.
+    # windowed_nis is defined in a private module of course.nis (course.nis._windowed).
     notebook.write_text(
         json.dumps(
             {
                 "cells": [
-                    {"cell_type": "code", "source": "from course.filters import windowed_nis"},
+                    {"cell_type": "code", "source": "from course.nis import windowed_nis"},
                     {"cell_type": "code", "source": ["from course import lsq\n", "lsq.w_tests"]},
                 ]
             }
@@ -58,7 +58,7 @@ def test_teaching_map_matches_objects_through_private_modules_and_reexports(tmp_
     taught = course_site.teaching_map({"notebooks/nb": notebook}, api)
     assert taught["course.lsq.w_tests"] == ["notebooks/nb"]
     assert taught["course.nis.windowed_nis"] == ["notebooks/nb"]
-    assert "course.filters.windowed_nis" not in taught  # documented once, under course.nis
+    assert "course.nis._windowed.windowed_nis" not in taught  # documented under its public home
 
 
 def test_every_public_object_is_documented_exactly_once():
@@ -83,8 +83,8 @@ def test_api_pages_follow_the_public_names_and_drop_stale_pages(tmp_path):
     lsq = (tmp_path / "docs/api/modules/course.lsq.rst").read_text()
     assert ".. autofunction:: w_tests" in lsq
     filters = (tmp_path / "docs/api/modules/course.filters.rst").read_text()
-    assert ":py:obj:`course.nis.windowed_nis`" in filters
-    assert ".. autofunction:: windowed_nis\n" not in filters
+    assert ".. autofunction:: kalman_filter\n" in filters
+    assert "Also exported here" not in filters  # one public name per object
 
 
 def test_shapes_in_types_are_escaped_but_not_inside_literals():

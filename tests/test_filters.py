@@ -7,7 +7,9 @@ import pytest
 from numpy.linalg import LinAlgError
 from scipy import stats
 
+from course import diagnosis as dg
 from course import filters as kf
+from course import nis
 from course.results import TestResult
 
 MISS = 1e-4  # probability that a seeded Monte Carlo band misses by chance
@@ -327,7 +329,7 @@ def test_ekf_equals_kf_on_linear_model():
 
 
 def test_numerical_jacobian_matches_analytic_on_a_batch():
-    model = kf.beta_drift_model(Ts=0.1)
+    model = dg.beta_drift_model(Ts=0.1)
     rng = np.random.default_rng(9)
     z = rng.normal([1.0, 2.0], [0.5, 3.0], size=(50, 2))
     u = rng.standard_normal((50, 1))
@@ -357,7 +359,7 @@ def test_nonlinear_model_checks_function_shapes():
 
 
 def test_ekf_numerical_and_analytic_jacobians_agree_on_lecture_model():
-    exact = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3)
+    exact = dg.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3)
     numeric = kf.NonlinearModel(
         exact.g, exact.h, exact.Q, exact.R, exact.x0_mean, exact.x0_cov, n_inputs=1
     )
@@ -371,7 +373,7 @@ def test_ekf_numerical_and_analytic_jacobians_agree_on_lecture_model():
 
 
 def test_ekf_store_covariances_false():
-    model = kf.beta_drift_model()
+    model = dg.beta_drift_model()
     u = np.ones(30)
     _, y = model.simulate(30, np.random.default_rng(11), batch=2, u=u)
     full = kf.extended_kalman_filter(model, y, u)
@@ -399,7 +401,7 @@ def test_step_functions_are_pure():
 
 def test_ekf_innovations_approximately_standard_normal_under_h0():
     """The EKF linearises, so N(0, S) holds only approximately: a looser band."""
-    model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+    model = dg.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
     u = np.where((np.arange(200) // 40) % 2 == 0, 0.5, 1.5)
     _, y = model.simulate(200, np.random.default_rng(12), batch=2000, u=u)
     z = kf.extended_kalman_filter(model, y, u, store_covariances=False).normalized_innovations()
@@ -414,38 +416,38 @@ def test_ekf_innovations_approximately_standard_normal_under_h0():
 # ---------------------------------------------------------------------------
 def test_windowed_sum_against_naive():
     v = np.random.default_rng(13).random((3, 20))
-    out = kf.windowed_sum(v, 5)
+    out = nis.windowed_sum(v, 5)
     assert np.all(np.isnan(out[:, :4]))
     for t in range(4, 20):
         np.testing.assert_allclose(out[:, t], v[:, t - 4 : t + 1].sum(axis=1), rtol=1e-12)
     with pytest.raises(ValueError, match="longer than the record"):
-        kf.windowed_sum(v, 21)
+        nis.windowed_sum(v, 21)
     with pytest.raises(ValueError, match="positive integer"):
-        kf.windowed_sum(v, 0)
+        nis.windowed_sum(v, 0)
 
 
 def test_windowed_nis_threshold_and_windowed_test():
-    assert kf.windowed_nis_threshold(10, 0.01) == pytest.approx(23.209251, abs=1e-6)
-    assert kf.windowed_nis_threshold(5, 0.05, n_outputs=2) == pytest.approx(18.307038, abs=1e-6)
+    assert nis.windowed_nis_threshold(10, 0.01) == pytest.approx(23.209251, abs=1e-6)
+    assert nis.windowed_nis_threshold(5, 0.05, n_outputs=2) == pytest.approx(18.307038, abs=1e-6)
     with pytest.raises(ValueError, match=r"window .*positive integer"):
-        kf.windowed_nis_threshold(0, 0.05)
+        nis.windowed_nis_threshold(0, 0.05)
     with pytest.raises(ValueError, match=r"window .*must be an integer"):
-        kf.windowed_nis_threshold(2.5, 0.05)
+        nis.windowed_nis_threshold(2.5, 0.05)
     with pytest.raises(ValueError, match=r"n_outputs .*positive integer"):
-        kf.windowed_nis_threshold(10, 0.05, n_outputs=0)
+        nis.windowed_nis_threshold(10, 0.05, n_outputs=0)
     with pytest.raises(ValueError, match="alpha"):
-        kf.windowed_nis_threshold(10, 1.5)
-    nis = np.arange(1.0, 11.0)  # windowed sum over the last 4: 7+8+9+10 = 34
-    res = kf.windowed_chi2_test(nis, window=4, alpha=0.05)
+        nis.windowed_nis_threshold(10, 1.5)
+    values = np.arange(1.0, 11.0)  # windowed sum over the last 4: 7+8+9+10 = 34
+    res = nis.windowed_chi2_test(values, window=4, alpha=0.05)
     assert isinstance(res, TestResult)
     assert res.statistic == 34.0 and res.dof == 4
     assert res.critical_value == pytest.approx(stats.chi2.isf(0.05, 4))
     assert res.pvalue == pytest.approx(stats.chi2.sf(34.0, 4))
     assert res.reject
-    early = kf.windowed_chi2_test(nis, window=4, alpha=0.01, t=3)  # 1+2+3+4 < 13.28
+    early = nis.windowed_chi2_test(values, window=4, alpha=0.01, t=3)  # 1+2+3+4 < 13.28
     assert early.statistic == 10.0 and not early.reject
     with pytest.raises(ValueError, match="full window"):
-        kf.windowed_chi2_test(nis, window=4, t=2)
+        nis.windowed_chi2_test(values, window=4, t=2)
     assert repr(res).startswith("TestResult('windowed NIS test (L = 4, t = 9)', statistic=34")
 
 
@@ -456,16 +458,16 @@ def test_windowed_test_on_filter_result_and_false_alarm_rate():
     u = np.zeros((N, 1))
     _, y = m.simulate(N, np.random.default_rng(14), batch=runs, u=u)
     res = kf.kalman_filter(m, y, u=u)
-    T = kf.windowed_nis(res, L)
-    thr = kf.windowed_nis_threshold(L, alpha)
+    T = nis.windowed_nis(res, L)
+    thr = nis.windowed_nis_threshold(L, alpha)
     # one sample per run: independent Bernoulli(alpha) trials
     alarms = int(np.sum(T[:, -1] > thr))
     lo, hi = stats.binom.interval(1 - MISS, runs, alpha)
     assert lo <= alarms <= hi
-    single = kf.windowed_chi2_test(kf.kalman_filter(m, y[0], u=u), L, alpha)
+    single = nis.windowed_chi2_test(kf.kalman_filter(m, y[0], u=u), L, alpha)
     assert single.statistic == pytest.approx(T[0, -1])
     with pytest.raises(ValueError, match="one record"):
-        kf.windowed_chi2_test(res, L, alpha)
+        nis.windowed_chi2_test(res, L, alpha)
 
 
 def test_alarm_statistics_exact_small_case():
@@ -476,24 +478,24 @@ def test_alarm_statistics_exact_small_case():
             [np.nan, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],  # misses
         ]
     )
-    a = kf.alarm_statistics(T, threshold=1.0, fault_time=4)
+    a = nis.alarm_statistics(T, threshold=1.0, fault_time=4)
     assert a.n_checked == 9 and a.false_alarm_rate == pytest.approx(1 / 9)
     assert a.run_false_alarm_probability == pytest.approx(1 / 3)
     assert a.detection_probability == pytest.approx(2 / 3)
     np.testing.assert_array_equal(a.delays, [2.0, 0.0, np.nan])
     assert a.median_delay == 1.0 and a.mean_delay == 1.0
-    b = kf.alarm_statistics(T, threshold=1.0)
+    b = nis.alarm_statistics(T, threshold=1.0)
     assert b.false_alarm_rate == pytest.approx(4 / 21) and b.delays.size == 0
     with pytest.raises(ValueError, match="n_runs, N"):
-        kf.alarm_statistics(T[0], 1.0)
+        nis.alarm_statistics(T[0], 1.0)
     with pytest.raises(ValueError, match="fault_time"):
-        kf.alarm_statistics(T, 1.0, fault_time=8)
+        nis.alarm_statistics(T, 1.0, fault_time=8)
 
 
 def test_windowed_sum_skips_only_windows_with_undefined_samples():
     v = np.arange(1.0, 11.0)
     v[[0, 6]] = np.nan  # undefined samples, e.g. the diffuse start of RLS
-    out = kf.windowed_sum(v, 3)
+    out = nis.windowed_sum(v, 3)
     expected = np.full(10, np.nan)
     for t in range(2, 10):
         window = v[t - 2 : t + 1]
@@ -519,7 +521,7 @@ def test_step_functions_check_shapes_and_positive_definiteness():
         kf.kf_update(x, P, np.zeros(2), np.eye(2), -3.0 * np.eye(2))
     with pytest.raises(LinAlgError, match="not positive"):
         kf.kf_update(x, P, np.zeros(1), [[1.0, 0.0]], [[-3.0]])
-    model = kf.beta_drift_model()
+    model = dg.beta_drift_model()
     with pytest.raises(ValueError, match="P_pred must be"):
         kf.ekf_update(model, np.zeros(2), np.eye(3), np.zeros(1))
     with pytest.raises(ValueError, match="P_filt must be"):
@@ -533,49 +535,49 @@ def test_diffuse_rls_windowed_nis_is_chi2_after_the_start():
     Phi = rng.standard_normal((N, k))
     Y = Phi @ [1.0, -2.0, 0.5] + 0.3 * rng.standard_normal((M, N))
     rec = kf.recursive_least_squares(Phi, Y, r=0.09)
-    W = kf.windowed_nis(rec, L)
+    W = nis.windowed_nis(rec, L)
     start = rec.first + 1  # first sample with an innovation
     assert np.all(np.isnan(W[:, : start + L - 1])) and np.all(np.isfinite(W[:, start + L - 1 :]))
     lo, hi = stats.binom.interval(1 - MISS, M, alpha)
-    thr = kf.windowed_nis_threshold(L, alpha)
+    thr = nis.windowed_nis_threshold(L, alpha)
     for t in (start + L - 1, N - 1):
         assert lo <= np.sum(W[:, t] > thr) <= hi
     one = kf.recursive_least_squares(Phi, Y[0], r=0.09)
-    res = kf.windowed_chi2_test(one, L, alpha)
+    res = nis.windowed_chi2_test(one, L, alpha)
     assert res.statistic == pytest.approx(W[0, -1]) and res.dof == L
     with pytest.raises(ValueError, match="undefined"):
-        kf.windowed_chi2_test(one, L, alpha, t=start + L - 2)
+        nis.windowed_chi2_test(one, L, alpha, t=start + L - 2)
 
 
 def test_residual_evaluation_input_errors():
-    nis = np.ones(10)
+    values = np.ones(10)
     with pytest.raises(ValueError, match=r"n_outputs .*positive integer"):
-        kf.windowed_chi2_test(nis, 3, n_outputs=0)
+        nis.windowed_chi2_test(values, 3, n_outputs=0)
     with pytest.raises(ValueError, match="non-negative"):
-        kf.windowed_chi2_test(-nis, 3)
+        nis.windowed_chi2_test(-values, 3)
     with pytest.raises(ValueError, match="one record"):
-        kf.windowed_chi2_test(np.ones((2, 10)), 3)
+        nis.windowed_chi2_test(np.ones((2, 10)), 3)
     with pytest.raises(ValueError, match=r"t .* must be an integer"):
-        kf.windowed_chi2_test(nis, 3, t=4.5)
+        nis.windowed_chi2_test(values, 3, t=4.5)
     with pytest.raises(TypeError, match="FilterResult or an RLSResult"):
-        kf.windowed_nis(nis, 3)
+        nis.windowed_nis(values, 3)
     with pytest.raises(ValueError, match="threshold must be finite"):
-        kf.alarm_statistics(np.ones((2, 3)), np.nan)
+        nis.alarm_statistics(np.ones((2, 3)), np.nan)
     with pytest.raises(ValueError, match="threshold must be a real number"):
-        kf.alarm_statistics(np.ones((2, 3)), "high")
+        nis.alarm_statistics(np.ones((2, 3)), "high")
     with pytest.raises(ValueError, match=r"fault_time .* must be an integer"):
-        kf.alarm_statistics(np.ones((2, 3)), 1.0, fault_time=1.5)
+        nis.alarm_statistics(np.ones((2, 3)), 1.0, fault_time=1.5)
 
 
 def test_lecture_model_input_errors():
     with pytest.raises(ValueError, match="q_beta must be a real number"):
-        kf.beta_drift_model(q_beta="slow")
+        dg.beta_drift_model(q_beta="slow")
     with pytest.raises(ValueError, match="r must be positive"):
-        kf.beta_drift_model(r=0.0)
+        dg.beta_drift_model(r=0.0)
     with pytest.raises(ValueError, match=r"Ts .* must be positive"):
-        kf.beta_drift_model(Ts=0.0)
+        dg.beta_drift_model(Ts=0.0)
     with pytest.raises(ValueError, match="q_x must be non-negative"):
-        kf.simulate_beta_system(np.ones(5), np.ones(5), np.random.default_rng(0), q_x=-1.0)
+        dg.simulate_beta_system(np.ones(5), np.ones(5), np.random.default_rng(0), q_x=-1.0)
     # a g written for one state (x[1]) instead of a batch (x[..., 1]) is reported clearly
     with pytest.raises(ValueError, match=r"g\(x0_mean, u\) raised IndexError.*x\[\.\.\., i\]"):
         kf.NonlinearModel(
@@ -589,9 +591,9 @@ def test_lecture_model_input_errors():
 
 def test_empirical_threshold():
     x = np.arange(1, 1001, dtype=float)
-    assert kf.empirical_threshold(x, 0.1) == pytest.approx(np.quantile(x, 0.9))
+    assert nis.empirical_threshold(x, 0.1) == pytest.approx(np.quantile(x, 0.9))
     with pytest.raises(ValueError, match="no finite"):
-        kf.empirical_threshold([np.nan], 0.1)
+        nis.empirical_threshold([np.nan], 0.1)
 
 
 # ---------------------------------------------------------------------------
@@ -608,15 +610,15 @@ def test_drifting_beta_false_alarms_only_without_random_walk():
     """The lecture's point: a filter that takes beta constant alarms on a drift."""
     N, L, alpha, runs = 250, 10, 0.001, 200
     u, beta = lecture_signals(N)
-    _, y = kf.simulate_beta_system(
+    _, y = dg.simulate_beta_system(
         beta, u, np.random.default_rng(15), Ts=0.1, q_x=1e-4, r=2.5e-3, x0=0.5, batch=runs
     )
-    thr = kf.windowed_nis_threshold(L, alpha)
+    thr = nis.windowed_nis_threshold(L, alpha)
     rates = {}
     for q_beta in (1e-4, 0.0):
-        model = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+        model = dg.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
         res = kf.extended_kalman_filter(model, y, u, store_covariances=False)
-        rates[q_beta] = kf.alarm_statistics(kf.windowed_nis(res, L), thr).false_alarm_rate
+        rates[q_beta] = nis.alarm_statistics(nis.windowed_nis(res, L), thr).false_alarm_rate
     assert rates[1e-4] < 0.01
     assert rates[0.0] > 0.1
 
@@ -625,7 +627,7 @@ def test_sensor_fault_is_detected():
     N, L, alpha, runs, tf = 200, 10, 0.001, 500, 120
     u, beta = lecture_signals(N)
     fault = np.where(np.arange(N) >= tf, 0.2, 0.0)
-    _, y = kf.simulate_beta_system(
+    _, y = dg.simulate_beta_system(
         beta,
         u,
         np.random.default_rng(16),
@@ -636,10 +638,10 @@ def test_sensor_fault_is_detected():
         fault=fault,
         batch=runs,
     )
-    model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+    model = dg.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
     res = kf.extended_kalman_filter(model, y, u, store_covariances=False)
-    a = kf.alarm_statistics(
-        kf.windowed_nis(res, L), kf.windowed_nis_threshold(L, alpha), fault_time=tf
+    a = nis.alarm_statistics(
+        nis.windowed_nis(res, L), nis.windowed_nis_threshold(L, alpha), fault_time=tf
     )
     assert a.detection_probability > 0.99
     assert a.median_delay <= 3
@@ -647,7 +649,7 @@ def test_sensor_fault_is_detected():
 
 def test_simulate_beta_system_noise_free_recursion():
     u, beta = lecture_signals(30)
-    st, y = kf.simulate_beta_system(
+    st, y = dg.simulate_beta_system(
         beta, u, np.random.default_rng(0), Ts=0.1, q_x=0.0, r=0.0, x0=0.3, fault=np.full(30, 0.1)
     )
     x = 0.3
@@ -661,10 +663,10 @@ def test_simulate_beta_system_noise_free_recursion():
 def test_observer_tracks_state_and_parameter_without_noise():
     N, Ts, beta_true = 3000, 0.1, 1.3
     u = np.where((np.arange(N) // 50) % 2 == 0, 0.5, 1.5)
-    _, y = kf.simulate_beta_system(
+    _, y = dg.simulate_beta_system(
         np.full(N, beta_true), u, np.random.default_rng(0), Ts=Ts, q_x=0.0, r=0.0, x0=0.5
     )
-    obs = kf.observer_residuals(
+    obs = dg.observer_residuals(
         y,
         u,
         f=lambda x, u, th: -th * x + u,
@@ -786,7 +788,7 @@ def test_rls_innovations_are_white_under_H0():
     lo, hi = stats.binom.interval(1 - MISS, M, alpha)
     T = np.sum(z**2, axis=-1)
     assert lo <= np.sum(stats.chi2.isf(alpha, N) < T) <= hi
-    W = kf.windowed_nis(rec, 10)
+    W = nis.windowed_nis(rec, 10)
     assert W.shape == (M, N) and np.all(np.isnan(W[:, :9]))
     np.testing.assert_allclose(W[:, 9], np.sum(z[:, :10] ** 2, axis=-1))
     assert lo <= np.sum(W[:, -1] > stats.chi2.isf(alpha, 10)) <= hi
@@ -849,7 +851,7 @@ def test_plot_functions_return_axes():
 def test_ekf_batch_equals_its_parts_filtered_apart():
     # Notebook 04 filters several Monte Carlo sweeps as one batch: that is honest only
     # if each run's numbers do not depend on the batch it is filtered in (to the bit).
-    model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3)
+    model = dg.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3)
     u = np.where((np.arange(60) // 20) % 2 == 0, 0.5, 1.5)
     _, y = model.simulate(60, np.random.default_rng(12), batch=5, u=u)
     together = kf.extended_kalman_filter(model, y, u)
@@ -861,7 +863,7 @@ def test_ekf_batch_equals_its_parts_filtered_apart():
 
 def test_stacked_products_match_matmul():
     # the fast stacked products (entry by entry, stored entry-major) against numpy's matmul
-    from course.filters._stacked import _mm, _mv
+    from course._stacked import _mm, _mv
 
     rng = np.random.default_rng(13)
     A, B, x = (

@@ -215,7 +215,7 @@ def _submissions(env) -> dict[str, object]:
         (
             "def w_statistics(A, y, Qyy):\n"
             "    f = getattr(lsq, 'f' + 'it')\n"
-            "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).w"
+            "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).statistic"
         ),
     )
     # the demo student's right T, computed (a hard-coded number went stale when the data changed)
@@ -233,7 +233,7 @@ def _submissions(env) -> dict[str, object]:
     return subs
 
 
-W_TESTS = "getattr(lsq, 'w_' + 'tests')(getattr(lsq, 'f' + 'it')(A, y, Qyy), 0.05).w"
+W_TESTS = "getattr(lsq, 'w_' + 'tests')(getattr(lsq, 'f' + 'it')(A, y, Qyy), 0.05).statistic"
 
 
 def _q3_honest() -> str:
@@ -389,7 +389,7 @@ def _issue_11_attacks(env) -> dict[str, object]:
             "    w, f = getattr(lsq, 'w_' + 'tests'), getattr(lsq, 'f' + 'it')\n"
             "    w = (getattr(w, '__kwdefaults__', None) or {}).get('__original', w)\n"
             "    f = (getattr(f, '__kwdefaults__', None) or {}).get('__original', f)\n"
-            "    return w(f(A, y, Qyy), 0.05).w\n"
+            "    return w(f(A, y, Qyy), 0.05).statistic\n"
         ),
     )
     subs["reloaded_module"] = _with_answer(
@@ -398,7 +398,7 @@ def _issue_11_attacks(env) -> dict[str, object]:
             "import importlib\n"
             "def w_statistics(A, y, Qyy):\n"
             "    fresh = importlib.reload(lsq)\n"
-            "    return getattr(fresh, 'w_' + 'tests')(getattr(fresh, 'f' + 'it')(A, y, Qyy), 0.05).w\n"
+            "    return getattr(fresh, 'w_' + 'tests')(getattr(fresh, 'f' + 'it')(A, y, Qyy), 0.05).statistic\n"
         ),
     )
     subs["=1+1"] = _solution()  # an honest student whose ID is a spreadsheet formula

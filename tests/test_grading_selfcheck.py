@@ -357,31 +357,6 @@ def test_seccomp_blocks_fork_but_not_threads():
     assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
 
 
-def test_old_package_name_still_works_for_one_release():
-    # student notebooks handed out before the rename import course.exercises, and instructors'
-    # checks.py files import course.exercises.spec: both keep working, with a warning
-    code = textwrap.dedent(
-        """
-        import warnings
-        warnings.simplefilter("error", DeprecationWarning)
-        try:
-            import course.exercises
-        except DeprecationWarning as w:
-            print("warned:", "course.grading" in str(w))
-        warnings.simplefilter("ignore", DeprecationWarning)
-        from course.exercises import Assignment, Checks
-        from course.exercises.spec import Checks as C2, student_rng
-        from course.exercises.grader import GradeOptions, Grader, grade, feedback_markdown
-        import course.grading as g
-        from course.grading.batch.session import AssignmentGrader
-        print(Assignment is g.Assignment, Checks is C2, Grader is AssignmentGrader)
-        print(grade is __import__("course.grading.batch.driver", fromlist=["x"]).grade)
-        """
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True
-    ).stdout.split()
-    assert out == ["warned:", "True", "True", "True", "True", "True"]
 
 
 def test_public_spec_round_trips_the_committed_checks_json():

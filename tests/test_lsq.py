@@ -7,7 +7,7 @@ import pytest
 from numpy.linalg import LinAlgError
 from scipy import stats
 
-from course import lsq
+from course import chi2, lsq
 
 TOL = 1e-10
 T4 = np.arange(1.0, 5.0)
@@ -199,12 +199,12 @@ def test_fit_matches_dense_reference(kind):
     assert f.squared_norm == pytest.approx(ref["T"], rel=1e-10)
     assert np.sum(f.redundancy_numbers) == pytest.approx(f.redundancy, rel=1e-12)
     wt = lsq.w_tests(f, 0.05)
-    np.testing.assert_allclose(wt.w, ref["w"], rtol=1e-9, atol=1e-11)
-    np.testing.assert_allclose(wt.pvalues, 2 * stats.norm.sf(np.abs(ref["w"])), rtol=1e-9)
+    np.testing.assert_allclose(wt.statistic, ref["w"], rtol=1e-9, atol=1e-11)
+    np.testing.assert_allclose(wt.pvalue, 2 * stats.norm.sf(np.abs(ref["w"])), rtol=1e-9)
     assert wt.largest == int(np.argmax(np.abs(ref["w"])))
     np.testing.assert_array_equal(wt.reject, np.abs(ref["w"]) > stats.norm.isf(0.025))
     # mdb: sqrt(lambda0 / c_i^T Qyy^-1 Qee Qyy^-1 c_i)
-    lam0 = lsq.noncentrality(0.001, 0.8)
+    lam0 = chi2.noncentrality(0.001, 0.8)
     np.testing.assert_allclose(lsq.mdb(f), np.sqrt(lam0 / np.diag(ref["N"])), rtol=1e-9)
 
 
@@ -216,11 +216,11 @@ def test_w_equals_residual_over_its_std_for_diagonal_qyy():
     y = A @ [1, -1, 2] + sig * rng.standard_normal(m)
     f = lsq.fit(A, y, np.diag(sig**2))
     wt = lsq.w_tests(f, 0.01)
-    np.testing.assert_allclose(wt.w, f.e_hat / f.sigma_e_hat, rtol=1e-10)
+    np.testing.assert_allclose(wt.statistic, f.e_hat / f.sigma_e_hat, rtol=1e-10)
     assert wt.critical_value == pytest.approx(stats.norm.isf(0.005), rel=1e-14)
     assert wt.null.dist.name == "norm" and wt.alpha == 0.01
     # ...and then mdb = sigma_i sqrt(lambda0 / r_i)
-    lam0 = lsq.noncentrality(0.001, 0.8)
+    lam0 = chi2.noncentrality(0.001, 0.8)
     np.testing.assert_allclose(lsq.mdb(f), sig * np.sqrt(lam0 / f.redundancy_numbers), rtol=1e-10)
 
 
@@ -232,7 +232,7 @@ def test_w_test_per_observation_test_results():
     for i, t in enumerate(tests):
         assert t.alternative == "two-sided"
         assert t.critical_value == pytest.approx((-crit, crit))
-        assert t.statistic == pytest.approx(wt.w[i]) and t.reject == wt.reject[i]
+        assert t.statistic == pytest.approx(wt.statistic[i]) and t.reject == wt.reject[i]
     # the largest |ê| (-10, obs 2) is not the largest |w|: the end point has less redundancy
     assert wt.rejected == [0, 1, 2, 3] and wt.largest == 3
     with pytest.raises(ValueError, match="observation index"):
@@ -245,8 +245,8 @@ def test_untestable_observation_gets_nan_w_and_infinite_mdb():
     f = lsq.fit(A, [1.0, 2.0, 4.0, 3.0])
     assert f.redundancy_numbers[3] == pytest.approx(0.0, abs=1e-12)
     wt = lsq.w_tests(f, 0.05)
-    assert np.isnan(wt.w[3]) and not wt.testable[3] and not wt.reject[3]
-    assert np.all(np.isfinite(wt.w[:3]))
+    assert np.isnan(wt.statistic[3]) and not wt.testable[3] and not wt.reject[3]
+    assert np.all(np.isfinite(wt.statistic[:3]))
     assert np.isinf(lsq.mdb(f)[3])
     with pytest.raises(ValueError, match="cannot be tested"):
         wt.test(3)
@@ -452,7 +452,7 @@ def test_sea_level_data_cases():
     "alpha, power, dof", [(0.001, 0.8, 1), (0.05, 0.5, 1), (0.2, 0.3, 1), (0.01, 0.9, 3)]
 )
 def test_noncentrality_achieves_power(alpha, power, dof):
-    lam0 = lsq.noncentrality(alpha, power, dof)
+    lam0 = chi2.noncentrality(alpha, power, dof)
     k = stats.chi2.isf(alpha, dof)
     assert stats.ncx2.sf(k, dof, lam0) == pytest.approx(power, abs=1e-10)
     if dof == 1:
@@ -469,18 +469,18 @@ def test_noncentrality_achieves_power(alpha, power, dof):
 
 
 def test_noncentrality_known_value_and_monotonicity():
-    assert round(lsq.noncentrality(0.001, 0.80), 2) == 17.07  # Baarda's B-method value
-    assert lsq.noncentrality(0.001, 0.9) > lsq.noncentrality(0.001, 0.8)
-    assert lsq.noncentrality(0.01, 0.8) < lsq.noncentrality(0.001, 0.8)
-    assert lsq.noncentrality(0.001, 0.8, 2) > lsq.noncentrality(0.001, 0.8, 1)
+    assert round(chi2.noncentrality(0.001, 0.80), 2) == 17.07  # Baarda's B-method value
+    assert chi2.noncentrality(0.001, 0.9) > chi2.noncentrality(0.001, 0.8)
+    assert chi2.noncentrality(0.01, 0.8) < chi2.noncentrality(0.001, 0.8)
+    assert chi2.noncentrality(0.001, 0.8, 2) > chi2.noncentrality(0.001, 0.8, 1)
     with pytest.raises(ValueError, match=r"power .* must exceed alpha"):
-        lsq.noncentrality(0.1, 0.05)
+        chi2.noncentrality(0.1, 0.05)
     for bad in (0, 1.5, "a", True, np.inf):
         with pytest.raises(ValueError, match=r"dof must be (a positive integer|an integer), got"):
-            lsq.noncentrality(0.05, 0.8, bad)
-    assert lsq.noncentrality(0.05, 0.8, np.int64(2)) == lsq.noncentrality(0.05, 0.8, 2.0)
+            chi2.noncentrality(0.05, 0.8, bad)
+    assert chi2.noncentrality(0.05, 0.8, np.int64(2)) == chi2.noncentrality(0.05, 0.8, 2.0)
     with pytest.raises(ValueError, match="power must lie strictly between 0 and 1"):
-        lsq.noncentrality(0.05, 1.0)
+        chi2.noncentrality(0.05, 1.0)
 
 
 def test_bias_of_size_mdb_is_detected_with_the_stated_power():
@@ -626,7 +626,7 @@ def _assert_same_fit(f, ref, rtol=1e-10, atol=1e-12):
         )
     assert f.squared_norm == pytest.approx(ref.squared_norm, rel=rtol)
     np.testing.assert_allclose(
-        lsq.w_tests(f).w, lsq.w_tests(ref).w, rtol=rtol, atol=atol, err_msg="w"
+        lsq.w_tests(f).statistic, lsq.w_tests(ref).statistic, rtol=rtol, atol=atol, err_msg="w"
     )
     np.testing.assert_allclose(lsq.mdb(f), lsq.mdb(ref), rtol=rtol, err_msg="mdb")
 
@@ -684,7 +684,7 @@ def test_sparse_covariances_equal_their_dense_form():
         np.testing.assert_allclose(f.Qee, lsq.fit(A, y, dense).Qee, atol=1e-12)
         np.testing.assert_array_equal(f.Qyy, dense)
         ref = dense_reference(A, y, dense)
-        np.testing.assert_allclose(lsq.w_tests(f).w, ref["w"], rtol=1e-9)
+        np.testing.assert_allclose(lsq.w_tests(f).statistic, ref["w"], rtol=1e-9)
         snoop = lsq.data_snooping(A, y + 30 * (np.arange(m) == 7), Q, alpha=0.001)
         assert snoop.removed[0] == 7
 
@@ -888,14 +888,14 @@ def test_snooping_downdate_equals_a_fresh_fit_every_round(kind):
         idx = np.array(idx)
         fresh = lsq.fit(A[idx], y[idx], dense[np.ix_(idx, idx)])
         ref = lsq.w_tests(fresh, 0.001)
-        np.testing.assert_allclose(wt.w, ref.w, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(wt.statistic, ref.statistic, rtol=1e-10, atol=1e-12)
         np.testing.assert_array_equal(wt.reject, ref.reject)
         np.testing.assert_array_equal(wt.testable, ref.testable)
         assert wt.largest == ref.largest
         fresh_fits.append(fresh)
     # removing observation i lowers T by exactly w_i² of the round that removed it
     for k in range(1, len(res.rounds)):
-        w_removed = res.rounds[k - 1].w[res.rounds[k - 1].largest]
+        w_removed = res.rounds[k - 1].statistic[res.rounds[k - 1].largest]
         drop = fresh_fits[k - 1].squared_norm - fresh_fits[k].squared_norm
         assert drop == pytest.approx(w_removed**2, rel=1e-9)
     keep = np.array(res.kept)
@@ -906,7 +906,7 @@ def test_snooping_with_redundancy_one_removes_the_first_of_equal_w():
     # All |w_i| are equal when m - n = 1; which one goes must not depend on round-off.
     A = np.column_stack([np.ones(4), T4, T4**2 / 2])
     wt = lsq.w_tests(lsq.fit(A, DAY2), 0.01)
-    np.testing.assert_allclose(np.abs(wt.w), np.abs(wt.w[0]), rtol=1e-12)
+    np.testing.assert_allclose(np.abs(wt.statistic), np.abs(wt.statistic[0]), rtol=1e-12)
     assert wt.largest == 0
     assert lsq.data_snooping(A, DAY2, alpha=0.01).removed == (0,)
 
@@ -921,7 +921,7 @@ def test_snooping_keeps_untestable_observations_untested():
         idx = np.array(idx)
         ref = lsq.w_tests(lsq.fit(A[idx], y[idx]), 0.01)
         np.testing.assert_array_equal(wt.testable, ref.testable)
-        np.testing.assert_allclose(wt.w, ref.w, rtol=1e-10)
+        np.testing.assert_allclose(wt.statistic, ref.statistic, rtol=1e-10)
 
 
 # ---------------------------------------------------------------------------

@@ -9,6 +9,8 @@ wrongly shaped arrays: a ValueError naming the argument).
 from __future__ import annotations
 
 import functools
+import importlib
+import pkgutil
 
 import numpy as np
 import pytest
@@ -257,9 +259,19 @@ GOOD = {
     ),
 }
 
+
+def _plotting_modules():
+    """Every public module of course.plotting but the style, found (not listed): a new
+    plotting module's functions need a good call below or the test fails."""
+    package = importlib.import_module("course.plotting")
+    for info in pkgutil.iter_modules(package.__path__):
+        if not info.name.startswith("_") and info.name != "style":
+            yield importlib.import_module(f"course.plotting.{info.name}")
+
+
 PUBLIC = sorted(
     f"{module.__name__.rsplit('.', 1)[1]}.{name}"
-    for module in (pl, pd, pf, pn, pm)
+    for module in _plotting_modules()
     for name in module.__all__
     if name.startswith("plot_")
 )
@@ -422,6 +434,8 @@ def test_two_dimensional_T_is_refused_at_once():
         (lambda: pl.plot_chi2_histogram(CHI2, 0), "dof"),
         (lambda: pl.plot_chi2_histogram(CHI2, 2.5), "dof"),
         (lambda: pl.plot_chi2_histogram(CHI2, 3, alpha=1.5), "alpha"),
+        (lambda: pl.plot_chi2_histogram(CHI2, 3, alpha="0.05"), "alpha"),  # text, as validation
+        (lambda: pl.plot_chi2_histogram(CHI2, "3"), "dof"),
         (lambda: pl.plot_chi2_histogram(CHI2, 3, bins=None), "bins"),
         (lambda: pl.plot_error_bars(T4, DAY1, -1.0), "sigma"),
         (lambda: pl.plot_error_bars(T4, DAY1, [1.0, 2.0]), "sigma"),

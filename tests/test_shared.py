@@ -10,7 +10,8 @@ from numpy.linalg import LinAlgError
 from scipy import stats
 
 from course import linalg as cl
-from course.distributions import FrozenDistribution, as_generator
+from course import validation
+from course.distributions import FrozenDistribution
 from course.results import TestResult, as_plain, describe_distribution, format_number
 
 
@@ -129,23 +130,23 @@ def test_as_float_array_errors_and_copy():
     with pytest.raises(
         ValueError, match=r"y contains NaN or inf \(1 entries, first at index \(2,\)\)"
     ):
-        cl.as_float_array([1, 2, np.nan], "y")
+        validation.as_float_array([1, 2, np.nan], "y")
     with pytest.raises(ValueError, match="y must be numeric"):
-        cl.as_float_array(["a", "b"], "y")
+        validation.as_float_array(["a", "b"], "y")
     with pytest.raises(
         ValueError, match=r"A must be 2-dimensional, got shape \(3,\) \(pass a column"
     ):
-        cl.as_float_array([1, 2, 3], "A", ndim=2)
+        validation.as_float_array([1, 2, 3], "A", ndim=2)
     with pytest.raises(ValueError, match="y is None"):
-        cl.as_float_array(None, "y")
+        validation.as_float_array(None, "y")
     with pytest.raises(ValueError, match="y is complex; pass real numbers"):
-        cl.as_float_array(
+        validation.as_float_array(
             np.array([1.0, 2.0 + 1e-20j]), "y"
         )  # never drops imaginary parts silently
     with pytest.raises(ValueError, match="y must be numeric"):
-        cl.as_float_array([[1.0, 2.0], [3.0]], "y")
+        validation.as_float_array([[1.0, 2.0], [3.0]], "y")
     src = np.arange(3.0)
-    out = cl.as_float_array(src, "y")
+    out = validation.as_float_array(src, "y")
     out[0] = 99
     assert src[0] == 0.0  # the caller's array is never modified
 
@@ -154,36 +155,38 @@ def test_as_vector_and_as_matrix_messages():
     with pytest.raises(
         ValueError, match=r"y must be a 1-D vector, got shape \(3, 1\); pass it flattened"
     ):
-        cl.as_vector(np.ones((3, 1)), "y")
+        validation.as_vector(np.ones((3, 1)), "y")
     with pytest.raises(ValueError, match="y must have length 4, got 3"):
-        cl.as_vector([1, 2, 3], "y", size=4)
+        validation.as_vector([1, 2, 3], "y", size=4)
     with pytest.raises(ValueError, match=r"H must have shape \(2, any\), got \(3, 2\)"):
-        cl.as_matrix(np.ones((3, 2)), "H", shape=(2, None))
-    assert cl.as_matrix(np.ones((2, 5)), "H", shape=(2, None)).shape == (2, 5)
+        validation.as_matrix(np.ones((3, 2)), "H", shape=(2, None))
+    assert validation.as_matrix(np.ones((2, 5)), "H", shape=(2, None)).shape == (2, 5)
 
 
 def test_as_covariance_checks():
     with pytest.raises(ValueError, match=r"R must have shape \(2, 2\)"):
-        cl.as_covariance(np.eye(3), "R", 2)
+        validation.as_covariance(np.eye(3), "R", 2)
     with pytest.raises(ValueError, match="R is not symmetric"):
-        cl.as_covariance([[1.0, 0.5], [0.0, 1.0]], "R", 2)
+        validation.as_covariance([[1.0, 0.5], [0.0, 1.0]], "R", 2)
     with pytest.raises(LinAlgError, match=r"R is not positive definite \(smallest eigenvalue -1"):
-        cl.as_covariance([[1.0, 2.0], [2.0, 1.0]], "R", 2)
+        validation.as_covariance([[1.0, 2.0], [2.0, 1.0]], "R", 2)
     with pytest.raises(LinAlgError, match="R is not positive definite"):
-        cl.as_covariance([[1.0, 1.0], [1.0, 1.0]], "R", 2)
+        validation.as_covariance([[1.0, 1.0], [1.0, 1.0]], "R", 2)
     singular = np.array([[1.0, 1.0], [1.0, 1.0]])
-    np.testing.assert_array_equal(cl.as_covariance(singular, "R", 2, allow_singular=True), singular)
+    np.testing.assert_array_equal(
+        validation.as_covariance(singular, "R", 2, allow_singular=True), singular
+    )
     with pytest.raises(LinAlgError, match="not positive semi-definite"):
-        cl.as_covariance([[1.0, 2.0], [2.0, 1.0]], "R", 2, allow_singular=True)
+        validation.as_covariance([[1.0, 2.0], [2.0, 1.0]], "R", 2, allow_singular=True)
 
 
-def test_check_alpha():
-    assert cl.check_alpha(np.float64(0.05)) == 0.05
+def test_as_probability():
+    assert validation.as_probability(np.float64(0.05)) == 0.05
     for bad in (0, 1, 2, -1):
         with pytest.raises(ValueError, match="alpha must lie strictly between 0 and 1"):
-            cl.check_alpha(bad)
+            validation.as_probability(bad)
     with pytest.raises(ValueError, match="power must be a number in"):
-        cl.check_alpha("high", "power")
+        validation.as_probability("high", "power")
 
 
 def test_cholesky_whiten_and_solve_spd():
@@ -272,10 +275,10 @@ def test_frozen_distribution_input_checks_and_rvs():
     b = d.rvs(size=5, rng=np.random.default_rng(3))
     np.testing.assert_array_equal(a, b)
     g = np.random.default_rng(1)
-    assert as_generator(g) is g
-    assert isinstance(as_generator(7), np.random.Generator)
+    assert validation.as_generator(g) is g
+    assert isinstance(validation.as_generator(7), np.random.Generator)
     with pytest.raises(TypeError, match="not a legacy RandomState"):
-        as_generator(np.random.RandomState(0))
+        validation.as_generator(np.random.RandomState(0))
     # the default repr is deterministic (no memory address), so results print the same every run
     assert repr(Chi2Wrapper(np.int64(3))) == "Chi2Wrapper(dof=3)"
     assert describe_distribution(Chi2Wrapper(2.5)) == "Chi2Wrapper(dof=2.5)"
@@ -479,3 +482,20 @@ def test_package_data_comes_from_importlib_resources():
     text = resources.files("course").joinpath("data", "sea_level_mude", "Dataset_0.txt").read_text()
     t, y = lsq.load_sea_level(0)
     assert y.size == len(text.split()) == t.size == 20
+
+
+def test_named_results_unpack_as_tuples():
+    from course import filters, mismatched, nis
+
+    eps = np.random.default_rng(0).standard_normal((30, 2))
+    law_min, law_max = nis.nis_matrix_test(eps, np.eye(2)).null  # a pair of laws
+    assert law_min.which == "min" and law_max.which == "max"
+    lo, hi = nis.nis_critical_values(2, 30)
+    assert (lo, hi) == tuple(nis.nis_critical_values(2, 30))
+    x, P = filters.kf_predict([1.0], [[1.0]], [[2.0]], [[0.5]])
+    assert x[0] == 2.0 and P[0, 0] == 4.5
+    m0 = filters.LinearModel([[0.5]], [[1.0]], [[1.0]], [[1.0]])
+    moments = mismatched.residual_moments(m0, m0, 3)
+    lam, V = mismatched.principal_directions(moments, 0)
+    s, left, right = mismatched.principal_directions(moments, 0, 1)
+    assert lam.shape == s.shape == (1,) and V.shape == left.shape == right.shape == (1, 1)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from numpy.linalg import LinAlgError
 
+from course import chi2, lsq, mismatched, nis, validation
 from course import diagnosis as dg
 from course import filters as kf
-from course import lsq, mismatched, nis, validation
 
 MODEL = kf.LinearModel([[0.5]], [[1.0]], [[1.0]], [[1.0]])
 U = np.column_stack([np.ones(6), np.arange(6.0)])
@@ -16,13 +16,13 @@ COUNT_TAKERS = {
     "lsq.data_snooping(max_removals)": lambda n: lsq.data_snooping(
         U, np.arange(6.0), max_removals=n
     ),
-    "chi2 residual_threshold(dof)": lambda n: dg.residual_threshold(n, 0.05),
+    "chi2 residual_threshold(dof)": lambda n: chi2.residual_threshold(n, 0.05),
     "diagnosis simulate_regression_records(n_records)": lambda n: dg.simulate_regression_records(
         U, [1, 1], sigma=1, n_records=n, rng=0
     ),
     "filters LinearModel.simulate(N)": lambda n: MODEL.simulate(n, 0),
     "filters LinearModel.simulate(batch)": lambda n: MODEL.simulate(3, 0, batch=n),
-    "nis windowed_nis_threshold(window)": lambda n: kf.windowed_nis_threshold(n, 0.05),
+    "nis windowed_nis_threshold(window)": lambda n: nis.windowed_nis_threshold(n, 0.05),
     "nis nis_critical_values(K)": lambda n: nis.nis_critical_values(2, n),
     "nis extreme_eigenvalue(K)": lambda n: nis.extreme_eigenvalue(2, n),
     "nis consistency_interval(count)": lambda n: nis.consistency_interval(2, n),
@@ -46,7 +46,7 @@ def test_one_integer_rule_for_every_count(name):
 
 
 def test_whole_floats_give_the_same_answer_as_integers():
-    assert dg.residual_threshold(10.0, 0.05) == dg.residual_threshold(10, 0.05)
+    assert chi2.residual_threshold(10.0, 0.05) == chi2.residual_threshold(10, 0.05)
     a = mismatched.simulate_records(MODEL, MODEL, 4.0, 3.0, np.random.default_rng(1))
     b = mismatched.simulate_records(MODEL, MODEL, 4, 3, np.random.default_rng(1))
     np.testing.assert_array_equal(a, b)
@@ -97,13 +97,6 @@ def test_generators_only():
     assert isinstance(validation.as_generator(None), np.random.Generator)
     with pytest.raises(TypeError, match="Generator"):
         validation.as_generator(np.random.RandomState(0))
-
-
-def test_linalg_still_exports_the_checks():
-    from course import linalg
-
-    assert linalg.as_covariance is validation.as_covariance
-    assert linalg.check_alpha is validation.as_probability
 
 
 # ---------------------------------------------------------------------------

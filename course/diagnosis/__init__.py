@@ -17,7 +17,7 @@ Decision structures (``_structures``)
 Prediction errors (``_prediction_error``)
     :class:`RegressionFit`, :func:`least_squares_residual`,
     :func:`prediction_error`, :func:`prediction_error_test`,
-    :func:`residual_threshold`, :func:`fault_noncentrality`,
+    :func:`fault_noncentrality`,
     :func:`prediction_error_power`, :class:`NonlinearFit`,
     :func:`nonlinear_prediction_error`.
 Parameter estimates (``_parameter_estimates``)
@@ -51,9 +51,7 @@ hypothesis, ``Theta_0 = {theta : theta_j = nominal_j for every j not in
 free}``.  Data may be one record ``y`` of shape ``(N,)`` or ``M`` records at
 once as the rows of an ``(M, N)`` array (records leading, as everywhere in
 the course); statistics then come back as length-``M`` arrays, which is what
-makes the Monte Carlo studies fast.  Records as the *columns* of an
-``(N, M)`` array, the layout of earlier releases, still work with a
-DeprecationWarning.  The test-quantity functions take the data first and the
+makes the Monte Carlo studies fast.  The test-quantity functions take the data first and the
 hypothesis ``(U, nominal, free)`` after it, as the statistical tests of
 :mod:`scipy.stats` do; :func:`least_squares_residual`, a fit, takes the
 regressors first, as :func:`course.lsq.fit` does.
@@ -78,7 +76,6 @@ from course.diagnosis._monte_carlo import (
     IsolationResult,
     isolation_monte_carlo,
     linear_test_statistics,
-    simulate_linear_regression,
     simulate_regression_records,
 )
 from course.diagnosis._observer import ObserverResult, observer_residuals
@@ -98,7 +95,6 @@ from course.diagnosis._prediction_error import (
     prediction_error,
     prediction_error_power,
     prediction_error_test,
-    residual_threshold,
 )
 from course.diagnosis._structures import (
     DecisionStructure,
@@ -147,8 +143,6 @@ __all__ = [
     "prediction_error_power",
     "prediction_error_test",
     "regression_parameter_test",
-    "residual_threshold",
     "simulate_beta_system",
-    "simulate_linear_regression",
     "simulate_regression_records",
 ]

@@ -11,13 +11,12 @@ from typing import Any
 
 import numpy as np
 
-from course import _deprecation
-from course.filters._models import NonlinearModel, Simulation, _batch_shape
-from course.filters._stacked import _component_major
+from course._signals import _batch_shape
+from course._stacked import _component_major
+from course.filters import NonlinearModel, Simulation
 from course.validation import as_finite, as_float_array, as_generator, as_positive, as_variance
 
 
-@_deprecation.keyword_only("Ts", "q_beta", "q_x", "r", "x0_mean", "x0_cov")
 def beta_drift_model(
     *,
     Ts: float = 0.1,
@@ -110,7 +109,6 @@ def beta_drift_model(
     )
 
 
-@_deprecation.keyword_only("Ts", "q_x", "r", "x0", "fault", "batch")
 def simulate_beta_system(
     beta: Any,
     u: Any,

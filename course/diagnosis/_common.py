@@ -6,7 +6,6 @@ from typing import Any
 
 import numpy as np
 
-from course import _deprecation
 from course.validation import as_float_array, as_indices, as_matrix, as_std, as_vector
 
 
@@ -14,12 +13,8 @@ def _records(y: Any, N: int | None, name: str = "y") -> tuple[np.ndarray, str]:
     """Data as columns ``(N, M)`` for the computation, and the layout to answer in.
 
     ``y`` is one record ``(N,)`` or ``M`` records as the rows of an
-    ``(M, N)`` array (records leading, the course's batch convention).  The
-    layout of earlier releases, records as the *columns* of an ``(N, M)``
-    array, is recognised when the first axis has the ``N`` samples and the
-    second does not, and still works with a DeprecationWarning (answers then
-    come back in that layout too).  A square ``(N, N)`` array is read as
-    records leading.
+    ``(M, N)`` array (records leading, the course's batch convention).  A
+    square ``(N, N)`` array is read as records leading.
     """
     Y = as_float_array(y, name, empty=False)
     if Y.ndim not in (1, 2):
@@ -37,12 +32,10 @@ def _records(y: Any, N: int | None, name: str = "y") -> tuple[np.ndarray, str]:
     if N is None or Y.shape[1] == N:
         return Y.T, "rows"
     if Y.shape[0] == N:
-        _deprecation.warn(
+        raise ValueError(
             f"{name} of shape (N, M) = {Y.shape} holds the records as columns; the course's "
-            f"layout is records leading: pass {name}.T, of shape (M, N) = {Y.shape[::-1]}",
-            stacklevel=4,
+            f"layout is records leading: pass {name}.T, of shape (M, N) = {Y.shape[::-1]}"
         )
-        return Y, "columns"
     raise ValueError(
         f"shape mismatch: {name} has shape {Y.shape} but the regressors have {N} rows; pass "
         f"M records of N = {N} samples as an (M, {N}) array"
@@ -57,8 +50,7 @@ def _answer(columns: np.ndarray, layout: str) -> np.ndarray:
 def _parameter_vectors(theta: Any, p: int, name: str = "theta") -> tuple[np.ndarray, bool]:
     """Parameter vector(s) as columns ``(p, K)`` (or ``(p,)``), and whether there were several.
 
-    ``theta`` is ``(p,)`` or ``K`` vectors as the rows of ``(K, p)``; the old
-    ``(p, K)`` layout (vectors as columns) works with a DeprecationWarning.
+    ``theta`` is ``(p,)`` or ``K`` vectors as the rows of ``(K, p)``.
     """
     theta = as_float_array(theta, name, empty=False)
     if theta.ndim == 1:
@@ -68,12 +60,10 @@ def _parameter_vectors(theta: Any, p: int, name: str = "theta") -> tuple[np.ndar
     if theta.ndim == 2 and theta.shape[1] == p:
         return theta.T, True
     if theta.ndim == 2 and theta.shape[0] == p:
-        _deprecation.warn(
+        raise ValueError(
             f"{name} of shape (p, K) = {theta.shape} holds the parameter vectors as columns; "
-            f"pass them as rows, {name}.T of shape (K, p) = {theta.shape[::-1]}",
-            stacklevel=4,
+            f"pass them as rows, {name}.T of shape (K, p) = {theta.shape[::-1]}"
         )
-        return theta, True
     raise ValueError(f"{name} must have shape ({p},) or (K, {p}), got {theta.shape}")
 
 

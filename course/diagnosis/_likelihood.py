@@ -16,11 +16,11 @@ from typing import Any
 import numpy as np
 from scipy import optimize, special, stats
 
-from course import _deprecation
+from course._law_inputs import _levels
 from course.chi2 import residual_norm_law
 from course.diagnosis._common import _check_sigma, _indices, _model, _void_test_message
 from course.diagnosis._prediction_error import prediction_error
-from course.distributions import FrozenDistribution, _levels
+from course.distributions import FrozenDistribution
 from course.linalg import cholesky_lower, whiten
 from course.results import TestResult, format_number
 from course.validation import (
@@ -39,7 +39,6 @@ from course.validation import (
 # ---------------------------------------------------------------------------
 # likelihood
 # ---------------------------------------------------------------------------
-@_deprecation.keyword_only("sigma")
 def normal_log_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
     """``log L(theta | z)`` for independent ``z_i ~ N(theta, sigma^2)``.
 
@@ -84,7 +83,6 @@ def normal_log_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
     return float(value) if np.ndim(value) == 0 else value
 
 
-@_deprecation.keyword_only("sigma")
 def normal_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
     """``L(theta | z) = f(z | theta)`` for independent ``z_i ~ N(theta, sigma^2)``.
 
@@ -315,7 +313,7 @@ class LogLikelihoodLaw(FrozenDistribution):
     def __init__(self, dof: int, c: float):
         self.dof = as_count(dof, "dof", what="the residual degrees of freedom")
         self.c = as_finite(c, "c")
-        self.support = (-np.inf, self.c)
+        self._bounds = (-np.inf, self.c)
 
     def _cdf(self, x):
         return stats.chi2.sf(2 * (self.c - x), self.dof)

@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from course import _deprecation
 from course.diagnosis._common import _check_sigma, _indices, _records
 from course.diagnosis._prediction_error import prediction_error
 from course.diagnosis._structures import DecisionStructure, _check_structure, diagnosis_matrix
@@ -49,8 +48,8 @@ def simulate_regression_records(
     The lecture's static fault model ``y(t) = theta_1 u1(t) + theta_2 u2(t)
     + theta_3 u3(t) + v(t)`` (LiU lecture, "Teststorheten är ett
     modellvalideringsmått") with white Gaussian noise.  The noise is drawn
-    in the order of the deprecated :func:`simulate_linear_regression`, so a
-    seeded study gives the same records (transposed).
+    sample-major (an ``(N, n_records)`` draw, transposed), the order the
+    course's seeded studies were computed with.
 
     Examples
     --------
@@ -72,30 +71,6 @@ def simulate_regression_records(
     n_records = as_count(n_records, "n_records", what="the number of records")
     noise = generator.standard_normal((U.shape[0], n_records)).T
     return np.ascontiguousarray(U @ theta + sigma * noise)
-
-
-def simulate_linear_regression(
-    U: Any, theta: Any, *, sigma: float, n_records: int, rng: Any
-) -> np.ndarray:
-    """Deprecated: records as the *columns* of an ``(N, n_records)`` array.
-
-    Use :func:`simulate_regression_records`, which returns the same records
-    as rows (the course's records-leading layout); this function returns its
-    transpose and warns.
-
-    Examples
-    --------
-    >>> import warnings
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore", DeprecationWarning)
-    ...     simulate_linear_regression([[1.0], [2.0]], [1.0], sigma=1, n_records=4, rng=0).shape
-    (2, 4)
-    """
-    _deprecation.warn(
-        "simulate_linear_regression returns records as columns; use "
-        "simulate_regression_records, which returns them as rows (its transpose)"
-    )
-    return simulate_regression_records(U, theta, sigma=sigma, n_records=n_records, rng=rng).T
 
 
 def linear_test_statistics(

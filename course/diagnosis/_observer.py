@@ -12,10 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from course import _deprecation
-from course.filters._models import _as_signal
-from course.filters._stacked import _mv
-from course.nis._windowed import windowed_sum
+from course._signals import _as_signal
+from course._stacked import _mv
+from course.nis import windowed_sum
 from course.validation import as_callable, as_float_array, as_matrix, as_positive, as_vector
 
 
@@ -40,7 +39,6 @@ class ObserverResult:
     def __repr__(self) -> str:
         return f"ObserverResult(shape of r={self.r.shape})"
 
-    @_deprecation.keyword_only("Ts")
     def windowed_energy(self, window: Any, *, Ts: float = 1.0) -> np.ndarray:
         """``T_t = Ts sum_{k=t-L+1}^{t} |r_k|^2``: the windowed integral of the squared residual.
 
@@ -50,7 +48,6 @@ class ObserverResult:
         return Ts * windowed_sum(np.sum(self.r**2, axis=-1), window)
 
 
-@_deprecation.keyword_only("Ts")
 def observer_residuals(
     y: Any, u: Any, f: Any, h: Any, x0: Any, theta0: Any, K1: Any, K2: Any, *, Ts: float
 ) -> ObserverResult:

@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from course import _deprecation
 from course.chi2 import chi2_power, residual_norm_law
 from course.chi2 import residual_threshold as residual_threshold
 from course.diagnosis._common import (
@@ -86,18 +85,6 @@ class RegressionFit:
         )
 
 
-def _swapped_regression_arguments(Phi: Any, y: Any) -> bool:
-    """True for a call in the old order ``(y, Phi)``: y first, the regressors second."""
-    a, b = np.shape(Phi), np.shape(y)
-    if len(a) == 1 and len(b) == 2:
-        return True
-    if len(a) == 2 and len(b) == 2:
-        new_fits = b[-1] == a[0]
-        old_fits = a[0] == b[0]
-        return old_fits and not new_fits
-    return False
-
-
 def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> RegressionFit:
     """``min over theta of ||y - Phi theta||^2``, correct also without excitation.
 
@@ -130,9 +117,8 @@ def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> Regr
     minimiser gives the same residual (slide "Excitation": there is always
     one shortest distance from a point to a subspace).
 
-    The order ``least_squares_residual(y, Phi)`` of earlier releases still
-    works, with a DeprecationWarning; the regressors come first, as in
-    :func:`course.lsq.fit` and :func:`course.filters.recursive_least_squares`.
+    The regressors come first, as in :func:`course.lsq.fit` and
+    :func:`course.filters.recursive_least_squares`.
 
     Examples
     --------
@@ -144,9 +130,6 @@ def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> Regr
     >>> fit.rank, fit.unique, round(fit.statistic, 10)
     (1, False, 5.0)
     """
-    if _swapped_regression_arguments(Phi, y):
-        _deprecation.warn("least_squares_residual(y, Phi) is now least_squares_residual(Phi, y)")
-        Phi, y = y, Phi
     Phi = as_matrix(Phi, "Phi")
     N, p = Phi.shape
     Y, layout = _records(y, N)
@@ -206,9 +189,7 @@ def prediction_error(
     ``T(z) = min over theta in Theta_0 of V(theta, z)`` (LiU lecture, slide
     "Teststorhet baserad på prediktionsfelen").  With the fixed parameters
     moved to the left, ``y - U_fixed nominal_fixed = U_free theta_free + v``
-    is a linear regression in the free parameters.  Records given as the
-    columns of an ``(N, M)`` array (the layout of earlier releases) still
-    work, with a DeprecationWarning.
+    is a linear regression in the free parameters.
 
     Examples
     --------
@@ -300,7 +281,6 @@ def prediction_error_test(
     )
 
 
-@_deprecation.keyword_only("sigma")
 def fault_noncentrality(
     U: Any, nominal: Any, free: Sequence[int], theta: Any, *, sigma: float = 1.0
 ) -> Any:

@@ -25,8 +25,8 @@ The names live in private single-topic modules and are re-exported here
 (see each function's docstring for its signature):
 
 Models (``_models``)
-    :class:`LinearModel`, :class:`NonlinearModel` (with ``simulate``),
-    :func:`numerical_jacobian`.
+    :class:`LinearModel`, :class:`NonlinearModel` (with ``simulate``, which
+    returns a :class:`Simulation`), :func:`numerical_jacobian`.
 Pure steps (``_steps``; state in, state out, any batch shape)
     :func:`kf_update`, :func:`kf_predict`, :func:`ekf_update`, :func:`ekf_predict`.
 Drivers and results (``_drivers``)
@@ -39,15 +39,12 @@ Recursive least squares (``_rls``)
 
 Residual evaluation (the windowed NIS, its threshold and test, alarm
 statistics) lives in :mod:`course.nis`; the lecture's beta example and the
-observer live in :mod:`course.diagnosis`.  Their names are still importable
-from here.
+observer live in :mod:`course.diagnosis`.
 
 Gain convention: ``K_t = P(t|t-1) H^T S_t^{-1}`` is the *measurement-update*
 gain, ``xhat(t|t) = xhat(t|t-1) + K_t eps_t``; the one-step predictor gain is
 ``F K_t``.
 """
-
-from importlib import import_module
 
 from course.filters._drivers import (
     FilterResult,
@@ -58,64 +55,26 @@ from course.filters._drivers import (
     riccati_gains,
     steady_state,
 )
-from course.filters._models import LinearModel, NonlinearModel, numerical_jacobian
+from course.filters._models import LinearModel, NonlinearModel, Simulation, numerical_jacobian
 from course.filters._rls import RLSResult, recursive_least_squares
 from course.filters._steps import ekf_predict, ekf_update, kf_predict, kf_update
-from course.nis._alarms import AlarmStatistics, alarm_statistics, empirical_threshold
-from course.nis._windowed import (
-    windowed_chi2_test,
-    windowed_nis,
-    windowed_nis_threshold,
-    windowed_sum,
-)
-
-# Names whose home is course.diagnosis (which imports this package): resolved on
-# first access so that importing either package first works.
-_FROM_DIAGNOSIS = {
-    "ObserverResult": "course.diagnosis._observer",
-    "observer_residuals": "course.diagnosis._observer",
-    "beta_drift_model": "course.diagnosis._beta_example",
-    "simulate_beta_system": "course.diagnosis._beta_example",
-}
 
 __all__ = [
-    "AlarmStatistics",
     "FilterResult",
     "LinearModel",
     "NonlinearModel",
-    "ObserverResult",
     "RLSResult",
     "RiccatiResult",
-    "alarm_statistics",
-    "beta_drift_model",
+    "Simulation",
     "ekf_predict",
     "ekf_update",
-    "empirical_threshold",
     "extended_kalman_filter",
     "kalman_filter",
     "kf_predict",
     "kf_update",
     "numerical_jacobian",
-    "observer_residuals",
     "recursive_least_squares",
     "riccati",
     "riccati_gains",
-    "simulate_beta_system",
     "steady_state",
-    "windowed_chi2_test",
-    "windowed_nis",
-    "windowed_nis_threshold",
-    "windowed_sum",
 ]
-
-
-def __getattr__(name):
-    if name in _FROM_DIAGNOSIS:
-        value = getattr(import_module(_FROM_DIAGNOSIS[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'course.filters' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))

@@ -13,6 +13,9 @@ import numpy as np
 from numpy.linalg import LinAlgError
 from scipy import linalg as sla
 
+from course import _unchecked
+from course._stacked import _batch_major, _time_major
+from course._unchecked import _symmetrize as symmetrize
 from course.filters._models import (
     LinearModel,
     NonlinearModel,
@@ -20,14 +23,11 @@ from course.filters._models import (
     _check_steps,
     _model_records,
 )
-from course.filters._stacked import _batch_major, _time_major
 from course.filters._steps import _ekf_predict as ekf_predict
 from course.filters._steps import _ekf_update as ekf_update
 from course.filters._steps import _kf_predict as kf_predict
 from course.filters._steps import _kf_update as kf_update
-from course.linalg import _symmetrize as symmetrize
 from course.linalg import readonly as _readonly
-from course.nis import _statistics as _nis_home
 from course.validation import InputTypeError, as_covariance, as_flag, as_vector
 
 
@@ -109,7 +109,7 @@ class FilterResult:
         Under H0 (the filter's model is true) they are independent ``N(0, I)``
         over time; with one output this is ``eps_t / sqrt(S_t)``.
         """
-        return _nis_home._normalized(self.eps, self.S)
+        return _unchecked._normalized(self.eps, self.S)
 
     def nis(self) -> np.ndarray:
         """Normalised innovation squared ``eps_t^T S_t^{-1} eps_t``, shape ``(*batch, N)``.
@@ -118,7 +118,7 @@ class FilterResult:
         :mod:`course.nis` (the same numbers as :func:`course.nis.nis` of
         ``eps`` and ``S``).
         """
-        return _nis_home._nis(self.eps, self.S)
+        return _unchecked._nis(self.eps, self.S)
 
 
 @dataclass(frozen=True, repr=False, eq=False)

@@ -13,11 +13,10 @@ from typing import Any
 import numpy as np
 from numpy.linalg import LinAlgError
 
-from course import _deprecation
+from course import _unchecked
+from course._unchecked import _symmetrize as symmetrize
 from course.filters._steps import _kf_update as kf_update
-from course.linalg import _symmetrize as symmetrize
 from course.linalg import matrix_rank, qr_solve
-from course.nis import _statistics as _nis_home
 from course.validation import as_covariance, as_float_array, as_matrix, as_variance, as_vector
 
 
@@ -77,7 +76,7 @@ class RLSResult:
         :meth:`FilterResult.normalized_innovations` (without its trailing
         output axis: RLS has one output).
         """
-        return _nis_home._normalized(self.eps[..., None], self.S[:, None, None])[..., 0]
+        return _unchecked._normalized(self.eps[..., None], self.S[:, None, None])[..., 0]
 
     def nis(self) -> np.ndarray:
         """Normalised innovations squared ``eps_t^2 / S_t``, ``(*batch, N)``.
@@ -86,7 +85,7 @@ class RLSResult:
         :func:`windowed_nis` of an ``RLSResult`` is ``chi2(L)`` with a full
         window (threshold :func:`windowed_nis_threshold` with ``n_outputs=1``).
         """
-        return _nis_home._nis(self.eps[..., None], self.S[:, None, None])
+        return _unchecked._nis(self.eps[..., None], self.S[:, None, None])
 
 
 def _first_full_rank(Phi: np.ndarray) -> int:
@@ -108,7 +107,6 @@ def _first_full_rank(Phi: np.ndarray) -> int:
     return lo
 
 
-@_deprecation.keyword_only("r", "q", "theta0", "P0")
 def recursive_least_squares(
     Phi: Any,
     y: Any,

@@ -12,9 +12,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.linalg import LinAlgError
 
+from course._stacked import _T, _mm, _mv
+from course._unchecked import _symmetrize as symmetrize
 from course.filters._models import NonlinearModel
-from course.filters._stacked import _T, _mm, _mv
-from course.linalg import _symmetrize as symmetrize
 from course.validation import InputTypeError, as_covariance_stack, as_float_array
 
 

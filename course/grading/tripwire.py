@@ -49,7 +49,7 @@ __all__ = ["EVENT", "instrument", "parse_events", "wrap_forbidden"]
 EVENT = b"\x1ecourse-forbidden-call:%s\x1f"
 _EVENT_RE = re.compile(rb"\x1ecourse-forbidden-call:([A-Za-z0-9_.]{1,200})\x1f")
 _LIBRARY_PREFIX = "course."
-_NOT_LIBRARY = ("course.grading", "course.exercises", "course.cli", "course.__main__")
+_NOT_LIBRARY = ("course.grading", "course.cli", "course.__main__")
 
 # placeholders in the prologue's source, replaced by objects in the compiled code's constants
 _P_FRAME, _P_ID, _P_WRITE = "__tw_getframe__", "__tw_id__", "__tw_write__"

@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
+from course._unchecked import _whiten_vectors as whiten_vectors
 from course.chi2 import residual_norm_law
 from course.distributions import TailPair
-from course.linalg import _whiten_vectors as whiten_vectors
 from course.nis._laws import (
     extreme_eigenvalue,
     prob_eigenvalues_within,

@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from course.distributions import _NO_STATE, FrozenDistribution, _levels, _points, _rng_argument
+from course._law_inputs import _levels, _points
+from course.distributions import FrozenDistribution
 from course.nis._pfaffians import (
     _augment,
     _bordered,
@@ -21,7 +22,7 @@ from course.nis._pfaffians import (
     _skew_blocks,
 )
 from course.nis._statistics import EigenvaluePair, _check_dims, _check_which
-from course.validation import as_count, as_finite, as_size
+from course.validation import as_count, as_finite, as_generator, as_size
 
 #: Chiani's shifted-gamma fit of the Tracy-Widom law TW1 ([C14], Table 1):
 #: TW1 ~ Gamma(shape=k, scale=theta) - alpha.
@@ -375,7 +376,7 @@ class TracyWidomApproximation(FrozenDistribution):
         self._loc = (mu - sign * sigma * alpha) / self.K
         self._scale = sigma / self.K
         self._sign = sign
-        self.support = (self._loc, np.inf) if sign > 0 else (-np.inf, self._loc)
+        self._bounds = (self._loc, np.inf) if sign > 0 else (-np.inf, self._loc)
 
     def __repr__(self) -> str:
         return f"TracyWidomApproximation(m={self.m}, K={self.K}, which={self.which!r})"
@@ -525,7 +526,6 @@ def simulate_extreme_eigenvalues(
     m: Any,
     K: Any,
     size: Any = None,
-    random_state: Any = _NO_STATE,
     *,
     rng: Any = None,
     chunk: int = 100_000,
@@ -542,8 +542,6 @@ def simulate_extreme_eigenvalues(
     m, K : int
     size : int or tuple of int, optional
         Shape of the output arrays.
-    random_state
-        Deprecated name of ``rng``.
     rng : numpy.random.Generator or seed
         Source of randomness (keyword-only).
     chunk : int
@@ -567,7 +565,7 @@ def simulate_extreme_eigenvalues(
     (True, (1000,))
     """
     m, K = _check_dims(m, K)
-    rng = _rng_argument(rng, random_state, "simulate_extreme_eigenvalues")
+    rng = as_generator(rng)
     shape = as_size(size) or ()
     chunk = as_count(chunk, "chunk")
     total = int(np.prod(shape)) if shape else 1

@@ -14,8 +14,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from course.linalg import _whiten_vectors as whiten_vectors
-from course.linalg import _whitened_squared_norms as whitened_squared_norms
+from course._unchecked import _whiten_vectors as whiten_vectors
+from course._unchecked import _whitened_squared_norms as whitened_squared_norms
 from course.linalg import cholesky_factor
 from course.validation import as_count, as_float_array
 
@@ -78,31 +78,6 @@ def _innovations_and_factor(innovations, S, name_eps="innovations", name_S="S"):
 def _whiten(L: np.ndarray, eps: np.ndarray) -> np.ndarray:
     """Forward substitution ``L z = eps`` over stacks (no inverse is formed)."""
     return whiten_vectors(L, eps)
-
-
-def _normalized(eps: np.ndarray, S: np.ndarray) -> np.ndarray:
-    """``L_t^{-1} eps_t`` for a filter's own arrays (trusted; NaN marks undefined samples).
-
-    ``S`` may be a broadcast view shared by a batch: each distinct matrix is
-    factored once.  With one output the whitening is a division, through
-    which NaN passes.
-    """
-    if S.shape[-1] == 1:
-        return eps / np.sqrt(S[..., 0])
-    if S.ndim > 2:
-        S = S[
-            tuple(
-                slice(0, 1) if stride == 0 and size > 1 else slice(None)
-                for stride, size in zip(S.strides[:-2], S.shape[:-2])
-            )
-        ]
-    return whiten_vectors(np.linalg.cholesky(S), eps)
-
-
-def _nis(eps: np.ndarray, S: np.ndarray) -> np.ndarray:
-    """``eps_t^T S_t^{-1} eps_t`` for a filter's own arrays (see :func:`_normalized`)."""
-    z = _normalized(eps, S)
-    return np.einsum("...i,...i->...", z, z)
 
 
 # ---------------------------------------------------------------------------

@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 
-from course import _deprecation
 from course.chi2 import residual_norm_law
 from course.results import TestResult
 from course.validation import InputTypeError, as_count, as_float_array, as_index, as_probability
@@ -122,7 +121,6 @@ def windowed_nis(result: Any, window: Any) -> np.ndarray:
     return windowed_sum(result.nis(), window)
 
 
-@_deprecation.alpha_first("windowed_nis_threshold(window, alpha, n_outputs=...)", "n_outputs")
 def windowed_nis_threshold(window: Any, alpha: Any = 0.05, *, n_outputs: Any = 1) -> float:
     """Threshold of the windowed NIS for a per-sample false-alarm probability ``alpha``.
 
@@ -146,9 +144,7 @@ def windowed_nis_threshold(window: Any, alpha: Any = 0.05, *, n_outputs: Any = 1
     Under H0 the normalised innovations of the correct (linear Gaussian)
     filter are independent ``N(0, I_p)``, so the window sum of ``L``
     NIS values is ``chi2(L p)`` (see :func:`windowed_chi2_test`), the law of
-    :func:`course.chi2.residual_norm_law`.  The order
-    ``(alpha, window, n_outputs)`` of earlier releases still works, with a
-    DeprecationWarning.
+    :func:`course.chi2.residual_norm_law`.
 
     Examples
     --------

@@ -3,12 +3,26 @@
 A figure drawn from NaN, an empty array or an array of the wrong shape is
 silently wrong (or, for a 2-D histogram input, takes minutes), so every
 plotting function checks its data here and raises a ``ValueError`` that
-names the argument and says what to pass instead.
+names the argument and says what to pass instead.  The rules are those of
+:mod:`course.validation` (a number is a real number, never the text
+``"0.05"``; a count is a whole number); this module only adds what a figure
+needs on top (the numbers of dimensions a plot can draw, a smallest number of
+entries, arrays that pair up) and takes ``(name, value)`` in the order the
+plotting code reads best.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from course.validation import (
+    as_count,
+    as_finite,
+    as_flag,
+    as_float_array,
+    as_positive,
+    as_probability,
+)
 
 __all__ = ["array", "flag", "positive_int", "probability", "same_length", "scalar"]
 
@@ -22,7 +36,7 @@ def array(
     allow_nan: bool = False,
     what: str = "values",
 ) -> np.ndarray:
-    """``value`` as a float array, checked.
+    """``value`` as a float array, checked by :func:`course.validation.as_float_array`.
 
     Parameters
     ----------
@@ -40,14 +54,7 @@ def array(
     what : str
         What the entries are, for the message.
     """
-    if value is None:
-        raise ValueError(f"{name} is None: pass an array of {what}")
-    try:
-        out = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"{name} must be an array of numbers ({what}), got {value!r:.60}"
-        ) from None
+    out = as_float_array(value, name, nan=allow_nan)
     if ndim is not None:
         allowed = (ndim,) if isinstance(ndim, int) else tuple(ndim)
         if out.ndim not in allowed:
@@ -62,16 +69,8 @@ def array(
             if out.size == 0
             else f"{name} has {out.size} entries: pass at least {min_size} {what}"
         )
-    if np.isinf(out).any():
-        raise ValueError(f"{name} contains infinite values: pass finite {what}")
-    nan = np.isnan(out)
-    if nan.any():
-        if not allow_nan:
-            raise ValueError(
-                f"{name} contains NaN at {int(nan.sum())} place(s): remove or fill them before plotting"
-            )
-        if nan.all():
-            raise ValueError(f"{name} is NaN everywhere: there is nothing to draw")
+    if allow_nan and out.size and np.isnan(out).all():
+        raise ValueError(f"{name} is NaN everywhere: there is nothing to draw")
     return out
 
 
@@ -79,47 +78,26 @@ def scalar(name: str, value, *, positive: bool = False, allow_none: bool = False
     """A finite float (optionally > 0); None passes through when allowed."""
     if value is None and allow_none:
         return None
-    if isinstance(value, (bool, np.bool_)) or value is None:
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r:.60}") from None
-    if not np.isfinite(out):
-        raise ValueError(f"{name} must be finite, got {out}")
-    if positive and out <= 0:
-        raise ValueError(f"{name} must be positive, got {out:g}")
-    return out
+    return as_positive(value, name) if positive else as_finite(value, name)
 
 
 def probability(name: str, value, *, allow_none: bool = False):
     """A level such as alpha, strictly between 0 and 1."""
-    out = scalar(name, value, allow_none=allow_none)
-    if out is not None and not 0.0 < out < 1.0:
-        raise ValueError(f"{name} must lie strictly between 0 and 1, got {out:g}")
-    return out
+    if value is None and allow_none:
+        return None
+    return as_probability(value, name)
 
 
 def positive_int(name: str, value, *, allow_none: bool = False):
     """A whole number >= 1 (a count of bins, degrees of freedom, ...)."""
     if value is None and allow_none:
         return None
-    if isinstance(value, (bool, np.bool_)) or value is None:
-        raise ValueError(f"{name} must be a whole number >= 1, got {value!r}")
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a whole number >= 1, got {value!r:.60}") from None
-    if not np.isfinite(out) or out != int(out) or out < 1:
-        raise ValueError(f"{name} must be a whole number >= 1, got {value!r}")
-    return int(out)
+    return as_count(value, name)
 
 
 def flag(name: str, value) -> bool:
     """A true boolean switch (so that ``"no"`` is not read as True)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be True or False, got {value!r}")
-    return bool(value)
+    return as_flag(value, name)
 
 
 def same_length(name_a: str, a: np.ndarray, name_b: str, b: np.ndarray, axis: int = 0) -> None:

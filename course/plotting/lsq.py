@@ -593,9 +593,9 @@ def plot_w_tests(w_result, ax=None, index=None, xlabel="observation"):
     -------
     matplotlib.axes.Axes
     """
-    w = _checks.array("w_result.w", w_result.w, allow_nan=True, what="w-statistics")
+    w = _checks.array("w_result.statistic", w_result.statistic, allow_nan=True, what="w-statistics")
     x = np.arange(w.size) if index is None else _checks.array("index", index, what="labels")
-    _checks.same_length("index", x, "w_result.w", w)
+    _checks.same_length("index", x, "w_result.statistic", w)
     ax = axes_or_new(ax)
     reject = np.asarray(w_result.reject, dtype=bool)
     colors = np.where(reject, REJECT.dark, pair(0).dark)
@@ -751,7 +751,7 @@ def plot_data_snooping_loop(result=None, ax=None):
         for k, (wt, kept) in enumerate(zip(result.rounds, result.round_indices), start=1):
             j = wt.largest
             verdict = f"remove {kept[j]}" if wt.reject[j] else "nothing rejected"
-            lines.append(f"round {k}: largest |w| = {abs(float(wt.w[j])):.2f} → {verdict}")
+            lines.append(f"round {k}: largest |w| = {abs(float(wt.statistic[j])):.2f} → {verdict}")
         lines.append(f"stopped: {result.stop_reason}")
         if result.fit.redundancy > 0:
             lines.append("final fit " + ("accepted" if accepted else "still rejected"))

@@ -203,7 +203,7 @@ q3.case(A_SEA, Y_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), 0.10, hidden=True)
     ],
 )
 def q4(A, y, Qyy):
-    return np.asarray(lsq.w_tests(lsq.fit(A, y, Qyy), 0.05).w)
+    return np.asarray(lsq.w_tests(lsq.fit(A, y, Qyy), 0.05).statistic)
 
 
 q4.case(A_LINE, Y_DAY2, I4, label="day 2 of the line fit")

@@ -9,6 +9,7 @@ from collections import namedtuple
 import numpy as np
 from scipy import stats
 
+from course import chi2
 from course import diagnosis as dg
 from course.grading.authoring.checks import Checks, Mistake
 
@@ -201,7 +202,7 @@ def q5():
     ],
 )
 def q6():
-    J = dg.residual_threshold(N - 1, 0.01, sigma=SIGMA)
+    J = chi2.residual_threshold(N - 1, 0.01, sigma=SIGMA)
     power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
     return ThresholdAndPower(J, power)
 
@@ -219,7 +220,7 @@ def _three_statistics(d):
 
 
 def _diagnosis(statistics, n, sigma, alpha):
-    alarms = statistics > dg.residual_threshold(n - 1, alpha, sigma=sigma)
+    alarms = statistics > chi2.residual_threshold(n - 1, alpha, sigma=sigma)
     return list(dg.diagnoses(dg.DecisionStructure(LECTURE, modes=MODES), alarms))
 
 
@@ -301,18 +302,18 @@ def q7(d):
     mistakes=[
         Mistake(
             "looks like chi2 with N degrees of freedom: T_k estimates one gain, so N - 1",
-            lambda d: float(dg.residual_threshold(d["y"].size, d["alpha"], sigma=d["sigma"])),
+            lambda d: float(chi2.residual_threshold(d["y"].size, d["alpha"], sigma=d["sigma"])),
         ),
         Mistake(
             "looks two-sided (alpha/2): the test alarms in the upper tail only",
             lambda d: float(
-                dg.residual_threshold(d["y"].size - 1, d["alpha"] / 2, sigma=d["sigma"])
+                chi2.residual_threshold(d["y"].size - 1, d["alpha"] / 2, sigma=d["sigma"])
             ),
         ),
     ],
 )
 def q8a(d):
-    return float(dg.residual_threshold(d["y"].size - 1, d["alpha"], sigma=d["sigma"]))
+    return float(chi2.residual_threshold(d["y"].size - 1, d["alpha"], sigma=d["sigma"]))
 
 
 @CHECKS.value(
@@ -374,7 +375,7 @@ def q9(U_, theta, sigma, alpha, n_runs, seed):
     rng = np.random.default_rng(seed)
     Y = U_ @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, U_.shape[0]))
     t1 = _t1_many(U_, Y)
-    return float(np.mean(t1 > dg.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
+    return float(np.mean(t1 > chi2.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
 
 
 def _t1_many(U_, Y):

@@ -9,7 +9,9 @@ from collections import namedtuple
 import numpy as np
 from scipy import stats
 
+from course import diagnosis as dg
 from course import filters as kf
+from course import nis
 from course.grading.authoring.checks import Band, Checks, Mistake
 
 from . import data
@@ -29,7 +31,7 @@ N7, T_FAULT7 = 200, 150
 _t7 = np.arange(N7)
 U7 = np.where((_t7 // 40) % 2 == 0, 0.5, 1.5)
 BETA7 = 0.8 + 0.6 * _t7 / N7
-_, Y7 = kf.simulate_beta_system(
+_, Y7 = dg.simulate_beta_system(
     BETA7,
     U7,
     np.random.default_rng(4062),
@@ -45,7 +47,7 @@ _, Y7 = kf.simulate_beta_system(
 # gradually and a threshold with L - 1 degrees of freedom, or the window's first sample
 # instead of its last, gives another first alarm (121 is right; 120 and 112 are not).
 T_FAULT_PRACTICE = 120
-_, Y_PRACTICE = kf.simulate_beta_system(
+_, Y_PRACTICE = dg.simulate_beta_system(
     BETA7,
     U7,
     np.random.default_rng(126),
@@ -158,7 +160,7 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     points=1,
     rtol=1e-9,
     atol=1e-12,
-    forbid=["course.filters.windowed_sum", "course.filters.windowed_nis"],
+    forbid=["course.nis.windowed_sum", "course.nis.windowed_nis"],
     hint=[
         "Squares, summed (not averaged), over full windows only: how many full windows of "
         "length L fit in N samples?",
@@ -167,7 +169,7 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     ],
 )
 def q3(z, L):
-    return kf.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1 :]
+    return nis.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1 :]
 
 
 q3.case(np.arange(6.0), 3, label="z = 0..5, L = 3")
@@ -215,10 +217,10 @@ def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None
 
     ``dof`` and ``shift`` make the declared mistakes (another dof, the window's first sample).
     """
-    model = kf.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
-    T = kf.windowed_nis(kf.extended_kalman_filter(model, y, u), window)
+    model = dg.beta_drift_model(Ts=Ts, q_beta=q_beta, q_x=q_x, r=r, x0_mean=(1.0, 0.5))
+    T = nis.windowed_nis(kf.extended_kalman_filter(model, y, u), window)
     if dof is None:
-        threshold = kf.windowed_nis_threshold(window, alpha)
+        threshold = nis.windowed_nis_threshold(window, alpha)
     else:
         threshold = float(stats.chi2.isf(alpha, dof))
     with np.errstate(invalid="ignore"):
@@ -243,11 +245,11 @@ def _alarm_mistakes(record):
 
 _HINT_ALARM = [
     "Three steps: the EKF's normalised innovations, their window sums, the first window "
-    "above the threshold. Which sample does kf.windowed_nis(result, L)[t] belong to?",
+    "above the threshold. Which sample does nis.windowed_nis(result, L)[t] belong to?",
     "A window of L squared normalised innovations (one output) is chi2 with L degrees of "
     "freedom under H0 -- not L - 1: nothing is estimated from the window. "
-    "kf.windowed_nis(result, L)[t] is the window that ENDS at t (NaN before L - 1); report that t.",
-    "threshold = stats.chi2.isf(alpha, L) (or kf.windowed_nis_threshold(L, alpha)); "
+    "nis.windowed_nis(result, L)[t] is the window that ENDS at t (NaN before L - 1); report that t.",
+    "threshold = stats.chi2.isf(alpha, L) (or nis.windowed_nis_threshold(L, alpha)); "
     "first_alarm = the first t with T[t] > threshold (np.flatnonzero), as an int.",
 ]
 
@@ -296,7 +298,7 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
         y[:, t, 0] = x + np.sqrt(r) * V[t]
         x = a * x + np.sqrt(q) * W[t]
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
-    sums = kf.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1 :]  # full windows only
+    sums = nis.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1 :]  # full windows only
     alarm = sums > stats.chi2.isf(alpha, L)
     return FalseAlarmRates(float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1))))
 
@@ -357,18 +359,18 @@ q6.case(1.0, 0.01, 0.5, 30, 5, 0.01, 20000, 7, hidden=True)
     public=False,
     hint=[
         "Count alarms only BEFORE the fault (t < t_fault7): every one of them is false. "
-        "The first L - 1 values of kf.windowed_nis are NaN (no full window yet).",
+        "The first L - 1 values of nis.windowed_nis are NaN (no full window yet).",
         "Run kf.extended_kalman_filter with q_beta=0.0 and with q_beta=1e-4 on the same "
-        "(y7, u7); count the samples t < t_fault7 where kf.windowed_nis(result, 10) exceeds "
-        "kf.windowed_nis_threshold(10, 0.001). Return (count_constant, count_random_walk).",
+        "(y7, u7); count the samples t < t_fault7 where nis.windowed_nis(result, 10) exceeds "
+        "nis.windowed_nis_threshold(10, 0.001). Return (count_constant, count_random_walk).",
     ],
 )
 def q7():
-    thr = kf.windowed_nis_threshold(10, 0.001)
+    thr = nis.windowed_nis_threshold(10, 0.001)
     counts = []
     for q_beta in (0.0, 1e-4):
-        model = kf.beta_drift_model(Ts=TS, q_beta=q_beta, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))
-        T = kf.windowed_nis(kf.extended_kalman_filter(model, Y7, U7), 10)
+        model = dg.beta_drift_model(Ts=TS, q_beta=q_beta, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))
+        T = nis.windowed_nis(kf.extended_kalman_filter(model, Y7, U7), 10)
         with np.errstate(invalid="ignore"):
             counts.append(int(np.sum(T[:T_FAULT7] > thr)))
     return FalseAlarms(*counts)

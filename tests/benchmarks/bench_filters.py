@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from course import diagnosis as dg
 from course import filters as kf
 
 TARGET = 20.0
@@ -33,7 +34,7 @@ TS, Q_BETA, Q_X, R = 0.1, 1e-4, 1e-4, 2.5e-3
 
 
 def make_data(runs, steps, seed=0):
-    model = kf.beta_drift_model(Ts=TS, q_beta=Q_BETA, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))
+    model = dg.beta_drift_model(Ts=TS, q_beta=Q_BETA, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))
     u = np.where((np.arange(steps) // 40) % 2 == 0, 0.5, 1.5)
     _, y = model.simulate(steps, np.random.default_rng(seed), batch=runs, u=u)
     return model, u, y

@@ -126,7 +126,7 @@ def check_agreement(label, f, omt, w, result, w_ref):
         "residuals": relative_error(f.e_hat, result.resid),
         "x_hat": relative_error(f.x_hat, result.params),
         "T": relative_error(omt.statistic, result.ssr),
-        "w": relative_error(w.w, w_ref),
+        "w": relative_error(w.statistic, w_ref),
     }
     bad = {k: v for k, v in errors.items() if not v <= AGREEMENT}
     if bad:

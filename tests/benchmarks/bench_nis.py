@@ -62,7 +62,7 @@ def main(argv=None):
 
     def monte_carlo():
         rng = np.random.default_rng(args.seed)
-        lmin, lmax = nis.simulate_extreme_eigenvalues(m, K, n_draws, rng)
+        lmin, lmax = nis.simulate_extreme_eigenvalues(m, K, n_draws, rng=rng)
         lmin.sort()
         lmax.sort()
         cdf_min = np.searchsorted(lmin, grid, side="right") / n_draws

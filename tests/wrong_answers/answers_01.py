@@ -377,7 +377,7 @@ suspect_mine = np.argmax(np.abs(w))
         (
             "lsq.w_tests",
             """res = lsq.w_tests(lsq.fit(mine["A"], mine["y"], mine["Qyy"]), mine["alpha"])
-suspect_mine = int(np.argmax(np.abs(res.w)))
+suspect_mine = int(np.argmax(np.abs(res.statistic)))
 """,
         ),
     ],
@@ -411,7 +411,7 @@ RIGHT["q6_practice"] = [
 RIGHT["q7_practice"] = [
     (
         "largest |w| (numpy int)",
-        """suspect_practice = np.argmax(np.abs(lsq.w_tests(lsq.fit(A_practice, y_practice, Q_practice), 0.01).w))""",
+        """suspect_practice = np.argmax(np.abs(lsq.w_tests(lsq.fit(A_practice, y_practice, Q_practice), 0.01).statistic))""",
     ),
 ]
 

@@ -348,8 +348,10 @@ RIGHT = {
     "q5b": [("Yes, with spaces and capitals", 'bias_decoupled = " Yes "')],
     "q6": [
         (
-            "dg.residual_threshold and a projector",
-            """J = dg.residual_threshold(N - 1, 0.01, sigma=sigma)
+            "chi2.residual_threshold and a projector",
+            """from course.chi2 import residual_threshold
+
+J = residual_threshold(N - 1, 0.01, sigma=sigma)
 P = np.eye(N) - np.outer(u1, u1) / (u1 @ u1)
 lam = np.sum((P @ (0.15 * u2)) ** 2) / sigma**2
 threshold_and_power = [J, stats.ncx2.sf(J / sigma**2, N - 1, lam)]
@@ -376,8 +378,9 @@ diagnosis_practice = tuple(single_fault_diagnoses(LECTURE, MODES, alarms_p))
     ],
     "q8a": [
         (
-            "dg.residual_threshold",
-            'J_mine = dg.residual_threshold(len(mine["y"]) - 1, mine["alpha"], sigma=mine["sigma"])',
+            "chi2.residual_threshold",
+            "from course.chi2 import residual_threshold\n\n"
+            'J_mine = residual_threshold(len(mine["y"]) - 1, mine["alpha"], sigma=mine["sigma"])',
         ),
     ],
     "q8": [
@@ -404,13 +407,15 @@ mode_mine = conclusion.get(len(diagnosis_mine), "several faults fit")
         (
             "projector matrix, one matrix product",
             _Q9
-            + """    E = rng.standard_normal((n_runs, n))
+            + """    from course.chi2 import residual_threshold
+
+    E = rng.standard_normal((n_runs, n))
     u = U[:, 0]
     P = np.eye(n) - np.outer(u, u) / (u @ u)
     base = U @ np.asarray(theta, dtype=float) - U[:, 1] - U[:, 2]
     R = (base + sigma * E) @ P
     T = np.einsum("ij,ij->i", R, R)
-    return np.mean(T > dg.residual_threshold(n - 1, alpha, sigma=sigma))
+    return np.mean(T > residual_threshold(n - 1, alpha, sigma=sigma))
 """,
         ),
     ],

@@ -37,13 +37,13 @@ def _q2(body: str) -> str:
 
 _Q3_HEAD = "def windowed_statistic(z, L):\n    z = np.asarray(z, dtype=float)\n"
 
-_Q5P_T = """model = kf.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
-T_practice = kf.windowed_nis(kf.extended_kalman_filter(model, y_practice, u_practice), 10)
+_Q5P_T = """model = dg.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+T_practice = nis.windowed_nis(kf.extended_kalman_filter(model, y_practice, u_practice), 10)
 """
-_Q5_T = """model = kf.beta_drift_model(Ts=mine["Ts"], q_beta=mine["q_beta"], q_x=mine["q_x"],
+_Q5_T = """model = dg.beta_drift_model(Ts=mine["Ts"], q_beta=mine["q_beta"], q_x=mine["q_x"],
                             r=mine["r"], x0_mean=(1.0, 0.5))
 L, alpha = mine["window"], mine["alpha"]
-T_mine = kf.windowed_nis(kf.extended_kalman_filter(model, mine["y"], mine["u"]), L)
+T_mine = nis.windowed_nis(kf.extended_kalman_filter(model, mine["y"], mine["u"]), L)
 """
 _FIRST = "int(np.flatnonzero(np.nan_to_num({T}) > {thr})[0])"
 
@@ -64,9 +64,9 @@ _Q6_HEAD = """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
 
 _Q7_HEAD = """T7 = {}
 for q_beta in (0.0, 1e-4):
-    m7 = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
-    T7[q_beta] = np.nan_to_num(kf.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10))
-thr7 = kf.windowed_nis_threshold(10, 0.001)
+    m7 = dg.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+    T7[q_beta] = np.nan_to_num(nis.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10))
+thr7 = nis.windowed_nis_threshold(10, 0.001)
 """
 
 _Q8_HEAD = """def rls_update(theta, P, phi, y, r):
@@ -261,7 +261,7 @@ WRONG = {
         ),
         (
             "threshold with L - 1 degrees of freedom",
-            _Q7_HEAD.replace("kf.windowed_nis_threshold(10, 0.001)", "stats.chi2.isf(0.001, 9)")
+            _Q7_HEAD.replace("nis.windowed_nis_threshold(10, 0.001)", "stats.chi2.isf(0.001, 9)")
             + "false_alarms = tuple(int(np.sum(T7[qb][:t_fault7] > thr7)) for qb in (0.0, 1e-4))",
         ),
         (
@@ -341,7 +341,7 @@ RIGHT = {
     ],
     "q4": [
         ("ppf(1 - alpha)", "threshold = stats.chi2.ppf(1 - 0.001, 10)"),
-        ("kf.windowed_nis_threshold", "threshold = kf.windowed_nis_threshold(10, 0.001)"),
+        ("nis.windowed_nis_threshold", "threshold = nis.windowed_nis_threshold(10, 0.001)"),
         (
             "numpy scalar with a print",
             "threshold = np.float64(stats.chi2.isf(0.001, 10))\nprint(round(threshold, 2))",
@@ -349,9 +349,9 @@ RIGHT = {
     ],
     "q5_practice": [
         (
-            "kf.windowed_nis_threshold and np.argmax, list",
+            "nis.windowed_nis_threshold and np.argmax, list",
             _Q5P_T
-            + "thr = kf.windowed_nis_threshold(10, 0.001)\n"
+            + "thr = nis.windowed_nis_threshold(10, 0.001)\n"
             + "alarm_practice = [thr, int(np.argmax(np.nan_to_num(T_practice) > thr))]",
         ),
         (
@@ -364,9 +364,9 @@ RIGHT = {
     ],
     "q5": [
         (
-            "kf.windowed_nis_threshold and np.argmax",
+            "nis.windowed_nis_threshold and np.argmax",
             _Q5_T
-            + "thr = kf.windowed_nis_threshold(L, alpha)\n"
+            + "thr = nis.windowed_nis_threshold(L, alpha)\n"
             + "alarm = (thr, int(np.argmax(np.nan_to_num(T_mine) > thr)))",
         ),
         (
@@ -405,8 +405,8 @@ RIGHT = {
             "np.count_nonzero with errstate, list",
             """counts = []
 for q_beta in (0.0, 1e-4):
-    m7 = kf.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
-    T7 = kf.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10)
+    m7 = dg.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
+    T7 = nis.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10)
     with np.errstate(invalid="ignore"):
         counts.append(np.count_nonzero(T7[:t_fault7] > stats.chi2.isf(0.001, 10)))
 false_alarms = counts""",
@@ -465,7 +465,7 @@ WRONG["q6"] += [
 ]
 RIGHT["q6"] += [
     (
-        "kf.windowed_nis on the library filter, a list",
+        "nis.windowed_nis on the library filter, a list",
         """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
     rng = np.random.default_rng(seed)
     x0 = rng.standard_normal(n_runs)
@@ -477,7 +477,7 @@ RIGHT["q6"] += [
         x[t + 1] = a * x[t] + np.sqrt(q) * W[t]
     y = (x + np.sqrt(r) * V).T[..., None]
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
-    T = kf.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1:]
+    T = nis.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1:]
     alarm = T > stats.chi2.isf(alpha, L)
     return [alarm[:, -1].mean(), alarm.any(axis=1).mean()]
 """,

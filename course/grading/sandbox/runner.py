@@ -254,8 +254,8 @@ def course_modules() -> list[str]:
 
     import course
 
-    names = ["course", "course.exercises"]  # the old name, for notebooks handed out before
-    skip = ("course.__main__", "course.cli", "course.exercises", "course.grading")
+    names = ["course"]
+    skip = ("course.__main__", "course.cli", "course.grading")
     for info in pkgutil.walk_packages(course.__path__, "course."):
         if not any(info.name == s or info.name.startswith(s + ".") for s in skip):
             names.append(info.name)
