@@ -289,9 +289,7 @@ def _import_graph() -> dict[str, set[str]]:
                     for a in node.names:
                         full = f"{base}.{a.name}"
                         targets.add(full if full in modules else owner(base))
-        graph[name] = {
-            t for t in targets if t and t != name
-        }
+        graph[name] = {t for t in targets if t and t != name}
     return graph
 
 

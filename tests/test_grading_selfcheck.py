@@ -357,8 +357,6 @@ def test_seccomp_blocks_fork_but_not_threads():
     assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
 
 
-
-
 def test_public_spec_round_trips_the_committed_checks_json():
     from course.grading.vocabulary import PublicSpec
 
