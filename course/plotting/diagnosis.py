@@ -15,10 +15,12 @@ import numpy as np
 
 from . import _checks, _mark_alarms, axes_or_new
 from .style import (
+    LAW,
     REJECT,
     legend_outside,
     monte_carlo_dots,
     pair,
+    sample_histogram,
     shade_tail,
     styled,
     theory_grid,
@@ -428,11 +430,11 @@ def plot_null_histogram(
     ax = axes_or_new(ax)
     hi = max(np.quantile(samples, 0.999), critical_value * 1.1)
     lo = min(samples.min(), 0.0)
-    ax.hist(samples, bins=bins, range=(lo, hi), density=True, color=pair("NF").light, label=label)
+    sample_histogram(ax, samples, bins=bins, range=(lo, hi), label=label)
     grid = theory_grid(lo, hi)
     density = null.pdf(grid)
     shade_tail(ax, grid, density, upper=critical_value, label="critical region")
-    ax.plot(grid, density, color=pair(0).dark, lw=2, label=null_label)
+    ax.plot(grid, density, color=LAW, lw=2, label=null_label)
     threshold_line(ax, critical_value, label=f"threshold {critical_value:.4g}")
     ax.set_xlabel(xlabel)
     ax.set_ylabel("density")

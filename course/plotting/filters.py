@@ -13,11 +13,13 @@ import numpy as np
 
 from . import _checks, _mark_alarms, axes_or_new
 from .style import (
+    LAW,
     REJECT,
     Pair,
     legend_outside,
     mark_time,
     pair,
+    sample_histogram,
     styled,
     theory_grid,
     threshold_line,
@@ -424,9 +426,9 @@ def plot_normalized_histogram(z, ax=None, bins=60, label="normalised innovations
     z = z[np.isfinite(z)]
     bins = _checks.positive_int("bins", bins)
     ax = axes_or_new(ax)
-    ax.hist(z, bins=bins, range=(-4.5, 4.5), density=True, color=pair(0).light, label=label)
+    sample_histogram(ax, z, bins=bins, range=(-4.5, 4.5), label=label)
     grid = theory_grid(-4.5, 4.5)
-    ax.plot(grid, stats.norm.pdf(grid), color=pair(0).dark, lw=1.5, label=r"$N(0, 1)$ density")
+    ax.plot(grid, stats.norm.pdf(grid), color=LAW, lw=2, label=r"$N(0, 1)$ density")
     ax.set_xlabel(r"normalised innovation $\varepsilon_t / \sqrt{S_t}$")
     ax.set_ylabel("density")
     legend_outside(ax)

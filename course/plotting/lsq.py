@@ -14,10 +14,12 @@ import numpy as np
 
 from . import _checks, axes_or_new
 from .style import (
+    LAW,
     REJECT,
     THEORY_POINTS,
     legend_outside,
     pair,
+    sample_histogram,
     shade_tail,
     styled,
     theory_grid,
@@ -549,26 +551,21 @@ def plot_chi2_histogram(T, dof, ax=None, alpha=None, bins=40, noncentrality=None
     upper = max(float(np.quantile(T, 0.995)), stats.chi2.isf(0.002, dof))
     if lam is not None:
         upper = max(upper, float(stats.ncx2.isf(0.005, dof, lam)) if lam > 0 else upper)
-    ax.hist(
-        T,
-        bins=bins,
-        range=(0, upper),
-        density=True,
-        color=pair(0).light,
-        label=f"simulated $T$ ({T.size} records)",
-    )
+    sample_histogram(ax, T, bins=bins, range=(0, upper), label=f"simulated $T$ ({T.size} records)")
     grid = theory_grid(0.0, upper, THEORY_POINTS + 1)[1:]  # the density may be infinite at 0
     density = stats.chi2.pdf(grid, dof)
     if alpha is not None:
         k = stats.chi2.isf(alpha, dof)
         shade_tail(ax, grid, density, upper=k, label=rf"critical region, $\alpha$ = {alpha:g}")
         threshold_line(ax, k, label=rf"$\chi^2_{{\alpha}}({dof})$ = {k:.4g}")
-    ax.plot(grid, density, color=pair(0).dark, label=rf"$\chi^2({dof})$ density")
+    ax.plot(grid, density, color=LAW, lw=2, label=rf"$\chi^2({dof})$ density")
     if lam is not None:
         ax.plot(
             grid,
             stats.ncx2.pdf(grid, dof, lam) if lam > 0 else density,
             color=pair(1).dark,
+            ls=pair(1).ls,
+            lw=2,
             label=rf"$\chi^2({dof}, \lambda = {lam:.3g})$ under the alternative",
         )
     ax.set_xlabel(r"$T = \hat e^{T} Q_{yy}^{-1} \hat e$")

@@ -15,9 +15,11 @@ import numpy as np
 
 from . import _checks, axes_or_new
 from .style import (
+    LAW,
     legend_outside,
     monte_carlo_dots,
     pair,
+    sample_histogram,
     shade_tail,
     styled,
     theory_grid,
@@ -194,13 +196,7 @@ def plot_cross_record_section(residuals, j, moments=None, output=0, ax=None, bin
         raise ValueError(f"j must be a time index 0..{r.shape[1] - 1}, got {j!r}")
     section = r[:, j]
     ax = axes_or_new(ax)
-    ax.hist(
-        section,
-        bins=bins,
-        density=True,
-        color=pair(1).light,
-        label=rf"$\varphi_{{{j}}}$: {section.size} records",
-    )
+    sample_histogram(ax, section, bins=bins, label=rf"$\varphi_{{{j}}}$: {section.size} records")
     if moments is not None:
         mean = float(moments.mean[j, output])
         sd = float(np.sqrt(moments.cov[j, output, output]))
@@ -208,7 +204,7 @@ def plot_cross_record_section(residuals, j, moments=None, output=0, ax=None, bin
         ax.plot(
             grid,
             stats.norm.pdf(grid, mean, sd),
-            color=pair(0).dark,
+            color=LAW,
             lw=2,
             label=rf"predicted $N(m_{{{j}}}, P_{{{j}}})$",
         )
@@ -305,7 +301,7 @@ def plot_law_against_sample(
     if not hasattr(law, "pdf"):
         raise ValueError("law must be a distribution with a pdf method")
     ax = axes_or_new(ax)
-    heights, _, _ = ax.hist(sample, bins=bins, density=True, color=pair("NF").light, label=label)
+    heights, _, _ = sample_histogram(ax, sample, bins=bins, label=label)
     if grid is None:
         lo, hi = np.quantile(sample, [0.0005, 0.9995])
         grid = theory_grid(lo, hi, 400)
@@ -319,7 +315,7 @@ def plot_law_against_sample(
         shade_tail(ax, grid, density, lower=lower, upper=upper, label="critical region")
         for value in values:
             threshold_line(ax, value)
-    ax.plot(grid, density, color=pair(0).dark, lw=2, label=law_label)
+    ax.plot(grid, density, color=LAW, lw=2, label=law_label)
     # a density with an integrable pole (chi2 with one degree of freedom)
     # must not flatten the histogram
     ax.set_ylim(0, 1.25 * np.max(heights))

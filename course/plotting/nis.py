@@ -12,7 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 from . import _checks, axes_or_new
-from .style import REJECT, legend_outside, monte_carlo_dots, pair, styled, theory_grid
+from .style import (
+    LAW,
+    REJECT,
+    legend_outside,
+    monte_carlo_dots,
+    pair,
+    sample_histogram,
+    styled,
+    theory_grid,
+)
 
 __all__ = [
     "plot_cdf_errors",
@@ -55,7 +64,7 @@ def plot_sample_against_law(
     if not laws or not all(hasattr(one, "pdf") for one in laws):
         raise ValueError("law must be a distribution with a pdf method, or a list of them")
     ax = axes_or_new(ax)
-    ax.hist(sample, bins=bins, density=True, color=pair(0).light, label=label)
+    sample_histogram(ax, sample, bins=bins, label=label)
     if grid is None:
         lo, hi = np.quantile(sample, [0.0005, 0.9995])
         pad = 0.05 * (hi - lo)
@@ -64,7 +73,8 @@ def plot_sample_against_law(
         grid = _checks.array("grid", grid, min_size=2, what="grid values")
     names = law_label if isinstance(law_label, (list, tuple)) else [law_label] * len(laws)
     for index, (one, name) in enumerate(zip(laws, names)):
-        ax.plot(grid, one.pdf(grid), color=pair(index).dark, lw=2, label=name)
+        colour = LAW if index == 0 else pair(index).dark
+        ax.plot(grid, one.pdf(grid), color=colour, ls=pair(index).ls, lw=2, label=name)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("density")
     if label or law_label:
@@ -105,14 +115,12 @@ def plot_extreme_laws(law_min, law_max, samples=None, ax=None, bins=80, threshol
     grid = theory_grid(lo, hi, 500)
     low, high = pair(0), pair(1)
     if samples is not None:
-        for sample, colours, name in zip(samples, (low, high), ("min", "max")):
-            ax.hist(
+        for sample, name in zip(samples, ("min", "max")):
+            sample_histogram(
+                ax,
                 sample,
                 bins=bins,
                 range=(lo, hi),
-                density=True,
-                color=colours.light,
-                alpha=0.8,
                 label=rf"$\lambda_{{\{name}}}$, {sample.size} draws",
             )
     pdf_min, pdf_max = law_min.pdf(grid), law_max.pdf(grid)

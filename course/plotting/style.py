@@ -3,10 +3,16 @@
 Every figure of the course is drawn by :mod:`course.plotting`, and every
 plotting function draws in this style:
 
-- **paired colours**: each fault mode, filter or test owns a pair (a dark
-  shade for lines, theory and estimates; a light shade for bands, histograms
-  and shaded regions), so the same thing has the same colour in every
-  notebook (``pair("F1")``, ``pair(0)``);
+- **paired colours, safe for colour-blind readers**: each fault mode, filter
+  or test owns a pair from the Okabe–Ito palette (a dark shade for lines,
+  theory and estimates; a light shade for bands and shaded regions), so the
+  same thing has the same colour in every notebook (``pair("F1")``,
+  ``pair(0)``); each pair also owns a marker and a line style
+  (``pair(k).marker``, ``pair(k).ls``), so curves told apart by colour are
+  told apart without it too;
+- **one look per kind of plot**: a simulated sample is a grey histogram
+  (:data:`SAMPLE`, :func:`sample_histogram`) and the law it is compared
+  with a dark line (:data:`LAW`), in every notebook;
 - **shaded α tails**: the critical region of a test is filled in the
   "reject" colour (:func:`shade_tail`), its threshold drawn dashed black;
 - **legends outside the data** (:func:`legend_outside`), so the curves the
@@ -31,8 +37,11 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = [
+    "LAW",
+    "MAX_WIDTH",
     "RC_PARAMS",
     "REJECT",
+    "SAMPLE",
     "THEORY_POINTS",
     "THRESHOLD",
     "Pair",
@@ -41,6 +50,7 @@ __all__ = [
     "mark_time",
     "monte_carlo_dots",
     "pair",
+    "sample_histogram",
     "shade_tail",
     "styled",
     "theory_grid",
@@ -53,29 +63,42 @@ THEORY_POINTS = 241
 
 
 class Pair(NamedTuple):
-    """A colour pair: ``dark`` for lines and markers, ``light`` for fills."""
+    """A colour pair: ``dark`` for lines and markers, ``light`` for fills.
+
+    ``marker`` and ``ls`` (line style) go with the colour, so that two curves
+    differ in shape as well as in hue.
+    """
 
     dark: str
     light: str
+    marker: str = "o"
+    ls: str | tuple = "-"
 
 
-# ColorBrewer "Paired" (light, dark) reordered so that the first four pairs
-# are the ones a reader tells apart most easily; grey is reserved for the
-# fault-free mode and for reference material.
+# The Okabe–Ito palette (Okabe & Ito 2008), distinguishable under the common
+# colour-vision deficiencies; each dark shade is paired with a light tint of
+# itself (35 % colour on white) for bands and fills. Vermillion is kept for
+# rejections and grey for the fault-free mode and reference material.
 _PAIRS = (
-    Pair("#1f78b4", "#a6cee3"),  # blue
-    Pair("#ff7f00", "#fdbf6f"),  # orange
-    Pair("#33a02c", "#b2df8a"),  # green
-    Pair("#6a3d9a", "#cab2d6"),  # purple
-    Pair("#b15928", "#f3c9a5"),  # brown
-    Pair("#e7298a", "#f4b6d6"),  # magenta
+    Pair("#0072b2", "#a6cbe0", "o", "-"),  # blue
+    Pair("#e69f00", "#f7dca6", "s", "--"),  # orange
+    Pair("#009e73", "#a6dccd", "^", "-."),  # bluish green
+    Pair("#cc79a7", "#edd1e1", "D", ":"),  # reddish purple
+    Pair("#56b4e9", "#cce7f7", "v", (0, (5, 1.5, 1, 1.5, 1, 1.5))),  # sky blue
+    Pair("#000000", "#a6a6a6", "P", (0, (8, 2))),  # black
 )
-_GREY = Pair("#4d4d4d", "#c7c7c7")
+_GREY = Pair("#4d4d4d", "#c7c7c7", "o", "-")
 
-#: The colour of rejections: critical regions, alarms, rejected observations.
-REJECT = Pair("#d7191c", "#f7b5b5")
+#: The colour of rejections: critical regions, alarms, rejected observations (vermillion).
+REJECT = Pair("#d55e00", "#f2c4a6", "x", "-")
 #: Thresholds and critical values are dashed black lines.
 THRESHOLD = "#000000"
+#: Histograms of simulated samples, in every notebook: light grey bars.
+SAMPLE = _GREY
+#: A theoretical law (a density drawn over a sample): the blue pair's dark shade.
+LAW = "#0072b2"
+#: The widest figure of the course, in inches: it fits the website's text column.
+MAX_WIDTH = 8.5
 
 _NAMED = {"NF": _GREY, "none": _GREY, "reference": _GREY, "data": _GREY}
 
@@ -131,7 +154,7 @@ RC_PARAMS = {
     "legend.fontsize": "small",
     "lines.linewidth": 1.5,
     "lines.markersize": 4.5,
-    "font.size": 10,
+    "font.size": 11,
     "image.cmap": "viridis",
     "mathtext.fontset": "dejavusans",
     "savefig.bbox": "tight",
@@ -236,6 +259,31 @@ def shade_tail(ax, x, density, lower=None, upper=None, label: str | None = "crit
         first = label if (k == 0 or lower is None) else None
         ax.fill_between(xs, ys, color=REJECT.light, lw=0, label=first, zorder=1)
     return ax
+
+
+def sample_histogram(ax, sample, bins=40, label: str | None = "simulated", **kwargs):
+    """A simulated sample as a density histogram in the course's one sample colour.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    sample : array_like
+        The simulated values.
+    bins : int or sequence
+        Passed to ``ax.hist``.
+    label : str or None
+        Legend text.
+    **kwargs
+        Passed to ``ax.hist`` (``range``, ...).
+
+    Returns
+    -------
+    tuple
+        What ``ax.hist`` returns (heights, bin edges, patches).
+    """
+    options = dict(density=True, color=SAMPLE.light, edgecolor="white", linewidth=0.3)
+    options.update(kwargs)
+    return ax.hist(np.asarray(sample, dtype=float), bins=bins, label=label, **options)
 
 
 def threshold_line(ax, value, label: str | None = None, orientation: str = "vertical"):
