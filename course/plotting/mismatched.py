@@ -220,8 +220,9 @@ def plot_cross_record_section(residuals, j, moments=None, output=0, ax=None, bin
 def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True, max_lag=None):
     """Image of ``C(j, k)`` (or the correlation coefficients) over all pairs of times.
 
-    The diagonal (the variances, or correlation one) is left blank so that
-    the colour scale shows the off-diagonal structure.
+    The diagonal (the variances, or correlation one) is left out of the
+    colour scale, drawn in neutral grey (white would read as "no
+    correlation"), so that the scale shows the off-diagonal structure.
 
     Parameters
     ----------
@@ -231,7 +232,7 @@ def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True, max
     correlation : bool
         Show correlation coefficients instead of covariances.
     max_lag : int, optional
-        Blank the entries with ``|j - k| > max_lag``.
+        Leave out (grey) the entries with ``|j - k| > max_lag``.
 
     Returns
     -------
@@ -254,11 +255,12 @@ def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True, max
     limit = np.nanmax(np.abs(C)) if np.any(np.isfinite(C)) else 1.0
     import matplotlib
 
-    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="white")
+    # the diagonal (a correlation of one) is drawn grey: white would read as zero correlation
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.55")
     image = ax.imshow(
         C, cmap=cmap, vmin=-limit, vmax=limit, origin="lower", interpolation="nearest"
     )
-    ax.figure.colorbar(image, ax=ax, shrink=0.85, label=label + " (diagonal blank)")
+    ax.figure.colorbar(image, ax=ax, shrink=0.85, label=label + " (diagonal grey)")
     ax.grid(False)
     ax.set_xlabel("time $k$")
     ax.set_ylabel("time $j$")
@@ -387,7 +389,16 @@ def plot_power_curves(M_values, powers, alpha=None, ax=None, simulated=None, n_e
         exact = _checks.array(f"powers[{label!r}]", given, what="power values")
         _checks.same_length(f"powers[{label!r}]", exact, "M_values", M_values)
         colours = pair(_TESTS.get(label, index))
-        ax.plot(M_values, exact, "o-", ms=3, color=colours.dark, label=f"{label} (exact)")
+        ax.plot(
+            M_values,
+            exact,
+            marker=colours.marker,
+            ls=colours.ls,
+            ms=4,
+            mfc="none",
+            color=colours.dark,
+            label=f"{label} (exact)",
+        )
     for index, (label, points) in enumerate((simulated or {}).items()):
         Ms, given_rates = zip(*points)
         rates = _checks.array(f"simulated[{label!r}]", given_rates, what="rejection rates")
