@@ -328,7 +328,7 @@ def plot_law_against_sample(
 
 
 @styled
-def plot_imhof_integrands(u, real_axis, contour, ax=None):
+def plot_imhof_integrands(u, real_axis, contour, ax=None, log=False):
     """Imhof's real-axis integrand next to the integrand on the deformed contour.
 
     Parameters
@@ -337,6 +337,10 @@ def plot_imhof_integrands(u, real_axis, contour, ax=None):
         Integration variable.
     real_axis, contour : (n,) array_like
         The two integrands at ``u``.
+    log : bool
+        Draw their absolute values on logarithmic axes, which shows how
+        fast each decays (a slow power law against a double exponential);
+        exact zeros are left out.
 
     Returns
     -------
@@ -347,13 +351,29 @@ def plot_imhof_integrands(u, real_axis, contour, ax=None):
     contour = _checks.array("contour", contour, min_size=2, what="integrand values")
     _checks.same_length("u", u, "real_axis", real_axis)
     _checks.same_length("u", u, "contour", contour)
+    log = _checks.flag("log", log)
     ax = axes_or_new(ax)
-    ax.plot(u, real_axis, color=pair(1).dark, lw=1, label="Imhof's integrand on the real axis")
-    ax.plot(u, contour, color=pair(0).dark, lw=2, label="integrand on the saddle-point hyperbola")
-    ax.axhline(0.0, color="k", lw=0.5)
+    real_style, contour_style = pair(1), pair(0)
+    curves = (
+        (real_axis, real_style, 1, "Imhof's integrand on the real axis"),
+        (contour, contour_style, 2, "integrand on the saddle-point hyperbola"),
+    )
+    for values, colours, width, label in curves:
+        if log:
+            shown = np.abs(values)
+            keep = shown > 0
+            ax.plot(u[keep], shown[keep], color=colours.dark, ls=colours.ls, lw=width, label=label)
+        else:
+            ax.plot(u, values, color=colours.dark, ls=colours.ls, lw=width, label=label)
     ax.set_xlabel("integration variable $u$")
-    # one axis for two different integrands: name the quantity, and Imhof's form
-    ax.set_ylabel(r"integrand at $u$ (Imhof: $\sin\theta(u)\,/\,(u\,\rho(u))$)")
+    if log:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylabel(r"|integrand| at $u$ (log scale)")
+    else:
+        ax.axhline(0.0, color="k", lw=0.5)
+        # one axis for two different integrands: name the quantity, and Imhof's form
+        ax.set_ylabel(r"integrand at $u$ (Imhof: $\sin\theta(u)\,/\,(u\,\rho(u))$)")
     legend_outside(ax, where="below")
     return ax
 
