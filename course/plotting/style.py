@@ -298,12 +298,16 @@ def mark_time(ax, t, label: str | None = "fault appears"):
 
 
 def monte_carlo_dots(ax, x, y, color_pair: Pair, label: str | None = None, yerr=None):
-    """Monte Carlo results as dots (with optional error bars) on their coarse grid."""
+    """Monte Carlo results as dots (with optional error bars) on their coarse grid.
+
+    The marker is the colour pair's own (``color_pair.marker``), so two series
+    differ in shape as well as in colour.
+    """
     if yerr is None:
         return ax.plot(
             x,
             y,
-            "o",
+            color_pair.marker,
             ms=4.5,
             mfc=color_pair.light,
             mec=color_pair.dark,
@@ -316,7 +320,7 @@ def monte_carlo_dots(ax, x, y, color_pair: Pair, label: str | None = None, yerr=
         x,
         y,
         yerr=yerr,
-        fmt="o",
+        fmt=color_pair.marker,
         ms=4.5,
         mfc=color_pair.light,
         mec=color_pair.dark,
