@@ -19,6 +19,7 @@ from .style import (
     legend_outside,
     mark_time,
     pair,
+    plain_log_axis,
     sample_histogram,
     styled,
     theory_grid,
@@ -176,7 +177,7 @@ def plot_estimate(
         lw=0,
         label=f"{label} ± {nsigma:g} std",
     )
-    ax.plot(t, estimate, color=colours.dark, lw=1.3, label=label)
+    ax.plot(t, estimate, color=colours.dark, ls=colours.ls, lw=1.3, label=label)
     if truth is not None:
         ax.plot(t, truth, color="k", lw=1, ls="--", label=truth_label)
     _fault(ax, fault_time)
@@ -239,7 +240,7 @@ def plot_residual(
             lw=0,
             label=rf"$\pm$ {nsigma:g}$\sqrt{{S_t}}$",
         )
-    ax.plot(t, residual, color=colours.dark, lw=1, label=label)
+    ax.plot(t, residual, color=colours.dark, ls=colours.ls, lw=1, label=label)
     ax.axhline(0.0, color="k", lw=0.5)
     _fault(ax, fault_time)
     ax.set_xlabel(xlabel)
@@ -294,7 +295,7 @@ def plot_test_statistic(
     _mark_alarms(ax, t, statistic, threshold, "o", ms=3)
     _fault(ax, fault_time)
     if log:
-        ax.set_yscale("log")
+        plain_log_axis(ax)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     legend_outside(ax)
@@ -349,7 +350,14 @@ def plot_alarm_rate(
     with np.errstate(invalid="ignore"):
         rate = np.mean(statistic > threshold, axis=0)
     rate[np.all(np.isnan(statistic), axis=0)] = np.nan
-    ax.plot(t, rate, lw=1.3, color=colours.dark, label=label or "fraction of runs in alarm")
+    ax.plot(
+        t,
+        rate,
+        lw=1.3,
+        color=colours.dark,
+        ls=colours.ls,
+        label=label or "fraction of runs in alarm",
+    )
     if alpha is not None:
         threshold_line(ax, alpha, label=rf"design $\alpha$ = {alpha:g}", orientation="horizontal")
     _fault(ax, fault_time)

@@ -50,6 +50,7 @@ __all__ = [
     "mark_time",
     "monte_carlo_dots",
     "pair",
+    "plain_log_axis",
     "sample_histogram",
     "shade_tail",
     "styled",
@@ -284,6 +285,29 @@ def sample_histogram(ax, sample, bins=40, label: str | None = "simulated", **kwa
     options = dict(density=True, color=SAMPLE.light, edgecolor="white", linewidth=0.3)
     options.update(kwargs)
     return ax.hist(np.asarray(sample, dtype=float), bins=bins, label=label, **options)
+
+
+def plain_log_axis(ax, axis: str = "y"):
+    """A logarithmic axis labelled with plain numbers, one kind of label only.
+
+    Matplotlib's default labels a short log axis with a mix of ``10^k`` and
+    ``2 x 10^k`` in two sizes; this keeps plain ``%g`` labels (``0.001``,
+    ``0.01`` ...) and no minor labels: at 1, 2 and 5 times each power of ten
+    when the data span at most two and a half decades, at the powers of ten
+    otherwise. Call it after the data are drawn.
+    """
+    from matplotlib import ticker
+
+    if axis not in ("x", "y"):
+        raise ValueError(f"axis must be 'x' or 'y', got {axis!r}")
+    target = ax.yaxis if axis == "y" else ax.xaxis
+    (ax.set_yscale if axis == "y" else ax.set_xscale)("log")
+    lo, hi = ax.get_ylim() if axis == "y" else ax.get_xlim()
+    few = lo > 0 and np.log10(hi / lo) <= 2.5
+    target.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0) if few else (1.0,)))
+    target.set_major_formatter(ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+    target.set_minor_formatter(ticker.NullFormatter())
+    return ax
 
 
 def threshold_line(ax, value, label: str | None = None, orientation: str = "vertical"):
