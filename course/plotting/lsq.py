@@ -277,7 +277,14 @@ def plot_projection_geometry(A, y, ax=None, labels=("$a_1$", "$a_2$")):
     origin = np.zeros(3)
     for k in range(2):
         arrow(origin, a[:, k], _FIT.dark, None, lw=1.0)
-        ax.text(*(1.08 * a[:, k]), labels[k], color=_FIT.dark)
+        # column labels beyond the arrow tips and just under the plane, clear of y and ŷ
+        ax.text(
+            *(1.18 * a[:, k] - [0, 0, 0.1 * reach]),
+            labels[k],
+            color=_FIT.dark,
+            ha="center",
+            va="top",
+        )
     arrow(origin, yc, _DATA.dark, "observations $y$")
     arrow(origin, y_hat, _FIT.dark, r"$\hat y = A\hat x$ in range($A$)")
     arrow(y_hat, e_hat, REJECT.dark, r"$\hat e = y - \hat y \perp$ range($A$)")
@@ -288,9 +295,9 @@ def plot_projection_geometry(A, y, ax=None, labels=("$a_1$", "$a_2$")):
         d2 = e_hat / np.linalg.norm(e_hat) * size
         corner = np.array([y_hat + d1, y_hat + d1 + d2, y_hat + d2])
         ax.plot(*corner.T, color="k", lw=0.8)
-    ax.text(*(yc * 1.05), "$y$", color=_DATA.dark)
-    ax.text(*(y_hat * 1.08), r"$\hat y$", color=_FIT.dark)
-    ax.text(*(y_hat + 0.5 * e_hat), r"  $\hat e$", color=REJECT.dark)
+    ax.text(*(yc + [0, 0, 0.06 * reach]), "$y$", color=_DATA.dark, ha="center", va="bottom")
+    ax.text(*(y_hat - [0, 0, 0.08 * reach]), r"$\hat y$", color=_FIT.dark, ha="center", va="top")
+    ax.text(*(y_hat + 0.5 * e_hat), r"  $\hat e$", color=REJECT.dark, ha="left", va="center")
     ax.set_xlim(-reach, reach)
     ax.set_ylim(-reach, reach)
     ax.set_zlim(-0.2 * reach, max(yc[2], 0.5 * reach))
@@ -499,7 +506,27 @@ def plot_sum_of_squares(
         if minimum is not None:
             value = sum_of_squares_grid(A, y, minimum[:1], minimum[1:], Qyy)[0, 0]
             zmin = np.log10(value) if log10 else value
-            ax.scatter([minimum[0]], [minimum[1]], [zmin], color=REJECT.dark, s=30)
+            # a 3-D marker at the bottom of the bowl is hidden by the surface: draw a stem from
+            # the minimum up above the surface, with the marker at both ends
+            top = float(np.nanmax(Z))
+            ax.plot(
+                [minimum[0]] * 2,
+                [minimum[1]] * 2,
+                [zmin, top],
+                color=REJECT.dark,
+                lw=1.5,
+                zorder=10,
+            )
+            ax.scatter(
+                [minimum[0]] * 2,
+                [minimum[1]] * 2,
+                [zmin, top],
+                color=REJECT.dark,
+                s=30,
+                depthshade=False,
+                zorder=11,
+            )
+            ax.text(minimum[0], minimum[1], top, "  minimum", color=REJECT.dark, zorder=12)
     else:
         ax = axes_or_new(ax)
         mesh = ax.pcolormesh(X1, X2, Z, shading="auto", cmap="viridis")
