@@ -586,8 +586,10 @@ def plot_isolation(result, ax=None, cmap: str = "Reds"):
     colours = matplotlib.colormaps[cmap].with_extremes(bad="white")
     ax = axes_or_new(ax)
     image = ax.imshow(table, vmin=0, vmax=top, cmap=colours)
-    for i in np.flatnonzero(undefined):
-        ax.add_patch(Rectangle((table.shape[1] - 1.5, i - 0.5), 1, 1, color="0.85", lw=0, zorder=1))
+    for row in np.flatnonzero(undefined).tolist():
+        ax.add_patch(
+            Rectangle((table.shape[1] - 1.5, row - 0.5), 1, 1, color="0.85", lw=0, zorder=1)
+        )
     ax.set_xticks([*range(len(modes)), table.shape[1] - 1], [*modes, "exact"])
     ax.set_yticks(range(len(simulated)), simulated)
     shown = [
