@@ -55,7 +55,11 @@ __all__ = [
 
 
 def _axes(axes, n, **kwargs):
-    """``n`` axes: the given ones, or a new figure of ``n`` panels side by side."""
+    """``n`` axes: the given ones, or a new figure of ``n`` panels one above the other.
+
+    Stacked, not side by side, so that the figure fits the website's text column
+    (at most ``style.MAX_WIDTH`` inches wide) and stays legible on a phone.
+    """
     if axes is not None:
         axes = list(np.atleast_1d(axes))
         if len(axes) != n:
@@ -66,7 +70,7 @@ def _axes(axes, n, **kwargs):
     from .plotting.style import context
 
     with context():
-        _, new = plt.subplots(1, n, figsize=(6.4 * n, 3.8), **kwargs)
+        _, new = plt.subplots(n, 1, figsize=(7.0, 3.4 * n), **kwargs)
     return list(np.atleast_1d(new))
 
 

@@ -81,7 +81,7 @@ TABLE = {
         true_model=model(TRUE),
         filter_model=model(FILT),
         N=count(N),
-        misprint=choice("H_tilde_sign"),
+        misprint=choice("Q1_block"),
     ),
     "simulate_records": case(
         mm.simulate_records,

@@ -221,6 +221,16 @@ def test_printed_gain_is_not_conformable_for_a_reduced_filter():
         residual_moments_as_printed(two_state_system(), reduced_filter(), 5, "A99")
 
 
+def test_a15_is_not_a_misprint():
+    """The paper prints (A15) as [H_j^0 - H_j^1]: in its block notation (blocks separated by
+    spaces, as in (A14)) that is [H^0, -H^1], the correct matrix; a plus-sign "as printed"
+    variant put a formula in the paper's mouth that it never printed."""
+    assert "H_tilde_sign" not in APPENDIX_MISPRINTS
+    assert not any(eq == "(A15)" for eq, _, _ in APPENDIX_MISPRINTS.values())
+    with pytest.raises(ValueError, match="misprint must be one of"):
+        residual_moments_as_printed(two_state_system(), reduced_filter(), 5, "H_tilde_sign")
+
+
 # ---------------------------------------------------------------------------
 # statistics, their quadratic-form matrices and laws
 # ---------------------------------------------------------------------------

@@ -200,3 +200,185 @@ def test_the_negative_zero_pattern():
     assert NEGATIVE_ZERO.search("x_hat = [-0.0, 1.0]") and NEGATIVE_ZERO.search("shift -0 samples")
     for fine in ("-0.0542", "-0.003", "e_hat = -0.5", "t - 0.05", "10-0.0", "1e-05", "-0.07"):
         assert not NEGATIVE_ZERO.search(fine), fine
+
+
+# ---------------------------------------------------------------------------
+# prose that quotes a number reads it from the output above it
+# ---------------------------------------------------------------------------
+NUMBER = r"(\d+(?:\.\d+)?)"
+# (notebook, a sentence of the prose with its numbers as groups, the printed line with the same
+# numbers as groups, the factor from printed to quoted (100 for a rate quoted in per cent)).
+# The numbers are compared as sorted lists, each within the rounding of both sides.
+QUOTED_NUMBERS = [
+    (
+        "01_least_squares_validation",
+        rf"the MDBs are {NUMBER}σ to {NUMBER}σ at the same",
+        rf"MDB \[m\] \(alpha=5%,\s+power=80%\) = \[{NUMBER}, {NUMBER},",
+        1,
+    ),
+    (
+        "01_least_squares_validation",
+        rf"and {NUMBER}σ to {NUMBER}σ at Baarda's 0\.1",
+        rf"MDB \[m\] \(alpha=0\.1%, power=80%\) = \[{NUMBER}, {NUMBER},",
+        1,
+    ),
+    (
+        "03_parameter_estimation_and_likelihood",
+        rf"put NF first only {NUMBER} % of the time",
+        rf"0\.003 \|\s+{NUMBER} \|",
+        100,
+    ),
+    (
+        "03_parameter_estimation_and_likelihood",
+        rf"ranked first in only {NUMBER} % of the records",
+        rf"\n\s+30 \|\s+\S+ \| {NUMBER}",
+        100,
+    ),
+    (
+        "04_ekf_residual_generators",
+        rf"band at {NUMBER} of the {NUMBER} samples",
+        rf"band at {NUMBER} of {NUMBER} samples",
+        1,
+    ),
+    (
+        "04_ekf_residual_generators",
+        rf"the fault adds {NUMBER} standard deviations\s+to the normalised innovation, then {NUMBER} "
+        rf"and {NUMBER}",
+        rf"t = 150, 151, 152: \[{NUMBER} {NUMBER} {NUMBER}\]",
+        1,
+    ),
+    (
+        "04_ekf_residual_generators",
+        rf"\({NUMBER} alarms where",
+        rf"alarms at the last sample: {NUMBER} of",
+        1,
+    ),
+    (
+        "05_nis_matrix_and_wishart",
+        rf"at or above the NIS at {NUMBER} of the {NUMBER} window lengths",
+        rf"at or above the NIS at {NUMBER} of {NUMBER} window lengths",
+        1,
+    ),
+    (
+        "05_nis_matrix_and_wishart",
+        rf"rises from {NUMBER} % at\s+\$K=2\$",
+        rf"NIS rate at K = 2: {NUMBER},",
+        100,
+    ),
+    (
+        "05_nis_matrix_and_wishart",
+        rf"NIS matrix are {NUMBER} and {NUMBER}\.",
+        rf"NIS-matrix eigenvalue test: statistic = \({NUMBER}, {NUMBER}\)",
+        1,
+    ),
+    (
+        "05_nis_matrix_and_wishart",
+        rf"below the lower\s+threshold {NUMBER}",
+        rf"NIS-matrix eigenvalue test: .* outside \[{NUMBER},",
+        1,
+    ),
+    (
+        "06_mismatched_filters",
+        rf"power climbs to {NUMBER} and\s+stays there",
+        rf"large-M limit of the mean test's power {NUMBER}",
+        1,
+    ),
+    (
+        "06_mismatched_filters",
+        rf"has power {NUMBER} at \$j = 5\$ and {NUMBER} at \$j = 29\$",
+        rf"against M2a at other times: j=5: {NUMBER} .* j=29: {NUMBER}",
+        1,
+    ),
+    (
+        "06_mismatched_filters",
+        rf"\(power\s+{NUMBER} at \$j = 3\$, {NUMBER} at \$j = 29\$\)",
+        rf"against M2b at other times: j=3: {NUMBER} .* j=29: {NUMBER}",
+        1,
+    ),
+]
+
+
+def _decimals(text):
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+def _agree(quoted, printed, factor):
+    """Quoted and printed numbers (strings) agree as sorted lists, within both roundings."""
+    if len(quoted) != len(printed):
+        return False
+    pairs = zip(sorted(quoted, key=float), sorted(printed, key=float))
+    return all(
+        abs(float(q) - factor * float(p))
+        <= 0.5 * 10.0 ** -_decimals(q) + factor * 0.5 * 10.0 ** -_decimals(p) + 1e-12
+        for q, p in pairs
+    )
+
+
+def _quoted_and_printed(nb, prose, printed):
+    """The numbers of the one markdown cell matching ``prose`` and of the output above it."""
+    hits = [
+        (i, m)
+        for i, c in enumerate(nb.cells)
+        if c.cell_type == "markdown"
+        for m in [re.search(prose, c.source, re.S)]
+        if m
+    ]
+    assert len(hits) == 1, f"the sentence {prose!r} must occur once, found {len(hits)}"
+    index, match = hits[0]
+    outputs = "\n".join(
+        text for c in nb.cells[:index] if c.cell_type == "code" for _, text in _outputs_text(c)
+    )
+    found = re.findall(printed, outputs)
+    assert found, f"no printed line {printed!r} above the sentence {prose!r}"
+    last = found[-1] if isinstance(found[-1], tuple) else (found[-1],)
+    return list(match.groups()), list(last)
+
+
+@pytest.mark.parametrize(
+    ("name", "prose", "printed", "factor"),
+    QUOTED_NUMBERS,
+    ids=[f"{name[:3]}{k}" for k, (name, *_) in enumerate(QUOTED_NUMBERS)],
+)
+def test_a_quoted_number_is_the_printed_number(name, prose, printed, factor):
+    nb = _read(ROOT / "notebooks" / f"{name}.ipynb")
+    quoted, shown = _quoted_and_printed(nb, prose, printed)
+    assert _agree(quoted, shown, factor), (
+        f"{name}: the prose says {quoted} where the output above prints {shown}"
+    )
+
+
+def test_the_quoted_number_check_can_fail():
+    assert _agree(["3.3", "5.1"], ["5.11", "3.35"], 1)
+    assert _agree(["30"], ["0.300"], 100)
+    assert not _agree(["4.9", "7.5"], ["5.11", "3.35"], 1)
+    assert not _agree(["0.128"], ["0.131"], 1)
+    assert not _agree(["1", "2"], ["1"], 1)
+
+
+# ---------------------------------------------------------------------------
+# figures that fit the website's text column
+# ---------------------------------------------------------------------------
+def _png_width(data):
+    import base64
+    import struct
+
+    raw = base64.b64decode(data)
+    assert raw[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+    return struct.unpack(">I", raw[16:20])[0]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_figures_are_at_most_the_course_width(path):
+    """A stored figure wider than style.MAX_WIDTH inches (at the style's dpi) is shrunk on the
+    website's 688-px column until its 11-pt labels are unreadable: stack or split the panels."""
+    from course.plotting.style import MAX_WIDTH, RC_PARAMS
+
+    limit = MAX_WIDTH * RC_PARAMS["figure.dpi"] + 2  # the tight bounding box may add a pixel
+    for index, cell in enumerate(_read(path).cells):
+        for out in cell.get("outputs", []):
+            data = out.get("data", {}).get("image/png")
+            if data:
+                width = _png_width(data)
+                assert width <= limit, (
+                    f"{path.name}, cell {index}: figure {width} px wide > {limit}"
+                )

@@ -479,3 +479,94 @@ def test_consistency_marks_points_outside_with_one_legend_entry():
     pn.plot_consistency(times, np.ones(5), (0.5, 2.0), ax=ax, label="inside")
     assert "outside the interval" not in [t.get_text() for t in ax.get_legend().get_texts()]
     plt.close("all")
+
+
+# ---------------------------------------------------------------------------
+# figures that read at the page (issue 29)
+# ---------------------------------------------------------------------------
+def test_the_palette_is_okabe_ito_with_a_marker_and_line_style_per_pair():
+    okabe_ito = {"#0072b2", "#e69f00", "#009e73", "#cc79a7", "#56b4e9", "#000000", "#d55e00"}
+    pairs = [style.pair(k) for k in range(6)]
+    assert {p.dark for p in pairs} | {style.REJECT.dark} <= okabe_ito
+    assert len({p.marker for p in pairs}) == 6 and len({str(p.ls) for p in pairs}) == 6
+
+
+def test_every_simulated_sample_histogram_has_the_one_sample_colour():
+    from scipy import stats
+
+    rng = np.random.default_rng(2)
+    draws = rng.chisquare(3, 400)
+    axes = [
+        pl.plot_chi2_histogram(draws, 3, alpha=0.05),
+        pd.plot_null_histogram(draws, stats.chi2(3), 7.8),
+        pf.plot_normalized_histogram(rng.standard_normal(400)),
+        pn.plot_sample_against_law(draws, stats.chi2(3)),
+        pm.plot_law_against_sample(draws, stats.chi2(3)),
+    ]
+    for ax in axes:
+        bars = [p for p in ax.patches if type(p).__name__ == "Rectangle" and p.get_height() > 0]
+        assert bars
+        assert {matplotlib.colors.to_hex(p.get_facecolor()) for p in bars} == {style.SAMPLE.light}
+    plt.close("all")
+
+
+def test_isolation_colour_scale_ends_at_the_largest_distance_and_shows_exact():
+    ax = pd.plot_isolation(_iso())
+    image = ax.get_images()[0]
+    assert image.get_clim()[1] == pytest.approx(0.2)  # the largest |P - ideal| is 0.2, not 1
+    assert [t.get_text() for t in ax.get_xticklabels()][-1] == "exact"
+    assert sum(t.get_text() == "1.00" for t in ax.texts) >= 3  # the exact column is written out
+    plt.close("all")
+
+
+def test_whitened_scatter_frame_is_set_by_the_ring_not_by_an_outlier():
+    z = np.random.default_rng(4).standard_normal((50, 2))
+    z[0] = (8.0, 0.0)
+    ax = pn.plot_whitened_scatter(z, thresholds=(0.55, 1.6))
+    assert ax.get_xlim()[1] < 5.0
+    labels = [str(line.get_label()) for line in ax.get_lines()]
+    assert any("1 outside the frame" in label for label in labels)
+    radius = np.sqrt(np.trace(z.T @ z / 50) / 2)
+    assert any(f"= {radius:.2f}" in label for label in labels)  # the dotted circle's own radius
+    plt.close("all")
+
+
+def test_imhof_integrands_on_log_axes_show_absolute_values():
+    u = np.geomspace(0.01, 10.0, 50)
+    ax = pm.plot_imhof_integrands(u, np.sin(u) / u, np.exp(-u), log=True)
+    assert ax.get_yscale() == "log" and ax.get_xscale() == "log"
+    assert all(np.all(line.get_ydata() > 0) for line in ax.get_lines())
+    plt.close("all")
+
+
+def test_plain_log_axis_has_one_kind_of_label():
+    _, ax = plt.subplots()
+    ax.plot([1, 2, 3], [0.002, 0.02, 0.05])
+    style.plain_log_axis(ax)
+    plt.gcf().canvas.draw()
+    labels = [t.get_text() for t in ax.get_yticklabels() if t.get_text()]
+    assert labels and all("times" not in s and "^" not in s for s in labels)
+    assert not [t.get_text() for t in ax.yaxis.get_minorticklabels() if t.get_text()]
+    plt.close("all")
+
+
+def test_cross_covariance_diagonal_is_not_white():
+    moments = mismatched.residual_moments(
+        kf.LinearModel(F=[[0.9]], H=[[1.0]], Q=[[0.5]], R=[[1.0]]),
+        kf.LinearModel(F=[[0.8]], H=[[1.0]], Q=[[1.0]], R=[[1.0]]),
+        6,
+    )
+    ax = pm.plot_cross_covariance(moments)
+    bad = ax.get_images()[0].get_cmap().get_bad()
+    assert matplotlib.colors.to_hex(bad) != "#ffffff"
+    plt.close("all")
+
+
+def test_power_curves_differ_in_marker_and_line_style():
+    ax = pm.plot_power_curves(
+        [3, 10, 30], {"mean test": [0.1, 0.2, 0.3], "covariance test": [0.1, 0.2, 0.3]}
+    )
+    lines = [line for line in ax.get_lines() if "(exact)" in str(line.get_label())]
+    assert len({line.get_marker() for line in lines}) == 2
+    assert len({str(line.get_linestyle()) for line in lines}) == 2
+    plt.close("all")

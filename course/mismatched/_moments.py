@@ -20,17 +20,14 @@ _readonly = readonly
 
 
 #: The misprints of Baram's appendix that :func:`residual_moments_as_printed`
-#: can put back: name -> (equation, as printed, as corrected).
+#: can put back: name -> (equation, as printed, as corrected). (A15), printed
+#: "[H_j^0 - H_j^1]", is not among them: in the paper's block notation (blocks
+#: separated by spaces, as in (A14)) it reads [H^0, -H^1], which is right.
 APPENDIX_MISPRINTS = {
     "gain_of_tested_model": (
         "(A17)-(A18)",
         "K^0 from a Riccati recursion of M^0 (mixing H^0 and H^1)",
         "K^1 from the Riccati recursion of the filter's own model M^1",
-    ),
-    "H_tilde_sign": (
-        "(A15)",
-        "H~ = [H^0  H^1] (the minus sign lost in '[H^0 - H^1]')",
-        "H~ = [H^0, -H^1]: r = H^0 x - H^1 xhat + v",
     ),
     "Q1_block": (
         "(A14), (A20)",
@@ -254,7 +251,7 @@ def residual_moments_as_printed(true_model, filter_model, N, misprint) -> Residu
     >>> from course.filters import LinearModel
     >>> true = LinearModel(F=[[0.9, 1.0], [0.0, 0.95]], H=[[1.0, 0.0]], Q=[[0.5, 0], [0, 0.02]], R=[[1.0]])
     >>> filt = LinearModel(F=[[0.95]], H=[[1.0]], Q=[[1.0]], R=[[1.2]])
-    >>> printed = residual_moments_as_printed(true, filt, 5, "H_tilde_sign")
+    >>> printed = residual_moments_as_printed(true, filt, 5, "Q1_block")
     >>> bool(printed.cov[-1, 0, 0] != residual_moments(true, filt, 5).cov[-1, 0, 0])
     True
     """
@@ -277,7 +274,7 @@ def _moments(m0, m1, N, misprint):
     else:
         K = riccati_gains(m1, N)
     na = n0 + n1
-    Ht = np.hstack([m0.H, (1.0 if misprint == "H_tilde_sign" else -1.0) * m1.H])
+    Ht = np.hstack([m0.H, -m1.H])
     x_mean = np.concatenate([m0.x0_mean, m1.x0_mean])
     Psi = np.zeros((na, na))
     Psi[:n0, :n0] = m0.x0_cov

@@ -15,10 +15,12 @@ import numpy as np
 
 from . import _checks, _mark_alarms, axes_or_new
 from .style import (
+    LAW,
     REJECT,
     legend_outside,
     monte_carlo_dots,
     pair,
+    sample_histogram,
     shade_tail,
     styled,
     theory_grid,
@@ -428,11 +430,11 @@ def plot_null_histogram(
     ax = axes_or_new(ax)
     hi = max(np.quantile(samples, 0.999), critical_value * 1.1)
     lo = min(samples.min(), 0.0)
-    ax.hist(samples, bins=bins, range=(lo, hi), density=True, color=pair("NF").light, label=label)
+    sample_histogram(ax, samples, bins=bins, range=(lo, hi), label=label)
     grid = theory_grid(lo, hi)
     density = null.pdf(grid)
     shade_tail(ax, grid, density, upper=critical_value, label="critical region")
-    ax.plot(grid, density, color=pair(0).dark, lw=2, label=null_label)
+    ax.plot(grid, density, color=LAW, lw=2, label=null_label)
     threshold_line(ax, critical_value, label=f"threshold {critical_value:.4g}")
     ax.set_xlabel(xlabel)
     ax.set_ylabel("density")
@@ -502,7 +504,7 @@ def plot_power_curves(
             xs,
             curve,
             color=_colour(colors.get(label), i).dark,
-            ls=(linestyles or {}).get(label, "-"),
+            ls=(linestyles or {}).get(label, _colour(colors.get(label), i).ls),
             label=f"{label} (theory)",
         )
     if simulated:
@@ -553,7 +555,12 @@ def plot_isolation(result, ax=None, cmap: str = "Reds"):
     (ideal 1 everywhere); with a fault the true mode should be the only
     diagnosis (1 on the diagonal, 0 elsewhere, NF included). Each cell is
     coloured by ``|P - ideal|``, so a white table is a perfect one and the
-    colour shows where isolation fails.
+    colour shows where isolation fails. The colour scale ends at the largest
+    distance in the table (rounded up to a multiple of 0.05), not at 1, so
+    that small failures are visible. A last column, after a gap, shows
+    ``result.exact`` (the diagnosis is exactly the true mode; ideal 1 for a
+    fault); for a mode no test reacts to it is zero by construction and is
+    left grey.
     """
     M = _checks.array("result.membership", result.membership, ndim=2, what="probabilities")
     modes = list(result.structure.modes)
@@ -566,21 +573,41 @@ def plot_isolation(result, ax=None, cmap: str = "Reds"):
             ideal[i, :] = 1.0  # a mode no test reacts to: nothing can be ruled out
         else:
             ideal[i, modes.index(mode)] = 1.0
+    exact = _checks.array("result.exact", result.exact, ndim=1, what="probabilities")
+    undefined = np.array([ideal[i].all() for i in range(M.shape[0])])  # NF: exact is 0 by design
+    # the table, a gap column, and the "exact" column
+    table = np.full((M.shape[0], M.shape[1] + 2), np.nan)
+    table[:, : M.shape[1]] = np.abs(M - ideal)
+    table[:, -1] = np.where(undefined, np.nan, 1.0 - exact)
+    top = max(0.05, float(np.ceil(np.nanmax(table) * 20) / 20))
+    import matplotlib
+    from matplotlib.patches import Rectangle
+
+    colours = matplotlib.colormaps[cmap].with_extremes(bad="white")
     ax = axes_or_new(ax)
-    image = ax.imshow(np.abs(M - ideal), vmin=0, vmax=1, cmap=cmap)
-    ax.set_xticks(range(len(modes)), modes)
+    image = ax.imshow(table, vmin=0, vmax=top, cmap=colours)
+    for row in np.flatnonzero(undefined).tolist():
+        ax.add_patch(
+            Rectangle((table.shape[1] - 1.5, row - 0.5), 1, 1, color="0.85", lw=0, zorder=1)
+        )
+    ax.set_xticks([*range(len(modes)), table.shape[1] - 1], [*modes, "exact"])
     ax.set_yticks(range(len(simulated)), simulated)
-    for i in range(M.shape[0]):
-        for j in range(M.shape[1]):
-            ax.text(
-                j,
-                i,
-                f"{M[i, j]:.2f}",
-                ha="center",
-                va="center",
-                color="white" if abs(M[i, j] - ideal[i, j]) > 0.6 else "black",
-                fontweight="bold" if ideal[i, j] == 1 else "normal",
-            )
+    shown = [
+        (i, j, M[i, j], ideal[i, j] == 1) for i in range(M.shape[0]) for j in range(M.shape[1])
+    ]
+    shown += [(i, table.shape[1] - 1, exact[i], not undefined[i]) for i in range(M.shape[0])]
+    for i, j, value, ideal_one in shown:
+        distance = table[i, j]
+        ax.text(
+            j,
+            i,
+            f"{value:.2f}",
+            ha="center",
+            va="center",
+            color="white" if np.isfinite(distance) and distance > 0.6 * top else "black",
+            fontweight="bold" if ideal_one else "normal",
+            zorder=2,
+        )
     ax.grid(False)
     ax.figure.colorbar(image, ax=ax, shrink=0.8, label="|P − ideal|")
     ax.set_xlabel("mode among the diagnoses")

@@ -13,11 +13,14 @@ import numpy as np
 
 from . import _checks, _mark_alarms, axes_or_new
 from .style import (
+    LAW,
     REJECT,
     Pair,
     legend_outside,
     mark_time,
     pair,
+    plain_log_axis,
+    sample_histogram,
     styled,
     theory_grid,
     threshold_line,
@@ -174,7 +177,7 @@ def plot_estimate(
         lw=0,
         label=f"{label} ± {nsigma:g} std",
     )
-    ax.plot(t, estimate, color=colours.dark, lw=1.3, label=label)
+    ax.plot(t, estimate, color=colours.dark, ls=colours.ls, lw=1.3, label=label)
     if truth is not None:
         ax.plot(t, truth, color="k", lw=1, ls="--", label=truth_label)
     _fault(ax, fault_time)
@@ -237,7 +240,7 @@ def plot_residual(
             lw=0,
             label=rf"$\pm$ {nsigma:g}$\sqrt{{S_t}}$",
         )
-    ax.plot(t, residual, color=colours.dark, lw=1, label=label)
+    ax.plot(t, residual, color=colours.dark, ls=colours.ls, lw=1, label=label)
     ax.axhline(0.0, color="k", lw=0.5)
     _fault(ax, fault_time)
     ax.set_xlabel(xlabel)
@@ -292,7 +295,7 @@ def plot_test_statistic(
     _mark_alarms(ax, t, statistic, threshold, "o", ms=3)
     _fault(ax, fault_time)
     if log:
-        ax.set_yscale("log")
+        plain_log_axis(ax)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     legend_outside(ax)
@@ -347,7 +350,14 @@ def plot_alarm_rate(
     with np.errstate(invalid="ignore"):
         rate = np.mean(statistic > threshold, axis=0)
     rate[np.all(np.isnan(statistic), axis=0)] = np.nan
-    ax.plot(t, rate, lw=1.3, color=colours.dark, label=label or "fraction of runs in alarm")
+    ax.plot(
+        t,
+        rate,
+        lw=1.3,
+        color=colours.dark,
+        ls=colours.ls,
+        label=label or "fraction of runs in alarm",
+    )
     if alpha is not None:
         threshold_line(ax, alpha, label=rf"design $\alpha$ = {alpha:g}", orientation="horizontal")
     _fault(ax, fault_time)
@@ -424,9 +434,9 @@ def plot_normalized_histogram(z, ax=None, bins=60, label="normalised innovations
     z = z[np.isfinite(z)]
     bins = _checks.positive_int("bins", bins)
     ax = axes_or_new(ax)
-    ax.hist(z, bins=bins, range=(-4.5, 4.5), density=True, color=pair(0).light, label=label)
+    sample_histogram(ax, z, bins=bins, range=(-4.5, 4.5), label=label)
     grid = theory_grid(-4.5, 4.5)
-    ax.plot(grid, stats.norm.pdf(grid), color=pair(0).dark, lw=1.5, label=r"$N(0, 1)$ density")
+    ax.plot(grid, stats.norm.pdf(grid), color=LAW, lw=2, label=r"$N(0, 1)$ density")
     ax.set_xlabel(r"normalised innovation $\varepsilon_t / \sqrt{S_t}$")
     ax.set_ylabel("density")
     legend_outside(ax)

@@ -14,10 +14,12 @@ import numpy as np
 
 from . import _checks, axes_or_new
 from .style import (
+    LAW,
     REJECT,
     THEORY_POINTS,
     legend_outside,
     pair,
+    sample_histogram,
     shade_tail,
     styled,
     theory_grid,
@@ -275,7 +277,14 @@ def plot_projection_geometry(A, y, ax=None, labels=("$a_1$", "$a_2$")):
     origin = np.zeros(3)
     for k in range(2):
         arrow(origin, a[:, k], _FIT.dark, None, lw=1.0)
-        ax.text(*(1.08 * a[:, k]), labels[k], color=_FIT.dark)
+        # column labels beyond the arrow tips and just under the plane, clear of y and ŷ
+        ax.text(
+            *(1.18 * a[:, k] - [0, 0, 0.1 * reach]),
+            labels[k],
+            color=_FIT.dark,
+            ha="center",
+            va="top",
+        )
     arrow(origin, yc, _DATA.dark, "observations $y$")
     arrow(origin, y_hat, _FIT.dark, r"$\hat y = A\hat x$ in range($A$)")
     arrow(y_hat, e_hat, REJECT.dark, r"$\hat e = y - \hat y \perp$ range($A$)")
@@ -286,9 +295,9 @@ def plot_projection_geometry(A, y, ax=None, labels=("$a_1$", "$a_2$")):
         d2 = e_hat / np.linalg.norm(e_hat) * size
         corner = np.array([y_hat + d1, y_hat + d1 + d2, y_hat + d2])
         ax.plot(*corner.T, color="k", lw=0.8)
-    ax.text(*(yc * 1.05), "$y$", color=_DATA.dark)
-    ax.text(*(y_hat * 1.08), r"$\hat y$", color=_FIT.dark)
-    ax.text(*(y_hat + 0.5 * e_hat), r"  $\hat e$", color=REJECT.dark)
+    ax.text(*(yc + [0, 0, 0.06 * reach]), "$y$", color=_DATA.dark, ha="center", va="bottom")
+    ax.text(*(y_hat - [0, 0, 0.08 * reach]), r"$\hat y$", color=_FIT.dark, ha="center", va="top")
+    ax.text(*(y_hat + 0.5 * e_hat), r"  $\hat e$", color=REJECT.dark, ha="left", va="center")
     ax.set_xlim(-reach, reach)
     ax.set_ylim(-reach, reach)
     ax.set_zlim(-0.2 * reach, max(yc[2], 0.5 * reach))
@@ -497,7 +506,27 @@ def plot_sum_of_squares(
         if minimum is not None:
             value = sum_of_squares_grid(A, y, minimum[:1], minimum[1:], Qyy)[0, 0]
             zmin = np.log10(value) if log10 else value
-            ax.scatter([minimum[0]], [minimum[1]], [zmin], color=REJECT.dark, s=30)
+            # a 3-D marker at the bottom of the bowl is hidden by the surface: draw a stem from
+            # the minimum up above the surface, with the marker at both ends
+            top = float(np.nanmax(Z))
+            ax.plot(
+                [minimum[0]] * 2,
+                [minimum[1]] * 2,
+                [zmin, top],
+                color=REJECT.dark,
+                lw=1.5,
+                zorder=10,
+            )
+            ax.scatter(
+                [minimum[0]] * 2,
+                [minimum[1]] * 2,
+                [zmin, top],
+                color=REJECT.dark,
+                s=30,
+                depthshade=False,
+                zorder=11,
+            )
+            ax.text(minimum[0], minimum[1], top, "  minimum", color=REJECT.dark, zorder=12)
     else:
         ax = axes_or_new(ax)
         mesh = ax.pcolormesh(X1, X2, Z, shading="auto", cmap="viridis")
@@ -549,26 +578,21 @@ def plot_chi2_histogram(T, dof, ax=None, alpha=None, bins=40, noncentrality=None
     upper = max(float(np.quantile(T, 0.995)), stats.chi2.isf(0.002, dof))
     if lam is not None:
         upper = max(upper, float(stats.ncx2.isf(0.005, dof, lam)) if lam > 0 else upper)
-    ax.hist(
-        T,
-        bins=bins,
-        range=(0, upper),
-        density=True,
-        color=pair(0).light,
-        label=f"simulated $T$ ({T.size} records)",
-    )
+    sample_histogram(ax, T, bins=bins, range=(0, upper), label=f"simulated $T$ ({T.size} records)")
     grid = theory_grid(0.0, upper, THEORY_POINTS + 1)[1:]  # the density may be infinite at 0
     density = stats.chi2.pdf(grid, dof)
     if alpha is not None:
         k = stats.chi2.isf(alpha, dof)
         shade_tail(ax, grid, density, upper=k, label=rf"critical region, $\alpha$ = {alpha:g}")
         threshold_line(ax, k, label=rf"$\chi^2_{{\alpha}}({dof})$ = {k:.4g}")
-    ax.plot(grid, density, color=pair(0).dark, label=rf"$\chi^2({dof})$ density")
+    ax.plot(grid, density, color=LAW, lw=2, label=rf"$\chi^2({dof})$ density")
     if lam is not None:
         ax.plot(
             grid,
             stats.ncx2.pdf(grid, dof, lam) if lam > 0 else density,
             color=pair(1).dark,
+            ls=pair(1).ls,
+            lw=2,
             label=rf"$\chi^2({dof}, \lambda = {lam:.3g})$ under the alternative",
         )
     ax.set_xlabel(r"$T = \hat e^{T} Q_{yy}^{-1} \hat e$")

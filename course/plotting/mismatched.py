@@ -15,9 +15,11 @@ import numpy as np
 
 from . import _checks, axes_or_new
 from .style import (
+    LAW,
     legend_outside,
     monte_carlo_dots,
     pair,
+    sample_histogram,
     shade_tail,
     styled,
     theory_grid,
@@ -194,13 +196,7 @@ def plot_cross_record_section(residuals, j, moments=None, output=0, ax=None, bin
         raise ValueError(f"j must be a time index 0..{r.shape[1] - 1}, got {j!r}")
     section = r[:, j]
     ax = axes_or_new(ax)
-    ax.hist(
-        section,
-        bins=bins,
-        density=True,
-        color=pair(1).light,
-        label=rf"$\varphi_{{{j}}}$: {section.size} records",
-    )
+    sample_histogram(ax, section, bins=bins, label=rf"$\varphi_{{{j}}}$: {section.size} records")
     if moments is not None:
         mean = float(moments.mean[j, output])
         sd = float(np.sqrt(moments.cov[j, output, output]))
@@ -208,7 +204,7 @@ def plot_cross_record_section(residuals, j, moments=None, output=0, ax=None, bin
         ax.plot(
             grid,
             stats.norm.pdf(grid, mean, sd),
-            color=pair(0).dark,
+            color=LAW,
             lw=2,
             label=rf"predicted $N(m_{{{j}}}, P_{{{j}}})$",
         )
@@ -224,8 +220,9 @@ def plot_cross_record_section(residuals, j, moments=None, output=0, ax=None, bin
 def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True, max_lag=None):
     """Image of ``C(j, k)`` (or the correlation coefficients) over all pairs of times.
 
-    The diagonal (the variances, or correlation one) is left blank so that
-    the colour scale shows the off-diagonal structure.
+    The diagonal (the variances, or correlation one) is left out of the
+    colour scale, drawn in neutral grey (white would read as "no
+    correlation"), so that the scale shows the off-diagonal structure.
 
     Parameters
     ----------
@@ -235,7 +232,7 @@ def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True, max
     correlation : bool
         Show correlation coefficients instead of covariances.
     max_lag : int, optional
-        Blank the entries with ``|j - k| > max_lag``.
+        Leave out (grey) the entries with ``|j - k| > max_lag``.
 
     Returns
     -------
@@ -258,11 +255,12 @@ def plot_cross_covariance(moments, ax=None, output=(0, 0), correlation=True, max
     limit = np.nanmax(np.abs(C)) if np.any(np.isfinite(C)) else 1.0
     import matplotlib
 
-    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="white")
+    # the diagonal (a correlation of one) is drawn grey: white would read as zero correlation
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.55")
     image = ax.imshow(
         C, cmap=cmap, vmin=-limit, vmax=limit, origin="lower", interpolation="nearest"
     )
-    ax.figure.colorbar(image, ax=ax, shrink=0.85, label=label + " (diagonal blank)")
+    ax.figure.colorbar(image, ax=ax, shrink=0.85, label=label + " (diagonal grey)")
     ax.grid(False)
     ax.set_xlabel("time $k$")
     ax.set_ylabel("time $j$")
@@ -305,7 +303,7 @@ def plot_law_against_sample(
     if not hasattr(law, "pdf"):
         raise ValueError("law must be a distribution with a pdf method")
     ax = axes_or_new(ax)
-    heights, _, _ = ax.hist(sample, bins=bins, density=True, color=pair("NF").light, label=label)
+    heights, _, _ = sample_histogram(ax, sample, bins=bins, label=label)
     if grid is None:
         lo, hi = np.quantile(sample, [0.0005, 0.9995])
         grid = theory_grid(lo, hi, 400)
@@ -319,7 +317,7 @@ def plot_law_against_sample(
         shade_tail(ax, grid, density, lower=lower, upper=upper, label="critical region")
         for value in values:
             threshold_line(ax, value)
-    ax.plot(grid, density, color=pair(0).dark, lw=2, label=law_label)
+    ax.plot(grid, density, color=LAW, lw=2, label=law_label)
     # a density with an integrable pole (chi2 with one degree of freedom)
     # must not flatten the histogram
     ax.set_ylim(0, 1.25 * np.max(heights))
@@ -330,7 +328,7 @@ def plot_law_against_sample(
 
 
 @styled
-def plot_imhof_integrands(u, real_axis, contour, ax=None):
+def plot_imhof_integrands(u, real_axis, contour, ax=None, log=False):
     """Imhof's real-axis integrand next to the integrand on the deformed contour.
 
     Parameters
@@ -339,6 +337,10 @@ def plot_imhof_integrands(u, real_axis, contour, ax=None):
         Integration variable.
     real_axis, contour : (n,) array_like
         The two integrands at ``u``.
+    log : bool
+        Draw their absolute values on logarithmic axes, which shows how
+        fast each decays (a slow power law against a double exponential);
+        exact zeros are left out.
 
     Returns
     -------
@@ -349,13 +351,29 @@ def plot_imhof_integrands(u, real_axis, contour, ax=None):
     contour = _checks.array("contour", contour, min_size=2, what="integrand values")
     _checks.same_length("u", u, "real_axis", real_axis)
     _checks.same_length("u", u, "contour", contour)
+    log = _checks.flag("log", log)
     ax = axes_or_new(ax)
-    ax.plot(u, real_axis, color=pair(1).dark, lw=1, label="Imhof's integrand on the real axis")
-    ax.plot(u, contour, color=pair(0).dark, lw=2, label="integrand on the saddle-point hyperbola")
-    ax.axhline(0.0, color="k", lw=0.5)
+    real_style, contour_style = pair(1), pair(0)
+    curves = (
+        (real_axis, real_style, 1, "Imhof's integrand on the real axis"),
+        (contour, contour_style, 2, "integrand on the saddle-point hyperbola"),
+    )
+    for values, colours, width, label in curves:
+        if log:
+            shown = np.abs(values)
+            keep = shown > 0
+            ax.plot(u[keep], shown[keep], color=colours.dark, ls=colours.ls, lw=width, label=label)
+        else:
+            ax.plot(u, values, color=colours.dark, ls=colours.ls, lw=width, label=label)
     ax.set_xlabel("integration variable $u$")
-    # one axis for two different integrands: name the quantity, and Imhof's form
-    ax.set_ylabel(r"integrand at $u$ (Imhof: $\sin\theta(u)\,/\,(u\,\rho(u))$)")
+    if log:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylabel(r"|integrand| at $u$ (log scale)")
+    else:
+        ax.axhline(0.0, color="k", lw=0.5)
+        # one axis for two different integrands: name the quantity, and Imhof's form
+        ax.set_ylabel(r"integrand at $u$ (Imhof: $\sin\theta(u)\,/\,(u\,\rho(u))$)")
     legend_outside(ax, where="below")
     return ax
 
@@ -391,7 +409,16 @@ def plot_power_curves(M_values, powers, alpha=None, ax=None, simulated=None, n_e
         exact = _checks.array(f"powers[{label!r}]", given, what="power values")
         _checks.same_length(f"powers[{label!r}]", exact, "M_values", M_values)
         colours = pair(_TESTS.get(label, index))
-        ax.plot(M_values, exact, "o-", ms=3, color=colours.dark, label=f"{label} (exact)")
+        ax.plot(
+            M_values,
+            exact,
+            marker=colours.marker,
+            ls=colours.ls,
+            ms=4,
+            mfc="none",
+            color=colours.dark,
+            label=f"{label} (exact)",
+        )
     for index, (label, points) in enumerate((simulated or {}).items()):
         Ms, given_rates = zip(*points)
         rates = _checks.array(f"simulated[{label!r}]", given_rates, what="rejection rates")

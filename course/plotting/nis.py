@@ -12,7 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 from . import _checks, axes_or_new
-from .style import REJECT, legend_outside, monte_carlo_dots, pair, styled, theory_grid
+from .style import (
+    LAW,
+    REJECT,
+    legend_outside,
+    monte_carlo_dots,
+    pair,
+    sample_histogram,
+    styled,
+    theory_grid,
+)
 
 __all__ = [
     "plot_cdf_errors",
@@ -55,7 +64,7 @@ def plot_sample_against_law(
     if not laws or not all(hasattr(one, "pdf") for one in laws):
         raise ValueError("law must be a distribution with a pdf method, or a list of them")
     ax = axes_or_new(ax)
-    ax.hist(sample, bins=bins, density=True, color=pair(0).light, label=label)
+    sample_histogram(ax, sample, bins=bins, label=label)
     if grid is None:
         lo, hi = np.quantile(sample, [0.0005, 0.9995])
         pad = 0.05 * (hi - lo)
@@ -64,7 +73,8 @@ def plot_sample_against_law(
         grid = _checks.array("grid", grid, min_size=2, what="grid values")
     names = law_label if isinstance(law_label, (list, tuple)) else [law_label] * len(laws)
     for index, (one, name) in enumerate(zip(laws, names)):
-        ax.plot(grid, one.pdf(grid), color=pair(index).dark, lw=2, label=name)
+        colour = LAW if index == 0 else pair(index).dark
+        ax.plot(grid, one.pdf(grid), color=colour, ls=pair(index).ls, lw=2, label=name)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("density")
     if label or law_label:
@@ -105,14 +115,12 @@ def plot_extreme_laws(law_min, law_max, samples=None, ax=None, bins=80, threshol
     grid = theory_grid(lo, hi, 500)
     low, high = pair(0), pair(1)
     if samples is not None:
-        for sample, colours, name in zip(samples, (low, high), ("min", "max")):
-            ax.hist(
+        for sample, name in zip(samples, ("min", "max")):
+            sample_histogram(
+                ax,
                 sample,
                 bins=bins,
                 range=(lo, hi),
-                density=True,
-                color=colours.light,
-                alpha=0.8,
                 label=rf"$\lambda_{{\{name}}}$, {sample.size} draws",
             )
     pdf_min, pdf_max = law_min.pdf(grid), law_max.pdf(grid)
@@ -201,7 +209,7 @@ def plot_detection(K_values, probabilities, alpha=None, ax=None, title=None, n_r
         p = _checks.array(f"probabilities[{label!r}]", p, what="detection rates")
         _checks.same_length(f"probabilities[{label!r}]", p, "K_values", K_values)
         colours = pair(index)
-        ax.plot(K_values, p, color=colours.light, lw=1.2, zorder=2)
+        ax.plot(K_values, p, color=colours.dark, ls=colours.ls, lw=1.0, alpha=0.7, zorder=2)
         yerr = None if n_runs is None else 1.96 * np.sqrt(p * (1 - p) / n_runs)
         monte_carlo_dots(ax, K_values, p, colours, label=label, yerr=yerr)
     if alpha is not None:
@@ -295,9 +303,12 @@ def plot_whitened_scatter(z, ax=None, thresholds=None, truth=None, label="whiten
     With ``Π̂ = (1/K) Σ z_k z_kᵀ`` (the NIS matrix) the ellipse is
     ``{Π̂^{1/2} u : |u| = 1}``: its semi-axes are the square roots of the
     eigenvalues of Π̂. The time-averaged NIS is ``(1/K) Σ |z_k|² = tr Π̂``,
-    the mean squared radius of the points: it sees only the ellipse's size
-    (the dotted circle of the same mean squared radius), the NIS matrix
-    sees its shape.
+    the mean squared radius of the points: it sees only the ellipse's size,
+    drawn as the round ellipse with the same trace (the dotted circle of
+    radius ``sqrt(tr Π̂ / 2)``, which is the unit circle when ``Π̂ = I``); the
+    NIS matrix sees its shape. The frame is set by the circles and ellipses,
+    not by the farthest point, so that a single outlier cannot shrink the
+    picture; the points left outside are counted in the legend.
     """
     z = _checks.array("z", z, ndim=2, what="whitened innovations (K x 2)")
     if z.shape[1] != 2:
@@ -320,6 +331,21 @@ def plot_whitened_scatter(z, ax=None, thresholds=None, truth=None, label="whiten
             lw=0,
             label=rf"accepted: all eigenvalues in [{lower:.2f}, {upper:.2f}]",
         )
+    extent = [1.0, float(np.sqrt(max(lam.max(), 0.0)))]
+    if thresholds is not None:
+        extent.append(float(np.sqrt(upper)))
+    if truth is not None:
+        T = _checks.array("truth", truth, ndim=2, what="covariance entries")
+        if T.shape != (2, 2):
+            raise ValueError(f"truth must be a 2 x 2 covariance, got shape {T.shape}")
+        w, U = np.linalg.eigh((T + T.T) / 2)
+        if np.any(w <= 0):
+            raise ValueError("truth must be positive definite")
+        extent.append(float(np.sqrt(w.max())))
+    reach = 1.6 * max(extent)
+    hidden = int(np.sum(np.any(np.abs(z) > reach, axis=1)))
+    if hidden:
+        label = f"{label} ({hidden} outside the frame)"
     ax.plot(z[:, 0], z[:, 1], "o", ms=3, color=pair("NF").dark, alpha=0.5, label=label)
     ax.plot(*circle, color="k", lw=1, label="unit circle: the model's promise")
     ax.plot(
@@ -327,7 +353,10 @@ def plot_whitened_scatter(z, ax=None, thresholds=None, truth=None, label="whiten
         ":",
         color=pair(0).dark,
         lw=1.5,
-        label=rf"what the NIS sees: mean $|z|^2$ = {nis_avg:.2f}",
+        label=(
+            rf"what the NIS sees: a circle of radius $\sqrt{{\bar\epsilon/2}}$ = "
+            rf"{np.sqrt(nis_avg / 2):.2f} (NIS $\bar\epsilon$ = mean $|z|^2$ = {nis_avg:.2f})"
+        ),
     )
     ax.plot(
         *ellipse,
@@ -339,20 +368,13 @@ def plot_whitened_scatter(z, ax=None, thresholds=None, truth=None, label="whiten
         tip = np.sqrt(max(lam[k], 0)) * V[:, k]
         ax.plot([-tip[0], tip[0]], [-tip[1], tip[1]], color=pair(1).dark, lw=0.8)
     if truth is not None:
-        T = _checks.array("truth", truth, ndim=2, what="covariance entries")
-        if T.shape != (2, 2):
-            raise ValueError(f"truth must be a 2 x 2 covariance, got shape {T.shape}")
-        w, U = np.linalg.eigh((T + T.T) / 2)
-        if np.any(w <= 0):
-            raise ValueError("truth must be positive definite")
         ax.plot(
             *(U @ (np.sqrt(w)[:, None] * (U.T @ circle))),
-            "--",
+            ls="--",
             color=pair(3).dark,
             lw=1.2,
             label="true covariance of $z$",
         )
-    reach = 1.1 * max(np.abs(z).max(), 1.5)
     ax.set_xlim(-reach, reach)
     ax.set_ylim(-reach, reach)
     ax.set_aspect("equal")

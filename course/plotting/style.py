@@ -3,10 +3,16 @@
 Every figure of the course is drawn by :mod:`course.plotting`, and every
 plotting function draws in this style:
 
-- **paired colours**: each fault mode, filter or test owns a pair (a dark
-  shade for lines, theory and estimates; a light shade for bands, histograms
-  and shaded regions), so the same thing has the same colour in every
-  notebook (``pair("F1")``, ``pair(0)``);
+- **paired colours, safe for colour-blind readers**: each fault mode, filter
+  or test owns a pair from the Okabe–Ito palette (a dark shade for lines,
+  theory and estimates; a light shade for bands and shaded regions), so the
+  same thing has the same colour in every notebook (``pair("F1")``,
+  ``pair(0)``); each pair also owns a marker and a line style
+  (``pair(k).marker``, ``pair(k).ls``), so curves told apart by colour are
+  told apart without it too;
+- **one look per kind of plot**: a simulated sample is a grey histogram
+  (:data:`SAMPLE`, :func:`sample_histogram`) and the law it is compared
+  with a dark line (:data:`LAW`), in every notebook;
 - **shaded α tails**: the critical region of a test is filled in the
   "reject" colour (:func:`shade_tail`), its threshold drawn dashed black;
 - **legends outside the data** (:func:`legend_outside`), so the curves the
@@ -31,8 +37,11 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = [
+    "LAW",
+    "MAX_WIDTH",
     "RC_PARAMS",
     "REJECT",
+    "SAMPLE",
     "THEORY_POINTS",
     "THRESHOLD",
     "Pair",
@@ -41,6 +50,8 @@ __all__ = [
     "mark_time",
     "monte_carlo_dots",
     "pair",
+    "plain_log_axis",
+    "sample_histogram",
     "shade_tail",
     "styled",
     "theory_grid",
@@ -53,29 +64,42 @@ THEORY_POINTS = 241
 
 
 class Pair(NamedTuple):
-    """A colour pair: ``dark`` for lines and markers, ``light`` for fills."""
+    """A colour pair: ``dark`` for lines and markers, ``light`` for fills.
+
+    ``marker`` and ``ls`` (line style) go with the colour, so that two curves
+    differ in shape as well as in hue.
+    """
 
     dark: str
     light: str
+    marker: str = "o"
+    ls: str | tuple = "-"
 
 
-# ColorBrewer "Paired" (light, dark) reordered so that the first four pairs
-# are the ones a reader tells apart most easily; grey is reserved for the
-# fault-free mode and for reference material.
+# The Okabe–Ito palette (Okabe & Ito 2008), distinguishable under the common
+# colour-vision deficiencies; each dark shade is paired with a light tint of
+# itself (35 % colour on white) for bands and fills. Vermillion is kept for
+# rejections and grey for the fault-free mode and reference material.
 _PAIRS = (
-    Pair("#1f78b4", "#a6cee3"),  # blue
-    Pair("#ff7f00", "#fdbf6f"),  # orange
-    Pair("#33a02c", "#b2df8a"),  # green
-    Pair("#6a3d9a", "#cab2d6"),  # purple
-    Pair("#b15928", "#f3c9a5"),  # brown
-    Pair("#e7298a", "#f4b6d6"),  # magenta
+    Pair("#0072b2", "#a6cbe0", "o", "-"),  # blue
+    Pair("#e69f00", "#f7dca6", "s", "--"),  # orange
+    Pair("#009e73", "#a6dccd", "^", "-."),  # bluish green
+    Pair("#cc79a7", "#edd1e1", "D", ":"),  # reddish purple
+    Pair("#56b4e9", "#cce7f7", "v", (0, (5, 1.5, 1, 1.5, 1, 1.5))),  # sky blue
+    Pair("#000000", "#a6a6a6", "P", (0, (8, 2))),  # black
 )
-_GREY = Pair("#4d4d4d", "#c7c7c7")
+_GREY = Pair("#4d4d4d", "#c7c7c7", "o", "-")
 
-#: The colour of rejections: critical regions, alarms, rejected observations.
-REJECT = Pair("#d7191c", "#f7b5b5")
+#: The colour of rejections: critical regions, alarms, rejected observations (vermillion).
+REJECT = Pair("#d55e00", "#f2c4a6", "x", "-")
 #: Thresholds and critical values are dashed black lines.
 THRESHOLD = "#000000"
+#: Histograms of simulated samples, in every notebook: light grey bars.
+SAMPLE = _GREY
+#: A theoretical law (a density drawn over a sample): the blue pair's dark shade.
+LAW = "#0072b2"
+#: The widest figure of the course, in inches: it fits the website's text column.
+MAX_WIDTH = 8.5
 
 _NAMED = {"NF": _GREY, "none": _GREY, "reference": _GREY, "data": _GREY}
 
@@ -131,7 +155,7 @@ RC_PARAMS = {
     "legend.fontsize": "small",
     "lines.linewidth": 1.5,
     "lines.markersize": 4.5,
-    "font.size": 10,
+    "font.size": 11,
     "image.cmap": "viridis",
     "mathtext.fontset": "dejavusans",
     "savefig.bbox": "tight",
@@ -238,6 +262,54 @@ def shade_tail(ax, x, density, lower=None, upper=None, label: str | None = "crit
     return ax
 
 
+def sample_histogram(ax, sample, bins=40, label: str | None = "simulated", **kwargs):
+    """A simulated sample as a density histogram in the course's one sample colour.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    sample : array_like
+        The simulated values.
+    bins : int or sequence
+        Passed to ``ax.hist``.
+    label : str or None
+        Legend text.
+    **kwargs
+        Passed to ``ax.hist`` (``range``, ...).
+
+    Returns
+    -------
+    tuple
+        What ``ax.hist`` returns (heights, bin edges, patches).
+    """
+    options = dict(density=True, color=SAMPLE.light, edgecolor="white", linewidth=0.3)
+    options.update(kwargs)
+    return ax.hist(np.asarray(sample, dtype=float), bins=bins, label=label, **options)
+
+
+def plain_log_axis(ax, axis: str = "y"):
+    """A logarithmic axis labelled with plain numbers, one kind of label only.
+
+    Matplotlib's default labels a short log axis with a mix of ``10^k`` and
+    ``2 x 10^k`` in two sizes; this keeps plain ``%g`` labels (``0.001``,
+    ``0.01`` ...) and no minor labels: at 1, 2 and 5 times each power of ten
+    when the data span at most two and a half decades, at the powers of ten
+    otherwise. Call it after the data are drawn.
+    """
+    from matplotlib import ticker
+
+    if axis not in ("x", "y"):
+        raise ValueError(f"axis must be 'x' or 'y', got {axis!r}")
+    target = ax.yaxis if axis == "y" else ax.xaxis
+    (ax.set_yscale if axis == "y" else ax.set_xscale)("log")
+    lo, hi = ax.get_ylim() if axis == "y" else ax.get_xlim()
+    few = lo > 0 and np.log10(hi / lo) <= 2.5
+    target.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0) if few else (1.0,)))
+    target.set_major_formatter(ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+    target.set_minor_formatter(ticker.NullFormatter())
+    return ax
+
+
 def threshold_line(ax, value, label: str | None = None, orientation: str = "vertical"):
     """A dashed black line at a critical value (vertical) or a level (horizontal)."""
     draw = ax.axvline if orientation == "vertical" else ax.axhline
@@ -250,12 +322,16 @@ def mark_time(ax, t, label: str | None = "fault appears"):
 
 
 def monte_carlo_dots(ax, x, y, color_pair: Pair, label: str | None = None, yerr=None):
-    """Monte Carlo results as dots (with optional error bars) on their coarse grid."""
+    """Monte Carlo results as dots (with optional error bars) on their coarse grid.
+
+    The marker is the colour pair's own (``color_pair.marker``), so two series
+    differ in shape as well as in colour.
+    """
     if yerr is None:
         return ax.plot(
             x,
             y,
-            "o",
+            color_pair.marker,
             ms=4.5,
             mfc=color_pair.light,
             mec=color_pair.dark,
@@ -268,7 +344,7 @@ def monte_carlo_dots(ax, x, y, color_pair: Pair, label: str | None = None, yerr=
         x,
         y,
         yerr=yerr,
-        fmt="o",
+        fmt=color_pair.marker,
         ms=4.5,
         mfc=color_pair.light,
         mec=color_pair.dark,
