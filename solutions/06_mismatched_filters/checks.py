@@ -91,7 +91,7 @@ def _augmented(F0, H0, F1, H1, K):
     forbid=_FORBID_MOMENTS,
     mistakes=[
         Mistake(
-            "the paper's misprint: the residual is H0 x - H1 xhat, so H~ = [H0, -H1]",
+            "a sign error: the residual is H0 x - H1 xhat, so the block of H1 in H~ carries a minus sign",
             lambda F0, H0, F1, H1, K: (
                 q1.reference(F0, H0, F1, H1, K)[0],
                 np.hstack([np.asarray(H0, float), np.asarray(H1, float)]),
