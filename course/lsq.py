@@ -88,6 +88,7 @@ __all__ = [
     "confidence_band",
     "data_snooping",
     "fit",
+    "load_mauna_loa_co2",
     "load_sea_level",
     "mdb",
     "noncentrality",
@@ -128,6 +129,25 @@ def _format_vector(values, digits: int = 5, limit: int = 6) -> str:
 #: rank deficiency by the library's rank rule (pivoted QR of A); above it,
 #: the columns are far from dependent and the check would be wasted work.
 _RCOND_CHECK = float(np.sqrt(np.finfo(float).eps))
+
+
+def _rcond_upper(R: np.ndarray) -> float:
+    """The reciprocal 1-norm condition number of the upper-triangular ``R`` (0 if singular).
+
+    LAPACK's ``dtrcon`` estimate where scipy has it (scipy >= 1.15); on older scipy (and
+    Pyodide's) the exact value ``1 / (||R||_1 ||R^-1||_1)`` from the n x n inverse, which
+    costs no more than the ``R^-1`` that the fit forms anyway.
+    """
+    trcon = getattr(lapack, "dtrcon", None)
+    if trcon is not None:
+        rcond, _ = trcon(R, norm="1", uplo="U")
+        return float(rcond)
+    if not (np.all(np.isfinite(R)) and np.all(np.diag(R) != 0)):
+        return 0.0
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        R_inv = sla.solve_triangular(R, np.eye(R.shape[0]), lower=False, check_finite=False)
+        rcond = 1.0 / (np.linalg.norm(R, 1) * np.linalg.norm(R_inv, 1))
+    return float(rcond) if np.isfinite(rcond) else 0.0
 
 
 def _row_norms_squared(X: np.ndarray) -> np.ndarray:
@@ -383,8 +403,7 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     # LAPACK works column-major: a Fortran-ordered input halves the QR's time at m = 1e5.
     A_w = np.asfortranarray(covariance.whiten(A))
     Q1, R = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
-    rcond, _ = lapack.dtrcon(R, norm="1", uplo="U")
-    if not rcond > _RCOND_CHECK:
+    if not _rcond_upper(R) > _RCOND_CHECK:
         check_full_column_rank(A, "A")  # names the dependent columns, if any
     coefficients = Q1.T @ y_w
     x_hat = sla.solve_triangular(R, coefficients, lower=False, check_finite=False)
@@ -1116,3 +1135,34 @@ def load_sea_level(case: int):
     source = resources.files("course") / "data" / "sea_level_mude" / f"Dataset_{case}.txt"
     y = np.loadtxt(io.StringIO(source.read_text(encoding="utf-8")))
     return np.arange(1.0, y.size + 1.0), y
+
+
+def load_mauna_loa_co2() -> tuple[np.ndarray, np.ndarray]:
+    """The weekly Mauna Loa CO2 record 1958-2001 shipped with the course.
+
+    Returns
+    -------
+    date : ndarray of datetime64[D], shape (2225,)
+        The date of each week (a Saturday), weeks without data left out.
+    co2 : ndarray, shape (2225,)
+        The week's mean CO2 concentration in ppm (1999 calibration scale).
+
+    Notes
+    -----
+    Data: the Scripps CO2 program's continuous measurements at Mauna Loa, as published by
+    C. D. Keeling and T. P. Whorf (2004), *Trends: A Compendium of Data on Global Change*,
+    CDIAC; public domain (see ``course/data/mauna_loa_co2/README.md``). Of the 2284 weeks
+    from 29 March 1958 to 29 December 2001, the 59 without a measurement are left out.
+
+    Examples
+    --------
+    >>> date, co2 = load_mauna_loa_co2()
+    >>> str(date[0]), float(co2[0]), date.size
+    ('1958-03-29', 316.1, 2225)
+    """
+    source = resources.files("course") / "data" / "mauna_loa_co2" / "co2_weekly.csv"
+    lines = source.read_text(encoding="utf-8").splitlines()[1:]  # below the header date,co2
+    rows = [line.split(",") for line in lines if line.strip()]
+    measured = [(day, ppm) for day, ppm in rows if ppm.strip()]
+    date = np.array([f"{d[:4]}-{d[4:6]}-{d[6:8]}" for d, _ in measured], dtype="datetime64[D]")
+    return date, np.array([float(ppm) for _, ppm in measured])

@@ -366,7 +366,7 @@ def _dependencies(wheel: Path) -> list[str]:
         next(n for n in zipfile.ZipFile(wheel).namelist() if n.endswith("METADATA"))
     )
     deps = re.findall(r"^Requires-Dist: (.+)$", metadata.decode(), re.MULTILINE)
-    return [d for d in deps if not d.startswith(("jupyterlab", "ipykernel"))]
+    return [d for d in deps if not d.startswith(("jupyterlab", "ipykernel", "ipywidgets"))]
 
 
 STUDENT_SCRIPT = """
