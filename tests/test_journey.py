@@ -102,7 +102,10 @@ def journey(tmp_path_factory):
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     python = venv / "bin" / "python"
     pip = [sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet"]
-    subprocess.run([*pip, "--disable-pip-version-check", str(wheel)], check=True)
+    # without PYTHONPATH: pip must not see a source tree's course (or its egg-info) as
+    # "already installed"
+    outer = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    subprocess.run([*pip, "--disable-pip-version-check", str(wheel)], check=True, env=outer)
     home = tmp / "home"
     home.mkdir()
     env = {
@@ -122,6 +125,7 @@ def journey(tmp_path_factory):
             "workspace.prepare_workdir(sys.argv[1], workspace.packaged_materials())",
             str(work),
         ],
+        cwd=home,  # not the repository, whose course/ would shadow the installed one
         env=env,
         capture_output=True,
         text=True,
@@ -144,12 +148,13 @@ def _answers(name: str) -> dict[str, str]:
         meta = cell.get("metadata", {}).get("course", {})
         if meta.get("role") == "answer" and meta.get("question"):
             lines = cell.source.splitlines()
-            kept = [line for line in lines if line.strip() not in MARKERS]
+            kept = [line for line in lines if not line.strip().startswith(MARKERS)]
             answers[meta["question"]] = "\n".join(kept)
     return answers
 
 
-MARKERS = {"### BEGIN SOLUTION", "### END SOLUTION"}
+#: The authoring markers (course.grading.notebook): the solution's region and its stub lines.
+MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### STUB")
 
 
 def _student_copy(path: Path, name: str) -> None:
