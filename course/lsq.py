@@ -1152,7 +1152,7 @@ def load_mauna_loa_co2() -> tuple[np.ndarray, np.ndarray]:
     Data: the Scripps CO2 program's continuous measurements at Mauna Loa, as published by
     C. D. Keeling and T. P. Whorf (2004), *Trends: A Compendium of Data on Global Change*,
     CDIAC; public domain (see ``course/data/mauna_loa_co2/README.md``). Of the 2284 weeks
-    from 29 March 1958 to 29 December 2001, the 59 without a measurement are left out.
+    from 1958-03-29 to 2001-12-29, the 59 without a measurement are left out.
 
     Examples
     --------

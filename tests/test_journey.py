@@ -301,6 +301,18 @@ def test_the_students_jupyter_has_no_grading_tool(journey):
         assert "nbgrader" not in (listed.stdout + listed.stderr).lower()
 
 
+def test_course_open_in_this_environment_shows_no_grading_tool():
+    """The developers' `course open` (this interpreter's JupyterLab, `.[all]` installed) lists
+    no nbgrader extension either; an environment installed from an older `.[all]`, or with
+    `.[bench]`, fails here until `python -m pip uninstall nbgrader`."""
+    for what in (["labextension", "list"], ["server", "extension", "list"]):
+        listed = subprocess.run(
+            [sys.executable, "-m", "jupyter", *what], capture_output=True, text=True, timeout=120
+        )
+        assert listed.returncode == 0, listed.stderr
+        assert "nbgrader" not in (listed.stdout + listed.stderr).lower(), what
+
+
 def test_journey_cost(executed):
     """Not a speed target: a notebook that hangs stops the journey here, with the times."""
     times = {name: seconds for name, (_, seconds) in executed.items()}

@@ -328,7 +328,16 @@ def _core_metadata(meta: dict, readme: str) -> str:
 
 
 # --------------------------------------------------------------------------------------
-# archives (written here, not by a build backend: offline, fast and reproducible)
+# archives, written here rather than by the project's build backend (setuptools.build_meta):
+# - in-process, the backend is whatever setuptools the instructor's environment holds, and
+#   `license = "MIT"` (PEP 639) needs setuptools >= 77, which `.[all]` does not bring (pip's
+#   isolated builds fetch it); through pip or `build` it needs the index, or a warm cache;
+# - no build step: a backend build copies the tree again into build/ and egg-info folders;
+# - byte-reproducible as it is: setuptools' sdist records the files' mtimes and the build's
+#   time in its gzip header (SOURCE_DATE_EPOCH reaches the wheel only), so two exports of
+#   the same tree would differ.
+# The wheel is pure Python and its metadata few (_core_metadata); tests/test_journey.py
+# installs it with pip into a fresh environment, and pip validates RECORD and METADATA.
 # --------------------------------------------------------------------------------------
 def _tree_files(folder: Path) -> list[tuple[str, bytes]]:
     return [
