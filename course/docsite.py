@@ -165,20 +165,6 @@ def _lite_notebook(source: Path, target: Path) -> None:
     target.write_text(json.dumps(notebook, indent=1, ensure_ascii=False), encoding="utf-8")
 
 
-def lite_extensions(prefix: Path | None = None) -> list[Path]:
-    """The prebuilt JupyterLab extensions of the environment ``prefix`` (default: this one)
-    that the JupyterLite app bundles: their folders, without :data:`LITE_EXCLUDED_EXTENSIONS`."""
-    root = Path(sys.prefix if prefix is None else prefix) / "share" / "jupyter" / "labextensions"
-    found = sorted([*root.glob("*/package.json"), *root.glob("@*/*/package.json")])
-    return [
-        p.parent
-        for p in found
-        if not any(
-            word in p.parent.relative_to(root).as_posix() for word in LITE_EXCLUDED_EXTENSIONS
-        )
-    ]
-
-
 def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -> Path:
     """Build the JupyterLite app into ``site_dir/lite`` with the course's wheel and notebooks.
 
@@ -229,6 +215,20 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     (work / "jupyter_lite_config.json").write_text(json.dumps(config, indent=1))
     _run([sys.executable, "-m", "jupyter", "lite", "build", "--lite-dir", str(work)], cwd=work)
     return site_dir / "lite"
+
+
+def lite_extensions(prefix: Path | None = None) -> list[Path]:
+    """The prebuilt JupyterLab extensions of the environment ``prefix`` (default: this one)
+    that the JupyterLite app bundles: their folders, without :data:`LITE_EXCLUDED_EXTENSIONS`."""
+    root = Path(sys.prefix if prefix is None else prefix) / "share" / "jupyter" / "labextensions"
+    found = sorted([*root.glob("*/package.json"), *root.glob("@*/*/package.json")])
+    return [
+        p.parent
+        for p in found
+        if not any(
+            word in p.parent.relative_to(root).as_posix() for word in LITE_EXCLUDED_EXTENSIONS
+        )
+    ]
 
 
 def _run(command: list[str], cwd: Path | None = None) -> None:
