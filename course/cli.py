@@ -104,9 +104,12 @@ def _open(args) -> int:
         return 2
     command = _jupyter_command(args.app)
     if command is None:
+        front_end, package = (
+            ("Lab", "jupyterlab") if args.app == "lab" else ("Notebook", "notebook")
+        )
         print(
-            f"course open: Jupyter {'Lab' if args.app == 'lab' else 'Notebook'} is not installed for "
-            f"{sys.executable}; install it with `{Path(sys.executable).name} -m pip install jupyterlab`",
+            f"course open: Jupyter {front_end} is not installed for {sys.executable}; install it "
+            f"with `{Path(sys.executable).name} -m pip install {package}`",
             file=sys.stderr,
         )
         return 2

@@ -28,6 +28,10 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 #: The first cell of every notebook in JupyterLite: install the course from the site's own wheel.
 LITE_INSTALL_CELL = "%pip install -q residual-validation-course"
 
+#: Jupyter extensions of tools that are not part of the course (the grading benchmark's
+#: peers): never bundled into the JupyterLite app, even from an environment that has them.
+LITE_EXCLUDED_EXTENSIONS = ("nbgrader",)
+
 
 @dataclass
 class BuildReport:
@@ -171,9 +175,15 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     work = cache / "lite"
     wheels = work / "wheels"
     contents = work / "contents"
-    for folder in (wheels, contents):
+    extensions = work / "labextensions"
+    for folder in (wheels, contents, extensions):
         shutil.rmtree(folder, ignore_errors=True)
         folder.mkdir(parents=True)
+    # the environment's extensions, those of non-course tools left out (jupyter lite would
+    # take every one under sys.prefix: see ignore_sys_prefix below)
+    installed = Path(sys.prefix) / "share" / "jupyter" / "labextensions"
+    for extension in lite_extensions():
+        shutil.copytree(extension, extensions / extension.relative_to(installed))
     # pip builds in a temporary copy so that the clone gets no build/ or egg-info folders.
     with tempfile.TemporaryDirectory() as tmp:
         copy = Path(tmp) / "src"
@@ -197,12 +207,28 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
             "no_sourcemaps": True,
             "contents": [str(contents)],
             "output_dir": str(site_dir / "lite"),
+            "ignore_sys_prefix": ["federated_extensions"],
         },
+        "FederatedExtensionAddon": {"extra_labextensions_path": [str(extensions)]},
         "PipliteAddon": {"piplite_urls": [str(wheel)]},
     }
     (work / "jupyter_lite_config.json").write_text(json.dumps(config, indent=1))
     _run([sys.executable, "-m", "jupyter", "lite", "build", "--lite-dir", str(work)], cwd=work)
     return site_dir / "lite"
+
+
+def lite_extensions(prefix: Path | None = None) -> list[Path]:
+    """The prebuilt JupyterLab extensions of the environment ``prefix`` (default: this one)
+    that the JupyterLite app bundles: their folders, without :data:`LITE_EXCLUDED_EXTENSIONS`."""
+    root = Path(sys.prefix if prefix is None else prefix) / "share" / "jupyter" / "labextensions"
+    found = sorted([*root.glob("*/package.json"), *root.glob("@*/*/package.json")])
+    return [
+        p.parent
+        for p in found
+        if not any(
+            word in p.parent.relative_to(root).as_posix() for word in LITE_EXCLUDED_EXTENSIONS
+        )
+    ]
 
 
 def _run(command: list[str], cwd: Path | None = None) -> None:

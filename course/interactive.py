@@ -79,7 +79,8 @@ def _ipywidgets():
         import ipywidgets
     except ImportError:  # pragma: no cover - depends on the installation
         raise ImportError(
-            "the sliders need ipywidgets: pip install 'residual-validation-course[notebooks]'"
+            "the sliders need ipywidgets: install it into this environment with "
+            "`python -m pip install ipywidgets` (the student edition brings it)"
         ) from None
     return ipywidgets
 

@@ -339,6 +339,11 @@ def test_jupyterlite_has_the_course_wheel_and_the_notebooks(site, server, browse
     assert "01_least_squares_validation.ipynb" in names
     first = json.loads((lite / "files" / "01_least_squares_validation.ipynb").read_text())
     assert LITE_INSTALL_CELL in "".join(first["cells"][0]["source"])
+    # the course's extensions only: no nbgrader menus beside the course (issue 23)
+    config = json.loads((lite / "jupyter-lite.json").read_text())["jupyter-config-data"]
+    bundled = [e["name"] for e in config.get("federated_extensions", [])]
+    assert "@jupyterlite/pyodide-kernel-extension" in bundled
+    assert not [name for name in bundled if "nbgrader" in name], bundled
     # The app itself loads; running code needs Pyodide from its CDN, which this test cannot reach.
     page = browser.new_page()
     errors = []

@@ -29,6 +29,8 @@ confidence_band
     Fitted values at new design rows with their confidence half-widths.
 load_sea_level
     The four MUDE sea-level data sets shipped with the course.
+load_mauna_loa_co2
+    The weekly Mauna Loa CO2 record 1958-2001 shipped with the course.
 
 Numerics
 --------
@@ -47,7 +49,7 @@ diagonal Qyy; the m x m matrices ``Qee`` and ``Qyy_hat`` are computed when
 asked for.
 """
 
-from course.lsq._data import load_sea_level
+from course.lsq._data import load_mauna_loa_co2, load_sea_level
 from course.lsq._fit import LeastSquaresFit, fit
 from course.lsq._reliability import ConfidenceBand, confidence_band, mdb
 from course.lsq._tests import (
@@ -66,6 +68,7 @@ __all__ = [
     "confidence_band",
     "data_snooping",
     "fit",
+    "load_mauna_loa_co2",
     "load_sea_level",
     "mdb",
     "overall_model_test",

@@ -59,6 +59,25 @@ def _format_vector(values, digits: int = 5, limit: int = 6) -> str:
 _RCOND_CHECK = float(np.sqrt(np.finfo(float).eps))
 
 
+def _rcond_upper(R: np.ndarray) -> float:
+    """The reciprocal 1-norm condition number of the upper-triangular ``R`` (0 if singular).
+
+    LAPACK's ``dtrcon`` estimate where scipy has it (scipy >= 1.15); on older scipy (and
+    Pyodide's) the exact value ``1 / (||R||_1 ||R^-1||_1)`` from the n x n inverse, which
+    costs no more than the ``R^-1`` that the fit forms anyway.
+    """
+    trcon = getattr(lapack, "dtrcon", None)
+    if trcon is not None:
+        rcond, _ = trcon(R, norm="1", uplo="U")
+        return float(rcond)
+    if not (np.all(np.isfinite(R)) and np.all(np.diag(R) != 0)):
+        return 0.0
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        R_inv = sla.solve_triangular(R, np.eye(R.shape[0]), lower=False, check_finite=False)
+        rcond = 1.0 / (np.linalg.norm(R, 1) * np.linalg.norm(R_inv, 1))
+    return float(rcond) if np.isfinite(rcond) else 0.0
+
+
 def _row_norms_squared(X: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", X, X)
 
@@ -312,8 +331,7 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
     # LAPACK works column-major: a Fortran-ordered input halves the QR's time at m = 1e5.
     A_w = np.asfortranarray(covariance.whiten(A))
     Q1, R = sla.qr(A_w, mode="economic", overwrite_a=True, check_finite=False)
-    rcond, _ = lapack.dtrcon(R, norm="1", uplo="U")
-    if not rcond > _RCOND_CHECK:
+    if not _rcond_upper(R) > _RCOND_CHECK:
         check_full_column_rank(A, "A")  # names the dependent columns, if any
     coefficients = Q1.T @ y_w
     x_hat = sla.solve_triangular(R, coefficients, lower=False, check_finite=False)

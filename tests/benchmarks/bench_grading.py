@@ -7,12 +7,19 @@ solutions, some answers left unanswered; seeded), every isolation layer on, defa
 CPUs this process may use). Also printed: the per-student overhead of the kernel isolation
 (the same run with Landlock and namespaces off), and the scaling with --jobs.
 
-Baseline: nbgrader (the ``bench`` extra), in a course folder the benchmark builds itself: the
+Baseline: nbgrader, in a course folder the benchmark builds itself: the
 solution notebook converted to nbgrader's format (answer cells as solution cells, one
 autograder test cell per question that checks the same public and hidden cases with the same
 tolerances through ``course.grading.compare``), ``nbgrader generate_assignment``, then every
 submission converted and ``nbgrader autograde``, which runs each notebook in a fresh Jupyter
 kernel. Target: ours at least 8x faster. Exits non-zero when a target is missed.
+
+nbgrader is not part of the course (``.[all]`` leaves it out: its Jupyter extensions would
+show in ``course open``). Where it is not importable here, the benchmark installs it with the
+course into a virtual environment of its own (``--peers DIR`` keeps that environment between
+runs; the first run downloads nbgrader) and runs it from there, with that environment's
+``bin/`` first on ``PATH`` (nbgrader calls ``alembic`` for its database). ``python -m pip
+install -e ".[bench]"`` into a separate environment runs it in place instead.
 """
 
 from __future__ import annotations
@@ -134,7 +141,28 @@ def nbgrader_source(checks) -> dict:
     return nb
 
 
-def run_nbgrader(subs: Path, work: Path, log) -> float:
+def peer_python(peers: Path, log) -> Path:
+    """The interpreter that runs nbgrader: this one when nbgrader is installed here, else
+    ``peers/bin/python``, made (once) with nbgrader and the course, whose autograder cells
+    import ``course.grading``."""
+    from importlib.util import find_spec
+
+    if find_spec("nbgrader") is not None:
+        return Path(sys.executable)
+    python = peers / "bin" / "python"
+    if not python.is_file():
+        print(f"installing nbgrader into {peers} (once) ...", flush=True)
+        subprocess.run([sys.executable, "-m", "venv", str(peers)], check=True)
+        subprocess.run(
+            [str(python), "-m", "pip", "install", "--quiet", "nbgrader>=0.9", "-e", str(ROOT)],
+            stdout=log,
+            stderr=log,
+            check=True,
+        )
+    return python
+
+
+def run_nbgrader(subs: Path, work: Path, log, python: Path) -> float:
     from course.grading.authoring.checks import load_checks
 
     checks = load_checks(SOLUTION_DIR)
@@ -147,8 +175,10 @@ def run_nbgrader(subs: Path, work: Path, log) -> float:
         "c.ExecutePreprocessor.timeout = 120\n"
     )
     (course / "source" / NAME / f"{NAME}.ipynb").write_text(json.dumps(nbgrader_source(checks)))
-    nbgrader = [sys.executable, "-m", "nbgrader"]
-    env = dict(os.environ, COURSE_DIR=str(ROOT))  # the notebooks' self-check finds exercises/
+    nbgrader = [str(python), "-m", "nbgrader"]
+    # the notebooks' self-check finds exercises/; the peers' bin/ first, for nbgrader's alembic
+    path = os.pathsep.join([str(python.parent), os.environ.get("PATH", "")])
+    env = dict(os.environ, COURSE_DIR=str(ROOT), PATH=path)
     subprocess.run(
         [*nbgrader, "generate_assignment", NAME, "--force", "--create"],
         cwd=course,
@@ -189,6 +219,13 @@ def main(argv=None) -> int:
     parser.add_argument("--n", type=int, default=40, help="number of submissions (default 40)")
     parser.add_argument("--jobs", type=int, default=None, help="default: the CPUs we may use")
     parser.add_argument("--skip-nbgrader", action="store_true", help="ours only")
+    parser.add_argument(
+        "--peers",
+        type=Path,
+        default=None,
+        help="virtual environment for nbgrader, kept between runs (default: a temporary one, "
+        "unless nbgrader is installed here)",
+    )
     args = parser.parse_args(argv)
     os.environ.setdefault("MPLBACKEND", "Agg")
     warnings.simplefilter("ignore")  # results below, not buried under warnings
@@ -219,7 +256,8 @@ def main(argv=None) -> int:
             print(f"  --jobs {j}: {t:7.1f} s  ({t / n:.2f} s per student)")
         if not args.skip_nbgrader:
             with open(tmp / "nbgrader.log", "wb") as log:
-                base = run_nbgrader(subs, tmp, log)
+                python = peer_python(args.peers or tmp / "peers", log)
+                base = run_nbgrader(subs, tmp, log, python)
             print(
                 f"nbgrader autograde (kernel per notebook): {base:7.1f} s  ({base / n:.2f} s per student)"
             )

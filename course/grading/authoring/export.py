@@ -50,8 +50,10 @@ REPO_ROOT = Path(__file__).resolve().parents[3]
 DIST_NAME = "residual-validation-course"
 _WHEEL_NAME = DIST_NAME.replace("-", "_")
 STUDENT_PAGE = Path("docs/students/install-and-submit.md")
-#: Jupyter for students: `course open` starts JupyterLab, so the student edition brings it.
-_STUDENT_EXTRA_DEPENDENCIES = ["jupyterlab>=4", "ipykernel>=6.25"]
+#: What students run beyond the library: `course open` starts JupyterLab, and the teaching
+#: notebooks' sliders need ipywidgets (the wheel has no extras and is on no index, so
+#: everything a shipped notebook imports must be a plain dependency).
+_STUDENT_EXTRA_DEPENDENCIES = ["jupyterlab>=4", "ipykernel>=6.25", "ipywidgets>=8.0"]
 # a fixed timestamp makes every archive byte-for-byte reproducible (zip cannot go below 1980)
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 
@@ -113,7 +115,8 @@ def export(
     ``releases`` are the assignments' release files when already at hand (``{name:
     release_files(...)}``, e.g. for several editions in a row); by default they are made here.
     """
-    dest, root = Path(dest).absolute(), Path(root).resolve()
+    # normalised (no "..") without resolving links: the path printed is the one to hand out
+    dest, root = Path(os.path.abspath(dest)), Path(root).resolve()
     _check_destination(dest)
     if (secret is None) != (roster is None):
         raise ExportError(
@@ -263,8 +266,8 @@ Assignments: {", ".join(names)}.
 | `EXPORT.md` | this note | no |
 
 Students can see: the library's source, the teaching notebooks, the assignment notebooks,
-`checks.json` (public cases with their expected values, the hints, how many hidden cases
-there are), `data.py` (the self-check's property checks{"" if keyed else " and the data generators"})
+`checks.json` (the public cases with their expected values sealed, i.e. checkable but not
+readable, the hints, how many hidden cases there are), `data.py` (the self-check's property checks{"" if keyed else " and the data generators"})
 {"and `personal_data.json` (every listed student's data, indexed by a hash of the ID)" if keyed else ""}.
 They cannot see: solution notebooks, `checks.py` (references, hidden cases, tolerances of
 hidden cases), {"the data generators, the secret, " if keyed else ""}the tests.
@@ -325,7 +328,16 @@ def _core_metadata(meta: dict, readme: str) -> str:
 
 
 # --------------------------------------------------------------------------------------
-# archives (written here, not by a build backend: offline, fast and reproducible)
+# archives, written here rather than by the project's build backend (setuptools.build_meta):
+# - in-process, the backend is whatever setuptools the instructor's environment holds, and
+#   `license = "MIT"` (PEP 639) needs setuptools >= 77, which `.[all]` does not bring (pip's
+#   isolated builds fetch it); through pip or `build` it needs the index, or a warm cache;
+# - no build step: a backend build copies the tree again into build/ and egg-info folders;
+# - byte-reproducible as it is: setuptools' sdist records the files' mtimes and the build's
+#   time in its gzip header (SOURCE_DATE_EPOCH reaches the wheel only), so two exports of
+#   the same tree would differ.
+# The wheel is pure Python and its metadata few (_core_metadata); tests/test_journey.py
+# installs it with pip into a fresh environment, and pip validates RECORD and METADATA.
 # --------------------------------------------------------------------------------------
 def _tree_files(folder: Path) -> list[tuple[str, bytes]]:
     return [

@@ -90,14 +90,28 @@ class PersonalData:
     def has(self, student_id: str) -> bool:
         return _lookup(self._salt, self.assignment, student_id) in self._students
 
+    def registered_case(self, student_id: str) -> str | None:
+        """The registered ID that differs from ``student_id`` only in upper/lower case, if
+        any: IDs are case-sensitive, and ``s001`` typed as ``S001`` is the likeliest slip."""
+        sid = str(student_id).strip()
+        variants = {sid.lower(), sid.upper(), sid.capitalize(), sid.swapcase()} - {sid}
+        return next((v for v in sorted(variants) if self.has(v)), None)
+
     def data(self, student_id: str, key: str) -> Any:
         entry = self._students.get(_lookup(self._salt, self.assignment, student_id))
         if entry is None:
+            sid = str(student_id).strip()
+            known = self.registered_case(sid)
+            if known is not None:
+                raise KeyError(
+                    f"Your student ID {sid!r} is not registered, but {known!r} is: IDs are "
+                    f"case-sensitive. Set STUDENT_ID = {known!r} in the first cell and run it."
+                )
             raise KeyError(
-                f"Your student ID {str(student_id).strip()!r} is not in this course's personal "
-                "data. Check STUDENT_ID in the first cell (exactly as registered, e.g. no "
-                "spaces or missing digits). If it is right, ask your instructor: the data may "
-                "have been issued before you enrolled."
+                f"Your student ID {sid!r} is not in this course's personal data. Check "
+                "STUDENT_ID in the first cell (exactly as registered: the same upper and "
+                "lower case, no spaces, no missing digits). If it is right, ask your "
+                "instructor: the data may have been issued before you enrolled."
             )
         return decode(entry[key])
 

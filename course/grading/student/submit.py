@@ -129,7 +129,7 @@ def make_submission(
             "save the notebook (Ctrl-S) after setting STUDENT_ID, then submit again"
         )
     if personal is not None and not personal.has(sid):
-        raise Refused(_unknown_id(sid))
+        raise Refused(_unknown_id(sid, personal))
     import course
 
     submission = {
@@ -152,11 +152,19 @@ def make_submission(
     return target, hashlib.sha256(data).hexdigest(), nb
 
 
-def _unknown_id(sid: str) -> str:
+def _unknown_id(sid: str, personal: PersonalData) -> str:
+    known = personal.registered_case(sid)
+    if known is not None:
+        return (
+            f"your student ID {sid!r} is not registered, but {known!r} is: IDs are "
+            f"case-sensitive. Set STUDENT_ID = {known!r} in the first cell, run that cell, "
+            "save, and submit again"
+        )
     return (
         f"your student ID {sid!r} is not in this course's personal data, so it cannot be "
-        "graded on your data: check STUDENT_ID in the first cell (exactly as registered), run "
-        "that cell, save, and submit again; if it is right, ask your instructor"
+        "graded on your data: check STUDENT_ID in the first cell (exactly as registered, the "
+        "same upper and lower case), run that cell, save, and submit again; if it is right, "
+        "ask your instructor"
     )
 
 
@@ -183,8 +191,13 @@ def _notebook_path(namespace: dict, assignment: str) -> Path | None:
 
 
 def _stale_answers(nb: dict, namespace: dict) -> list[str]:
-    """Questions whose SAVED answer was never run in this kernel (edited and not saved, or
-    not run since the kernel started)."""
+    """Questions whose SAVED code answer was never run in this kernel (edited and not saved,
+    or not run since the kernel started).
+
+    Only code cells reach the kernel's input history ``In``. A short answer (a markdown
+    cell) is graded as the saved file holds it, and the submission is that file, so there is
+    nothing to compare it with.
+    """
     history = namespace.get("In")
     if not isinstance(history, list) or len(history) < 2:
         return []
@@ -192,11 +205,22 @@ def _stale_answers(nb: dict, namespace: dict) -> list[str]:
     stale = []
     for cell in _cells(nb):
         meta = _role(cell)
+        if cell.get("cell_type") != "code":
+            continue
         if meta.get("role") == CellRole.ANSWER and meta.get("question"):
             saved = "\n".join(line.rstrip() for line in _source(cell).strip().splitlines())
             if saved and saved not in ran:
                 stale.append(str(meta["question"]))
     return stale
+
+
+class WrittenPath(type(Path())):  # type: ignore[misc]
+    """The submission's path, returned by ``check.submit()``: a :class:`~pathlib.Path` that
+    Jupyter does not display, since the receipt printed above already names the file (the
+    submit cell ends with the call, so its value would show as ``PosixPath('…')``)."""
+
+    def _ipython_display_(self) -> None:
+        return None
 
 
 def submit_from_kernel(check, namespace: dict, notebook=None, out=None) -> Path | None:
@@ -208,7 +232,7 @@ def submit_from_kernel(check, namespace: dict, notebook=None, out=None) -> Path 
         print(f"Not submitted: {exc}.")
         return None
     if check.personal is not None and not check.personal.has(sid):
-        print(f"Not submitted: {_unknown_id(sid)}.")
+        print(f"Not submitted: {_unknown_id(sid, check.personal)}.")
         return None
     path = Path(notebook) if notebook is not None else _notebook_path(namespace, name)
     if path is None or not path.is_file():
@@ -255,4 +279,4 @@ def submit_from_kernel(check, namespace: dict, notebook=None, out=None) -> Path 
         "  Upload this file to your course's assignment page. Changed something? Save, run "
         "this cell again and upload the new file."
     )
-    return target
+    return WrittenPath(target)
