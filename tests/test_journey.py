@@ -458,18 +458,19 @@ def test_lsq_fit_works_where_scipy_has_no_dtrcon(monkeypatch):
     from scipy.linalg import lapack
 
     from course import lsq
+    from course.lsq import _fit
 
     rng = np.random.default_rng(7)
     A = rng.standard_normal((30, 4))
     y = A @ np.arange(1.0, 5.0) + 0.1 * rng.standard_normal(30)
     reference = lsq.fit(A, y)
     R = np.linalg.qr(A, mode="r")
-    estimate = lsq._rcond_upper(R)
+    estimate = _fit._rcond_upper(R)
     monkeypatch.delattr(lapack, "dtrcon", raising=False)
     assert not hasattr(lapack, "dtrcon")
     fitted = lsq.fit(A, y)
     np.testing.assert_allclose(fitted.x_hat, reference.x_hat, rtol=1e-12)
-    exact = lsq._rcond_upper(R)  # 1 / (||R||_1 ||R^-1||_1); LAPACK estimates it within 3x
+    exact = _fit._rcond_upper(R)  # 1 / (||R||_1 ||R^-1||_1); LAPACK estimates it within 3x
     assert exact == pytest.approx(1 / (np.linalg.norm(R, 1) * np.linalg.norm(np.linalg.inv(R), 1)))
     assert exact / 3 <= estimate <= 3 * exact
     dependent = np.column_stack([A[:, :3], A[:, 0] + A[:, 1]])
@@ -477,7 +478,7 @@ def test_lsq_fit_works_where_scipy_has_no_dtrcon(monkeypatch):
         lsq.fit(dependent, y)
     singular = np.triu(np.ones((3, 3)))
     singular[1, 1] = 0.0
-    assert lsq._rcond_upper(singular) == 0.0
+    assert _fit._rcond_upper(singular) == 0.0
 
 
 def test_the_readme_states_the_supported_range():
