@@ -11,6 +11,7 @@ Sphinx warnings are errors, and a notebook that raises fails the build.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -21,7 +22,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["BuildReport", "build_lite", "build_site", "find_root"]
+__all__ = ["BuildReport", "build_lite", "build_site", "cache_stored_outputs", "find_root"]
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -74,6 +75,29 @@ def _cached_records(cache_dir: Path) -> dict[int, str]:
     return {record.pk: record.uri for record in get_cache(str(path)).list_cache_records()}
 
 
+def cache_stored_outputs(root: Path, cache_dir: Path) -> list[str]:
+    """Put the teaching notebooks, with the outputs saved in them, into the execution cache.
+
+    The test suite checks with nbval that a fresh run of every teaching notebook reproduces its
+    saved outputs, so those outputs are what the build would compute: the build (and CI, which
+    runs nbval anyway) need not run each notebook a second time. The cache is keyed by the code
+    of a notebook, so one edited after it was saved runs as usual. Returns the notebooks added.
+    """
+    import nbformat
+    from jupyter_cache import get_cache
+
+    cache = get_cache(str(Path(cache_dir) / "jupyter_cache"))
+    added = []
+    for notebook in sorted(Path(root).glob("notebooks/*.ipynb")):
+        with contextlib.suppress(KeyError):  # KeyError: no cached run of this code yet
+            cache.match_cache_notebook(nbformat.read(notebook, as_version=4))
+            continue
+        # no check_validity: cells that nbval skips keep no execution count in the saved file
+        cache.cache_notebook_file(str(notebook), check_validity=False)
+        added.append(notebook.relative_to(root).as_posix())
+    return added
+
+
 def build_site(
     out_dir: str | os.PathLike,
     *,
@@ -82,12 +106,16 @@ def build_site(
     jobs: int = 1,
     lite: bool = True,
     quiet: bool = False,
+    stored_outputs: bool = False,
 ) -> BuildReport:
     """Build the website into ``out_dir``; raise ``RuntimeError`` when Sphinx fails.
 
     ``cache_dir`` keeps the executed notebooks and Sphinx's parsed pages between builds
     (default ``<clone>/.cache/docs``); it is never inside ``out_dir``, so a new output folder
     still reuses every notebook whose code did not change.
+
+    ``stored_outputs``: show the outputs saved in the teaching notebooks instead of running
+    them (see :func:`cache_stored_outputs`); a notebook whose code changed still runs.
     """
     root = find_root() if root is None else Path(root).resolve()
     out = Path(out_dir).resolve()
@@ -95,6 +123,8 @@ def build_site(
     if cache == out or out in cache.parents:
         raise ValueError(f"cache_dir {cache} must not be inside out_dir {out}")
     cache.mkdir(parents=True, exist_ok=True)
+    if stored_outputs:
+        cache_stored_outputs(root, cache)
     before = _cached_records(cache)
     env = dict(os.environ)
     env["COURSE_DOCS_CACHE"] = str(cache)
