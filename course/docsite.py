@@ -78,24 +78,40 @@ def _cached_records(cache_dir: Path) -> dict[int, str]:
 def cache_stored_outputs(root: Path, cache_dir: Path) -> list[str]:
     """Put the teaching notebooks, with the outputs saved in them, into the execution cache.
 
-    The test suite checks with nbval that a fresh run of every teaching notebook reproduces its
-    saved outputs, so those outputs are what the build would compute: the build (and CI, which
-    runs nbval anyway) need not run each notebook a second time. The cache is keyed by the code
-    of a notebook, so one edited after it was saved runs as usual. Returns the notebooks added.
+    The test suite checks with nbval that a fresh run of every committed teaching notebook
+    reproduces its saved outputs, so those outputs are what the build would compute: the build
+    (and CI, which runs nbval anyway) need not run each notebook a second time. A notebook
+    with a code cell that was never run (no execution count; the widget cells that nbval skips
+    aside) is left out and runs as usual, and the cache is keyed by the code, so a notebook
+    edited later runs too. Widget cells show no output this way (a run shows their text form).
+    Returns the notebooks added.
     """
     import nbformat
     from jupyter_cache import get_cache
 
     cache = get_cache(str(Path(cache_dir) / "jupyter_cache"))
     added = []
-    for notebook in sorted(Path(root).glob("notebooks/*.ipynb")):
-        with contextlib.suppress(KeyError):  # KeyError: no cached run of this code yet
-            cache.match_cache_notebook(nbformat.read(notebook, as_version=4))
+    for path in sorted(Path(root).glob("notebooks/*.ipynb")):
+        notebook = nbformat.read(path, as_version=4)
+        if not _saved_after_a_run(notebook):
             continue
-        # no check_validity: cells that nbval skips keep no execution count in the saved file
-        cache.cache_notebook_file(str(notebook), check_validity=False)
-        added.append(notebook.relative_to(root).as_posix())
+        with contextlib.suppress(KeyError):  # KeyError: no cached run of this code yet
+            cache.match_cache_notebook(notebook)
+            continue
+        # no check_validity: the skipped widget cells keep no execution count
+        cache.cache_notebook_file(str(path), check_validity=False)
+        added.append(path.relative_to(root).as_posix())
     return added
+
+
+def _saved_after_a_run(notebook) -> bool:
+    """Whether every code cell but nbval's skipped ones holds the count of a run."""
+    return all(
+        cell.get("execution_count") is not None
+        or "nbval-skip" in cell.get("metadata", {}).get("tags", [])
+        for cell in notebook.cells
+        if cell.cell_type == "code"
+    )
 
 
 def build_site(
@@ -115,7 +131,7 @@ def build_site(
     still reuses every notebook whose code did not change.
 
     ``stored_outputs``: show the outputs saved in the teaching notebooks instead of running
-    them (see :func:`cache_stored_outputs`); a notebook whose code changed still runs.
+    them (see :func:`cache_stored_outputs`); a notebook with a cell never run still runs.
     """
     root = find_root() if root is None else Path(root).resolve()
     out = Path(out_dir).resolve()

@@ -19,7 +19,13 @@ sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 import course_site  # noqa: E402
 
 from course import cli  # noqa: E402
-from course.docsite import LITE_INSTALL_CELL, _lite_notebook, build_site, find_root  # noqa: E402
+from course.docsite import (  # noqa: E402
+    LITE_INSTALL_CELL,
+    _lite_notebook,
+    build_site,
+    cache_stored_outputs,
+    find_root,
+)
 
 
 def test_names_used_follow_aliases_across_cells():
@@ -146,3 +152,31 @@ def test_docs_command_is_wired(capsys):
 def test_cache_inside_the_output_folder_is_refused(tmp_path):
     with pytest.raises(ValueError, match="cache_dir"):
         build_site(tmp_path / "site", root=ROOT, cache_dir=tmp_path / "site" / "cache")
+
+
+def test_stored_outputs_fill_the_cache_until_the_code_changes(tmp_path):
+    """``course docs --stored-outputs``: each teaching notebook enters the execution cache once,
+    with its saved outputs; a cell added and never run keeps its notebook out (it will run)."""
+    pytest.importorskip("jupyter_cache")
+    root = tmp_path / "clone"
+    (root / "notebooks").mkdir(parents=True)
+    names = [
+        "03_parameter_estimation_and_likelihood.ipynb",
+        "05a_wishart_numerics_under_the_hood.ipynb",
+    ]
+    for name in names:
+        (root / "notebooks" / name).write_bytes((ROOT / "notebooks" / name).read_bytes())
+    cache = tmp_path / "cache"
+    assert cache_stored_outputs(root, cache) == [f"notebooks/{n}" for n in names]
+    assert cache_stored_outputs(root, cache) == []
+    edited = root / "notebooks" / names[0]
+    notebook = json.loads(edited.read_text())
+    notebook["cells"].append(
+        {"cell_type": "code", "execution_count": None, "metadata": {}, "outputs": []}
+        | {"id": "never-run", "source": "x_new = 1"}
+    )
+    edited.write_text(json.dumps(notebook, indent=1))
+    assert cache_stored_outputs(root, cache) == []
+    notebook["cells"][-1]["execution_count"] = 99  # saved after a run: its outputs count
+    edited.write_text(json.dumps(notebook, indent=1))
+    assert cache_stored_outputs(root, cache) == [f"notebooks/{names[0]}"]
