@@ -62,6 +62,24 @@ def assert_rate(rate, n, p, miss=1e-4):
     )
 
 
+# -- the fast lane: python -m pytest -m "not slow" ----------------------------------------------
+#: Module fixtures that grade a whole class or export a student edition (tens of seconds).
+SLOW_FIXTURES = frozenset({"graded_class", "graded", "needles", "class_edition", "public_edition"})
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark ``slow`` what the fast lane leaves out without each test saying so: the notebook
+    cells (nbval), the website (``browser``) and every test that needs a graded class or an
+    exported edition (:data:`SLOW_FIXTURES`). Other slow tests carry ``@pytest.mark.slow``."""
+    for item in items:
+        if (
+            item.path.suffix == ".ipynb"
+            or item.get_closest_marker("browser") is not None
+            or SLOW_FIXTURES & set(getattr(item, "fixturenames", ()))
+        ):
+            item.add_marker(pytest.mark.slow)
+
+
 # -- one graded class per assignment, shared by the whole-class tests ---------------------------
 #: tag -> writer(assignment, folder): the notebooks a test module adds to that assignment's class
 _CLASS_WRITERS: dict[str, Callable[[str, Path], object]] = {}

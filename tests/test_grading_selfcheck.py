@@ -357,6 +357,7 @@ def test_seccomp_blocks_fork_but_not_threads():
     assert out.stdout.split("\n")[:2] == ["blocked 1", "kill blocked"], out.stderr
 
 
+@pytest.mark.slow  # a fresh install or a whole grading run
 def test_spawn_mode_grades_like_fork_mode(tmp_path):
     from course.grading.driver import GradeOptions, grade
 

@@ -424,6 +424,7 @@ print("survey", mine["A"].shape)
 """
 
 
+@pytest.mark.slow  # a fresh install or a whole grading run
 def test_the_wheel_installs_and_works_without_the_repository(class_edition, tmp_path):
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
