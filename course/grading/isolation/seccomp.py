@@ -47,7 +47,7 @@ import functools
 import os
 import platform
 
-__all__ = ["DENIED", "available", "die_with_parent", "install", "rules"]
+__all__ = ["DENIED", "available", "die_with_parent", "export_pfc", "install", "rules"]
 
 #: Refused outright with EPERM (a name that does not exist on an architecture, e.g. ``fork``
 #: on aarch64, is known to libseccomp and simply matches nothing there).
