@@ -4,6 +4,7 @@ tripwire, layer detection and the refusal to grade without file-system walls."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -144,6 +145,24 @@ def test_seccomp_argument_rules_read_arguments_as_the_kernel_does():
         "ok",
         "ok",
     ]
+
+
+def test_seccomp_filter_names_every_call_of_the_policy():
+    """libseccomp compiled a rule for every call the policy names that exists here (nothing
+    dropped silently), each with the promised error, and nothing else."""
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    import re
+
+    pfc = seccomp.export_pfc(os.getpid(), pinned_fd=7)
+    filtered = dict(re.findall(r'filter for syscall "(\w+)" \((-?\d+)\)', pfc))
+    expected = {*seccomp.DENIED, "clone", "clone3", "kill", "tkill", "tgkill", "prlimit64"}
+    expected |= {"close", "dup2", "dup3", "close_range"}
+    lib = seccomp._library()
+    here = {name for name in expected if lib.seccomp_syscall_resolve_name(name.encode()) >= 0}
+    assert set(filtered) == here, sorted(set(filtered) ^ here)  # aarch64 has no fork: absent
+    assert {"execve", "socket", "clone", "kill", "close", "close_range"} <= set(filtered)
+    assert "action ERRNO(38)" in pfc and "# invalid architecture action\naction ERRNO(1)" in pfc
 
 
 def test_grading_children_run_under_the_filter():
