@@ -12,6 +12,7 @@ Sphinx warnings are errors, and a notebook that raises fails the build.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import shutil
@@ -215,25 +216,27 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     time a notebook runs.
     """
     work = cache / "lite"
-    wheels = work / "wheels"
+    # The wheel is built again only when what goes into it changed (not for a notebook edit).
+    wheels = work / "wheels" / _wheel_inputs_digest(root)
     contents = work / "contents"
-    for folder in (wheels, contents):
-        shutil.rmtree(folder, ignore_errors=True)
-        folder.mkdir(parents=True)
-    # pip builds in a temporary copy so that the clone gets no build/ or egg-info folders.
-    with tempfile.TemporaryDirectory() as tmp:
-        copy = Path(tmp) / "src"
-        shutil.copytree(
-            root,
-            copy,
-            ignore=shutil.ignore_patterns(
-                ".git", ".cache", ".venv*", "build", "dist", "*.egg-info", "__pycache__"
-            ),
-            symlinks=True,
-        )
-        _run(
-            [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(wheels), str(copy)]
-        )
+    shutil.rmtree(contents, ignore_errors=True)
+    contents.mkdir(parents=True)
+    if not any(wheels.glob("*.whl")):
+        shutil.rmtree(wheels.parent, ignore_errors=True)
+        wheels.mkdir(parents=True)
+        # pip builds in a temporary copy so that the clone gets no build/ or egg-info folders.
+        with tempfile.TemporaryDirectory() as tmp:
+            copy = Path(tmp) / "src"
+            shutil.copytree(
+                root,
+                copy,
+                ignore=shutil.ignore_patterns(
+                    ".git", ".cache", ".venv*", "build", "dist", "*.egg-info", "__pycache__"
+                ),
+                symlinks=True,
+            )
+            command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w"]
+            _run([*command, str(wheels), str(copy)])
     wheel = next(wheels.glob("*.whl"))
     for notebook in notebooks:
         _lite_notebook(notebook, contents / notebook.name)
@@ -249,6 +252,19 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     (work / "jupyter_lite_config.json").write_text(json.dumps(config, indent=1))
     _run([sys.executable, "-m", "jupyter", "lite", "build", "--lite-dir", str(work)], cwd=work)
     return site_dir / "lite"
+
+
+def _wheel_inputs_digest(root: Path) -> str:
+    """A digest of everything the course's wheel is built from: the package and the files
+    ``pyproject.toml`` names (its readme and licence)."""
+    digest = hashlib.sha256()
+    files = [root / name for name in ("pyproject.toml", "README.md", "LICENSE")]
+    files += sorted(p for p in (root / "course").rglob("*") if "__pycache__" not in p.parts)
+    for path in files:
+        if path.is_file():
+            digest.update(path.relative_to(root).as_posix().encode() + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
 
 
 def _run(command: list[str], cwd: Path | None = None) -> None:

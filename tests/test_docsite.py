@@ -22,6 +22,7 @@ from course import cli  # noqa: E402
 from course.docsite import (  # noqa: E402
     LITE_INSTALL_CELL,
     _lite_notebook,
+    _wheel_inputs_digest,
     build_site,
     cache_stored_outputs,
     find_root,
@@ -180,3 +181,23 @@ def test_stored_outputs_fill_the_cache_until_the_code_changes(tmp_path):
     notebook["cells"][-1]["execution_count"] = 99  # saved after a run: its outputs count
     edited.write_text(json.dumps(notebook, indent=1))
     assert cache_stored_outputs(root, cache) == [f"notebooks/{names[0]}"]
+
+
+def test_the_lite_wheel_is_rebuilt_only_when_its_inputs_change(tmp_path):
+    """The JupyterLite app reuses the course's wheel across builds unless the package (or the
+    files pyproject.toml names) changed: editing a notebook does not rebuild it."""
+    root = tmp_path / "clone"
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_bytes((ROOT / name).read_bytes())
+    (root / "course").mkdir()
+    (root / "course" / "__init__.py").write_text("__version__ = '0'\n")
+    (root / "notebooks").mkdir()
+    (root / "notebooks" / "a.ipynb").write_text("{}")
+    first = _wheel_inputs_digest(root)
+    (root / "notebooks" / "a.ipynb").write_text('{"cells": []}')
+    (root / "course" / "__pycache__").mkdir()
+    (root / "course" / "__pycache__" / "x.pyc").write_bytes(b"compiled")
+    assert _wheel_inputs_digest(root) == first
+    (root / "course" / "lsq.py").write_text("x = 1\n")
+    assert _wheel_inputs_digest(root) != first
