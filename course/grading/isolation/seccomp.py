@@ -26,13 +26,14 @@ enforced. Files are Landlock's and the namespaces' business (:mod:`course.gradin
 
 The rules are handed to libseccomp (Debian's ``libseccomp2``, present wherever systemd is),
 which keeps the system-call numbers of every architecture and compiles the BPF program, the
-architecture checks included. The binding is the handful of ctypes declarations below, not
-``pyseccomp`` or Debian's ``python3-seccomp``: the latter is built for Debian's own Python
-only, and the former finds the library by running ``/sbin/ldconfig`` in a subprocess when it
-is imported, which fails inside the fork server's bubblewrap root (and a sandbox module
-should start no process); ``libseccomp.so.2`` loads by its stable name through the loader's
-cache, which the sandbox keeps readable. A machine without libseccomp grades without this
-layer, and :meth:`~course.grading.isolation.Isolation.describe` says so.
+architecture checks included. The binding is the handful of ctypes declarations below (five
+functions of libseccomp's stable C API), not a Python package: Debian's ``python3-seccomp``
+is built for Debian's own Python only, and ``pyseccomp`` (last released in 2021) would be a
+dependency for instructors to install for those five functions, and looks the library up
+with ``ctypes.util.find_library``, which starts ``ldconfig`` in a subprocess at import.
+``libseccomp.so.2`` loads by its stable name through the loader's cache. A machine without
+libseccomp grades without this layer, and
+:meth:`~course.grading.isolation.Isolation.describe` says so.
 
 Arguments are compared as the kernel reads them: a descriptor or a process ID is a 32-bit int,
 so where a refusal depends on one, its low 32 bits decide (``MASKED_EQ`` with ``0xFFFFFFFF``),
