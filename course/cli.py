@@ -127,7 +127,11 @@ def _docs(args) -> int:
 
     try:
         report = build_site(
-            args.out_dir, cache_dir=args.cache, jobs=args.jobs, lite=not args.no_lite
+            args.out_dir,
+            cache_dir=args.cache,
+            jobs=args.jobs,
+            lite=not args.no_lite,
+            stored_outputs=args.stored_outputs,
         )
     except (RuntimeError, FileNotFoundError, ValueError) as error:
         print(f"course docs: {error}", file=sys.stderr)
@@ -188,6 +192,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_docs.add_argument("--jobs", type=int, default=1, help="parallel Sphinx processes")
     p_docs.add_argument("--no-lite", action="store_true", help="skip the JupyterLite app")
+    p_docs.add_argument(
+        "--stored-outputs",
+        action="store_true",
+        help="show the outputs saved in the teaching notebooks instead of running them "
+        "(the test suite checks that a fresh run reproduces them)",
+    )
     p_docs.set_defaults(func=_docs)
 
     try:

@@ -11,6 +11,8 @@ Sphinx warnings are errors, and a notebook that raises fails the build.
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import json
 import os
 import shutil
@@ -21,7 +23,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["BuildReport", "build_lite", "build_site", "find_root"]
+__all__ = ["BuildReport", "build_lite", "build_site", "cache_stored_outputs", "find_root"]
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -78,6 +80,45 @@ def _cached_records(cache_dir: Path) -> dict[int, str]:
     return {record.pk: record.uri for record in get_cache(str(path)).list_cache_records()}
 
 
+def cache_stored_outputs(root: Path, cache_dir: Path) -> list[str]:
+    """Put the teaching notebooks, with the outputs saved in them, into the execution cache.
+
+    The test suite checks with nbval that a fresh run of every committed teaching notebook
+    reproduces its saved outputs, so those outputs are what the build would compute: the build
+    (and CI, which runs nbval anyway) need not run each notebook a second time. A notebook
+    with a code cell that was never run (no execution count; the widget cells that nbval skips
+    aside) is left out and runs as usual, and the cache is keyed by the code, so a notebook
+    edited later runs too. Widget cells show no output this way (a run shows their text form).
+    Returns the notebooks added.
+    """
+    import nbformat
+    from jupyter_cache import get_cache
+
+    cache = get_cache(str(Path(cache_dir) / "jupyter_cache"))
+    added = []
+    for path in sorted(Path(root).glob("notebooks/*.ipynb")):
+        notebook = nbformat.read(path, as_version=4)
+        if not _saved_after_a_run(notebook):
+            continue
+        with contextlib.suppress(KeyError):  # KeyError: no cached run of this code yet
+            cache.match_cache_notebook(notebook)
+            continue
+        # no check_validity: the skipped widget cells keep no execution count
+        cache.cache_notebook_file(str(path), check_validity=False)
+        added.append(path.relative_to(root).as_posix())
+    return added
+
+
+def _saved_after_a_run(notebook) -> bool:
+    """Whether every code cell but nbval's skipped ones holds the count of a run."""
+    return all(
+        cell.get("execution_count") is not None
+        or "nbval-skip" in cell.get("metadata", {}).get("tags", [])
+        for cell in notebook.cells
+        if cell.cell_type == "code"
+    )
+
+
 def build_site(
     out_dir: str | os.PathLike,
     *,
@@ -86,12 +127,16 @@ def build_site(
     jobs: int = 1,
     lite: bool = True,
     quiet: bool = False,
+    stored_outputs: bool = False,
 ) -> BuildReport:
     """Build the website into ``out_dir``; raise ``RuntimeError`` when Sphinx fails.
 
     ``cache_dir`` keeps the executed notebooks and Sphinx's parsed pages between builds
     (default ``<clone>/.cache/docs``); it is never inside ``out_dir``, so a new output folder
     still reuses every notebook whose code did not change.
+
+    ``stored_outputs``: show the outputs saved in the teaching notebooks instead of running
+    them (see :func:`cache_stored_outputs`); a notebook with a cell never run still runs.
     """
     root = find_root() if root is None else Path(root).resolve()
     out = Path(out_dir).resolve()
@@ -99,6 +144,8 @@ def build_site(
     if cache == out or out in cache.parents:
         raise ValueError(f"cache_dir {cache} must not be inside out_dir {out}")
     cache.mkdir(parents=True, exist_ok=True)
+    if stored_outputs:
+        cache_stored_outputs(root, cache)
     before = _cached_records(cache)
     env = dict(os.environ)
     env["COURSE_DOCS_CACHE"] = str(cache)
@@ -173,10 +220,11 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     time a notebook runs.
     """
     work = cache / "lite"
-    wheels = work / "wheels"
+    # The wheel is built again only when what goes into it changed (not for a notebook edit).
+    wheels = work / "wheels" / _wheel_inputs_digest(root)
     contents = work / "contents"
     extensions = work / "labextensions"
-    for folder in (wheels, contents, extensions):
+    for folder in (contents, extensions):
         shutil.rmtree(folder, ignore_errors=True)
         folder.mkdir(parents=True)
     # the environment's extensions, those of non-course tools left out (jupyter lite would
@@ -184,20 +232,22 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     installed = Path(sys.prefix) / "share" / "jupyter" / "labextensions"
     for extension in lite_extensions():
         shutil.copytree(extension, extensions / extension.relative_to(installed))
-    # pip builds in a temporary copy so that the clone gets no build/ or egg-info folders.
-    with tempfile.TemporaryDirectory() as tmp:
-        copy = Path(tmp) / "src"
-        shutil.copytree(
-            root,
-            copy,
-            ignore=shutil.ignore_patterns(
-                ".git", ".cache", ".venv*", "build", "dist", "*.egg-info", "__pycache__"
-            ),
-            symlinks=True,
-        )
-        _run(
-            [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(wheels), str(copy)]
-        )
+    if not any(wheels.glob("*.whl")):
+        shutil.rmtree(wheels.parent, ignore_errors=True)
+        wheels.mkdir(parents=True)
+        # pip builds in a temporary copy so that the clone gets no build/ or egg-info folders.
+        with tempfile.TemporaryDirectory() as tmp:
+            copy = Path(tmp) / "src"
+            shutil.copytree(
+                root,
+                copy,
+                ignore=shutil.ignore_patterns(
+                    ".git", ".cache", ".venv*", "build", "dist", "*.egg-info", "__pycache__"
+                ),
+                symlinks=True,
+            )
+            command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w"]
+            _run([*command, str(wheels), str(copy)])
     wheel = next(wheels.glob("*.whl"))
     for notebook in notebooks:
         _lite_notebook(notebook, contents / notebook.name)
@@ -229,6 +279,19 @@ def lite_extensions(prefix: Path | None = None) -> list[Path]:
             word in p.parent.relative_to(root).as_posix() for word in LITE_EXCLUDED_EXTENSIONS
         )
     ]
+
+
+def _wheel_inputs_digest(root: Path) -> str:
+    """A digest of everything the course's wheel is built from: the package and the files
+    ``pyproject.toml`` names (its readme and licence)."""
+    digest = hashlib.sha256()
+    files = [root / name for name in ("pyproject.toml", "README.md", "LICENSE")]
+    files += sorted(p for p in (root / "course").rglob("*") if "__pycache__" not in p.parts)
+    for path in files:
+        if path.is_file():
+            digest.update(path.relative_to(root).as_posix().encode() + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
 
 
 def _run(command: list[str], cwd: Path | None = None) -> None:

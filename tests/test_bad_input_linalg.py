@@ -135,8 +135,10 @@ TABLE = {
     # -- linalg ---------------------------------------------------------------------
     "readonly": case(linalg.readonly, array=Arg(np.zeros(2), {"list": [1.0], "None": None})),
     "symmetrize": case(linalg.symmetrize, P=array(S, min_ndim=2)),
-    "psd_sqrt": case(linalg.psd_sqrt, C=covariance(S, psd=True)),
-    "cholesky_lower": case(linalg.cholesky_lower, matrix=covariance(S), name="matrix"),
+    "psd_sqrt": case(linalg.psd_sqrt, C=covariance(S, psd=True, extreme=True)),
+    "cholesky_lower": case(
+        linalg.cholesky_lower, matrix=covariance(S, extreme=True), name="matrix"
+    ),
     "covariance_factor": case(
         linalg.covariance_factor,
         value=dataclasses.replace(

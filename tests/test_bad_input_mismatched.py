@@ -1,5 +1,7 @@
 """Bad input to every public callable of course.mismatched (see tests/bad_input.py)."""
 
+import dataclasses
+
 import numpy as np
 from bad_input import (
     Arg,
@@ -34,7 +36,9 @@ R2 = mm.simulate_records(TWO_OUTPUTS, TWO_OUTPUTS, M, 3, np.random.default_rng(4
 
 def residuals(value=R):
     """``(M, N, p)`` residuals of ``M >= 2`` records (``(M, N)`` for one output)."""
-    return array(value, ndims=(2, 3)).but(one_record=value[:1])
+    base = array(value, ndims=(2, 3)).but(one_record=value[:1])
+    # tiny residuals only: squares of 1e300 overflow (the statistics are of the order 1e600)
+    return dataclasses.replace(base, extreme={"R * 1e-300": np.asarray(value, float) * 1e-300})
 
 
 def model(value):

@@ -92,33 +92,35 @@ TABLE = {
     "extreme_eigenvalue": case(
         nis.extreme_eigenvalue, **dims(), which=choice("max"), method=choice("exact")
     ),
-    "nees": case(nis.nees, errors=innovations(), P=covariance(S, ndims=(2, 3))),
-    "nis": case(nis.nis, innovations=innovations(), S=covariance(S, ndims=(2, 3))),
+    "nees": case(nis.nees, errors=innovations(), P=covariance(S, ndims=(2, 3), extreme=True)),
+    "nis": case(nis.nis, innovations=innovations(), S=covariance(S, ndims=(2, 3), extreme=True)),
     "nis_critical_values": case(
         nis.nis_critical_values, **dims(2, 50, False), alpha=probability(0.05)
     ),
     "nis_matrix": case(
         nis.nis_matrix,
         innovations=innovations(),
-        S=covariance(S, ndims=(2, 3)),
+        S=covariance(S, ndims=(2, 3), extreme=True),
         window=count(3, none_ok=True).but(longer_than_record=6),
     ),
     "nis_matrix_critical_values": case(
         nis.nis_matrix_critical_values, **dims(2, 50), alpha=probability(0.05)
     ),
     "nis_matrix_eigenvalues": case(
-        nis.nis_matrix_eigenvalues, innovations=innovations(), S=covariance(S, ndims=(2, 3))
+        nis.nis_matrix_eigenvalues,
+        innovations=innovations(),
+        S=covariance(S, ndims=(2, 3), extreme=True),
     ),
     "nis_matrix_test": case(
         nis.nis_matrix_test,
         innovations=array(EPS).but(fewer_steps_than_outputs=EPS[:1]),
-        S=covariance(S, ndims=(2, 3)),
+        S=covariance(S, ndims=(2, 3), extreme=True),
         alpha=probability(0.05),
     ),
     "nis_test": case(
         nis.nis_test,
         innovations=array(EPS),
-        S=covariance(S, ndims=(2, 3)),
+        S=covariance(S, ndims=(2, 3), extreme=True),
         alpha=probability(0.05),
     ),
     "prob_eigenvalues_within": case(

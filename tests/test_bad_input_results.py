@@ -118,7 +118,11 @@ TABLE = {
         alternative=choice("greater"),
     ),
     "describe_distribution": case(results.describe_distribution, dist=fixed(CHI2)),
-    "format_number": case(results.format_number, value=fixed(0.0497870684), digits=count(4)),
+    "format_number": case(
+        results.format_number,
+        value=Arg(0.0497870684, {}, extreme={"1e300": 1e300, "-1e-300": -1e-300}),
+        digits=count(4),
+    ),
     "rejection_probability": case(
         results.rejection_probability,
         law=obj(stats.norm(loc=3)),

@@ -306,6 +306,7 @@ def test_names_resolved_without_a_roster(tmp_path):
     assert "22222" not in flags and "11111" not in flags
 
 
+@pytest.mark.slow  # a fresh install or a whole grading run
 def test_submitting_section_in_a_real_kernel(tmp_path):
     """The released notebook, run top to bottom in a Jupyter kernel as a student would (with
     unanswered questions), ends by writing the file to upload."""

@@ -19,7 +19,14 @@ sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 import course_site  # noqa: E402
 
 from course import cli  # noqa: E402
-from course.docsite import LITE_INSTALL_CELL, _lite_notebook, build_site, find_root  # noqa: E402
+from course.docsite import (  # noqa: E402
+    LITE_INSTALL_CELL,
+    _lite_notebook,
+    _wheel_inputs_digest,
+    build_site,
+    cache_stored_outputs,
+    find_root,
+)
 
 
 def test_names_used_follow_aliases_across_cells():
@@ -146,3 +153,51 @@ def test_docs_command_is_wired(capsys):
 def test_cache_inside_the_output_folder_is_refused(tmp_path):
     with pytest.raises(ValueError, match="cache_dir"):
         build_site(tmp_path / "site", root=ROOT, cache_dir=tmp_path / "site" / "cache")
+
+
+def test_stored_outputs_fill_the_cache_until_the_code_changes(tmp_path):
+    """``course docs --stored-outputs``: each teaching notebook enters the execution cache once,
+    with its saved outputs; a cell added and never run keeps its notebook out (it will run)."""
+    pytest.importorskip("jupyter_cache")
+    root = tmp_path / "clone"
+    (root / "notebooks").mkdir(parents=True)
+    names = [
+        "03_parameter_estimation_and_likelihood.ipynb",
+        "05a_wishart_numerics_under_the_hood.ipynb",
+    ]
+    for name in names:
+        (root / "notebooks" / name).write_bytes((ROOT / "notebooks" / name).read_bytes())
+    cache = tmp_path / "cache"
+    assert cache_stored_outputs(root, cache) == [f"notebooks/{n}" for n in names]
+    assert cache_stored_outputs(root, cache) == []
+    edited = root / "notebooks" / names[0]
+    notebook = json.loads(edited.read_text())
+    notebook["cells"].append(
+        {"cell_type": "code", "execution_count": None, "metadata": {}, "outputs": []}
+        | {"id": "never-run", "source": "x_new = 1"}
+    )
+    edited.write_text(json.dumps(notebook, indent=1))
+    assert cache_stored_outputs(root, cache) == []
+    notebook["cells"][-1]["execution_count"] = 99  # saved after a run: its outputs count
+    edited.write_text(json.dumps(notebook, indent=1))
+    assert cache_stored_outputs(root, cache) == [f"notebooks/{names[0]}"]
+
+
+def test_the_lite_wheel_is_rebuilt_only_when_its_inputs_change(tmp_path):
+    """The JupyterLite app reuses the course's wheel across builds unless the package (or the
+    files pyproject.toml names) changed: editing a notebook does not rebuild it."""
+    root = tmp_path / "clone"
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_bytes((ROOT / name).read_bytes())
+    (root / "course").mkdir()
+    (root / "course" / "__init__.py").write_text("__version__ = '0'\n")
+    (root / "notebooks").mkdir()
+    (root / "notebooks" / "a.ipynb").write_text("{}")
+    first = _wheel_inputs_digest(root)
+    (root / "notebooks" / "a.ipynb").write_text('{"cells": []}')
+    (root / "course" / "__pycache__").mkdir()
+    (root / "course" / "__pycache__" / "x.pyc").write_bytes(b"compiled")
+    assert _wheel_inputs_digest(root) == first
+    (root / "course" / "lsq.py").write_text("x = 1\n")
+    assert _wheel_inputs_digest(root) != first

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import class_submissions
 from value_leaves import leaves
 
 from course.grading.authoring.release import find_solutions
@@ -422,32 +423,25 @@ def _graded_values(checks, sid: str) -> list:
     return out
 
 
-def test_grading_feedback_shows_no_expected_value(tmp_path):
+@class_submissions("feedback scan")
+def _class_submission(name: str, subs: Path) -> None:
+    """One student, ``s-wrong``, answers every question of ``name`` wrong."""
+    import nbformat
+
+    nbformat.write(_wrong_submission(name)[0], subs / "s-wrong.ipynb")
+
+
+def test_grading_feedback_shows_no_expected_value(graded_class):
     """Wrong answers to every question of every assignment, graded: the student's feedback
     file names what is wrong without any expected value (public, hidden or personal); the
     instructor's results.jsonl keeps expected and got."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    import nbformat
-
-    from course.grading.batch.driver import grade
-    from course.grading.batch.options import GradeOptions
-
-    def graded(name):
-        nb, checks = _wrong_submission(name)
-        subs = tmp_path / name / "subs"
-        subs.mkdir(parents=True)
-        nbformat.write(nb, subs / "s-wrong.ipynb")
-        out = tmp_path / name / "out"
-        grade(ROOT / "solutions" / name, subs, out, GradeOptions(jobs=1, progress=False))
-        text = (out / "feedback" / "s-wrong.md").read_text("utf-8")
-        row = json.loads((out / "results.jsonl").read_text().splitlines()[-1])
-        return name, checks, text, row
+    from course.grading.authoring.checks import load_checks
 
     found, details = [], 0
-    with ThreadPoolExecutor(max_workers=2) as pool:  # two assignments at a time (2 cores)
-        results = list(pool.map(graded, ASSIGNMENTS))
-    for name, checks, text, row in results:
+    for name in ASSIGNMENTS:
+        graded = graded_class(name)
+        checks = load_checks(ROOT / "solutions" / name)
+        text, row = graded.feedback("s-wrong"), graded.rows["s-wrong"]
         assert row["total"] < row["max"], (name, row["total"])
         details += sum(
             "expected" in case.get("detail", "")

@@ -29,6 +29,7 @@ def _rows(out: Path) -> dict:
     return rows
 
 
+@pytest.mark.slow  # a fresh install or a whole grading run
 def test_cluster_grades_like_a_local_run(tmp_path):
     solution = json.loads((SOLUTION_DIR / f"{NAME}.ipynb").read_text())
     release = json.loads((ROOT / "exercises" / NAME / f"{NAME}.ipynb").read_text())

@@ -18,6 +18,8 @@ import sys
 import sysconfig
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
 
@@ -39,6 +41,7 @@ def _venv(tmp: Path) -> tuple[Path, str]:
     return venv, purelib
 
 
+@pytest.mark.slow  # a fresh install or a whole grading run
 def test_non_editable_install_grades_from_a_course_folder(tmp_path):
     venv, purelib = _venv(tmp_path)
     python = venv / "bin" / "python"

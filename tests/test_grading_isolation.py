@@ -4,6 +4,7 @@ tripwire, layer detection and the refusal to grade without file-system walls."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -90,6 +91,93 @@ def test_seccomp_refuses_sockets_and_pins_the_report_pipe():
     assert out == ["no", "no", "no", "no", "yes", "yes"]
 
 
+def test_seccomp_argument_rules_read_arguments_as_the_kernel_does():
+    """The raw calls (ctypes ``syscall``), past anything Python checks: each refusal of the
+    policy with the error it promises, the calls it must allow, and arguments with stray high
+    bits, which the kernel truncates to an int (a pinned descriptor must stay pinned)."""
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    out = _run(
+        """
+        import ctypes, os, platform, resource
+        from course.grading.sandbox.isolation import seccomp
+        libc = ctypes.CDLL(None, use_errno=True)
+        lib = seccomp._library()
+        nr = lambda name: lib.seccomp_syscall_resolve_name(name.encode())
+        def call(name, *args, number=None):
+            args = [ctypes.c_long(a) for a in args]
+            got = libc.syscall(ctypes.c_long(nr(name) if number is None else number), *args)
+            return "ok" if got >= 0 else os.strerror(ctypes.get_errno()).replace(" ", "_")
+        r, w = os.pipe()
+        assert seccomp.install(pinned_fd=w)
+        high = 1 << 32
+        new = (ctypes.c_long * 2)(1024, 1024)
+        old = (ctypes.c_long * 2)()
+        print(call("close", w + high), call("dup2", 0, w + high), call("dup3", 0, w, 0))
+        print(call("close_range", w + high, w, 0), call("close_range", 0, w, 0))
+        print(call("kill", os.getpid() + high, 0), call("kill", 1, 0), call("kill", os.getpid(), 0))
+        print(call("tgkill", 1, 1, 0), call("tkill", 1, 0))
+        print(call("prlimit64", 0, resource.RLIMIT_NOFILE, ctypes.addressof(new), 0),
+              call("prlimit64", 0, resource.RLIMIT_NOFILE, 0, ctypes.addressof(old)))
+        print(call("clone3", 0, 0), call("clone", 0, 0, 0, 0, 0), call("unshare", 0))
+        if platform.machine() == "x86_64":  # x32 ABI: the same numbers with bit 30 set
+            print(call("getpid", number=nr("getpid") | 0x40000000), call("getpid"))
+        else:
+            print("Operation_not_permitted ok")
+        print(call("dup3", 0, w + 1, 0), call("close", w + 1))
+        """
+    )
+    refused = "Operation_not_permitted"
+    assert out == [
+        *[refused] * 3,
+        *[refused] * 2,
+        refused,
+        refused,
+        "ok",
+        *[refused] * 2,
+        refused,
+        "ok",
+        "Function_not_implemented",
+        refused,
+        refused,
+        refused,
+        "ok",
+        "ok",
+        "ok",
+    ]
+
+
+def test_seccomp_filter_names_every_call_of_the_policy():
+    """libseccomp compiled a rule for every call the policy names that exists here (nothing
+    dropped silently), each with the promised error, and nothing else."""
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    import re
+
+    pfc = seccomp.export_pfc(os.getpid(), pinned_fd=7)
+    filtered = dict(re.findall(r'filter for syscall "(\w+)" \((-?\d+)\)', pfc))
+    expected = {*seccomp.DENIED, "clone", "clone3", "kill", "tkill", "tgkill", "prlimit64"}
+    expected |= {"close", "dup2", "dup3", "close_range"}
+    lib = seccomp._library()
+    here = {name for name in expected if lib.seccomp_syscall_resolve_name(name.encode()) >= 0}
+    assert set(filtered) == here, sorted(set(filtered) ^ here)  # aarch64 has no fork: absent
+    assert {"execve", "socket", "clone", "kill", "close", "close_range"} <= set(filtered)
+    assert "action ERRNO(38)" in pfc and "# invalid architecture action\naction ERRNO(1)" in pfc
+
+
+def test_grading_children_run_under_the_filter():
+    """The filter is loaded in the grading child itself (inside bubblewrap when it is there,
+    after Landlock), not only in a test process."""
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    from course.grading.sandbox.parent import Sandbox
+
+    with Sandbox(isolation=detect()) as sandbox:
+        child = sandbox.start({"student_id": "s1"})
+        child.close()
+    assert child.info["seccomp"] is True, child.info
+
+
 def test_tripwire_reports_calls_that_do_not_come_from_the_library():
     out = _run(
         """
@@ -141,6 +229,7 @@ def test_events_are_found_whatever_a_submission_writes_around_them():
     assert names == ["a.b"]
 
 
+@pytest.mark.slow  # a fresh install or a whole grading run
 def test_grading_is_refused_without_file_system_walls(tmp_path):
     with pytest.raises(IsolationError, match="--unsafe-no-isolation"):
         detect(namespaces=False, landlock=False)

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import nbformat
 import pytest
+from conftest import class_submissions
 
 from course.grading.authoring.checks import load_checks
 from course.grading.authoring.notebooks import (
@@ -24,8 +25,6 @@ from course.grading.authoring.notebooks import (
 )
 from course.grading.authoring.passes import make_release
 from course.grading.authoring.release import find_solutions, release_files
-from course.grading.batch.driver import grade
-from course.grading.batch.options import GradeOptions
 from course.grading.notebook import MarkerError, strip_markers
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -130,40 +129,19 @@ def test_release_leaks_no_solution(name):
     assert "checks.py" not in files
 
 
-@pytest.fixture(scope="module")
-def graded_solutions(tmp_path_factory):
+@class_submissions("release")
+def _release_submissions(name: str, subs: Path) -> None:
     """Every solution (as the demo student and as another ID) and every untouched release."""
-    tmp = tmp_path_factory.mktemp("release")
-    results = {}
-    for name in ASSIGNMENTS:
-        try:  # one broken assignment must not hide the results of the others
-            subs = tmp / name / "subs"
-            subs.mkdir(parents=True)
-            solution = (SOLUTIONS / name / f"{name}.ipynb").read_bytes()
-            (subs / "demo.ipynb").write_bytes(solution)
-            (subs / "other-student.ipynb").write_bytes(solution)
-            (subs / "untouched.ipynb").write_bytes(
-                (EXERCISES / name / f"{name}.ipynb").read_bytes()
-            )
-            grade(SOLUTIONS / name, subs, tmp / name / "out", GradeOptions(jobs=2, progress=False))
-            lines = (tmp / name / "out" / "results.jsonl").read_text().splitlines()
-            results[name] = {json.loads(l)["student"]: json.loads(l) for l in lines}
-        except Exception as exc:  # reported by the tests of this assignment
-            results[name] = exc
-    return results
-
-
-def _rows(graded_solutions, name):
-    rows = graded_solutions[name]
-    if isinstance(rows, Exception):
-        raise rows
-    return rows
+    solution = (SOLUTIONS / name / f"{name}.ipynb").read_bytes()
+    (subs / "demo.ipynb").write_bytes(solution)
+    (subs / "other-student.ipynb").write_bytes(solution)
+    (subs / "untouched.ipynb").write_bytes((EXERCISES / name / f"{name}.ipynb").read_bytes())
 
 
 @pytest.mark.parametrize("name", ASSIGNMENTS)
-def test_solution_scores_full_marks(graded_solutions, name):
+def test_solution_scores_full_marks(graded_class, name):
     for sid in ("demo", "other-student"):
-        row = _rows(graded_solutions, name)[sid]
+        row = graded_class(name).rows[sid]
         # short answers wait for the instructor's marks ("to mark"): all the rest is automatic
         to_mark = sum(r["max"] for r in row["questions"].values() if r["status"] == "to mark")
         assert row["total"] == row["max"] - to_mark > 0, (
@@ -174,8 +152,8 @@ def test_solution_scores_full_marks(graded_solutions, name):
 
 
 @pytest.mark.parametrize("name", ASSIGNMENTS)
-def test_untouched_release_scores_zero(graded_solutions, name):
-    row = _rows(graded_solutions, name)["untouched"]
+def test_untouched_release_scores_zero(graded_class, name):
+    row = graded_class(name).rows["untouched"]
     assert row["total"] == 0
     assert all(r["status"] == "not answered" for r in row["questions"].values()), row["questions"]
 

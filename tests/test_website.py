@@ -1,8 +1,10 @@
 """The course website, built by ``course docs`` and checked in a real browser.
 
-The site is built from a copy of the repository into a temporary folder (with its own
-notebook cache, so the build executes every notebook as on a fresh clone), served on
-127.0.0.1 and visited with Debian's Chromium through Playwright. Screenshots of the landing
+The site is built from a copy of the repository into a temporary folder, with its own
+notebook cache seeded with the outputs saved in the teaching notebooks (``stored_outputs``:
+nbval, in the same suite, checks that a fresh run reproduces them, so the build need not run
+each notebook a second time), served on 127.0.0.1 and visited with Debian's Chromium through
+Playwright. Screenshots of the landing
 page and of a notebook page are saved under the test's temporary folder (printed at the end;
 set ``COURSE_WEBSITE_ARTIFACTS=DIR`` to keep them in DIR instead).
 
@@ -68,12 +70,18 @@ def source(workdir) -> Path:
 
 @pytest.fixture(scope="module")
 def site(source, workdir):
-    # COURSE_WEBSITE_CACHE=DIR reuses executed notebooks between runs of this test (local
-    # iteration); by default the build executes every notebook, as on a fresh clone.
+    # COURSE_WEBSITE_CACHE=DIR keeps the cache between runs of this test (local iteration).
     cache = Path(os.environ.get("COURSE_WEBSITE_CACHE") or workdir / "cache")
-    report = build_site(workdir / "site", root=source, cache_dir=cache, quiet=True)
+    report = build_site(
+        workdir / "site", root=source, cache_dir=cache, quiet=True, stored_outputs=True
+    )
     print(report.summary())
     return report
+
+
+def test_the_build_shows_the_saved_outputs_without_running_notebooks(site):
+    """Each teaching notebook runs once in the suite (nbval), not again for the website."""
+    assert site.executed == [], f"the build ran {site.executed}: is the seeded cache missed?"
 
 
 @pytest.fixture(scope="module")

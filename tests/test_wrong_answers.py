@@ -26,8 +26,9 @@ dependent question is graded.
 
 To stay cheap, the suite packs the variants of different questions into few notebooks
 (questions are graded independently; a notebook holds at most one variant per question, every
-other answer cell keeps the solution) and grades each assignment's notebooks in one batch with
-the real grader, ``course.grading.batch.driver.grade``.
+other answer cell keeps the solution) and grades them with the real grader,
+``course.grading.batch.driver.grade``, in the assignment's graded class that the whole-class tests
+share (``graded_class`` in ``tests/conftest.py``).
 
 ``python tests/test_wrong_answers.py [NN ...]`` prints the table of every variant's score.
 """
@@ -48,6 +49,7 @@ from pathlib import Path
 
 import nbformat
 import pytest
+from conftest import class_submissions
 
 from course.grading.authoring.checks import load_checks
 from course.grading.batch.driver import grade
@@ -209,39 +211,54 @@ def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
     return nb
 
 
-def grade_spec(spec: Spec, tmp: Path) -> list[tuple[Variant, dict]]:
-    """Grade every variant of ``spec``; return (variant, that question's result row) pairs."""
-    solution_dir = SOLUTIONS / spec.assignment
-    solution_nb = nbformat.read(solution_dir / f"{spec.assignment}.ipynb", as_version=4)
-    subs = tmp / "subs"
-    subs.mkdir(parents=True)
+def write_submissions(spec: Spec, subs: Path) -> list[tuple[str, dict[str, Variant]]]:
+    """Write the packed notebooks of ``spec`` into ``subs``; return (student ID, batch) pairs."""
+    solution_nb = nbformat.read(
+        SOLUTIONS / spec.assignment / f"{spec.assignment}.ipynb", as_version=4
+    )
     batches = pack(spec, _solution_sources(solution_nb))
     ids = [f"{spec.student}-{k + 1}" for k in range(len(batches))]
     for sid, batch in zip(ids, batches):
         nbformat.write(build_notebook(solution_nb, batch, sid), subs / f"{sid}.ipynb")
-    grade(solution_dir, subs, tmp / "out", GradeOptions(jobs=2, progress=False))
-    rows = {}
-    for line in (tmp / "out" / "results.jsonl").read_text().splitlines():
-        row = json.loads(line)
-        rows[row["student"]] = row
-    out = []
-    for sid, batch in zip(ids, batches):
-        for v in batch.values():
-            out.append((v, rows[sid]["questions"][v.qid] | {"student": sid}))
-    return out
+    return list(zip(ids, batches))
+
+
+def variant_rows(made, rows: dict) -> list[tuple[Variant, dict]]:
+    """(variant, that question's result row) pairs of the notebooks ``write_submissions`` made."""
+    return [
+        (v, rows[sid]["questions"][v.qid] | {"student": sid})
+        for sid, batch in made
+        for v in batch.values()
+    ]
+
+
+def grade_spec(spec: Spec, tmp: Path) -> list[tuple[Variant, dict]]:
+    """Grade every variant of ``spec`` on its own; return (variant, result row) pairs."""
+    subs = tmp / "subs"
+    subs.mkdir(parents=True)
+    made = write_submissions(spec, subs)
+    grade(SOLUTIONS / spec.assignment, subs, tmp / "out", GradeOptions(jobs=2, progress=False))
+    lines = (tmp / "out" / "results.jsonl").read_text().splitlines()
+    return variant_rows(made, {row["student"]: row for row in map(json.loads, lines)})
 
 
 SPECS = {p.stem.removeprefix("answers_"): p for p in ANSWER_FILES}
 
 
-@pytest.fixture(scope="module")
-def graded(tmp_path_factory):
-    cache: dict[str, list] = {}
+@class_submissions("wrong answers")
+def _class_submissions(name: str, subs: Path):
+    """The suite's notebooks of assignment ``name``, in the shared graded class."""
+    specs = [spec for spec in map(load_spec, ANSWER_FILES) if spec.assignment == name]
+    return [made for spec in specs for made in write_submissions(spec, subs)]
 
+
+@pytest.fixture(scope="module")
+def graded(graded_class):
     def get(key: str):
-        if key not in cache:
-            cache[key] = grade_spec(load_spec(SPECS[key]), tmp_path_factory.mktemp(f"wa{key}"))
-        return cache[key]
+        spec = load_spec(SPECS[key])
+        graded = graded_class(spec.assignment)
+        made = graded.made["wrong answers"]
+        return variant_rows([m for m in made if m[0].startswith(f"{spec.student}-")], graded.rows)
 
     return get
 
@@ -330,12 +347,11 @@ def test_right_answers_pass_the_public_self_check(key):
 
 
 def test_every_assignment_has_answers():
-    """Every assignment gets a wrong-answer file (04-06 are added in their own branch)."""
+    """Every assignment has a wrong-answer file: a new assignment without one fails here."""
     names = {load_spec(p).assignment for p in ANSWER_FILES}
     missing = [n for n in sorted(p.name for p in SOLUTIONS.iterdir()) if n not in names]
     missing = [n for n in missing if (SOLUTIONS / n / "checks.py").is_file()]
-    if missing:
-        pytest.skip(f"no wrong-answer file yet for {missing}")
+    assert not missing, f"no tests/wrong_answers/answers_NN.py for {missing}"
 
 
 def test_packing_respects_dependencies():

@@ -425,8 +425,11 @@ class Setup:
 def prepare(config: dict) -> Setup:
     """Everything before any child exists (trusted; once per fork server)."""
     from course.grading import tripwire
-    from course.grading.sandbox.isolation import landlock, privileges
+    from course.grading.sandbox.isolation import landlock, privileges, seccomp
     from course.grading.sandbox.isolation.paths import python_paths
+
+    if config.get("seccomp", True):
+        seccomp.available()  # loads libseccomp once, for every child, while files are readable
 
     drop_to = tuple(config["drop_to"]) if config.get("drop_to") else None
     unprivileged = os.geteuid() != 0

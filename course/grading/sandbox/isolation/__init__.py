@@ -78,6 +78,8 @@ class Isolation:
             missing.append("namespaces (install bubblewrap)")
         if not self.landlock:
             missing.append("Landlock (kernel >= 5.13)")
+        if not self.seccomp:
+            missing.append("seccomp (install libseccomp2, release 2.5.4 or later)")
         if self.drop_to is not None and self.unprivileged is False:
             missing.append("unprivileged user (the Python installation is not readable by nobody)")
         if missing:

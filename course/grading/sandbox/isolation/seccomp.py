@@ -1,4 +1,4 @@
-"""The seccomp-BPF filter of a grading child (Linux x86-64 and aarch64).
+"""The seccomp filter of a grading child, written as libseccomp rules.
 
 Installed in the child right before student code runs, it makes the KERNEL refuse:
 
@@ -15,43 +15,44 @@ Installed in the child right before student code runs, it makes the KERNEL refus
   ``open_by_handle_at``,
 - closing or replacing one pinned descriptor (``close``, ``dup2``/``dup3``, ``close_range``):
   the pipe on which forbidden library calls are reported to the grader
-  (:mod:`course.grading.tripwire`).
+  (:mod:`course.grading.tripwire`),
+- system calls of another architecture (i386 calls on x86-64, x32 calls).
+
+Every refusal is the error EPERM (ENOSYS for ``clone3``); nothing is killed.
 
 This is the layer that still holds when the Python audit hook is bypassed (for instance through
 ``_posixsubprocess`` or ctypes) and when the grader runs as root, where ``RLIMIT_NPROC`` is not
 enforced. Files are Landlock's and the namespaces' business (:mod:`course.grading.sandbox.isolation`).
+
+The rules are handed to libseccomp (Debian's ``libseccomp2``, present wherever systemd is),
+which keeps the system-call numbers of every architecture and compiles the BPF program, the
+architecture checks included. The binding is the handful of ctypes declarations below (five
+functions of libseccomp's stable C API), not a Python package: Debian's ``python3-seccomp``
+is built for Debian's own Python only, and ``pyseccomp`` (last released in 2021) would be a
+dependency for instructors to install for those five functions, and looks the library up
+with ``ctypes.util.find_library``, which starts ``ldconfig`` in a subprocess at import.
+``libseccomp.so.2`` loads by its stable name through the loader's cache. A machine without
+libseccomp grades without this layer, and
+:meth:`~course.grading.sandbox.isolation.Isolation.describe` says so.
+
+Arguments are compared as the kernel reads them: a descriptor or a process ID is a 32-bit int,
+so where a refusal depends on one, its low 32 bits decide (``MASKED_EQ`` with ``0xFFFFFFFF``),
+or a rule errs on the side of refusing (a 64-bit value with stray high bits).
 """
 
 from __future__ import annotations
 
 import ctypes
+import errno
+import functools
 import os
 import platform
-import struct
 
-__all__ = ["available", "die_with_parent", "install"]
+__all__ = ["DENIED", "available", "die_with_parent", "export_pfc", "install", "rules"]
 
-_LD_W_ABS = 0x20
-_JEQ_K = 0x15
-_JGT_K = 0x25
-_JGE_K = 0x35
-_JSET_K = 0x45
-_RET_K = 0x06
-
-_RET_ALLOW = 0x7FFF0000
-_RET_EPERM = 0x00050000 | 1
-_RET_ENOSYS = 0x00050000 | 38
-
-_CLONE_THREAD = 0x00010000
-_PR_SET_NO_NEW_PRIVS = 38
-_PR_SET_SECCOMP = 22
-_SECCOMP_MODE_FILTER = 2
-
-# offsets in struct seccomp_data: nr, arch, then 64-bit args from 16 (low words first)
-_NR, _ARCH, _ARG0, _ARG1, _ARG2 = 0, 4, 16, 24, 32
-
-#: Refused outright with EPERM (names missing on an architecture are skipped).
-_DENIED = (
+#: Refused outright with EPERM (a name that does not exist on an architecture, e.g. ``fork``
+#: on aarch64, is known to libseccomp and simply matches nothing there).
+DENIED = (
     "fork",
     "vfork",
     "execve",
@@ -93,217 +94,178 @@ _DENIED = (
     "finit_module",
     "delete_module",
 )
+#: Refused depending on their arguments (see :func:`rules`).
+_CONDITIONAL = (
+    "clone",
+    "clone3",
+    "kill",
+    "tkill",
+    "tgkill",
+    "prlimit64",
+    "close",
+    "dup2",
+    "dup3",
+    "close_range",
+)
 
-# (audit arch, syscall numbers); fork/vfork/dup2 do not exist on aarch64.
-# fmt: off
-_ARCHES = {
-    "x86_64": (
-        0xC000003E,
-        dict(
-            fork=57,
-            vfork=58,
-            execve=59,
-            execveat=322,
-            clone=56,
-            clone3=435,
-            kill=62,
-            tkill=200,
-            tgkill=234,
-            ptrace=101,
-            setrlimit=160,
-            prlimit64=302,
-            process_vm_readv=310,
-            process_vm_writev=311,
-            pidfd_getfd=438,
-            socket=41,
-            socketpair=53,
-            io_uring_setup=425,
-            io_uring_enter=426,
-            io_uring_register=427,
-            unshare=272,
-            setns=308,
-            mount=165,
-            umount2=166,
-            pivot_root=155,
-            chroot=161,
-            move_mount=429,
-            open_tree=428,
-            fsopen=430,
-            fsconfig=431,
-            fsmount=432,
-            fspick=433,
-            mount_setattr=442,
-            bpf=321,
-            userfaultfd=323,
-            perf_event_open=298,
-            keyctl=250,
-            add_key=248,
-            request_key=249,
-            open_by_handle_at=304,
-            name_to_handle_at=303,
-            kexec_load=246,
-            kexec_file_load=320,
-            init_module=175,
-            finit_module=313,
-            delete_module=176,
-            close=3,
-            dup2=33,
-            dup3=292,
-            close_range=436,
-        ),
-    ),
-    "aarch64": (
-        0xC00000B7,
-        dict(
-            execve=221,
-            execveat=281,
-            clone=220,
-            clone3=435,
-            kill=129,
-            tkill=130,
-            tgkill=131,
-            ptrace=117,
-            setrlimit=164,
-            prlimit64=261,
-            process_vm_readv=270,
-            process_vm_writev=271,
-            pidfd_getfd=438,
-            socket=198,
-            socketpair=199,
-            io_uring_setup=425,
-            io_uring_enter=426,
-            io_uring_register=427,
-            unshare=97,
-            setns=268,
-            mount=40,
-            umount2=39,
-            pivot_root=41,
-            chroot=51,
-            move_mount=429,
-            open_tree=428,
-            fsopen=430,
-            fsconfig=431,
-            fsmount=432,
-            fspick=433,
-            mount_setattr=442,
-            bpf=280,
-            userfaultfd=282,
-            perf_event_open=241,
-            keyctl=219,
-            add_key=217,
-            request_key=218,
-            open_by_handle_at=265,
-            name_to_handle_at=264,
-            kexec_load=104,
-            kexec_file_load=294,
-            init_module=105,
-            finit_module=273,
-            delete_module=106,
-            close=57,
-            dup3=24,
-            close_range=436,
-        ),
-    ),
-}
-# fmt: on
+# libseccomp's ABI (seccomp.h of libseccomp 2.x)
+_ACT_ALLOW = 0x7FFF0000
+_ACT_ERRNO = 0x00050000
+_ATTR_ACT_BADARCH = 2
+_NE, _LE, _GE, _GT, _MASKED_EQ = 1, 3, 5, 6, 7
+_NR_SCMP_ERROR = -1  # a name libseccomp does not know
+
+_CLONE_THREAD = 0x00010000
+_LOW_WORD = 0xFFFFFFFF  # the kernel reads an int: the low 32 bits of the register
+# clone's flags are its first argument, except on s390 (where they come second)
+_CLONE_FLAGS = 1 if platform.machine().startswith("s390") else 0
+
+
+class _ArgCmp(ctypes.Structure):
+    """``struct scmp_arg_cmp``: argument ``arg`` compared by ``op`` with ``datum_a``/``b``."""
+
+    _fields_ = [
+        ("arg", ctypes.c_uint),
+        ("op", ctypes.c_int),
+        ("datum_a", ctypes.c_uint64),
+        ("datum_b", ctypes.c_uint64),
+    ]
+
+
+#: One rule: (action, system call name, argument comparisons (arg, op, datum_a, datum_b)).
+Rule = tuple[int, str, tuple[tuple[int, int, int, int], ...]]
+
+
+@functools.cache
+def _library() -> ctypes.CDLL | None:
+    """libseccomp, with the signatures used here declared; None where it is missing."""
+    if os.name != "posix" or platform.system() != "Linux":
+        return None
+    try:
+        lib = ctypes.CDLL("libseccomp.so.2", use_errno=True)
+    except OSError:
+        return None
+    lib.seccomp_init.argtypes = [ctypes.c_uint32]
+    lib.seccomp_init.restype = ctypes.c_void_p
+    lib.seccomp_release.argtypes = [ctypes.c_void_p]
+    lib.seccomp_release.restype = None
+    lib.seccomp_attr_set.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_uint32]
+    lib.seccomp_syscall_resolve_name.argtypes = [ctypes.c_char_p]
+    lib.seccomp_rule_add_array.argtypes = [
+        ctypes.c_void_p,
+        ctypes.c_uint32,
+        ctypes.c_int,
+        ctypes.c_uint,
+        ctypes.POINTER(_ArgCmp),
+    ]
+    lib.seccomp_load.argtypes = [ctypes.c_void_p]
+    lib.seccomp_export_pfc.argtypes = [ctypes.c_void_p, ctypes.c_int]
+    return lib
+
+
+def _errno(code: int) -> int:
+    return _ACT_ERRNO | (code & 0xFFFF)
+
+
+def rules(pid: int, pinned_fd: int | None = None) -> list[Rule]:
+    """The filter's rules for the process ``pid`` (every call not named is allowed)."""
+    deny = _errno(errno.EPERM)
+    out: list[Rule] = [(deny, name, ()) for name in DENIED]
+    out += [
+        (_errno(errno.ENOSYS), "clone3", ()),  # glibc then falls back to clone
+        (deny, "clone", ((_CLONE_FLAGS, _MASKED_EQ, _CLONE_THREAD, 0),)),  # not a thread
+        # another process: 64 bits compared, so stray high bits are refused too
+        *((deny, name, ((0, _NE, pid, 0),)) for name in ("kill", "tkill", "tgkill")),
+        (deny, "prlimit64", ((2, _NE, 0, 0),)),  # a new limit (the pointer is not NULL)
+    ]
+    if pinned_fd is not None:
+        pinned = (_MASKED_EQ, _LOW_WORD, pinned_fd)
+        out += [
+            (deny, "close", ((0, *pinned),)),
+            (deny, "dup2", ((1, *pinned),)),  # newfd
+            (deny, "dup3", ((1, *pinned),)),
+            # close_range(first, last) with first <= pinned <= last; a first with high bits
+            # set is read as its low word by the kernel, so it counts as low
+            (deny, "close_range", ((0, _LE, pinned_fd, 0), (1, _GE, pinned_fd, 0))),
+            (deny, "close_range", ((0, _GT, _LOW_WORD, 0), (1, _GE, pinned_fd, 0))),
+        ]
+    return out
+
+
+@functools.cache
+def _unknown_names() -> tuple[str, ...]:
+    """Names of the policy this libseccomp does not know (an older release than the policy)."""
+    lib = _library()
+    if lib is None:
+        return ()
+    return tuple(
+        name
+        for name in (*DENIED, *_CONDITIONAL)
+        if lib.seccomp_syscall_resolve_name(name.encode()) == _NR_SCMP_ERROR
+    )
 
 
 def available() -> bool:
-    """Whether this platform has a filter here (Linux on x86-64 or aarch64)."""
-    return os.name == "posix" and platform.system() == "Linux" and platform.machine() in _ARCHES
+    """Whether this machine can install the filter: Linux with a libseccomp that knows every
+    system call the policy names."""
+    return _library() is not None and not _unknown_names()
 
 
-def _program(pid: int, pinned_fd: int | None = None) -> tuple[bytes, int]:
-    arch, nr = _ARCHES[platform.machine()]
-    code: list = []  # entries: [op, jt_label, jf_label, k] with labels resolved below
-    labels: dict[str, int] = {}
+def _build(pid: int, pinned_fd: int | None) -> int:
+    """A libseccomp filter context holding :func:`rules` (release it with seccomp_release)."""
+    lib = _library()
+    if lib is None or not available():
+        raise OSError("libseccomp is not available")
+    ctx = lib.seccomp_init(_ACT_ALLOW)
+    if not ctx:
+        raise OSError("seccomp_init failed")
+    try:
+        if lib.seccomp_attr_set(ctx, _ATTR_ACT_BADARCH, _errno(errno.EPERM)) != 0:
+            raise OSError("seccomp_attr_set failed")
+        for action, name, comparisons in rules(pid, pinned_fd):
+            args = (_ArgCmp * max(1, len(comparisons)))(*(_ArgCmp(*c) for c in comparisons))
+            number = lib.seccomp_syscall_resolve_name(name.encode())
+            code = lib.seccomp_rule_add_array(ctx, action, number, len(comparisons), args)
+            if code != 0:
+                raise OSError(-code, f"seccomp rule for {name}: {os.strerror(-code)}")
+    except BaseException:
+        lib.seccomp_release(ctx)
+        raise
+    return ctx
 
-    def emit(op, k=0, jt=None, jf=None):
-        code.append([op, jt, jf, k])
 
-    def label(name):
-        labels[name] = len(code)
+def export_pfc(pid: int, pinned_fd: int | None = None) -> str:
+    """The filter in libseccomp's readable pseudo-filter code (for tests and reviews)."""
+    import tempfile
 
-    emit(_LD_W_ABS, _ARCH)
-    emit(_JEQ_K, arch, jt=None, jf="deny")
-    emit(_LD_W_ABS, _NR)
-    if platform.machine() == "x86_64":
-        emit(_JGE_K, 0x40000000, jt="deny", jf=None)  # x32 ABI syscalls
-    for name in _DENIED:
-        if name in nr:
-            emit(_JEQ_K, nr[name], jt="deny", jf=None)
-    emit(_JEQ_K, nr["clone3"], jt="enosys", jf=None)
-    emit(_JEQ_K, nr["clone"], jt="clone", jf=None)
-    for name in ("kill", "tkill", "tgkill"):
-        emit(_JEQ_K, nr[name], jt="signal", jf=None)
-    emit(_JEQ_K, nr["prlimit64"], jt="prlimit", jf=None)
-    if pinned_fd is not None:
-        emit(_JEQ_K, nr["close"], jt="close", jf=None)
-        if "dup2" in nr:
-            emit(_JEQ_K, nr["dup2"], jt="dup", jf=None)
-        emit(_JEQ_K, nr["dup3"], jt="dup", jf=None)
-        emit(_JEQ_K, nr["close_range"], jt="close_range", jf=None)
-    emit(_RET_K, _RET_ALLOW)
-    label("clone")
-    emit(_LD_W_ABS, _ARG0)  # clone flags
-    emit(_JSET_K, _CLONE_THREAD, jt="allow", jf="deny")
-    label("signal")
-    emit(_LD_W_ABS, _ARG0)  # target pid / tgid
-    emit(_JEQ_K, pid, jt="allow", jf="deny")
-    label("prlimit")
-    emit(_LD_W_ABS, _ARG2)  # new-limit pointer, low word
-    emit(_JEQ_K, 0, jt=None, jf="deny")
-    emit(_LD_W_ABS, _ARG2 + 4)  # high word
-    emit(_JEQ_K, 0, jt="allow", jf="deny")
-    if pinned_fd is not None:
-        label("close")
-        emit(_LD_W_ABS, _ARG0)  # the kernel reads an int: the low word
-        emit(_JEQ_K, pinned_fd, jt="deny", jf="allow")
-        label("dup")
-        emit(_LD_W_ABS, _ARG1)  # newfd
-        emit(_JEQ_K, pinned_fd, jt="deny", jf="allow")
-        label("close_range")
-        emit(_LD_W_ABS, _ARG0)  # first
-        emit(_JGT_K, pinned_fd, jt="allow", jf=None)
-        emit(_LD_W_ABS, _ARG1)  # last
-        emit(_JGE_K, pinned_fd, jt="deny", jf="allow")
-    label("allow")
-    emit(_RET_K, _RET_ALLOW)
-    label("deny")
-    emit(_RET_K, _RET_EPERM)
-    label("enosys")
-    emit(_RET_K, _RET_ENOSYS)
-
-    packed = b""
-    for i, (op, jt, jf, k) in enumerate(code):
-        offsets = []
-        for target in (jt, jf):
-            off = 0 if target is None else labels[target] - (i + 1)
-            if not 0 <= off < 256:
-                raise RuntimeError("seccomp program jump out of range")
-            offsets.append(off)
-        packed += struct.pack("=HBBI", op, offsets[0], offsets[1], k & 0xFFFFFFFF)
-    return packed, len(code)
+    lib = _library()
+    ctx = _build(pid, pinned_fd)
+    try:
+        with tempfile.TemporaryFile("w+") as f:
+            if lib is None or lib.seccomp_export_pfc(ctx, f.fileno()) != 0:
+                raise OSError("seccomp_export_pfc failed")
+            f.seek(0)
+            return f.read()
+    finally:
+        if lib is not None:
+            lib.seccomp_release(ctx)
 
 
 def install(pinned_fd: int | None = None) -> bool:
     """Install the filter in the calling process (irreversible). Returns False if unavailable.
 
-    ``pinned_fd``: a descriptor the process may then neither close nor replace.
+    ``pinned_fd``: a descriptor the process may then neither close nor replace. libseccomp
+    sets ``no_new_privs`` first, as the kernel requires of an unprivileged process.
     """
     if not available():
         return False
-    libc = ctypes.CDLL(None, use_errno=True)
-    filters, count = _program(os.getpid(), pinned_fd)
-    buf = ctypes.create_string_buffer(filters, len(filters))
-
-    class _SockFprog(ctypes.Structure):
-        _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_void_p)]
-
-    prog = _SockFprog(count, ctypes.cast(buf, ctypes.c_void_p))
-    if libc.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0:
-        return False
-    return libc.prctl(_PR_SET_SECCOMP, _SECCOMP_MODE_FILTER, ctypes.byref(prog), 0, 0) == 0
+    lib = _library()
+    assert lib is not None
+    ctx = _build(os.getpid(), pinned_fd)
+    try:
+        return lib.seccomp_load(ctx) == 0
+    finally:
+        lib.seccomp_release(ctx)
 
 
 def die_with_parent() -> bool:
