@@ -12,14 +12,7 @@ import numpy as np
 from scipy import stats
 
 from course.distributions import _NO_STATE, FrozenDistribution, _levels, _points, _rng_argument
-from course.nis._pfaffians import (
-    _augment,
-    _bordered,
-    _log_gamma_kernel,
-    _log_gamma_ratio_half,
-    _pfaffian,
-    _skew_blocks,
-)
+from course.nis._pfaffians import _augment, _bordered, _LaguerreBasis, _pfaffian
 from course.nis._statistics import EigenvaluePair, _check_dims, _check_which
 from course.validation import as_count, as_finite, as_size
 
@@ -95,7 +88,7 @@ class ExtremeEigenvalue(FrozenDistribution):
         self.m, self.K = _check_dims(m, K)
         self.which = _check_which(which)
         self._a = (self.K - self.m + 1) / 2.0
-        self._e_scale = np.exp(_log_gamma_ratio_half(self._a)) / (2 * np.sqrt(np.pi))
+        self._basis = _LaguerreBasis(self.m, self._a)
         J, g = self._blocks(np.zeros(1), np.full(1, np.inf))
         self._A_full = _augment(J, g)[0]
         self._pf_full = float(_pfaffian(self._A_full))
@@ -107,7 +100,7 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     # -- core -----------------------------------------------------------------
     def _blocks(self, lo: np.ndarray, hi: np.ndarray):
-        return _skew_blocks(self.m, self._a, lo, hi, self._e_scale)
+        return self._basis.blocks(lo, hi)
 
     def _side(self, t: np.ndarray, kind: str):
         """Blocks of [0, t] ("low") or [t, inf) ("high")."""
@@ -145,11 +138,7 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     def _density(self, t, J, g):
         """pdf at x = 2t/K from the derivative of the inside Pfaffian."""
-        s = np.sqrt(self._a)
-        u = (t - self._a) / s
-        with np.errstate(divide="ignore"):
-            w = np.exp(_log_gamma_kernel(self._a, t) - np.log(t))
-        f = w[:, None] * u[:, None] ** np.arange(self.m)
+        f = self._basis.values(t)
         if self.m % 2:
             # d/dt of the border g is +f for [0, t] and -f for [t, inf).
             border = -1.0 if self.which == "max" else 1.0
