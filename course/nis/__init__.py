@@ -31,7 +31,8 @@ Laws (``_laws``, numerics in ``_pfaffians``)
     :func:`extreme_eigenvalue` (exact, or the Tracy-Widom shifted-gamma
     approximation), :class:`ExtremeEigenvalue`,
     :class:`TracyWidomApproximation`, :func:`prob_eigenvalues_within`,
-    :func:`simulate_extreme_eigenvalues`.
+    :func:`simulate_extreme_eigenvalues`; :data:`EXACT_LAW_LIMITS`, the sizes
+    where the exact laws are validated (and served).
 Tests and thresholds (``_consistency_tests``)
     :func:`nis_test`, :func:`nis_matrix_test`, :func:`nis_critical_values`,
     :func:`nis_matrix_critical_values`, :func:`consistency_interval`.
@@ -62,6 +63,7 @@ from course.nis._consistency_tests import (
     nis_test,
 )
 from course.nis._laws import (
+    EXACT_LAW_LIMITS,
     TW1_GAMMA,
     EigenvaluePair,
     ExtremeEigenvalue,
@@ -82,6 +84,7 @@ from course.nis._windowed import (
 )
 
 __all__ = [
+    "EXACT_LAW_LIMITS",
     "TW1_GAMMA",
     "AlarmStatistics",
     "EigenvaluePair",

@@ -20,6 +20,11 @@ from course.validation import as_count, as_finite, as_size
 #: TW1 ~ Gamma(shape=k, scale=theta) - alpha.
 TW1_GAMMA = {"k": 46.44604884387787, "theta": 0.18605402228279347, "alpha": 9.848007781128567}
 
+#: Where the exact laws are validated (CDF error below 1e-8, measured below 1e-13,
+#: against a high-precision evaluation of Chiani's formula): ``m <= 30`` and
+#: ``m <= K <= 10^5``. :class:`ExtremeEigenvalue` refuses other sizes.
+EXACT_LAW_LIMITS = {"m": 30, "K": 100_000}
+
 
 class ExtremeEigenvalue(FrozenDistribution):
     """Exact law of ``lambda_max`` or ``lambda_min`` of ``Pi = W/K``, ``W ~ W_m(K, I)``.
@@ -53,14 +58,23 @@ class ExtremeEigenvalue(FrozenDistribution):
     ``< m``, ``a = (K - m + 1)/2``.  Chiani uses ``f_i = y^{a-1+i} e^{-y}``,
     whose entries are incomplete gamma functions; at large ``K`` they agree
     to many digits and the Pfaffian cancels catastrophically (about 17 digits
-    are lost at ``m = 6``, ``K = 1000``).  Here the basis is the Gamma(a)
-    density times powers of the *standardised* variable
-    ``u = (y - a)/sqrt(a)`` (a unit-triangular change of basis rescaled, so
-    the ratio of Pfaffians is unchanged); its entries are O(1) and are
-    computed by the parts-integration recursions of :func:`_skew_blocks`
-    from regularised incomplete gamma functions, so the result keeps close to
-    machine precision for every ``K``.  Normalising by the Pfaffian over
-    ``[0, inf)`` avoids the multivariate-gamma constant.
+    are lost at ``m = 6``, ``K = 1000``).  Powers of a standardised variable
+    cure large ``K`` but not large ``m``: near ``K = m`` the eigenvalues
+    spread over ``[0, 2m]`` and the skew matrix of ``w(y) u^i`` has a
+    condition number of 1e34 at ``m = 24``, ``K = 30``, so double precision
+    returns nonsense even from exactly rounded entries.  Here the basis is
+    ``f_i(y) = c w(y) L_i^(K-m)(2y)``, ``w`` the Gamma(a) density and
+    ``L_i^(alpha)`` the generalised Laguerre polynomials normalised so that
+    the ``f_i`` are orthonormal for ``int f_i f_j y dy`` (a change of basis
+    by a triangular matrix, so the ratio of Pfaffians is unchanged).  The
+    skew matrix of ``[0, inf)`` then has a condition number below 100 for
+    every ``m <= 30`` and ``K``.  In ``v = sqrt(y)`` the basis functions are
+    ``v^(K-m) e^{-v^2}`` times polynomials, smooth at 0, so the running
+    integrals ``int_lo^z f_i`` and the entries are computed by composite
+    Clenshaw-Curtis quadrature (panels of width 0.75 in ``v``, 25 nodes each)
+    over the interval cut where every ``f_i`` is below 1e-30 of its largest
+    value (:class:`course.nis._pfaffians._LaguerreBasis`).  Normalising by the
+    Pfaffian over ``[0, inf)`` avoids the multivariate-gamma constant.
 
     ``cdf`` of ``lambda_max`` uses ``I = [0, Kx/2]``; ``sf`` of
     ``lambda_min`` uses ``I = [Kx/2, inf)``.  The complementary probability
@@ -73,12 +87,21 @@ class ExtremeEigenvalue(FrozenDistribution):
     skew update, ``d Pf(A) = -Pf([[A, U, V], [-U^T, 0, 0], [-V^T, 0, 0]])``.
     For ``m = 1`` the law is ``chi2(K)/K``.
 
-    Accuracy (against an independent 80-digit evaluation, ``m <= 6``,
-    ``K <= 10^4``): absolute error below ``1e-13`` everywhere; relative error
-    about ``1e-13`` in the tails the tests use (upper tail of ``lambda_max``,
-    lower tail of ``lambda_min``) down to probabilities of ``1e-300``.  In
-    the opposite tails, probabilities below about ``1e-12`` are accurate in
-    absolute terms only.  Quantiles come from a safeguarded Newton iteration
+    Accuracy, against Chiani's formula in his own basis evaluated with
+    mpmath at a working precision raised until 30 digits settle
+    (``tests/nis_reference.py``): on the validated region ``m <= 30``,
+    ``m <= K <= 10^5`` (:data:`EXACT_LAW_LIMITS`) the absolute CDF error is
+    below ``1e-13`` at every ``K`` tested (all ``K`` from ``m`` to ``2m``
+    and ``K`` up to ``10^5``; the full grid is
+    ``tests/benchmarks/bench_nis.py``, a hypothesis sweep of it runs in the
+    test suite); relative error about ``1e-12`` in the tails the tests use
+    (upper tail of ``lambda_max``, lower tail of ``lambda_min``) down to
+    probabilities of ``1e-300`` (checked for ``m <= 6``).  In the opposite
+    tails, probabilities below about ``1e-12`` are accurate in absolute terms
+    only.  Outside the validated region the constructor raises
+    ``ValueError`` rather than return unchecked numbers.  A CDF point costs
+    about 5 ms at ``m = 30``, a quantile about 50 ms.  Quantiles come from a
+    safeguarded Newton iteration
     on ``log F`` against ``log x``, started at the Tracy-Widom quantile.
     """
 
@@ -87,6 +110,7 @@ class ExtremeEigenvalue(FrozenDistribution):
     def __init__(self, m, K, which="max"):
         self.m, self.K = _check_dims(m, K)
         self.which = _check_which(which)
+        _check_validated(self.m, self.K)
         self._a = (self.K - self.m + 1) / 2.0
         self._basis = _LaguerreBasis(self.m, self._a)
         J, g = self._blocks(np.zeros(1), np.full(1, np.inf))
@@ -276,6 +300,16 @@ class ExtremeEigenvalue(FrozenDistribution):
         return self._moment_integral(2) - self.mean() ** 2
 
 
+def _check_validated(m: int, K: int) -> None:
+    if m > EXACT_LAW_LIMITS["m"] or K - EXACT_LAW_LIMITS["K"] > 0:
+        raise ValueError(
+            f"the exact law is validated for m <= {EXACT_LAW_LIMITS['m']} and "
+            f"K <= {EXACT_LAW_LIMITS['K']:,} (got m = {m}, K = {K}); beyond that its accuracy "
+            'has not been checked: use method="tracy-widom" for a quick look, or Monte Carlo '
+            "(simulate_extreme_eigenvalues) for a threshold"
+        )
+
+
 class TracyWidomApproximation(FrozenDistribution):
     """Fast approximation of an extreme-eigenvalue law: Tracy-Widom via a shifted gamma.
 
@@ -437,12 +471,16 @@ def extreme_eigenvalue(m, K, which="max", method="exact"):
     Raises
     ------
     ValueError
-        ``m < 1``, ``K < m``, non-integers, unknown ``which`` or ``method``.
+        ``m < 1``, ``K < m``, non-integers, unknown ``which`` or ``method``;
+        for ``method="exact"`` also sizes outside the validated region
+        ``m <= 30``, ``K <= 10^5`` (:data:`EXACT_LAW_LIMITS`).
 
     Notes
     -----
     The exact law is Chiani's Pfaffian ([C14], Theorem 1; [C17], Theorem 1)
-    evaluated in a standardised basis, see :class:`ExtremeEigenvalue`; the
+    evaluated in an orthonormal Laguerre basis, see :class:`ExtremeEigenvalue`;
+    its CDF is validated to better than 1e-13 (target 1e-8) for ``m <= 30``
+    and ``m <= K <= 10^5``. The
     approximation is Johnstone's Tracy-Widom limit ([J]) with Chiani's
     shifted gamma for TW1, see :class:`TracyWidomApproximation`.
 
@@ -477,6 +515,12 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
     -------
     float
         The probability, in ``[0, 1]``.
+
+    Raises
+    ------
+    ValueError
+        Bad dimensions or thresholds, or sizes outside the validated region
+        ``m <= 30``, ``K <= 10^5`` of the exact laws.
 
     Notes
     -----
