@@ -71,7 +71,7 @@ class ExtremeEigenvalue(FrozenDistribution):
     every ``m <= 30`` and ``K``.  In ``v = sqrt(y)`` the basis functions are
     ``v^(K-m) e^{-v^2}`` times polynomials, smooth at 0, so the running
     integrals ``int_lo^z f_i`` and the entries are computed by composite
-    Clenshaw-Curtis quadrature (panels of width 0.75 in ``v``, 25 nodes each)
+    Gauss-Legendre quadrature (panels of width 1.5 in ``v``, 24 nodes each)
     over the interval cut where every ``f_i`` is below 1e-30 of its largest
     value (:class:`course.nis._pfaffians._LaguerreBasis`).  Normalising by the
     Pfaffian over ``[0, inf)`` avoids the multivariate-gamma constant.
