@@ -8,10 +8,14 @@ entries follow from the closed-form recursion (integration by parts)::
     J(p, q+1) = q J(p, q) - (hi^q e^-hi + lo^q e^-lo) gamma(p; lo, hi)
                 + 2^(1-p-q) gamma(p+q; 2 lo, 2 hi),     J(p, p) = 0,
 
-with ``gamma(p; lo, hi)`` the (unregularised) incomplete gamma integral.  In
-this basis double precision loses all digits at large K, so it runs with
-80 significant digits.  Run ``python tests/nis_reference.py`` (needs
-``mpmath``) to print the table pasted into the tests.
+with ``gamma(p; lo, hi)`` the (unregularised) incomplete gamma integral, and
+the Pfaffian by Parlett-Reid elimination in mpmath.  In this basis double
+precision loses all digits at large K (and at large m), so :func:`prob_within`
+runs with 80 significant digits (enough for the table's m <= 6) and
+:func:`checked_probabilities` raises the precision until two evaluations agree
+to 30 digits (m = 30, K = 1000 needs about 125; K = 10^5 several hundred).
+Run ``python tests/nis_reference.py`` (needs ``mpmath``) to print the table
+pasted into the tests.
 """
 
 from __future__ import annotations

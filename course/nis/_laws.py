@@ -337,9 +337,8 @@ class TracyWidomApproximation(FrozenDistribution):
     The result is an asymptotic law (large ``m`` and ``K``) and costs what
     an approximation costs. Measured error, ``sup_x |F_TW(x) - F(x)|``
     against the exact law :class:`ExtremeEigenvalue` on 400 points between
-    its 1e-6 and 1 - 1e-6 quantiles (the rows m <= 6 are recomputed by the
-    test suite; the exact law is accurate to 1e-13 there, and to Monte Carlo
-    resolution, about 0.005, at m = 10 and 16):
+    its 1e-6 and 1 - 1e-6 quantiles (every row is recomputed by the test
+    suite; the exact law is accurate to 1e-13 on the whole table):
 
     Largest eigenvalue (``which="max"``):
 
