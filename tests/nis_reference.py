@@ -13,7 +13,7 @@ the Pfaffian by Parlett-Reid elimination in mpmath.  In this basis double
 precision loses all digits at large K (and at large m), so :func:`prob_within`
 runs with 80 significant digits (enough for the table's m <= 6) and
 :func:`checked_probabilities` raises the precision until two evaluations agree
-to 30 digits (m = 30, K = 1000 needs about 125; K = 10^5 several hundred).
+to 30 digits (m = 30, K = 1000 needs about 100 digits, K = 10^5 several hundred).
 Run ``python tests/nis_reference.py`` (needs ``mpmath``) to print the table
 pasted into the tests.
 """
