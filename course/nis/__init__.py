@@ -13,8 +13,9 @@ Cholesky factor ``B_k`` of ``S_k`` (``S_k = B_k B_k^T``) gives
 The scalar NIS only sees the trace of ``Pi``.  The extreme eigenvalues
 ``lambda_min(Pi)`` and ``lambda_max(Pi)`` see a wrong innovation covariance
 in any direction, and :func:`extreme_eigenvalue` gives their exact laws
-(Chiani's Pfaffian closed forms, evaluated stably in double precision for
-any ``K``).
+(Chiani's Pfaffian closed forms, evaluated stably in double precision in
+an orthonormal Laguerre basis, validated for ``m <= 30`` and ``K <= 10^5``
+and refused beyond).
 
 This package is the one home of the NIS chain: NIS -> window -> threshold ->
 alarm.  The names live in private single-topic modules and are re-exported
