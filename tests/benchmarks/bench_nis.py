@@ -165,6 +165,8 @@ def accuracy(kind):
             print(
                 f"   MISSED at m={m}, K={K}: CDF error {cdf_error:.1e}, level error {level_error:.1e}"
             )
+        if K - 2 * m == 0:  # the last K of this m: one progress line per dimension
+            print(f"   m={m:2d} done; largest CDF error so far {worst_cdf:.1e}", flush=True)
     print(f"   largest CDF error {worst_cdf:.1e} at (m, K) = {where.get('cdf')} (target <= 1e-8)")
     print(
         f"   largest quantile level error {worst_level:.1e} at {where.get('level')} (target <= 1e-8)"
