@@ -13,8 +13,9 @@ Cholesky factor ``B_k`` of ``S_k`` (``S_k = B_k B_k^T``) gives
 The scalar NIS only sees the trace of ``Pi``.  The extreme eigenvalues
 ``lambda_min(Pi)`` and ``lambda_max(Pi)`` see a wrong innovation covariance
 in any direction, and :func:`extreme_eigenvalue` gives their exact laws
-(Chiani's Pfaffian closed forms, evaluated stably in double precision for
-any ``K``).
+(Chiani's Pfaffian closed forms, evaluated stably in double precision in
+an orthonormal Laguerre basis, validated for ``m <= 30`` and ``K <= 10^5``
+and refused beyond).
 
 This package is the one home of the NIS chain: NIS -> window -> threshold ->
 alarm.  The names live in private single-topic modules and are re-exported
@@ -31,7 +32,8 @@ Laws (``_laws``, numerics in ``_pfaffians``)
     :func:`extreme_eigenvalue` (exact, or the Tracy-Widom shifted-gamma
     approximation), :class:`ExtremeEigenvalue`,
     :class:`TracyWidomApproximation`, :func:`prob_eigenvalues_within`,
-    :func:`simulate_extreme_eigenvalues`.
+    :func:`simulate_extreme_eigenvalues`; :data:`EXACT_LAW_LIMITS`, the sizes
+    where the exact laws are validated (and served).
 Tests and thresholds (``_consistency_tests``)
     :func:`nis_test`, :func:`nis_matrix_test`, :func:`nis_critical_values`,
     :func:`nis_matrix_critical_values`, :func:`consistency_interval`.
@@ -62,6 +64,7 @@ from course.nis._consistency_tests import (
     nis_test,
 )
 from course.nis._laws import (
+    EXACT_LAW_LIMITS,
     TW1_GAMMA,
     EigenvaluePair,
     ExtremeEigenvalue,
@@ -82,6 +85,7 @@ from course.nis._windowed import (
 )
 
 __all__ = [
+    "EXACT_LAW_LIMITS",
     "TW1_GAMMA",
     "AlarmStatistics",
     "EigenvaluePair",

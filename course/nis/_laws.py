@@ -13,20 +13,18 @@ from scipy import stats
 
 from course._law_inputs import _levels, _points
 from course.distributions import FrozenDistribution
-from course.nis._pfaffians import (
-    _augment,
-    _bordered,
-    _log_gamma_kernel,
-    _log_gamma_ratio_half,
-    _pfaffian,
-    _skew_blocks,
-)
+from course.nis._pfaffians import _augment, _bordered, _LaguerreBasis, _pfaffian
 from course.nis._statistics import EigenvaluePair, _check_dims, _check_which
 from course.validation import as_count, as_finite, as_generator, as_size
 
 #: Chiani's shifted-gamma fit of the Tracy-Widom law TW1 ([C14], Table 1):
 #: TW1 ~ Gamma(shape=k, scale=theta) - alpha.
 TW1_GAMMA = {"k": 46.44604884387787, "theta": 0.18605402228279347, "alpha": 9.848007781128567}
+
+#: Where the exact laws are validated (CDF error below 1e-8, measured below 1e-13,
+#: against a high-precision evaluation of Chiani's formula): ``m <= 30`` and
+#: ``m <= K <= 10^5``. :class:`ExtremeEigenvalue` refuses other sizes.
+EXACT_LAW_LIMITS = {"m": 30, "K": 100_000}
 
 
 class ExtremeEigenvalue(FrozenDistribution):
@@ -61,14 +59,23 @@ class ExtremeEigenvalue(FrozenDistribution):
     ``< m``, ``a = (K - m + 1)/2``.  Chiani uses ``f_i = y^{a-1+i} e^{-y}``,
     whose entries are incomplete gamma functions; at large ``K`` they agree
     to many digits and the Pfaffian cancels catastrophically (about 17 digits
-    are lost at ``m = 6``, ``K = 1000``).  Here the basis is the Gamma(a)
-    density times powers of the *standardised* variable
-    ``u = (y - a)/sqrt(a)`` (a unit-triangular change of basis rescaled, so
-    the ratio of Pfaffians is unchanged); its entries are O(1) and are
-    computed by the parts-integration recursions of :func:`_skew_blocks`
-    from regularised incomplete gamma functions, so the result keeps close to
-    machine precision for every ``K``.  Normalising by the Pfaffian over
-    ``[0, inf)`` avoids the multivariate-gamma constant.
+    are lost at ``m = 6``, ``K = 1000``).  Powers of a standardised variable
+    cure large ``K`` but not large ``m``: near ``K = m`` the eigenvalues
+    spread over ``[0, 2m]`` and the skew matrix of ``w(y) u^i`` has a
+    condition number of 1e34 at ``m = 24``, ``K = 30``, so double precision
+    returns nonsense even from exactly rounded entries.  Here the basis is
+    ``f_i(y) = c w(y) L_i^(K-m)(2y)``, ``w`` the Gamma(a) density and
+    ``L_i^(alpha)`` the generalised Laguerre polynomials normalised so that
+    the ``f_i`` are orthonormal for ``int f_i f_j y dy`` (a change of basis
+    by a triangular matrix, so the ratio of Pfaffians is unchanged).  The
+    skew matrix of ``[0, inf)`` then has a condition number below 100 for
+    every ``m <= 30`` and ``K``.  In ``v = sqrt(y)`` the basis functions are
+    ``v^(K-m) e^{-v^2}`` times polynomials, smooth at 0, so the running
+    integrals ``int_lo^z f_i`` and the entries are computed by composite
+    Gauss-Legendre quadrature (panels of width 1.5 in ``v``, 24 nodes each)
+    over the interval cut where every ``f_i`` is below 1e-30 of its largest
+    value (:class:`course.nis._pfaffians._LaguerreBasis`).  Normalising by the
+    Pfaffian over ``[0, inf)`` avoids the multivariate-gamma constant.
 
     ``cdf`` of ``lambda_max`` uses ``I = [0, Kx/2]``; ``sf`` of
     ``lambda_min`` uses ``I = [Kx/2, inf)``.  The complementary probability
@@ -81,12 +88,22 @@ class ExtremeEigenvalue(FrozenDistribution):
     skew update, ``d Pf(A) = -Pf([[A, U, V], [-U^T, 0, 0], [-V^T, 0, 0]])``.
     For ``m = 1`` the law is ``chi2(K)/K``.
 
-    Accuracy (against an independent 80-digit evaluation, ``m <= 6``,
-    ``K <= 10^4``): absolute error below ``1e-13`` everywhere; relative error
-    about ``1e-13`` in the tails the tests use (upper tail of ``lambda_max``,
-    lower tail of ``lambda_min``) down to probabilities of ``1e-300``.  In
-    the opposite tails, probabilities below about ``1e-12`` are accurate in
-    absolute terms only.  Quantiles come from a safeguarded Newton iteration
+    Accuracy, against Chiani's formula in his own basis evaluated with
+    mpmath at a working precision raised until 30 digits settle
+    (``tests/nis_reference.py``): on the validated region ``m <= 30``,
+    ``m <= K <= 10^5`` (:data:`EXACT_LAW_LIMITS`) the absolute CDF error is
+    below ``1e-13`` at every ``K`` tested (all ``K`` from ``m`` to ``2m``
+    and ``K`` up to ``10^5``; the full grid is
+    ``tests/benchmarks/bench_nis.py``, a hypothesis sweep of it runs in the
+    test suite); relative error about ``1e-12`` in the tails the tests use
+    (upper tail of ``lambda_max``, lower tail of ``lambda_min``) down to
+    probabilities of ``1e-300`` (checked for ``m <= 6``; at ``m = 16`` to
+    ``30`` checked at ``1e-30``, relative error below ``1e-12``).  In the
+    opposite tails, probabilities below about ``1e-12`` are accurate in
+    absolute terms only.  Outside the validated region the constructor raises
+    ``ValueError`` rather than return unchecked numbers.  A CDF point costs
+    about 1 ms of CPU at ``m = 30`` (building the law 2-3 ms more), a
+    quantile 10-30 ms.  Quantiles come from a safeguarded Newton iteration
     on ``log F`` against ``log x``, started at the Tracy-Widom quantile.
     """
 
@@ -95,8 +112,9 @@ class ExtremeEigenvalue(FrozenDistribution):
     def __init__(self, m, K, which="max"):
         self.m, self.K = _check_dims(m, K)
         self.which = _check_which(which)
+        _check_validated(self.m, self.K)
         self._a = (self.K - self.m + 1) / 2.0
-        self._e_scale = np.exp(_log_gamma_ratio_half(self._a)) / (2 * np.sqrt(np.pi))
+        self._basis = _LaguerreBasis(self.m, self._a)
         J, g = self._blocks(np.zeros(1), np.full(1, np.inf))
         self._A_full = _augment(J, g)[0]
         self._pf_full = float(_pfaffian(self._A_full))
@@ -108,7 +126,7 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     # -- core -----------------------------------------------------------------
     def _blocks(self, lo: np.ndarray, hi: np.ndarray):
-        return _skew_blocks(self.m, self._a, lo, hi, self._e_scale)
+        return self._basis.blocks(lo, hi)
 
     def _side(self, t: np.ndarray, kind: str):
         """Blocks of [0, t] ("low") or [t, inf) ("high")."""
@@ -146,11 +164,7 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     def _density(self, t, J, g):
         """pdf at x = 2t/K from the derivative of the inside Pfaffian."""
-        s = np.sqrt(self._a)
-        u = (t - self._a) / s
-        with np.errstate(divide="ignore"):
-            w = np.exp(_log_gamma_kernel(self._a, t) - np.log(t))
-        f = w[:, None] * u[:, None] ** np.arange(self.m)
+        f = self._basis.values(t)
         if self.m % 2:
             # d/dt of the border g is +f for [0, t] and -f for [t, inf).
             border = -1.0 if self.which == "max" else 1.0
@@ -288,6 +302,16 @@ class ExtremeEigenvalue(FrozenDistribution):
         return self._moment_integral(2) - self.mean() ** 2
 
 
+def _check_validated(m: int, K: int) -> None:
+    if m > EXACT_LAW_LIMITS["m"] or K - EXACT_LAW_LIMITS["K"] > 0:
+        raise ValueError(
+            f"the exact law is validated for m <= {EXACT_LAW_LIMITS['m']} and "
+            f"K <= {EXACT_LAW_LIMITS['K']:,} (got m = {m}, K = {K}); beyond that its accuracy "
+            'has not been checked: use method="tracy-widom" for a quick look, or Monte Carlo '
+            "(simulate_extreme_eigenvalues) for a threshold"
+        )
+
+
 class TracyWidomApproximation(FrozenDistribution):
     """Fast approximation of an extreme-eigenvalue law: Tracy-Widom via a shifted gamma.
 
@@ -315,9 +339,8 @@ class TracyWidomApproximation(FrozenDistribution):
     The result is an asymptotic law (large ``m`` and ``K``) and costs what
     an approximation costs. Measured error, ``sup_x |F_TW(x) - F(x)|``
     against the exact law :class:`ExtremeEigenvalue` on 400 points between
-    its 1e-6 and 1 - 1e-6 quantiles (the rows m <= 6 are recomputed by the
-    test suite; the exact law is accurate to 1e-13 there, and to Monte Carlo
-    resolution, about 0.005, at m = 10 and 16):
+    its 1e-6 and 1 - 1e-6 quantiles (every row is recomputed by the test
+    suite; the exact law is accurate to 1e-13 on the whole table):
 
     Largest eigenvalue (``which="max"``):
 
@@ -449,12 +472,16 @@ def extreme_eigenvalue(m, K, which="max", method="exact"):
     Raises
     ------
     ValueError
-        ``m < 1``, ``K < m``, non-integers, unknown ``which`` or ``method``.
+        ``m < 1``, ``K < m``, non-integers, unknown ``which`` or ``method``;
+        for ``method="exact"`` also sizes outside the validated region
+        ``m <= 30``, ``K <= 10^5`` (:data:`EXACT_LAW_LIMITS`).
 
     Notes
     -----
     The exact law is Chiani's Pfaffian ([C14], Theorem 1; [C17], Theorem 1)
-    evaluated in a standardised basis, see :class:`ExtremeEigenvalue`; the
+    evaluated in an orthonormal Laguerre basis, see :class:`ExtremeEigenvalue`;
+    its CDF is validated to better than 1e-13 (target 1e-8) for ``m <= 30``
+    and ``m <= K <= 10^5``. The
     approximation is Johnstone's Tracy-Widom limit ([J]) with Chiani's
     shifted gamma for TW1, see :class:`TracyWidomApproximation`.
 
@@ -489,6 +516,12 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
     -------
     float
         The probability, in ``[0, 1]``.
+
+    Raises
+    ------
+    ValueError
+        Bad dimensions or thresholds, or sizes outside the validated region
+        ``m <= 30``, ``K <= 10^5`` of the exact laws.
 
     Notes
     -----

@@ -1,4 +1,4 @@
-"""Pfaffian numerics of Chiani's closed forms, in a standardised basis that keeps its digits.
+"""Pfaffian numerics of Chiani's closed forms, in an orthonormal basis that keeps its digits.
 
 Sources: Chiani (2014, 2017) for the Pfaffians, de Bruijn (1955) for the integration formula
 behind them, Parlett and Reid (1970) for the elimination that evaluates a Pfaffian; full
@@ -7,14 +7,17 @@ references in the course bibliography, :doc:`/docs/bibliography`.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+from numpy.polynomial import legendre
 from scipy import special
 
 _HALF_LOG_2PI = 0.5 * np.log(2 * np.pi)
 
 
 # ---------------------------------------------------------------------------
-# the exact laws: Chiani's Pfaffian in a standardised basis
+# the exact laws: Chiani's Pfaffian in an orthonormal Laguerre basis
 # ---------------------------------------------------------------------------
 def _stirling_correction(x: float) -> float:
     """``log Gamma(x) - [(x - 1/2) log x - x + log(2 pi)/2]`` for x >= 10."""
@@ -53,6 +56,18 @@ def _log_gamma_kernel(a: float, t: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         out = a * _log1pmx(t / a - 1.0) + 0.5 * np.log(a) - _HALF_LOG_2PI - _stirling_correction(a)
     return np.where(t > 0, out, -np.inf)
+
+
+def _log_gamma_density(a: float, t: np.ndarray) -> np.ndarray:
+    """log of the Gamma(a) density at ``t >= 0`` (``-inf``, 0 or ``inf`` at ``t = 0``)."""
+    t = np.asarray(t, dtype=float)
+    if a < 10:
+        with np.errstate(divide="ignore"):
+            return special.xlogy(a - 1.0, t) - t - special.gammaln(a)
+    positive = t > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = _log_gamma_kernel(a, t) - np.log(np.where(positive, t, 1.0))
+    return np.where(positive, out, -np.inf)
 
 
 def _log_gamma_ratio_half(a: float) -> float:
@@ -103,115 +118,143 @@ def _pfaffian(A: np.ndarray) -> np.ndarray:
     return pf.reshape(batch)
 
 
-def _moments(shape: float, lo: np.ndarray, hi: np.ndarray, count: int):
-    """Standardised incomplete moments of the Gamma(shape) law over ``[lo, hi]``.
+#: Gauss-Legendre nodes per panel and panel width in v = sqrt(y) of the quadrature of
+#: :class:`_LaguerreBasis`: the CDFs agree with the high-precision reference to ~1e-14
+#: (16 nodes per 1.0 already lose three digits, 32 per 3.0 lose four).
+_PANEL_NODES = 24
+_PANEL_WIDTH = 1.5
+#: Distance in v past the finite end of a tail interval beyond the basis' support after
+#: which its integrands have fallen below 1e-30 of their value at that end.
+_V_MARGIN = 6.0
 
-    ``M_k = int_lo^hi w(y) u(y)^k dy`` for ``k < count`` with ``w`` the
-    Gamma(shape, 1) density, ``u = (y - shape)/sqrt(shape)``; ``lo`` may be
-    0 and ``hi`` infinite.  Integration by parts gives
-    ``M_{k+1} = (k/s) M_k + k M_{k-1} - [phi u^k]_lo^hi / s`` with
-    ``phi(y) = y w(y)`` and ``s = sqrt(shape)``: every term is O(1), so the
-    recursion keeps its digits where the raw moments ``int y^k w`` cancel.
 
-    Returns ``(M, u(hi), phi(hi))``, ``M`` of shape ``lo.shape + (count,)``;
-    ``u(hi)`` and ``phi(hi)`` are 0 where ``hi`` is infinite.
+@functools.cache
+def _panel_rule(n: int):
+    """Gauss-Legendre nodes and weights on [-1, 1] and the running-integral matrix.
+
+    ``S @ f`` integrates the degree ``n - 1`` interpolant of the values ``f``
+    at the nodes from -1 up to each node.  Gauss-Legendre integrates products
+    of two such functions (degree ``2n - 2``) exactly, which is what the
+    double integrals need.
     """
-    s = np.sqrt(shape)
-    lo, hi = np.broadcast_arrays(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
-    zeros = np.zeros(lo.shape)
-    finite = np.isfinite(hi)
-    has_lo = lo > 0
-    # Only the special functions a side needs are evaluated: the two common
-    # intervals [0, t] and [t, inf) are cheap, a general band costs more.
-    if np.all(finite):
-        u_hi = (hi - shape) / s
-        phi_hi = np.exp(_log_gamma_kernel(shape, hi))
-    else:
-        u_hi = np.where(finite, (np.where(finite, hi, 0.0) - shape) / s, 0.0)
-        phi_hi = np.where(finite, np.exp(_log_gamma_kernel(shape, np.where(finite, hi, 1.0))), 0.0)
-    u_lo = (lo - shape) / s
-    if not np.any(has_lo):
-        phi_lo = zeros
-    else:
-        phi_lo = np.where(has_lo, np.exp(_log_gamma_kernel(shape, np.where(has_lo, lo, 1.0))), 0.0)
-    # The mass of [lo, hi] from whichever regularised gamma has no cancellation.
-    if not np.any(finite):
-        mass = special.gammaincc(shape, lo)
-    elif not np.any(has_lo):
-        mass = special.gammainc(shape, hi)
-    else:
-        upper_side = lo >= shape
-        mass = np.where(
-            ~finite,
-            special.gammaincc(shape, lo),
-            np.where(
-                ~has_lo,
-                special.gammainc(shape, hi),
-                np.where(
-                    upper_side,
-                    special.gammaincc(shape, lo) - special.gammaincc(shape, hi),
-                    special.gammainc(shape, hi) - special.gammainc(shape, lo),
-                ),
-            ),
-        )
-    out = np.empty(lo.shape + (count,))
-    out[..., 0] = mass
-    previous = np.zeros(lo.shape)
-    pow_hi, pow_lo = np.ones(lo.shape), np.ones(lo.shape)
-    for k in range(count - 1):
-        edge = phi_hi * pow_hi - phi_lo * pow_lo
-        out[..., k + 1] = (k / s) * out[..., k] + k * previous - edge / s
-        previous = out[..., k]
-        pow_hi, pow_lo = pow_hi * u_hi, pow_lo * u_lo
-    return out, u_hi, phi_hi
+    x, weights = legendre.leggauss(n)
+    to_coefficients = np.linalg.solve(legendre.legvander(x, n - 1), np.eye(n))
+    S = legendre.legvander(x, n) @ legendre.legint(to_coefficients, lbnd=-1, axis=0)
+    return x, weights, S
 
 
-def _skew_blocks(m: int, a: float, lo: np.ndarray, hi: np.ndarray, e_scale: float):
-    """Chiani's skew matrix over ``[lo, hi]``, in the basis ``w(y) u(y)^k``.
+class _LaguerreBasis:
+    """Chiani's skew matrix in a basis of Laguerre functions, entries by quadrature.
 
-    ``J_ij = int int_{[lo,hi]^2} sgn(z - y) f_i(y) f_j(z) dy dz`` with
-    ``f_k = w u^k`` (``w`` the Gamma(a) density, ``u = (y - a)/sqrt(a)``),
-    and ``g_i = int_lo^hi f_i``.  Returns ``J`` of shape
-    ``lo.shape + (m, m)`` and ``g`` of shape ``lo.shape + (m,)``.
+    The basis is ``f_k(y) = c w(y) P_k(2y)``, ``k < m``: ``w`` the Gamma(a)
+    density, ``P_k`` the generalised Laguerre polynomial ``L_k^(alpha)``,
+    ``alpha = 2a - 1 = K - m``, normalised so that the ``f_k`` are
+    orthonormal for the inner product ``int f_i f_j y dy`` (the weight
+    ``y^alpha e^{-2y}``); ``c = sqrt(2) pi^(1/4) (Gamma(a)/Gamma(a+1/2))^(1/2)``.
+    Orthonormal functions make the skew matrix of the whole half-line well
+    conditioned (condition number below 100 for m <= 30 at every K), where
+    the powers of a standardised variable reached 1e34 at m = 24, K = 30.
 
-    ``J = H - H^T`` with ``H_kl = int f_l(z) G_k(z) dz``,
-    ``G_k(z) = int_lo^z f_k``; parts integration in ``l`` gives
-    ``H_{k,l+1} = (l/s) H_kl + l H_{k,l-1} + (E_{k+l} - phi(hi) u(hi)^l g_k)/s``,
-    with ``E_n = int y w(y)^2 u^n dy``, a standardised incomplete moment
-    of the Gamma(2a) law over ``[2 lo, 2 hi]``:
-    ``E_n = Gamma(a+1/2)/(2 sqrt(pi) Gamma(a)) 2^{-n/2} M_n^{(2a)}``
-    (``e_scale`` is that constant); ``H_00 = g_0^2/2`` and
-    ``H_k0 = g_0 g_k - H_0k``.
+    In ``v = sqrt(y)`` the integrands ``2 v f_k(v^2) = 2 c' v^alpha e^{-v^2}
+    P_k(2 v^2)`` are smooth (``alpha`` is a non-negative integer), so the
+    running integrals ``G_k(z) = int_lo^z f_k`` and the double integrals
+    ``H_kl = int f_l G_k`` come from composite Gauss-Legendre panels (the
+    running integral by the spectral integration matrix of each panel).  The
+    functions are negligible (below 1e-30 of their largest value) outside
+    ``[v_low, v_high]``, found once per law on a grid around the turning
+    points of ``P_{m-1}``, so an interval is cut there; a tail interval
+    beyond them is cut :data:`_V_MARGIN` past its finite end, where its
+    integrand has fallen by 1e-30 relative to that end, so tiny tail
+    probabilities keep their relative accuracy.
     """
-    s = np.sqrt(a)
-    g, u, upper = _moments(a, lo, hi, m)
-    n_e = max(2 * m - 2, 1)
-    m2, _, _ = _moments(2 * a, 2 * lo, 2 * hi, n_e)
-    E = e_scale * m2 * 2.0 ** (-0.5 * np.arange(n_e))
-    H = np.empty(g.shape[:-1] + (m, m))
-    H[..., 0, 0] = 0.5 * g[..., 0] ** 2
-    # Row 0 first (it fixes column 0 through H_k0 = g_0 g_k - H_0k), then
-    # the remaining rows advance in l together.
-    power = np.ones(g.shape[:-1])
-    for l in range(m - 1):
-        before = H[..., 0, l - 1] if l else 0.0
-        H[..., 0, l + 1] = (
-            (l / s) * H[..., 0, l] + l * before + (E[..., l] - upper * power * g[..., 0]) / s
+
+    def __init__(self, m: int, a: float):
+        self.m, self.a = m, a
+        self.alpha = 2.0 * a - 1.0
+        self.log_scale = 0.5 * np.log(2.0) + 0.25 * np.log(np.pi) - 0.5 * _log_gamma_ratio_half(a)
+        # The basis lives between the outer turning points of P_{m-1}; beyond them it decays
+        # like a Gaussian of width 1/2 in v.  Cut where every function is below 1e-30 of the
+        # largest value, found on a grid of step 0.05 in v.
+        k = m - 1
+        centre, spread = 2 * k + self.alpha + 1, 2 * np.sqrt(k * (k + self.alpha + 1))
+        v = np.arange(
+            max(np.sqrt(max(centre - spread, 0.0) / 2) - 2 * _V_MARGIN, 0.0),
+            np.sqrt((centre + spread) / 2) + 2 * _V_MARGIN,
+            0.05,
         )
-        power = power * u
-    if m > 1:
-        H[..., 1:, 0] = g[..., :1] * g[..., 1:] - H[..., 0, 1:]
-        rows = np.arange(1, m)
-        power = np.ones(g.shape[:-1])[..., None]
-        for l in range(m - 1):
-            before = H[..., 1:, l - 1] if l else 0.0
-            H[..., 1:, l + 1] = (
-                (l / s) * H[..., 1:, l]
-                + l * before
-                + (E[..., rows + l] - upper[..., None] * power * g[..., 1:]) / s
-            )
-            power = power * u[..., None]
-    return H - np.swapaxes(H, -1, -2), g
+        envelope = np.max(np.abs(self._integrand(v)), axis=0)
+        kept = v[envelope >= 1e-30 * np.max(envelope)]
+        self.v_low, self.v_high = max(kept[0] - 0.05, 0.0), kept[-1] + 0.05
+        self.panels = max(1, int(np.ceil((self.v_high - self.v_low) / _PANEL_WIDTH)))
+
+    def _laguerre(self, half_gap: np.ndarray) -> np.ndarray:
+        """``P_k(2y)``, ``k < m``, shape ``(m,) + y.shape``, from ``half_gap = a - y``.
+
+        Three-term recurrence of the orthonormal polynomials:
+        ``r_k P_{k+1} = (2k + alpha + 1 - x) P_k - r_{k-1} P_{k-1}``,
+        ``r_k = sqrt((k+1)(k+1+alpha))``, ``x = 2y``; ``alpha + 1 - x = 2(a - y)``
+        is passed exactly (no cancellation at large ``a``).  The degree is the
+        leading axis so that every step writes contiguous memory.
+        """
+        P = np.empty((self.m,) + half_gap.shape)
+        P[0] = 1.0
+        for k in range(self.m - 1):
+            r = np.sqrt((k + 1) * (k + 1 + self.alpha))
+            P[k + 1] = (2 * k + 2 * half_gap) * P[k]
+            if k:
+                P[k + 1] -= np.sqrt(k * (k + self.alpha)) * P[k - 1]
+            P[k + 1] /= r
+        return P
+
+    def values(self, t: np.ndarray) -> np.ndarray:
+        """``f_k(t)``, shape ``t.shape + (m,)`` (per unit of ``y``)."""
+        w = np.exp(_log_gamma_density(self.a, t) + self.log_scale)
+        return np.moveaxis(w * self._laguerre(self.a - t), 0, -1)
+
+    def _integrand(self, v: np.ndarray) -> np.ndarray:
+        """``2 v f_k(v^2)``, shape ``(m,) + v.shape``: the basis per unit of ``v``, smooth at 0."""
+        y = v * v
+        if self.a == 0.5:  # alpha = 0: 2 v w(v^2) = 2 e^{-v^2} / sqrt(pi), also at v = 0
+            w = 2.0 * np.exp(-y + self.log_scale - 0.5 * np.log(np.pi))
+        else:  # 2 v w(v^2) = 2 v^alpha e^{-v^2} / Gamma(a), 0 at v = 0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                w = 2.0 * np.exp(_log_gamma_kernel(self.a, y) - np.log(v) + self.log_scale)
+            w = np.where(v > 0, w, 0.0)
+        root_a = np.sqrt(self.a)
+        return w * self._laguerre((root_a - v) * (root_a + v))
+
+    def blocks(self, lo: np.ndarray, hi: np.ndarray):
+        """``(J, g)`` over ``[lo, hi]`` (``lo`` may be 0, ``hi`` infinite), stacked like ``lo``.
+
+        ``J_kl = int int_{[lo,hi]^2} sgn(z - y) f_k(y) f_l(z) dy dz = H_kl - H_lk``
+        with ``H_kl = int_lo^hi f_l(z) G_k(z) dz``, and ``g_k = int_lo^hi f_k``.
+        """
+        lo, hi = np.broadcast_arrays(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
+        shape = lo.shape
+        v0, v1 = np.sqrt(lo.reshape(-1)), np.sqrt(hi.reshape(-1))
+        # Cut where the integrands are negligible (relative to the interval's own mass).
+        v1 = np.minimum(v1, np.maximum(self.v_high, v0 + _V_MARGIN))
+        v0 = np.maximum(v0, np.minimum(self.v_low, v1 - _V_MARGIN))
+        x, weights, S = _panel_rule(_PANEL_NODES)
+        J = np.empty((v0.size, self.m, self.m))
+        g = np.empty((v0.size, self.m))
+        # Chunks bound the memory of the (m, points, panels, nodes) arrays.
+        step = max(1, 4_000_000 // (self.panels * (_PANEL_NODES + 1) * self.m))
+        for start in range(0, v0.size, step):
+            part = slice(start, start + step)
+            edges = np.linspace(v0[part], v1[part], self.panels + 1, axis=-1)
+            half = 0.5 * np.diff(edges, axis=-1)
+            v = 0.5 * (edges[:, :-1] + edges[:, 1:])[..., None] + half[..., None] * x
+            F = self._integrand(v)  # (m, points, panels, nodes)
+            local = half[..., None] * np.matmul(F, S.T)  # running integrals within a panel
+            ends = np.cumsum(half * (F @ weights), axis=-1)
+            before = np.concatenate([np.zeros_like(ends[..., :1]), ends[..., :-1]], axis=-1)
+            G = (local + before[..., None]).reshape(self.m, len(v), -1)
+            weighted = (F * (half[..., None] * weights)).reshape(self.m, len(v), -1)
+            H = np.matmul(G.transpose(1, 0, 2), weighted.transpose(1, 2, 0))
+            J[part] = H - np.swapaxes(H, -1, -2)
+            g[part] = ends[..., -1].T
+        return J.reshape(shape + (self.m, self.m)), g.reshape(shape + (self.m,))
 
 
 def _augment(J: np.ndarray, g: np.ndarray) -> np.ndarray:
