@@ -182,7 +182,9 @@ def build_parser() -> argparse.ArgumentParser:
         "docs",
         help="build the course website into a folder",
         description="Build the course website (executed notebooks, API reference, guides, "
-        "an in-browser JupyterLite) into OUT_DIR; open OUT_DIR/index.html. Needs the docs "
+        "an in-browser JupyterLite) into OUT_DIR; open OUT_DIR/index.html, or serve the folder "
+        "over http (python -m http.server --directory OUT_DIR) for the in-browser notebooks, "
+        "which browsers do not start from a file:// page. Needs the docs "
         'extra (python -m pip install -e ".[docs]"). Executed notebooks are cached, so a '
         "rebuild runs only the notebooks whose code changed. Sphinx warnings are errors.",
     )

@@ -48,7 +48,11 @@ class BuildReport:
         ran = ", ".join(self.executed) if self.executed else "none (all from the cache)"
         return (
             f"site built in {self.seconds:.0f} s: {self.out_dir / 'index.html'}\n"
-            f"notebooks executed: {ran}"
+            f"notebooks executed: {ran}\n"
+            "To run the notebooks in the browser (JupyterLite), serve the folder over http "
+            "(browsers do not start it from a file:// page):\n"
+            f"  python -m http.server --directory {self.out_dir} 8000   "
+            "then open http://localhost:8000/"
         )
 
 
@@ -194,9 +198,39 @@ def build_site(
     return BuildReport(out_dir=out, cache_dir=cache, seconds=seconds, executed=executed)
 
 
+def _joined(value):
+    """A multi-line field of a notebook as one string (a list of lines joined), else as is."""
+    if isinstance(value, list) and all(isinstance(line, str) for line in value):
+        return "".join(value)
+    return value
+
+
+def _join_multiline_strings(notebook: dict) -> None:
+    """Write every multi-line string of ``notebook`` as one string, in place.
+
+    nbformat allows a cell's source, a stream's text and a text or image output as a list of
+    lines; Jupyter joins them, but JupyterLite's contents shows such a list as its items
+    separated by commas (a leading comma on every stored output line, jupyterlite#1105).
+    """
+    for cell in notebook.get("cells", []):
+        cell["source"] = _joined(cell.get("source", ""))
+        for output in cell.get("outputs", []):
+            if "text" in output:
+                output["text"] = _joined(output["text"])
+            data = output.get("data", {})
+            for mime, value in data.items():
+                # JSON outputs are objects, not lines: only strings and lists of strings join.
+                if not mime.endswith("json"):
+                    data[mime] = _joined(value)
+
+
 def _lite_notebook(source: Path, target: Path) -> None:
-    """A copy of a teaching notebook whose first cell installs the course in the browser."""
+    """A copy of a teaching notebook whose first cell installs the course in the browser.
+
+    Multi-line strings are joined, since JupyterLite would show their lines comma-separated.
+    """
     notebook = json.loads(source.read_text(encoding="utf-8"))
+    _join_multiline_strings(notebook)
     install = {
         "cell_type": "code",
         "execution_count": None,
@@ -210,6 +244,69 @@ def _lite_notebook(source: Path, target: Path) -> None:
     }
     notebook["cells"].insert(0, install)
     target.write_text(json.dumps(notebook, indent=1, ensure_ascii=False), encoding="utf-8")
+
+
+#: Served beside the JupyterLite app and loaded by each of its pages: without it a reader who
+#: is offline, or who opened the site from ``file://``, sees a kernel error icon and no reason.
+LITE_CHECK_SCRIPT = """\
+// The course: tell the reader why Python cannot start in the browser, when it cannot.
+(function () {
+  var PYODIDE = "%(pyodide)s";
+  function banner(html) {
+    var show = function () {
+      var box = document.createElement("div");
+      box.id = "course-lite-problem";
+      box.setAttribute("role", "alert");
+      box.style.cssText = "position:fixed;top:0;left:0;right:0;z-index:10000;padding:0.8em 1em;" +
+        "background:#fff3cd;color:#3d2e00;border-bottom:2px solid #b58900;font:15px/1.4 sans-serif";
+      box.innerHTML = html;
+      document.body.appendChild(box);
+    };
+    if (document.body) { show(); } else { document.addEventListener("DOMContentLoaded", show); }
+  }
+  if (location.protocol === "file:") {
+    banner("<b>The notebooks cannot run from a file on disk.</b> Browsers do not let JupyterLite " +
+      "start Python from a <code>file://</code> page. Serve the site folder over http: " +
+      "<code>python -m http.server --directory SITE_FOLDER 8000</code>, then open " +
+      "<code>http://localhost:8000/</code>.");
+    return;
+  }
+  var failed = function () {
+    banner("<b>Python could not be loaded into the browser.</b> The in-browser kernel " +
+      "downloads Python (Pyodide, about 30 MB) from " + PYODIDE.split("/")[2] + " the first " +
+      "time, and that failed: are you offline? The notebook pages of the course site show " +
+      "every output without running anything; to run the notebooks offline, install the course " +
+      "and use <code>course open</code>.");
+  };
+  if (navigator.onLine === false) { failed(); return; }
+  var timer = new Promise(function (_, reject) { setTimeout(reject, 15000); });
+  Promise.race([fetch(PYODIDE + "/pyodide.mjs", {method: "HEAD", mode: "no-cors"}), timer])
+    .catch(failed);
+})();
+"""
+
+
+def _pyodide_url() -> str:
+    """Where the JupyterLite kernel loads Pyodide from (the kernel package's default CDN)."""
+    try:
+        from jupyterlite_pyodide_kernel.constants import PYODIDE_CDN_URL
+    except ImportError:  # an older kernel package: the check still explains file:// pages
+        return "https://cdn.jsdelivr.net/pyodide"
+    return str(PYODIDE_CDN_URL)
+
+
+def add_lite_check(lite_dir: Path) -> list[Path]:
+    """Add the reader-facing check of :data:`LITE_CHECK_SCRIPT` to every page of the app."""
+    script = lite_dir / "course-lite-check.js"
+    script.write_text(LITE_CHECK_SCRIPT % {"pyodide": _pyodide_url()}, encoding="utf-8")
+    pages = []
+    for page in sorted(lite_dir.glob("*/index.html")):
+        html = page.read_text(encoding="utf-8")
+        tag = '<script src="../course-lite-check.js"></script>'
+        if tag not in html and "</head>" in html:
+            page.write_text(html.replace("</head>", f"{tag}\n</head>", 1), encoding="utf-8")
+            pages.append(page)
+    return pages
 
 
 def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -> Path:
@@ -264,6 +361,7 @@ def build_lite(root: Path, site_dir: Path, cache: Path, notebooks: list[Path]) -
     }
     (work / "jupyter_lite_config.json").write_text(json.dumps(config, indent=1))
     _run([sys.executable, "-m", "jupyter", "lite", "build", "--lite-dir", str(work)], cwd=work)
+    add_lite_check(site_dir / "lite")
     return site_dir / "lite"
 
 

@@ -17,6 +17,8 @@ import course
 DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS / "_ext"))
 
+import course_site  # noqa: E402  (the course's own extension, found through the line above)
+
 #: Where executed notebooks are cached (jupyter-cache); never inside the output folder.
 CACHE = Path(os.environ.get("COURSE_DOCS_CACHE", DOCS.parent / ".cache" / "docs"))
 
@@ -30,6 +32,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",  # "[source]" beside each object of the API reference
     "numpydoc",
     "course_site",
 ]
@@ -97,6 +100,7 @@ html_theme = "sphinx_book_theme"
 html_title = project
 html_static_path = [str(DOCS / "_static")]
 html_css_files = ["course.css"]
+html_js_files = ["course.js"]
 html_favicon = str(DOCS / "_static" / "favicon.svg")  # else browsers ask for /favicon.ico
 html_theme_options = {
     "use_download_button": True,
@@ -105,6 +109,11 @@ html_theme_options = {
     "home_page_in_toc": True,
     "navigation_with_keys": False,
 }
+# Binder and Colab launch buttons on notebook pages, once the course has a public repository:
+# set its URL (e.g. "https://github.com/OWNER/REPO") and branch here.
+repository_url = ""
+repository_branch = "main"
+html_theme_options.update(course_site.launch_options(repository_url, repository_branch))
 html_context = {"default_mode": "auto"}  # an empty mode makes the theme log a console error
 html_last_updated_fmt = None
 html_copy_source = True  # the download button offers the .ipynb and .md sources

@@ -9,6 +9,7 @@ import json
 import sys
 from pathlib import Path
 
+import nbformat
 import pytest
 
 pytest.importorskip("sphinx", reason='the docs extra is not installed (pip install -e ".[docs]")')
@@ -141,7 +142,47 @@ def test_lite_copy_installs_the_course_first(tmp_path):
     copy = json.loads((tmp_path / source.name).read_text())
     original = json.loads(source.read_text())
     assert "".join(copy["cells"][0]["source"]).endswith(LITE_INSTALL_CELL)
-    assert copy["cells"][1:] == original["cells"]
+    # The same cells, every multi-line field as one string (nbformat's reader joins them too).
+    assert copy["cells"][1:] == nbformat.reads(source.read_text(), as_version=4)["cells"]
+    assert len(copy["cells"]) == len(original["cells"]) + 1
+
+
+def test_lite_copy_has_no_line_lists_that_jupyterlite_would_show_with_commas(tmp_path):
+    # jupyterlite#1105: a stored output kept as a list of lines shows as "line1\n,line2\n".
+    source = tmp_path / "src.ipynb"
+    notebook = {
+        "cells": [
+            {
+                "cell_type": "code",
+                "execution_count": 1,
+                "id": "a",
+                "metadata": {},
+                "source": ["x = 1\n", "print(x)"],
+                "outputs": [
+                    {"name": "stdout", "output_type": "stream", "text": ["1\n", "2\n"]},
+                    {
+                        "output_type": "execute_result",
+                        "execution_count": 1,
+                        "metadata": {},
+                        "data": {
+                            "text/plain": ["array([1,\n", "       2])"],
+                            "application/json": {"lines": ["kept", "as is"]},
+                        },
+                    },
+                ],
+            }
+        ],
+        "metadata": {},
+        "nbformat": 4,
+        "nbformat_minor": 5,
+    }
+    source.write_text(json.dumps(notebook))
+    _lite_notebook(source, tmp_path / "copy.ipynb")
+    cell = json.loads((tmp_path / "copy.ipynb").read_text())["cells"][1]
+    assert cell["source"] == "x = 1\nprint(x)"
+    assert cell["outputs"][0]["text"] == "1\n2\n"
+    assert cell["outputs"][1]["data"]["text/plain"] == "array([1,\n       2])"
+    assert cell["outputs"][1]["data"]["application/json"] == {"lines": ["kept", "as is"]}
 
 
 def test_docs_command_is_wired(capsys):
@@ -201,3 +242,28 @@ def test_the_lite_wheel_is_rebuilt_only_when_its_inputs_change(tmp_path):
     assert _wheel_inputs_digest(root) == first
     (root / "course" / "lsq.py").write_text("x = 1\n")
     assert _wheel_inputs_digest(root) != first
+
+
+def test_launch_buttons_appear_only_with_a_repository():
+    assert course_site.launch_options("") == {}
+    options = course_site.launch_options("https://github.com/owner/course/", "trunk")
+    assert options["repository_url"] == "https://github.com/owner/course"
+    assert options["repository_branch"] == "trunk"
+    assert options["launch_buttons"]["binderhub_url"] == "https://mybinder.org"
+    assert options["launch_buttons"]["colab_url"] == "https://colab.research.google.com"
+    with pytest.raises(ValueError, match="repository_url"):
+        course_site.launch_options("git@github.com:owner/course.git")
+
+
+def test_lite_pages_explain_why_python_cannot_start(tmp_path):
+    lite = tmp_path / "lite"
+    for app in ("lab", "notebooks"):
+        (lite / app).mkdir(parents=True)
+        (lite / app / "index.html").write_text("<html><head><title>x</title></head><body></body>")
+    from course.docsite import add_lite_check
+
+    assert len(add_lite_check(lite)) == 2
+    assert add_lite_check(lite) == []  # idempotent: a rebuild adds no second tag
+    script = (lite / "course-lite-check.js").read_text()
+    assert "file:" in script and "offline" in script and "https://" in script
+    assert "course-lite-check.js" in (lite / "lab" / "index.html").read_text()

@@ -362,6 +362,77 @@ def test_jupyterlite_has_the_course_wheel_and_the_notebooks(site, server, browse
     assert not errors, errors
 
 
+#: Pages read on a phone: the landing page, a notebook, an API chapter and a guide with tables.
+NARROW_PAGES = [
+    "docs/index.html",
+    "notebooks/01_least_squares_validation.html",
+    "docs/api/modules/course.lsq.html",
+    "docs/instructors/term.html",
+]
+
+
+def test_pages_do_not_scroll_sideways_at_400_px(server, browser):
+    page = browser.new_page(viewport={"width": 400, "height": 800})
+    wide = {}
+    for rel in NARROW_PAGES:
+        page.goto(server + rel, wait_until="load")
+        width = page.evaluate("() => document.documentElement.scrollWidth")
+        if width > 401:
+            wide[rel] = width
+    page.close()
+    assert not wide, f"pages wider than a 400 px screen (scrollWidth): {wide}"
+
+
+def test_figures_show_near_their_drawn_size(server, browser):
+    """A figure drawn wider than the content column shrinks, and its labels with it."""
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    small = {}
+    for html in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        rel = f"notebooks/{html.stem}.html"
+        page.goto(server + rel, wait_until="load")
+        scales = page.evaluate(
+            """() => Array.from(document.querySelectorAll('.cell_output img'))
+                 .filter(img => img.naturalWidth > 0)
+                 .map(img => img.getBoundingClientRect().width / img.naturalWidth)"""
+        )
+        shrunk = [round(scale, 2) for scale in scales if scale < 0.75]
+        if shrunk:
+            small[rel] = shrunk
+    page.close()
+    assert not small, f"figures shown below 75 % of their size at desktop width: {small}"
+
+
+def test_jupyterlite_shows_stored_outputs_without_list_commas(site):
+    """jupyterlite#1105: outputs stored as lists of lines showed as 'line1\\n,line2'."""
+    copy = json.loads(
+        (site.out_dir / "lite" / "files" / "01_least_squares_validation.ipynb").read_text()
+    )
+    fields = [cell["source"] for cell in copy["cells"]]
+    for cell in copy["cells"]:
+        for output in cell.get("outputs", []):
+            fields += [output.get("text", "")]
+            fields += [v for k, v in output.get("data", {}).items() if not k.endswith("json")]
+    assert fields and all(isinstance(value, str) for value in fields)
+
+
+def test_jupyterlite_says_why_python_cannot_start(server, browser, site):
+    """Offline, and from a file:// page, the reader gets a reason instead of an error icon."""
+    page = browser.new_page()
+    # Python comes from Pyodide's CDN: refuse it, as a machine without internet would.
+    page.route("https://cdn.jsdelivr.net/**", lambda route: route.abort())
+    page.goto(server + "lite/lab/index.html", wait_until="load")
+    banner = page.wait_for_selector("#course-lite-problem", timeout=30_000)
+    assert "Python could not be loaded" in banner.inner_text()
+    assert "course open" in banner.inner_text()
+    page.goto((site.out_dir / "lite" / "lab" / "index.html").as_uri(), wait_until="load")
+    banner = page.wait_for_selector("#course-lite-problem", timeout=10_000)
+    assert "file" in banner.inner_text() and "http.server" in banner.inner_text()
+    page.goto((site.out_dir / "notebooks" / "01_least_squares_validation.html").as_uri())
+    launch = page.inner_text("p.course-launch")
+    page.close()
+    assert "http.server" in launch and "Run this notebook" not in launch
+
+
 def test_incremental_build_reexecutes_only_the_changed_notebook(site, source):
     marker = f"incremental build check {uuid.uuid4().hex[:8]}"  # new code: never in a cache
     notebook_path = source / INCREMENTAL_NOTEBOOK

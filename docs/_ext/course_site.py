@@ -439,6 +439,30 @@ def _api_reference(app, fromdoc: str, fullname: str):
     return xref
 
 
+def launch_options(repository_url: str, branch: str = "main") -> dict:
+    """The book theme's options for Binder and Colab launch buttons on notebook pages.
+
+    Empty when no repository is configured: a launch button needs the notebooks at a public
+    URL (Binder and Colab open them from there), and a dead button is worse than none.
+    """
+    url = repository_url.strip().rstrip("/")
+    if not url:
+        return {}
+    if not url.startswith("https://"):
+        raise ValueError(f"repository_url must be an https:// URL of a public repository: {url!r}")
+    return {
+        "repository_url": url,
+        "repository_branch": branch,
+        "path_to_docs": "",  # the Sphinx source is the repository root (see conf.py)
+        "use_repository_button": True,
+        "launch_buttons": {
+            "binderhub_url": "https://mybinder.org",
+            "colab_url": "https://colab.research.google.com",
+            "notebook_interface": "jupyterlab",
+        },
+    }
+
+
 def copy_mathjax(app, exception) -> None:
     """Serve MathJax from the site: tex-chtml plus its fonts and on-demand extensions."""
     if exception is not None or app.builder.format != "html":
