@@ -237,10 +237,8 @@ def _lite_notebook(source: Path, target: Path) -> None:
         "id": "install-course",
         "metadata": {"tags": ["jupyterlite-install"]},
         "outputs": [],
-        "source": [
-            "# In the browser (JupyterLite) the course is installed from this site's own wheel.\n",
-            LITE_INSTALL_CELL,
-        ],
+        "source": "# In the browser (JupyterLite) the course is installed from this site's own "
+        f"wheel.\n{LITE_INSTALL_CELL}",
     }
     notebook["cells"].insert(0, install)
     target.write_text(json.dumps(notebook, indent=1, ensure_ascii=False), encoding="utf-8")
