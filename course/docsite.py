@@ -22,6 +22,7 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 __all__ = ["BuildReport", "build_lite", "build_site", "cache_stored_outputs", "find_root"]
 
@@ -231,7 +232,7 @@ def _lite_notebook(source: Path, target: Path) -> None:
     """
     notebook = json.loads(source.read_text(encoding="utf-8"))
     _join_multiline_strings(notebook)
-    install = {
+    install: dict[str, Any] = {
         "cell_type": "code",
         "execution_count": None,
         "id": "install-course",

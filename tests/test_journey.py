@@ -301,6 +301,32 @@ def test_the_students_jupyter_has_no_grading_tool(journey):
         assert "nbgrader" not in (listed.stdout + listed.stderr).lower()
 
 
+def test_the_edition_ships_no_grader_and_says_so(journey):
+    """Students run the self-check and submit; the batch grader and its sandbox stay with the
+    instructor, and `course grade` in the student edition says whose tool it is."""
+    import zipfile
+
+    wheel = next(journey["handout"].glob("*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "course/grading/student/selfcheck.py" in names
+    assert "course/grading/authoring/seal.py" in names
+    shipped = [
+        n for n in names if n.startswith(("course/grading/batch/", "course/grading/sandbox/"))
+    ]
+    assert not shipped, shipped
+    course_cli = journey["venv"] / "bin" / "course"
+    for command in (["grade", "01_least_squares", "subs"], ["export", "out"]):
+        done = subprocess.run(
+            [str(course_cli), *command],
+            env=journey["env"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert done.returncode == 2, done.stderr
+        assert "student edition" in done.stderr and "Traceback" not in done.stderr
+
+
 def test_course_open_in_this_environment_shows_no_grading_tool():
     """The developers' `course open` (this interpreter's JupyterLab, `.[all]` installed) lists
     no nbgrader extension either; an environment installed from an older `.[all]`, or with

@@ -260,7 +260,7 @@ def _add_class_commands(subparsers) -> None:
     )
     p_ex.add_argument("--roster", default=None, help="CSV of the class (id, name, email)")
     p_ex.add_argument("--course-dir", help=COURSE_DIR_HELP)
-    p_ex.set_defaults(func=_export)
+    p_ex.set_defaults(func=_instructor_only(_export))
 
     p_sub = subparsers.add_parser(
         "submit",
@@ -287,6 +287,27 @@ def _add_class_commands(subparsers) -> None:
     p_sec.add_argument("action", choices=["new", "show"])
     p_sec.add_argument("file", metavar="FILE", nargs="?", default=None)
     p_sec.set_defaults(func=_secret)
+
+
+def _instructor_only(command):
+    """``command``, or a clear refusal where the grader's rooms are not installed (the student
+    edition ships without ``course.grading.batch`` and ``course.grading.sandbox``)."""
+
+    def run(args) -> int:
+        try:
+            return command(args)
+        except ModuleNotFoundError as exc:
+            rooms = ("course.grading.batch", "course.grading.sandbox")
+            if not (exc.name or "").startswith(rooms):
+                raise
+            print(
+                f"course {args.command}: this is the student edition, which has no grader; "
+                "grading and exports are done from the instructor's clone of the course",
+                file=sys.stderr,
+            )
+            return 2
+
+    return run
 
 
 def add_commands(subparsers) -> None:
@@ -385,5 +406,5 @@ def add_commands(subparsers) -> None:
     )
     p_gr.add_argument("--course-dir", help=COURSE_DIR_HELP)
     p_gr.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
-    p_gr.set_defaults(func=_grade)
+    p_gr.set_defaults(func=_instructor_only(_grade))
     _add_class_commands(subparsers)

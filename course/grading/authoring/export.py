@@ -158,6 +158,25 @@ def export(
     return result
 
 
+#: The grader's rooms that only the instructor runs (``course grade`` and its sandbox): the
+#: student edition leaves them out, and ``course grade`` there says it is the instructor's.
+INSTRUCTOR_ONLY_ROOMS = ("batch", "sandbox")
+
+
+def _not_for_students(package: Path):
+    """``copytree``'s ignore function for the student edition's copy of ``course/``."""
+    everywhere = shutil.ignore_patterns("__pycache__", "*.pyc", "materials", ".*")
+    grading = (package / "grading").resolve()
+
+    def ignore(folder: str, names: list[str]) -> set[str]:
+        skipped = set(everywhere(folder, names))
+        if Path(folder).resolve() == grading:
+            skipped |= set(INSTRUCTOR_ONLY_ROOMS) & set(names)
+        return skipped
+
+    return ignore
+
+
 def _build(staging, dest, root, names, releases, secret, roster) -> ExportResult:
     import course
 
@@ -165,11 +184,7 @@ def _build(staging, dest, root, names, releases, secret, roster) -> ExportResult
     project = _project_metadata(root)
     folder = staging / f"{DIST_NAME}-{version}"
     package = folder / "course"
-    shutil.copytree(
-        root / "course",
-        package,
-        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "materials", ".*"),
-    )
+    shutil.copytree(root / "course", package, ignore=_not_for_students(root / "course"))
     materials = package / "materials"
     (materials / "notebooks").mkdir(parents=True)
     for nb in sorted((root / "notebooks").glob("*.ipynb")):
