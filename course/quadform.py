@@ -66,14 +66,14 @@ from __future__ import annotations
 
 import functools
 import math
-import operator
 import warnings
 
 import numpy as np
 from scipy import integrate, optimize, stats
 
 from .distributions import _NO_STATE, FrozenDistribution, _rng_argument
-from .linalg import as_covariance, as_float_array, as_matrix, as_vector, symmetrize
+from .linalg import as_covariance, as_matrix, symmetrize
+from .validation import as_finite, as_float_array, as_vector
 
 __all__ = [
     "QuadraticForm",
@@ -105,6 +105,8 @@ _MAX_HALVINGS = 6
 _MAX_NEWTON = 100
 # Truncation points beyond this (cosh(60) ~ 6e25) mean no convergence.
 _U_MAX = 60.0
+# inversion_integrands draws the contour integrand up to this u (0 beyond: see there).
+_U_DRAWN = 700.0
 # The vertex is accepted when |phi'| phi''^{-1/2} is below this (see _saddle).
 _SADDLE_TOL = 0.3
 # Smallest opening a/b of the hyperbola (see _plan).
@@ -129,16 +131,6 @@ _NEAR_ZERO = 1e-17
 _MIN_RTOL = 1e-15
 # Beyond this many factors the integrand takes logarithms in real arithmetic.
 _COMPLEX_LOG_SIZE = 2000
-# Up to this many terms, one point's saddle is found in Python floats.
-_PYTHON_TERMS = 24
-# Python numbers taken without numpy (bool, numpy scalars and the rest go through numpy).
-_PLAIN_NUMBERS = frozenset((float, int))
-# One point's trapezoid nodes are read from a table of u = j _GRID, 0 <= u <=
-# _GRID_SPAN (see _grid_nodes): the step is rounded down to a multiple of
-# _GRID_MULTIPLE grid spacings (at most 3% finer, so never less accurate).
-_GRID = 2.0**-10
-_GRID_SPAN = 16.0
-_GRID_MULTIPLE = 4
 # Constants of _plan's bounds: sqrt(2 pi); the share of the tolerance left to
 # the truncation (log 0.01); log of sqrt(2)/pi (rounded up to 1.42/pi).
 _SQRT_2PI = math.sqrt(2.0 * math.pi)
@@ -150,52 +142,19 @@ _LOG2 = math.log(2.0)
 # ---------------------------------------------------------------------------
 # validation of the chi-square terms
 # ---------------------------------------------------------------------------
-def _real_array(value, name):
-    """``value`` as a new float array; None, complex and non-numeric values are refused."""
+def _per_term(value, name, size, default):
+    """``dof`` or ``noncentrality``: one finite number for every term, or one per term."""
     if value is None:
-        raise ValueError(f"{name} is None; pass a number or an array of numbers")
-    if isinstance(value, (str, bytes)) or (
-        isinstance(value, (list, tuple)) and any(isinstance(v, (str, bytes)) for v in value)
-    ):  # numpy would read "1" as 1.0: text typed by mistake must not pass as a number
-        raise ValueError(f"{name} must be real numbers, got text {value!r}")
-    if getattr(value, "dtype", None) is not None and value.dtype.kind == "c":
-        raise ValueError(f"{name} is complex; pass real numbers")
-    try:
-        return np.array(value, dtype=float)
-    except (TypeError, ValueError, OverflowError) as exc:
+        return np.full(size, default)
+    array = as_float_array(value, name)
+    if array.ndim == 0:
+        return np.full(size, float(array))
+    if array.ndim != 1 or array.size != size:
         raise ValueError(
-            f"{name} must be real numbers, got {type(value).__name__}: {exc}"
-        ) from None
-
-
-def _finite_vector(value, name, size=None):
-    """A finite 1-D float array (a scalar is repeated ``size`` times)."""
-    array = _real_array(value, name)
-    if array.ndim == 0 and size is not None:
-        array = np.full(size, float(array))
-    if array.ndim != 1:
-        raise ValueError(f"{name} must be a 1-D array, got shape {array.shape}")
-    if size is not None and array.size != size:
-        raise ValueError(
-            f"{name} must have the same length as weights ({size}), got length {array.size}"
+            f"{name} must be one number or have the same length as weights ({size}), "
+            f"got shape {array.shape}"
         )
-    if not np.isfinite(array).all():
-        raise ValueError(f"{name} contains NaN or inf; pass finite numbers")
     return array
-
-
-def _finite_scalar(value, name):
-    """A finite Python float."""
-    if type(value) is float or type(value) is int:  # (bool is not int here: it is refused)
-        number = float(value)
-    else:
-        array = _real_array(value, name)
-        if array.ndim != 0:
-            raise ValueError(f"{name} must be a single number, got shape {array.shape}")
-        number = float(array)
-    if not math.isfinite(number):
-        raise ValueError(f"{name} must be finite, got {number}")
-    return number
 
 
 def _terms(weights, dof, noncentrality, sigma=0.0):
@@ -206,55 +165,19 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
     d2) = w chi2(h1 + h2, d1 + d2)``.  ``dof`` may be any positive real (a
     chi-square with ``h`` degrees of freedom is a Gamma(h/2, 2) variable).
     """
-    w, h, d, sigma = _validated(weights, dof, noncentrality, sigma)
-    if type(w) is list:
-        w, h, d = np.array(w, dtype=float), np.array(h, dtype=float), np.array(d, dtype=float)
-    return w, h, d, sigma
-
-
-def _validated(weights, dof, noncentrality, sigma=0.0):
-    """:func:`_terms` as lists of Python floats for at most ``_PYTHON_TERMS`` terms, else arrays."""
-    columns = _short_columns(weights, dof, noncentrality)
-    if columns is None:
-        w = _finite_vector(weights, "weights")
-        r = w.size
-        if r == 0:
-            raise ValueError("weights is empty; pass at least one weight")
-        h = np.ones(r) if dof is None else _finite_vector(dof, "dof", r)
-        d = (
-            np.zeros(r)
-            if noncentrality is None
-            else _finite_vector(noncentrality, "noncentrality", r)
-        )
-        if r <= _PYTHON_TERMS:
-            columns = w.tolist(), h.tolist(), d.tolist()
-    sigma = _finite_scalar(sigma, "sigma")
+    w = as_vector(weights, "weights")
+    r = w.size
+    h = _per_term(dof, "dof", r, 1.0)
+    d = _per_term(noncentrality, "noncentrality", r, 0.0)
+    sigma = as_finite(sigma, "sigma", what="the standard deviation of the normal term")
     if sigma < 0:
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
         )
-    if columns is not None:
-        # a few terms: checks, sorting and merging in Python floats are cheaper
-        w, h, d = columns
-        _check_terms(min(h), min(d))
-        rows = sorted(zip(w, h, d))
-        if 0.0 in w:
-            rows = [row for row in rows if row[0] != 0]
-            if not rows:
-                return [], [], [], sigma
-        w, h, d = map(list, zip(*rows))
-        tol = _MERGE_RTOL * max(-w[0], w[-1])
-        if len(w) > 1 and min(map(operator.sub, w[1:], w)) <= tol:
-            groups = [[rows[0]]]
-            for row in rows[1:]:
-                if row[0] - groups[-1][-1][0] > tol:
-                    groups.append([row])
-                else:
-                    groups[-1].append(row)
-            rows = [_merge(group) if len(group) > 1 else group[0] for group in groups]
-            w, h, d = map(list, zip(*rows))
-        return w, h, d, sigma
-    _check_terms(h.min(), d.min())
+    if h.min() <= 0:
+        raise ValueError(f"dof (degrees of freedom) must be positive, got {h.min():g}")
+    if d.min() < 0:
+        raise ValueError(f"noncentrality must be non-negative (squared means), got {d.min():g}")
     keep = w != 0
     w, h, d = w[keep], h[keep], d[keep]
     order = np.argsort(w, kind="stable")
@@ -272,96 +195,8 @@ def _validated(weights, dof, noncentrality, sigma=0.0):
     return w, h, d, sigma
 
 
-def _short_columns(weights, dof, noncentrality):
-    """``(w, h, d)`` as lists of finite Python floats for a few plain terms, else None.
-
-    The fast way in for a law of at most ``_PYTHON_TERMS`` terms given as
-    lists or tuples of Python numbers or as 1-D real arrays (``dof`` and
-    ``noncentrality`` also as one number): no numpy call.  Anything else,
-    and every bad value, returns None and takes the numpy validation, which
-    words the error.
-    """
-    w = _short_column(weights)
-    if not w:
-        return None
-    r = len(w)
-    h = [1.0] * r if dof is None else _short_column(dof, r)
-    d = [0.0] * r if noncentrality is None else _short_column(noncentrality, r)
-    if h is None or d is None:
-        return None
-    # one test of all three: a sum of floats is finite only if every one is
-    # (finite ones whose sum overflows take the numpy way, which accepts them)
-    if not math.isfinite(sum(w) + sum(h) + sum(d)):
-        return None
-    return w, h, d
-
-
-def _short_column(value, size=None):
-    """A short list/tuple of Python numbers or 1-D real array as floats (None if not).
-
-    Finiteness is tested once for the three columns by :func:`_short_columns`.
-    """
-    kind = type(value)
-    if kind is list or kind is tuple:
-        if len(value) > _PYTHON_TERMS:
-            return None
-        if not _PLAIN_NUMBERS.issuperset(map(type, value)):
-            return None
-        try:
-            column = list(map(float, value))
-        except OverflowError:  # an int beyond the doubles
-            return None
-    elif kind is np.ndarray:
-        if value.ndim != 1 or value.dtype.kind not in "fiu" or value.size > _PYTHON_TERMS:
-            return None
-        column = value.astype(float).tolist() if value.dtype.kind != "f" else value.tolist()
-    elif size is not None and kind in _PLAIN_NUMBERS:
-        try:
-            column = [float(value)] * size
-        except OverflowError:
-            return None
-    else:
-        return None
-    if size is not None and len(column) != size:
-        return None
-    return column
-
-
-def _check_terms(smallest_dof, smallest_noncentrality):
-    if smallest_dof <= 0:
-        raise ValueError(f"dof (degrees of freedom) must be positive, got {smallest_dof:g}")
-    if smallest_noncentrality < 0:
-        raise ValueError(
-            f"noncentrality must be non-negative (squared means), got {smallest_noncentrality:g}"
-        )
-
-
-def _merge(group):
-    """One term from chi-square terms with (nearly) equal weights."""
-    ws, hs, ds = zip(*group)
-    h = math.fsum(hs)
-    # the first weight plus the mean offset: w h would overflow near the largest double
-    first = ws[0]
-    w = first + math.fsum([(v - first) * k for v, k in zip(ws, hs)]) / h
-    return w, h, math.fsum(ds)
-
-
-class _ScalarMath:
-    """The few functions :func:`_plan` needs, for Python floats (numpy has them for arrays)."""
-
-    log, exp, sqrt, sinh, abs = math.log, math.exp, math.sqrt, math.sinh, abs
-    maximum, minimum = max, min
-
-    @staticmethod
-    def where(condition, a, b):
-        return a if condition else b
-
-
-_SCALAR = _ScalarMath()
-
-
 def _term_constants(w, h, d):
-    """Per-term summands of the constants of :class:`_Side` (arrays; lists: :func:`_term_rows`).
+    """Per-term summands of the constants of :class:`_Side`.
 
     ``d/2``; ``h/2`` (k); ``w (h + d)`` (mean); ``2 w^2 (h + 2d)`` (variance);
     ``-h/2 log(2|w|) - d/4`` (log D of the truncation bound, see :func:`_plan`);
@@ -393,40 +228,6 @@ def _derivative_factors(w, h, d):
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
-def _term_rows(w, h, d):
-    """The sums of :func:`_term_constants` and the per-term rows of :class:`_Side`, in one loop.
-
-    For a few terms given as lists of Python floats.  Returns the sums, the
-    rows of :meth:`_Side.derivatives_at` (see :func:`_derivative_factors`)
-    and of :meth:`_Side.cgf_at`, the list of ``2 w`` and the exponent's
-    weights ``-h/2`` and ``d/2`` (see :attr:`_Side.exponent_weights`).
-    """
-    mean = var = log_d = d_over_w = zero_slope = log_c = 0.0
-    rows: list[tuple] = []
-    append, log, log2 = rows.append, math.log, _LOG2  # (local names: cheaper lookups in the loop)
-    for wi, hi, di in zip(w, h, d):
-        w2, hw, dw, ww = wi + wi, hi * wi, di * wi, wi * wi
-        append((w2, hw, dw, w2 * hw, 8.0 * ww * hw, 4.0 * wi * dw, 24.0 * ww * dw))
-        mean += hw + dw
-        var += 2.0 * ww * (hi + di + di)
-        if wi > 0:
-            log_2w = log(wi) + log2
-            quarter = 0.25 / wi
-            d_over_w += di * quarter
-            zero_slope += (hi + di) * quarter
-            log_c -= 0.5 * hi * log_2w
-        else:
-            log_2w = log(-wi) + log2
-        log_d -= 0.5 * hi * log_2w + 0.25 * di
-    # the rest by C-level map and zip (cheaper than Python steps per term)
-    w2_list = list(map(operator.add, w, w))
-    log_weights = list(map((-0.5).__mul__, h))
-    inverse_weights = list(map((0.5).__mul__, d))
-    cgf_rows = list(zip(w2_list, map((0.5).__mul__, h), inverse_weights))
-    sums = 0.5 * sum(d), 0.5 * sum(h), mean, var, log_d, d_over_w, zero_slope, log_c
-    return sums, rows, cgf_rows, w2_list, log_weights, inverse_weights
-
-
 # ---------------------------------------------------------------------------
 # the normalised terms of one tail
 # ---------------------------------------------------------------------------
@@ -441,28 +242,14 @@ class _Side:
     """
 
     def __init__(self, w, h, d, sigma2):
-        """``w, h, d``: lists of floats (at most ``_PYTHON_TERMS``) or arrays."""
         self.sigma2 = sigma2
-        self.r = r = len(w)
-        # per-term rows for the Python-float versions of derivatives, cgf and path
-        self.rows: list | None = None
-        self.cgf_rows: list | None = None
-        self.w2_list: list | None = None
-        if type(w) is not list and r <= _PYTHON_TERMS:
-            w, h, d = w.tolist(), h.tolist(), d.tolist()
-        if type(w) is list:
-            # a few terms: every constant in one loop of Python floats (numpy
-            # calls cost more); the arrays of the numpy versions on first use
-            self._columns = w, h, d
-            sums, self.rows, self.cgf_rows, self.w2_list, *exponent_lists = _term_rows(w, h, d)
-            ends = [(w[0], w[-1]), (h[0], h[-1]), (d[0], d[-1])] if r else [(0.0, 0.0)] * 3
-            smallest = min(map(abs, w)) if r else 1.0
-        else:
-            self.w, self.h, self.d = w, h, d
-            sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
-            ends = [(float(v[0]), float(v[-1])) for v in (w, h, d)]
-            smallest = float(np.min(np.abs(w)))
-        (w_first, w_last), (_, h_last), (_, d_last) = ends
+        self.r = r = w.size
+        self.w, self.h, self.d = w, h, d
+        sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
+        (w_first, w_last), (_, h_last), (_, d_last) = (
+            [(float(v[0]), float(v[-1])) for v in (w, h, d)] if r else [(0.0, 0.0)] * 3
+        )
+        smallest = float(np.min(np.abs(w))) if r else 1.0
         positive = w_last > 0
         self.s_max = 0.5 / w_last if positive else math.inf
         self.s_min = 0.5 / w_first if w_first < 0 else -math.inf
@@ -485,57 +272,18 @@ class _Side:
         # rows of the path matrix (see _path_coefficients)
         self.rows_of_path = (2 * r if self.noncentral else r) + 3
         # weights W of the rows of the path matrix in the exponent (see _integrand):
-        # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1.
-        # A few terms keep them as floats: one point's path coefficients take
-        # them into the same array (one numpy call less per point)
-        self.exponent_row: list | None = None
-        if self.rows is not None:
-            log_weights, inverse_weights = exponent_lists
-            row = log_weights + inverse_weights if self.noncentral else log_weights
-            row.append(1.0)
-            self.exponent_row = row
-        else:
-            parts = [-0.5 * h, 0.5 * d] if self.noncentral else [-0.5 * h]
-            self.exponent_weights = np.concatenate(parts + [[1.0]]).astype(complex)
-
-    # the arrays of the numpy versions (for a few terms given as lists: made on first use)
-    @functools.cached_property
-    def w(self):
-        return np.array(self._columns[0], dtype=float)
-
-    @functools.cached_property
-    def h(self):
-        return np.array(self._columns[1], dtype=float)
-
-    @functools.cached_property
-    def d(self):
-        return np.array(self._columns[2], dtype=float)
-
-    @functools.cached_property
-    def exponent_weights(self):
-        """The weights ``W`` of :func:`_integrand` as an array (see :meth:`__init__`)."""
-        return np.array(self.exponent_row, dtype=complex)
-
-    @functools.cached_property
-    def w2(self):
-        """``2 w`` (for the numpy versions)."""
-        return 2.0 * self.w
-
-    @functools.cached_property
-    def minus_w2(self):
-        """``-2 w`` (for the numpy path coefficients)."""
-        return -2.0 * self.w
-
-    @functools.cached_property
-    def factors(self):
-        """Per-term factors of the derivatives of ``K`` (for the numpy version)."""
-        return _derivative_factors(self.w, self.h, self.d)
+        # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1
+        parts = [-0.5 * h, 0.5 * d] if self.noncentral else [-0.5 * h]
+        self.exponent_weights = np.concatenate(parts + [[1.0]]).astype(complex)
+        self.w2 = 2.0 * w
+        self.minus_w2 = -self.w2
+        # per-term factors of the derivatives of K
+        self.factors = _derivative_factors(w, h, d)
 
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
         """The side of ``-X``: weights negated, kept in increasing order."""
-        minus_w = [-v for v in reversed(w)] if type(w) is list else -w[::-1]
-        return cls(minus_w, h[::-1], d[::-1], sigma2)
+        return cls(-w[::-1], h[::-1], d[::-1], sigma2)
 
     # -- the cumulant generating function K(s) = log M(s) ---------------------
     def derivatives(self, s, x, pole):
@@ -557,33 +305,6 @@ class _Side:
             g3 = g3 - 2.0 * inv * inv * inv
         return g1, g2, g3
 
-    def derivatives_at(self, s, x, pole):
-        """:meth:`derivatives` at one real ``s`` (Python floats)."""
-        if self.rows is None:
-            g = self.derivatives(np.array([s]), x, pole)
-            return float(g[0][0]), float(g[1][0]), float(g[2][0])
-        g1, g2, g3 = self.sigma2 * s - x, self.sigma2, 0.0
-        if self.noncentral:
-            for w2, hw, dw, c2, c3, n2, n3 in self.rows:
-                t = 1.0 / (1.0 - s * w2)
-                t2 = t * t
-                g1 += t * hw + t2 * dw
-                g2 += t2 * (c2 + t * n2)
-                g3 += t2 * t * (c3 + t * n3)
-        else:  # (the noncentral factors are 0: fewer operations in the hot loop)
-            for w2, hw, _, c2, c3, _, _ in self.rows:
-                t = 1.0 / (1.0 - s * w2)
-                t2 = t * t
-                g1 += t * hw
-                g2 += t2 * c2
-                g3 += t2 * t * c3
-        if pole:
-            inv = 1.0 / s
-            g1 -= inv
-            g2 += inv * inv
-            g3 -= 2.0 * inv * inv * inv
-        return g1, g2, g3
-
     def cgf(self, s):
         """``K(s)`` at real ``s`` of shape (n,) inside the interval of convergence."""
         z = 1.0 - np.multiply.outer(s, self.w2)
@@ -592,28 +313,18 @@ class _Side:
             value = value + (1.0 / z - 1.0) @ (0.5 * self.d)
         return value
 
-    def cgf_at(self, s):
-        """:meth:`cgf` at one real ``s`` (Python floats)."""
-        if self.cgf_rows is None:
-            return float(self.cgf(np.array([s]))[0])
-        value = 0.5 * self.sigma2 * s * s
-        for w2, half_h, half_d in self.cgf_rows:
-            z = 1.0 - s * w2
-            value += half_d * (1.0 / z - 1.0) - half_h * math.log(z)
-        return value
-
     # -- where the saddle point lies ------------------------------------------
-    def bracket(self, x, upper, xp=np):
+    def bracket(self, x, upper):
         """Finite ``(lo, hi)`` holding the saddle of ``phi`` (with or without the pole) and a guess.
 
         Upper tail: ``(0, s_max)``; lower tail: ``(s_min, 0)``.  Infinite ends
         are replaced by bounds from ``K'`` (see the comments); the guess is the
         saddle of a Gaussian model of ``K``, or of the dominant term alone in
         the far upper tail, or of the behaviour at ``-inf`` far below a
-        positive form.  ``xp``: numpy (arrays) or :data:`_SCALAR` (floats).
+        positive form.
         """
         dx = x - self.mean
-        root = xp.sqrt(dx * dx + 4.0 * self.var)
+        root = np.sqrt(dx * dx + 4.0 * self.var)
         if upper:
             # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
             guess = 2.0 / (root - dx)
@@ -622,14 +333,14 @@ class _Side:
                 hi = self.s_max + lo
                 w, h, d = self.top
                 # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-                t = (h * w + xp.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (
-                    2.0 * xp.maximum(x, 1e-300)
+                t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (
+                    2.0 * np.maximum(x, 1e-300)
                 )
-                guess = xp.where(t < 1.0, xp.minimum(guess, self.s_max * (1.0 - t)), guess)
+                guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
             else:
                 # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
                 # beyond the root of sigma2 s^2 - (x - mean) s - 1
-                hi = (dx + xp.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
+                hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
             return lo, hi, guess
         guess = -2.0 / (root + dx)
         hi = 0.0 * x
@@ -639,14 +350,14 @@ class _Side:
         # left of the root of that bound + 1/|s| = x; with a normal term also
         # left of -sqrt((k + 1)/sigma2)
         k1 = self.k + 1.0
-        bound = (k1 + xp.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * xp.maximum(x, 1e-300))
+        bound = (k1 + np.sqrt(k1 * k1 + 4.0 * self.d_over_w * x)) / (2.0 * np.maximum(x, 1e-300))
         if self.sigma2:
-            bound = xp.minimum(bound, math.sqrt(k1 / self.sigma2))
+            bound = np.minimum(bound, math.sqrt(k1 / self.sigma2))
         # far below the weights the bound is the saddle itself; nearer the mean
         # Newton starts at the geometric mean of it and the Gaussian guess (on
         # Davies' points and random positive forms, a fifth to a third fewer steps)
         far_below = x * self.k < 0.1 * self.mean
-        return -bound, hi, xp.where(far_below, -bound, -xp.sqrt(bound * -guess))
+        return -bound, hi, np.where(far_below, -bound, -np.sqrt(bound * -guess))
 
 
 def _saddle(x, side, upper, pole):
@@ -680,24 +391,6 @@ def _saddle(x, side, upper, pole):
     return s, g2, g3
 
 
-def _saddle_at(x, side, upper, pole):
-    """:func:`_saddle` for one point (Python floats: no numpy call per step)."""
-    lo, hi, guess = side.bracket(x, upper, _SCALAR)
-    width = hi - lo
-    s = min(max(guess, lo + 1e-9 * width), hi - 1e-9 * width)
-    for _ in range(_MAX_NEWTON):
-        g1, g2, g3 = side.derivatives_at(s, x, pole)
-        if abs(g1) <= _SADDLE_TOL * math.sqrt(g2):
-            break
-        if g1 > 0:
-            hi = s
-        else:
-            lo = s
-        newton = s - g1 / g2
-        s = newton if lo < newton < hi else float(_bisect(lo, hi))
-    return s, g2, g3
-
-
 def _bisect(lo, hi):
     """Midpoint of ``(lo, hi)`` in the logit of ``s / far end`` (or plain, across 0)."""
     far = np.where(np.abs(lo) > np.abs(hi), lo, hi)
@@ -713,10 +406,9 @@ def _bisect(lo, hi):
 # ---------------------------------------------------------------------------
 
 
-def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
+def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     """Path, scale, truncation point and step of the contour integral at ``x``.
 
-    ``xp`` is :data:`_SCALAR` for one point (floats) or ``numpy`` (arrays).
     Returns ``(a, b, e0, log_tol, U, step)``: the hyperbola's half-widths;
     ``E0 = K(s0) - s0 x`` (the integrand is computed as ``exp(E - E0)``, so
     that tails down to 1e-300 neither underflow nor lose digits); the log of
@@ -747,51 +439,51 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, xp, opening=None):
     fine level, half the step, then agrees with it within ``rtol`` and is
     accepted); elsewhere the step is halved.
     """
-    b = 1.0 / xp.sqrt(g2)
+    b = 1.0 / np.sqrt(g2)
     if opening is None:
-        ratio = xp.minimum(
-            xp.maximum(xp.abs(g3) * b**3 / 3.0, _MIN_OPENING), 0.5 if side.sigma2 else 1.0
+        ratio = np.minimum(
+            np.maximum(np.abs(g3) * b**3 / 3.0, _MIN_OPENING), 0.5 if side.sigma2 else 1.0
         )
     else:
         ratio = opening + 0.0 * b
     a = ratio * b
     e0 = k0 - s0 * x
-    vertex = b / xp.abs(s0) if pole else b
-    log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + xp.log(vertex)
+    vertex = b / np.abs(s0) if pole else b
+    log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + np.log(vertex)
     if atol > 0:
-        log_tol = xp.maximum(log_tol, math.log(atol * math.pi) - e0)
+        log_tol = np.maximum(log_tol, math.log(atol * math.pi) - e0)
     # -- truncation (bounds in Y = Im s = b sinh u: see the docstring) ------------
     k_e = side.k + (1.0 if pole else 0.0)
     log_tol_t = log_tol + _LOG_TRUNCATION_SHARE
     # |s'| <= sqrt(2) dY/du (a <= b) and |s| >= Y
     log_rhs = side.log_d_y + _LOG_SQRT2_OVER_PI - e0 - log_tol_t
     # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
-    y_positive = xp.maximum(a - s0, 0.0) / ratio
+    y_positive = np.maximum(a - s0, 0.0) / ratio
     log_y_need = 700.0
     if k_e > 1:
-        log_y_need = xp.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
-    algebraic = xp.maximum(xp.exp(log_y_need), y_positive)
+        log_y_need = np.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
+    algebraic = np.maximum(np.exp(log_y_need), y_positive)
     # with x > 0, exp(-s x) decays like exp(-lam Y)
-    lam = xp.maximum(ratio * x, 1e-300)
-    decay = xp.maximum(log_rhs - xp.log(lam) + (a - s0) * x, 0.0) / lam
-    y_need = xp.maximum(xp.minimum(algebraic, decay), 1.0)
+    lam = np.maximum(ratio * x, 1e-300)
+    decay = np.maximum(log_rhs - np.log(lam) + (a - s0) * x, 0.0) / lam
+    y_need = np.maximum(np.minimum(algebraic, decay), 1.0)
     if side.noncentral:
-        y_need = xp.maximum(y_need, 2.0 * side.y_unit)
+        y_need = np.maximum(y_need, 2.0 * side.y_unit)
     if side.sigma2:
         # the bounds above need Im s >= Re s (then |exp(sigma2 s^2/2)| <= 1); the
         # normal factor gives another: with Y >= 4 (a + |s0|) and >= 1/(2 min|w|),
         # and Re s >= 0, every |1 - 2 w s| >= 1 so |M| <= 1,
         # |exp(sigma2 s^2/2)| <= exp(-7 sigma2 Y^2/32) and the tail beyond U is
         # below exp(-c Y^2)/(c Y^2), c = 7 sigma2/32
-        y_need = xp.maximum(y_need, b * xp.sinh(xp.log(4.0 * xp.abs(s0) / b + 3.0)))
+        y_need = np.maximum(y_need, b * np.sinh(np.log(4.0 * np.abs(s0) / b + 3.0)))
         c = 7.0 * side.sigma2 / 32.0
-        y_normal = xp.maximum(xp.maximum(2.0 - e0 - log_tol_t, 1.0) / c, 0.0) ** 0.5
-        y_normal = xp.maximum(xp.maximum(y_normal, 4.0 * (a + xp.abs(s0))), side.y_unit)
-        q = 1.0 + xp.maximum(-s0, 0.0) / a
-        y_normal = xp.maximum(y_normal, b * xp.sqrt(q * q - 1.0))
-        y_need = xp.minimum(y_need, y_normal)
+        y_normal = np.maximum(np.maximum(2.0 - e0 - log_tol_t, 1.0) / c, 0.0) ** 0.5
+        y_normal = np.maximum(np.maximum(y_normal, 4.0 * (a + np.abs(s0))), side.y_unit)
+        q = 1.0 + np.maximum(-s0, 0.0) / a
+        y_normal = np.maximum(y_normal, b * np.sqrt(q * q - 1.0))
+        y_need = np.minimum(y_need, y_normal)
     ratio_y = y_need / b
-    U = xp.maximum(xp.log(ratio_y + xp.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
+    U = np.maximum(np.log(ratio_y + np.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
     # -- step (the same for every point: see the docstring) ----------------------
     step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
     return a, b, e0, log_tol, U, step
@@ -822,23 +514,11 @@ def _path_coefficients(x, side, s0, a, b, k0):
     coefficients with the nodes' basis gives them all.  Rows: ``z_1 .. z_r``
     (their logarithms), ``z_1 .. z_r`` again for the noncentral terms (their
     reciprocals), the linear part, ``s'``, ``s``.  Returns the matrix and the
-    weights of its rows in the exponent (:attr:`_Side.exponent_weights`).
-    Floats give one point's matrix (built in Python for a few terms, in one
-    array with the weights), 1-D arrays one matrix per point ``(points, rows,
-    3)``.
+    weights of its rows in the exponent (:attr:`_Side.exponent_weights`);
+    the matrix has one block per point, ``(points, rows, 3)``.
     """
     ib = 1j * b
     c0 = k0 + side.half_d_sum  # the noncentral terms' -d/2 (0 when central)
-    if side.w2_list is not None and isinstance(s0, float):
-        # one flat list of Python numbers: numpy reads it faster than nested rows
-        z: list[complex] = []
-        for v in side.w2_list:
-            z += (1.0 - v * s0, -v * a, -v * ib)
-        flat = z + z if side.noncentral else z
-        flat += (-c0, -x * a, -x * ib, ib, ib, a, s0, a, ib)
-        size = len(flat)
-        both = np.array(flat + side.exponent_row, dtype=complex)
-        return both[:size].reshape(-1, 3), both[size:]
     path = np.stack(np.broadcast_arrays(s0, a, ib), axis=-1)
     r = side.r
     coef = np.empty(path.shape[:-1] + (side.rows_of_path, 3), dtype=complex)
@@ -858,8 +538,8 @@ def _integrand(basis, coef, side, pole):
     ``coef`` is what :func:`_path_coefficients` returns (matrix, weights).
 
     ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
-    ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes.  One
-    point gives shape (nodes,), many (points, nodes).  The exponent is one
+    ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes; the
+    result has shape (points, nodes).  The exponent is one
     product ``W . [log z, 1/z, linear]`` with the weights ``W = (-h/2, d/2,
     1)`` of :attr:`_Side.exponent_weights`: about ten numpy calls whatever the
     number of terms (on the few dozen nodes of one point their overhead, and
@@ -869,11 +549,9 @@ def _integrand(basis, coef, side, pole):
     """
     r = side.r
     matrix, weights = coef
-    one = matrix.ndim == 2  # one point: ndarray.dot costs less than the @ ufunc machinery
-    path = matrix.dot(basis) if one else matrix @ basis
-    # the rows along the first axis (one point's path already has them there):
-    # plain first-axis indexing is cheaper than path[..., i, :]
-    rows = path if one else path.transpose(1, 0, 2)
+    path = matrix @ basis
+    # the rows along the first axis: plain first-axis indexing is cheaper than path[..., i, :]
+    rows = path.transpose(1, 0, 2)
     logs = rows[:r]
     if logs.size > _COMPLEX_LOG_SIZE:
         # numpy's complex log costs ~100 ns a value, this real split ~45
@@ -885,7 +563,7 @@ def _integrand(basis, coef, side, pole):
     if side.noncentral:
         inverse = rows[r : 2 * r]
         np.reciprocal(inverse, out=inverse)
-    e = weights.dot(path[:-2]) if one else weights @ path[..., :-2, :]
+    e = weights @ path[..., :-2, :]
     s = rows[-1]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
@@ -900,33 +578,6 @@ def _integrand(basis, coef, side, pole):
     if pole:
         value /= s
     return value.imag
-
-
-_GRID_TABLE: list[np.ndarray] = []
-
-
-def _grid_nodes(k, count, odd):
-    """:func:`_nodes`' basis at ``u = k _GRID j`` (j < count) or ``k _GRID (2j + 1)``, or None.
-
-    Views of one table of the fine grid ``u = j _GRID`` up to ``_GRID_SPAN``,
-    computed once on first use (it depends on nothing but the module's
-    constants, so it is no memo of a law or a tolerance); None where the
-    nodes leave the table.
-    """
-    start, stride = (k, 2 * k) if odd else (0, k)
-    stop = start + stride * (count - 1) + 1
-    if not _GRID_TABLE:
-        _GRID_TABLE.append(_nodes.__wrapped__(_GRID, round(_GRID_SPAN / _GRID) + 1, False)[1])
-    table = _GRID_TABLE[0]
-    if stop > table.shape[1]:
-        return None
-    return table[:, start:stop:stride]
-
-
-def _point_nodes(k, h, count, odd):
-    """One point's node basis at step ``h``: from the table when ``k`` > 0 and it holds them."""
-    nodes = _grid_nodes(k, count, odd) if k else None
-    return _nodes(h, count, odd)[1] if nodes is None else nodes
 
 
 def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
@@ -991,19 +642,13 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
 
 
 def _contour(x, side, upper, pole, atol, rtol, opening=None):
-    """The contour integral at the points ``x`` (1-D) of one side; (value, error, converged).
-
-    One point takes a path set up in Python floats (numpy calls cost more
-    than the arithmetic there); many points are set up together in numpy.
-    """
-    if x.size == 1 and opening is None:
-        return tuple(np.array([v]) for v in _contour_at(float(x[0]), side, upper, pole, atol, rtol))
+    """The contour integral at the points ``x`` (1-D) of one side; (value, error, converged)."""
     # far out (x near the largest double) intermediate squares overflow to inf
     # harmlessly: those points end as tails below the smallest double
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         s0, g2, g3 = _saddle(x, side, upper, pole)
         k0 = side.cgf(s0)
-        plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, np, opening)
+        plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening)
     a, b, e0, log_tol, U, step = plan
     # tails far below the smallest double: the best answer is 0
     vertex = b / np.abs(s0) if pole else b
@@ -1040,10 +685,6 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     """
     if sides is None:
         sides = {}
-    if x.size == 1:
-        return tuple(
-            np.array([v]) for v in _probability_at(float(x[0]), w, h, d, sigma, atol, rtol, sides)
-        )
     m, normal = _normalised(sides, w, h, d, sigma)
     with np.errstate(over="ignore", under="ignore"):
         x = x / m
@@ -1084,16 +725,6 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     return sf, cdf, err, conv
 
 
-def _probability_at(x, w, h, d, sigma, atol, rtol, sides):
-    """:func:`_probabilities` at one point, in Python floats: (sf, cdf, error, converged)."""
-    m, normal = _normalised(sides, w, h, d, sigma)
-    x /= m  # Python floats overflow to inf quietly
-    if normal:
-        return float(stats.norm.sf(x)), float(stats.norm.cdf(x)), 0.0, True
-    (up, low), error, ok = _tails_at(abs(x), _side(sides, 1.0 if x >= 0 else -1.0), atol, rtol)
-    return (up, low, error, ok) if x >= 0 else (low, up, error, ok)
-
-
 def _normalised(sides, w, h, d, sigma):
     """Scale ``m = max(|w|, sigma)`` of the law, and whether it is normal to double precision.
 
@@ -1105,21 +736,12 @@ def _normalised(sides, w, h, d, sigma):
     """
     terms = sides.get("terms")
     if terms is None:
-        r = len(w)
-        m = max(-float(w[0]), float(w[-1]), sigma) if r else sigma
+        m = max(-float(w[0]), float(w[-1]), sigma) if w.size else sigma
         sigma = sigma / m
-        if type(w) is list:
-            w = [v / m for v in w]
-            if sigma and r:
-                kept = [
-                    t for t in zip(w, h, d) if abs(t[0]) * (t[1] + t[2] + 1.0) > _NEGLIGIBLE * sigma
-                ]
-                w, h, d = map(list, zip(*kept)) if kept else ([], [], [])
-        else:
-            w = w / m
-            if sigma and r:
-                keep = np.abs(w) * (h + d + 1.0) > _NEGLIGIBLE * sigma
-                w, h, d = w[keep], h[keep], d[keep]
+        w = w / m
+        if sigma and w.size:
+            keep = np.abs(w) * (h + d + 1.0) > _NEGLIGIBLE * sigma
+            w, h, d = w[keep], h[keep], d[keep]
         terms = sides["terms"] = (m, w, h, d, sigma * sigma)
     return terms[0], len(terms[1]) == 0
 
@@ -1134,73 +756,6 @@ def _side(sides, sign):
     return side
 
 
-def _tails_at(x, side, atol, rtol):
-    """``((P(X > x), P(X <= x)), error, converged)`` at one point x >= 0 of a side."""
-    if side.top is None and not side.sigma2:
-        return (0.0, 1.0), 0.0, True
-    if side.positive_form:
-        if x == 0:
-            return (1.0, 0.0), 0.0, True
-        if x * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0):
-            near = math.exp(side.k * math.log(x) + side.log_c0)
-            return (1.0 - near, near), 0.0, True
-    if math.isinf(x):
-        return (0.0, 1.0), 0.0, True
-    upper = x > side.mean
-    v, error, ok = _contour_at(x, side, upper, True, atol, rtol)
-    v = min(max(0.0, v if upper else -v), 1.0)
-    return ((v, 1.0 - v) if upper else (1.0 - v, v)), error, ok
-
-
-def _contour_at(x, side, upper, pole, atol, rtol, opening=None):
-    """:func:`_contour` at one point: Python floats around the numpy integrand."""
-    s0, g2, g3 = _saddle_at(x, side, upper, pole)
-    k0 = side.cgf_at(s0)
-    plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, _SCALAR, opening)
-    a, b, e0, log_tol, U, step = plan
-    if e0 + math.log(b / abs(s0) if pole else b) <= _LOG_UNDERFLOW:
-        return 0.0, 0.0, True
-    converged = U <= _U_MAX
-    # the fine step as a multiple k of the table's grid (rounded down: never coarser)
-    k = max(_GRID_MULTIPLE, int(0.5 * step / _GRID) // _GRID_MULTIPLE * _GRID_MULTIPLE)
-    h = k * _GRID
-    n = math.ceil(min(U, _U_MAX) / h)
-    nodes = _point_nodes(k, h, n + 1, False)
-    coef = _path_coefficients(x, side, s0, a, b, k0)
-    f = _integrand(nodes, coef, side, pole).tolist()
-    bound = _BLOWUP * abs(f[0])
-    if not (max(f) <= bound and min(f) >= -bound):  # (also true of a NaN first value)
-        if opening is None:
-            return _contour_at(x, side, upper, pole, atol, rtol, _SAFE_OPENING)
-        return 0.0, math.inf, False
-    f[0] *= 0.5
-    total = h * math.fsum(f)
-    diff = abs(total - 2.0 * h * math.fsum(f[::2]))
-    tol = math.exp(min(log_tol, 700.0))
-    for level in range(_MAX_HALVINGS + 1):
-        if diff <= max(tol, rtol * abs(total)):
-            break
-        if level == _MAX_HALVINGS:
-            converged = False
-            break
-        h *= 0.5
-        # the table holds the odd nodes while k is even; then every later level is computed
-        k = k // 2 if k and k % 2 == 0 else 0
-        nodes = _point_nodes(k, h, n, True)
-        f = _integrand(nodes, coef, side, pole).tolist()
-        n *= 2
-        refined = 0.5 * total + h * math.fsum(f)
-        diff, total = abs(refined - total), refined
-    # exp(E0) total / pi without overflow or underflow in between
-    value = (
-        math.copysign(math.exp(min(e0 + math.log(abs(total) / math.pi), 1.0)), total)
-        if total
-        else 0.0
-    )
-    error = math.exp(min(e0 + math.log(diff / math.pi), 1.0)) if diff else 0.0
-    return value, error, converged
-
-
 def _near_zero(xs, side):
     """``P(X <= x)`` of a positive form far below its weights, and where that is exact.
 
@@ -1212,7 +767,8 @@ def _near_zero(xs, side):
     overflow).  Returns the values and the mask where they hold.
     """
     tiny = (xs > 0) & (xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0))
-    with np.errstate(divide="ignore"):
+    # (evaluated at every point, used only where tiny: elsewhere it may overflow)
+    with np.errstate(divide="ignore", over="ignore"):
         return np.exp(side.k * np.log(np.maximum(xs, 1e-320)) + side.log_c0), tiny
 
 
@@ -1273,7 +829,7 @@ def _imhof_real_axis(x, w, h, d, sigma, atol):
 
 def _tolerances(atol, rtol):
     """Validated ``(atol, rtol)``: non-negative, not both zero, and attainable in doubles."""
-    atol, rtol = _finite_scalar(atol, "atol"), _finite_scalar(rtol, "rtol")
+    atol, rtol = as_finite(atol, "atol"), as_finite(rtol, "rtol")
     if atol < 0 or rtol < 0 or atol + rtol == 0:
         raise ValueError(f"atol and rtol must be >= 0 and not both 0, got {atol:g} and {rtol:g}")
     if 0 < rtol < _MIN_RTOL and atol < _MIN_RTOL:
@@ -1285,29 +841,13 @@ def _tolerances(atol, rtol):
 
 def _points(c):
     """The points ``c`` as a 1-D float array and their shape; NaN refused, ±inf allowed."""
-    if isinstance(c, (float, int)) and not isinstance(c, bool):
-        x = np.array([float(c)])
-        shape = ()
-    else:
-        x = _real_array(c, "c")
-        shape = x.shape
-        x = x.ravel()
-    if np.isnan(x).any():
-        raise ValueError("c contains NaN; pass the points at which to evaluate the law")
-    return x, shape
+    x = as_float_array(c, "c", finite=False)
+    return x.ravel(), x.shape
 
 
 def _evaluate(c, weights, dof, noncentrality, sigma, atol, rtol, method):
-    w, h, d, sigma = _validated(weights, dof, noncentrality, sigma)
+    w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
     atol, rtol = _tolerances(atol, rtol)
-    if method == "contour" and len(w) and isinstance(c, (float, int)) and not isinstance(c, bool):
-        # one point: Python floats all the way (numpy calls cost more than the work)
-        if math.isnan(c):
-            raise ValueError("c is NaN; pass the point at which to evaluate the law")
-        sf, cdf, err, ok = _probability_at(float(c), w, h, d, sigma, atol, rtol, {})
-        if not ok:
-            _warn_unconverged(np.array([ok]), np.array([err]), stacklevel=4)
-        return sf, cdf, err
     x, shape = _points(c)
     if len(w) == 0 and sigma == 0:
         # every weight is zero: the form is the constant 0
@@ -1319,7 +859,6 @@ def _evaluate(c, weights, dof, noncentrality, sigma, atol, rtol, method):
     elif method == "imhof":
         if len(w) == 0:
             raise ValueError("method='imhof' needs at least one chi-square term")
-        w, h, d = np.asarray(w, dtype=float), np.asarray(h, dtype=float), np.asarray(d, dtype=float)
         # an absolute tolerance: the real-axis integral has no relative control
         sf, err = _imhof_real_axis(x, w, h, d, sigma, atol if atol > 0 else rtol)
         if sigma == 0 and (np.all(w > 0) or np.all(w < 0)):
@@ -1506,12 +1045,12 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     :func:`imhof_cdf`.
     """
     w, h, d, _ = _terms(weights, dof, noncentrality)
-    c = _finite_scalar(c, "c")
+    c = as_finite(c, "c")
     if c <= 0 or not np.any(w > 0):
         raise ValueError(
             f"inversion_integrands needs c > 0 and at least one positive weight, got c = {c:g}"
         )
-    u = np.linspace(0.0, 10.0, 401) if u is None else _finite_vector(u, "u")
+    u = np.linspace(0.0, 10.0, 401) if u is None else as_vector(u, "u")
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         wu = np.multiply.outer(u, w)
         # wu/(1+wu^2) and wu^2/(1+wu^2) written so that wu = 0 and wu^2 = inf (weights near
@@ -1527,21 +1066,27 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     side = _Side(w / m, h, d, 0.0)
     x = c / m
     upper = x > side.mean
-    try:
-        s0, g2, g3 = _saddle_at(x, side, upper, True)
-        k0 = side.cgf_at(s0)
-        a, b, e0, *_ = _plan(x, side, upper, True, ATOL, RTOL, s0, g2, g3, k0, _SCALAR)
-    except (ZeroDivisionError, OverflowError):
+    point = np.array([x])
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        s0, g2, g3 = _saddle(point, side, upper, True)
+        k0 = side.cgf(s0)
+        a, b, e0, *_ = _plan(point, side, upper, True, ATOL, RTOL, s0, g2, g3, k0)
+    if not np.isfinite([s0[0], a[0], b[0], e0[0]]).all():
         # c / max|w| below ~1e-290: the saddle point is not representable in doubles
         raise ValueError(
             f"c / max|weights| = {x:.3g} is too close to 0 for the contour integrand to be "
             "drawn in double precision; the law is scale-invariant, so scale c and the "
             "weights by the same factor (imhof_cdf handles such points by itself)"
-        ) from None
-    # the path and its integrand in u do not depend on the scale m
-    basis = np.stack([np.ones(u.size), np.cosh(u) - 1.0, np.sinh(u)])
-    coef = _path_coefficients(x, side, s0, a, b, k0)
-    contour = _integrand(basis, coef, side, True) * math.exp(e0)
+        )
+    # the path and its integrand in u do not depend on the scale m; beyond
+    # u = _U_DRAWN (cosh u near the largest double) the integrand is 0 in doubles:
+    # it decays like exp(-e^u) far beyond the truncation point (u <= _U_MAX)
+    drawn = np.minimum(np.abs(u), _U_DRAWN)
+    basis = np.stack([np.ones(u.size), np.cosh(drawn) - 1.0, np.sinh(drawn)])
+    coef = _path_coefficients(point, side, s0, a, b, k0)
+    with np.errstate(over="ignore", under="ignore"):
+        contour = _integrand(basis, coef, side, True)[0] * math.exp(e0[0])
+    contour[np.abs(u) >= _U_DRAWN] = 0.0
     return real_axis, contour, ("upper" if upper else "lower")
 
 
@@ -1654,7 +1199,7 @@ def _ltz(x, w, h, d, sigma, offset):
     return np.asarray(sf, dtype=float), np.asarray(cdf, dtype=float)
 
 
-def _ltz_at(x, name, w, h, d, sigma, offset):
+def _ltz_points(x, name, w, h, d, sigma, offset):
     """:func:`_ltz` at the points ``x`` (array_like), each result shaped like ``x``."""
     x = as_float_array(x, name)
     sf, cdf = _ltz(np.ravel(x), w, h, d, sigma, offset)
@@ -1695,7 +1240,7 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     Analysis 53, 853-856, equations (3)-(8).
     """
     w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
-    sf, _ = _ltz_at(c, "c", w, h, d, sigma, 0.0)
+    sf, _ = _ltz_points(c, "c", w, h, d, sigma, 0.0)
     return sf
 
 
@@ -1725,7 +1270,7 @@ def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     (0.51, 0.494)
     """
     w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
-    _, cdf = _ltz_at(c, "c", w, h, d, sigma, 0.0)
+    _, cdf = _ltz_points(c, "c", w, h, d, sigma, 0.0)
     return cdf
 
 
@@ -1776,27 +1321,20 @@ class WeightedChiSquare(FrozenDistribution):
     def __init__(
         self, weights, dof=None, noncentrality=None, sigma=0.0, offset=0.0, atol=ATOL, rtol=RTOL
     ):
-        w, h, d, sigma = _validated(weights, dof, noncentrality, sigma)
+        w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
         self._set_terms(w, h, d, sigma, offset, atol, rtol)
 
     def _set_terms(self, w, h, d, sigma, offset, atol=ATOL, rtol=RTOL):
-        """Store validated terms (sorted, merged): lists of floats (a few) or arrays."""
-        offset = _finite_scalar(offset, "offset")
+        """Store validated terms (sorted, merged arrays)."""
+        offset = as_finite(offset, "offset")
         if len(w) == 0 and sigma == 0:
             raise ValueError(
                 "the law is a point mass (no chi-square term and no normal term); "
                 "a constant has no distribution to compute"
             )
-        # a few terms also as Python floats for one point (see _at); given as
-        # such, their arrays are made on first use (a law built for one
-        # probability never reads them, and three arrays cost ~10% of its call)
-        if type(w) is list:
-            self._few: tuple[list, list, list] | None = (w, h, d)
-        else:
-            self._few = (w.tolist(), h.tolist(), d.tolist()) if w.size <= _PYTHON_TERMS else None
-            for array in (w, h, d):
-                array.setflags(write=False)
-            self._arrays = (w, h, d)
+        for array in (w, h, d):
+            array.setflags(write=False)
+        self._arrays = (w, h, d)
         self.sigma, self.offset = float(sigma), offset
         self.atol, self.rtol = _tolerances(atol, rtol)
         # the normalised terms of each tail, built on first use
@@ -1806,15 +1344,6 @@ class WeightedChiSquare(FrozenDistribution):
         lower = offset if one_signed and w[0] > 0 else -math.inf
         upper = offset if one_signed and w[-1] < 0 else math.inf
         self._bounds = (lower, upper)
-
-    @functools.cached_property
-    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(weights, dof, noncentrality)`` as read-only arrays, made from ``_few``."""
-        assert self._few is not None  # (terms given as arrays set this in _set_terms)
-        arrays = tuple(np.array(column, dtype=float) for column in self._few)
-        for array in arrays:
-            array.setflags(write=False)
-        return arrays[0], arrays[1], arrays[2]
 
     @property
     def weights(self) -> np.ndarray:
@@ -1879,31 +1408,6 @@ class WeightedChiSquare(FrozenDistribution):
         _warn_unconverged(conv, err, stacklevel=5)
         return cdf.reshape(np.shape(x))
 
-    def cdf(self, x):
-        """P(X <= x); one Python number takes a path in Python floats."""
-        both = self._at(x)
-        return super().cdf(x) if both is None else np.float64(both[1])
-
-    def sf(self, x):
-        """P(X > x), computed directly in the upper tail; one Python number takes Python floats."""
-        both = self._at(x)
-        return super().sf(x) if both is None else np.float64(both[0])
-
-    def _at(self, x):
-        """``(sf, cdf)`` at one plain Python number inside the support, else None (the general path)."""
-        if self._few is None or not (type(x) is float or type(x) is int):
-            return None
-        x = float(x)
-        lower, upper = self._bounds
-        if not lower < x < upper:  # outside the support, or NaN: the general path words it
-            return None
-        sf, cdf, err, ok = _probability_at(
-            x - self.offset, *self._few, self.sigma, self.atol, self.rtol, self._sides
-        )
-        if not ok:
-            _warn_unconverged(np.array([ok]), np.array([err]), stacklevel=4)
-        return sf, cdf
-
     def _sf(self, x):
         sf, _cdf, err, conv = self._both(x)
         _warn_unconverged(conv, err, stacklevel=5)
@@ -1925,12 +1429,14 @@ class WeightedChiSquare(FrozenDistribution):
 
     def approx_sf(self, x):
         """``P(Q > x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
-        sf, _ = _ltz_at(x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset)
+        sf, _ = _ltz_points(
+            x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset
+        )
         return sf
 
     def approx_cdf(self, x):
         """``P(Q <= x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
-        _, cdf = _ltz_at(
+        _, cdf = _ltz_points(
             x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset
         )
         return cdf

@@ -181,9 +181,12 @@ def as_float_array(
             f"{name} is complex; pass real numbers (e.g. np.real(...) if the "
             "imaginary parts are rounding noise)"
         )
+    if _holds_text(value):
+        # numpy reads "1.0" as 1.0: text typed by mistake must not pass as a number
+        raise ValueError(f"{name} must be numeric, got text among its entries")
     try:
         array = np.array(value, dtype=float)  # a copy: callers may not mutate input
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
     if min_ndim is not None and array.ndim < min_ndim:
         raise ValueError(
@@ -215,6 +218,23 @@ def as_float_array(
     if not empty and array.size == 0:
         raise ValueError(f"{name} is empty (shape {array.shape}); pass at least one value")
     return array
+
+
+def _holds_text(value: Any) -> bool:
+    """Whether an array, list or tuple holds a string (at any depth)."""
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "US":
+            return True
+        return value.dtype.kind == "O" and any(map(_holds_text_entry, value.flat))
+    if isinstance(value, (list, tuple)):
+        return any(map(_holds_text_entry, value))
+    return False
+
+
+def _holds_text_entry(entry: Any) -> bool:
+    return isinstance(entry, (str, bytes)) or (
+        isinstance(entry, (list, tuple, np.ndarray)) and _holds_text(entry)
+    )
 
 
 def _is_complex(value: Any) -> bool:
