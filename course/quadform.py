@@ -122,6 +122,13 @@ _STEP_CONSTANT = 3.5
 _MAX_STEP = 0.5
 # Below exp(-760) a probability is 0 in double precision.
 _LOG_UNDERFLOW = -760.0
+# Beyond this many degrees of freedom (or this noncentrality) in one term the
+# integrals are centred at the mean (see _Side.linear): the factors' logarithms
+# otherwise lose ~eps h of the exponent (errors of 1e-8 at dof 1e8).
+_CENTRED_DOF = 1e4
+# Beyond this the law is normal to double precision (skewness below 1e-100) and the
+# sums of its cumulants approach the largest double: the normal limit is used.
+_NORMAL_DOF = 1e200
 # Chi-square terms this small beside a normal term are dropped (see _normalised).
 _NEGLIGIBLE = 1e-17
 # Below x sum((h + d)/(4w)) = _NEAR_ZERO (k + 1) a positive form's CDF is
@@ -228,6 +235,40 @@ def _derivative_factors(w, h, d):
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
+def _two_product(a, b):
+    """``a b`` as ``p + e`` exactly (Dekker's product with Veltkamp's split); arrays."""
+    p = a * b
+
+    def split(v):
+        c = 134217729.0 * v  # 2^27 + 1
+        high = c - (c - v)
+        return high, v - high
+
+    (ah, al), (bh, bl) = split(a), split(b)
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _log1p_minus(u):
+    """``log(1 + u) - u`` for real or complex ``u``, accurate also where ``|u|`` is tiny.
+
+    With ``v = u / (2 + u)``: ``log(1 + u) = 2 atanh v`` and ``2 v - u = -u^2 / (2 + u)``, so
+    ``L(u) = -u^2/(2 + u) + 2 (v^3/3 + v^5/5 + ...)``; for ``|u| < 1/4`` (``|v| < 1/7``)
+    nine terms reach double precision and nothing cancels.
+    """
+    small = np.abs(u) < 0.25
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        out = np.log1p(u) - u
+        if small.any():
+            us = u[small]
+            v = us / (2.0 + us)
+            v2 = v * v
+            series = 1.0 / 19.0
+            for n in range(17, 1, -2):
+                series = series * v2 + 1.0 / n
+            out[small] = 2.0 * v * v2 * series - us * us / (2.0 + us)
+    return out
+
+
 # ---------------------------------------------------------------------------
 # the normalised terms of one tail
 # ---------------------------------------------------------------------------
@@ -241,7 +282,7 @@ class _Side:
     two equal weights.  Holds the constants the contour integral needs.
     """
 
-    def __init__(self, w, h, d, sigma2):
+    def __init__(self, w, h, d, sigma2, centred=False):
         self.sigma2 = sigma2
         self.r = r = w.size
         self.w, self.h, self.d = w, h, d
@@ -262,6 +303,16 @@ class _Side:
         self.y_unit = 0.5 / smallest if r else 0.0
         half_d, self.k, self.mean, var, self.log_d_y, d_over_w, zero_slope, log_c = sums
         self.half_d_sum = half_d
+        # huge dof: K(s) - s mean and x - mean are computed without the mean
+        # itself (see linear, derivatives, cgf, _integrand); the mean as an
+        # unevaluated sum mean + mean_low of exact products
+        self.huge = bool(r and float(np.max(h + d)) > _CENTRED_DOF)
+        self.centred = centred
+        self.mean_low = 0.0
+        if self.centred:
+            parts = np.concatenate([*_two_product(w, h), *_two_product(w, d)]).tolist()
+            self.mean = math.fsum(parts)
+            self.mean_low = math.fsum([*parts, -self.mean])
         self.noncentral = half_d > 0
         self.var = var + sigma2
         # for the bound on the lower-tail saddle of a positive form
@@ -285,17 +336,59 @@ class _Side:
         """The side of ``-X``: weights negated, kept in increasing order."""
         return cls(-w[::-1], h[::-1], d[::-1], sigma2)
 
+    @functools.cached_property
+    def twin(self):
+        """The centred :class:`_Side` of the same terms (for a law of huge dof)."""
+        return _Side(self.w, self.h, self.d, self.sigma2, centred=True)
+
+    def groups(self, x):
+        """``(upper, mask, side)``: the points above and below the mean, and the side for each.
+
+        With huge dof (:attr:`huge`) points near the mean, where ``|2 w s0| <
+        1/4`` for every weight (``|x - mean| <= var/4`` at unit weights), take
+        the centred twin; farther out ``log z`` itself loses nothing, while
+        centring would cancel ``h w s`` against ``s mean``.
+        """
+        if not self.huge:
+            upper = x > self.mean
+            return [(True, upper, self), (False, ~upper, self)]
+        delta = self.twin.linear(x)
+        near = np.abs(delta) <= 0.25 * self.var
+        upper = delta > 0
+        return [
+            (True, upper & near, self.twin),
+            (False, ~upper & near, self.twin),
+            (True, upper & ~near, self),
+            (False, ~upper & ~near, self),
+        ]
+
+    def linear(self, x):
+        """The coefficient of ``-s`` in the exponent: ``x``, or ``x - mean`` when centred."""
+        if not self.centred:
+            return x
+        return (x - self.mean) - self.mean_low
+
     # -- the cumulant generating function K(s) = log M(s) ---------------------
     def derivatives(self, s, x, pole):
         """``phi'``, ``phi''``, ``phi'''`` of ``phi(s) = K(s) - s x [- log|s|]``, s of shape (n,)."""
         _, hw, dw, c2, c3, n2, n3 = self.factors
-        t = 1.0 / (1.0 - np.multiply.outer(s, self.w2))
+        ws = np.multiply.outer(s, self.w2)
+        t = 1.0 / (1.0 - ws)
         t2 = t * t
-        g1 = t @ hw + (self.sigma2 * s - x)
+        if self.centred:
+            # K' - x as sum h w (t - 1) + d w (t^2 - 1) - (x - mean), t - 1 = 2 w s t:
+            # no large terms cancel
+            t_minus_1 = ws * t
+            g1 = t_minus_1 @ hw + (self.sigma2 * s - self.linear(x))
+            if self.noncentral:
+                g1 = g1 + (t_minus_1 * (t + 1.0)) @ dw
+        else:
+            g1 = t @ hw + (self.sigma2 * s - x)
         g2 = t2 @ c2 + self.sigma2
         g3 = (t2 * t) @ c3
         if self.noncentral:
-            g1 = g1 + t2 @ dw
+            if not self.centred:
+                g1 = g1 + t2 @ dw
             g2 = g2 + (t2 * t) @ n2
             g3 = g3 + (t2 * t2) @ n3
         if pole:
@@ -306,7 +399,17 @@ class _Side:
         return g1, g2, g3
 
     def cgf(self, s):
-        """``K(s)`` at real ``s`` of shape (n,) inside the interval of convergence."""
+        """``K(s)`` at real ``s`` of shape (n,) inside the interval of convergence.
+
+        Centred (huge dof): ``K(s) - s mean`` as ``sum -h/2 L(u) + d/2
+        u^2/(1 + u)`` with ``u = -2 w s`` and ``L(u) = log(1 + u) - u``.
+        """
+        if self.centred:
+            u = np.multiply.outer(s, -self.w2)
+            value = _log1p_minus(u) @ (-0.5 * self.h) + 0.5 * self.sigma2 * s * s
+            if self.noncentral:
+                value = value + (u * u / (1.0 + u)) @ (0.5 * self.d)
+            return value
         z = 1.0 - np.multiply.outer(s, self.w2)
         value = np.log(z) @ (-0.5 * self.h) + 0.5 * self.sigma2 * s * s
         if self.noncentral:
@@ -323,7 +426,7 @@ class _Side:
         the far upper tail, or of the behaviour at ``-inf`` far below a
         positive form.
         """
-        dx = x - self.mean
+        dx = self.linear(x) if self.centred else x - self.mean
         root = np.sqrt(dx * dx + 4.0 * self.var)
         if upper:
             # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
@@ -447,7 +550,7 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     else:
         ratio = opening + 0.0 * b
     a = ratio * b
-    e0 = k0 - s0 * x
+    e0 = k0 - s0 * side.linear(x)
     vertex = b / np.abs(s0) if pole else b
     log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + np.log(vertex)
     if atol > 0:
@@ -518,12 +621,15 @@ def _path_coefficients(x, side, s0, a, b, k0):
     the matrix has one block per point, ``(points, rows, 3)``.
     """
     ib = 1j * b
-    c0 = k0 + side.half_d_sum  # the noncentral terms' -d/2 (0 when central)
+    # the noncentral terms' -d/2 (0 when central; centred, K(s0) holds it)
+    c0 = k0 if side.centred else k0 + side.half_d_sum
+    x = side.linear(x)
     path = np.stack(np.broadcast_arrays(s0, a, ib), axis=-1)
     r = side.r
     coef = np.empty(path.shape[:-1] + (side.rows_of_path, 3), dtype=complex)
     np.multiply(side.minus_w2[:, None], path[..., None, :], out=coef[..., :r, :])
-    coef[..., :r, 0] += 1.0
+    if not side.centred:  # (centred: the rows hold u = z - 1, see _integrand)
+        coef[..., :r, 0] += 1.0
     if side.noncentral:
         coef[..., r : 2 * r, :] = coef[..., :r, :]
     coef[..., -3, :] = np.stack(np.broadcast_arrays(-c0, -x * a, -x * ib), axis=-1)
@@ -553,14 +659,20 @@ def _integrand(basis, coef, side, pole):
     # the rows along the first axis: plain first-axis indexing is cheaper than path[..., i, :]
     rows = path.transpose(1, 0, 2)
     logs = rows[:r]
-    if logs.size > _COMPLEX_LOG_SIZE:
+    if side.centred:
+        # u = z - 1: -h/2 log z + d/2 (1/z - 1) = -h/2 L(u) + d/2 u^2/(1 + u) + mean s
+        if side.noncentral:
+            u = rows[r : 2 * r]
+            u *= u / (1.0 + u)
+        logs[...] = _log1p_minus(logs)
+    elif logs.size > _COMPLEX_LOG_SIZE:
         # numpy's complex log costs ~100 ns a value, this real split ~45
         angle = np.arctan2(logs.imag, logs.real)
         logs.real = np.log(np.abs(logs))
         logs.imag = angle
     else:
         np.log(logs, out=logs)
-    if side.noncentral:
+    if side.noncentral and not side.centred:
         inverse = rows[r : 2 * r]
         np.reciprocal(inverse, out=inverse)
     e = weights @ path[..., :-2, :]
@@ -690,6 +802,9 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         x = x / m
     if normal:
         return stats.norm.sf(x), stats.norm.cdf(x), np.zeros(x.shape), np.ones(x.shape, bool)
+    if sides["limit"] is not None:
+        z = _standardised(x, sides["limit"])
+        return stats.norm.sf(z), stats.norm.cdf(z), np.zeros(x.shape), np.ones(x.shape, bool)
     sf, cdf = np.empty(x.shape), np.empty(x.shape)
     err = np.zeros(x.shape)
     conv = np.ones(x.shape, dtype=bool)
@@ -711,11 +826,11 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             up[zero], low[zero] = 1.0, 0.0
             low[tiny], up[tiny] = near[tiny], 1.0 - near[tiny]
             todo &= ~zero & ~tiny
-        upper = xs > side.mean
-        for is_upper, m_ in ((True, todo & upper), (False, todo & ~upper)):
+        for is_upper, group, part in side.groups(xs):
+            m_ = todo & group
             if m_.any():
-                v, e[m_], ok[m_] = _contour(xs[m_], side, is_upper, True, atol, rtol)
-                v = np.clip(v if is_upper else -v, 0.0, 1.0)
+                v, e[m_], ok[m_] = _contour(xs[m_], part, is_upper, True, atol, rtol)
+                v = np.clip(v if is_upper else -v, 0.0, 1.0) + 0.0  # (no -0.0)
                 up[m_], low[m_] = (v, 1.0 - v) if is_upper else (1.0 - v, v)
         if sign > 0:
             sf[mask], cdf[mask] = up, low
@@ -743,7 +858,34 @@ def _normalised(sides, w, h, d, sigma):
             keep = np.abs(w) * (h + d + 1.0) > _NEGLIGIBLE * sigma
             w, h, d = w[keep], h[keep], d[keep]
         terms = sides["terms"] = (m, w, h, d, sigma * sigma)
+        sides["limit"] = _normal_limit(w, h, d, sigma) if w.size else None
     return terms[0], len(terms[1]) == 0
+
+
+def _normal_limit(w, h, d, sigma):
+    """``(H, mean/H, its low part, sd)`` where the law is normal to double precision, else None.
+
+    Beyond ``_NORMAL_DOF`` degrees of freedom in a term the skewness, about
+    ``sqrt(8/k)``, is below 1e-100, and the cumulants' sums approach the largest
+    double: they are taken on ``h/H`` and ``d/H`` (``H`` a power of two, so
+    exactly), the mean as an unevaluated sum of exact products.
+    """
+    largest = float(np.max(h + d))
+    if largest <= _NORMAL_DOF:
+        return None
+    H = 2.0 ** (math.frexp(largest)[1] - 1)
+    hs, ds = h / H, d / H
+    parts = np.concatenate([*_two_product(w, hs), *_two_product(w, ds)]).tolist()
+    mean = math.fsum(parts)
+    var = float(2.0 * (w * w) @ (hs + 2.0 * ds)) + sigma * sigma / H
+    return H, mean, math.fsum([*parts, -mean]), math.sqrt(H) * math.sqrt(var)
+
+
+def _standardised(x, limit):
+    """``(x - mean) / sd`` of a law in the normal limit (:func:`_normal_limit`)."""
+    H, mean, low, sd = limit
+    with np.errstate(over="ignore"):
+        return ((x / H - mean) - low) * (H / sd)
 
 
 def _side(sides, sign):
@@ -1104,6 +1246,10 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
         x = x / m
     if normal:
         return stats.norm.pdf(x) / m
+    if sides["limit"] is not None:
+        z = _standardised(x, sides["limit"])
+        with np.errstate(under="ignore"):
+            return stats.norm.pdf(z) / (m * sides["limit"][3])
     out = np.zeros(x.shape)
     w = sides["terms"][1]
     mixed = w[0] < 0 < w[-1]
@@ -1132,10 +1278,9 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
 
 def _density_core(x, side, atol, rtol):
     out = np.empty(x.shape)
-    upper = x > side.mean
-    for is_upper, mask in ((True, upper), (False, ~upper)):
+    for is_upper, mask, part in side.groups(x):
         if mask.any():
-            out[mask] = _contour(x[mask], side, is_upper, False, atol, rtol)[0]
+            out[mask] = _contour(x[mask], part, is_upper, False, atol, rtol)[0]
     return out
 
 
@@ -1162,7 +1307,10 @@ def _ltz(x, w, h, d, sigma, offset):
     """(sf, cdf) of the LTZ approximation; negative skewness uses -Q.
 
     Computed on the law scaled to ``max(|w|, sigma) = 1`` (the cumulants of
-    weights of 1e300 overflow).
+    weights of 1e300 overflow), with the cumulants divided by ``H``, a power of
+    two of the size of the largest dof (those of dof 1e200 overflow too).  Where
+    the matched chi-square has over 1e10 degrees of freedom it is the normal
+    law to well within the approximation's own error, and the normal is used.
     """
     m = max(float(np.max(np.abs(w), initial=0.0)), sigma)
     if m == 0:  # the constant offset
@@ -1170,19 +1318,23 @@ def _ltz(x, w, h, d, sigma, offset):
         return sf, 1 - sf
     with np.errstate(over="ignore", under="ignore"):
         x = (x - offset) / m
-    c1, c2, c3, c4 = _ltz_parameters(w / m, h, d, sigma / m, 0.0)
+    largest = float(np.max(h + d, initial=1.0))
+    H = 2.0 ** (math.frexp(largest)[1] - 1) if largest > 1e100 else 1.0
+    # c_k / H of the law: every c_k is a sum of dof (and sigma^2) times powers of w
+    c1, c2, c3, c4 = _ltz_parameters(w / m, h / H, d / H, sigma / m / math.sqrt(H), 0.0)
     if c2 <= 0:
-        sf = (x < c1).astype(float)
+        sf = (x < H * c1).astype(float)
         return sf, 1 - sf
     flip = c3 < 0
     if flip:
         x, c1, c3 = -x, -c1, -c3
-    if c3 == 0:
-        z = (x - c1) / math.sqrt(2 * c2)
+    s1 = c3 / c2**1.5 / math.sqrt(H)
+    if s1 * s1 < 1e-10:
+        with np.errstate(over="ignore"):
+            z = (x / H - c1) * math.sqrt(H / (2 * c2))
         sf, cdf = stats.norm.sf(z), stats.norm.cdf(z)
     else:
-        s1 = c3 / c2**1.5
-        s2 = c4 / c2**2
+        s2 = c4 / c2**2 / H
         if s1**2 > s2:
             a = 1.0 / (s1 - math.sqrt(s1**2 - s2))
             delta = s1 * a**3 - a**2
@@ -1191,7 +1343,7 @@ def _ltz(x, w, h, d, sigma, offset):
             a = 1.0 / s1
             delta = 0.0
             l = 1.0 / s1**2
-        t = (x - c1) / math.sqrt(2 * c2) * math.sqrt(2) * a + l + delta
+        t = (x - H * c1) / math.sqrt(2 * H * c2) * math.sqrt(2) * a + l + delta
         law = stats.ncx2(l, delta) if delta > 0 else stats.chi2(l)
         sf, cdf = law.sf(t), law.cdf(t)
     if flip:

@@ -21,6 +21,7 @@ high-precision values agree with them to 1.8e-5, inside Davies' 1e-4.
 """
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -28,7 +29,7 @@ from conftest import binomial_band
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.linalg import LinAlgError
-from scipy import stats
+from scipy import special, stats
 
 from course import quadform
 from course.quadform import (
@@ -877,3 +878,79 @@ def integrate_cdf_of_difference(nc):
         epsrel=1e-12,
         limit=500,
     )[0]
+
+
+# ---------------------------------------------------------------------------
+# huge degrees of freedom and extreme scales (issue 28, items 2 and 5)
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("dof", [1e6, 1e7, 1e8, 1e12])
+def test_huge_dof_meets_the_requested_accuracy_in_the_body(dof):
+    # in the body (|z| <= 2.5) scipy's regularised incomplete gamma is accurate
+    # (it is far in the lower tail at df >= 1e7 that it is not); the old
+    # contour summed log(1 - 2 w s) of size eps h and erred by up to 1.4e-9
+    sd = math.sqrt(2.0 * dof)
+    c = dof + sd * np.array([-2.0, -1.0, -0.3, 0.0, 0.7, 1.5, 2.5])
+    reference = special.gammainc(dof / 2, c / 2)
+    got = np.array([imhof_cdf(float(ci), [1.0], [dof]) for ci in c])
+    assert np.max(np.abs(got - reference)) < 1e-12
+    assert np.max(np.abs(imhof_cdf(c, [1.0], [dof]) - reference)) < 1e-12
+
+
+def test_huge_dof_never_fails_in_arithmetic():
+    weights = [1.0, 0.5]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        # at the mean of a law of dof 1e20 the truth is 1/2 up to a skewness term
+        # of order 1e-10 (the old code returned 0.0)
+        assert abs(imhof_cdf(1.5e20, weights, [1e20, 1e20]) - 0.5) < 1e-9
+        assert abs(imhof_sf(1.5e20, weights, [1e20, 1e20]) - 0.5) < 1e-9
+        for dof in (1e20, 1e200, 1.7e308):
+            # far below the mean: 0 (the old code raised ZeroDivisionError, then a
+            # NaN-to-integer error at 1e200)
+            assert imhof_cdf(1.0, weights, [dof, dof]) == 0.0
+            assert imhof_sf(1.0, weights, [dof, dof]) == 1.0
+        # the normal limit: exactly 1/2 at an exactly representable mean
+        assert imhof_cdf(1.5e300, weights, [1e300, 1e300]) == pytest.approx(0.5, abs=1e-15)
+        assert liu_tang_zhang_cdf(1.5e200, weights, [1e200, 1e200]) == pytest.approx(0.5)
+        # (powers of two: the mean 1.5 H is exact, the density there 1/sqrt(2 pi var))
+        H = 2.0**660
+        law = WeightedChiSquare(weights, [H, H])
+        assert law.pdf(1.5 * H) == pytest.approx(1 / math.sqrt(2 * math.pi * 2.5 * H))
+
+
+def test_liu_tang_zhang_is_finite_at_huge_dof():
+    # the cumulants of dof 1e200 overflowed: NaN
+    for dof in (1e100, 1e200, 1e300):
+        p = liu_tang_zhang_cdf(0.75 * dof, [1.0, 0.5], [dof, dof])
+        assert p == pytest.approx(0.0, abs=1e-12)
+        assert np.isfinite(liu_tang_zhang_sf(1.5 * dof, [1.0, 0.5], [dof, dof]))
+
+
+def test_inversion_integrands_are_finite_beyond_u_710():
+    # cosh(710) overflows: the contour integrand was NaN there; it is 0 in doubles
+    u = np.array([0.0, 1.0, 709.0, 710.0, 1e3])
+    real_axis, contour, _ = inversion_integrands(1.0, [1.0, 0.5], u=u)
+    assert np.isfinite(real_axis).all() and np.isfinite(contour).all()
+    assert contour[2:].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_many_weights_give_no_spurious_overflow_warning():
+    weights = np.random.default_rng(1).uniform(0.1, 1.0, 3000)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p = imhof_cdf(0.55 * 3000, weights)
+    assert 0.0 < p < 1.0
+
+
+def test_a_bool_level_and_text_in_object_arrays_are_refused():
+    law = WeightedChiSquare([1.0, 0.5])
+    with pytest.raises(ValueError, match="probabilities"):
+        law.ppf(True)
+    with pytest.raises(ValueError, match="probabilities"):
+        law.isf(np.array([True, False]))
+    with pytest.raises(ValueError, match=r"weights.*text"):
+        imhof_cdf(1.0, np.array(["1.0", "0.5"], dtype=object))
+    with pytest.raises(ValueError, match=r"c .*text"):
+        imhof_cdf(np.array(["1.0"], dtype=object), [1.0])
+    with pytest.raises(ValueError, match=r"dof.*text"):
+        imhof_cdf(1.0, [1.0, 0.5], [1, "2"])
