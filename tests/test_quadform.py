@@ -41,6 +41,7 @@ from course.quadform import (
     liu_tang_zhang_cdf,
     liu_tang_zhang_sf,
 )
+from course.quadform._terms import _terms
 
 # (weights, dof, noncentrality): [(c, P(Q <= c)), ...]
 DAVIES_CASES = {
@@ -645,7 +646,7 @@ def test_many_weights_agree_with_monte_carlo():
 
 def test_every_container_of_the_same_terms_gives_the_same_law():
     # lists, tuples, arrays, ints, numpy scalars and float32 give the same terms
-    expected = quadform._terms(np.array([3.0, -1.0, 3.0]), np.array([1.0, 2.0, 2.0]), [0.5, 0, 1])
+    expected = _terms(np.array([3.0, -1.0, 3.0]), np.array([1.0, 2.0, 2.0]), [0.5, 0, 1])
     assert [a.tolist() for a in expected[:3]] == [[-1.0, 3.0], [2.0, 3.0], [0.0, 1.5]]
     containers = [
         ([3, -1, 3], [1, 2, 2], [0.5, 0, 1]),
@@ -656,7 +657,7 @@ def test_every_container_of_the_same_terms_gives_the_same_law():
     ]
     reference = imhof_cdf(2.0, *expected[:3])
     for weights, dof, nc in containers:
-        terms = quadform._terms(weights, dof, nc)
+        terms = _terms(weights, dof, nc)
         assert all(np.array_equal(a, b) for a, b in zip(terms, expected))
         assert imhof_cdf(2.0, weights, dof, nc) == reference
 

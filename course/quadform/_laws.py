@@ -1,0 +1,430 @@
+"""Frozen laws: :class:`WeightedChiSquare` and the quadratic form :class:`QuadraticForm`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import optimize, stats
+
+from ..distributions import _NO_STATE, FrozenDistribution, _rng_argument
+from ..linalg import as_covariance, as_matrix, symmetrize
+from ..validation import as_finite, as_vector
+from ._contour import _density, _probabilities
+from ._ltz import _ltz_points
+from ._terms import (
+    _ZERO_RTOL,
+    ATOL,
+    RTOL,
+    _fmt,
+    _readonly,
+    _squeeze,
+    _terms,
+    _tolerances,
+    _warn_unconverged,
+)
+
+
+# ---------------------------------------------------------------------------
+# frozen distributions
+# ---------------------------------------------------------------------------
+class WeightedChiSquare(FrozenDistribution):
+    """Law of ``sum_r w_r chi2(h_r, delta_r^2) + sigma Z + offset``.
+
+    Parameters
+    ----------
+    weights : (r,) array_like
+        Weights of either sign.
+    dof : (r,) array_like or float, optional
+        Degrees of freedom (ones by default).
+    noncentrality : (r,) array_like or float, optional
+        Noncentrality parameters ``delta_r^2`` (zeros by default).
+    sigma : float, optional
+        Standard deviation of an independent normal term.
+    offset : float, optional
+        A constant added to the sum.
+    atol, rtol : float, optional
+        Accuracy of :func:`imhof_cdf` used by ``cdf``, ``sf`` and quantiles.
+
+    Attributes
+    ----------
+    weights, dof, noncentrality : ndarray
+        The terms after dropping zero weights and merging equal ones.
+    sigma, offset : float
+    support : tuple of float
+
+    Notes
+    -----
+    ``mean = sum w (h + delta^2) + offset`` and
+    ``var = 2 sum w^2 (h + 2 delta^2) + sigma^2`` (the first two cumulants
+    ``kappa_j = 2^{j-1} (j-1)! sum w^j (h + j delta^2)``).  Every method
+    works on the law scaled to ``max(|w|, sigma) = 1``: a law with weights of
+    1e300 has an infinite variance in doubles, not an overflow.
+
+    Examples
+    --------
+    >>> from course.quadform import WeightedChiSquare
+    >>> law = WeightedChiSquare([2.0, -1.0], dof=[3, 1], noncentrality=[0.5, 0.0])
+    >>> law.mean(), round(float(law.isf(0.05)), 4)
+    (6.0, 17.2707)
+    """
+
+    def __init__(
+        self, weights, dof=None, noncentrality=None, sigma=0.0, offset=0.0, atol=ATOL, rtol=RTOL
+    ):
+        w, h, d, sigma = _terms(weights, dof, noncentrality, sigma)
+        self._set_terms(w, h, d, sigma, offset, atol, rtol)
+
+    def _set_terms(self, w, h, d, sigma, offset, atol=ATOL, rtol=RTOL):
+        """Store validated terms (sorted, merged arrays)."""
+        offset = as_finite(offset, "offset")
+        if len(w) == 0 and sigma == 0:
+            raise ValueError(
+                "the law is a point mass (no chi-square term and no normal term); "
+                "a constant has no distribution to compute"
+            )
+        for array in (w, h, d):
+            array.setflags(write=False)
+        self._arrays = (w, h, d)
+        self.sigma, self.offset = float(sigma), offset
+        self.atol, self.rtol = _tolerances(atol, rtol)
+        # the normalised terms of each tail, built on first use
+        self._sides, self._density_sides = {}, {}
+        # the weights are sorted increasingly: one-signed when the first (last) is
+        one_signed = sigma == 0 and len(w) > 0
+        lower = offset if one_signed and w[0] > 0 else -math.inf
+        upper = offset if one_signed and w[-1] < 0 else math.inf
+        self._bounds = (lower, upper)
+
+    @property
+    def weights(self) -> np.ndarray:
+        """The weights after dropping zeros and merging equal ones (sorted, read-only)."""
+        return self._arrays[0]
+
+    @property
+    def dof(self) -> np.ndarray:
+        """The degrees of freedom of the terms of :attr:`weights` (read-only)."""
+        return self._arrays[1]
+
+    @property
+    def noncentrality(self) -> np.ndarray:
+        """The noncentrality parameters of the terms of :attr:`weights` (read-only)."""
+        return self._arrays[2]
+
+    def __repr__(self) -> str:
+        return f"WeightedChiSquare(terms={self.weights.size}, dof={_fmt(np.sum(self.dof))})"
+
+    # -- closed forms ------------------------------------------------------
+    def cumulant(self, j: int) -> float:
+        """The j-th cumulant ``2^{j-1} (j-1)! sum w^j (h + j delta^2)`` (+ normal, offset)."""
+        if isinstance(j, bool) or not isinstance(j, (int, np.integer)) or j < 1:
+            raise ValueError(f"cumulant order j must be a positive integer, got {j!r}")
+        j = int(j)
+        w, h, d = self.weights, self.dof, self.noncentrality
+        # on the normalised weights: a law with weights of 1e300 has an
+        # infinite variance in doubles, not an overflow warning
+        scale = float(np.max(np.abs(w), initial=0.0)) or 1.0
+        log_factor = (j - 1) * math.log(2.0) + math.lgamma(j) + j * math.log(scale)
+        with np.errstate(over="ignore", invalid="ignore"):
+            value = float(np.exp(log_factor) * (((w / scale) ** j) @ (h + j * d)))
+        if j == 1:
+            value += self.offset
+        if j == 2:
+            value += self.sigma * self.sigma
+        return value
+
+    def mean(self) -> float:
+        """E[Q] in closed form."""
+        return self.cumulant(1)
+
+    def var(self) -> float:
+        """Var[Q] in closed form."""
+        return self.cumulant(2)
+
+    # -- probabilities -----------------------------------------------------
+    def _both(self, x):
+        return _probabilities(
+            np.ravel(x) - self.offset,
+            self.weights,
+            self.dof,
+            self.noncentrality,
+            self.sigma,
+            self.atol,
+            self.rtol,
+            self._sides,
+        )
+
+    def _cdf(self, x):
+        _sf, cdf, err, conv = self._both(x)
+        _warn_unconverged(conv, err, stacklevel=5)
+        return cdf.reshape(np.shape(x))
+
+    def _sf(self, x):
+        sf, _cdf, err, conv = self._both(x)
+        _warn_unconverged(conv, err, stacklevel=5)
+        return sf.reshape(np.shape(x))
+
+    def _pdf(self, x):
+        x = np.asarray(x, dtype=float)
+        out = _density(
+            np.ravel(x) - self.offset,
+            self.weights,
+            self.dof,
+            self.noncentrality,
+            self.sigma,
+            self.atol,
+            self.rtol,
+            self._density_sides,
+        )
+        return out.reshape(x.shape)
+
+    def approx_sf(self, x):
+        """``P(Q > x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
+        sf, _ = _ltz_points(
+            x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset
+        )
+        return sf
+
+    def approx_cdf(self, x):
+        """``P(Q <= x)`` by the Liu-Tang-Zhang approximation (fast, approximate)."""
+        _, cdf = _ltz_points(
+            x, "x", self.weights, self.dof, self.noncentrality, self.sigma, self.offset
+        )
+        return cdf
+
+    def _rvs(self, size, rng):
+        shape = _sample_shape(size)
+        out = np.full(shape, self.offset)
+        for w, h, d in zip(self.weights, self.dof, self.noncentrality):
+            draw = rng.noncentral_chisquare(h, d, shape) if d > 0 else rng.chisquare(h, shape)
+            out = out + w * draw
+        if self.sigma:
+            out = out + self.sigma * rng.standard_normal(shape)
+        return _squeeze(out)
+
+    def _root(self, func, target, increasing):
+        # bracket from a normal approximation outward in steps of the std
+        # (computed on the normalised law: the std of a law with weights of
+        # 1e300 is not a double)
+        scale = max(float(np.max(np.abs(self.weights), initial=0.0)), self.sigma)
+        w = self.weights / scale
+        std_n = math.sqrt(
+            float(2.0 * (w * w) @ (self.dof + 2.0 * self.noncentrality)) + (self.sigma / scale) ** 2
+        )
+        mean_n = float(w @ (self.dof + self.noncentrality))
+        z = stats.norm.ppf(target) if increasing else stats.norm.isf(target)
+        lower, upper = self.support()
+        guess = min(max(self.offset + scale * (mean_n + std_n * z), lower), upper)
+        std = scale * std_n
+        sign = 1.0 if increasing else -1.0
+
+        def gap(x):
+            return sign * (float(func(x)) - target)
+
+        step = 0.25 * std
+        left = max(guess - step, lower)
+        right = min(guess + step, upper)
+        for _ in range(200):
+            if gap(left) <= 0:
+                break
+            step *= 2
+            left = max(left - step, lower)
+        for _ in range(200):
+            if gap(right) >= 0:
+                break
+            step *= 2
+            right = min(right + step, upper)
+        eps = 8 * np.finfo(float).eps
+        root = optimize.brentq(
+            gap, left, right, xtol=max(1e-13 * std, 1e-300), rtol=eps, maxiter=200
+        )
+        if abs(root) < 1e-3 * std:
+            # near 0 (a positive form far in its lower tail): refine to relative
+            # precision, not only to 1e-13 std (ppf(1e-8) of chi2_1 was 0)
+            a, b = max(root - 2e-13 * std, left), min(root + 2e-13 * std, right)
+            if gap(a) <= 0 <= gap(b):
+                root = optimize.brentq(gap, a, b, xtol=1e-300, rtol=eps, maxiter=400)
+        return root
+
+
+def _sample_shape(size):
+    """The shape of a sample: None, a non-negative integer or a tuple of them."""
+    if size is None:
+        return ()
+    sizes = size if isinstance(size, tuple) else (size,)
+    for n in sizes:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(
+                f"size must be a non-negative integer or a tuple of them, got {size!r}"
+            )
+    return tuple(int(n) for n in sizes)
+
+
+class QuadraticForm(WeightedChiSquare):
+    """Law of ``Q = x^T A x`` with ``x ~ N(mean, cov)``; ``cov`` may be singular.
+
+    Parameters
+    ----------
+    A : (n, n) array_like
+        Symmetric matrix of the form.
+    mean : (n,) array_like, optional
+        Mean of ``x`` (zeros by default).
+    cov : (n, n) array_like, optional
+        Covariance of ``x``, symmetric positive semi-definite (identity by
+        default).
+    atol, rtol : float, optional
+        Accuracy of the distribution function (see :func:`imhof_cdf`).
+
+    Attributes
+    ----------
+    A, mean_vector, cov : ndarray
+        Read-only validated copies of the inputs.
+    weights, dof, noncentrality, sigma, offset
+        The reduction ``Q = sum w_r chi2(h_r, delta_r^2) + sigma Z + offset``.
+    rank : int
+        Rank of ``cov``.
+
+    Raises
+    ------
+    ValueError
+        ``A`` empty, not square or not symmetric; wrong shapes; NaN or inf;
+        a constant form; ``x^T A x`` beyond double precision.
+    numpy.linalg.LinAlgError
+        ``cov`` not positive semi-definite.
+
+    Notes
+    -----
+    With ``cov = L L^T`` (``L = V_+ diag(sqrt(e_+))`` from the eigenpairs of
+    ``cov`` with positive eigenvalues; its nonzero spectrum is that of
+    ``cov^{1/2} A cov^{1/2}``), write ``mean = L nu + mu_perp`` with
+    ``mu_perp`` orthogonal to the range of ``cov`` and ``L^T A L = P diag(lambda) P^T``.
+    With ``y = P^T (z + nu) ~ N(P^T nu, I)`` and ``g = P^T L^T A mu_perp``,
+
+    ``Q = sum_r [lambda_r y_r^2 + 2 g_r y_r] + mu_perp^T A mu_perp``.
+
+    Completing squares for ``lambda_r != 0`` gives ``lambda_r chi2(1,
+    ((P^T nu)_r + g_r/lambda_r)^2)``; the terms with ``lambda_r = 0`` are
+    normal.  For a non-singular ``cov`` this is Baram (1980), (3.16)-(3.17):
+    ``delta_r = p_r^T cov^{-1/2} mean``, with no normal term and no offset.
+    ``mean`` and ``var`` use the closed forms ``tr(A cov) + mean^T A mean`` and
+    ``2 tr((A cov)^2) + 4 mean^T A cov A mean``.  The reduction is done on
+    ``A / max|A|`` and ``x / gamma`` (``gamma`` the larger of ``max|mean|`` and
+    ``sqrt(max|cov|)``) and scaled back, so the units of ``A`` and ``x`` do
+    not matter until ``x^T A x`` itself leaves the range of doubles (then a
+    ValueError says so).
+
+    Examples
+    --------
+    >>> from course.quadform import QuadraticForm
+    >>> form = QuadraticForm([[1.0, 0.5], [0.5, -1.0]], mean=[1.0, 0.0])
+    >>> form.rank, round(float(form.cdf(0.0)), 6)
+    (2, 0.378713)
+    """
+
+    def __init__(self, A, mean=None, cov=None, atol=ATOL, rtol=RTOL):
+        A = as_matrix(A, "A")
+        n = A.shape[0]
+        if A.shape != (n, n):
+            raise ValueError(f"A must be square (n x n), got shape {A.shape}")
+        if n == 0:
+            raise ValueError("A is empty (0 x 0); pass a square matrix of at least 1 x 1")
+        mean = np.zeros(n) if mean is None else as_vector(mean, "mean", n)
+        cov = np.eye(n) if cov is None else as_matrix(cov, "cov", (n, n))
+        # x^T A x = alpha gamma^2 (x/gamma)^T (A/alpha) (x/gamma): the reduction
+        # works on unit-size matrices whatever the units (1e-300 or 1e300)
+        alpha = float(np.max(np.abs(A)))
+        gamma = max(math.sqrt(float(np.max(np.abs(cov)))), float(np.max(np.abs(mean))))
+        if alpha == 0 or gamma == 0:
+            raise ValueError(
+                "the quadratic form is constant (A = 0, or cov = 0 and mean = 0): "
+                "x^T A x = 0 with probability one"
+            )
+        A_n = A / alpha
+        asym = float(np.max(np.abs(A_n - A_n.T)))
+        if asym > 1e-10:
+            raise ValueError(
+                f"A is not symmetric (largest |A - A^T| = {asym * alpha:.3g}); x^T A x only "
+                "depends on the symmetric part, so pass (A + A.T) / 2"
+            )
+        cov_n = as_covariance(cov / gamma / gamma, "cov", n, allow_singular=True)
+        self.A = _readonly(symmetrize(A))
+        self.mean_vector = _readonly(mean)
+        self.cov = _readonly(symmetrize(cov))
+        self._normalised = (symmetrize(A_n), mean / gamma, symmetrize(cov_n))
+        w, h, d, sigma, offset, rank = _reduce(*self._normalised)
+        self.rank = rank
+        log_scale = math.log(alpha) + 2.0 * math.log(gamma)
+        self._scale = math.exp(log_scale) if log_scale < 709.0 else math.inf
+        if w.size == 0 and sigma == 0:
+            raise ValueError(
+                "the quadratic form is constant (A cov A = 0 and no linear term): "
+                f"x^T A x = {offset * self._scale:.6g} with probability one"
+            )
+        with np.errstate(over="ignore"):
+            w, sigma, offset = w * self._scale, sigma * self._scale, offset * self._scale
+        size = max(float(np.max(np.abs(w), initial=0.0)), sigma)
+        if not (1e-305 < size < math.inf and np.isfinite(w).all() and math.isfinite(offset)):
+            raise ValueError(
+                f"x^T A x is of order 1e{log_scale / math.log(10):.0f} (max|A| times the "
+                "square of the scale of x), beyond double precision; rescale A, mean or cov"
+            )
+        self._set_terms(w, h, d, sigma, offset, atol, rtol)
+
+    def __repr__(self) -> str:
+        return f"QuadraticForm(dim={self.A.shape[0]}, rank={self.rank}, terms={self.weights.size})"
+
+    def mean(self) -> float:
+        """``tr(A cov) + mean^T A mean``."""
+        A, mu, S = self._normalised
+        return self._scale * float(np.sum(A * S) + mu @ A @ mu)
+
+    def var(self) -> float:
+        """``2 tr((A cov)^2) + 4 mean^T A cov A mean``."""
+        A, mu, S = self._normalised
+        AS = A @ S
+        return self._scale * self._scale * float(2 * np.sum(AS * AS.T) + 4 * mu @ AS @ A @ mu)
+
+    def rvs_direct(self, size, random_state=_NO_STATE, *, rng=None):
+        """Draw ``x ~ N(mean, cov)`` and return ``x^T A x`` (slow; for checks)."""
+        rng = _rng_argument(rng, random_state, "QuadraticForm.rvs_direct")
+        shape = _sample_shape(size)
+        if len(shape) != 1:
+            raise ValueError(f"size must be a non-negative integer, got {size!r}")
+        size = shape[0]
+        eigenvalues, vectors = np.linalg.eigh(self.cov)
+        root = vectors * np.sqrt(np.clip(eigenvalues, 0, None))
+        x = self.mean_vector + rng.standard_normal((size, root.shape[1])) @ root.T
+        return np.einsum("ij,jk,ik->i", x, self.A, x)
+
+
+def _reduce(A, mu, S):
+    """Terms of ``x^T A x``, ``x ~ N(mu, S)``: see :class:`QuadraticForm`."""
+    e, V = np.linalg.eigh(S)
+    top = max(float(e[-1]), 0.0)
+    keep = e > _ZERO_RTOL * top * len(e)
+    Vk, ek = V[:, keep], e[keep]
+    L = Vk * np.sqrt(ek)
+    nu = (Vk.T @ mu) / np.sqrt(ek)
+    # a full-rank cov leaves no mean outside its range (not even rounding)
+    mu_perp = np.zeros_like(mu) if keep.all() else mu - Vk @ (Vk.T @ mu)
+    B = symmetrize(L.T @ A @ L)
+    lam, P = np.linalg.eigh(B) if B.size else (np.zeros(0), np.zeros((0, 0)))
+    y_mean = P.T @ nu
+    g = P.T @ (L.T @ (A @ mu_perp))
+    big = float(np.max(np.abs(lam))) if lam.size else 0.0
+    nonzero = np.abs(lam) > _ZERO_RTOL * big * max(1, len(lam))
+    lz, gz = lam[nonzero], g[nonzero]
+    noncentrality = (y_mean[nonzero] + gz / lz) ** 2
+    offset = float(mu_perp @ A @ mu_perp) - float(np.sum(gz**2 / lz))
+    # zero eigenvalues: 2 g y with y ~ N(y_mean, 1) is a normal term
+    g0, m0 = g[~nonzero], y_mean[~nonzero]
+    offset += float(np.sum(2 * g0 * m0))
+    sigma = 2.0 * float(np.sqrt(np.sum(g0**2)))
+    chi_sd = float(np.sqrt(np.sum(2 * lz**2 * (1 + 2 * noncentrality))))
+    if sigma <= 1e-10 * chi_sd:
+        sigma = 0.0  # rounding noise, not a normal component
+    if lz.size:
+        w, h, d, sigma = _terms(lz, np.ones(lz.size), noncentrality, sigma)
+    else:
+        w, h, d = np.zeros(0), np.zeros(0), np.zeros(0)
+    return w, h, d, sigma, offset, int(keep.sum())
