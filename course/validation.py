@@ -202,12 +202,14 @@ def as_float_array(
                 else ""
             )
         )
-    bad_entries = np.zeros(array.shape, bool)
-    if finite:
+    # (one test in the usual case, where every entry is finite)
+    suspect = (finite or not nan) and not np.isfinite(array).all()
+    bad_entries = np.zeros(array.shape if suspect else (), bool)
+    if suspect and finite:
         bad_entries |= np.isinf(array)
-    if not nan:
+    if suspect and not nan:
         bad_entries |= np.isnan(array)
-    if bad_entries.any():
+    if suspect and bad_entries.any():
         bad = np.argwhere(bad_entries)
         where = tuple(int(i) for i in bad[0])
         what = " or ".join(w for w, on in (("NaN", not nan), ("inf", finite)) if on)

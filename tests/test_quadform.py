@@ -955,3 +955,24 @@ def test_a_bool_level_and_text_in_object_arrays_are_refused():
         imhof_cdf(np.array(["1.0"], dtype=object), [1.0])
     with pytest.raises(ValueError, match=r"dof.*text"):
         imhof_cdf(1.0, [1.0, 0.5], [1, "2"])
+
+
+@pytest.mark.parametrize("df", [0.3, 1.0, 3.0, 10.0])
+def test_vectorised_quantile_search_matches_the_chi_square_quantiles(df):
+    # ppf and isf search all levels (and both tails) in a few vectorised calls;
+    # next to the bound 0 and far in either tail they keep full relative accuracy
+    law = WeightedChiSquare([1.0], [df])
+    levels = np.array([1e-12, 1e-8, 0.025, 0.5, 0.975, 1 - 1e-8])
+    assert np.allclose(law.ppf(levels), stats.chi2.ppf(levels, df), rtol=1e-11, atol=0)
+    assert np.allclose(law.isf(levels), stats.chi2.isf(levels, df), rtol=1e-11, atol=0)
+    for p in (0.005, 0.025):
+        assert float(law.ppf(p)) == pytest.approx(stats.chi2.ppf(p, df), rel=1e-11)
+        assert float(law.isf(p)) == pytest.approx(stats.chi2.isf(p, df), rel=1e-11)
+    assert law.ppf([0.0, 1.0]).tolist() == [0.0, math.inf]
+
+
+def test_quantiles_of_a_mixed_law_invert_its_distribution_function():
+    law = WeightedChiSquare([2.0, -1.0, 0.5], [1, 3, 2], [0.5, 0.0, 1.0], sigma=0.3, offset=1.0)
+    levels = np.array([1e-9, 0.01, 0.3, 0.5, 0.9, 0.999])
+    assert np.allclose(law.cdf(law.ppf(levels)), levels, rtol=1e-9, atol=0)
+    assert np.allclose(law.sf(law.isf(levels)), levels, rtol=1e-9, atol=0)

@@ -59,11 +59,11 @@ class _Side:
         self.sigma2 = sigma2
         self.r = r = w.size
         self.w, self.h, self.d = w, h, d
-        sums = [float(np.sum(column)) for column in _term_constants(w, h, d)]
+        sums = np.array(_term_constants(w, h, d)).sum(axis=1).tolist()
         (w_first, w_last), (_, h_last), (_, d_last) = (
             [(float(v[0]), float(v[-1])) for v in (w, h, d)] if r else [(0.0, 0.0)] * 3
         )
-        smallest = float(np.min(np.abs(w))) if r else 1.0
+        smallest = float(np.abs(w).min()) if r else 1.0
         positive = w_last > 0
         self.s_max = 0.5 / w_last if positive else math.inf
         self.s_min = 0.5 / w_first if w_first < 0 else -math.inf
@@ -79,7 +79,7 @@ class _Side:
         # huge dof: K(s) - s mean and x - mean are computed without the mean
         # itself (see linear, derivatives, cgf, _integrand); the mean as an
         # unevaluated sum mean + mean_low of exact products
-        self.huge = bool(r and float(np.max(h + d)) > _CENTRED_DOF)
+        self.huge = bool(r and (h + d).max() > _CENTRED_DOF)
         self.centred = centred
         self.mean_low = 0.0
         if self.centred:
@@ -246,12 +246,14 @@ def _saddle(x, side, upper, pole):
     interval gives the same integral.
     """
     lo, hi, guess = side.bracket(x, upper)
-    lo, hi = np.broadcast_to(lo, x.shape).copy(), np.broadcast_to(hi, x.shape).copy()
+    zero = np.zeros(x.shape)
+    lo, hi = lo + zero, hi + zero  # (new arrays of the points' shape)
     width = hi - lo
-    s = np.clip(guess, lo + 1e-9 * width, hi - 1e-9 * width)
+    s = np.minimum(np.maximum(guess, lo + 1e-9 * width), hi - 1e-9 * width)
     g1, g2, g3 = side.derivatives(s, x, pole)
     # Newton steps on the points not yet close enough (the others keep theirs)
-    active = np.flatnonzero(np.abs(g1) > _SADDLE_TOL * np.sqrt(g2))
+    far = np.abs(g1) > _SADDLE_TOL * np.sqrt(g2)
+    active = np.flatnonzero(far) if far.any() else far[:0]
     for _ in range(_MAX_NEWTON):
         if active.size == 0:
             break
@@ -397,17 +399,18 @@ def _path_coefficients(x, side, s0, a, b, k0):
     # the noncentral terms' -d/2 (0 when central; centred, K(s0) holds it)
     c0 = k0 if side.centred else k0 + side.half_d_sum
     x = side.linear(x)
-    path = np.stack(np.broadcast_arrays(s0, a, ib), axis=-1)
     r = side.r
-    coef = np.empty(path.shape[:-1] + (side.rows_of_path, 3), dtype=complex)
-    np.multiply(side.minus_w2[:, None], path[..., None, :], out=coef[..., :r, :])
+    coef = np.empty((s0.size, side.rows_of_path, 3), dtype=complex)
+    # the last three rows, filled column by column: s, s' and the linear part
+    path = coef[:, -1, :]
+    path[:, 0], path[:, 1], path[:, 2] = s0, a, ib
+    coef[:, -2, 0], coef[:, -2, 1], coef[:, -2, 2] = ib, ib, a
+    coef[:, -3, 0], coef[:, -3, 1], coef[:, -3, 2] = -c0, -x * a, -x * ib
+    np.multiply(side.minus_w2[:, None], path[:, None, :], out=coef[:, :r, :])
     if not side.centred:  # (centred: the rows hold u = z - 1, see _integrand)
-        coef[..., :r, 0] += 1.0
+        coef[:, :r, 0] += 1.0
     if side.noncentral:
-        coef[..., r : 2 * r, :] = coef[..., :r, :]
-    coef[..., -3, :] = np.stack(np.broadcast_arrays(-c0, -x * a, -x * ib), axis=-1)
-    coef[..., -2, :] = np.stack(np.broadcast_arrays(ib, ib, a), axis=-1)
-    coef[..., -1, :] = path
+        coef[:, r : 2 * r, :] = coef[:, :r, :]
     return coef, side.exponent_weights
 
 
@@ -481,18 +484,26 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     converged = U <= _U_MAX
     U = np.minimum(U, _U_MAX)
     h = 0.5 * step
-    n = math.ceil(float(np.max(U)) / h)
+    n = math.ceil(float(U.max()) / h)
     nodes = _nodes(h, n + 1, False)
+    one = x.size == 1  # (one point: its nodes up to U, no mask)
     total = np.empty(x.shape)
     coarse = np.empty(x.shape)
     blown = np.zeros(x.shape, dtype=bool)
     # chunks over x keep the (points, nodes, weights) work arrays small
     size = max(1, _CHUNK // ((n + 1) * max(side.r, 1)))
+    # the coefficients of every point, when they fit one chunk (kept for the halvings)
+    whole = _path_coefficients(x, side, s0, a, b, k0) if size >= x.size else None
     for start in range(0, x.size, size):
         i = slice(start, start + size)
-        coef = _path_coefficients(x[i], side, s0[i], a[i], b[i], k0[i])
-        f = _integrand(nodes[1], coef, side, pole)
-        f *= nodes[0] <= U[i, None]
+        coef = (
+            whole if whole is not None else _path_coefficients(x[i], side, s0[i], a[i], b[i], k0[i])
+        )
+        if one:
+            f = _integrand(nodes[1][:, : nodes[0].searchsorted(U[0], "right")], coef, side, pole)
+        else:
+            f = _integrand(nodes[1], coef, side, pole)
+            f *= nodes[0] <= U[i, None]
         blown[i] = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
         f[:, 0] *= 0.5
         total[i] = h * f.sum(axis=1)
@@ -512,9 +523,15 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         h *= 0.5
         nodes = _nodes(h, n, True)
         n *= 2
-        coef = _path_coefficients(x[j], side, s0[j], a[j], b[j], k0[j])
-        f = _integrand(nodes[1], coef, side, pole)
-        f *= nodes[0] <= U[j, None]
+        if whole is not None:
+            coef = (whole[0][j], whole[1])
+        else:
+            coef = _path_coefficients(x[j], side, s0[j], a[j], b[j], k0[j])
+        if one:
+            f = _integrand(nodes[1][:, : nodes[0].searchsorted(U[0], "right")], coef, side, pole)
+        else:
+            f = _integrand(nodes[1], coef, side, pole)
+            f *= nodes[0] <= U[j, None]
         refined = 0.5 * total[j] + h * f.sum(axis=1)
         diff[j] = np.abs(refined - total[j])
         total[j] = refined
@@ -538,10 +555,15 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
     # tails far below the smallest double: the best answer is 0
     vertex = b / np.abs(s0) if pole else b
     live = e0 + np.log(vertex) > _LOG_UNDERFLOW
-    value, error = np.zeros(x.shape), np.zeros(x.shape)
-    converged = np.ones(x.shape, dtype=bool)
-    blown = np.zeros(x.shape, dtype=bool)
-    if live.any():
+    if live.all():  # (the usual case: no copies)
+        value, error, converged, blown = _integrate(
+            x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol
+        )
+    else:
+        value, error = np.zeros(x.shape), np.zeros(x.shape)
+        converged = np.ones(x.shape, dtype=bool)
+        blown = np.zeros(x.shape, dtype=bool)
+    if live.any() and not live.all():
         i = np.flatnonzero(live)
         value[i], error[i], converged[i], blown[i] = _integrate(
             x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step, rtol
@@ -585,7 +607,8 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         if not mask.any():
             continue
         side = _side(sides, sign)
-        xs = sign * x[mask]
+        whole = mask.all()  # (every point on one side: no copies in and out)
+        xs = sign * (x if whole else x[mask])
         # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
         up, low = np.zeros(xs.shape), np.ones(xs.shape)
         e, ok = np.zeros(xs.shape), np.ones(xs.shape, dtype=bool)
@@ -594,17 +617,29 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             todo[:] = False
         elif side.positive_form:
             # a positive form: P(X <= 0) = 0, and far below the weights a closed form
-            near, tiny = _near_zero(xs, side)
             zero = xs <= 0
-            up[zero], low[zero] = 1.0, 0.0
-            low[tiny], up[tiny] = near[tiny], 1.0 - near[tiny]
+            tiny = ~zero & (xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0))
+            if zero.any():
+                up[zero], low[zero] = 1.0, 0.0
+            if tiny.any():
+                near = _near_zero(xs[tiny], side)
+                low[tiny], up[tiny] = near, 1.0 - near
             todo &= ~zero & ~tiny
         for is_upper, group, part in side.groups(xs):
             m_ = todo & group
-            if m_.any():
-                v, e[m_], ok[m_] = _contour(xs[m_], part, is_upper, True, atol, rtol)
-                v = np.clip(v if is_upper else -v, 0.0, 1.0) + 0.0  # (no -0.0)
+            if not m_.any():
+                continue
+            every = m_.all()  # (then no copies in and out)
+            v, e_m, ok_m = _contour(xs if every else xs[m_], part, is_upper, True, atol, rtol)
+            v = np.clip(v if is_upper else -v, 0.0, 1.0) + 0.0  # (no -0.0)
+            if every:
+                e, ok = e_m, ok_m
+                up, low = (v, 1.0 - v) if is_upper else (1.0 - v, v)
+            else:
+                e[m_], ok[m_] = e_m, ok_m
                 up[m_], low[m_] = (v, 1.0 - v) if is_upper else (1.0 - v, v)
+        if whole:
+            return (up, low, e, ok) if sign > 0 else (low, up, e, ok)
         if sign > 0:
             sf[mask], cdf[mask] = up, low
         else:
@@ -672,19 +707,16 @@ def _side(sides, sign):
 
 
 def _near_zero(xs, side):
-    """``P(X <= x)`` of a positive form far below its weights, and where that is exact.
+    """``P(X <= x)`` of a positive form far below its weights (at ``x > 0``).
 
     ``M(-t) = C t^{-k} (1 + sum (d - h)/(4 w t) + O(t^-2))`` as ``t -> inf``
     with ``C = prod (2w)^{-h/2} e^{-sum d/2}``, so ``P(X <= x) = C x^k /
     Gamma(k+1) (1 + O(x sum (h + d)/(4 w)))``: where the correction is below
-    the double precision the leading term is the answer (computed in logs:
-    ``imhof_cdf(1e-300, [5.0])`` is 8e-152, where a saddle point would
-    overflow).  Returns the values and the mask where they hold.
+    the double precision, ``x sum (h + d)/(4 w) <= _NEAR_ZERO (k + 1)``, the
+    leading term is the answer (computed in logs: ``imhof_cdf(1e-300, [5.0])``
+    is 8e-152, where a saddle point would overflow).
     """
-    tiny = (xs > 0) & (xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0))
-    # (evaluated at every point, used only where tiny: elsewhere it may overflow)
-    with np.errstate(divide="ignore", over="ignore"):
-        return np.exp(side.k * np.log(np.maximum(xs, 1e-320)) + side.log_c0), tiny
+    return np.exp(side.k * np.log(xs) + side.log_c0)
 
 
 def _density(x, w, h, d, sigma, atol, rtol, sides=None):

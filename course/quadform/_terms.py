@@ -105,18 +105,22 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
         )
-    if h.min() <= 0:
-        raise ValueError(f"dof (degrees of freedom) must be positive, got {h.min():g}")
-    if d.min() < 0:
-        raise ValueError(f"noncentrality must be non-negative (squared means), got {d.min():g}")
-    keep = w != 0
-    w, h, d = w[keep], h[keep], d[keep]
-    order = np.argsort(w, kind="stable")
-    w, h, d = w[order], h[order], d[order]
+    columns = np.array([w, h, d])
+    smallest_dof, smallest_noncentrality = columns[1:].min(axis=1).tolist()
+    if smallest_dof <= 0:
+        raise ValueError(f"dof (degrees of freedom) must be positive, got {smallest_dof:g}")
+    if smallest_noncentrality < 0:
+        raise ValueError(
+            f"noncentrality must be non-negative (squared means), got {smallest_noncentrality:g}"
+        )
+    if not w.all():
+        columns = columns[:, w != 0]
+    w, h, d = columns[:, columns[0].argsort(kind="stable")]
     if w.size > 1:
         scale = max(-w[0], w[-1])
-        breaks = np.flatnonzero(np.diff(w) > _MERGE_RTOL * scale) + 1
-        if breaks.size < w.size - 1:
+        gaps = w[1:] - w[:-1]
+        if gaps.min() <= _MERGE_RTOL * scale:
+            breaks = np.flatnonzero(gaps > _MERGE_RTOL * scale) + 1
             members = np.split(np.arange(w.size), breaks)
             # the mean of a group as its first weight plus the mean offset: w h would
             # overflow for weights near the largest double
