@@ -190,6 +190,22 @@ class _Side:
         return value
 
     # -- where the saddle point lies ------------------------------------------
+    def tails(self, x):
+        """``[(upper, mask, side)]``: which tail each point integrates, grouped by side.
+
+        ``upper`` holds, for every point of ``x``, whether it lies above the
+        mean (its upper tail is the smaller one); ``mask`` selects the points of
+        the group (``None``: every point).  One group, unless the dof are huge
+        (:attr:`huge`), where points near the mean take the centred twin: both
+        tails of a group are integrated in one call of :func:`_contour`.
+        """
+        if not self.huge:
+            return [(x > self.mean, None, self)]
+        delta = self.twin.linear(x)
+        near = np.abs(delta) <= 0.25 * self.var
+        upper = delta > 0
+        return [(upper, near, self.twin), (upper, ~near, self)]
+
     def bracket(self, x, upper):
         """Finite ``(lo, hi)`` holding the saddle of ``phi`` (with or without the pole) and a guess.
 
@@ -197,8 +213,14 @@ class _Side:
         are replaced by bounds from ``K'`` (see the comments); the guess is the
         saddle of a Gaussian model of ``K``, or of the dominant term alone in
         the far upper tail, or of the behaviour at ``-inf`` far below a
-        positive form.
+        positive form.  ``upper`` is one flag for every point or one per point.
         """
+        if not isinstance(upper, bool):
+            ends = np.empty((3, x.size))
+            for flag, group in ((True, upper), (False, ~upper)):
+                if group.any():
+                    ends[:, group] = self.bracket(x[group], flag)
+            return ends[0], ends[1], ends[2]
         dx = self.linear(x) if self.centred else x - self.mean
         root = np.sqrt(dx * dx + 4.0 * self.var)
         if upper:
@@ -572,7 +594,13 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
         i = np.flatnonzero(blown)
         if opening is None:
             value[i], error[i], converged[i] = _contour(
-                x[i], side, upper, pole, atol, rtol, _SAFE_OPENING
+                x[i],
+                side,
+                upper if isinstance(upper, bool) else upper[i],
+                pole,
+                atol,
+                rtol,
+                _SAFE_OPENING,
             )
         else:
             converged[i] = False
@@ -625,19 +653,30 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
                 near = _near_zero(xs[tiny], side)
                 low[tiny], up[tiny] = near, 1.0 - near
             todo &= ~zero & ~tiny
-        for is_upper, group, part in side.groups(xs):
-            m_ = todo & group
+        for upper, group, part in side.tails(xs):
+            m_ = todo if group is None else todo & group
             if not m_.any():
                 continue
             every = m_.all()  # (then no copies in and out)
-            v, e_m, ok_m = _contour(xs if every else xs[m_], part, is_upper, True, atol, rtol)
-            v = np.clip(v if is_upper else -v, 0.0, 1.0) + 0.0  # (no -0.0)
-            if every:
-                e, ok = e_m, ok_m
-                up, low = (v, 1.0 - v) if is_upper else (1.0 - v, v)
+            if not every:
+                upper = upper[m_]
+            # one flag when every point integrates the same tail (a single point)
+            flag = bool(upper[0]) if upper.all() or not upper.any() else upper
+            v, e_m, ok_m = _contour(xs if every else xs[m_], part, flag, True, atol, rtol)
+            if flag is True:
+                v_up = np.clip(v, 0.0, 1.0) + 0.0  # (no -0.0)
+                v_low = 1.0 - v_up
+            elif flag is False:
+                v_low = np.clip(-v, 0.0, 1.0) + 0.0
+                v_up = 1.0 - v_low
             else:
-                e[m_], ok[m_] = e_m, ok_m
-                up[m_], low[m_] = (v, 1.0 - v) if is_upper else (1.0 - v, v)
+                v = np.clip(np.where(upper, v, -v), 0.0, 1.0) + 0.0
+                v_up = np.where(upper, v, 1.0 - v)
+                v_low = np.where(upper, 1.0 - v, v)
+            if every:
+                e, ok, up, low = e_m, ok_m, v_up, v_low
+            else:
+                e[m_], ok[m_], up[m_], low[m_] = e_m, ok_m, v_up, v_low
         if whole:
             return (up, low, e, ok) if sign > 0 else (low, up, e, ok)
         if sign > 0:
