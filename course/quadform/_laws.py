@@ -11,7 +11,7 @@ from ..distributions import _NO_STATE, FrozenDistribution, _levels, _rng_argumen
 from ..linalg import as_covariance, as_matrix, symmetrize
 from ..validation import as_finite, as_vector
 from ._contour import _density, _probabilities
-from ._ltz import _ltz_points
+from ._ltz import _ltz_points, _ltz_quantiles
 from ._terms import (
     _ZERO_RTOL,
     ATOL,
@@ -23,6 +23,12 @@ from ._terms import (
     _tolerances,
     _warn_unconverged,
 )
+
+# Half-width, in standard deviations, of the first bracket of a quantile
+# around its Liu-Tang-Zhang guess (see WeightedChiSquare._quantiles).
+_LTZ_BRACKET = 0.05
+# Interpolation nodes in a bracket of a quantile (the coarse interpolant takes every other).
+_NODES = 13
 
 
 # ---------------------------------------------------------------------------
@@ -230,16 +236,21 @@ class WeightedChiSquare(FrozenDistribution):
     def _quantiles(self, levels, lower):
         """The points where ``P(X <= x)`` (``lower``) or ``P(X > x)`` equals ``levels``.
 
-        Three vectorised evaluations for every level together, instead of a
-        root search per level (~12 integrals each): (1) a grid around a normal
-        guess (steps of the standard deviation, and points approaching a bound
-        of the support geometrically) brackets every level; (2) 7 Chebyshev
-        points inside each bracket give an interpolant of the log tail
-        probability, whose root is (3) evaluated and corrected by one Newton
-        step on the interpolant's slope.  Next to a bound ``b`` of the support
-        the coordinate is ``log|x - b|``, in which the log tail of a one-signed
-        form is nearly linear (``P(X <= x) ~ C x^k``).  A level the grid does not
-        bracket falls back to the root search of :meth:`_root`.
+        A few vectorised evaluations for every level together, instead of a
+        root search per level (~12 integrals each).  (1) The Liu-Tang-Zhang
+        approximation (:func:`_ltz_quantiles`, closed form) guesses each
+        quantile; 9 Chebyshev points of a bracket of ``+-0.3`` standard
+        deviations around it are evaluated in one call.  (2) Levels that
+        bracket misses (the approximation is off by more, or undefined) take a
+        grid around a normal guess (steps of the standard deviation, and points
+        approaching a bound of the support geometrically) and then 7 Chebyshev
+        points inside the grid's bracket.  (3) The inverse of the log tail
+        probability is interpolated through the nine values, and where the
+        interpolants through all and every other node disagree, Newton/secant
+        steps polish it.  Next to a bound ``b`` of the support the coordinate is
+        ``log|x - b|``, in which the log tail of a one-signed form is nearly
+        linear (``P(X <= x) ~ C x^k``).  A level the grid does not bracket
+        either falls back to the root search of :meth:`_root`.
         """
         # the search runs on the smaller tail (1 - p is exact for p >= 1/2)
         big = levels > 0.5
@@ -251,61 +262,109 @@ class WeightedChiSquare(FrozenDistribution):
             float(2.0 * (w * w) @ (self.dof + 2.0 * self.noncentrality)) + (self.sigma / scale) ** 2
         )
         mean = self.offset + scale * float(w @ (self.dof + self.noncentrality))
-        z = np.where(lower, 1.0, -1.0) * special.ndtri(levels)
         lo_bound, hi_bound = self._bounds
-        # (the smaller tail's quantile lies below the median: few steps beyond the mean)
-        steps = [-13, -8, -5, -3, -2, -1.5, -1, -0.5, 0, 0.5, 1, 1.5, 2, 3, 5]
-        with np.errstate(over="ignore"):  # (beyond the doubles: inf, outside the support)
-            grid = mean + std * (z[:, None] + np.array(steps))
-        near = np.array([1e-12, 1e-6, 1e-3, 0.03, 0.2])
-        if math.isfinite(lo_bound):
-            extra = lo_bound + (mean - lo_bound) * near
-            grid = np.column_stack([grid, np.broadcast_to(extra, (grid.shape[0], near.size))])
-        if math.isfinite(hi_bound):
-            extra = hi_bound - (hi_bound - mean) * near
-            grid = np.column_stack([grid, np.broadcast_to(extra, (grid.shape[0], near.size))])
-        # strictly inside the support: at a bound the tail is exactly 0 or 1
-        grid = np.sort(grid, axis=1)
-        inside = (grid > lo_bound) & (grid < hi_bound)
-        grid = np.where(inside, grid, mean)
-        target = np.log(levels)
-        goal = np.where(lower, target, -target)
-        g = self._log_tail(grid, lower)
-        above = (g >= goal[:, None]) & inside
-        below = (g < goal[:, None]) & inside
+        goal = np.where(lower, 1.0, -1.0) * np.log(levels)
+        n = levels.size
+        # Chebyshev-Lobatto points of [-1, 1]
+        t = np.cos(np.pi * np.arange(_NODES) / (_NODES - 1))[::-1]
+
+        def kind_of(x):
+            """The coordinate of a bracket around ``x``: 1 (log(x - lo)), -1 (log(hi - x)), 0."""
+            return np.where(
+                math.isfinite(lo_bound) & (x < mean),
+                1,
+                np.where(math.isfinite(hi_bound) & (x > mean), -1, 0),
+            )
+
+        def to_y(x, kind):
+            with np.errstate(divide="ignore", invalid="ignore"):  # (branches not taken)
+                return np.where(
+                    kind > 0,
+                    np.log(np.abs(x - lo_bound)),
+                    np.where(kind < 0, np.log(np.abs(hi_bound - x)), x),
+                )
+
+        # (1) a narrow bracket around the LTZ guess: every node in one evaluation
+        guess = _ltz_quantiles(
+            levels, lower, self.weights, self.dof, self.noncentrality, self.sigma, self.offset
+        )
+        with np.errstate(invalid="ignore", over="ignore"):
+            # (next to a finite bound, at most 70 % of the way to it)
+            x_left, x_right = guess - _LTZ_BRACKET * std, guess + _LTZ_BRACKET * std
+            if math.isfinite(lo_bound):
+                x_left = np.maximum(x_left, lo_bound + 0.3 * (guess - lo_bound))
+            if math.isfinite(hi_bound):
+                x_right = np.minimum(x_right, hi_bound - 0.3 * (hi_bound - guess))
+            usable = (
+                np.isfinite(x_left)
+                & np.isfinite(x_right)
+                & (x_left > lo_bound)
+                & (x_right < hi_bound)
+                & (x_left < x_right)
+            )
+        kind = np.zeros(n, dtype=int)
+        y_left, y_right = np.zeros(n), np.ones(n)
+        g_nodes = np.zeros((n, t.size))
+        found = np.zeros(n, dtype=bool)
+        if usable.any():
+            i = np.flatnonzero(usable)
+            kind[i] = kind_of(guess[i])
+            y_left[i], y_right[i] = to_y(x_left[i], kind[i]), to_y(x_right[i], kind[i])
+            y_nodes = (
+                0.5 * (y_left[i] + y_right[i])[:, None]
+                + 0.5 * (y_right[i] - y_left[i])[:, None] * t
+            )
+            g_nodes[i] = self._log_tail(
+                self._from_y(y_nodes, kind[i][:, None], lo_bound, hi_bound), lower[i]
+            )
+            g = g_nodes[i]
+            found[i] = (
+                np.all(np.diff(g, axis=1) > 0, axis=1) & (g[:, 0] < goal[i]) & (goal[i] <= g[:, -1])
+            )
+        # (2) the others: a grid around the normal guess, then Chebyshev points inside
+        miss = np.flatnonzero(~found)
+        if miss.size:
+            z = np.where(lower[miss], 1.0, -1.0) * special.ndtri(levels[miss])
+            # (the smaller tail's quantile lies below the median: few steps beyond the mean)
+            steps = [-13, -8, -5, -3, -2, -1.5, -1, -0.5, 0, 0.5, 1, 1.5, 2, 3, 5]
+            with np.errstate(over="ignore"):  # (beyond the doubles: inf, outside the support)
+                grid = mean + std * (z[:, None] + np.array(steps))
+            near = np.array([1e-12, 1e-6, 1e-3, 0.03, 0.2])
+            if math.isfinite(lo_bound):
+                extra = lo_bound + (mean - lo_bound) * near
+                grid = np.column_stack([grid, np.broadcast_to(extra, (grid.shape[0], near.size))])
+            if math.isfinite(hi_bound):
+                extra = hi_bound - (hi_bound - mean) * near
+                grid = np.column_stack([grid, np.broadcast_to(extra, (grid.shape[0], near.size))])
+            # strictly inside the support: at a bound the tail is exactly 0 or 1
+            grid = np.sort(grid, axis=1)
+            inside = (grid > lo_bound) & (grid < hi_bound)
+            grid = np.where(inside, grid, mean)
+            g = self._log_tail(grid, lower[miss])
+            above = (g >= goal[miss, None]) & inside
+            below = (g < goal[miss, None]) & inside
+            first = np.argmax(above, axis=1)
+            hit = above.any(axis=1) & (first > 0)
+            hit[hit] = below[hit, first[hit] - 1]
+            if hit.any():
+                i, first, g = miss[hit], first[hit], g[hit]
+                rows = np.arange(i.size)
+                left, right = grid[hit, first - 1], grid[hit, first]
+                kind[i] = kind_of(0.5 * (left + right))
+                y_left[i], y_right[i] = to_y(left, kind[i]), to_y(right, kind[i])
+                y_inner = (
+                    0.5 * (y_left[i] + y_right[i])[:, None]
+                    + 0.5 * (y_right[i] - y_left[i])[:, None] * t[1:-1]
+                )
+                x_inner = self._from_y(y_inner, kind[i][:, None], lo_bound, hi_bound)
+                g_inner = self._log_tail(x_inner, lower[i])
+                g_nodes[i] = np.column_stack([g[rows, first - 1], g_inner, g[rows, first]])
+                found[i] = True
         result = np.empty(levels.shape)
-        first = np.argmax(above, axis=1)
-        found = above.any(axis=1) & (first > 0)
-        found[found] = below[found, first[found] - 1]
         rows = np.flatnonzero(found)
         if rows.size:
-            first = first[rows]
-            left, right = grid[rows, first - 1], grid[rows, first]
-
-            # the interpolation coordinate of each level: log|x - bound| next to a bound
-            def to_y(x, kind):
-                with np.errstate(divide="ignore", invalid="ignore"):  # (branches not taken)
-                    return np.where(
-                        kind > 0,
-                        np.log(np.abs(x - lo_bound)),
-                        np.where(kind < 0, np.log(np.abs(hi_bound - x)), x),
-                    )
-
-            midpoint = 0.5 * (left + right)
-            kind = np.where(
-                math.isfinite(lo_bound) & (midpoint < mean),
-                1,
-                np.where(math.isfinite(hi_bound) & (midpoint > mean), -1, 0),
-            )
-            y_left, y_right = to_y(left, kind), to_y(right, kind)
-            t = np.cos(np.pi * np.arange(9) / 8)[::-1]  # Chebyshev-Lobatto points of [-1, 1]
-            y_inner = (
-                0.5 * (y_left + y_right)[:, None] + 0.5 * (y_right - y_left)[:, None] * t[1:-1]
-            )
-            x_inner = self._from_y(y_inner, kind[:, None], lo_bound, hi_bound)
-            g_inner = self._log_tail(x_inner, lower[rows])
-            g_nodes = np.column_stack([g[rows, first - 1], g_inner, g[rows, first]])
-            # the inverse t(g) interpolated through the 9 nodes, and through every
+            kind, y_left, y_right, g_nodes = kind[rows], y_left[rows], y_right[rows], g_nodes[rows]
+            # (3) the inverse t(g) interpolated through the 9 nodes, and through every
             # other one: their difference bounds the error of the coarse one, and
             # the fine one is far better (the rule converges geometrically); g is
             # mapped to [-1, 1] as t is, so the interpolation is scale-free
@@ -330,12 +389,13 @@ class WeightedChiSquare(FrozenDistribution):
             y_low = np.minimum(y_left, y_right)
             y_high = np.maximum(y_left, y_right)
             y = np.clip(y, y_low, y_high)
-            todo = np.flatnonzero(~(np.abs(y - coarse) <= 1e-12 * (y_high - y_low)))
-            # (3) where the interpolants disagree: the estimate checked, then Newton
-            # steps on the interpolant's slope (a secant once two values are known),
-            # kept inside the bracket, until the log tail meets its goal within the
-            # integrals' accuracy
+            # the fine interpolant is accepted where the coarse one is within the
+            # integrals' accuracy of it in log tail (so the fine one, far better, is
+            # too); elsewhere the estimate is checked, then Newton steps on the
+            # interpolant's slope (a secant once two values are known), kept inside
+            # the bracket, until the log tail meets its goal within that accuracy
             tol = max(4.0 * self.rtol, 1e-13)
+            todo = np.flatnonzero(~(np.abs((y - coarse) * slope) <= tol))
             previous = None
             for _ in range(8):
                 if todo.size == 0:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
+from scipy import special, stats
 
 from ..validation import as_float_array
 from ._terms import _squeeze, _terms
@@ -76,6 +76,46 @@ def _ltz(x, w, h, d, sigma, offset):
     if flip:
         sf, cdf = cdf, sf
     return np.asarray(sf, dtype=float), np.asarray(cdf, dtype=float)
+
+
+def _ltz_quantiles(levels, lower, w, h, d, sigma, offset):
+    """Approximate quantiles by :func:`_ltz`: ``P(Q <= x)`` (``lower``) or ``P(Q > x)`` = levels.
+
+    The matched noncentral chi-square is inverted in closed form (``scipy.special``'s
+    ``chdtri`` and ``chndtrix``) and mapped back through the cumulant matching;
+    a guess for :meth:`WeightedChiSquare._quantiles`, NaN where the matching is
+    undefined or the dof are huge (the search then brackets by itself).
+    """
+    nan = np.full(levels.shape, np.nan)
+    m = max(float(np.max(np.abs(w), initial=0.0)), sigma)
+    if m == 0 or float(np.max(h + d, initial=1.0)) > 1e100:
+        return nan
+    c1, c2, c3, c4 = _ltz_parameters(w / m, h, d, sigma / m, 0.0)
+    if not c2 > 0:
+        return nan
+    sign = -1.0 if c3 < 0 else 1.0
+    # the tail of sign * Q whose level is given: P(sQ <= sx) for a lower level when s = 1
+    upper = lower != (sign > 0)
+    s1 = sign * c3 / c2**1.5
+    with np.errstate(all="ignore"):
+        if s1 * s1 < 1e-10:
+            z = np.where(upper, -special.ndtri(levels), special.ndtri(levels))
+            y = sign * c1 + z * math.sqrt(2.0 * c2)
+        else:
+            s2 = c4 / c2**2
+            if s1 * s1 > s2:
+                a = 1.0 / (s1 - math.sqrt(s1 * s1 - s2))
+                delta = s1 * a**3 - a * a
+                dof = a * a - 2.0 * delta
+            else:
+                a, delta, dof = 1.0 / s1, 0.0, 1.0 / (s1 * s1)
+            cdf_level = np.where(upper, 1.0 - levels, levels)
+            if delta > 0:
+                t = special.chndtrix(cdf_level, dof, delta)
+            else:
+                t = np.where(upper, special.chdtri(dof, levels), special.chdtri(dof, 1.0 - levels))
+            y = sign * c1 + (t - dof - delta) * math.sqrt(c2) / a
+        return offset + m * sign * y
 
 
 def _ltz_points(x, name, w, h, d, sigma, offset):
