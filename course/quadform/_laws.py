@@ -170,6 +170,16 @@ class WeightedChiSquare(FrozenDistribution):
         _warn_unconverged(conv, err, stacklevel=5)
         return sf.reshape(np.shape(x))
 
+    def _outside(self, lower, upper):
+        """``P(X <= lower) + P(X > upper)`` (a two-sided critical region) in one evaluation."""
+        points = np.array([lower, upper], dtype=float)
+        lo_bound, hi_bound = self._bounds
+        if not ((points > lo_bound) & (points < hi_bound)).all():
+            return self.cdf(lower) + self.sf(upper)
+        sf, cdf, err, conv = self._both(points)
+        _warn_unconverged(conv, err, stacklevel=4)
+        return cdf[0] + sf[1]
+
     def _pdf(self, x):
         x = np.asarray(x, dtype=float)
         out = _density(
@@ -288,28 +298,27 @@ class WeightedChiSquare(FrozenDistribution):
         guess = _ltz_quantiles(
             levels, lower, self.weights, self.dof, self.noncentrality, self.sigma, self.offset
         )
-        with np.errstate(invalid="ignore", over="ignore"):
-            # (next to a finite bound, at most 70 % of the way to it)
-            x_left, x_right = guess - _LTZ_BRACKET * std, guess + _LTZ_BRACKET * std
-            if math.isfinite(lo_bound):
-                x_left = np.maximum(x_left, lo_bound + 0.3 * (guess - lo_bound))
-            if math.isfinite(hi_bound):
-                x_right = np.minimum(x_right, hi_bound - 0.3 * (hi_bound - guess))
-            usable = (
-                np.isfinite(x_left)
-                & np.isfinite(x_right)
-                & (x_left > lo_bound)
-                & (x_right < hi_bound)
-                & (x_left < x_right)
-            )
         kind = np.zeros(n, dtype=int)
         y_left, y_right = np.zeros(n), np.ones(n)
         g_nodes = np.zeros((n, t.size))
         found = np.zeros(n, dtype=bool)
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            kind_guess = kind_of(guess)
+            y_guess = to_y(guess, kind_guess)
+            # +-_LTZ_BRACKET std in x; in log|x - bound| at most +-_LTZ_BRACKET (5 % of x - bound)
+            distance = np.where(kind_guess > 0, guess - lo_bound, hi_bound - guess)
+            half = np.where(
+                kind_guess == 0,
+                _LTZ_BRACKET * std,
+                np.minimum(_LTZ_BRACKET * std / distance, _LTZ_BRACKET),
+            )
+            usable = np.isfinite(y_guess) & np.isfinite(half) & (half > 0)
         if usable.any():
             i = np.flatnonzero(usable)
-            kind[i] = kind_of(guess[i])
-            y_left[i], y_right[i] = to_y(x_left[i], kind[i]), to_y(x_right[i], kind[i])
+            kind[i] = kind_guess[i]
+            # (y decreases with x next to an upper bound)
+            signed = np.where(kind[i] < 0, -half[i], half[i])
+            y_left[i], y_right[i] = y_guess[i] - signed, y_guess[i] + signed
             y_nodes = (
                 0.5 * (y_left[i] + y_right[i])[:, None]
                 + 0.5 * (y_right[i] - y_left[i])[:, None] * t
