@@ -273,21 +273,39 @@ def _saddle(x, side, upper, pole):
     width = hi - lo
     s = np.minimum(np.maximum(guess, lo + 1e-9 * width), hi - 1e-9 * width)
     g1, g2, g3 = side.derivatives(s, x, pole)
-    # Newton steps on the points not yet close enough (the others keep theirs)
+    # Newton steps on the points not yet close enough (the others keep theirs),
+    # on compacted copies of them: no gathering and scattering at every step
     far = np.abs(g1) > _SADDLE_TOL * np.sqrt(g2)
-    active = np.flatnonzero(far) if far.any() else far[:0]
+    if not far.any():
+        return s, g2, g3
+    every = far.all()
+    i = None if every else np.flatnonzero(far)
+    s_i, lo_i, hi_i, x_i, g1_i, g2_i = (
+        (s.copy(), lo, hi, x, g1, g2) if every else (s[i], lo[i], hi[i], x[i], g1[i], g2[i])
+    )
     for _ in range(_MAX_NEWTON):
-        if active.size == 0:
+        right = g1_i > 0
+        hi_i = np.where(right, s_i, hi_i)
+        lo_i = np.where(right, lo_i, s_i)
+        newton = s_i - g1_i / g2_i
+        inside = (newton > lo_i) & (newton < hi_i)
+        s_i = newton if inside.all() else np.where(inside, newton, _bisect(lo_i, hi_i))
+        g1_i, g2_i, g3_i = side.derivatives(s_i, x_i, pole)
+        if i is None:
+            s, g2, g3 = s_i, g2_i, g3_i
+        else:
+            s[i], g2[i], g3[i] = s_i, g2_i, g3_i
+        far = np.abs(g1_i) > _SADDLE_TOL * np.sqrt(g2_i)
+        if not far.any():
             break
-        i = active
-        right = g1[i] > 0
-        hi[i] = np.where(right, s[i], hi[i])
-        lo[i] = np.where(right, lo[i], s[i])
-        newton = s[i] - g1[i] / g2[i]
-        inside = (newton > lo[i]) & (newton < hi[i])
-        s[i] = newton if inside.all() else np.where(inside, newton, _bisect(lo[i], hi[i]))
-        g1[i], g2[i], g3[i] = side.derivatives(s[i], x[i], pole)
-        active = i[np.abs(g1[i]) > _SADDLE_TOL * np.sqrt(g2[i])]
+        if not far.all():
+            if i is None:
+                s, g2, g3 = s.copy(), g2.copy(), g3.copy()
+                i = np.flatnonzero(far)
+            else:
+                i = i[far]
+            s_i, lo_i, hi_i, x_i = s_i[far], lo_i[far], hi_i[far], x_i[far]
+            g1_i, g2_i = g1_i[far], g2_i[far]
     return s, g2, g3
 
 

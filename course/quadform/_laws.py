@@ -28,7 +28,7 @@ from ._terms import (
 # around its Liu-Tang-Zhang guess (see WeightedChiSquare._quantiles).
 _LTZ_BRACKET = 0.05
 # Interpolation nodes in a bracket of a quantile (the coarse interpolant takes every other).
-_NODES = 13
+_NODES = 11
 
 
 # ---------------------------------------------------------------------------
