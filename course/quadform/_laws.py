@@ -17,6 +17,7 @@ from ._terms import (
     ATOL,
     RTOL,
     _fmt,
+    _merged,
     _readonly,
     _squeeze,
     _terms,
@@ -693,7 +694,8 @@ def _reduce(A, mu, S):
     if sigma <= 1e-10 * chi_sd:
         sigma = 0.0  # rounding noise, not a normal component
     if lz.size:
-        w, h, d, sigma = _terms(lz, np.ones(lz.size), noncentrality, sigma)
+        # (eigenvalues and squared means: finite and valid by construction)
+        w, h, d, sigma = _merged(np.array([lz, np.ones(lz.size), noncentrality]), sigma)
     else:
         w, h, d = np.zeros(0), np.zeros(0), np.zeros(0)
     return w, h, d, sigma, offset, int(keep.sum())

@@ -113,9 +113,17 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
         raise ValueError(
             f"noncentrality must be non-negative (squared means), got {smallest_noncentrality:g}"
         )
+    return _merged(columns, sigma)
+
+
+def _merged(columns, sigma=0.0):
+    """``(w, h, d, sigma)`` from validated rows ``(w, h, d)``: zeros dropped, sorted, equal merged."""
+    w = columns[0]
     if not w.all():
         columns = columns[:, w != 0]
-    w, h, d = columns[:, columns[0].argsort(kind="stable")]
+    if columns.shape[1] > 1:
+        columns = columns[:, columns[0].argsort(kind="stable")]
+    w, h, d = columns
     if w.size > 1:
         scale = max(-w[0], w[-1])
         gaps = w[1:] - w[:-1]
