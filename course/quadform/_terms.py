@@ -73,10 +73,34 @@ _LOG2 = math.log(2.0)
 # ---------------------------------------------------------------------------
 # validation of the chi-square terms
 # ---------------------------------------------------------------------------
+def _plain_numbers(value):
+    """``value`` as a float array when it is a list or tuple of finite Python floats and ints.
+
+    The common case of a law typed by hand, checked with a few cheap tests;
+    anything else (arrays, nesting, bools, text, NaN, inf, huge ints) returns
+    None and goes through :func:`course.validation.as_float_array`, which
+    explains what is wrong.
+    """
+    if type(value) not in (list, tuple) or not value:
+        return None
+    for entry in value:
+        kind = type(entry)
+        if kind is not float and kind is not int:
+            return None
+    try:
+        array = np.array(value, dtype=float)
+    except OverflowError:
+        return None
+    return array if np.isfinite(array).all() else None
+
+
 def _per_term(value, name, size, default):
     """``dof`` or ``noncentrality``: one finite number for every term, or one per term."""
     if value is None:
         return np.full(size, default)
+    array = _plain_numbers(value)
+    if array is not None and array.size == size:
+        return array
     array = as_float_array(value, name)
     if array.ndim == 0:
         return np.full(size, float(array))
@@ -96,11 +120,14 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
     d2) = w chi2(h1 + h2, d1 + d2)``.  ``dof`` may be any positive real (a
     chi-square with ``h`` degrees of freedom is a Gamma(h/2, 2) variable).
     """
-    w = as_vector(weights, "weights")
+    w = _plain_numbers(weights)
+    if w is None:
+        w = as_vector(weights, "weights")
     r = w.size
     h = _per_term(dof, "dof", r, 1.0)
     d = _per_term(noncentrality, "noncentrality", r, 0.0)
-    sigma = as_finite(sigma, "sigma", what="the standard deviation of the normal term")
+    if not (type(sigma) is float and math.isfinite(sigma)):
+        sigma = as_finite(sigma, "sigma", what="the standard deviation of the normal term")
     if sigma < 0:
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
@@ -129,12 +156,14 @@ def _merged(columns, sigma=0.0):
         gaps = w[1:] - w[:-1]
         if gaps.min() <= _MERGE_RTOL * scale:
             breaks = np.flatnonzero(gaps > _MERGE_RTOL * scale) + 1
-            members = np.split(np.arange(w.size), breaks)
+            starts = np.concatenate([[0], breaks])
+            first = w[starts]
             # the mean of a group as its first weight plus the mean offset: w h would
             # overflow for weights near the largest double
-            w = np.array([w[g[0]] + np.average(w[g] - w[g[0]], weights=h[g]) for g in members])
-            h = np.array([h[g].sum() for g in members])
-            d = np.array([d[g].sum() for g in members])
+            offsets = w - np.repeat(first, np.diff(np.append(starts, w.size)))
+            h_sum = np.add.reduceat(h, starts)
+            w = first + np.add.reduceat(offsets * h, starts) / h_sum
+            h, d = h_sum, np.add.reduceat(d, starts)
     return w, h, d, sigma
 
 
@@ -207,7 +236,9 @@ def _log1p_minus(u):
 
 def _tolerances(atol, rtol):
     """Validated ``(atol, rtol)``: non-negative, not both zero, and attainable in doubles."""
-    atol, rtol = as_finite(atol, "atol"), as_finite(rtol, "rtol")
+    plain = type(atol) is float and type(rtol) is float  # (the usual case: two floats)
+    if not (plain and math.isfinite(atol) and math.isfinite(rtol)):
+        atol, rtol = as_finite(atol, "atol"), as_finite(rtol, "rtol")
     if atol < 0 or rtol < 0 or atol + rtol == 0:
         raise ValueError(f"atol and rtol must be >= 0 and not both 0, got {atol:g} and {rtol:g}")
     if 0 < rtol < _MIN_RTOL and atol < _MIN_RTOL:
@@ -219,6 +250,13 @@ def _tolerances(atol, rtol):
 
 def _points(c):
     """The points ``c`` as a 1-D float array and their shape; NaN refused, ±inf allowed."""
+    if type(c) is float or type(c) is int:  # (one number, not NaN: the usual scalar call)
+        try:
+            value = float(c)
+        except OverflowError:  # (an int beyond the doubles: as_float_array says so)
+            value = math.nan
+        if value == value:
+            return np.array([value]), ()
     x = as_float_array(c, "c", finite=False)
     return x.ravel(), x.shape
 
