@@ -646,18 +646,20 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     if sides["limit"] is not None:
         z = _standardised(x, sides["limit"])
         return stats.norm.sf(z), stats.norm.cdf(z), np.zeros(x.shape), np.ones(x.shape, bool)
-    sf, cdf = np.empty(x.shape), np.empty(x.shape)
-    err = np.zeros(x.shape)
-    conv = np.ones(x.shape, dtype=bool)
+    sf = cdf = err = conv = None
     for sign, mask in ((1.0, x >= 0), (-1.0, x < 0)):
         if not mask.any():
             continue
         side = _side(sides, sign)
         whole = mask.all()  # (every point on one side: no copies in and out)
+        if not whole and sf is None:
+            sf, cdf = np.empty(x.shape), np.empty(x.shape)
+            err, conv = np.zeros(x.shape), np.ones(x.shape, dtype=bool)
         xs = sign * (x if whole else x[mask])
         # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
-        up, low = np.zeros(xs.shape), np.ones(xs.shape)
-        e, ok = np.zeros(xs.shape), np.ones(xs.shape, dtype=bool)
+        # (allocated only where some points do not come from one contour call)
+        up = low = e = ok = None
+
         todo = np.isfinite(xs)
         if side.top is None and not side.sigma2:
             todo[:] = False
@@ -665,12 +667,12 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             # a positive form: P(X <= 0) = 0, and far below the weights a closed form
             zero = xs <= 0
             tiny = ~zero & (xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0))
-            if zero.any():
+            if zero.any() or tiny.any():
+                up, low, e, ok = _allocated(xs)
                 up[zero], low[zero] = 1.0, 0.0
-            if tiny.any():
                 near = _near_zero(xs[tiny], side)
                 low[tiny], up[tiny] = near, 1.0 - near
-            todo &= ~zero & ~tiny
+                todo &= ~zero & ~tiny
         for upper, group, part in side.tails(xs):
             m_ = todo if group is None else todo & group
             if not m_.any():
@@ -682,19 +684,23 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             flag = bool(upper[0]) if upper.all() or not upper.any() else upper
             v, e_m, ok_m = _contour(xs if every else xs[m_], part, flag, True, atol, rtol)
             if flag is True:
-                v_up = np.clip(v, 0.0, 1.0) + 0.0  # (no -0.0)
+                v_up = np.minimum(np.maximum(v, 0.0), 1.0) + 0.0  # (no -0.0)
                 v_low = 1.0 - v_up
             elif flag is False:
-                v_low = np.clip(-v, 0.0, 1.0) + 0.0
+                v_low = np.minimum(np.maximum(-v, 0.0), 1.0) + 0.0
                 v_up = 1.0 - v_low
             else:
-                v = np.clip(np.where(upper, v, -v), 0.0, 1.0) + 0.0
+                v = np.minimum(np.maximum(np.where(upper, v, -v), 0.0), 1.0) + 0.0
                 v_up = np.where(upper, v, 1.0 - v)
                 v_low = np.where(upper, 1.0 - v, v)
             if every:
                 e, ok, up, low = e_m, ok_m, v_up, v_low
             else:
+                if up is None:
+                    up, low, e, ok = _allocated(xs)
                 e[m_], ok[m_], up[m_], low[m_] = e_m, ok_m, v_up, v_low
+        if up is None:
+            up, low, e, ok = _allocated(xs)
         if whole:
             return (up, low, e, ok) if sign > 0 else (low, up, e, ok)
         if sign > 0:
@@ -702,7 +708,14 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         else:
             cdf[mask], sf[mask] = up, low
         err[mask], conv[mask] = e, ok
+    if sf is None:  # (no points)
+        return x.copy(), x.copy(), x.copy(), x == x
     return sf, cdf, err, conv
+
+
+def _allocated(xs):
+    """``(P(X > x), P(X <= x), error, converged)`` arrays for ``xs``: 0, 1, 0, True."""
+    return np.zeros(xs.shape), np.ones(xs.shape), np.zeros(xs.shape), xs == xs
 
 
 def _normalised(sides, w, h, d, sigma):
