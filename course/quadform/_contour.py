@@ -520,7 +520,6 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     ``-P(X <= x)`` on a lower one (the residue at the pole is 1), the density
     without the pole.
     """
-    error = np.zeros(x.shape)
     converged = U <= _U_MAX
     U = np.minimum(U, _U_MAX)
     h = 0.5 * step
@@ -549,14 +548,20 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         total[i] = h * f.sum(axis=1)
         coarse[i] = 2.0 * h * f[:, ::2].sum(axis=1)
     tol = np.exp(log_tol)
-    active = np.flatnonzero(~blown)
     diff = np.abs(total - coarse)
+    # a point's error estimate is its last difference (diff is updated in place);
+    # blown points get theirs from _contour's second path
+    error = diff
+    # (None: every point; the first level, with no point blown, indexes nothing)
+    active = np.flatnonzero(~blown) if blown.any() else None
     for level in range(_MAX_HALVINGS + 1):
-        j = active
-        estimate = diff[j]
-        error[j] = estimate
-        done = estimate <= np.maximum(tol[j], rtol * np.abs(total[j]))
-        active = j[~done]
+        if active is None:
+            done = diff <= np.maximum(tol, rtol * np.abs(total))
+            active = np.flatnonzero(~done) if not done.all() else done[:0].nonzero()[0]
+        else:
+            j = active
+            done = diff[j] <= np.maximum(tol[j], rtol * np.abs(total[j]))
+            active = j[~done]
         if active.size == 0 or level == _MAX_HALVINGS:
             break
         j = active
