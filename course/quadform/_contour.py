@@ -600,7 +600,8 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
     # tails far below the smallest double: the best answer is 0
     vertex = b / np.abs(s0) if pole else b
     live = e0 + np.log(vertex) > _LOG_UNDERFLOW
-    if live.all():  # (the usual case: no copies)
+    every = live.all()
+    if every:  # (the usual case: no copies)
         value, error, converged, blown = _integrate(
             x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol
         )
@@ -608,7 +609,7 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
         value, error = np.zeros(x.shape), np.zeros(x.shape)
         converged = np.ones(x.shape, dtype=bool)
         blown = np.zeros(x.shape, dtype=bool)
-    if live.any() and not live.all():
+    if not every and live.any():
         i = np.flatnonzero(live)
         value[i], error[i], converged[i], blown[i] = _integrate(
             x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step, rtol
@@ -652,11 +653,17 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         z = _standardised(x, sides["limit"])
         return stats.norm.sf(z), stats.norm.cdf(z), np.zeros(x.shape), np.ones(x.shape, bool)
     sf = cdf = err = conv = None
-    for sign, mask in ((1.0, x >= 0), (-1.0, x < 0)):
-        if not mask.any():
+    negative = x < 0
+    # (every point on one side, the usual case: one pass, no copies in and out)
+    one_side = (
+        None if x.size == 0 else (-1.0 if negative.all() else 1.0 if not negative.any() else None)
+    )
+    passes = ((one_side, None),) if one_side else ((1.0, ~negative), (-1.0, negative))
+    for sign, mask in passes:
+        whole = mask is None
+        if not whole and not mask.any():
             continue
         side = _side(sides, sign)
-        whole = mask.all()  # (every point on one side: no copies in and out)
         if not whole and sf is None:
             sf, cdf = np.empty(x.shape), np.empty(x.shape)
             err, conv = np.zeros(x.shape), np.ones(x.shape, dtype=bool)
@@ -686,7 +693,7 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             if not every:
                 upper = upper[m_]
             # one flag when every point integrates the same tail (a single point)
-            flag = bool(upper[0]) if upper.all() or not upper.any() else upper
+            flag = bool(upper[0]) if upper.size == 1 or upper.all() or not upper.any() else upper
             v, e_m, ok_m = _contour(xs if every else xs[m_], part, flag, True, atol, rtol)
             if flag is True:
                 v_up = np.minimum(np.maximum(v, 0.0), 1.0) + 0.0  # (no -0.0)
