@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -30,6 +31,8 @@ from ._terms import (
 _LTZ_BRACKET = 0.05
 # Interpolation nodes in a bracket of a quantile (the coarse interpolant takes every other).
 _NODES = 11
+# ... the Chebyshev-Lobatto points of [-1, 1], increasing
+_CHEBYSHEV = np.cos(np.pi * np.arange(_NODES) / (_NODES - 1))[::-1]
 
 
 # ---------------------------------------------------------------------------
@@ -267,17 +270,11 @@ class WeightedChiSquare(FrozenDistribution):
         big = levels > 0.5
         levels = np.where(big, 1.0 - levels, levels)
         lower = lower ^ big
-        scale = max(float(np.max(np.abs(self.weights), initial=0.0)), self.sigma)
-        w = self.weights / scale
-        std = scale * math.sqrt(
-            float(2.0 * (w * w) @ (self.dof + 2.0 * self.noncentrality)) + (self.sigma / scale) ** 2
-        )
-        mean = self.offset + scale * float(w @ (self.dof + self.noncentrality))
+        mean, std = self._mean_std
         lo_bound, hi_bound = self._bounds
         goal = np.where(lower, 1.0, -1.0) * np.log(levels)
         n = levels.size
-        # Chebyshev-Lobatto points of [-1, 1]
-        t = np.cos(np.pi * np.arange(_NODES) / (_NODES - 1))[::-1]
+        t = _CHEBYSHEV
 
         def kind_of(x):
             """The coordinate of a bracket around ``x``: 1 (log(x - lo)), -1 (log(hi - x)), 0."""
@@ -384,21 +381,21 @@ class WeightedChiSquare(FrozenDistribution):
             goal_unit = (goal[rows] - g_mid) / g_half
             t_nodes = np.broadcast_to(t, g_unit.shape)
             y_mid, y_half = 0.5 * (y_left + y_right), 0.5 * (y_right - y_left)
-            y = y_mid + y_half * _lagrange(g_unit, t_nodes, goal_unit)
+            # the fine interpolant at the goal and 1e-6 to either side (its slope), in one call
+            m = goal_unit.size
+            fine = _lagrange(
+                np.concatenate([g_unit] * 3),
+                np.concatenate([t_nodes] * 3),
+                np.concatenate([goal_unit, goal_unit + 1e-6, goal_unit - 1e-6]),
+            )
+            y = y_mid + y_half * fine[:m]
             coarse = y_mid + y_half * _lagrange(g_unit[:, ::2], t_nodes[:, ::2], goal_unit)
             with np.errstate(divide="ignore", invalid="ignore"):
                 # d g / d y from the interpolant's slope at the estimate
-                slope = (
-                    (g_half / y_half)
-                    * 2e-6
-                    / (
-                        _lagrange(g_unit, t_nodes, goal_unit + 1e-6)
-                        - _lagrange(g_unit, t_nodes, goal_unit - 1e-6)
-                    )
-                )
+                slope = (g_half / y_half) * 2e-6 / (fine[m : 2 * m] - fine[2 * m :])
             y_low = np.minimum(y_left, y_right)
             y_high = np.maximum(y_left, y_right)
-            y = np.clip(y, y_low, y_high)
+            y = np.minimum(np.maximum(y, y_low), y_high)
             # the fine interpolant is accepted where the coarse one is within the
             # integrals' accuracy of it in log tail (so the fine one, far better, is
             # too); elsewhere the estimate is checked, then Newton steps on the
@@ -434,6 +431,17 @@ class WeightedChiSquare(FrozenDistribution):
             func = self.cdf if lower[row] else self.sf
             result[row] = self._root(func, float(levels[row]), bool(lower[row]))
         return result
+
+    @functools.cached_property
+    def _mean_std(self):
+        """Mean and standard deviation, from the law scaled to ``max(|w|, sigma) = 1``."""
+        scale = max(float(np.max(np.abs(self.weights), initial=0.0)), self.sigma)
+        w = self.weights / scale
+        std = scale * math.sqrt(
+            float(2.0 * (w * w) @ (self.dof + 2.0 * self.noncentrality)) + (self.sigma / scale) ** 2
+        )
+        mean = self.offset + scale * float(w @ (self.dof + self.noncentrality))
+        return mean, std
 
     @staticmethod
     def _from_y(y, kind, lo_bound, hi_bound):

@@ -90,7 +90,12 @@ def _ltz_quantiles(levels, lower, w, h, d, sigma, offset):
     m = max(float(np.max(np.abs(w), initial=0.0)), sigma)
     if m == 0 or float(np.max(h + d, initial=1.0)) > 1e100:
         return nan
-    c1, c2, c3, c4 = _ltz_parameters(w / m, h, d, sigma / m, 0.0)
+    # the cumulants c_1..c_4 of the scaled law in one product (a guess: any rounding will do)
+    wn = w / m
+    square = wn * wn
+    powers = np.array([wn, square, square * wn, square * square])
+    c1, c2, c3, c4 = (powers @ h + (powers @ d) * np.array([1.0, 2.0, 3.0, 4.0])).tolist()
+    c2 += 0.5 * (sigma / m) ** 2
     if not c2 > 0:
         return nan
     sign = -1.0 if c3 < 0 else 1.0
@@ -113,7 +118,7 @@ def _ltz_quantiles(levels, lower, w, h, d, sigma, offset):
             if delta > 0:
                 t = special.chndtrix(cdf_level, dof, delta)
             else:
-                t = np.where(upper, special.chdtri(dof, levels), special.chdtri(dof, 1.0 - levels))
+                t = special.chdtri(dof, np.where(upper, levels, 1.0 - levels))
             y = sign * c1 + (t - dof - delta) * math.sqrt(c2) / a
         return offset + m * sign * y
 
