@@ -155,14 +155,17 @@ class _Side:
             g1 = t_minus_1 @ hw + (self.sigma2 * s - self.linear(x))
             if self.noncentral:
                 g1 = g1 + (t_minus_1 * (t + 1.0)) @ dw
-        else:
+        elif self.sigma2:
             g1 = t @ hw + (self.sigma2 * s - x)
-        g2 = t2 @ c2 + self.sigma2
-        g3 = (t2 * t) @ c3
+        else:
+            g1 = t @ hw - x
+        g2 = t2 @ c2 + self.sigma2 if self.sigma2 else t2 @ c2
+        t3 = t2 * t
+        g3 = t3 @ c3
         if self.noncentral:
             if not self.centred:
                 g1 = g1 + t2 @ dw
-            g2 = g2 + (t2 * t) @ n2
+            g2 = g2 + t3 @ n2
             g3 = g3 + (t2 * t2) @ n3
         if pole:
             inv = 1.0 / s
@@ -267,9 +270,7 @@ def _saddle(x, side, upper, pole):
     only has to be approximate, ``|phi'| phi''^{-1/2} < 0.3``: any vertex in the
     interval gives the same integral.
     """
-    lo, hi, guess = side.bracket(x, upper)
-    zero = np.zeros(x.shape)
-    lo, hi = lo + zero, hi + zero  # (new arrays of the points' shape)
+    lo, hi, guess = side.bracket(x, upper)  # (new arrays of the points' shape)
     width = hi - lo
     s = np.minimum(np.maximum(guess, lo + 1e-9 * width), hi - 1e-9 * width)
     g1, g2, g3 = side.derivatives(s, x, pole)
