@@ -527,13 +527,11 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     n = math.ceil(float(U.max()) / h)
     nodes = _nodes(h, n + 1, False)
     one = x.size == 1  # (one point: its nodes up to U, no mask)
-    total = np.empty(x.shape)
-    coarse = np.empty(x.shape)
-    blown = np.zeros(x.shape, dtype=bool)
     # chunks over x keep the (points, nodes, weights) work arrays small
     size = max(1, _CHUNK // ((n + 1) * max(side.r, 1)))
     # the coefficients of every point, when they fit one chunk (kept for the halvings)
     whole = _path_coefficients(x, side, s0, a, b, k0) if size >= x.size else None
+    parts = []
     for start in range(0, x.size, size):
         i = slice(start, start + size)
         coef = (
@@ -544,10 +542,13 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         else:
             f = _integrand(nodes[1], coef, side, pole)
             f *= nodes[0] <= U[i, None]
-        blown[i] = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
+        chunk_blown = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
         f[:, 0] *= 0.5
-        total[i] = h * f.sum(axis=1)
-        coarse[i] = 2.0 * h * f[:, ::2].sum(axis=1)
+        parts.append((h * f.sum(axis=1), 2.0 * h * f[:, ::2].sum(axis=1), chunk_blown))
+    if len(parts) == 1:  # (one chunk, the usual case: no copies)
+        total, coarse, blown = parts[0]
+    else:
+        total, coarse, blown = (np.concatenate(column) for column in zip(*parts))
     tol = np.exp(log_tol)
     diff = np.abs(total - coarse)
     # a point's error estimate is its last difference (diff is updated in place);
