@@ -120,19 +120,30 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
     d2) = w chi2(h1 + h2, d1 + d2)``.  ``dof`` may be any positive real (a
     chi-square with ``h`` degrees of freedom is a Gamma(h/2, 2) variable).
     """
-    w = _plain_numbers(weights)
-    if w is None:
-        w = as_vector(weights, "weights")
-    r = w.size
-    h = _per_term(dof, "dof", r, 1.0)
-    d = _per_term(noncentrality, "noncentrality", r, 0.0)
+    # (the three typed as lists or tuples of numbers of one length: one conversion)
+    columns = None
+    if (
+        type(dof) is type(noncentrality) is type(weights)
+        and type(weights) in (list, tuple)
+        and len(weights) == len(dof) == len(noncentrality)
+    ):
+        columns = _plain_numbers([*weights, *dof, *noncentrality])
+    if columns is not None:
+        columns = columns.reshape(3, -1)
+    else:
+        w = _plain_numbers(weights)
+        if w is None:
+            w = as_vector(weights, "weights")
+        r = w.size
+        h = _per_term(dof, "dof", r, 1.0)
+        d = _per_term(noncentrality, "noncentrality", r, 0.0)
+        columns = np.array([w, h, d])
     if not (type(sigma) is float and math.isfinite(sigma)):
         sigma = as_finite(sigma, "sigma", what="the standard deviation of the normal term")
     if sigma < 0:
         raise ValueError(
             f"sigma (the standard deviation of the normal term) must be >= 0, got {sigma}"
         )
-    columns = np.array([w, h, d])
     smallest_dof, smallest_noncentrality = columns[1:].min(axis=1).tolist()
     if smallest_dof <= 0:
         raise ValueError(f"dof (degrees of freedom) must be positive, got {smallest_dof:g}")
@@ -176,17 +187,18 @@ def _term_constants(w, h, d):
     see :func:`_near_zero`).
     """
     positive = w > 0
-    log_w = np.log(np.abs(w))
+    log_d = -0.5 * h * (np.log(np.abs(w)) + math.log(2.0))
     quarter = 0.25 / w * positive
+    h_d = h + d
     return (
         0.5 * d,
         0.5 * h,
-        w * (h + d),
+        w * h_d,
         2.0 * w * w * (h + 2.0 * d),
-        -0.5 * h * (log_w + math.log(2.0)) - 0.25 * d,
+        log_d - 0.25 * d,
         d * quarter,
-        (h + d) * quarter,
-        -0.5 * h * (log_w + math.log(2.0)) * positive,
+        h_d * quarter,
+        log_d * positive,
     )
 
 
