@@ -312,7 +312,7 @@ class WeightedChiSquare(FrozenDistribution):
             )
             usable = np.isfinite(y_guess) & np.isfinite(half) & (half > 0)
         if usable.any():
-            i = np.flatnonzero(usable)
+            i = slice(None) if usable.all() else np.flatnonzero(usable)  # (a slice: views)
             kind[i] = kind_guess[i]
             # (y decreases with x next to an upper bound)
             signed = np.where(kind[i] < 0, -half[i], half[i])
@@ -681,26 +681,30 @@ def _reduce(A, mu, S):
     top = max(float(e[-1]), 0.0)
     keep = e > _ZERO_RTOL * top * len(e)
     Vk, ek = V[:, keep], e[keep]
-    L = Vk * np.sqrt(ek)
-    nu = (Vk.T @ mu) / np.sqrt(ek)
+    root = np.sqrt(ek)
+    L = Vk * root
+    nu = (Vk.T @ mu) / root
     # a full-rank cov leaves no mean outside its range (not even rounding)
     mu_perp = np.zeros_like(mu) if keep.all() else mu - Vk @ (Vk.T @ mu)
     B = symmetrize(L.T @ A @ L)
     lam, P = np.linalg.eigh(B) if B.size else (np.zeros(0), np.zeros((0, 0)))
     y_mean = P.T @ nu
     g = P.T @ (L.T @ (A @ mu_perp))
-    big = float(np.max(np.abs(lam))) if lam.size else 0.0
-    nonzero = np.abs(lam) > _ZERO_RTOL * big * max(1, len(lam))
+    size = np.abs(lam)
+    big = float(np.max(size)) if lam.size else 0.0
+    nonzero = size > _ZERO_RTOL * big * max(1, len(lam))
     lz, gz = lam[nonzero], g[nonzero]
     noncentrality = (y_mean[nonzero] + gz / lz) ** 2
     offset = float(mu_perp @ A @ mu_perp) - float(np.sum(gz**2 / lz))
     # zero eigenvalues: 2 g y with y ~ N(y_mean, 1) is a normal term
-    g0, m0 = g[~nonzero], y_mean[~nonzero]
-    offset += float(np.sum(2 * g0 * m0))
-    sigma = 2.0 * float(np.sqrt(np.sum(g0**2)))
-    chi_sd = float(np.sqrt(np.sum(2 * lz**2 * (1 + 2 * noncentrality))))
-    if sigma <= 1e-10 * chi_sd:
-        sigma = 0.0  # rounding noise, not a normal component
+    sigma = 0.0
+    if not nonzero.all():
+        g0, m0 = g[~nonzero], y_mean[~nonzero]
+        offset += float(np.sum(2 * g0 * m0))
+        sigma = 2.0 * float(np.sqrt(np.sum(g0**2)))
+        chi_sd = float(np.sqrt(np.sum(2 * lz**2 * (1 + 2 * noncentrality))))
+        if sigma <= 1e-10 * chi_sd:
+            sigma = 0.0  # rounding noise, not a normal component
     if lz.size:
         # (eigenvalues and squared means: finite and valid by construction)
         w, h, d, sigma = _merged(np.array([lz, np.ones(lz.size), noncentrality]), sigma)
