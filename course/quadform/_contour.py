@@ -97,7 +97,8 @@ class _Side:
         self.rows_of_path = (2 * r if self.noncentral else r) + 3
         # weights W of the rows of the path matrix in the exponent (see _integrand):
         # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1
-        parts = [-0.5 * h, 0.5 * d] if self.noncentral else [-0.5 * h]
+        self.minus_half_h = -0.5 * h
+        parts = [self.minus_half_h, 0.5 * d] if self.noncentral else [self.minus_half_h]
         self.exponent_weights = np.concatenate(parts + [[1.0]]).astype(complex)
         self.w2 = 2.0 * w
         self.minus_w2 = -self.w2
@@ -187,7 +188,9 @@ class _Side:
                 value = value + (u * u / (1.0 + u)) @ (0.5 * self.d)
             return value
         z = 1.0 - np.multiply.outer(s, self.w2)
-        value = np.log(z) @ (-0.5 * self.h) + 0.5 * self.sigma2 * s * s
+        value = np.log(z) @ self.minus_half_h
+        if self.sigma2:
+            value = value + 0.5 * self.sigma2 * s * s
         if self.noncentral:
             value = value + (1.0 / z - 1.0) @ (0.5 * self.d)
         return value
@@ -669,7 +672,9 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         if not whole and sf is None:
             sf, cdf = np.empty(x.shape), np.empty(x.shape)
             err, conv = np.zeros(x.shape), np.ones(x.shape, dtype=bool)
-        xs = sign * (x if whole else x[mask])
+        xs = x if whole else x[mask]
+        if sign < 0:
+            xs = -xs
         # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
         # (allocated only where some points do not come from one contour call)
         up = low = e = ok = None
@@ -689,9 +694,9 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
                 todo &= ~zero & ~tiny
         for upper, group, part in side.tails(xs):
             m_ = todo if group is None else todo & group
-            if not m_.any():
-                continue
             every = m_.all()  # (then no copies in and out)
+            if not every and not m_.any():
+                continue
             if not every:
                 upper = upper[m_]
             # one flag when every point integrates the same tail (a single point)
