@@ -30,7 +30,7 @@ from ._terms import (
 # around its Liu-Tang-Zhang guess (see WeightedChiSquare._quantiles).
 _LTZ_BRACKET = 0.05
 # Interpolation nodes in a bracket of a quantile (the coarse interpolant takes every other).
-_NODES = 11
+_NODES = 9
 # ... the Chebyshev-Lobatto points of [-1, 1], increasing
 _CHEBYSHEV = np.cos(np.pi * np.arange(_NODES) / (_NODES - 1))[::-1]
 
@@ -382,17 +382,12 @@ class WeightedChiSquare(FrozenDistribution):
             t_nodes = np.broadcast_to(t, g_unit.shape)
             y_mid, y_half = 0.5 * (y_left + y_right), 0.5 * (y_right - y_left)
             # the fine interpolant at the goal and 1e-6 to either side (its slope), in one call
-            m = goal_unit.size
-            fine = _lagrange(
-                np.concatenate([g_unit] * 3),
-                np.concatenate([t_nodes] * 3),
-                np.concatenate([goal_unit, goal_unit + 1e-6, goal_unit - 1e-6]),
-            )
-            y = y_mid + y_half * fine[:m]
-            coarse = y_mid + y_half * _lagrange(g_unit[:, ::2], t_nodes[:, ::2], goal_unit)
+            fine = _lagrange(g_unit, t_nodes, goal_unit[:, None] + np.array([0.0, 1e-6, -1e-6]))
+            y = y_mid + y_half * fine[:, 0]
+            coarse = y_mid + y_half * _lagrange(g_unit[:, 1:-1], t_nodes[:, 1:-1], goal_unit)
             with np.errstate(divide="ignore", invalid="ignore"):
                 # d g / d y from the interpolant's slope at the estimate
-                slope = (g_half / y_half) * 2e-6 / (fine[m : 2 * m] - fine[2 * m :])
+                slope = (g_half / y_half) * 2e-6 / (fine[:, 1] - fine[:, 2])
             y_low = np.minimum(y_left, y_right)
             y_high = np.maximum(y_left, y_right)
             y = np.minimum(np.maximum(y, y_low), y_high)
@@ -506,23 +501,27 @@ class WeightedChiSquare(FrozenDistribution):
 
 
 def _lagrange(nodes, values, at):
-    """The polynomial through ``(nodes, values)`` (one row each) at ``at`` (one per row).
+    """The polynomial through ``(nodes, values)`` (one row each) at ``at`` (one or more per row).
 
-    Barycentric form; the nodes of a row are distinct.
+    Barycentric form; the nodes of a row are distinct.  ``at`` of shape
+    ``(rows,)`` gives one value per row, of shape ``(rows, k)`` k values per row
+    (the barycentric weights computed once).
     """
     gaps = nodes[:, :, None] - nodes[:, None, :]
     n = nodes.shape[1]
     gaps[:, np.arange(n), np.arange(n)] = 1.0
-    weights = 1.0 / gaps.prod(axis=2)
-    offsets = at[:, None] - nodes
+    weights = (1.0 / gaps.prod(axis=2))[:, None, :]
+    points = at[:, None] if at.ndim == 1 else at
+    offsets = points[:, :, None] - nodes[:, None, :]
     exact = offsets == 0.0
     offsets[exact] = 1.0
     terms = weights / offsets
-    value = (terms * values).sum(axis=1) / terms.sum(axis=1)
-    hit = exact.any(axis=1)
+    value = (terms * values[:, None, :]).sum(axis=2) / terms.sum(axis=2)
+    hit = exact.any(axis=2)
     if hit.any():
-        value[hit] = values[hit][exact[hit]]
-    return value
+        rows, columns = np.nonzero(hit)
+        value[rows, columns] = np.broadcast_to(values[:, None, :], exact.shape)[exact]
+    return value[:, 0] if at.ndim == 1 else value
 
 
 def _sample_shape(size):
