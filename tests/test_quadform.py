@@ -42,6 +42,7 @@ from course.quadform import (
     liu_tang_zhang_sf,
 )
 from course.quadform._terms import _terms
+from course.results import rejection_probability
 
 # (weights, dof, noncentrality): [(c, P(Q <= c)), ...]
 DAVIES_CASES = {
@@ -979,3 +980,49 @@ def test_quantiles_of_a_mixed_law_invert_its_distribution_function():
     levels = np.array([1e-9, 0.01, 0.3, 0.5, 0.9, 0.999])
     assert np.allclose(law.cdf(law.ppf(levels)), levels, rtol=1e-9, atol=0)
     assert np.allclose(law.sf(law.isf(levels)), levels, rtol=1e-9, atol=0)
+
+
+def _random_laws(count, seed):
+    """Random laws of 1-5 terms, one-signed and mixed, central and noncentral."""
+    rng = np.random.default_rng(seed)
+    for i in range(count):
+        r = int(rng.integers(1, 6))
+        weights = rng.uniform(-2, 3, r) if i % 3 else rng.uniform(0.1, 3, r)
+        dof = rng.integers(1, 30, r).astype(float)
+        noncentrality = rng.uniform(0, 4, r) if i % 2 else np.zeros(r)
+        yield WeightedChiSquare(weights, dof, noncentrality)
+
+
+def test_two_sided_quantiles_take_one_evaluation_and_meet_the_tolerance(monkeypatch):
+    # the search brackets each level +-0.05 std around its Liu-Tang-Zhang guess and
+    # interpolates 9 nodes: one vectorised evaluation for the pair of a two-sided
+    # region on nearly every law, and the log tail within 4 rtol of its goal
+    calls = []
+    evaluate = WeightedChiSquare._log_tail
+
+    def counted(self, x, lower):
+        calls.append(x.shape)
+        return evaluate(self, x, lower)
+
+    monkeypatch.setattr(WeightedChiSquare, "_log_tail", counted)
+    single, laws = 0, list(_random_laws(40, seed=7))
+    for law in laws:
+        calls.clear()
+        lower, upper = law.ppf(0.025), law.isf(0.025)
+        single += calls == [(2, 9)]
+        assert abs(math.log(law.cdf(lower)) - math.log(0.025)) <= 4 * law.rtol
+        assert abs(math.log(law.sf(upper)) - math.log(0.025)) <= 4 * law.rtol
+    assert single >= 36
+
+
+def test_a_two_sided_rejection_probability_is_one_evaluation_of_both_tails():
+    law = WeightedChiSquare([2.0, 0.5], [3, 1], [1.0, 0.0])
+    lower, upper = 1.5, 14.0
+    expected = float(law.cdf(lower)) + float(law.sf(upper))
+    assert rejection_probability(law, (lower, upper), "two-sided") == pytest.approx(
+        expected, rel=1e-14
+    )
+    # thresholds outside the support (a positive form: X > 0) take the general path
+    assert rejection_probability(law, (-1.0, upper), "two-sided") == pytest.approx(
+        float(law.sf(upper)), rel=1e-14
+    )

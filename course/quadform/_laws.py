@@ -250,18 +250,19 @@ class WeightedChiSquare(FrozenDistribution):
     def _quantiles(self, levels, lower):
         """The points where ``P(X <= x)`` (``lower``) or ``P(X > x)`` equals ``levels``.
 
-        A few vectorised evaluations for every level together, instead of a
-        root search per level (~12 integrals each).  (1) The Liu-Tang-Zhang
+        Usually one vectorised evaluation for every level together, instead of
+        a root search per level (~12 integrals each).  (1) The Liu-Tang-Zhang
         approximation (:func:`_ltz_quantiles`, closed form) guesses each
-        quantile; 9 Chebyshev points of a bracket of ``+-0.3`` standard
-        deviations around it are evaluated in one call.  (2) Levels that
-        bracket misses (the approximation is off by more, or undefined) take a
-        grid around a normal guess (steps of the standard deviation, and points
-        approaching a bound of the support geometrically) and then 7 Chebyshev
-        points inside the grid's bracket.  (3) The inverse of the log tail
-        probability is interpolated through the nine values, and where the
-        interpolants through all and every other node disagree, Newton/secant
-        steps polish it.  Next to a bound ``b`` of the support the coordinate is
+        quantile; the 9 Chebyshev points of a bracket of ``+-0.05`` standard
+        deviations around it (at most 5 % of ``x - b`` next to a bound ``b`` of
+        the support) are evaluated in one call.  (2) Levels that bracket
+        misses take a grid around a normal guess (steps of the standard
+        deviation, and points approaching a bound geometrically) and then the 7
+        inner Chebyshev points of the grid's bracket.  (3) The inverse of the
+        log tail probability is interpolated through the 9 values; it is
+        accepted where the interpolant through the 7 inner nodes agrees with it
+        within the integrals' accuracy in log tail (``4 rtol``), elsewhere
+        Newton/secant steps polish it.  Next to a bound the coordinate is
         ``log|x - b|``, in which the log tail of a one-signed form is nearly
         linear (``P(X <= x) ~ C x^k``).  A level the grid does not bracket
         either falls back to the root search of :meth:`_root`.
