@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -657,13 +658,19 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     if sides["limit"] is not None:
         z = _standardised(x, sides["limit"])
         return stats.norm.sf(z), stats.norm.cdf(z), np.zeros(x.shape), np.ones(x.shape, bool)
-    sf = cdf = err = conv = None
+    # (None until a second pass needs them)
+    sf: Any = None
+    cdf: Any = None
+    err: Any = None
+    conv: Any = None
     negative = x < 0
     # (every point on one side, the usual case: one pass, no copies in and out)
     one_side = (
         None if x.size == 0 else (-1.0 if negative.all() else 1.0 if not negative.any() else None)
     )
-    passes = ((one_side, None),) if one_side else ((1.0, ~negative), (-1.0, negative))
+    passes: tuple[tuple[Any, Any], ...] = (
+        ((one_side, None),) if one_side else ((1.0, ~negative), (-1.0, negative))
+    )
     for sign, mask in passes:
         whole = mask is None
         if not whole and not mask.any():
@@ -677,7 +684,10 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             xs = -xs
         # P(X > xs), P(X <= xs): with no positive weight and no normal term X <= 0 <= xs
         # (allocated only where some points do not come from one contour call)
-        up = low = e = ok = None
+        up: Any = None
+        low: Any = None
+        e: Any = None
+        ok: Any = None
 
         todo = np.isfinite(xs)
         if side.top is None and not side.sigma2:
