@@ -332,7 +332,7 @@ def _bisect(lo, hi):
 def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     """Path, scale, truncation point and step of the contour integral at ``x``.
 
-    Returns ``(a, b, e0, log_tol, U, step)``: the hyperbola's half-widths;
+    Returns ``(a, b, e0, log_tol, U, step, log_vertex)``: the hyperbola's half-widths;
     ``E0 = K(s0) - s0 x`` (the integrand is computed as ``exp(E - E0)``, so
     that tails down to 1e-300 neither underflow nor lose digits); the log of
     the absolute tolerance on that scaled integral; the truncation point
@@ -372,7 +372,8 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     a = ratio * b
     e0 = k0 - s0 * side.linear(x)
     vertex = b / np.abs(s0) if pole else b
-    log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + np.log(vertex)
+    log_vertex = np.log(vertex)
+    log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + log_vertex
     if atol > 0:
         log_tol = np.maximum(log_tol, math.log(atol * math.pi) - e0)
     # -- truncation (bounds in Y = Im s = b sinh u: see the docstring) ------------
@@ -409,7 +410,7 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     U = np.maximum(np.log(ratio_y + np.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
     # -- step (the same for every point: see the docstring) ----------------------
     step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
-    return a, b, e0, log_tol, U, step
+    return a, b, e0, log_tol, U, step, log_vertex
 
 
 @functools.lru_cache(maxsize=64)
@@ -602,10 +603,9 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
         s0, g2, g3 = _saddle(x, side, upper, pole)
         k0 = side.cgf(s0)
         plan = _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening)
-    a, b, e0, log_tol, U, step = plan
+    a, b, e0, log_tol, U, step, log_vertex = plan
     # tails far below the smallest double: the best answer is 0
-    vertex = b / np.abs(s0) if pole else b
-    live = e0 + np.log(vertex) > _LOG_UNDERFLOW
+    live = e0 + log_vertex > _LOG_UNDERFLOW
     every = live.all()
     if every:  # (the usual case: no copies)
         value, error, converged, blown = _integrate(

@@ -189,6 +189,9 @@ def _term_constants(w, h, d):
     positive = w > 0
     log_d = -0.5 * h * (np.log(np.abs(w)) + math.log(2.0))
     quarter = 0.25 / w * positive
+    if not d.any():  # (central: the same values without the zero terms)
+        zero = 0.0 * d
+        return zero, 0.5 * h, w * h, 2.0 * w * w * h, log_d, zero, h * quarter, log_d * positive
     h_d = h + d
     return (
         0.5 * d,
