@@ -76,11 +76,18 @@ _LOG2 = math.log(2.0)
 def _plain_numbers(value):
     """``value`` as a float array when it is a list or tuple of finite Python floats and ints.
 
-    The common case of a law typed by hand, checked with a few cheap tests;
-    anything else (arrays, nesting, bools, text, NaN, inf, huge ints) returns
+    Or a 1-D real numpy array of finite numbers.  The common cases of a law
+    typed by hand or built by code, checked with a few cheap tests; anything
+    else (other arrays, nesting, bools, text, NaN, inf, huge ints) returns
     None and goes through :func:`course.validation.as_float_array`, which
     explains what is wrong.
     """
+    if type(value) is np.ndarray:
+        # (a 1-D array of real numbers, as built by code: one copy and a finiteness test)
+        if value.ndim != 1 or value.size == 0 or value.dtype.kind not in "fiu":
+            return None
+        array = value.astype(float)
+        return array if np.isfinite(array).all() else None
     if type(value) not in (list, tuple) or not value:
         return None
     for entry in value:
