@@ -12,7 +12,7 @@ from ..distributions import _NO_STATE, FrozenDistribution, _levels, _rng_argumen
 from ..linalg import as_covariance, as_matrix, symmetrize
 from ..validation import as_finite, as_vector
 from ._contour import _density, _probabilities
-from ._ltz import _ltz_points, _ltz_quantiles
+from ._ltz import _ltz_matching, _ltz_points, _ltz_quantiles
 from ._terms import (
     _ZERO_RTOL,
     ATOL,
@@ -294,9 +294,7 @@ class WeightedChiSquare(FrozenDistribution):
                 )
 
         # (1) a narrow bracket around the LTZ guess: every node in one evaluation
-        guess = _ltz_quantiles(
-            levels, lower, self.weights, self.dof, self.noncentrality, self.sigma, self.offset
-        )
+        guess = _ltz_quantiles(levels, lower, self._ltz_matching, self.offset)
         kind = np.zeros(n, dtype=int)
         y_left, y_right = np.zeros(n), np.ones(n)
         g_nodes = np.zeros((n, t.size))
@@ -427,6 +425,11 @@ class WeightedChiSquare(FrozenDistribution):
             func = self.cdf if lower[row] else self.sf
             result[row] = self._root(func, float(levels[row]), bool(lower[row]))
         return result
+
+    @functools.cached_property
+    def _ltz_matching(self):
+        """The Liu-Tang-Zhang chi-square of the law (the quantiles' first guess)."""
+        return _ltz_matching(self.weights, self.dof, self.noncentrality, self.sigma)
 
     @functools.cached_property
     def _mean_std(self):

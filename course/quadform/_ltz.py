@@ -78,18 +78,18 @@ def _ltz(x, w, h, d, sigma, offset):
     return np.asarray(sf, dtype=float), np.asarray(cdf, dtype=float)
 
 
-def _ltz_quantiles(levels, lower, w, h, d, sigma, offset):
-    """Approximate quantiles by :func:`_ltz`: ``P(Q <= x)`` (``lower``) or ``P(Q > x)`` = levels.
+def _ltz_matching(w, h, d, sigma):
+    """The chi-square matched by :func:`_ltz` to a law, for :func:`_ltz_quantiles` (or None).
 
-    The matched noncentral chi-square is inverted in closed form (``scipy.special``'s
-    ``chdtri`` and ``chndtrix``) and mapped back through the cumulant matching;
-    a guess for :meth:`WeightedChiSquare._quantiles`, NaN where the matching is
-    undefined or the dof are huge (the search then brackets by itself).
+    ``(m, sign, c1, c2, a, delta, dof)``: the scale ``max(|w|, sigma)``, the
+    sign of the skewness, the first two cumulants of the scaled law (times
+    ``sign``) and the matched ``chi2(dof, delta)`` with its factor ``a``
+    (``a = 0``: the normal law).  None where the matching is undefined or the
+    dof are huge.  Per-law constants, computed once per law.
     """
-    nan = np.full(levels.shape, np.nan)
     m = max(float(np.max(np.abs(w), initial=0.0)), sigma)
     if m == 0 or float(np.max(h + d, initial=1.0)) > 1e100:
-        return nan
+        return None
     # the cumulants c_1..c_4 of the scaled law in one product (a guess: any rounding will do)
     wn = w / m
     square = wn * wn
@@ -97,29 +97,44 @@ def _ltz_quantiles(levels, lower, w, h, d, sigma, offset):
     c1, c2, c3, c4 = (powers @ h + (powers @ d) * np.array([1.0, 2.0, 3.0, 4.0])).tolist()
     c2 += 0.5 * (sigma / m) ** 2
     if not c2 > 0:
-        return nan
+        return None
     sign = -1.0 if c3 < 0 else 1.0
+    s1 = sign * c3 / c2**1.5
+    if s1 * s1 < 1e-10:
+        return m, sign, sign * c1, c2, 0.0, 0.0, 0.0
+    s2 = c4 / c2**2
+    if s1 * s1 > s2:
+        a = 1.0 / (s1 - math.sqrt(s1 * s1 - s2))
+        delta = s1 * a**3 - a * a
+        dof = a * a - 2.0 * delta
+    else:
+        a, delta, dof = 1.0 / s1, 0.0, 1.0 / (s1 * s1)
+    return m, sign, sign * c1, c2, a, delta, dof
+
+
+def _ltz_quantiles(levels, lower, matching, offset):
+    """Approximate quantiles by :func:`_ltz`: ``P(Q <= x)`` (``lower``) or ``P(Q > x)`` = levels.
+
+    The chi-square of :func:`_ltz_matching` is inverted in closed form
+    (``scipy.special``'s ``chdtri`` and ``chndtrix``) and mapped back through
+    the cumulant matching; a guess for :meth:`WeightedChiSquare._quantiles`,
+    NaN where the matching is None (the search then brackets by itself).
+    """
+    if matching is None:
+        return np.full(levels.shape, np.nan)
+    m, sign, c1, c2, a, delta, dof = matching
     # the tail of sign * Q whose level is given: P(sQ <= sx) for a lower level when s = 1
     upper = lower != (sign > 0)
-    s1 = sign * c3 / c2**1.5
     with np.errstate(all="ignore"):
-        if s1 * s1 < 1e-10:
+        if a == 0.0:
             z = np.where(upper, -special.ndtri(levels), special.ndtri(levels))
-            y = sign * c1 + z * math.sqrt(2.0 * c2)
+            y = c1 + z * math.sqrt(2.0 * c2)
+        elif delta > 0:
+            t = special.chndtrix(np.where(upper, 1.0 - levels, levels), dof, delta)
+            y = c1 + (t - dof - delta) * math.sqrt(c2) / a
         else:
-            s2 = c4 / c2**2
-            if s1 * s1 > s2:
-                a = 1.0 / (s1 - math.sqrt(s1 * s1 - s2))
-                delta = s1 * a**3 - a * a
-                dof = a * a - 2.0 * delta
-            else:
-                a, delta, dof = 1.0 / s1, 0.0, 1.0 / (s1 * s1)
-            cdf_level = np.where(upper, 1.0 - levels, levels)
-            if delta > 0:
-                t = special.chndtrix(cdf_level, dof, delta)
-            else:
-                t = special.chdtri(dof, np.where(upper, levels, 1.0 - levels))
-            y = sign * c1 + (t - dof - delta) * math.sqrt(c2) / a
+            t = special.chdtri(dof, np.where(upper, levels, 1.0 - levels))
+            y = c1 + (t - dof - delta) * math.sqrt(c2) / a
         return offset + m * sign * y
 
 
