@@ -513,13 +513,12 @@ def _lagrange(nodes, values, at):
     """
     gaps = nodes[:, :, None] - nodes[:, None, :]
     n = nodes.shape[1]
-    gaps[:, np.arange(n), np.arange(n)] = 1.0
+    gaps.reshape(len(nodes), n * n)[:, :: n + 1] = 1.0  # (the diagonals, through a view)
     weights = (1.0 / gaps.prod(axis=2))[:, None, :]
     points = at[:, None] if at.ndim == 1 else at
     offsets = points[:, :, None] - nodes[:, None, :]
     exact = offsets == 0.0
-    offsets[exact] = 1.0
-    terms = weights / offsets
+    terms = weights / np.where(exact, 1.0, offsets)
     value = (terms * values[:, None, :]).sum(axis=2) / terms.sum(axis=2)
     hit = exact.any(axis=2)
     if hit.any():
