@@ -73,8 +73,10 @@ precision (skewness below 1e-100) and the normal limit is used, on cumulants
 scaled by a power of two so that no sum overflows.
 
 Quantiles (``ppf``, ``isf``, critical values) are found for every level, and
-both tails, in a few vectorised evaluations: see
-``WeightedChiSquare._quantiles``.
+both tails, in one vectorised evaluation as a rule (nodes around the
+Liu-Tang-Zhang guess), a few where that guess is off: see
+``WeightedChiSquare._quantiles``.  A two-sided critical region is one search,
+and its rejection probability under another law one evaluation of both tails.
 
 Modules: ``_terms`` (validation of the terms, shared constants), ``_contour``
 (the vectorised integral), ``_imhof`` (the public integrals), ``_ltz`` (the
