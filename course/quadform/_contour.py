@@ -100,7 +100,7 @@ class _Side:
         # log z_r: -h_r/2; 1/z_r: d_r/2 (noncentral laws only); the linear part: 1
         self.minus_half_h = -0.5 * h
         parts = [self.minus_half_h, 0.5 * d] if self.noncentral else [self.minus_half_h]
-        self.exponent_weights = np.concatenate(parts + [[1.0]]).astype(complex)
+        self.exponent_weights = np.concatenate(parts + [[1.0]], dtype=complex)
         self.w2 = 2.0 * w
         self.minus_w2 = -self.w2
         # per-term factors of the derivatives of K
@@ -694,9 +694,11 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             todo[:] = False
         elif side.positive_form:
             # a positive form: P(X <= 0) = 0, and far below the weights a closed form
-            zero = xs <= 0
-            tiny = ~zero & (xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0))
-            if zero.any() or tiny.any():
+            # (one test for both: x <= 0 also passes the second, the slope being > 0)
+            closed = xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0)
+            if closed.any():
+                zero = xs <= 0
+                tiny = ~zero & closed
                 up, low, e, ok = _allocated(xs)
                 up[zero], low[zero] = 1.0, 0.0
                 near = _near_zero(xs[tiny], side)

@@ -213,12 +213,15 @@ def _term_constants(w, h, d):
 
 
 def _derivative_factors(w, h, d):
-    """Per-term factors of the derivatives of ``K`` (floats or arrays).
+    """Per-term factors of the derivatives of ``K`` (arrays; None for the noncentral ones of a central law).
 
     With ``t = 1/(1 - 2 w s)``: ``K' = sum t hw + t^2 dw``,
     ``K'' = sum t^2 c2 + t^3 n2``, ``K''' = sum t^3 c3 + t^4 n3``.
     """
-    hw, dw = h * w, d * w
+    hw = h * w
+    if not d.any():  # (central: the noncentral factors are never used)
+        return 2.0 * w, hw, None, 2.0 * w * hw, 8.0 * w * w * hw, None, None
+    dw = d * w
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
 
 
