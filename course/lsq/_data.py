@@ -1,4 +1,8 @@
-"""The MUDE sea-level data sets shipped with the course."""
+"""The MUDE sea-level data sets shipped with the course.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""The weighted least-squares fit (BLUE) in the whitened problem, and its result."""
+"""The weighted least-squares fit (BLUE) in the whitened problem, and its result.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

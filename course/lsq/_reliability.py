@@ -1,4 +1,8 @@
-"""Internal reliability (the minimal detectable bias) and the confidence band of a fit."""
+"""Internal reliability (the minimal detectable bias) and the confidence band of a fit.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""The tests on least-squares residuals: the overall model test, Baarda's w-tests and data snooping."""
+"""The tests on least-squares residuals: the overall model test, Baarda's w-tests and data snooping.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

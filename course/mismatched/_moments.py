@@ -1,4 +1,8 @@
-"""The moments of mismatched-filter residuals (Baram's appendix, corrected) and their Monte Carlo check."""
+"""The moments of mismatched-filter residuals (Baram's appendix, corrected) and their Monte Carlo check.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

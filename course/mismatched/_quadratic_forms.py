@@ -1,4 +1,8 @@
-"""The section statistics as quadratic forms in normal variables (Baram section 3) and their exact laws."""
+"""The section statistics as quadratic forms in normal variables (Baram section 3) and their exact laws.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""The statistics of a cross-record section: mean, covariance and correlation."""
+"""The statistics of a cross-record section: mean, covariance and correlation.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""The mean, covariance and correlation tests and their power."""
+"""The mean, covariance and correlation tests and their power.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

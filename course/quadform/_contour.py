@@ -5,6 +5,8 @@ The law is normalised (:func:`_normalised`), split into its two tails
 truncation, step) and summed by the trapezoidal rule, all points of a call in
 one set of numpy operations.  The numerics are described in the docstring of
 :mod:`course.quadform`.
+
+The works cited here are in the course bibliography, :doc:`/docs/bibliography`.
 """
 
 from __future__ import annotations

@@ -1,4 +1,7 @@
-"""The public integrals: ``imhof_cdf``, ``imhof_sf`` and ``inversion_integrands``."""
+"""The public integrals: ``imhof_cdf``, ``imhof_sf`` and ``inversion_integrands``.
+
+The works cited here are in the course bibliography, :doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,7 @@
-"""Frozen laws: :class:`WeightedChiSquare` and the quadratic form :class:`QuadraticForm`."""
+"""Frozen laws: :class:`WeightedChiSquare` and the quadratic form :class:`QuadraticForm`.
+
+The works cited here are in the course bibliography, :doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,7 @@
-"""The Liu-Tang-Zhang (2009) four-cumulant approximation."""
+"""The four-cumulant approximation of Liu, Tang and Zhang (2009).
+
+The works cited here are in the course bibliography, :doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
