@@ -78,7 +78,7 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.grading.batch.driver import grade
+    from course.grading.batch.driver import SelectionError, grade
     from course.grading.batch.marks import MarksError
     from course.grading.batch.options import GradeOptions, available_cpus
     from course.grading.sandbox.isolation import IsolationError
@@ -114,13 +114,14 @@ def _grade(args) -> int:
         cluster=args.cluster,
         announce=lambda text: print(text, file=sys.stderr),
         short_answers=Path(args.short_answers) if args.short_answers else None,
+        students=frozenset(args.student) if args.student else None,
     )
     try:
         summary = grade(solution_dir, submissions, Path(args.out), options)
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except MarksError as exc:
+    except (MarksError, SelectionError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -361,7 +362,15 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument(
         "--regrade",
         action="store_true",
-        help="ignore previous results in OUT and grade everyone again",
+        help="ignore previous results in OUT and grade everyone again (with --student: "
+        "only those students)",
+    )
+    p_gr.add_argument(
+        "--student",
+        action="append",
+        metavar="ID",
+        default=None,
+        help="grade only this student (repeatable); the others keep their previous results",
     )
     p_gr.add_argument("--no-progress", action="store_true", help="no progress bar")
     p_gr.add_argument(
