@@ -9,6 +9,7 @@ graded again.
 
 from __future__ import annotations
 
+import csv
 import shutil
 from pathlib import Path
 
@@ -18,6 +19,8 @@ from conftest import class_submissions
 from course.cli import main as course_main
 from course.grading.batch.driver import SelectionError, grade
 from course.grading.batch.options import GradeOptions
+from course.grading.batch.reports import append_result
+from course.grading.batch.results import StudentResult
 
 ROOT = Path(__file__).resolve().parents[1]
 NAME = "01_least_squares"
@@ -88,3 +91,76 @@ def test_student_grades_only_the_chosen_students(class_copy, capsys):
     # an ID without a submission is refused before anything is graded
     with pytest.raises(SelectionError, match="nobody"):
         grade(SOLUTION, subs, out, _options(students=frozenset({"nobody"})))
+
+
+# -- item 4: the gradebook across assignments ----------------------------------------------------
+def _output(folder: Path, assignment: str, max_points: float, totals: dict, column=None) -> Path:
+    """A grading output folder as `course grade` leaves it (results.jsonl; canvas.csv's header
+    when the run had a roster and named its column)."""
+    folder.mkdir()
+    for sid, total in totals.items():
+        row = StudentResult(sid, assignment, "c" * 64, "1.0", "public", max_points, total=total)
+        append_result(row, folder / "results.jsonl")
+    if column is not None:
+        header = f"Student,ID,SIS User ID,SIS Login ID,Section,{column}\r\n"
+        (folder / "canvas.csv").write_text(header, encoding="utf-8")
+    return folder
+
+
+CANVAS_ROSTER = (
+    "Student,ID,SIS User ID,SIS Login ID,Section\n"
+    "    Points Possible,,,,\n"
+    '"Doe, Jane",101,s001,jdoe,A\n'
+    '"Roe, Ann",102,s002,aroe,A\n'
+    '"Poe, Ed",103,s003,epoe,B\n'
+)
+
+
+def test_gradebook_combines_assignments(tmp_path, capsys):
+    first = _output(tmp_path / "g01", "01_least_squares", 14, {"s001": 12.5, "s002": 14, "zz9": 3})
+    third = _output(
+        tmp_path / "g03", "03_kalman", 10, {"s001": 7, "s003": 9.25}, column="Kalman (4711)"
+    )
+    roster = tmp_path / "roster.csv"
+    roster.write_text(CANVAS_ROSTER, encoding="utf-8")
+    dest = tmp_path / "book"
+    code = course_main(
+        ["gradebook", str(first), str(third), "--out", str(dest), "--roster", str(roster)]
+    )
+    assert code == 0, capsys.readouterr().err
+    assert "01_least_squares (14), Kalman (4711) (10)" in capsys.readouterr().out
+    book = list(csv.reader((dest / "gradebook.csv").open(encoding="utf-8")))
+    assert book == [
+        ["student", "01_least_squares", "Kalman (4711)", "total", "max"],
+        ["s001", "12.5", "7", "19.5", "24"],
+        ["s002", "14", "", "14", "24"],
+        ["s003", "", "9.25", "9.25", "24"],
+    ]
+    canvas = list(csv.reader((dest / "canvas.csv").open(encoding="utf-8")))
+    assert canvas[0] == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section"] + [
+        "01_least_squares",
+        "Kalman (4711)",
+    ]  # no total: Canvas computes its own and would import one as a new assignment
+    assert canvas[1][0].strip() == "Points Possible" and canvas[1][5:] == ["14", "10"]
+    assert canvas[2] == ["Doe, Jane", "101", "s001", "jdoe", "A", "12.5", "7"]
+    assert (dest / "canvas.csv").read_bytes().count(b"\r\n") == 5  # Canvas's CRLF rows
+    moodle = list(csv.reader((dest / "moodle.csv").open(encoding="utf-8")))
+    assert moodle[0][4:] == ["01_least_squares", "Kalman (4711)", "Total"]
+    assert moodle[2] == ["s002", "", "Ann", "Roe", "14", "", "14"]
+    # without a roster: every graded student (zz9 too), no LMS files; missing as zero
+    course_main(["gradebook", str(first), str(third), "--out", str(tmp_path / "b2"),
+                 "--missing-as-zero"])  # fmt: skip
+    rows = list(csv.reader((tmp_path / "b2" / "gradebook.csv").open(encoding="utf-8")))
+    assert (
+        rows[-1] == ["zz9", "3", "0", "3", "24"] and not (tmp_path / "b2" / "canvas.csv").exists()
+    )
+
+
+def test_gradebook_refuses_what_it_cannot_combine(tmp_path, capsys):
+    first = _output(tmp_path / "a", "01_least_squares", 14, {"s001": 1})
+    again = _output(tmp_path / "b", "01_least_squares", 14, {"s002": 2})
+    (tmp_path / "empty").mkdir()
+    assert course_main(["gradebook", str(first), str(again), "--out", str(tmp_path / "o")]) == 2
+    assert "both hold 01_least_squares" in capsys.readouterr().err
+    assert course_main(["gradebook", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 2
+    assert "holds no results.jsonl" in capsys.readouterr().err

@@ -27,6 +27,8 @@ The flow
    :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`), the short
    answers' marking file (:mod:`.batch.marks`) and the LMS files (:mod:`.batch.roster`) are
    written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers.
+   ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
+   one gradebook.
 
 Modules
 -------
@@ -43,7 +45,8 @@ notebook
 tripwire
     Forbidden library functions: a warning in the self-check, a report from a grading child.
 cli
-    ``course release | grade | export | secret | submit``: the entry points into the rooms.
+    ``course release | grade | gradebook | export | secret | submit``: the entry points into
+    the rooms.
 
 ``authoring/`` what the instructor writes and hands out
     checks (the vocabulary of ``checks.py``), notebooks (solution-notebook helpers), passes
@@ -57,7 +60,7 @@ cli
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), reports (feedback, grades, results log), marks
     (short answers), identity (whose submission is whose), roster (the class, LMS grade files),
-    cluster (Dask).
+    cluster (Dask), gradebook (several assignments in one file).
 ``sandbox/`` the sandboxed children
     parent (the grader's handle), forkserver (the warm process children fork from), runner
     (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,

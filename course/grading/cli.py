@@ -1,5 +1,5 @@
-"""The instructors' subcommands ``course release``, ``grade``, ``export`` and ``secret``, and the
-students' ``course submit`` (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``export`` and
+``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -159,6 +159,23 @@ def _class_options(args) -> dict | None:
         "missing_as_zero": args.missing_as_zero,
         "lms_column": args.lms_column,
     }
+
+
+def _gradebook(args) -> int:
+    from course.grading.batch.gradebook import GradebookError, read_gradebook, write_gradebook
+    from course.grading.batch.roster import RosterError, read_roster
+
+    try:
+        roster = read_roster(args.roster) if args.roster else None
+        book = read_gradebook([Path(p) for p in args.outs])
+        written = write_gradebook(book, Path(args.out), roster, args.missing_as_zero)
+    except (GradebookError, RosterError) as exc:
+        print(f"course gradebook: {exc}", file=sys.stderr)
+        return 2
+    columns = ", ".join(f"{c.name} ({c.max_points:g})" for c in book.columns)
+    print(f"Gradebook of {len(book.columns)} assignment(s): {columns}")
+    print("Wrote " + ", ".join(str(p) for p in written))
+    return 0
 
 
 def _export(args) -> int:
@@ -416,4 +433,23 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument("--course-dir", help=COURSE_DIR_HELP)
     p_gr.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
     p_gr.set_defaults(func=_instructor_only(_grade))
+
+    p_gb = subparsers.add_parser(
+        "gradebook",
+        help="combine several assignments' grading outputs into one gradebook",
+        description="Read the results.jsonl of each OUT_DIR (the --out of a `course grade` run, "
+        "one per assignment) and write DEST/gradebook.csv (a column per assignment and the "
+        "total); with --roster also DEST/canvas.csv and DEST/moodle.csv.",
+    )
+    p_gb.add_argument("outs", nargs="+", metavar="OUT_DIR", help="grading output folders")
+    p_gb.add_argument("--out", required=True, metavar="DEST", help="folder to write to")
+    p_gb.add_argument(
+        "--roster", default=None, help="CSV of the class: write canvas.csv and moodle.csv too"
+    )
+    p_gb.add_argument(
+        "--missing-as-zero",
+        action="store_true",
+        help="0 for an assignment a student did not submit (default: blank)",
+    )
+    p_gb.set_defaults(func=_instructor_only(_gradebook))
     _add_class_commands(subparsers)
