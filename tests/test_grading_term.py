@@ -13,6 +13,7 @@ import csv
 import shutil
 from pathlib import Path
 
+import nbformat
 import pytest
 from conftest import class_submissions
 
@@ -30,12 +31,26 @@ EXERCISE = ROOT / "exercises" / NAME
 
 @class_submissions("term")
 def _term_submissions(name: str, subs: Path) -> None:
-    """A full solution and an untouched release of assignment 01."""
+    """A full solution, an untouched release and a solution with two wrong answers."""
     if name != NAME:
         return None
     (subs / "term-full.ipynb").write_bytes((SOLUTION / f"{NAME}.ipynb").read_bytes())
     (subs / "term-stub.ipynb").write_bytes((EXERCISE / f"{NAME}.ipynb").read_bytes())
+    # a named mistake of checks.py (q1: day 2's data) and a kind of wrong (q2: the sign)
+    nb = nbformat.read(SOLUTION / f"{NAME}.ipynb", as_version=4)
+    for cell in nb.cells:
+        course = cell.get("metadata", {}).get("course", {})
+        if course.get("role") == "answer" and course.get("question") in WRONG:
+            cell.source = WRONG[course["question"]]
+    nbformat.write(nb, subs / "term-wrong.ipynb")
     return None
+
+
+WRONG = {
+    "q1": "x_hat_day1 = np.linalg.lstsq(A, y_day2, rcond=None)[0]",
+    "q2": "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
+    "e_hat_day2 = A @ x_hat_day2 - y_day2",
+}
 
 
 @pytest.fixture
@@ -164,3 +179,80 @@ def test_gradebook_refuses_what_it_cannot_combine(tmp_path, capsys):
     assert "both hold 01_least_squares" in capsys.readouterr().err
     assert course_main(["gradebook", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 2
     assert "holds no results.jsonl" in capsys.readouterr().err
+
+
+# -- item 3: the class report --------------------------------------------------------------------
+def _report(graded) -> str:
+    return (graded.out / "report.html").read_text("utf-8")
+
+
+def test_report_counts_mistakes_and_cases(graded_class):
+    text = _report(graded_class(NAME))
+    # q1 of term-wrong matched checks.py's named mistake; q2's residuals have the sign flipped
+    assert "<td>q1</td><td>named mistake</td><td>this is the estimate of day 2&#x27;s data" in text
+    assert "<td>q2</td><td>kind of wrong</td><td>the sign</td>" in text
+    assert text.count("data:image/png;base64,") == 2
+    for forbidden in ("http://", "https://", "<script", "<link"):
+        assert forbidden not in text  # self-contained: nothing fetched, nothing run
+
+
+def test_report_of_rows_separates_public_and_hidden_cases():
+    from course.grading.authoring.checks import load_checks
+    from course.grading.batch.classreport import report_html
+    from course.grading.batch.results import CaseResult, QuestionResult
+
+    def row(sid, cases, status="fail", seconds=1.0):
+        ok = all(c.ok for c in cases)
+        q = QuestionResult(1.0 if ok else 0.0, 1.0, "pass" if ok else status, cases=cases)
+        r = StudentResult(sid, NAME, "c", "v", "k", 1.0, {"q3": q}, wall_seconds=seconds)
+        r.add_total()
+        return r
+
+    def case(label, ok, message=""):
+        return CaseResult(label, ok, message)
+
+    rows = [
+        row("a", [case("small", True), case("hidden case 1", True)]),
+        row("b", [case("small", True), case("hidden case 1", False, "T: got NaN at [0]")]),
+        row("c", [case("small", False, "timeout"), case("hidden case 1", False, "not run")],
+            status="timeout", seconds=30.0),
+        row("d", [case("small", False, "T: too large by a factor ≈ 2.0"),
+                  case("hidden case 1", False, "T: too large by a factor ≈ 2.0")]),
+    ]  # fmt: skip
+    text = report_html(rows, load_checks(SOLUTION), ["q3"])
+    # full marks 1 of 4; public cases 2 of 4 passed; hidden 1 of 4
+    assert "<td>q3</td><td>3</td><td>0.25</td><td>25 %</td><td>50 %</td><td>25 %</td>" in text
+    assert "<td>a constant factor</td><td>1</td>" in text  # d counts once for two cases
+    assert "<td>NaN or inf</td><td>1</td>" in text
+    assert "<td>q3</td><td>timeout</td><td>1</td><td>c</td>" in text
+    assert text.index("<td>c</td><td>30.00</td>") < text.index("<td>a</td><td>1.00</td>")
+
+
+@pytest.mark.browser
+def test_report_renders_in_chromium_with_its_figures(graded_class):
+    from browser import CHROMIUM_ARGS, chromium_or_skip
+
+    chromium = chromium_or_skip()
+    sync_api = pytest.importorskip("playwright.sync_api")
+    report = graded_class(NAME).out / "report.html"
+    with sync_api.sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            requests, errors = [], []
+            page.on("request", lambda r: requests.append(r.url))
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(report.as_uri(), wait_until="load")
+            images = page.evaluate(
+                "() => Array.from(document.images).map(i => [i.alt, i.complete && "
+                "i.naturalWidth > 0, i.getBoundingClientRect().width])"
+            )
+            headings = page.evaluate(
+                "() => Array.from(document.querySelectorAll('h2')).map(h => h.textContent)"
+            )
+        finally:
+            browser.close()
+    assert len(images) == 2 and all(loaded and width > 100 for _, loaded, width in images), images
+    assert not errors
+    assert all(url.startswith(("file:", "data:")) for url in requests), requests
+    assert headings[:2] == ["Pass rate per question", "Distribution of the totals"]

@@ -8,6 +8,7 @@ students ``--student`` names), one
 (:mod:`course.grading.batch.reports`) as students finish.
 
 Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status),
+``report.html`` (the class report, :mod:`course.grading.batch.classreport`),
 ``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
 finish; a rerun skips students already graded with the same checks and library version from
 the same file).
@@ -23,6 +24,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
+from course.grading.batch.classreport import warm_up, write_report
 from course.grading.batch.cluster import grade_on_cluster
 from course.grading.batch.identity import resolve_identities
 from course.grading.batch.marks import (
@@ -238,6 +240,8 @@ def grade(
             if tqdm
             else None
         )
+        if pending:
+            warm_up()  # the report's imports, while the students are graded
         if options.cluster:
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
@@ -259,6 +263,7 @@ def grade(
         final = [rows[sub.student] for sub in todo if sub.student in rows]
         marking = _merge_marks(grader.checks, final, out, options, marks_in, results_path)
         write_csv(final, qids, out / "grades.csv")
+        write_report(final, grader.checks, qids, out)
         summary = Summary(
             final,
             qids,

@@ -177,7 +177,10 @@ class Summary:
             )
         if self.unselected:
             text += f"; {self.unselected} never graded and not chosen by --student"
-        return text + f", in {self.seconds:.1f} s; results in {self.out}"
+        return (
+            text + f", in {self.seconds:.1f} s; results in {self.out} (the class report: "
+            f"{self.out / 'report.html'})"
+        )
 
     def text(self) -> str:
         n = len(self.rows)
