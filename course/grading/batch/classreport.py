@@ -1,7 +1,7 @@
 """``report.html``: the picture of a graded class, written beside ``grades.csv`` by each run.
 
-One self-contained page (figures embedded as base64 PNG in the course's figure style, no
-script, no style sheet or font from outside), readable without the console:
+One self-contained page (figures as inline SVG in the course's figure style, no script, no
+style sheet or font from outside), readable without the console:
 
 - the pass rate per question: full marks, and the public and hidden cases apart;
 - the distribution of the totals;
@@ -16,17 +16,14 @@ Counts are of students: a student whose three hidden cases show the same factor 
 
 from __future__ import annotations
 
-import base64
 import html
-import io
-import threading
 from collections import Counter
 from pathlib import Path
 
 from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import GradeStatus
 
-__all__ = ["diagnosis", "report_html", "warm_up", "write_report"]
+__all__ = ["diagnosis", "report_html", "write_report"]
 
 REPORT_FILE = "report.html"
 
@@ -145,83 +142,169 @@ class _Class:
         return max((float(r.max) for r in self.rows), default=0.0)
 
 
-def _import_figures() -> None:
-    import matplotlib.backends.backend_agg
-    import matplotlib.figure  # noqa: F401
-
-    import course.plotting.style  # noqa: F401
-
-
-def warm_up() -> threading.Thread:
-    """Import matplotlib in a background thread (about a second): the driver starts it while
-    the children grade, when the parent mostly waits, so the report adds only its drawing to
-    the run's time."""
-    thread = threading.Thread(target=_import_figures, name="report-warm-up", daemon=True)
-    thread.start()
-    return thread
+# -- figures: inline SVG in the course's figure style ------------------------------------------
+# Drawn by hand rather than by matplotlib: importing and drawing with matplotlib costs about a
+# second of CPU per run, more than the grading-speed budget allows; the figures keep the
+# style's colours (:func:`course.plotting.style.pair`, ``SAMPLE``, ``THRESHOLD``), its legend
+# outside the data, its dashed black threshold line and axis labels with units.
+_W, _H = 720, 320
+_LEFT, _RIGHT, _TOP, _BOTTOM = 64, 150, 14, 90
+_FONT = 'font-family="system-ui, sans-serif" font-size="12"'
 
 
-def _png(fig) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return base64.b64encode(buf.getvalue()).decode("ascii")
+def _num(x: float) -> str:
+    return f"{x:.1f}".rstrip("0").rstrip(".")
 
 
-def _figures(data: _Class) -> list[tuple[str, str]]:
-    """(alt text, base64 PNG) of the pass-rate bars and the histogram of totals."""
-    from matplotlib.figure import Figure  # no pyplot: no global figure state, no backend
-    from matplotlib.ticker import MaxNLocator
+def _svg(alt: str, body: list[str]) -> str:
+    return (
+        f'<svg role="img" viewBox="0 0 {_W} {_H}" '
+        f'width="{_W}" height="{_H}" {_FONT}><title>{html.escape(alt)}</title>'
+        + "".join(body)
+        + "</svg>"
+    )
 
-    from course.plotting.style import SAMPLE, THRESHOLD, context, legend_outside, pair
 
+def _axes(ticks: list[tuple[float, str]], y_of, xlabel: str, ylabel: str) -> list[str]:
+    """Frame, horizontal grid lines with their labels, and the axis labels."""
+    x0, x1, y0 = _LEFT, _W - _RIGHT, _H - _BOTTOM
     out = []
-    with context():
-        n_q = len(data.qids)
-        fig = Figure(figsize=(min(8.5, 3.5 + 0.6 * n_q), 3.6))
-        ax = fig.subplots()
-        width = 0.27
-        series = (
-            ("full marks", data.full, pair(0)),
-            ("public cases", data.public, pair(2)),
-            ("hidden cases", data.hidden, pair(1)),
+    for value, label in ticks:
+        y = y_of(value)
+        out.append(f'<line x1="{x0}" x2="{x1}" y1="{_num(y)}" y2="{_num(y)}" stroke="#e5e5e5"/>')
+        out.append(
+            f'<text x="{x0 - 6}" y="{_num(y + 4)}" text-anchor="end">{html.escape(label)}</text>'
         )
-        for k, (label, rates, colours) in enumerate(series):
-            # no bar where a question has no case of the kind (the table shows —), not a zero
-            shown = [(i, rates[q]) for i, q in enumerate(data.qids) if rates[q] is not None]
-            xs = [i + (k - 1) * width for i, _ in shown]
-            ys = [100 * (rate or 0.0) for _, rate in shown]
-            ax.bar(xs, ys, width, label=label, color=colours.dark)
-        ax.set_xticks(range(n_q), data.qids)
-        if n_q > 6 or max((len(q) for q in data.qids), default=0) > 4:
-            ax.tick_params(axis="x", labelrotation=35)
-            for tick in ax.get_xticklabels():
-                tick.set_horizontalalignment("right")
-        ax.set_ylim(0, 100)
-        ax.set_ylabel("students or cases passed [%]")
-        ax.set_xlabel("question")
-        legend_outside(ax)
-        out.append(("pass rate per question: full marks, public and hidden cases", _png(fig)))
-
-        fig = Figure(figsize=(6.4, 3.2))
-        ax = fig.subplots()
-        top = data.max_points or 1.0
-        bins = max(5, min(20, int(top) + 1))
-        ax.hist(
-            data.totals,
-            bins=bins,
-            range=(0, top),
-            color=SAMPLE.light,
-            edgecolor=SAMPLE.dark,
-            linewidth=0.5,
-            label="students",
-        )
-        ax.axvline(top, color=THRESHOLD, ls="--", lw=1, label="maximum")
-        ax.set_xlabel("total [points]")
-        ax.set_ylabel("students")
-        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-        legend_outside(ax)
-        out.append(("distribution of the totals", _png(fig)))
+    out.append(f'<line x1="{x0}" x2="{x0}" y1="{_TOP}" y2="{y0}" stroke="#000"/>')
+    out.append(f'<line x1="{x0}" x2="{x1}" y1="{y0}" y2="{y0}" stroke="#000"/>')
+    out.append(
+        f'<text x="{(x0 + x1) / 2}" y="{_H - 6}" text-anchor="middle">{html.escape(xlabel)}</text>'
+    )
+    mid = (_TOP + y0) / 2
+    out.append(
+        f'<text x="14" y="{mid}" text-anchor="middle" transform="rotate(-90 14 {mid})">'
+        f"{html.escape(ylabel)}</text>"
+    )
     return out
+
+
+def _legend(entries: list[tuple[str, str]]) -> list[str]:
+    """The legend outside the data, right of the axes: (label, SVG of its 14 px key)."""
+    out = []
+    for k, (label, key) in enumerate(entries):
+        x, y = _W - _RIGHT + 14, _TOP + 8 + 20 * k
+        out.append(f'<g transform="translate({x} {y})">{key}</g>')
+        out.append(f'<text x="{x + 22}" y="{y + 11}">{html.escape(label)}</text>')
+    return out
+
+
+def _pass_rate_svg(data: _Class) -> str:
+    from course.plotting.style import pair
+
+    x0, x1, y0 = _LEFT, _W - _RIGHT, _H - _BOTTOM
+    n_q = max(len(data.qids), 1)
+    slot = (x1 - x0) / n_q
+    width = slot * 0.26
+
+    def y_of(percent: float) -> float:
+        return y0 - (y0 - _TOP) * percent / 100
+
+    body = _axes(
+        [(v, str(v)) for v in range(0, 101, 20)],
+        y_of,
+        "question",
+        "students or cases passed [%]",
+    )
+    series = (
+        ("full marks", data.full, pair(0).dark),
+        ("public cases", data.public, pair(2).dark),
+        ("hidden cases", data.hidden, pair(1).dark),
+    )
+    rotate = len(data.qids) > 6 or max((len(q) for q in data.qids), default=0) > 4
+    for i, qid in enumerate(data.qids):
+        centre = x0 + slot * (i + 0.5)
+        for k, (label, rates, colour) in enumerate(series):
+            rate = rates[qid]
+            if rate is None:  # no case of this kind: no bar (the table shows —), not a zero
+                continue
+            top = y_of(100 * rate)
+            body.append(
+                f'<rect x="{_num(centre + (k - 1.5) * width)}" y="{_num(top)}" '
+                f'width="{_num(width)}" height="{_num(y0 - top)}" fill="{colour}">'
+                f"<title>{html.escape(qid)}, {label}: {100 * rate:.0f} %</title></rect>"
+            )
+        label = html.escape(qid)
+        if rotate:
+            body.append(
+                f'<text x="{_num(centre)}" y="{y0 + 14}" text-anchor="end" '
+                f'transform="rotate(-35 {_num(centre)} {y0 + 14})">{label}</text>'
+            )
+        else:
+            body.append(
+                f'<text x="{_num(centre)}" y="{y0 + 16}" text-anchor="middle">{label}</text>'
+            )
+    legend = [(label, f'<rect width="14" height="14" fill="{c}"/>') for label, _, c in series]
+    return _svg(
+        "pass rate per question: full marks, public and hidden cases", body + _legend(legend)
+    )
+
+
+def _nice_step(rough: float) -> float:
+    """The smallest of 1, 2, 5 times a power of ten at least ``rough`` (axis tick spacing)."""
+    import math
+
+    power = 10.0 ** math.floor(math.log10(rough)) if rough > 0 else 1.0
+    return next(m * power for m in (1, 2, 5, 10) if m * power >= rough)
+
+
+def _totals_svg(data: _Class) -> str:
+    from course.plotting.style import SAMPLE, THRESHOLD
+
+    x0, x1, y0 = _LEFT, _W - _RIGHT, _H - _BOTTOM
+    top = data.max_points or 1.0
+    n_bins = max(5, min(20, int(top) + 1))
+    counts = [0] * n_bins
+    for total in data.totals:
+        counts[min(n_bins - 1, max(0, int(n_bins * total / top)))] += 1
+    peak = max(max(counts), 1)
+    step = max(1, -(-peak // 5))  # at most about five integer ticks
+    y_max = step * -(-peak // step)
+
+    def y_of(count: float) -> float:
+        return y0 - (y0 - _TOP) * count / y_max
+
+    def x_of(points: float) -> float:
+        return x0 + (x1 - x0 - 10) * points / top
+
+    body = _axes(
+        [(v, str(v)) for v in range(0, y_max + 1, step)], y_of, "total [points]", "students"
+    )
+    for b, count in enumerate(counts):
+        lo, hi = top * b / n_bins, top * (b + 1) / n_bins
+        if count:
+            body.append(
+                f'<rect x="{_num(x_of(lo))}" y="{_num(y_of(count))}" '
+                f'width="{_num(x_of(hi) - x_of(lo))}" height="{_num(y0 - y_of(count))}" '
+                f'fill="{SAMPLE.light}" stroke="{SAMPLE.dark}" stroke-width="0.5">'
+                f"<title>{_num(lo)} to {_num(hi)} points: {count} student(s)</title></rect>"
+            )
+    tick = _nice_step(top / 4)
+    steps = [tick * k for k in range(int(top // tick) + 1) if top - tick * k > 0.3 * tick]
+    for value in [*steps, top]:  # the maximum labelled, no tick crowding it
+        x = _num(x_of(value))
+        body.append(f'<line x1="{x}" x2="{x}" y1="{y0}" y2="{y0 + 4}" stroke="#000"/>')
+        body.append(f'<text x="{x}" y="{y0 + 17}" text-anchor="middle">{value:g}</text>')
+    xm = _num(x_of(top))
+    dash = 'stroke-dasharray="5 3"'
+    body.append(f'<line x1="{xm}" x2="{xm}" y1="{_TOP}" y2="{y0}" stroke="{THRESHOLD}" {dash}/>')
+    legend = [
+        (
+            "students",
+            f'<rect width="14" height="14" fill="{SAMPLE.light}" stroke="{SAMPLE.dark}"/>',
+        ),
+        ("maximum", f'<line x1="0" x2="14" y1="7" y2="7" stroke="{THRESHOLD}" {dash}/>'),
+    ]
+    return _svg("distribution of the totals", body + _legend(legend))
 
 
 def _pct(rate: float | None) -> str:
@@ -241,7 +324,8 @@ body { font-family: system-ui, sans-serif; max-width: 60rem; margin: 1.5rem auto
        padding: 0 1rem; color: #1a1a1a; line-height: 1.45; }
 table { border-collapse: collapse; margin: 0.5rem 0 1.2rem; }
 th, td { border-bottom: 1px solid #ccc; padding: 0.2rem 0.7rem; text-align: left; }
-img { max-width: 100%; height: auto; display: block; margin: 0.5rem 0 1rem; }
+figure { margin: 0.5rem 0 1rem; }
+svg { max-width: 100%; height: auto; display: block; }
 .note { color: #555; }
 """
 
@@ -267,10 +351,8 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         f"<p>{n} student(s); total out of {data.max_points:g}: mean {sum(totals) / n:.2f}, "
         f"median {median:g}, lowest {totals[0]:g}, highest {totals[-1]:g}.</p>"
     )
-    figures = _figures(data)
     parts.append("<h2>Pass rate per question</h2>")
-    alt, png = figures[0]
-    parts.append(f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{png}">')
+    parts.append(f"<figure>{_pass_rate_svg(data)}</figure>")
     rows_q = []
     for qid in data.qids:
         pts = [r.questions[qid].points for r in data.rows if qid in r.questions]
@@ -294,8 +376,7 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         "cases run that passed (a question not answered runs none; — : no such case).</p>"
     )
     parts.append("<h2>Distribution of the totals</h2>")
-    alt, png = figures[1]
-    parts.append(f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{png}">')
+    parts.append(f"<figure>{_totals_svg(data)}</figure>")
 
     parts.append("<h2>What went wrong, per question</h2>")
     wrong = []

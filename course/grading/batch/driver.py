@@ -24,7 +24,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.batch.classreport import warm_up, write_report
+from course.grading.batch.classreport import write_report
 from course.grading.batch.cluster import grade_on_cluster
 from course.grading.batch.identity import resolve_identities
 from course.grading.batch.marks import (
@@ -240,8 +240,6 @@ def grade(
             if tqdm
             else None
         )
-        if pending:
-            warm_up()  # the report's imports, while the students are graded
         if options.cluster:
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
