@@ -261,3 +261,47 @@ def test_report_renders_in_chromium_with_its_figures(graded_class):
     assert not errors
     assert all(url.startswith(("file:", "data:")) for url in requests), requests
     assert headings[:2] == ["Pass rate per question", "Distribution of the totals"]
+
+
+# -- item 6: small traps -------------------------------------------------------------------------
+def test_the_layers_line_stands_on_its_own_line(class_copy, capsys):
+    """The sandbox layers are announced before the progress bar starts its line."""
+    import sys
+
+    _, subs, out = class_copy
+    options = GradeOptions(
+        jobs=1, progress=True, announce=lambda text: print(text, file=sys.stderr)
+    )
+    grade(SOLUTION, subs, out, options)
+    err = capsys.readouterr().err
+    first = GradeOptions().isolation().describe().splitlines()[0]
+    at = err.index(first)
+    assert at == 0 or err[at - 1] == "\n", repr(err[max(0, at - 80) : at + 20])
+
+
+def test_roster_without_secret_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("COURSE_SECRET_FILE", raising=False)
+    roster = tmp_path / "roster.csv"
+    roster.write_text("id,name\ns1,A\n", encoding="utf-8")
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    args = ["grade", str(SOLUTION), str(subs), "--out", str(tmp_path / "out")]
+    assert course_main([*args, "--roster", str(roster)]) == 2
+    err = capsys.readouterr().err
+    assert "--roster without the class's secret" in err and "--no-secret" in err
+    assert not (tmp_path / "out").exists()
+    code = course_main([*args, "--roster", str(roster), "--no-secret", "--no-progress"])
+    assert code == 0 and "public generators (no secret)" in capsys.readouterr().err
+
+
+def test_class_data_stays_out_of_the_clone():
+    import subprocess
+
+    names = ["roster.csv", "submissions/02/s1.ipynb", "grades/02/grades.csv", "handout/x.whl",
+             "gradebook/canvas.csv", "class.key"]  # fmt: skip
+    text = (ROOT / "docs" / "instructors" / "term.md").read_text("utf-8")
+    assert "outside** the clone" in text
+    ignored = subprocess.run(
+        ["git", "check-ignore", "--no-index", *names], cwd=ROOT, capture_output=True, text=True
+    ).stdout.split()
+    assert sorted(ignored) == sorted(names)

@@ -135,14 +135,24 @@ def _grade(args) -> int:
 
 def _class_options(args) -> dict | None:
     """The secret and the roster of ``course grade`` (None after printing why not)."""
-    from course.grading.authoring.secret import SecretError, load_secret
+    from course.grading.authoring.secret import SECRET_ENV, SecretError, load_secret
     from course.grading.batch.roster import RosterError, read_roster
 
     try:
-        secret = load_secret(args.secret)
+        secret = None if args.no_secret else load_secret(args.secret)
         roster = read_roster(args.roster) if args.roster else None
     except (SecretError, RosterError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
+        return None
+    if roster is not None and secret is None and not args.no_secret:
+        print(
+            "course grade: --roster without the class's secret: the students of an edition "
+            "exported with --secret worked on personal data drawn with that key, and without it "
+            "their personal questions would be graded against public data instead. Pass "
+            f"--secret FILE (or set {SECRET_ENV}), or --no-secret for a class whose edition was "
+            "exported with --no-secret.",
+            file=sys.stderr,
+        )
         return None
     print(
         "personal data: "
@@ -394,6 +404,12 @@ def add_commands(subparsers) -> None:
         "--secret",
         default=None,
         help="the class's key file, as given to `course export` (default: $COURSE_SECRET_FILE)",
+    )
+    p_gr.add_argument(
+        "--no-secret",
+        action="store_true",
+        help="grade on public data although a secret is set (a class whose edition was "
+        "exported with --no-secret); --roster needs --secret or this",
     )
     p_gr.add_argument(
         "--roster",

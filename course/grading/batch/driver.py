@@ -225,6 +225,10 @@ def grade(
                 )
                 rows[row.student] = row
 
+        if options.announce is not None and not options.cluster:
+            # before the progress bar, whose line has no end until it closes
+            iso = grader.sandbox.isolation if pending else grader.isolation
+            options.announce(iso.describe())
         try:
             from tqdm import tqdm
         except ImportError:  # pragma: no cover
@@ -243,9 +247,6 @@ def grade(
         if options.cluster:
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
-            if options.announce is not None:
-                iso = grader.sandbox.isolation if pending else grader.isolation
-                options.announce(iso.describe())
             results = _grade_locally(grader, pending, options.jobs)
         for row in results:
             finish(row)
