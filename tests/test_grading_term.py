@@ -92,7 +92,7 @@ def test_student_grades_only_the_chosen_students(class_copy, capsys):
     # without --regrade a chosen student graded from an unchanged file is kept
     summary = grade(SOLUTION, subs, out, _options(students=frozenset({"term-full"})))
     assert summary.graded == 0 and summary.stale == ["term-stub"]
-    assert "1 changed since graded but not chosen by --student (term-stub)" in summary.text()
+    assert "1 out of date but not chosen by --student (term-stub)" in summary.text()
     # --regrade with --student: only that student, the rest of results.jsonl stays
     before = (out / "results.jsonl").read_text()
     code = course_main(

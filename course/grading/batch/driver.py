@@ -196,7 +196,7 @@ def grade(
         rows: dict[str, StudentResult] = {}
         pending = []
         regraded: dict[str, int] = {}  # why students graded before were graded again
-        stale: list[str] = []  # changed files left alone because --student chose others
+        stale: list[str] = []  # out of date, left alone because --student chose others
         skipped = 0  # never graded and not chosen by --student
         for sub in todo:
             old = previous.get(sub.student)

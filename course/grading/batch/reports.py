@@ -118,7 +118,7 @@ class Summary:
     unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
     marking: str = ""  # what happened to the short answers (course.grading.batch.marks)
     regraded: dict = field(default_factory=dict)  # why graded again -> how many ("file changed")
-    stale: list = field(default_factory=list)  # changed files not regraded (--student chose others)
+    stale: list = field(default_factory=list)  # out of date, not regraded: --student chose others
     unselected: int = 0  # submissions never graded and not chosen by --student
 
     def class_text(self) -> str:
@@ -172,7 +172,7 @@ class Summary:
         )
         if self.stale:
             text += (
-                f"; {len(self.stale)} changed since graded but not chosen by --student "
+                f"; {len(self.stale)} out of date but not chosen by --student "
                 f"({', '.join(self.stale[:20])}{' …' if len(self.stale) > 20 else ''})"
             )
         if self.unselected:
