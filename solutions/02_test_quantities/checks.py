@@ -33,6 +33,16 @@ SIGMA = 0.2
 NOMINAL = np.ones(3)
 MODES = ["NF", "F1", "F2", "F3"]
 LECTURE = np.array([[0, 0, 1, 1], [0, 1, 0, 1], [0, 1, 1, 0]])
+# q8b: a single mode, nothing alarms, two or more fault modes remain, or no mode remains.
+Q8B_OPTIONS = [
+    "NF",
+    "F1",
+    "F2",
+    "F3",
+    "no fault detected",
+    "several faults fit",
+    "no single fault fits",
+]
 MODES5 = ["NF", "F1", "F2", "F3", "F4"]
 STRUCTURE5 = np.array([[0, 1, 1, 0, 0], [0, 0, 1, 1, 0], [0, 1, 0, 0, 1], [0, 0, 0, 1, 1]])
 Y_RECORD = U @ np.array([1.0, 1.3, 1.0]) + SIGMA * np.random.default_rng(2).standard_normal(N)
@@ -225,8 +235,12 @@ def _diagnosis(statistics, n, sigma, alpha):
 
 
 def _conclusion(diagnosis):
+    """The option of q8b that a diagnosis supports (each option's meaning is in its question)."""
     if len(diagnosis) == len(MODES):
         return "no fault detected"
+    if not diagnosis:
+        # every test alarms: every mode is ruled out, none of the single faults explains it
+        return "no single fault fits"
     if len(diagnosis) == 1:
         return diagnosis[0]
     return "several faults fit"
@@ -332,10 +346,13 @@ def q8(d):
 @CHECKS.choice(
     "q8b",
     var="mode_mine",
-    options=["NF", "F1", "F2", "F3", "no fault detected", "several faults fit"],
+    options=Q8B_OPTIONS,
     points=1,
     data="record",
-    hint="Answer with one of the options exactly as written.",
+    hint="Answer with one of the options (upper/lower case and surrounding spaces do not "
+    'matter): a single mode when the diagnosis isolates it, "no fault detected" when nothing '
+    'alarms, "several faults fit" when two or more fault modes remain, "no single fault fits" '
+    "when the diagnosis is empty.",
 )
 def q8b(d):
     return _conclusion(_diagnosis(_three_statistics(d), d["y"].size, d["sigma"], d["alpha"]))

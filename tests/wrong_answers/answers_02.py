@@ -259,6 +259,8 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
     "q8b": [
         ("NF always", 'mode_mine = "NF"'),
         ("F1 (first fault, a guess)", 'mode_mine = "F1"'),
+        ("no single fault fits, always", 'mode_mine = "no single fault fits"'),
+        ("several faults fit, always", 'mode_mine = "several faults fit"'),
     ],
     "q9": [
         (
@@ -398,7 +400,9 @@ print(diagnosis_mine)
     "q8b": [
         (
             "from a dictionary",
-            """conclusion = {1: diagnosis_mine[0], 4: "no fault detected"}
+            """conclusion = {0: "no single fault fits", 4: "no fault detected"}
+if len(diagnosis_mine) == 1:
+    conclusion[1] = diagnosis_mine[0]
 mode_mine = conclusion.get(len(diagnosis_mine), "several faults fit")
 """,
         ),
