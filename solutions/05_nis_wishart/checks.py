@@ -63,6 +63,21 @@ EPS_GAP_LO = _record_with_eigenvalues((12, [0.26, 1.3]), np.eye(2), _rng)
 S_F = np.array([[1.5, 0.3, 0.0], [0.3, 1.0, -0.2], [0.0, -0.2, 0.7]])
 EPS_GAP_3 = _record_with_eigenvalues((10, [0.6, 1.0, 2.47]), S_F, _rng)
 
+# Public cases that see the decision (their own generator, so the records above stay as they
+# were). m = 2, K = 12, alpha = 0.05: thresholds (0.2377, 2.3303). Both extreme eigenvalues
+# outside (any "or" or "and" rule rejects, a test that never rejects does not), then only
+# lmax outside and only lmin outside (the test rejects, "and instead of or" does not).
+_rng_decision = np.random.default_rng(2026_11_26)
+EPS_BOTH_OUT = _record_with_eigenvalues((12, [0.15, 2.7]), S_A, _rng_decision)
+EPS_MAX_OUT = _record_with_eigenvalues((12, [0.9, 2.6]), S_A, _rng_decision)
+EPS_MIN_OUT = _record_with_eigenvalues((12, [0.18, 1.4]), np.eye(2), _rng_decision)
+# A public stack of S (one covariance per step), as the preamble allows: K = 6, m = 3.
+_A_STACK = _rng_decision.standard_normal((6, 3, 3))
+S_STACK = _A_STACK @ np.swapaxes(_A_STACK, -1, -2) + 0.5 * np.eye(3)
+EPS_STACK = np.einsum(
+    "kij,kj->ki", np.linalg.cholesky(S_STACK), _rng_decision.standard_normal((6, 3))
+)
+
 CHECKS = Checks(
     "05_nis_wishart",
     title="Assignment 5: the NIS matrix and Wishart eigenvalue tests",
@@ -88,6 +103,7 @@ def q1(eps, S):
 
 
 q1.case(EPS_A, S_A, label="K = 5, m = 2, one S for all steps")
+q1.case(EPS_STACK, S_STACK, label="K = 6, m = 3, a stack of S (one per step)")
 ### BEGIN HIDDEN TESTS
 q1.case(EPS_B, S_B, hidden=True)
 q1.case(EPS_C, S_C, hidden=True)
@@ -114,6 +130,7 @@ def q2(eps, S):
 
 
 q2.case(EPS_A, S_A, label="K = 5, m = 2, one S for all steps")
+q2.case(EPS_STACK, S_STACK, label="K = 6, m = 3, a stack of S (one per step)")
 ### BEGIN HIDDEN TESTS
 q2.case(EPS_B, S_B, hidden=True)
 q2.case(EPS_C, S_C, hidden=True)
@@ -180,7 +197,24 @@ def q4():
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.nis_matrix_test"],
+    # Order matters where two mistakes give the same value on a case: the public cases are
+    # ordered so that each mistake's FIRST failing case tells it apart (see the cases below).
     mistakes=[
+        Mistake(
+            "rejects only when BOTH extreme eigenvalues are outside: one eigenvalue outside "
+            "its threshold is enough (lmin below the lower OR lmax above the upper)",
+            lambda eps, S, alpha: _decided(eps, S, alpha, lambda low, high: low and high),
+        ),
+        Mistake(
+            "the decision is never a rejection, even with both extreme eigenvalues outside "
+            "their thresholds: is reject always False, or the comparisons the wrong way round?",
+            lambda eps, S, alpha: _decided(eps, S, alpha, lambda low, high: False),
+        ),
+        Mistake(
+            "rejects although both extreme eigenvalues lie between the thresholds: is reject "
+            "always True, or are the comparisons the wrong way round?",
+            lambda eps, S, alpha: _decided(eps, S, alpha, lambda low, high: True),
+        ),
         Mistake(
             "the decision looks one-sided: thresholds at alpha instead of alpha/2",
             lambda eps, S, alpha: q5.reference(eps, S, 2 * alpha),
@@ -200,7 +234,21 @@ def q5(eps, S, alpha):
     return MatrixTest(lmin, lmax, bool(result.reject))
 
 
+def _decided(eps, S, alpha, rule):
+    """q5 with another decision ``rule(lmin below, lmax above)`` (the mistakes of q5)."""
+    right = q5.reference(eps, S, alpha)
+    K, m = np.shape(eps)
+    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
+    return MatrixTest(right.lmin, right.lmax, bool(rule(right.lmin < lower, right.lmax > upper)))
+
+
+# The order tells the mistakes apart: "always rejects" fails first on a case that does not
+# reject, "never rejects" on the case with both eigenvalues outside (where "and" is right),
+# "and instead of or" on a case with one eigenvalue outside, "one-sided" on the near case.
 q5.case(EPS_A, S_A, 0.05, label="K = 5, m = 2, alpha = 0.05")
+q5.case(EPS_BOTH_OUT, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, both eigenvalues outside")
+q5.case(EPS_MAX_OUT, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, only lmax outside")
+q5.case(EPS_MIN_OUT, np.eye(2), 0.05, label="K = 12, m = 2, alpha = 0.05, only lmin outside")
 q5.case(EPS_GAP_HI, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, lmax near the upper threshold")
 ### BEGIN HIDDEN TESTS
 q5.case(EPS_GAP_LO, np.eye(2), 0.05, hidden=True)
