@@ -165,3 +165,38 @@ def test_monte_carlo_answers_repeat_the_seeded_simulation(checks, name, qid):
         args[seed_at] = int(args[seed_at]) + 1
         other = q.reference(*args)
         assert not compare(expected, other, q.rtol, q.atol).ok, case.label
+
+
+# -- issue 26: cases that exercise what the question asks ---------------------------------
+def test_02_q9_hidden_cases_vary_the_record_length(checks):
+    """A detection_rate written with the notebook's N (not U.shape[0]) scored 2/2."""
+    q = checks["02_test_quantities"].questions["q9"]
+    public_n = {np.shape(c.args[0])[0] for c in q.public_cases}
+    assert {np.shape(c.args[0])[0] for c in q.hidden_cases} - public_n
+
+
+def test_02_q3_hidden_cases_include_u1_identically_zero(checks):
+    """The question insists on the u1 = 0 guard: it must weigh on the hidden cases too."""
+    q = checks["02_test_quantities"].questions["q3"]
+    zero = [c for c in q.hidden_cases if not np.any(c.args[1])]
+    assert len(zero) >= 2
+    for case in zero:  # the answer is the whole sum of squares, neither 0 nor NaN
+        y, _, u2, u3 = (np.asarray(a, dtype=float) for a in case.args)
+        assert q.reference(*case.args) == pytest.approx(float(np.sum((y - u2 - u3) ** 2)))
+
+
+def test_03_q7_public_case_with_sigma_not_one(checks):
+    """With sigma = 1 only, dividing by sigma^2 passed the self-check; now a public case tells
+    it, and names it."""
+    q = checks["03_estimation_and_likelihood"].questions["q7"]
+    cases = [c for c in q.public_cases if c.args[3] != 1.0]
+    assert cases
+    n, theta0, theta1, sigma, alpha = cases[0].args
+    from scipy import stats
+
+    wrong = float(
+        stats.norm.sf(stats.norm.isf(alpha) - np.sqrt(n) * abs(theta1 - theta0) / sigma**2)
+    )
+    mistakes = [(m.message, m.reference(*cases[0].args)) for m in q.mistakes]
+    verdict = compare(q.reference(*cases[0].args), wrong, q.rtol, q.atol, mistakes=mistakes)
+    assert not verdict.ok and "sigma^2" in verdict.message

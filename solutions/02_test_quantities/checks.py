@@ -29,6 +29,15 @@ U1 = 1.0 + 0.5 * np.sin(2 * np.pi * T_AXIS / 20)
 U2 = np.cos(2 * np.pi * T_AXIS / 13)
 U3 = np.where((T_AXIS // 8) % 2 == 0, 1.0, -1.0)
 U = np.column_stack([U1, U2, U3])
+# The same three signals over 60 samples (a hidden case of q9 with another N).
+_T60 = np.arange(60)
+U_60 = np.column_stack(
+    [
+        1.0 + 0.5 * np.sin(2 * np.pi * _T60 / 20),
+        np.cos(2 * np.pi * _T60 / 13),
+        np.where((_T60 // 8) % 2 == 0, 1.0, -1.0),
+    ]
+)
 SIGMA = 0.2
 NOMINAL = np.ones(3)
 MODES = ["NF", "F1", "F2", "F3"]
@@ -131,6 +140,8 @@ q3.case(Y_RECORD, np.zeros(N), U2, U3, label="u1 identically zero")
 q3.case(U @ [2.5, 1.0, 1.0], U1, U2, U3, hidden=True)
 q3.case(U @ [1.0, 1.0, 0.5], U1, U2, U3, hidden=True)
 q3.case(np.arange(5.0), np.array([1.0, 0, 2, 0, 1]), np.ones(5), np.zeros(5), hidden=True)
+q3.case(U @ [1.0, 1.2, 1.0], np.zeros(N), U2, U3, hidden=True)  # u1 identically zero again
+q3.case(np.arange(6.0), np.zeros(6), np.ones(6), np.zeros(6), hidden=True)
 
 
 @CHECKS.function(
@@ -408,3 +419,7 @@ q9.case(U, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 4000, 8, label="no fault, alp
 q9.case(U, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 20000, 7, hidden=True)
 q9.case(U, np.array([1.8, 1.0, 1.0]), SIGMA, 0.05, 20000, 11, hidden=True)
 q9.case(U, np.array([1.0, 1.0, 1.1]), SIGMA, 0.01, 20000, 13, hidden=True)
+# Other record lengths: a detection_rate that uses the notebook's N instead of U.shape[0]
+# fails here.
+q9.case(U[:30], np.array([1.0, 1.2, 1.0]), SIGMA, 0.05, 20000, 17, hidden=True)
+q9.case(U_60, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 20000, 19, hidden=True)

@@ -95,6 +95,19 @@ WRONG = {
             _T1 + "    r = target - u1\n    return float(r @ r)\n",
         ),
         (
+            "no u1 = 0 guard, nan turned into 0 afterwards",
+            _T1
+            + "    with np.errstate(invalid='ignore', divide='ignore'):\n"
+            + "        th = (target @ u1) / (u1 @ u1)\n"
+            + "    r = target - th * u1\n    return float(np.nan_to_num(r @ r))\n",
+        ),
+        (
+            "u1 = 0 returns 0 (nothing to fit, nothing left)",
+            _T1
+            + "    if not np.any(u1):\n        return 0.0\n"
+            + "    th = (target @ u1) / (u1 @ u1)\n    r = target - th * u1\n    return float(r @ r)\n",
+        ),
+        (
             "mean instead of sum",
             _T1
             + "    e = u1 @ u1\n    th = (target @ u1) / e if e > 0 else 0.0\n"
@@ -300,6 +313,20 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
         (
             "returns alpha",
             "def detection_rate(U, theta, sigma, alpha, n_runs, seed):\n    return alpha\n",
+        ),
+        (
+            "the notebook's global N instead of U.shape[0]",
+            _Q9.replace("    n = U.shape[0]\n", "    n = N\n")
+            + "    Y = U @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, n))\n"
+            + _Q9_T
+            + "    return float(np.mean(T > sigma**2 * stats.chi2.isf(alpha, n - 1)))\n",
+        ),
+        (
+            "the global N in the threshold only",
+            _Q9
+            + "    Y = U @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, n))\n"
+            + _Q9_T
+            + "    return float(np.mean(T > sigma**2 * stats.chi2.isf(alpha, N - 1)))\n",
         ),
     ],
 }
