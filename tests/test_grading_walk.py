@@ -363,3 +363,27 @@ def test_a_band_holds_its_ends_and_nothing_beyond(band):
         assert not compare(band, wrong if wrong.ndim else float(wrong)).ok
     # a band does not take the question's tolerance: just outside fails whatever rtol/atol say
     assert not compare(band, above if above.ndim else float(above), 1e-3, 1e-3).ok
+
+
+# -- feedback never gives the answer away as a ratio (issue 26, items 4/5) ----------------
+@pytest.mark.parametrize(
+    ("expected", "got"),
+    [
+        (14, 16),  # 04 q7: "too large by a factor ≈ 1.14 (= 8/7)" gave 14 away
+        ((14, 0), (16, 0)),
+        (np.array([37, 38]), np.array([40, 40])),  # 02 q4: dof from the columns
+        (38, 40),
+    ],
+)
+def test_integer_feedback_names_no_factor(expected, got):
+    message = compare(expected, got, RTOL, ATOL).message
+    assert message and "factor" not in message and "/" not in message.split(";")[0], message
+
+
+def test_float_feedback_names_no_revealing_ratio():
+    """06 q3: (M - 1)/M against M/(M - 1) was told "(= 16/9)"; only the ratios of common
+    slips (as the seal names them) are spelled out."""
+    e = 0.75 * 2.345
+    assert "16/9" not in compare(e, 2.345 * 4 / 3, RTOL, ATOL).message
+    assert "(= 4/3)" in compare(e, e * 4 / 3, RTOL, ATOL).message
+    assert "(= 3/2)" in compare(e, e * 1.5, RTOL, ATOL).message
