@@ -200,3 +200,39 @@ def test_03_q7_public_case_with_sigma_not_one(checks):
     mistakes = [(m.message, m.reference(*cases[0].args)) for m in q.mistakes]
     verdict = compare(q.reference(*cases[0].args), wrong, q.rtol, q.atol, mistakes=mistakes)
     assert not verdict.ok and "sigma^2" in verdict.message
+
+
+def _first_message(q, student):
+    """The message a student reads: that of the first public case the answer fails."""
+    for case in q.public_cases if q.kind == "function" else [None]:
+        args = case.args if case is not None else ()
+        mistakes = [(m.message, m.reference(*args)) for m in q.mistakes]
+        verdict = compare(q.reference(*args), student(*args), q.rtol, q.atol, mistakes=mistakes)
+        if not verdict.ok:
+            return verdict.message
+    return ""
+
+
+def test_02_q4_dof_from_columns_is_told_to_use_the_rank(checks):
+    """It was told "off by one ... a 1-based index" (and at grading "a factor ≈ 1.5")."""
+    q = checks["02_test_quantities"].questions["q4"]
+
+    def regression_residual(Phi, Y):
+        T = q.reference(Phi, Y).T
+        return (T, np.shape(Phi)[0] - np.shape(Phi)[1])
+
+    message = _first_message(q, regression_residual)
+    assert "use its rank" in message and "off by one" not in message
+
+
+@pytest.mark.parametrize(
+    ("qid", "wrong"),
+    [
+        ("q3", lambda q: lambda *args: q.reference(*args) / 0.2**2),
+        ("q6", lambda q: lambda: (q.reference().J / 0.2**2, q.reference().power)),
+        ("q7_practice", lambda q: lambda: q.reference() / 0.2**2),
+    ],
+)
+def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
+    q = checks["02_test_quantities"].questions[qid]
+    assert "sigma^2" in _first_message(q, wrong(q))

@@ -150,3 +150,53 @@ def test_05_q1_q2_public_cases_include_a_stack_of_S(qid):
     eps, S = stacks[0].args
     one_S = q.reference(eps, S[0])  # what a solution that handles one S only computes
     assert not compare(q.reference(eps, S), one_S, q.rtol, q.atol).ok
+
+
+# -- issue 26, item 5: the commonest mistakes are named -----------------------------------
+def _first_message(q, student):
+    """The message a student reads: that of the first public case the answer fails."""
+    for case in q.public_cases if q.kind == "function" else [None]:
+        args = case.args if case is not None else ()
+        mistakes = [(m.message, m.reference(*args)) for m in q.mistakes]
+        got = student(*args)
+        verdict = compare(q.reference(*args), got, q.rtol, q.atol, mistakes=mistakes)
+        if not verdict.ok:
+            return verdict.message
+    return ""
+
+
+def _whiten(eps, S, root):
+    eps = np.asarray(eps, float)
+    K, m = eps.shape
+    S = np.broadcast_to(np.asarray(S, float), (K, m, m))
+    return np.stack([np.linalg.solve(root(S[k]), eps[k]) for k in range(K)])
+
+
+def _symmetric_root(S):
+    w, V = np.linalg.eigh(S)
+    return V @ np.diag(np.sqrt(w)) @ V.T
+
+
+@pytest.mark.parametrize(
+    ("student", "words"),
+    [
+        (lambda eps, S: (z := _whiten(eps, S, np.linalg.cholesky)).T @ z, "SUM of the outer"),
+        (lambda eps, S: np.asarray(eps).T @ np.asarray(eps) / len(eps), "whiten first"),
+        (
+            lambda eps, S: (z := _whiten(eps, S, _symmetric_root)).T @ z / len(eps),
+            "another square root of S",
+        ),
+    ],
+    ids=["factor K (sum)", "not whitened", "symmetric square root"],
+)
+def test_05_q2_common_mistakes_are_named(student, words):
+    q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions["q2"]
+    assert words in _first_message(q, student)
+
+
+def test_05_q8_normal_approximation_is_named():
+    q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions["q8"]
+    from scipy import stats
+
+    half = float(stats.norm.isf(0.025)) * np.sqrt(2 * 4 / 50)
+    assert "normal approximation" in _first_message(q, lambda: (4 - half, 4 + half))

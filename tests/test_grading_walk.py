@@ -387,3 +387,12 @@ def test_float_feedback_names_no_revealing_ratio():
     assert "16/9" not in compare(e, 2.345 * 4 / 3, RTOL, ATOL).message
     assert "(= 4/3)" in compare(e, e * 4 / 3, RTOL, ATOL).message
     assert "(= 3/2)" in compare(e, e * 1.5, RTOL, ATOL).message
+
+
+def test_an_array_of_strings_is_told_to_be_a_list():
+    """02 q1 answered with np.array(['F1', 'F2']) was told "(use numbers or booleans)"."""
+    from course.grading.codec import EncodingError, encode
+
+    with pytest.raises(EncodingError, match="list of strings"):
+        encode(np.array(["F1", "F2"]))
+    assert encode(["F1", "F2"]) == ["F1", "F2"]

@@ -124,6 +124,13 @@ def q2():
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
     ],
+    mistakes=[
+        Mistake(
+            "looks divided by sigma^2: T1 is the plain sum of squared residuals (the threshold "
+            "of q6 carries the sigma^2)",
+            lambda y, u1, u2, u3: q3.reference(y, u1, u2, u3) / SIGMA**2,
+        ),
+    ],
     hint=(
         "Set the derivative of the sum with respect to th1 to zero: what is left is a ratio of "
         "two sums. What happens to that ratio when u1 is identically zero?",
@@ -154,6 +161,15 @@ q3.case(np.arange(6.0), np.zeros(6), np.ones(6), np.zeros(6), hidden=True)
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
+    ],
+    mistakes=[
+        Mistake(
+            "dof counts the columns of Phi: use its rank, dof = N - rank(Phi) (a column that "
+            "repeats another, or is zero, estimates nothing and costs no degree of freedom)",
+            lambda Phi, Y: RegressionResidual(
+                q4.reference(Phi, Y).T, int(np.shape(Phi)[0] - np.shape(Phi)[1])
+            ),
+        ),
     ],
     hint="Project Y onto the orthogonal complement of the column space of Phi with an SVD "
     "(or np.linalg.lstsq, which reports the rank); never solve the normal equations. "
@@ -212,6 +228,11 @@ def q5():
         "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
     ),
     mistakes=[
+        Mistake(
+            "J looks like a threshold on T1/sigma^2: the test compares T1 itself, so J = sigma^2 "
+            "times the chi2 quantile",
+            lambda: ThresholdAndPower(q6.reference().J / SIGMA**2, q6.reference().power),
+        ),
         Mistake(
             "looks like chi2 with N degrees of freedom: T1 estimates one gain, so N - 1",
             lambda: _threshold_and_power(N, 0.01),
@@ -276,6 +297,16 @@ def q5b():
     atol=1e-9,
     hint="The three test quantities of q7, on the public record y_near: T_k leaves theta_k free "
     "and fixes the other two gains at 1.",
+    mistakes=[
+        Mistake(
+            "looks divided by sigma^2: T_k is the plain sum of squared residuals",
+            lambda: _three_statistics({"y": Y_NEAR, "U": U}) / SIGMA**2,
+        ),
+        Mistake(
+            "looks like a mean of squared residuals: T_k is their sum",
+            lambda: _three_statistics({"y": Y_NEAR, "U": U}) / N,
+        ),
+    ],
 )
 def q7_practice():
     return _three_statistics({"y": Y_NEAR, "U": U})

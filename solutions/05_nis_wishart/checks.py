@@ -121,12 +121,58 @@ q1.case(EPS_C, S_C, hidden=True)
         "course.nis.nis_matrix_eigenvalues",
         "course.nis.nis_matrix_test",
     ],
+    mistakes=[
+        Mistake(
+            "looks like the SUM of the outer products z_k z_k^T: Pi is their mean (divide by K)",
+            lambda eps, S: q2.reference(eps, S) * np.shape(eps)[0],
+        ),
+        Mistake(
+            "looks like the outer products of eps itself: whiten first, z_k = B_k^{-1} eps_k "
+            "with S_k = B_k B_k^T",
+            lambda eps, S: np.einsum("ki,kj->ij", eps, eps) / np.shape(eps)[0],
+        ),
+        Mistake(
+            "whitened with another square root of S (the symmetric S^(1/2)?): with one S for "
+            "all steps its NIS matrix is a rotation of the right one, with the same eigenvalues "
+            "(q5 would not see it), but not the same matrix; use the lower Cholesky factor B_k "
+            "(S_k = B_k B_k^T), z_k = B_k^{-1} eps_k",
+            lambda eps, S: _nis_matrix_symmetric_root(eps, S),
+        ),
+        Mistake(
+            "whitened with the transposed factor: with S_k = B_k B_k^T (B_k lower), "
+            "z_k = B_k^{-1} eps_k; B_k^{-T} eps_k (or scipy's upper factor U_k, solve(U_k, eps_k)) "
+            "does not whiten",
+            lambda eps, S: _nis_matrix_upper_factor(eps, S),
+        ),
+    ],
     hint="Pi = (1/K) sum_k z_k z_k^T with z_k = B_k^{-1} eps_k (B_k lower Cholesky "
     "factor of S_k): the mean of the outer products of the whitened innovations. "
     "Its trace equals the average NIS of q1.",
 )
 def q2(eps, S):
     return nis.nis_matrix(eps, S)
+
+
+def _stack(eps, S):
+    eps = np.asarray(eps, dtype=float)
+    K, m = eps.shape
+    return eps, np.broadcast_to(np.asarray(S, dtype=float), (K, m, m))
+
+
+def _nis_matrix_symmetric_root(eps, S):
+    """q2 whitened with S_k^(-1/2) (symmetric) instead of the Cholesky factor (a mistake)."""
+    eps, S = _stack(eps, S)
+    w, V = np.linalg.eigh(S)
+    z = np.einsum("kij,kj,klj,kl->ki", V, 1.0 / np.sqrt(w), V, eps)
+    return z.T @ z / len(eps)
+
+
+def _nis_matrix_upper_factor(eps, S):
+    """q2 whitened with B_k^T instead of B_k (a mistake)."""
+    eps, S = _stack(eps, S)
+    B = np.linalg.cholesky(S)
+    z = np.linalg.solve(np.swapaxes(B, -1, -2), eps[:, :, None])[:, :, 0]
+    return z.T @ z / len(eps)
 
 
 q2.case(EPS_A, S_A, label="K = 5, m = 2, one S for all steps")
@@ -391,6 +437,14 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
     atol=1e-10,
     forbid=["course.nis.consistency_interval"],
     mistakes=[
+        Mistake(
+            "looks like the normal approximation n +- z sqrt(2n/N): the question asks for the "
+            "exact chi2(n N) quantiles of the sum, divided by N",
+            lambda: (
+                4.0 - float(stats.norm.isf(0.025)) * np.sqrt(8.0 / 50),
+                4.0 + float(stats.norm.isf(0.025)) * np.sqrt(8.0 / 50),
+            ),
+        ),
         Mistake(
             "quantiles of chi2(nN) for the SUM: the run average is that sum divided by N",
             lambda: (float(stats.chi2(200).ppf(0.025)), float(stats.chi2(200).isf(0.025))),

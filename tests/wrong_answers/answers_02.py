@@ -95,6 +95,12 @@ WRONG = {
             _T1 + "    r = target - u1\n    return float(r @ r)\n",
         ),
         (
+            "divided by sigma^2",
+            _T1
+            + "    e = u1 @ u1\n    th = (target @ u1) / e if e > 0 else 0.0\n"
+            + "    r = target - th * u1\n    return float(r @ r) / sigma**2\n",
+        ),
+        (
             "no u1 = 0 guard, nan turned into 0 afterwards",
             _T1
             + "    with np.errstate(invalid='ignore', divide='ignore'):\n"
@@ -200,6 +206,14 @@ threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N - 1, lam)))
         ),
     ],
     "q7_practice": [
+        (
+            "divided by sigma^2",
+            _T_ALL + "T_practice = np.array([_T(U, y_near, k) for k in range(3)]) / sigma**2\n",
+        ),
+        (
+            "mean of squares, not the sum",
+            _T_ALL + "T_practice = np.array([_T(U, y_near, k) for k in range(3)]) / N\n",
+        ),
         (
             "all three gains fixed (no gain estimated)",
             "T_practice = np.array([float(np.sum((y_near - U.sum(axis=1)) ** 2))] * 3)",

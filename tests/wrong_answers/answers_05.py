@@ -105,6 +105,20 @@ WRONG = {
         ("divided by K - 1", _Q2 + _WHITEN + "    return z.T @ z / (K - 1)\n"),
         ("not whitened", _Q2 + _WHITEN + "    return eps.T @ eps / K\n"),
         (
+            "the symmetric square root of S (scipy.linalg.sqrtm)",
+            _Q2
+            + "    import scipy.linalg\n"
+            + "    eps = np.asarray(eps, dtype=float)\n"
+            + "    K, m = eps.shape\n"
+            + "    S = np.broadcast_to(np.asarray(S, dtype=float), (K, m, m))\n"
+            + "    z = np.stack([np.linalg.solve(scipy.linalg.sqrtm(S[k]).real, eps[k]) for k in range(K)])\n"
+            + "    return z.T @ z / K\n",
+        ),
+        (
+            "sum over steps, whitened (factor K)",
+            _Q2 + _WHITEN + "    return np.einsum('ki,kj->ij', z, z)\n",
+        ),
+        (
             "one S only (the first of a stack)",
             _Q2
             + "    eps = np.asarray(eps, float)\n"
@@ -298,6 +312,14 @@ WRONG = {
         (
             "chi2(n N) not divided by N",
             "nees_interval = (stats.chi2(200).ppf(0.025), stats.chi2(200).isf(0.025))",
+        ),
+        (
+            "normal approximation n +- 1.96 sqrt(2n/N)",
+            "nees_interval = (4 - 1.96 * np.sqrt(8 / 50), 4 + 1.96 * np.sqrt(8 / 50))",
+        ),
+        (
+            "normal approximation with the exact z",
+            "h = stats.norm.isf(0.025) * np.sqrt(2 * 4 / 50)\nnees_interval = (4 - h, 4 + h)",
         ),
         (
             "chi2(n) of one run",
