@@ -122,3 +122,12 @@ def test_every_graded_question_has_a_hidden_or_personal_case(name):
         f"{name}: public-only value questions {sorted(public_only)}; give a new question a "
         "personal (data=) or private case, and drop a converted one from PUBLIC_VALUE_ONLY"
     )
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_choice_hints_do_not_demand_an_exact_copy(name):
+    """Options match ignoring case and surrounding spaces: a hint that says "exactly" makes a
+    student distrust a right " Yes "; say what is accepted instead."""
+    for q in _checks(name).questions.values():
+        if q.kind == "choice":
+            assert "exactly" not in q.hint, (name, q.id, q.hint)

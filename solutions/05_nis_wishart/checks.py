@@ -372,7 +372,7 @@ WHICH_OPTIONS = ["neither", "only the NIS test", "only the matrix test", "both"]
     options=WHICH_OPTIONS,
     points=1,
     data="record",
-    hint="Copy one of the options exactly (a string).",
+    hint="One of the options, as a string (upper/lower case and surrounding spaces do not matter).",
 )
 def q6_which(d):
     p_nis, p_matrix = _pvalues(d["eps"], d["S"], d["alpha"])
