@@ -236,3 +236,27 @@ def test_02_q4_dof_from_columns_is_told_to_use_the_rank(checks):
 def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
     q = checks["02_test_quantities"].questions[qid]
     assert "sigma^2" in _first_message(q, wrong(q))
+
+
+def test_02_q5_sum_for_mean_is_named(checks):
+    q = checks["02_test_quantities"].questions["q5"]
+    assert "sum of the squared residuals" in _first_message(q, lambda: q.reference() * 20)
+
+
+def test_02_q9_another_draw_order_is_named(checks):
+    """A right statistic on noise drawn (N, n_runs) read like a wrong statistic."""
+    q = checks["02_test_quantities"].questions["q9"]
+
+    def detection_rate(U, theta, sigma, alpha, n_runs, seed):
+        from scipy import stats
+
+        U = np.asarray(U, dtype=float)
+        n = U.shape[0]
+        rng = np.random.default_rng(seed)
+        Y = (U @ np.asarray(theta))[:, None] + sigma * rng.standard_normal((n, n_runs))
+        target = Y.T - U[:, 1] - U[:, 2]
+        u = U[:, 0]
+        R = target - np.outer(target @ u, u) / (u @ u)
+        return float(np.mean(np.sum(R**2, axis=1) > sigma**2 * stats.chi2.isf(alpha, n - 1)))
+
+    assert "another order" in _first_message(q, detection_rate)

@@ -201,6 +201,10 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
     ),
     mistakes=[
         Mistake(
+            "looks like the sum of the squared residuals: the lecture's T is their mean (1/N)",
+            lambda: float(np.sum((Y_GB - U_GB - np.mean(Y_GB - U_GB)) ** 2)),
+        ),
+        Mistake(
             "the bias was not removed: subtract its estimate b_hat before squaring",
             lambda: float(np.mean((Y_GB - U_GB) ** 2)),
         ),
@@ -424,15 +428,29 @@ def q8b(d):
             "returns alpha: the promised false-alarm rate, not the simulated rate",
             lambda U_, theta, sigma, alpha, n_runs, seed: float(alpha),
         ),
+        Mistake(
+            "the rate of the right statistic, but the noise drawn in another order (records in "
+            "columns?): the recipe draws ONE rng.standard_normal((n_runs, N)), row r for record r",
+            lambda U_, theta, sigma, alpha, n_runs, seed: _detection_rate(
+                U_, theta, sigma, alpha, n_runs, seed, records_in_columns=True
+            ),
+        ),
     ],
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):
     # The simulation the question prescribes, run with the case's seed: a correct answer counts
     # exactly the same detections (any vectorisation), while the exact power (the formula, not
     # a simulation) or another random sample differs from it by a Monte Carlo error.
+    return _detection_rate(U_, theta, sigma, alpha, n_runs, seed)
+
+
+def _detection_rate(U_, theta, sigma, alpha, n_runs, seed, records_in_columns=False):
+    """q9's simulation; ``records_in_columns`` draws the noise (N, n_runs) (a mistake)."""
     U_ = np.asarray(U_, dtype=float)
     rng = np.random.default_rng(seed)
-    Y = U_ @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, U_.shape[0]))
+    shape = (U_.shape[0], n_runs) if records_in_columns else (n_runs, U_.shape[0])
+    noise = rng.standard_normal(shape)
+    Y = U_ @ np.asarray(theta, dtype=float) + sigma * (noise.T if records_in_columns else noise)
     t1 = _t1_many(U_, Y)
     return float(np.mean(t1 > chi2.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
 
