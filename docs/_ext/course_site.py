@@ -15,11 +15,15 @@ What it adds to a plain Sphinx + myst-nb + numpydoc build:
 * **Offline maths.** MathJax 3 is served from the site itself (the ``django-static-mathjax``
   wheel ships it), so formulas are typeset without reaching a CDN.
 * **Entry page.** ``OUT/index.html`` forwards to the landing page ``docs/index.html``.
+* **Hideable answers.** An admonition with the class ``dropdown`` (``:class: dropdown`` under
+  ``:::{admonition} Answer``) becomes an HTML ``<details>`` box, closed until the reader opens
+  it, without JavaScript and without sphinx-togglebutton or sphinx-design.
 """
 
 from __future__ import annotations
 
 import ast
+import html
 import importlib
 import inspect
 import json
@@ -509,6 +513,31 @@ def write_entry_page(app, exception) -> None:
     )
 
 
+def dropdown_admonitions(app, doctree, docname) -> None:
+    """Turn each admonition of class ``dropdown`` into a closed ``<details>`` box (HTML only).
+
+    In Jupyter the same markdown shows the answer in plain text under its title line; on the
+    site it stays hidden until the reader clicks the title.
+    """
+    if app.builder.format != "html":
+        return
+    for node in list(doctree.findall(nodes.admonition)):
+        if "dropdown" not in node["classes"] or not node.children:
+            continue
+        title = node.children[0]
+        label = title.astext() if isinstance(title, nodes.title) else "Answer"
+        body = node.children[1:] if isinstance(title, nodes.title) else node.children
+        classes = " ".join(["admonition", *node["classes"]])
+        opening = nodes.raw(
+            "",
+            f'<details class="{html.escape(classes)}">'
+            f'<summary class="admonition-title">{html.escape(label)}</summary>',
+            format="html",
+        )
+        closing = nodes.raw("", "</details>", format="html")
+        node.replace_self([opening, *body, closing])
+
+
 def setup(app):
     app.add_config_value("course_site_notebooks", ["notebooks/*.ipynb"], "env")
     app.add_config_value("course_site_assignments", ["exercises/*/*.ipynb"], "env")
@@ -521,6 +550,7 @@ def setup(app):
     app.connect("env-get-outdated", outdated_by_teaching_map)
     app.connect("autodoc-process-docstring", add_notebook_see_also, priority=600)
     app.connect("doctree-read", add_notebook_links)
+    app.connect("doctree-resolved", dropdown_admonitions)
     app.connect("build-finished", copy_mathjax)
     app.connect("build-finished", write_entry_page)
     app.connect("build-finished", build_lite)
