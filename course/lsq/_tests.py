@@ -34,7 +34,7 @@ from course.validation import (
 # overall model test
 # ---------------------------------------------------------------------------
 def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
-    """Overall model test: is the weighted squared norm of ``ê`` too large?
+    r"""Overall model test: is the weighted squared norm of ``ê`` too large?
 
     Parameters
     ----------
@@ -55,18 +55,26 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     ValueError
         If ``m - n = 0``: without redundancy the test is void.
 
+    See Also
+    --------
+    w_tests : Tests of the single observations.
+    data_snooping : Detection, identification and adaptation in a loop.
+    course.chi2.residual_norm_law : The chi-square law of a residual norm.
+
     Notes
     -----
     Eq. (10.2): under H0 (``y ~ N(Ax, Qyy)``)
 
     .. math:: T = \\hat e^T Q_{yy}^{-1} \\hat e \\sim \\chi^2(m - n, 0),
 
-    rejected (right-sided) when ``T > chi2_alpha(m - n)``. For diagonal Qyy
-    ``T = Σ (ê_i / σ_i)²`` (10.3); for m repeated measurements of one
-    quantity ``T / (m - 1) = σ̂² / σ²`` (Section 10.1.4), which is why
-    ``T / (m - n)`` is reported as the (a-posteriori) variance factor. T is
-    evaluated as ``||ẽ||²`` with ``ẽ = L^{-1} ê`` the whitened residuals, the
-    same number without ``Qyy^{-1}``.
+    rejected (right-sided) when :math:`T > \chi^2_\alpha(m - n)`. For diagonal
+    :math:`Q_{yy}`, :math:`T = \sum_i (\hat e_i / \sigma_i)^2` (10.3); for
+    :math:`m` repeated measurements of one quantity
+    :math:`T / (m - 1) = \hat\sigma^2 / \sigma^2` (Section 10.1.4), which is
+    why :math:`T / (m - n)` is reported as the (a-posteriori) variance
+    factor. :math:`T` is evaluated as :math:`\lVert \tilde e \rVert^2` with
+    :math:`\tilde e = L^{-1} \hat e` the whitened residuals, the same number
+    without :math:`Q_{yy}^{-1}`.
 
     A 1-D Qyy filled with standard deviations ``s_i`` instead of variances
     is a likely slip that no check of Qyy alone can see (both are positive
@@ -320,7 +328,7 @@ def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
 
 
 def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
-    """Baarda's w-test of every observation for a single outlier.
+    r"""Baarda's w-test of every observation for a single outlier.
 
     Parameters
     ----------
@@ -342,6 +350,12 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     ValueError
         If ``m - n = 0`` (nothing can be tested).
 
+    See Also
+    --------
+    overall_model_test : The test of the whole model.
+    data_snooping : The w-tests repeated after each removal.
+    mdb : The smallest outlier each w-test finds with a given power.
+
     Notes
     -----
     The alternative hypothesis of test i is ``E(y) = A x + c_i ∇`` with
@@ -352,13 +366,19 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
                          {\\sqrt{c_i^T Q_{yy}^{-1} Q_{\\hat e\\hat e} Q_{yy}^{-1} c_i}}
               \\sim N(0, 1) \\text{ under H0}
 
-    reduces for diagonal Qyy to the chapter's eq. (10.4), ``w_i = ê_i /
-    σ_êi``, and also holds for correlated observations. The critical value
-    is two-sided, ``N_{α/2}(0, 1)`` (Section 10.3). With ``Qyy = L L^T``,
-    the thin QR ``L^{-1} A = Q1 R`` and the whitened residuals ``ẽ``:
-    ``Q_yy^{-1} ê = L^{-T} ẽ`` and
-    ``c_i^T Q_yy^{-1} Q_êê Q_yy^{-1} c_i = |L^{-1} c_i|² - |Q1^T L^{-1} c_i|²``,
-    where ``|L^{-1} c_i|² = (Q_yy^{-1})_{ii}``; so the numerators and the
+    reduces for diagonal :math:`Q_{yy}` to the chapter's eq. (10.4),
+    :math:`w_i = \hat e_i / \sigma_{\hat e_i}`, and also holds for correlated
+    observations. The critical value is two-sided, :math:`N_{\alpha/2}(0, 1)`
+    (Section 10.3). With :math:`Q_{yy} = LL^{\mathsf T}`, the thin QR
+    :math:`L^{-1}A = Q_1 R` and the whitened residuals :math:`\tilde e`:
+    :math:`Q_{yy}^{-1}\hat e = L^{-\mathsf T}\tilde e` and
+
+    .. math::
+
+        c_i^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} c_i
+        = \lVert L^{-1} c_i \rVert^2 - \lVert Q_1^{\mathsf T} L^{-1} c_i \rVert^2,
+
+    where :math:`\lVert L^{-1} c_i \rVert^2 = (Q_{yy}^{-1})_{ii}`; so the numerators and the
     denominators come from one whitening solve with n + 1 right-hand sides
     and the diagonal of ``Q_yy^{-1}`` (O(m n) for diagonal Qyy).
     Reference: W. Baarda (1968), *A testing procedure for use in geodetic
@@ -469,6 +489,11 @@ def data_snooping(
     SnoopingResult
         Removed indices (original numbering), the w-tests of every round, the
         final fit and the reason for stopping.
+
+    See Also
+    --------
+    w_tests : One round of tests.
+    overall_model_test : The detection step.
 
     Notes
     -----
