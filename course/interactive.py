@@ -38,6 +38,7 @@ from .plotting.style import (
     theory_grid,
     threshold_line,
 )
+from .results import critical_value, rejection_probability
 from .validation import as_count, as_finite, as_positive, as_probability
 
 __all__ = [
@@ -217,10 +218,12 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
     r_i = fit.redundancy_numbers[index]
     lam = outlier**2 * r_i / sigma**2
     dof = fit.redundancy
-    omt_power = float(stats.ncx2.sf(omt.critical_value, dof, lam)) if lam > 0 else alpha
+    omt_power = (
+        rejection_probability(stats.ncx2(dof, lam), omt.critical_value) if lam > 0 else alpha
+    )
     k = wt.critical_value
-    shift = np.sqrt(lam)
-    w_power = float(stats.norm.sf(k - shift) + stats.norm.cdf(-k - shift))
+    # the outlier's w-statistic is N(sqrt(lam), 1); the w-test rejects |w| > k
+    w_power = rejection_probability(stats.norm(loc=np.sqrt(lam)), (-k, k), "two-sided")
 
     ax_T, ax_w = _axes(axes, 2)
     upper = max(stats.chi2.isf(1e-3, dof), 1.15 * omt.statistic, stats.ncx2.isf(0.01, dof, lam))
@@ -607,8 +610,8 @@ def records_view(
         second = k if kind == "correlation" else None
         law0 = mm.statistic_law(null, kind, j, M, k=second)
         law2 = mm.statistic_law(alternative, kind, j, M, k=second)
-        lo, hi = float(law0.ppf(alpha / 2)), float(law0.isf(alpha / 2))
-        power = float(law2.cdf(lo) + law2.sf(hi))
+        lo, hi = critical_value(law0, alpha, "two-sided")
+        power = rejection_probability(law2, (lo, hi), "two-sided")
         powers[kind] = power
         left = min(float(law0.ppf(1e-3)), float(law2.ppf(1e-3)))
         right = max(float(law0.isf(1e-3)), float(law2.isf(1e-3)))

@@ -26,7 +26,7 @@ from course.diagnosis._common import (
 )
 from course.linalg import check_full_column_rank, cholesky_lower, qr_solve, solve_spd, symmetrize
 from course.linalg import whiten as _whiten
-from course.results import TestResult, format_number
+from course.results import TestResult, critical_value, format_number, rejection_probability
 from course.validation import as_covariance, as_float_array, as_probability, as_vector
 
 
@@ -369,9 +369,14 @@ def parameter_estimate_power(
     cov = cov_all[np.ix_(pos, pos)]
     if len(tested) == 1:
         s = float(np.sqrt(cov[0, 0]))
-        c = stats.norm.isf(alpha / 2)
-        b = shift[0] / s
-        power = np.asarray(stats.norm.sf(c - b) + stats.norm.cdf(-c - b))
-        return float(power) if power.ndim == 0 else power
+        region = critical_value(stats.norm(), alpha, "two-sided")
+        # the standardised estimate is N(b, 1) under the fault b = shift / s
+        power = np.array(
+            [
+                rejection_probability(stats.norm(loc=b), region, "two-sided")
+                for b in np.ravel(shift[0] / s)
+            ]
+        )
+        return float(power[0]) if not several else power
     lam = np.sum(_whiten(cholesky_lower(cov, "covariance"), shift) ** 2, axis=0)
     return chi2_power(len(tested), lam, alpha)
