@@ -63,55 +63,55 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     bordered by :math:`g_i = \int_I f_i` when :math:`m` is odd, for any basis
     :math:`f_0, \dots, f_{m-1}` of :math:`y^{a-1} e^{-y} p(y)` with :math:`p` of
-    degree :math:`< m`, :math:`a = (K - m + 1)/2`.  Chiani uses ``f_i = y^{a-1+i} e^{-y}``,
-    whose entries are incomplete gamma functions; at large ``K`` they agree
+    degree :math:`< m`, :math:`a = (K - m + 1)/2`.  Chiani uses :math:`f_i = y^{a-1+i} e^{-y}`,
+    whose entries are incomplete gamma functions; at large :math:`K` they agree
     to many digits and the Pfaffian cancels catastrophically (about 17 digits
-    are lost at ``m = 6``, ``K = 1000``).  Powers of a standardised variable
-    cure large ``K`` but not large ``m``: near ``K = m`` the eigenvalues
-    spread over ``[0, 2m]`` and the skew matrix of ``w(y) u^i`` has a
-    condition number of 1e34 at ``m = 24``, ``K = 30``, so double precision
+    are lost at :math:`m = 6`, :math:`K = 1000`).  Powers of a standardised variable
+    cure large :math:`K` but not large :math:`m`: near :math:`K = m` the eigenvalues
+    spread over :math:`[0, 2m]` and the skew matrix of :math:`w(y)\, u^i` has a
+    condition number of 1e34 at :math:`m = 24`, :math:`K = 30`, so double precision
     returns nonsense even from exactly rounded entries.  Here the basis is
-    ``f_i(y) = c w(y) L_i^(K-m)(2y)``, ``w`` the Gamma(a) density and
-    ``L_i^(alpha)`` the generalised Laguerre polynomials normalised so that
-    the ``f_i`` are orthonormal for ``int f_i f_j y dy`` (a change of basis
+    :math:`f_i(y) = c\, w(y)\, L_i^{(K-m)}(2y)`, :math:`w` the Gamma(a) density and
+    :math:`L_i^{(\alpha)}` the generalised Laguerre polynomials normalised so that
+    the :math:`f_i` are orthonormal for :math:`\int f_i f_j\, y\, dy` (a change of basis
     by a triangular matrix, so the ratio of Pfaffians is unchanged).  The
-    skew matrix of ``[0, inf)`` then has a condition number below 100 for
-    every ``m <= 30`` and ``K``.  In ``v = sqrt(y)`` the basis functions are
-    ``v^(K-m) e^{-v^2}`` times polynomials, smooth at 0, so the running
-    integrals ``int_lo^z f_i`` and the entries are computed by composite
-    Gauss-Legendre quadrature (panels of width 1.5 in ``v``, 24 nodes each)
-    over the interval cut where every ``f_i`` is below 1e-30 of its largest
+    skew matrix of :math:`[0, \infty)` then has a condition number below 100 for
+    every :math:`m \le 30` and :math:`K`.  In :math:`v = \sqrt y` the basis functions are
+    :math:`v^{K-m} e^{-v^2}` times polynomials, smooth at 0, so the running
+    integrals :math:`\int_{\text{lo}}^z f_i` and the entries are computed by composite
+    Gauss-Legendre quadrature (panels of width 1.5 in :math:`v`, 24 nodes each)
+    over the interval cut where every :math:`f_i` is below 1e-30 of its largest
     value (:class:`course.nis._pfaffians._LaguerreBasis`).  Normalising by the
-    Pfaffian over ``[0, inf)`` avoids the multivariate-gamma constant.
+    Pfaffian over :math:`[0, \infty)` avoids the multivariate-gamma constant.
 
-    ``cdf`` of ``lambda_max`` uses ``I = [0, Kx/2]``; ``sf`` of
-    ``lambda_min`` uses ``I = [Kx/2, inf)``.  The complementary probability
-    is computed without the subtraction ``1 - p`` when ``p > 1/2``: with
-    ``A_full = A_I + D`` (``D`` assembled from the other interval's pieces),
-    ``p^2 = det(I - A_full^{-1} D)`` and ``1 - p = -expm1(log(p))`` with
-    ``log p = sum_k log|1 - mu_k| / 2`` over the eigenvalues ``mu_k`` of
-    ``A_full^{-1} D``, so small tail probabilities keep their relative
+    ``cdf`` of :math:`\lambda_{\max}` uses :math:`I = [0, Kx/2]`; ``sf`` of
+    :math:`\lambda_{\min}` uses :math:`I = [Kx/2, \infty)`.  The complementary probability
+    is computed without the subtraction :math:`1 - p` when :math:`p > 1/2`: with
+    :math:`A_{\text{full}} = A_I + D` (:math:`D` assembled from the other interval's pieces),
+    :math:`p^2 = \det(I - A_{\text{full}}^{-1} D)` and :math:`1 - p = -\operatorname{expm1}(\log p)` with
+    :math:`\log p = \sum_k \log|1 - \mu_k| / 2` over the eigenvalues :math:`\mu_k` of
+    :math:`A_{\text{full}}^{-1} D`, so small tail probabilities keep their relative
     accuracy.  The density is the derivative of a Pfaffian under a rank-two
-    skew update, ``d Pf(A) = -Pf([[A, U, V], [-U^T, 0, 0], [-V^T, 0, 0]])``.
-    For ``m = 1`` the law is ``chi2(K)/K``.
+    skew update, :math:`d\operatorname{Pf}(A) = -\operatorname{Pf}\begin{bmatrix} A & U & V \\ -U^{\mathsf T} & 0 & 0 \\ -V^{\mathsf T} & 0 & 0 \end{bmatrix}`.
+    For :math:`m = 1` the law is :math:`\chi^2(K)/K`.
 
     Accuracy, against Chiani's formula in his own basis evaluated with
     mpmath at a working precision raised until 30 digits settle
-    (``tests/nis_reference.py``): on the validated region ``m <= 30``,
-    ``m <= K <= 10^5`` (:data:`EXACT_LAW_LIMITS`) the absolute CDF error is
-    below ``1e-13`` at every ``K`` tested (all ``K`` from ``m`` to ``2m``
-    and ``K`` up to ``10^5``; the full grid is
+    (``tests/nis_reference.py``): on the validated region :math:`m \le 30`,
+    :math:`m \le K \le 10^5` (:data:`EXACT_LAW_LIMITS`) the absolute CDF error is
+    below :math:`10^{-13}` at every :math:`K` tested (all :math:`K` from :math:`m` to :math:`2m`
+    and :math:`K` up to :math:`10^5`; the full grid is
     ``tests/benchmarks/bench_nis.py``, a hypothesis sweep of it runs in the
-    test suite); relative error about ``1e-12`` in the tails the tests use
-    (upper tail of ``lambda_max``, lower tail of ``lambda_min``) down to
-    probabilities of ``1e-300`` (checked for ``m <= 6``; at ``m = 16`` to
-    ``30`` checked at ``1e-30``, relative error below ``1e-12``).  In the
-    opposite tails, probabilities below about ``1e-12`` are accurate in
+    test suite); relative error about :math:`10^{-12}` in the tails the tests use
+    (upper tail of :math:`\lambda_{\max}`, lower tail of :math:`\lambda_{\min}`) down to
+    probabilities of :math:`10^{-300}` (checked for :math:`m \le 6`; at :math:`m = 16` to
+    :math:`30` checked at :math:`10^{-30}`, relative error below :math:`10^{-12}`).  In the
+    opposite tails, probabilities below about :math:`10^{-12}` are accurate in
     absolute terms only.  Outside the validated region the constructor raises
     ``ValueError`` rather than return unchecked numbers.  A CDF point costs
-    about 1 ms of CPU at ``m = 30`` (building the law 2-3 ms more), a
+    about 1 ms of CPU at :math:`m = 30` (building the law 2-3 ms more), a
     quantile 10-30 ms.  Quantiles come from a safeguarded Newton iteration
-    on ``log F`` against ``log x``, started at the Tracy-Widom quantile.
+    on :math:`\log F` against :math:`\log x`, started at the Tracy-Widom quantile.
     """
 
     _bounds = (0.0, np.inf)
