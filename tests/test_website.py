@@ -336,7 +336,14 @@ def test_answers_are_hidden_until_opened(site):
 
 @pytest.mark.parametrize(
     "module",
-    ["course.nis", "course.chi2", "course.lsq", "course.filters", "course.mismatched"],
+    [
+        "course.nis",
+        "course.chi2",
+        "course.lsq",
+        "course.filters",
+        "course.mismatched",
+        "course.diagnosis",
+    ],
 )
 def test_api_pages_typeset_their_formulas(visits, module):
     """The Notes of the API reference are maths, not ASCII formulas in code literals."""
