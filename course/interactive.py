@@ -166,7 +166,7 @@ def _build(update, sliders: dict):
 # ---------------------------------------------------------------------------
 @styled
 def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=None):
-    """Overall model test and w-tests of a MUDE sea-level record with an added outlier.
+    r"""Overall model test and w-tests of a MUDE sea-level record with an added outlier.
 
     Parameters
     ----------
@@ -191,11 +191,23 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
         with the outlier), ``omt_power`` and ``w_power`` (the
         probabilities that each test detects an outlier of this size).
 
+    See Also
+    --------
+    course.lsq.overall_model_test : The overall model test.
+    course.lsq.w_tests : The w-tests.
+    course.lsq.mdb : Minimal detectable biases.
+
     Notes
     -----
-    An outlier ``∇`` in observation ``i`` makes ``T`` non-central
-    ``χ²(m − n, λ)`` and ``w_i`` normal with mean ``√λ``, with
-    ``λ = ∇² (Q_yy⁻¹ Q_êê Q_yy⁻¹)_ii`` (Teunissen 2000).
+    An outlier :math:`\nabla` in observation :math:`i` makes :math:`T`
+    non-central :math:`\chi^2(m - n, \lambda)` and :math:`w_i` normal with mean
+    :math:`\sqrt\lambda`, with
+
+    .. math::
+
+        \lambda = \nabla^2 \bigl(Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1}\bigr)_{ii}
+
+    (Teunissen 2000).
     """
     from scipy import stats
 

@@ -393,6 +393,10 @@ class TestResult:
     details : mapping, optional
         Extra, test-specific values (shown in the HTML table).
 
+    See Also
+    --------
+    decide : The one decision path.
+
     Notes
     -----
     Build one with :meth:`from_null`, which computes the critical value,

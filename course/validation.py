@@ -309,7 +309,7 @@ def as_matrix(
 
 
 def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False) -> np.ndarray:
-    """Validate a covariance matrix: square ``size`` x ``size``, symmetric, PD.
+    r"""Validate a covariance matrix: square ``size`` x ``size``, symmetric, PD.
 
     Parameters
     ----------
@@ -335,18 +335,29 @@ def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False
         Not positive definite, numerically included (not positive
         semi-definite with ``allow_singular``).
 
+    See Also
+    --------
+    as_float_array : The check of any array of numbers.
+    course.linalg.covariance_factor : The factor of a checked covariance.
+
     Notes
     -----
     Positive definiteness is decided by the Cholesky factorisation
-    ``Q = L L^T`` (no eigendecomposition), with a relative tolerance on its
-    diagonal: the matrix is *numerically singular*, and refused, when some
-    ``L_ii**2 <= SINGULAR_RTOL * m * Q_ii`` (:data:`SINGULAR_RTOL` is
-    ``4 eps``).  ``L_ii**2 / Q_ii`` is the part of the variance of variable
-    ``i`` that the variables before it leave unexplained; an exactly
-    singular matrix (a variable that is a combination of others) leaves only
-    rounding there, and its Cholesky factorisation may still "succeed".
-    With ``allow_singular=True`` the smallest eigenvalue must be at least
-    ``-m eps max|Q|``.
+    :math:`Q = LL^{\mathsf T}` (no eigendecomposition), with a relative
+    tolerance on its diagonal: the matrix is *numerically singular*, and
+    refused, when for some :math:`i`
+
+    .. math::
+
+        L_{ii}^2 \le \epsilon_s\, m\, Q_{ii}
+
+    (:math:`\epsilon_s` = :data:`SINGULAR_RTOL`, four machine epsilons).
+    :math:`L_{ii}^2 / Q_{ii}` is the part of the variance of variable :math:`i`
+    that the variables before it leave unexplained; an exactly singular matrix
+    (a variable that is a combination of others) leaves only rounding there,
+    and its Cholesky factorisation may still "succeed".  With
+    ``allow_singular=True`` the smallest eigenvalue must be at least
+    :math:`-m\,\epsilon \max|Q|`.
 
     Examples
     --------
