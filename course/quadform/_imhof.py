@@ -117,7 +117,7 @@ def imhof_cdf(
     method="contour",
     full_output=False,
 ):
-    """``P(Q <= c)`` for ``Q = sum_k w_k chi2(dof_k, noncentrality_k) + sigma Z``.
+    r"""CDF :math:`P(Q \le c)` of :math:`Q = \sum_k w_k \chi^2(h_k, \delta_k^2) + \sigma Z`.
 
     Parameters
     ----------
@@ -168,28 +168,53 @@ def imhof_cdf(
         When the error estimate stays above the tolerance after six step
         halvings (never seen on the course's test cases).
 
+    See Also
+    --------
+    imhof_sf : The upper tail :math:`P(Q > c)`, computed directly.
+    liu_tang_zhang_cdf : A fast approximation without error control.
+    WeightedChiSquare : The same law frozen, with quantiles and moments.
+    inversion_integrands : The integrands, for figures.
+
     Notes
     -----
-    Imhof (1961), section 3: with ``theta(u) = 1/2 sum[h_k atan(w_k u) +
-    delta_k^2 w_k u / (1 + w_k^2 u^2)] - c u / 2`` and ``rho(u) = prod (1 +
-    w_k^2 u^2)^{h_k/4} exp(1/2 sum (delta_k w_k u)^2 / (1 + w_k^2 u^2))``,
+    Imhof (1961), section 3: with
 
-    .. math:: P(Q > c) = \\frac12 + \\frac1\\pi \\int_0^\\infty
-              \\frac{\\sin\\theta(u)}{u\\,\\rho(u)}\\,du .
+    .. math::
+
+        \theta(u) = \frac12 \sum_k \Bigl[h_k \arctan(w_k u)
+            + \frac{\delta_k^2 w_k u}{1 + w_k^2 u^2}\Bigr] - \frac{c u}{2},
+        \qquad
+        \rho(u) = \prod_k (1 + w_k^2 u^2)^{h_k/4}
+            \exp\Bigl(\frac12 \sum_k \frac{(\delta_k w_k u)^2}{1 + w_k^2 u^2}\Bigr),
+
+    .. math::
+
+        P(Q > c) = \frac12 + \frac1\pi \int_0^\infty
+            \frac{\sin\theta(u)}{u\,\rho(u)}\,du .
 
     This is the Gil-Pelaez inversion of the characteristic function (Baram
-    1980, (3.16)) along ``s = iu/2`` in the Laplace variable.  The default
+    1980, (3.16)) along :math:`s = iu/2` in the Laplace variable.  The default
     method moves the path (Cauchy's theorem) to the hyperbola
-    ``s(u) = s0 + a(cosh u - 1) + i b sinh u`` through the real saddle point
-    ``s0`` of ``M(s) e^{-sc}/s`` in ``(0, 1/(2 max w))``, with ``b = a`` the
-    saddle's width, giving ``P(Q > c) = (1/pi) int_0^inf Im[M(s) e^{-sc}
-    s'(u)/s] du``.  Upper tails (``c >= 0``) use ``Q``, lower tails the
-    mirrored form ``-Q``, so small tail probabilities keep their relative
-    accuracy.  See the module docstring for the error control.
+
+    .. math::
+
+        s(u) = s_0 + a(\cosh u - 1) + i b \sinh u
+
+    through the real saddle point :math:`s_0` of :math:`M(s) e^{-sc}/s` in
+    :math:`(0, 1/(2 \max_k w_k))`, with :math:`b = a` the saddle's width, giving
+
+    .. math::
+
+        P(Q > c) = \frac1\pi \int_0^\infty
+            \operatorname{Im}\Bigl[\frac{M(s) e^{-sc} s'(u)}{s}\Bigr]\,du .
+
+    Upper tails (:math:`c \ge 0`) use :math:`Q`, lower tails the mirrored form
+    :math:`-Q`, so small tail probabilities keep their relative accuracy.  See
+    the module docstring for the error control.
 
     Examples
     --------
-    Davies' (1980) first test case, ``6 chi2_1 + 3 chi2_1 + chi2_1``:
+    Davies' (1980) first test case, :math:`6 \chi^2_1 + 3 \chi^2_1 + \chi^2_1`:
 
     >>> import numpy as np
     >>> from course.quadform import imhof_cdf
@@ -214,7 +239,7 @@ def imhof_sf(
     method="contour",
     full_output=False,
 ):
-    """``P(Q > c)``, computed directly (not as ``1 - cdf``) in the upper tail.
+    r"""Survival function :math:`P(Q > c)`, computed directly in the upper tail.
 
     Parameters
     ----------
@@ -228,15 +253,27 @@ def imhof_sf(
     error : float or ndarray
         Only with ``full_output``: estimated absolute error.
 
+    See Also
+    --------
+    imhof_cdf : The lower tail :math:`P(Q \le c)`; the formulas.
+    liu_tang_zhang_sf : A fast approximation without error control.
+    WeightedChiSquare : The same law frozen, with quantiles and moments.
+
     Notes
     -----
-    Imhof (1961), section 3, on the deformed contour of :func:`imhof_cdf`;
-    whichever tail is smaller at ``c`` is the one integrated, so small
+    Imhof (1961), section 3, on the deformed contour of :func:`imhof_cdf`:
+
+    .. math::
+
+        P(Q > c) = \frac1\pi \int_0^\infty
+            \operatorname{Im}\Bigl[\frac{M(s) e^{-sc} s'(u)}{s}\Bigr]\,du ;
+
+    whichever tail is smaller at :math:`c` is the one integrated, so small
     upper-tail probabilities keep their relative accuracy.
 
     Examples
     --------
-    Far in the upper tail of ``chi2_1``, where ``1 - imhof_cdf`` would be 0:
+    Far in the upper tail of :math:`\chi^2_1`, where ``1 - imhof_cdf`` would be 0:
 
     >>> from course.quadform import imhof_sf
     >>> print(f"{float(imhof_sf(1300.0, [1.0])):.6e}")
@@ -247,7 +284,7 @@ def imhof_sf(
 
 
 def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
-    """Imhof's real-axis integrand and the deformed-contour integrand at ``u``.
+    r"""Imhof's real-axis integrand and the deformed-contour integrand at ``u``.
 
     For teaching figures.
 
@@ -263,20 +300,35 @@ def inversion_integrands(c, weights, dof=None, noncentrality=None, u=None):
     Returns
     -------
     real_axis : ndarray
-        ``sin(theta(u)) / (u rho(u))``; ``1/2 + (1/pi) int_0^inf`` of it is
-        ``P(Q > c)`` (Imhof 1961).
+        :math:`\sin\theta(u) / (u \rho(u))`; :math:`\frac12 + \frac1\pi
+        \int_0^\infty` of it is :math:`P(Q > c)` (Imhof 1961).
     contour : ndarray
-        ``Im[f(s(u)) s'(u)]`` on the saddle-point hyperbola; ``(1/pi)
-        int_0^inf`` of it is ``P(Q > c)`` when ``tail == "upper"`` and
-        ``-P(Q <= c)`` when ``tail == "lower"``.
+        :math:`\operatorname{Im}[f(s(u)) s'(u)]` on the saddle-point hyperbola;
+        :math:`\frac1\pi \int_0^\infty` of it is :math:`P(Q > c)` when
+        ``tail == "upper"`` and :math:`-P(Q \le c)` when ``tail == "lower"``.
     tail : str
         Which tail the contour computes (the smaller one).
 
+    See Also
+    --------
+    imhof_cdf : The integrals of these integrands; their formulas.
+    imhof_sf : The upper tail.
+
     Notes
     -----
-    The real-axis integrand is Imhof's (1961), eq. (3.2); the contour one is
-    ``Im[M(s) e^{-sc} s'(u) / s]`` on the saddle-point hyperbola of
-    :func:`imhof_cdf`.
+    The real-axis integrand is Imhof's (1961), eq. (3.2),
+
+    .. math::
+
+        \frac{\sin\theta(u)}{u\,\rho(u)},
+
+    and the contour one is
+
+    .. math::
+
+        \operatorname{Im}\Bigl[\frac{M(s) e^{-sc} s'(u)}{s}\Bigr]
+
+    on the saddle-point hyperbola :math:`s(u)` of :func:`imhof_cdf`.
     """
     w, h, d, _ = _terms(weights, dof, noncentrality)
     c = as_finite(c, "c")

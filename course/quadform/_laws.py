@@ -43,7 +43,7 @@ _CHEBYSHEV = np.cos(np.pi * np.arange(_NODES) / (_NODES - 1))[::-1]
 # frozen distributions
 # ---------------------------------------------------------------------------
 class WeightedChiSquare(FrozenDistribution):
-    """Law of ``sum_r w_r chi2(h_r, delta_r^2) + sigma Z + offset``.
+    r"""Law of :math:`\sum_r w_r \chi^2(h_r, \delta_r^2) + \sigma Z + q_0` (``offset`` :math:`q_0`).
 
     Parameters
     ----------
@@ -67,13 +67,31 @@ class WeightedChiSquare(FrozenDistribution):
     sigma, offset : float
     support : tuple of float
 
+    See Also
+    --------
+    QuadraticForm : The law of :math:`x^T A x`, reduced to this one.
+    imhof_cdf, imhof_sf : The integrals behind ``cdf`` and ``sf``.
+    liu_tang_zhang_sf : The approximation that starts the quantile search.
+
     Notes
     -----
-    ``mean = sum w (h + delta^2) + offset`` and
-    ``var = 2 sum w^2 (h + 2 delta^2) + sigma^2`` (the first two cumulants
-    ``kappa_j = 2^{j-1} (j-1)! sum w^j (h + j delta^2)``).  Every method
-    works on the law scaled to ``max(|w|, sigma) = 1``: a law with weights of
-    1e300 has an infinite variance in doubles, not an overflow.
+    The cumulants are
+
+    .. math::
+
+        \kappa_j = 2^{j-1} (j-1)! \sum_r w_r^j (h_r + j \delta_r^2)
+            \quad (j \ge 3),
+
+    and the first two carry the normal term and the offset:
+
+    .. math::
+
+        \operatorname{E} Q = \sum_r w_r (h_r + \delta_r^2) + q_0, \qquad
+        \operatorname{Var} Q = 2 \sum_r w_r^2 (h_r + 2 \delta_r^2) + \sigma^2 .
+
+    Every method works on the law scaled to :math:`\max(|w_r|, \sigma) = 1`:
+    a law with weights of 1e300 has an infinite variance in doubles, not an
+    overflow.
 
     Examples
     --------
@@ -545,7 +563,7 @@ def _sample_shape(size):
 
 
 class QuadraticForm(WeightedChiSquare):
-    """Law of ``Q = x^T A x`` with ``x ~ N(mean, cov)``; ``cov`` may be singular.
+    r"""Law of :math:`Q = x^T A x`, :math:`x \sim N(\mu, \Sigma)`; :math:`\Sigma` may be singular.
 
     Parameters
     ----------
@@ -576,26 +594,45 @@ class QuadraticForm(WeightedChiSquare):
     numpy.linalg.LinAlgError
         ``cov`` not positive semi-definite.
 
+    See Also
+    --------
+    WeightedChiSquare : The reduced law, with all the methods.
+    imhof_cdf, imhof_sf : The integrals behind ``cdf`` and ``sf``.
+
     Notes
     -----
-    With ``cov = L L^T`` (``L = V_+ diag(sqrt(e_+))`` from the eigenpairs of
-    ``cov`` with positive eigenvalues; its nonzero spectrum is that of
-    ``cov^{1/2} A cov^{1/2}``), write ``mean = L nu + mu_perp`` with
-    ``mu_perp`` orthogonal to the range of ``cov`` and ``L^T A L = P diag(lambda) P^T``.
-    With ``y = P^T (z + nu) ~ N(P^T nu, I)`` and ``g = P^T L^T A mu_perp``,
+    Write :math:`\mu` for ``mean`` and :math:`\Sigma` for ``cov``.  With
+    :math:`\Sigma = L L^T`, :math:`L = V_+ \operatorname{diag}(\sqrt{e_+})` from
+    the eigenpairs of :math:`\Sigma` with positive eigenvalues (the nonzero
+    spectrum of :math:`L^T A L` is that of :math:`\Sigma^{1/2} A \Sigma^{1/2}`),
+    write :math:`\mu = L \nu + \mu_\perp` with :math:`\mu_\perp` orthogonal to
+    the range of :math:`\Sigma`, and :math:`L^T A L = P \operatorname{diag}(\lambda) P^T`.
+    With :math:`x = L (z + \nu) + \mu_\perp`, :math:`z \sim N(0, I)`,
+    :math:`y = P^T (z + \nu) \sim N(P^T \nu, I)` and
+    :math:`g = P^T L^T A \mu_\perp`,
 
-    ``Q = sum_r [lambda_r y_r^2 + 2 g_r y_r] + mu_perp^T A mu_perp``.
+    .. math::
 
-    Completing squares for ``lambda_r != 0`` gives ``lambda_r chi2(1,
-    ((P^T nu)_r + g_r/lambda_r)^2)``; the terms with ``lambda_r = 0`` are
-    normal.  For a non-singular ``cov`` this is Baram (1980), (3.16)-(3.17):
-    ``delta_r = p_r^T cov^{-1/2} mean``, with no normal term and no offset.
-    ``mean`` and ``var`` use the closed forms ``tr(A cov) + mean^T A mean`` and
-    ``2 tr((A cov)^2) + 4 mean^T A cov A mean``.  The reduction is done on
-    ``A / max|A|`` and ``x / gamma`` (``gamma`` the larger of ``max|mean|`` and
-    ``sqrt(max|cov|)``) and scaled back, so the units of ``A`` and ``x`` do
-    not matter until ``x^T A x`` itself leaves the range of doubles (then a
-    ValueError says so).
+        Q = \sum_r \bigl[\lambda_r y_r^2 + 2 g_r y_r\bigr] + \mu_\perp^T A \mu_\perp .
+
+    Completing squares for :math:`\lambda_r \ne 0` gives
+    :math:`\lambda_r \chi^2\bigl(1, ((P^T \nu)_r + g_r/\lambda_r)^2\bigr)`; the
+    terms with :math:`\lambda_r = 0` are normal.  For a non-singular
+    :math:`\Sigma` this is Baram (1980), (3.16)-(3.17):
+    :math:`\delta_r = p_r^T \Sigma^{-1/2} \mu`, with no normal term and no offset.
+    ``mean`` and ``var`` use the closed forms
+
+    .. math::
+
+        \operatorname{E} Q = \operatorname{tr}(A \Sigma) + \mu^T A \mu, \qquad
+        \operatorname{Var} Q = 2 \operatorname{tr}\bigl((A \Sigma)^2\bigr)
+            + 4 \mu^T A \Sigma A \mu .
+
+    The reduction is done on :math:`A / \max|A_{ij}|` and :math:`x / \gamma`
+    (:math:`\gamma` the larger of :math:`\max|\mu_i|` and
+    :math:`\sqrt{\max|\Sigma_{ij}|}`) and scaled back, so the units of
+    :math:`A` and :math:`x` do not matter until :math:`x^T A x` itself leaves
+    the range of doubles (then a ValueError says so).
 
     Examples
     --------

@@ -149,7 +149,7 @@ def _ltz_points(x, name, w, h, d, sigma, offset):
 
 
 def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
-    """Fast approximation of ``P(Q > c)`` (Liu, Tang & Zhang 2009).
+    r"""Fast approximation of :math:`P(Q > c)` (Liu, Tang & Zhang 2009).
 
     Matches the first four cumulants of ``Q`` (skewness exactly, kurtosis
     as closely as possible) with a noncentral chi-square; forms with negative
@@ -157,12 +157,12 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     *body* of the law, with no error control: use :func:`imhof_sf` (at
     ``rtol=1e-4`` if speed matters) for anything that is reported.
 
-    Measured error (``tests/test_quadform.py``), where the exact ``P(Q <= c)``
+    Measured error (``tests/test_quadform.py``), where the exact :math:`P(Q \le c)`
     lies in [0.01, 0.99]: at most 0.03 absolute for weights of one sign and
     0.11 with weights of both signs (300 random laws of 1-5 terms, weights
     0.1-5, dof 1-5, noncentrality 0-5; 0.02 on Davies' 13 cases).  In the
-    tails the relative error is unbounded: for ``0.6 chi2_1 + 0.3 chi2_1 +
-    0.1 chi2_1`` it gives ``P(Q <= 0.1) = 0`` where the law has 0.054.
+    tails the relative error is unbounded: for :math:`0.6 \chi^2_1 + 0.3 \chi^2_1
+    + 0.1 \chi^2_1` it gives :math:`P(Q \le 0.1) = 0` where the law has 0.054.
 
     Parameters
     ----------
@@ -172,10 +172,30 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     Returns
     -------
     float or ndarray
-        Approximate ``P(Q > c)``.
+        Approximate :math:`P(Q > c)`.
+
+    See Also
+    --------
+    liu_tang_zhang_cdf : The lower tail of the same approximation.
+    imhof_sf : The exact upper tail, with a controlled error.
+    WeightedChiSquare : The exact law frozen (its quantiles start from this guess).
 
     Notes
     -----
+    With the cumulants :math:`\kappa_j` of :math:`Q`, :math:`s_1 = \kappa_3 /
+    \kappa_2^{3/2} / \sqrt 8` and :math:`s_2 = \kappa_4 / \kappa_2^2 / 12`,
+    the standardised :math:`Q` is matched to a standardised
+    :math:`\chi^2(l, \delta^2)`,
+
+    .. math::
+
+        P(Q > c) \approx P\Bigl(\chi^2(l, \delta^2) > l + \delta^2
+            + \sqrt{2 (l + 2\delta^2)}\,\frac{c - \kappa_1}{\sqrt{\kappa_2}}\Bigr),
+
+    where, with :math:`a = 1/(s_1 - \sqrt{s_1^2 - s_2})` when :math:`s_1^2 > s_2`,
+    :math:`\delta^2 = s_1 a^3 - a^2` and :math:`l = a^2 - 2\delta^2` (else
+    :math:`\delta^2 = 0`, :math:`l = 1/s_1^2`): the skewness is matched
+    exactly and the kurtosis as closely as possible.  Source:
     Liu, H., Tang, Y. and Zhang, H. H. (2009), "A new chi-square
     approximation to the distribution of non-negative definite quadratic
     forms in non-central normal variables", Computational Statistics & Data
@@ -187,7 +207,7 @@ def liu_tang_zhang_sf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
 
 
 def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
-    """Fast approximation of ``P(Q <= c)`` (Liu, Tang & Zhang 2009).
+    r"""Fast approximation of :math:`P(Q \le c)` (Liu, Tang & Zhang 2009).
 
     Parameters
     ----------
@@ -197,11 +217,16 @@ def liu_tang_zhang_cdf(c, weights, dof=None, noncentrality=None, *, sigma=0.0):
     Returns
     -------
     float or ndarray
-        Approximate ``P(Q <= c)``.
+        Approximate :math:`P(Q \le c)`.
+
+    See Also
+    --------
+    liu_tang_zhang_sf : The upper tail, and the measured error.
+    imhof_cdf : The exact lower tail, with a controlled error.
 
     Notes
     -----
-    One minus :func:`liu_tang_zhang_sf`, computed from the complementary
+    :math:`1 - P(Q > c)` of :func:`liu_tang_zhang_sf`, computed from the complementary
     noncentral chi-square function; Liu, Tang & Zhang (2009), (3)-(8).  Its
     measured error is stated in :func:`liu_tang_zhang_sf`.
 
