@@ -765,3 +765,99 @@ def test_summary_names_the_slowest_students(graded):
     assert slow and all(sid in slow[0] for _, sid in times[-3:]), (slow, times[-3:])
     # a submission that times out on a question is slower than the honest solution
     assert graded["rows"]["infinite_loop"]["wall_seconds"] > TIMEOUT
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25: whose submission is whose is decided by the LMS's names, never by the notebook
+# ---------------------------------------------------------------------------------------
+def _id_notebook(path: Path, sid: str, written: str | None = None) -> Path:
+    """A notebook declaring ``sid`` (setup cell and submission metadata, with a forged time)."""
+    nb = {
+        "nbformat": 4,
+        "nbformat_minor": 5,
+        "metadata": {"course": {"submission": {"student_id": sid, "written": written or ""}}},
+        "cells": [
+            {
+                "cell_type": "code",
+                "id": "setup",
+                "metadata": {"course": {"role": "setup"}},
+                "source": f'STUDENT_ID = "{sid}"',
+                "outputs": [],
+                "execution_count": None,
+            }
+        ],
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(nb))
+    return path
+
+
+def _roster_file(tmp_path: Path):
+    from course.grading.batch.roster import read_roster
+
+    path = tmp_path / "roster.csv"
+    path.write_text(
+        "Student,ID,SIS User ID,SIS Login ID\n"
+        '"Tim, Vic",101,v1,vic\n"Lory, Mal",102,m2,mal\n"Other, Ann",103,a3,ann\n'
+    )
+    return read_roster(path)
+
+
+def _resolve(folder: Path, roster=None):
+    from course.grading.batch.driver import find_submissions
+    from course.grading.batch.identity import resolve_identities
+
+    return resolve_identities(
+        find_submissions(folder, NAME), NAME, roster.students if roster else None
+    )
+
+
+def _graded_file(identity, sid: str) -> str | None:
+    entry = next(e for e in identity.entries if e.student == sid)
+    return None if entry.path is None else entry.path.relative_to(entry.path.parents[1]).as_posix()
+
+
+def test_a_moodle_upload_cannot_take_another_students_grade(tmp_path):
+    """Issue 25.1: an extra upload in the attacker's Moodle folder declares the victim's ID and a
+    future time; the victim keeps their own file, the upload is quarantined with both names."""
+    subs = tmp_path / "subs"
+    _id_notebook(subs / "Vic Tim_11_assignsubmission_file_" / f"{NAME}.ipynb", "v1", "2020")
+    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "x.ipynb", "v1", "2999-01-01")
+    identity = _resolve(subs, _roster_file(tmp_path))
+    assert _graded_file(identity, "v1") == f"Vic Tim_11_assignsubmission_file_/{NAME}.ipynb"
+    assert [(c[0], c[1], c[2]) for c in identity.conflicts] == [
+        ("Mal Lory_12_assignsubmission_file_", "m2", "v1")
+    ]
+    m2 = next(e for e in identity.entries if e.student == "m2")
+    assert m2.refused and m2.path is None and "quarantined" in m2.note
+    assert any("QUARANTINED Mal Lory" in f and "'v1'" in f for f in identity.flags)
+
+
+def test_without_a_roster_a_claim_from_another_uploader_is_never_graded(tmp_path):
+    subs = tmp_path / "subs"
+    _id_notebook(subs / "Vic Tim_11_assignsubmission_file_" / f"{NAME}.ipynb", "v1")
+    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "x.ipynb", "v1", "2999-01-01")
+    _id_notebook(subs / "v1.ipynb", "m2")  # a file named for v1 that declares someone else
+    identity = _resolve(subs)
+    # v1.ipynb names v1 but declares m2: quarantined; the two Moodle uploads come from
+    # different uploaders and neither is named v1: neither replaces v1's work
+    assert _graded_file(identity, "v1") is None
+    assert {c[0] for c in identity.conflicts} == {
+        "v1.ipynb",
+        "Vic Tim_11_assignsubmission_file_",
+        "Mal Lory_12_assignsubmission_file_",
+    }
+    assert all(e.student != "m2" for e in identity.entries)
+
+
+def test_canvas_order_decides_between_one_students_files_not_the_written_time(tmp_path):
+    subs = tmp_path / "subs"
+    _id_notebook(subs / f"timvic_101_700_{NAME}.ipynb", "v1", "2999-01-01")  # forged time
+    _id_notebook(subs / f"timvic_LATE_101_900_{NAME}-1.ipynb", "v1", "2000-01-01")
+    # another Canvas user's upload declaring v1, with an even later file number
+    _id_notebook(subs / f"lorymal_102_950_{NAME}.ipynb", "v1", "2999-12-31")
+    identity = _resolve(subs, _roster_file(tmp_path))
+    entry = next(e for e in identity.entries if e.student == "v1")
+    assert entry.path.name == f"timvic_LATE_101_900_{NAME}-1.ipynb"
+    assert [c[:3] for c in identity.conflicts] == [(f"lorymal_102_950_{NAME}.ipynb", "m2", "v1")]
+    assert any("the last in the LMS's order" in f for f in identity.flags)
