@@ -861,3 +861,151 @@ def test_canvas_order_decides_between_one_students_files_not_the_written_time(tm
     assert entry.path.name == f"timvic_LATE_101_900_{NAME}-1.ipynb"
     assert [c[:3] for c in identity.conflicts] == [(f"lorymal_102_950_{NAME}.ipynb", "m2", "v1")]
     assert any("the last in the LMS's order" in f for f in identity.flags)
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.2 and 25.9: nothing a submission holds can stall or bloat the parent
+# ---------------------------------------------------------------------------------------
+class _Alarm:
+    """Fail (instead of hanging the suite) when the parent's work on student text takes more
+    than ``seconds``: the old code took tens of seconds on each of these inputs."""
+
+    def __init__(self, seconds: int):
+        self.seconds = seconds
+
+    def __enter__(self):
+        import signal
+
+        def stop(signum, frame):
+            raise TimeoutError(f"the parent spent more than {self.seconds} s on student text")
+
+        self.old = signal.signal(signal.SIGALRM, stop)
+        signal.alarm(self.seconds)
+
+    def __exit__(self, *exc):
+        import signal
+
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, self.old)
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "import ," * 24_000 + " b",  # 192 KB on one line (the old regex: quadratic)
+        "import " + "a, " * 64_000 + "b +",
+        "x = (" + "np, " * 60_000 + "\n.inv",  # a mention after a huge unparsable line
+        "from numpy.linalg import " + " " * 150_000 + ",",  # whitespace runs
+    ],
+)
+def test_forbidden_scan_of_unparsable_text_is_linear(source):
+    from course.grading.notebook import forbidden_mentions
+
+    with _Alarm(10):
+        found = forbidden_mentions(source, ["numpy.linalg.inv", "numpy.linalg.b"])
+    assert ("numpy.linalg.inv" in found) == source.endswith(".inv")
+    assert ("numpy.linalg.b" in found) == source.startswith("import ")
+
+
+@pytest.mark.parametrize(
+    "cell",
+    [
+        "\n".join(f"!echo {i}" for i in range(600)),  # the issue's 5 KB setup cell
+        "\n".join(f"%time x{i} = {i}" for i in range(1_500)),
+        "\n".join(f"y{i} = !ls" for i in range(1_000)),
+    ],
+)
+def test_ipython_syntax_in_a_cell_cannot_stall_the_parent(cell):
+    from course.grading.notebook import forbidden_mentions, student_id_in
+
+    with _Alarm(10):
+        assert student_id_in('STUDENT_ID = "s1"\n' + cell) in (None, "s1")
+        forbidden_mentions(cell + "\nnp.linalg.inv(A)", ["numpy.linalg.inv"])
+
+
+def test_ipython_syntax_of_an_honest_cell_is_still_understood():
+    from course.grading.notebook import forbidden_mentions, student_id_in
+
+    assert student_id_in('%matplotlib inline\n!pip list\nSTUDENT_ID = "s1"') == "s1"
+    assert forbidden_mentions("%matplotlib inline\ny = np.linalg.inv(A)", ["numpy.linalg.inv"]) == [
+        "numpy.linalg.inv"
+    ]
+
+
+def test_a_huge_cell_is_not_parsed_by_the_parent():
+    from course.grading.notebook import MAX_PARSED_CHARS, python_source
+
+    with pytest.raises(SyntaxError, match="larger than"):
+        python_source("x = 1\n" * (MAX_PARSED_CHARS // 6 + 1))
+
+
+def _handle(forbid=("numpy.linalg.inv",)):
+    from course.grading.sandbox.parent import ChildHandle
+
+    sandbox = types.SimpleNamespace(forbid=tuple(forbid), forbid_set=frozenset(forbid))
+    req_r, req_w = os.pipe()
+    resp_r, resp_w = os.pipe()
+    ev_r, ev_w = os.pipe()
+    for fd in (resp_r, ev_r, req_w):
+        os.set_blocking(fd, False)
+    child = ChildHandle(sandbox, os.getpid(), "/nonexistent", req_w, resp_r, ev_r)
+    return child, resp_w, ev_w, (req_r, req_w, resp_r, resp_w, ev_r, ev_w)
+
+
+def test_forbidden_call_reports_keep_one_entry_per_name():
+    from course.grading.tripwire import EVENT
+
+    child, _, ev_w, fds = _handle()
+    try:
+        os.set_blocking(ev_w, False)
+        record, fake = EVENT % b"numpy.linalg.inv", EVENT % b"made.up.name"
+        for _ in range(2_000):
+            os.write(ev_w, fake * 20 + record)
+            child._read_events()
+        assert len(child._events) == 1 and child.events_reported == 2_000 * 21
+        assert child.take_events() == ["numpy.linalg.inv"] and child.take_events() == []
+    finally:
+        for fd in fds:
+            os.close(fd)
+
+
+@pytest.mark.parametrize(
+    "junk",
+    [b"[" * 100_000, b"{" * 50_000, b'{"a":' * 30_000, b"\xff\xfe" * 1000, b"null"],
+)
+def test_a_malformed_reply_line_is_ignored_not_a_grader_error(junk):
+    """Issue 25.9: only ValueError was caught; a line of 100,000 '[' raised RecursionError."""
+    child, resp_w, _, fds = _handle()
+    real = None
+    try:
+        import course.grading.sandbox.parent as parent_module
+
+        nonce = "abcd"
+        orig = parent_module.secrets.token_hex
+        parent_module.secrets.token_hex = lambda n: nonce
+        try:
+            real = json.dumps({"id": 1, "nonce": nonce, "status": "ok"}).encode()
+            import threading
+
+            data = junk + b"\n" + real + b"\n"  # more than a pipe holds: written alongside
+            writer = threading.Thread(target=lambda: os.write(resp_w, data), daemon=True)
+            writer.start()
+            reply = child.request("value", 5.0, name="x")
+            writer.join(5)
+        finally:
+            parent_module.secrets.token_hex = orig
+        assert reply["status"] == "ok"
+    finally:
+        for fd in fds:
+            os.close(fd)
+
+
+def test_a_deeply_nested_value_is_refused_by_the_decoder():
+    from course.grading.codec import EncodingError, decode
+
+    deep: list = []
+    for _ in range(5_000):
+        deep = [deep]
+    with pytest.raises(EncodingError, match="nested too deeply"):
+        decode(deep)
+    assert decode([[[1.5]]]) == [[[1.5]]]
