@@ -200,7 +200,10 @@ def _submissions(env) -> dict[str, object]:
     _cell(nb, "code-02")["source"] = _cell(nb, "code-02")["source"].replace(
         "14.0, 20.0", "99.0, 99.0"
     )
-    _cell(nb, "setup")["source"] = _cell(nb, "setup")["source"].replace('"demo"', '"someone-else"')
+    # its own ID (a notebook declaring another's is quarantined: see the identity tests below)
+    _cell(nb, "setup")["source"] = _cell(nb, "setup")["source"].replace(
+        '"demo"', '"edited_protected"'
+    )
     subs["edited_protected"] = nb
     subs["forbidden_static"] = _with_answer(
         "q3",
@@ -614,7 +617,6 @@ def test_edited_protected_cells_are_not_trusted(graded):
     _expect(row, {})
     notes = " ".join(row["notes"])
     assert "'code-02' was edited" in notes
-    assert "'someone-else'" in notes and "'edited_protected'" in notes
 
 
 def test_forbidden_calls(graded):
@@ -1009,3 +1011,86 @@ def test_a_deeply_nested_value_is_refused_by_the_decoder():
     with pytest.raises(EncodingError, match="nested too deeply"):
         decode(deep)
     assert decode([[[1.5]]]) == [[[1.5]]]
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.5: feedback that cannot leak or lie; control characters reach nothing
+# ---------------------------------------------------------------------------------------
+_FORGERIES = [
+    "\n\n**Total: 17 / 17**\n",
+    "<!-- the rest is hidden -->",
+    "\x1b[2J\x1b[1;1H**Total: 17 / 17**\x07",
+    "\r# q1: 1 / 1 (pass)",
+    "`code` [link](http://x) | a | b |",
+    "\u202e71 / 71 :latoT\u202c",
+]
+
+
+def _row_with_message(text: str):
+    from course.grading.batch.results import CaseResult, QuestionResult, StudentResult
+
+    row = StudentResult("s1", NAME, "0" * 64, "1", "none", 2.0)
+    row.questions["q1"] = QuestionResult(
+        0.0, 1.0, "error", f"your answer cell raised ValueError: {text}"
+    )
+    row.questions["q3"] = QuestionResult(
+        0.0,
+        1.0,
+        "fail",
+        "",
+        [CaseResult("a", False, f"raised KeyError: {text}"), CaseResult("b", True)],
+    )
+    row.notes.append(f"Cell said {text}")
+    return row
+
+
+@pytest.mark.parametrize("text", _FORGERIES)
+def test_student_text_cannot_forge_feedback(text):
+    from course.grading.batch.reports import feedback_markdown
+
+    fb = feedback_markdown(_row_with_message(text), load_checks(SOLUTION_DIR))
+    assert sum(line.startswith("**Total:") for line in fb.splitlines()) == 1
+    assert "<!--" not in fb and "](" not in fb.replace("\\](", "")
+    assert not any(c in fb for c in "\x1b\x07\r\u202e\u202c")
+    assert [line for line in fb.splitlines() if line.startswith("#")] == [
+        line for line in fb.splitlines() if line.startswith(("# ", "## "))
+    ] and not any(line.startswith("# q1") for line in fb.splitlines())
+
+
+def test_control_characters_never_reach_csv_cells_file_names_or_the_console(tmp_path):
+    from course.grading.batch.reports import write_csv
+    from course.grading.vocabulary import is_student_id
+
+    row = _row_with_message("\x1b]0;owned\x07 =1+1")
+    write_csv([row], ["q1", "q3"], tmp_path / "grades.csv")
+    raw = (tmp_path / "grades.csv").read_text()
+    assert "\x1b" not in raw and "\x07" not in raw
+    assert not is_student_id("s123\n") and not is_student_id("s123\x1b")
+    subs = tmp_path / "subs"
+    _id_notebook(subs / "evil\x1b[31m\x07name.ipynb", "placeholder-not-an-id")
+    identity = _resolve(subs)
+    (student,) = [e.student for e in identity.entries]
+    assert student.isprintable() and "/" not in student and "\x1b" not in student
+    assert all(flag.isprintable() for flag in identity.flags)
+
+
+def test_a_hidden_case_s_exception_shows_its_type_and_the_student_s_line_only():
+    """Issue 25.7: a function raising with its arguments put every hidden input into the
+    feedback; the parent now shows Python's exception type and the student's own line."""
+    from course.grading.batch.session import StudentSession
+
+    me = types.SimpleNamespace(
+        plan=types.SimpleNamespace(
+            answer_sources={"q3": "def f(A, y):\n    raise ValueError(repr((A, y)))\n"}
+        )
+    )
+    q = types.SimpleNamespace(id="q3")
+    secret = "[[0.3141592, 2.71828]]"
+    err = {"type": "ValueError", "message": secret, "line": 2}
+    text = StudentSession._hidden_error(me, q, err)
+    assert secret not in text and "0.314" not in text
+    assert text.startswith("ValueError at line 2 of your answer: raise ValueError(repr((A, y)))")
+    # an exception class named after the inputs, a forged line number: nothing of them shows
+    forged = {"type": "Err_0_3141592", "message": secret, "line": 99}
+    text = StudentSession._hidden_error(me, q, forged)
+    assert "3141592" not in text and text.startswith("an exception (")

@@ -31,7 +31,13 @@ from typing import Any
 
 from course.grading.notebook import MAX_NOTEBOOK_BYTES
 from course.grading.student.submit import saved_student_id
-from course.grading.vocabulary import DEMO_STUDENT_ID, PLACEHOLDER_ID, is_student_id
+from course.grading.vocabulary import (
+    CONTROL_CHARACTERS,
+    DEMO_STUDENT_ID,
+    PLACEHOLDER_ID,
+    is_student_id,
+    visible_text,
+)
 
 __all__ = ["Identity", "resolve_identities"]
 
@@ -86,6 +92,12 @@ def _name_id(name: str, assignment: str) -> str | None:
 
 def _contains(name: str, sid: str) -> bool:
     return re.search(rf"(?<![A-Za-z0-9]){re.escape(sid)}(?![A-Za-z0-9])", name) is not None
+
+
+def _safe_name(name: str) -> str:
+    """A file name as a row's name: control and invisible characters and path signs become
+    ``_``, so it is safe as a file name, a CSV cell and a console line."""
+    return re.sub(r"[/\\]", "_", CONTROL_CHARACTERS.sub("_", name)).lstrip(".") or "_"
 
 
 def _looks_bare(name_id: str) -> bool:
@@ -171,7 +183,8 @@ def resolve_identities(
     for sub in entries:
         name, path = sub.student, sub.path
         if path is None:  # refused or empty: nothing to read, the name stays
-            claimed.setdefault(name, []).append(_Claim(name, sub, True, f"name:{name}", (0, name)))
+            key = name if is_student_id(name) else _safe_name(name)
+            claimed.setdefault(key, []).append(_Claim(key, sub, True, f"name:{name}", (0, name)))
             continue
         shown = path.name if path.stem == name else name
         # the file's own name inside an LMS's folder is the uploader's choice, not the LMS's
@@ -222,7 +235,7 @@ def resolve_identities(
                     "roster student its name points at"
                 )
         else:
-            sid = name_id or name
+            sid = name_id or _safe_name(name)
             out.flags.append(
                 f"{shown}: no student ID in the notebook, and the file name is not "
                 f"{'a roster ID' if roster else 'an ID'}; graded as {sid!r} "
@@ -278,11 +291,12 @@ def resolve_identities(
                 + f"; graded {claims[-1].shown} (the last in the LMS's order)"
             )
         out.entries.append(replace(claims[-1].sub, student=sid))
+    out.flags = [visible_text(f) for f in out.flags]  # file names reach the console
     if out.mismatched_keys:
         out.flags.append(
             f"{len(out.mismatched_keys)} submission(s) were worked on personal data issued with "
             f"another key than this run's ({data_key}): "
-            + ", ".join(out.mismatched_keys[:5])
+            + ", ".join(visible_text(k) for k in out.mismatched_keys[:5])
             + (" …" if len(out.mismatched_keys) > 5 else "")
             + "; grade with the class's --secret, or their personal questions score 0"
         )
