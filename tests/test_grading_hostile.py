@@ -1094,3 +1094,75 @@ def test_a_hidden_case_s_exception_shows_its_type_and_the_student_s_line_only():
     forged = {"type": "Err_0_3141592", "message": secret, "line": 99}
     text = StudentSession._hidden_error(me, q, forged)
     assert "3141592" not in text and text.startswith("an exception (")
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.3 (5, 6): a child cannot change the fork server's scheduling or use System V IPC
+# ---------------------------------------------------------------------------------------
+def test_seccomp_keeps_scheduling_and_sysv_ipc_to_the_child_itself():
+    import subprocess
+    import sys
+    import textwrap
+
+    from course.grading.sandbox.isolation import seccomp
+
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    code = textwrap.dedent(
+        """
+        import ctypes, os, sys
+        from course.grading.sandbox.isolation import seccomp
+        libc = ctypes.CDLL(None, use_errno=True)
+        server = int(sys.argv[1])  # a process standing for the fork server (own group)
+        def attempt(f, *args):
+            try:
+                f(*args)
+                return "yes"
+            except OSError:
+                return "no"
+        mine = os.sched_getaffinity(0)
+        assert seccomp.install()
+        print(attempt(os.sched_setaffinity, server, {min(mine)}),
+              attempt(os.setpriority, os.PRIO_PROCESS, server, 19),
+              attempt(os.setpriority, os.PRIO_USER, 54321, 19),  # a user with no processes
+              attempt(os.setpriority, os.PRIO_PGRP, server, 19),
+              attempt(os.sched_setscheduler, server, os.SCHED_IDLE, os.sched_param(0)),
+              attempt(os.sched_setparam, server, os.sched_param(0)),
+              attempt(os.sched_setscheduler, 0, os.SCHED_FIFO, os.sched_param(1)),
+              attempt(os.setpriority, os.PRIO_PROCESS, 0, -5))
+        shm = libc.shmget(0, 1 << 20, 0o1600)  # IPC_PRIVATE | IPC_CREAT
+        msg = libc.msgget(0, 0o1600)
+        sem = libc.semget(0, 1, 0o1600)
+        print("no" if shm == -1 else "yes", "no" if msg == -1 else "yes",
+              "no" if sem == -1 else "yes")
+        for ident, ctl in ((shm, libc.shmctl), (msg, libc.msgctl)):
+            if ident != -1:
+                ctl(ident, 0, None)  # IPC_RMID: leave nothing behind on the old code
+        if sem != -1:
+            libc.semctl(sem, 0, 0)
+        print(attempt(os.sched_setaffinity, 0, mine),
+              attempt(os.setpriority, os.PRIO_PROCESS, 0, os.getpriority(os.PRIO_PROCESS, 0)),
+              attempt(os.sched_setscheduler, 0, os.SCHED_OTHER, os.sched_param(0)))
+        """
+    )
+    # the target is a sleeper in its own session: on the old code the child changed only it
+    server = subprocess.Popen(["sleep", "60"], start_new_session=True)
+    try:
+        before = (os.sched_getaffinity(server.pid), os.getpriority(os.PRIO_PROCESS, server.pid))
+        out = subprocess.run(
+            [sys.executable, "-c", code, str(server.pid)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            env={**os.environ, "PYTHONPATH": str(ROOT)},
+        )
+        after = (os.sched_getaffinity(server.pid), os.getpriority(os.PRIO_PROCESS, server.pid))
+    finally:
+        server.kill()
+        server.wait()
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.split("\n")
+    assert lines[0].split() == ["no"] * 8  # nothing aimed at another process, no real time
+    assert lines[1].split() == ["no"] * 3  # no System V shared memory, queues, semaphores
+    assert lines[2].split() == ["yes"] * 3  # the child's own thread keeps its calls
+    assert after == before
