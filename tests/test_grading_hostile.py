@@ -1166,3 +1166,52 @@ def test_seccomp_keeps_scheduling_and_sysv_ipc_to_the_child_itself():
     assert lines[1].split() == ["no"] * 3  # no System V shared memory, queues, semaphores
     assert lines[2].split() == ["yes"] * 3  # the child's own thread keeps its calls
     assert after == before
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.4: a child that stays root keeps root's user ID but none of its powers
+# ---------------------------------------------------------------------------------------
+@pytest.mark.skipif(os.geteuid() != 0, reason="needs root (a root child)")
+def test_a_root_child_drops_every_capability(tmp_path):
+    import subprocess
+    import sys
+    import textwrap
+
+    host = tmp_path / "host.txt"  # a host file of another user, as a root child could reach
+    host.write_text("x")
+    os.chown(host, 65534, 65534)
+    os.chmod(host, 0o640)
+    code = textwrap.dedent(
+        f"""
+        import os, socket
+        from course.grading.sandbox.isolation import privileges
+        def attempt(f, *args):
+            try:
+                f(*args)
+                return "yes"
+            except OSError:
+                return "no"
+        privileges.drop_capabilities()
+        path = {str(host)!r}
+        print(os.geteuid(),
+              attempt(os.chmod, path, 0o666), attempt(os.chown, path, 0, 0),
+              attempt(os.utime, path, (0, 0)), attempt(socket.sethostname, socket.gethostname()),
+              attempt(os.setpriority, os.PRIO_PROCESS, 0, -1),
+              attempt(os.sched_setscheduler, 0, os.SCHED_FIFO, os.sched_param(1)),
+              attempt(os.setpriority, os.PRIO_PROCESS, 1, 0),
+              attempt(open, "/proc/self/status"))
+        print([l for l in open("/proc/self/status") if l.startswith(("CapEff", "CapBnd", "NoNewPrivs"))])
+        """
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert out.returncode == 0, out.stderr
+    first, status = out.stdout.split("\n")[:2]
+    assert first.split() == ["0"] + ["no"] * 7 + ["yes"], out.stdout
+    assert "CapEff:\\t0000000000000000" in status and "NoNewPrivs:\\t1" in status
+    assert host.stat().st_mode & 0o777 == 0o640 and host.stat().st_uid == 65534

@@ -489,6 +489,8 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
 
         if setup.drop_child is not None:
             privileges.drop(setup.drop_child)
+        elif os.geteuid() == 0:  # a root child: root's user ID, none of its powers
+            privileges.drop_capabilities()
         use_seccomp = bool(limits.get("seccomp", True)) and setup.seccomp and seccomp.available()
         if not use_seccomp:
             limits = dict(limits, nproc=0)  # only a backstop for non-root users
