@@ -19,7 +19,9 @@ def _points(x: Any, name: str = "x") -> np.ndarray:
 
 
 def _levels(q: Any, name: str = "q") -> np.ndarray:
-    """Probabilities for ``ppf``/``isf``: real numbers in [0, 1]."""
+    """Probabilities for ``ppf``/``isf``: real numbers in [0, 1] (True is not 1)."""
+    if isinstance(q, (bool, np.bool_)) or getattr(getattr(q, "dtype", None), "kind", "") == "b":
+        raise ValueError(f"{name} must be probabilities (numbers in [0, 1]), got {q!r}")
     q = as_float_array(q, name)
     if np.any((q < 0) | (q > 1)):
         raise ValueError(f"{name}: probabilities must lie in [0, 1], got {q}")

@@ -53,7 +53,7 @@ def _frozen_chi2(dof: int, scale: float) -> Any:
 
 
 def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
-    """Null law of a squared residual norm: ``sigma^2 chi2(dof)`` (frozen scipy law).
+    r"""Null law of a squared residual norm: ``sigma^2 chi2(dof)`` (frozen scipy law).
 
     Parameters
     ----------
@@ -70,10 +70,20 @@ def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
         ``chi2(dof)``, or ``chi2(dof, scale=sigma**2)``; cached, so repeated
         calls in a Monte Carlo loop cost nothing.
 
+    See Also
+    --------
+    residual_threshold : The critical value of a residual norm test.
+    noncentrality : The non-centrality a test needs for a given power.
+
     Notes
     -----
-    Cochran's theorem: a Gaussian vector ``v ~ N(0, sigma^2 I)`` projected
-    on a subspace of dimension ``dof`` has ``|P v|^2 / sigma^2 ~ chi2(dof)``.
+    Cochran's theorem: a Gaussian vector :math:`v \sim N(0, \sigma^2 I)`
+    projected on a subspace of dimension :math:`d` (``dof``) by the orthogonal
+    projection :math:`P` has
+
+    .. math::
+
+        \frac{\lVert P v \rVert^2}{\sigma^2} \sim \chi^2(d).
 
     Examples
     --------
@@ -89,7 +99,7 @@ def residual_norm_law(dof: Any, *, sigma: Any = 1.0) -> Any:
 
 
 def residual_threshold(dof: Any, alpha: Any = 0.05, *, sigma: Any = 1.0) -> float:
-    """Threshold ``J`` on ``T = ||residual||^2`` with false-alarm rate ``alpha``.
+    r"""Threshold ``J`` on ``T = ||residual||^2`` with false-alarm rate ``alpha``.
 
     Parameters
     ----------
@@ -105,11 +115,21 @@ def residual_threshold(dof: Any, alpha: Any = 0.05, *, sigma: Any = 1.0) -> floa
     float
         ``J = sigma^2 * chi2.isf(alpha, dof)``.
 
+    See Also
+    --------
+    residual_norm_law : The law this threshold is a quantile of.
+    course.lsq.overall_model_test : The same test on a least-squares fit.
+
     Notes
     -----
-    Under H0 the residual is ``(I - P) v`` with ``v ~ N(0, sigma^2 I)`` and
-    ``I - P`` an orthogonal projection of rank ``N - rank(Phi)``, so
-    ``T / sigma^2 ~ chi2(N - rank)`` (Cochran's theorem).
+    Under H0 the residual is :math:`(I - P) v` with
+    :math:`v \sim N(0, \sigma^2 I)` and :math:`I - P` an orthogonal projection
+    of rank :math:`N - \operatorname{rank}(\Phi)`, so (Cochran's theorem)
+
+    .. math::
+
+        \frac{T}{\sigma^2} \sim \chi^2(N - \operatorname{rank}\Phi), \qquad
+        J = \sigma^2 \chi^2_{N - \operatorname{rank}\Phi}(1 - \alpha).
 
     Examples
     --------
@@ -157,7 +177,7 @@ def chi2_power(dof: Any, noncentrality: Any, alpha: Any = 0.05) -> Any:
 
 
 def noncentrality(alpha: Any, power: Any, dof: Any = 1) -> float:
-    """Non-centrality λ0 at which a chi-square test has the given power.
+    r"""Non-centrality λ0 at which a chi-square test has the given power.
 
     Parameters
     ----------
@@ -173,19 +193,37 @@ def noncentrality(alpha: Any, power: Any, dof: Any = 1) -> float:
     float
         λ0 solving ``chi2_power(dof, λ0, alpha) = power``.
 
+    See Also
+    --------
+    residual_norm_law : The central law under H0.
+    course.lsq.mdb : The smallest outlier a w-test finds with this power.
+    course.diagnosis.fault_noncentrality : The non-centrality a fault produces.
+
     Notes
     -----
     Under an alternative with bias the test statistic follows a non-central
-    ``chi2(dof, λ)``; the power grows with λ, and λ0 is found with
-    ``scipy.optimize.brentq``. For ``dof = 1`` the test ``w² > chi2_α(1)`` is
-    the two-sided w-test, whose power is
-    ``Φ(√λ - z_{α/2}) + Φ(-√λ - z_{α/2})``; dropping the (tiny) second term
-    gives the familiar approximation ``√λ0 ≈ z_{α/2} + z_{1-γ}`` with
-    ``z_{1-γ} = Φ^{-1}(γ)`` (e.g. 17.07 for α = 0.001, γ = 0.80), which
-    slightly overstates the exact λ0. Reference: W. Baarda (1968), *A testing
-    procedure for use in geodetic networks*; P. J. G. Teunissen (2000),
-    *Testing theory*, ch. 4. (The non-centrality a given fault *produces* in
-    a test is :func:`course.diagnosis.fault_noncentrality`.)
+    :math:`\chi^2(d, \lambda)`; the power grows with :math:`\lambda`, and
+    :math:`\lambda_0` solves
+
+    .. math::
+
+        P\bigl(\chi^2(d, \lambda_0) > \chi^2_d(1 - \alpha)\bigr) = \gamma
+
+    (found with ``scipy.optimize.brentq``). For :math:`d = 1` the test
+    :math:`w^2 > \chi^2_1(1 - \alpha)` is the two-sided w-test, whose power is
+
+    .. math::
+
+        \Phi(\sqrt\lambda - z_{\alpha/2}) + \Phi(-\sqrt\lambda - z_{\alpha/2});
+
+    dropping the (tiny) second term gives the familiar approximation
+    :math:`\sqrt{\lambda_0} \approx z_{\alpha/2} + z_{1-\gamma}` with
+    :math:`z_{1-\gamma} = \Phi^{-1}(\gamma)` (e.g. 17.07 for
+    :math:`\alpha = 0.001`, :math:`\gamma = 0.80`), which slightly overstates the
+    exact :math:`\lambda_0`. Reference: W. Baarda (1968), *A testing procedure
+    for use in geodetic networks*; P. J. G. Teunissen (2000), *Testing theory*,
+    ch. 4. (The non-centrality a given fault *produces* in a test is
+    :func:`course.diagnosis.fault_noncentrality`.)
 
     Examples
     --------

@@ -38,6 +38,7 @@ from .plotting.style import (
     theory_grid,
     threshold_line,
 )
+from .results import critical_value, rejection_probability
 from .validation import as_count, as_finite, as_positive, as_probability
 
 __all__ = [
@@ -165,7 +166,7 @@ def _build(update, sliders: dict):
 # ---------------------------------------------------------------------------
 @styled
 def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=None):
-    """Overall model test and w-tests of a MUDE sea-level record with an added outlier.
+    r"""Overall model test and w-tests of a MUDE sea-level record with an added outlier.
 
     Parameters
     ----------
@@ -190,11 +191,23 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
         with the outlier), ``omt_power`` and ``w_power`` (the
         probabilities that each test detects an outlier of this size).
 
+    See Also
+    --------
+    course.lsq.overall_model_test : The overall model test.
+    course.lsq.w_tests : The w-tests.
+    course.lsq.mdb : Minimal detectable biases.
+
     Notes
     -----
-    An outlier ``∇`` in observation ``i`` makes ``T`` non-central
-    ``χ²(m − n, λ)`` and ``w_i`` normal with mean ``√λ``, with
-    ``λ = ∇² (Q_yy⁻¹ Q_êê Q_yy⁻¹)_ii`` (Teunissen 2000).
+    An outlier :math:`\nabla` in observation :math:`i` makes :math:`T`
+    non-central :math:`\chi^2(m - n, \lambda)` and :math:`w_i` normal with mean
+    :math:`\sqrt\lambda`, with
+
+    .. math::
+
+        \lambda = \nabla^2 \bigl(Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1}\bigr)_{ii}
+
+    (Teunissen 2000).
     """
     from scipy import stats
 
@@ -217,10 +230,12 @@ def omt_view(alpha=0.05, outlier=15.0, *, record=0, index=4, sigma=2.0, axes=Non
     r_i = fit.redundancy_numbers[index]
     lam = outlier**2 * r_i / sigma**2
     dof = fit.redundancy
-    omt_power = float(stats.ncx2.sf(omt.critical_value, dof, lam)) if lam > 0 else alpha
+    omt_power = (
+        rejection_probability(stats.ncx2(dof, lam), omt.critical_value) if lam > 0 else alpha
+    )
     k = wt.critical_value
-    shift = np.sqrt(lam)
-    w_power = float(stats.norm.sf(k - shift) + stats.norm.cdf(-k - shift))
+    # the outlier's w-statistic is N(sqrt(lam), 1); the w-test rejects |w| > k
+    w_power = rejection_probability(stats.norm(loc=np.sqrt(lam)), (-k, k), "two-sided")
 
     ax_T, ax_w = _axes(axes, 2)
     upper = max(stats.chi2.isf(1e-3, dof), 1.15 * omt.statistic, stats.ncx2.isf(0.01, dof, lam))
@@ -607,8 +622,8 @@ def records_view(
         second = k if kind == "correlation" else None
         law0 = mm.statistic_law(null, kind, j, M, k=second)
         law2 = mm.statistic_law(alternative, kind, j, M, k=second)
-        lo, hi = float(law0.ppf(alpha / 2)), float(law0.isf(alpha / 2))
-        power = float(law2.cdf(lo) + law2.sf(hi))
+        lo, hi = critical_value(law0, alpha, "two-sided")
+        power = rejection_probability(law2, (lo, hi), "two-sided")
         powers[kind] = power
         left = min(float(law0.ppf(1e-3)), float(law2.ppf(1e-3)))
         right = max(float(law0.isf(1e-3)), float(law2.isf(1e-3)))

@@ -892,12 +892,17 @@ def covariance_factor(value, name: str, size: int) -> CovarianceFactor:
         A matrix that is not positive definite: the Cholesky factorisation
         fails or a diagonal matrix has a non-positive entry.
 
+    See Also
+    --------
+    course.validation.as_covariance : The check of a covariance.
+
     Notes
     -----
-    Costs: O(m) for diagonal covariances; O(m b²) time and O(m b) memory for
-    a sparse matrix of bandwidth b after reordering (block-diagonal
-    covariances, e.g. 3 x 3 blocks of GNSS baselines, have b = 2); O(m³/3)
-    time and O(m²) memory for a dense one.
+    Costs: :math:`O(m)` for diagonal covariances; :math:`O(mb^2)` time and
+    :math:`O(mb)` memory for a sparse matrix of bandwidth :math:`b` after
+    reordering (block-diagonal covariances, e.g. 3 x 3 blocks of GNSS
+    baselines, have :math:`b = 2`); :math:`O(m^3/3)` time and :math:`O(m^2)`
+    memory for a dense one.
     """
     m = as_count(size, "size")
     if value is None:

@@ -249,6 +249,11 @@ def rejection_probability(law: Law, critical: Any, alternative: str = "greater")
     alternative = _check_alternative(alternative)
     if alternative == "two-sided":
         lower, upper = _critical_pair(critical)
+        # a law that evaluates both tails of several points in one call (the
+        # quadratic forms: one integral setup instead of two) says so by `_outside`
+        outside = getattr(law, "_outside", None)
+        if outside is not None:
+            return float(outside(lower, upper))
         return float(law.cdf(lower) + law.sf(upper))
     if isinstance(critical, tuple):
         raise ValueError(
@@ -387,6 +392,10 @@ class TestResult:
         Which tail(s) form the critical region.
     details : mapping, optional
         Extra, test-specific values (shown in the HTML table).
+
+    See Also
+    --------
+    decide : The one decision path.
 
     Notes
     -----

@@ -183,9 +183,12 @@ def as_float_array(
             f"{name} is complex; pass real numbers (e.g. np.real(...) if the "
             "imaginary parts are rounding noise)"
         )
+    if _holds_text(value):
+        # numpy reads "1.0" as 1.0: text typed by mistake must not pass as a number
+        raise ValueError(f"{name} must be numeric, got text among its entries")
     try:
         array = np.array(value, dtype=float)  # a copy: callers may not mutate input
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
     if min_ndim is not None and array.ndim < min_ndim:
         raise ValueError(
@@ -201,12 +204,14 @@ def as_float_array(
                 else ""
             )
         )
-    bad_entries = np.zeros(array.shape, bool)
-    if finite:
+    # (one test in the usual case, where every entry is finite)
+    suspect = (finite or not nan) and not np.isfinite(array).all()
+    bad_entries = np.zeros(array.shape if suspect else (), bool)
+    if suspect and finite:
         bad_entries |= np.isinf(array)
-    if not nan:
+    if suspect and not nan:
         bad_entries |= np.isnan(array)
-    if bad_entries.any():
+    if suspect and bad_entries.any():
         bad = np.argwhere(bad_entries)
         where = tuple(int(i) for i in bad[0])
         what = " or ".join(w for w, on in (("NaN", not nan), ("inf", finite)) if on)
@@ -217,6 +222,23 @@ def as_float_array(
     if not empty and array.size == 0:
         raise ValueError(f"{name} is empty (shape {array.shape}); pass at least one value")
     return array
+
+
+def _holds_text(value: Any) -> bool:
+    """Whether an array, list or tuple holds a string (at any depth)."""
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "US":
+            return True
+        return value.dtype.kind == "O" and any(map(_holds_text_entry, value.flat))
+    if isinstance(value, (list, tuple)):
+        return any(map(_holds_text_entry, value))
+    return False
+
+
+def _holds_text_entry(entry: Any) -> bool:
+    return isinstance(entry, (str, bytes)) or (
+        isinstance(entry, (list, tuple, np.ndarray)) and _holds_text(entry)
+    )
 
 
 def _is_complex(value: Any) -> bool:
@@ -287,7 +309,7 @@ def as_matrix(
 
 
 def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False) -> np.ndarray:
-    """Validate a covariance matrix: square ``size`` x ``size``, symmetric, PD.
+    r"""Validate a covariance matrix: square ``size`` x ``size``, symmetric, PD.
 
     Parameters
     ----------
@@ -313,18 +335,29 @@ def as_covariance(value: Any, name: str, size: int, allow_singular: bool = False
         Not positive definite, numerically included (not positive
         semi-definite with ``allow_singular``).
 
+    See Also
+    --------
+    as_float_array : The check of any array of numbers.
+    course.linalg.covariance_factor : The factor of a checked covariance.
+
     Notes
     -----
     Positive definiteness is decided by the Cholesky factorisation
-    ``Q = L L^T`` (no eigendecomposition), with a relative tolerance on its
-    diagonal: the matrix is *numerically singular*, and refused, when some
-    ``L_ii**2 <= SINGULAR_RTOL * m * Q_ii`` (:data:`SINGULAR_RTOL` is
-    ``4 eps``).  ``L_ii**2 / Q_ii`` is the part of the variance of variable
-    ``i`` that the variables before it leave unexplained; an exactly
-    singular matrix (a variable that is a combination of others) leaves only
-    rounding there, and its Cholesky factorisation may still "succeed".
-    With ``allow_singular=True`` the smallest eigenvalue must be at least
-    ``-m eps max|Q|``.
+    :math:`Q = LL^{\mathsf T}` (no eigendecomposition), with a relative
+    tolerance on its diagonal: the matrix is *numerically singular*, and
+    refused, when for some :math:`i`
+
+    .. math::
+
+        L_{ii}^2 \le \epsilon_s\, m\, Q_{ii}
+
+    (:math:`\epsilon_s` = :data:`SINGULAR_RTOL`, four machine epsilons).
+    :math:`L_{ii}^2 / Q_{ii}` is the part of the variance of variable :math:`i`
+    that the variables before it leave unexplained; an exactly singular matrix
+    (a variable that is a combination of others) leaves only rounding there,
+    and its Cholesky factorisation may still "succeed".  With
+    ``allow_singular=True`` the smallest eigenvalue must be at least
+    :math:`-m\,\epsilon \max|Q|`.
 
     Examples
     --------

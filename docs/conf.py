@@ -77,6 +77,11 @@ nb_output_folder = str(CACHE / "jupyter_execute")  # staging of figures, outside
 nb_ipywidgets_js: dict = {}
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "substitution"]
 myst_heading_anchors = 3
+# Figures of a notebook get their caption, alt text and label from the metadata of the cell that
+# draws them ({"mystnb": {"figure": {"caption", "name"}, "image": {"alt"}}}); the prose refers to
+# them with {numref}`fig-...`, numbered per page.
+numfig = True
+numfig_format = {"figure": "Figure %s"}
 course_site_notebooks = ["notebooks/*.ipynb"]
 course_site_assignments = ["exercises/*/*.ipynb"]  # in the teaching map too
 # The JupyterLite app (OUT/lite); COURSE_DOCS_LITE=0 skips it (course docs --no-lite).

@@ -165,3 +165,98 @@ def test_monte_carlo_answers_repeat_the_seeded_simulation(checks, name, qid):
         args[seed_at] = int(args[seed_at]) + 1
         other = q.reference(*args)
         assert not compare(expected, other, q.rtol, q.atol).ok, case.label
+
+
+# -- issue 26: cases that exercise what the question asks ---------------------------------
+def test_02_q9_hidden_cases_vary_the_record_length(checks):
+    """A detection_rate written with the notebook's N (not U.shape[0]) scored 2/2."""
+    q = checks["02_test_quantities"].questions["q9"]
+    public_n = {np.shape(c.args[0])[0] for c in q.public_cases}
+    assert {np.shape(c.args[0])[0] for c in q.hidden_cases} - public_n
+
+
+def test_02_q3_hidden_cases_include_u1_identically_zero(checks):
+    """The question insists on the u1 = 0 guard: it must weigh on the hidden cases too."""
+    q = checks["02_test_quantities"].questions["q3"]
+    zero = [c for c in q.hidden_cases if not np.any(c.args[1])]
+    assert len(zero) >= 2
+    for case in zero:  # the answer is the whole sum of squares, neither 0 nor NaN
+        y, _, u2, u3 = (np.asarray(a, dtype=float) for a in case.args)
+        assert q.reference(*case.args) == pytest.approx(float(np.sum((y - u2 - u3) ** 2)))
+
+
+def test_03_q7_public_case_with_sigma_not_one(checks):
+    """With sigma = 1 only, dividing by sigma^2 passed the self-check; now a public case tells
+    it, and names it."""
+    q = checks["03_estimation_and_likelihood"].questions["q7"]
+    cases = [c for c in q.public_cases if c.args[3] != 1.0]
+    assert cases
+    n, theta0, theta1, sigma, alpha = cases[0].args
+    from scipy import stats
+
+    wrong = float(
+        stats.norm.sf(stats.norm.isf(alpha) - np.sqrt(n) * abs(theta1 - theta0) / sigma**2)
+    )
+    mistakes = [(m.message, m.reference(*cases[0].args)) for m in q.mistakes]
+    verdict = compare(q.reference(*cases[0].args), wrong, q.rtol, q.atol, mistakes=mistakes)
+    assert not verdict.ok and "sigma^2" in verdict.message
+
+
+def _first_message(q, student):
+    """The message a student reads: that of the first public case the answer fails."""
+    for case in q.public_cases if q.kind == "function" else [None]:
+        args = case.args if case is not None else ()
+        mistakes = [(m.message, m.reference(*args)) for m in q.mistakes]
+        verdict = compare(q.reference(*args), student(*args), q.rtol, q.atol, mistakes=mistakes)
+        if not verdict.ok:
+            return verdict.message
+    return ""
+
+
+def test_02_q4_dof_from_columns_is_told_to_use_the_rank(checks):
+    """It was told "off by one ... a 1-based index" (and at grading "a factor ≈ 1.5")."""
+    q = checks["02_test_quantities"].questions["q4"]
+
+    def regression_residual(Phi, Y):
+        T = q.reference(Phi, Y).T
+        return (T, np.shape(Phi)[0] - np.shape(Phi)[1])
+
+    message = _first_message(q, regression_residual)
+    assert "use its rank" in message and "off by one" not in message
+
+
+@pytest.mark.parametrize(
+    ("qid", "wrong"),
+    [
+        ("q3", lambda q: lambda *args: q.reference(*args) / 0.2**2),
+        ("q6", lambda q: lambda: (q.reference().J / 0.2**2, q.reference().power)),
+        ("q7_practice", lambda q: lambda: q.reference() / 0.2**2),
+    ],
+)
+def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
+    q = checks["02_test_quantities"].questions[qid]
+    assert "sigma^2" in _first_message(q, wrong(q))
+
+
+def test_02_q5_sum_for_mean_is_named(checks):
+    q = checks["02_test_quantities"].questions["q5"]
+    assert "sum of the squared residuals" in _first_message(q, lambda: q.reference() * 20)
+
+
+def test_02_q9_another_draw_order_is_named(checks):
+    """A right statistic on noise drawn (N, n_runs) read like a wrong statistic."""
+    q = checks["02_test_quantities"].questions["q9"]
+
+    def detection_rate(U, theta, sigma, alpha, n_runs, seed):
+        from scipy import stats
+
+        U = np.asarray(U, dtype=float)
+        n = U.shape[0]
+        rng = np.random.default_rng(seed)
+        Y = (U @ np.asarray(theta))[:, None] + sigma * rng.standard_normal((n, n_runs))
+        target = Y.T - U[:, 1] - U[:, 2]
+        u = U[:, 0]
+        R = target - np.outer(target @ u, u) / (u @ u)
+        return float(np.mean(np.sum(R**2, axis=1) > sigma**2 * stats.chi2.isf(alpha, n - 1)))
+
+    assert "another order" in _first_message(q, detection_rate)

@@ -93,3 +93,110 @@ def test_small_k_false_alarm_case_excludes_the_nominal_alpha():
     q = checks.questions["q7"]
     outside = [c for c in q.cases if not compare(q.reference(*c.args), float(c.args[2])).ok]
     assert any(not c.hidden for c in outside) and any(c.hidden for c in outside)
+
+
+def _matrix_test_with(rule):
+    """A student's q5 of assignment 05 whose decision is ``rule(lmin below, lmax above)``."""
+
+    def matrix_test(eps, S, alpha):
+        K, m = np.shape(eps)
+        values = np.linalg.eigvalsh(nis.nis_matrix(eps, S))
+        lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
+        return (
+            float(values[0]),
+            float(values[-1]),
+            bool(rule(values[0] < lower, values[-1] > upper)),
+        )
+
+    return matrix_test
+
+
+@pytest.mark.parametrize(
+    ("rule", "words"),
+    [
+        (lambda low, high: False, "never a rejection"),
+        (lambda low, high: low and high, "BOTH extreme eigenvalues"),
+        (lambda low, high: True, "both extreme eigenvalues lie between"),
+    ],
+    ids=["never rejects", "and instead of or", "always rejects"],
+)
+def test_05_q5_public_cases_see_the_decision(rule, words):
+    """Issue 26: neither public case of 05 q5 rejected, so a test that never rejects passed the
+    self-check and "and" instead of "or" scored full marks; always-reject was told "one-sided".
+    Each now fails a public case, and its first failure (the message a student reads) names
+    what is wrong in kind."""
+    q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions["q5"]
+    student = _matrix_test_with(rule)
+    messages = []
+    for case in q.public_cases:
+        mistakes = [(m.message, m.reference(*case.args)) for m in q.mistakes]
+        verdict = compare(
+            q.reference(*case.args), student(*case.args), q.rtol, q.atol, mistakes=mistakes
+        )
+        if not verdict.ok:
+            messages.append(verdict.message)
+    assert messages, "a public case must fail"
+    assert words in messages[0], messages[0]
+    assert "one-sided" not in messages[0]
+
+
+@pytest.mark.parametrize("qid", ["q1", "q2"])
+def test_05_q1_q2_public_cases_include_a_stack_of_S(qid):
+    """The preamble allows S as a (K, m, m) stack: a solution for one S must fail the
+    self-check, not only the hidden cases."""
+    q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions[qid]
+    stacks = [c for c in q.public_cases if np.ndim(c.args[1]) == 3]
+    assert stacks
+    eps, S = stacks[0].args
+    one_S = q.reference(eps, S[0])  # what a solution that handles one S only computes
+    assert not compare(q.reference(eps, S), one_S, q.rtol, q.atol).ok
+
+
+# -- issue 26, item 5: the commonest mistakes are named -----------------------------------
+def _first_message(q, student):
+    """The message a student reads: that of the first public case the answer fails."""
+    for case in q.public_cases if q.kind == "function" else [None]:
+        args = case.args if case is not None else ()
+        mistakes = [(m.message, m.reference(*args)) for m in q.mistakes]
+        got = student(*args)
+        verdict = compare(q.reference(*args), got, q.rtol, q.atol, mistakes=mistakes)
+        if not verdict.ok:
+            return verdict.message
+    return ""
+
+
+def _whiten(eps, S, root):
+    eps = np.asarray(eps, float)
+    K, m = eps.shape
+    S = np.broadcast_to(np.asarray(S, float), (K, m, m))
+    return np.stack([np.linalg.solve(root(S[k]), eps[k]) for k in range(K)])
+
+
+def _symmetric_root(S):
+    w, V = np.linalg.eigh(S)
+    return V @ np.diag(np.sqrt(w)) @ V.T
+
+
+@pytest.mark.parametrize(
+    ("student", "words"),
+    [
+        (lambda eps, S: (z := _whiten(eps, S, np.linalg.cholesky)).T @ z, "SUM of the outer"),
+        (lambda eps, S: np.asarray(eps).T @ np.asarray(eps) / len(eps), "whiten first"),
+        (
+            lambda eps, S: (z := _whiten(eps, S, _symmetric_root)).T @ z / len(eps),
+            "another square root of S",
+        ),
+    ],
+    ids=["factor K (sum)", "not whitened", "symmetric square root"],
+)
+def test_05_q2_common_mistakes_are_named(student, words):
+    q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions["q2"]
+    assert words in _first_message(q, student)
+
+
+def test_05_q8_normal_approximation_is_named():
+    q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions["q8"]
+    from scipy import stats
+
+    half = float(stats.norm.isf(0.025)) * np.sqrt(2 * 4 / 50)
+    assert "normal approximation" in _first_message(q, lambda: (4 - half, 4 + half))

@@ -308,3 +308,91 @@ def test_a_broken_structure_reads_the_same_in_grading_and_in_the_self_check(valu
         assert sig.ok  # an array of rates for one rate: outside the band, not a wrong kind
         return
     assert sig.message == clear.message
+
+
+# -- the tolerance rule at its boundary (issue 26, item 6) --------------------------------
+# |got - expected| <= atol + rtol*|expected|: just inside passes, just outside fails, so that a
+# rule loosened (a doubled tolerance) or tightened (a halved one, < instead of <=) fails here.
+_TOLERANCES = [
+    pytest.param(1e-7, 0.0, id="rtol only"),
+    pytest.param(0.0, 1e-9, id="atol only"),
+    pytest.param(1e-6, 1e-9, id="both"),
+    pytest.param(1e-4, 1e-12, id="loose rtol"),
+]
+
+
+@pytest.mark.parametrize(("rtol", "atol"), _TOLERANCES)
+@pytest.mark.parametrize("expected", [3.7, -0.0123, 2.5e5, 0.0])
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_the_tolerance_rule_holds_at_its_boundary(rtol, atol, expected, side):
+    tol = atol + rtol * abs(expected)
+    if tol == 0.0:
+        pytest.skip("no tolerance: exact equality, tested elsewhere")
+    inside, outside = expected + side * 0.98 * tol, expected + side * 1.02 * tol
+    assert compare(expected, inside, rtol, atol).ok
+    assert not compare(expected, outside, rtol, atol).ok
+    # element-wise in arrays: one element just outside fails the whole answer
+    e = np.array([expected, 1.0, -2.0])
+    t = atol + rtol * np.abs(e)
+    assert compare(e, e + side * 0.98 * t, rtol, atol).ok
+    just_out = e + side * 0.98 * t
+    just_out[0] = outside
+    assert not compare(e, just_out, rtol, atol).ok
+
+
+def test_the_tolerance_boundary_itself_passes():
+    """``<=``: a difference of exactly the tolerance (representable: atol only) passes."""
+    assert compare(1.0, 1.5, 0.0, 0.5).ok
+    assert compare(1.0, 0.5, 0.0, 0.5).ok
+    assert not compare(1.0, np.nextafter(1.5, 2.0), 0.0, 0.5).ok
+
+
+@pytest.mark.parametrize(
+    "band",
+    [Band(0.25, 0.75), Band(np.array([0.1, 0.2]), np.array([0.3, 0.4]))],
+    ids=["a number", "per element"],
+)
+def test_a_band_holds_its_ends_and_nothing_beyond(band):
+    lo, hi = np.asarray(band.lo, float), np.asarray(band.hi, float)
+    assert compare(band, lo if lo.ndim else float(lo)).ok
+    assert compare(band, hi if hi.ndim else float(hi)).ok
+    assert compare(band, (lo + hi) / 2 if lo.ndim else float((lo + hi) / 2)).ok
+    below = np.nextafter(lo, -np.inf)
+    above = np.nextafter(hi, np.inf)
+    for wrong in (below, above):
+        assert not compare(band, wrong if wrong.ndim else float(wrong)).ok
+    # a band does not take the question's tolerance: just outside fails whatever rtol/atol say
+    assert not compare(band, above if above.ndim else float(above), 1e-3, 1e-3).ok
+
+
+# -- feedback never gives the answer away as a ratio (issue 26, items 4/5) ----------------
+@pytest.mark.parametrize(
+    ("expected", "got"),
+    [
+        (14, 16),  # 04 q7: "too large by a factor ≈ 1.14 (= 8/7)" gave 14 away
+        ((14, 0), (16, 0)),
+        (np.array([37, 38]), np.array([40, 40])),  # 02 q4: dof from the columns
+        (38, 40),
+    ],
+)
+def test_integer_feedback_names_no_factor(expected, got):
+    message = compare(expected, got, RTOL, ATOL).message
+    assert message and "factor" not in message and "/" not in message.split(";")[0], message
+
+
+def test_float_feedback_names_no_revealing_ratio():
+    """06 q3: (M - 1)/M against M/(M - 1) was told "(= 16/9)"; only the ratios of common
+    slips (as the seal names them) are spelled out."""
+    e = 0.75 * 2.345
+    assert "16/9" not in compare(e, 2.345 * 4 / 3, RTOL, ATOL).message
+    assert "(= 4/3)" in compare(e, e * 4 / 3, RTOL, ATOL).message
+    assert "(= 3/2)" in compare(e, e * 1.5, RTOL, ATOL).message
+
+
+def test_an_array_of_strings_is_told_to_be_a_list():
+    """02 q1 answered with np.array(['F1', 'F2']) was told "(use numbers or booleans)"."""
+    from course.grading.codec import EncodingError, encode
+
+    with pytest.raises(EncodingError, match="list of strings"):
+        encode(np.array(["F1", "F2"]))
+    assert encode(["F1", "F2"]) == ["F1", "F2"]

@@ -315,7 +315,7 @@ def test_the_edition_ships_no_grader_and_says_so(journey):
     ]
     assert not shipped, shipped
     course_cli = journey["venv"] / "bin" / "course"
-    for command in (["grade", "01_least_squares", "subs"], ["export", "out"]):
+    for command in (["grade", "01_least_squares", "subs", "--out", "graded"], ["export", "out"]):
         done = subprocess.run(
             [str(course_cli), *command],
             env=journey["env"],

@@ -21,6 +21,7 @@ high-precision values agree with them to 1.8e-5, inside Davies' 1e-4.
 """
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -28,7 +29,7 @@ from conftest import binomial_band
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.linalg import LinAlgError
-from scipy import stats
+from scipy import special, stats
 
 from course import quadform
 from course.quadform import (
@@ -40,6 +41,8 @@ from course.quadform import (
     liu_tang_zhang_cdf,
     liu_tang_zhang_sf,
 )
+from course.quadform._terms import _terms
+from course.results import rejection_probability
 
 # (weights, dof, noncentrality): [(c, P(Q <= c)), ...]
 DAVIES_CASES = {
@@ -607,29 +610,10 @@ def test_requested_relative_accuracy_is_met_on_davies_cases(rtol):
         cdf = imhof_cdf(c, weights, dof, nc, rtol=rtol)
         got = np.where(ref < 0.5, cdf, 1 - cdf)
         assert np.all(np.abs(got - small) <= rtol * small + 2e-16)
-        # one point at a time takes the scalar path: the same accuracy
+        # one point at a time: the same accuracy
         scalar = np.array([imhof_cdf(ci, weights, dof, nc, rtol=rtol) for ci in c])
         got = np.where(ref < 0.5, scalar, 1 - scalar)
         assert np.all(np.abs(got - small) <= rtol * small + 2e-16)
-
-
-def test_one_points_nodes_from_the_table_are_the_computed_nodes(monkeypatch):
-    # one point reads its trapezoid nodes from a fixed table (no cosh/sinh per
-    # call): the views must be the nodes themselves, at every level
-    for k, count, odd in [(128, 33, False), (64, 32, True), (76, 50, False), (19, 40, True)]:
-        table = quadform._grid_nodes(k, count, odd)
-        computed = quadform._nodes(k * quadform._GRID, count, odd)[1]
-        assert table.shape == computed.shape
-        assert np.array_equal(table, computed)
-    span = round(quadform._GRID_SPAN / quadform._GRID)
-    assert quadform._grid_nodes(128, span // 128 + 2, False) is None
-    # off the table (a long path, a level past the table's halvings) the nodes
-    # are computed: the same numbers
-    points = [(1.0, (6, 3, 1)), (45.0, (6, 3, 1, 12, 6, 2)), (-40.0, (7, 3, -7, -3))]
-    table_path = [imhof_cdf(c, w, rtol=1e-6) for c, w in points]
-    monkeypatch.setattr(quadform, "_grid_nodes", lambda k, count, odd: None)
-    computed_path = [imhof_cdf(c, w, rtol=1e-6) for c, w in points]
-    assert np.allclose(table_path, computed_path, rtol=1e-14, atol=0)
 
 
 def test_a_frozen_law_at_one_python_number_agrees_with_its_array_path():
@@ -649,16 +633,13 @@ def test_a_frozen_law_at_one_python_number_agrees_with_its_array_path():
         WeightedChiSquare([1.0], rtol=-1e-6)
 
 
-def test_many_weights_take_the_numpy_path_and_agree(monkeypatch):
+def test_many_weights_agree_with_monte_carlo():
     rng = np.random.default_rng(9)
     w = np.concatenate([rng.uniform(0.1, 2, 30), -rng.uniform(0.1, 1, 10)])
     dof = rng.integers(1, 4, 40)
     nc = rng.uniform(0, 1, 40)
     x = np.array([-5.0, 0.0, 10.0, 40.0])
     numpy_path = imhof_cdf(x, w, dof, nc)
-    monkeypatch.setattr(quadform, "_PYTHON_TERMS", 64)
-    python_path = imhof_cdf(x, w, dof, nc)
-    assert np.allclose(numpy_path, python_path, rtol=1e-10, atol=1e-14)
     law = WeightedChiSquare(w, dof, nc)
     draws = law.rvs(100_000, rng=rng)
     for p, f in zip(numpy_path, (draws[:, None] <= x).mean(axis=0)):
@@ -667,9 +648,8 @@ def test_many_weights_take_the_numpy_path_and_agree(monkeypatch):
 
 
 def test_every_container_of_the_same_terms_gives_the_same_law():
-    # a few terms in lists, tuples or short arrays skip numpy's validation (a
-    # fast path); ints, numpy scalars and float32 must give the same terms
-    expected = quadform._terms(np.array([3.0, -1.0, 3.0]), np.array([1.0, 2.0, 2.0]), [0.5, 0, 1])
+    # lists, tuples, arrays, ints, numpy scalars and float32 give the same terms
+    expected = _terms(np.array([3.0, -1.0, 3.0]), np.array([1.0, 2.0, 2.0]), [0.5, 0, 1])
     assert [a.tolist() for a in expected[:3]] == [[-1.0, 3.0], [2.0, 3.0], [0.0, 1.5]]
     containers = [
         ([3, -1, 3], [1, 2, 2], [0.5, 0, 1]),
@@ -680,7 +660,7 @@ def test_every_container_of_the_same_terms_gives_the_same_law():
     ]
     reference = imhof_cdf(2.0, *expected[:3])
     for weights, dof, nc in containers:
-        terms = quadform._terms(weights, dof, nc)
+        terms = _terms(weights, dof, nc)
         assert all(np.array_equal(a, b) for a, b in zip(terms, expected))
         assert imhof_cdf(2.0, weights, dof, nc) == reference
 
@@ -902,3 +882,149 @@ def integrate_cdf_of_difference(nc):
         epsrel=1e-12,
         limit=500,
     )[0]
+
+
+# ---------------------------------------------------------------------------
+# huge degrees of freedom and extreme scales (issue 28, items 2 and 5)
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("dof", [1e6, 1e7, 1e8, 1e12])
+def test_huge_dof_meets_the_requested_accuracy_in_the_body(dof):
+    # in the body (|z| <= 2.5) scipy's regularised incomplete gamma is accurate
+    # (it is far in the lower tail at df >= 1e7 that it is not); the old
+    # contour summed log(1 - 2 w s) of size eps h and erred by up to 1.4e-9
+    sd = math.sqrt(2.0 * dof)
+    c = dof + sd * np.array([-2.0, -1.0, -0.3, 0.0, 0.7, 1.5, 2.5])
+    reference = special.gammainc(dof / 2, c / 2)
+    got = np.array([imhof_cdf(float(ci), [1.0], [dof]) for ci in c])
+    assert np.max(np.abs(got - reference)) < 1e-12
+    assert np.max(np.abs(imhof_cdf(c, [1.0], [dof]) - reference)) < 1e-12
+
+
+def test_huge_dof_never_fails_in_arithmetic():
+    weights = [1.0, 0.5]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        # at the mean of a law of dof 1e20 the truth is 1/2 up to a skewness term
+        # of order 1e-10 (the old code returned 0.0)
+        assert abs(imhof_cdf(1.5e20, weights, [1e20, 1e20]) - 0.5) < 1e-9
+        assert abs(imhof_sf(1.5e20, weights, [1e20, 1e20]) - 0.5) < 1e-9
+        for dof in (1e20, 1e200, 1.7e308):
+            # far below the mean: 0 (the old code raised ZeroDivisionError, then a
+            # NaN-to-integer error at 1e200)
+            assert imhof_cdf(1.0, weights, [dof, dof]) == 0.0
+            assert imhof_sf(1.0, weights, [dof, dof]) == 1.0
+        # the normal limit: exactly 1/2 at an exactly representable mean
+        assert imhof_cdf(1.5e300, weights, [1e300, 1e300]) == pytest.approx(0.5, abs=1e-15)
+        assert liu_tang_zhang_cdf(1.5e200, weights, [1e200, 1e200]) == pytest.approx(0.5)
+        # (powers of two: the mean 1.5 H is exact, the density there 1/sqrt(2 pi var))
+        H = 2.0**660
+        law = WeightedChiSquare(weights, [H, H])
+        assert law.pdf(1.5 * H) == pytest.approx(1 / math.sqrt(2 * math.pi * 2.5 * H))
+
+
+def test_liu_tang_zhang_is_finite_at_huge_dof():
+    # the cumulants of dof 1e200 overflowed: NaN
+    for dof in (1e100, 1e200, 1e300):
+        p = liu_tang_zhang_cdf(0.75 * dof, [1.0, 0.5], [dof, dof])
+        assert p == pytest.approx(0.0, abs=1e-12)
+        assert np.isfinite(liu_tang_zhang_sf(1.5 * dof, [1.0, 0.5], [dof, dof]))
+
+
+def test_inversion_integrands_are_finite_beyond_u_710():
+    # cosh(710) overflows: the contour integrand was NaN there; it is 0 in doubles
+    u = np.array([0.0, 1.0, 709.0, 710.0, 1e3])
+    real_axis, contour, _ = inversion_integrands(1.0, [1.0, 0.5], u=u)
+    assert np.isfinite(real_axis).all() and np.isfinite(contour).all()
+    assert contour[2:].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_many_weights_give_no_spurious_overflow_warning():
+    # the closed form near 0 of a positive form was evaluated at every point,
+    # where k log x overflowed (k = 1500) though only points far below the mean use it
+    weights = np.random.default_rng(0).uniform(0.1, 1.0, 3000)
+    c = float(np.sum(weights))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p = imhof_cdf(np.array([c, c + 1.0]), weights)
+    assert 0.5 < p[0] < p[1] < 0.52
+
+
+def test_a_bool_level_and_text_in_object_arrays_are_refused():
+    law = WeightedChiSquare([1.0, 0.5])
+    with pytest.raises(ValueError, match="probabilities"):
+        law.ppf(True)
+    with pytest.raises(ValueError, match="probabilities"):
+        law.isf(np.array([True, False]))
+    with pytest.raises(ValueError, match=r"weights.*text"):
+        imhof_cdf(1.0, np.array(["1.0", "0.5"], dtype=object))
+    with pytest.raises(ValueError, match=r"c .*text"):
+        imhof_cdf(np.array(["1.0"], dtype=object), [1.0])
+    with pytest.raises(ValueError, match=r"dof.*text"):
+        imhof_cdf(1.0, [1.0, 0.5], [1, "2"])
+
+
+@pytest.mark.parametrize("df", [0.3, 1.0, 3.0, 10.0])
+def test_vectorised_quantile_search_matches_the_chi_square_quantiles(df):
+    # ppf and isf search all levels (and both tails) in a few vectorised calls;
+    # next to the bound 0 and far in either tail they keep full relative accuracy
+    law = WeightedChiSquare([1.0], [df])
+    levels = np.array([1e-12, 1e-8, 0.025, 0.5, 0.975, 1 - 1e-8])
+    assert np.allclose(law.ppf(levels), stats.chi2.ppf(levels, df), rtol=1e-11, atol=0)
+    assert np.allclose(law.isf(levels), stats.chi2.isf(levels, df), rtol=1e-11, atol=0)
+    for p in (0.005, 0.025):
+        assert float(law.ppf(p)) == pytest.approx(stats.chi2.ppf(p, df), rel=1e-11)
+        assert float(law.isf(p)) == pytest.approx(stats.chi2.isf(p, df), rel=1e-11)
+    assert law.ppf([0.0, 1.0]).tolist() == [0.0, math.inf]
+
+
+def test_quantiles_of_a_mixed_law_invert_its_distribution_function():
+    law = WeightedChiSquare([2.0, -1.0, 0.5], [1, 3, 2], [0.5, 0.0, 1.0], sigma=0.3, offset=1.0)
+    levels = np.array([1e-9, 0.01, 0.3, 0.5, 0.9, 0.999])
+    assert np.allclose(law.cdf(law.ppf(levels)), levels, rtol=1e-9, atol=0)
+    assert np.allclose(law.sf(law.isf(levels)), levels, rtol=1e-9, atol=0)
+
+
+def _random_laws(count, seed):
+    """Random laws of 1-5 terms, one-signed and mixed, central and noncentral."""
+    rng = np.random.default_rng(seed)
+    for i in range(count):
+        r = int(rng.integers(1, 6))
+        weights = rng.uniform(-2, 3, r) if i % 3 else rng.uniform(0.1, 3, r)
+        dof = rng.integers(1, 30, r).astype(float)
+        noncentrality = rng.uniform(0, 4, r) if i % 2 else np.zeros(r)
+        yield WeightedChiSquare(weights, dof, noncentrality)
+
+
+def test_two_sided_quantiles_take_one_evaluation_and_meet_the_tolerance(monkeypatch):
+    # the search brackets each level +-0.05 std around its Liu-Tang-Zhang guess and
+    # interpolates 9 nodes: one vectorised evaluation for the pair of a two-sided
+    # region on nearly every law, and the log tail within 4 rtol of its goal
+    calls = []
+    evaluate = WeightedChiSquare._log_tail
+
+    def counted(self, x, lower):
+        calls.append(x.shape)
+        return evaluate(self, x, lower)
+
+    monkeypatch.setattr(WeightedChiSquare, "_log_tail", counted)
+    single, laws = 0, list(_random_laws(40, seed=7))
+    for law in laws:
+        calls.clear()
+        lower, upper = law.ppf(0.025), law.isf(0.025)
+        single += calls == [(2, 9)]
+        assert abs(math.log(law.cdf(lower)) - math.log(0.025)) <= 4 * law.rtol
+        assert abs(math.log(law.sf(upper)) - math.log(0.025)) <= 4 * law.rtol
+    assert single >= 36
+
+
+def test_a_two_sided_rejection_probability_is_one_evaluation_of_both_tails():
+    law = WeightedChiSquare([2.0, 0.5], [3, 1], [1.0, 0.0])
+    lower, upper = 1.5, 14.0
+    expected = float(law.cdf(lower)) + float(law.sf(upper))
+    assert rejection_probability(law, (lower, upper), "two-sided") == pytest.approx(
+        expected, rel=1e-14
+    )
+    # thresholds outside the support (a positive form: X > 0) take the general path
+    assert rejection_probability(law, (-1.0, upper), "two-sided") == pytest.approx(
+        float(law.sf(upper)), rel=1e-14
+    )

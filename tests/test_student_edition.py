@@ -182,7 +182,9 @@ def test_class_edition_ships_data_not_generators(class_edition, class_files):
             for key in checks.data_keys():
                 assert _same(issued.data(sid, key), checks.data_for(key, sid, secret))
         assert not issued.has("not-on-the-roster")
-        assert sid not in (folder / PERSONAL_FILE).read_text()  # IDs are not listed in clear
+        # IDs are not listed in clear: no JSON string of the file is an ID (a bare substring
+        # test failed by chance when base64 data happened to contain "s003")
+        assert sid not in _json_strings(json.loads((folder / PERSONAL_FILE).read_text()))
     assert secret.key.hex() not in (class_edition.dest / "EXPORT.md").read_text()
 
 
@@ -574,3 +576,12 @@ def test_export_refuses_to_hand_out_a_leak(tmp_path):
     ):
         export(tmp_path / "refused", root=leaky)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["clean", "leaky", "ok"]
+
+
+def _json_strings(value) -> set[str]:
+    """Every key and string value of a parsed JSON document."""
+    if isinstance(value, dict):
+        return set(value) | {s for v in value.values() for s in _json_strings(v)}
+    if isinstance(value, list):
+        return {s for v in value for s in _json_strings(v)}
+    return {value} if isinstance(value, str) else set()

@@ -295,6 +295,62 @@ def test_every_notebook_page_shows_its_figures(site, visits):
         assert all(loaded for _, loaded in images), f"{rel}: figures that did not load {images}"
 
 
+_IMG = re.compile(r"<img\b[^>]*>")
+_ATTR = re.compile(r'(\w+)="([^"]*)"')
+_HASH_NAME = re.compile(r"^[0-9a-f]{16,}(\.\w+)?$")
+
+
+def test_notebook_figures_have_alt_text_numbered_captions_and_references(site):
+    """No figure is announced to a screen reader by a file hash; figures are numbered and cited."""
+    pages = sorted((site.out_dir / "notebooks").glob("*.html"))
+    assert len(pages) >= 6
+    hashed, unnumbered, uncited = {}, [], []
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        article = text[text.index('<article class="bd-article"') :]
+        alts = [dict(_ATTR.findall(tag)).get("alt", "") for tag in _IMG.findall(article)]
+        bad = [alt for alt in alts if not alt.strip() or _HASH_NAME.match(alt.strip())]
+        if bad:
+            hashed[page.name] = bad
+        numbers = re.findall(r'<span class="caption-number">Figure (\d+)', article)
+        if len(numbers) < len(alts):  # every figure of the page numbered and captioned
+            unnumbered.append(f"{page.name}: {len(numbers)} numbered of {len(alts)}")
+        cited = re.findall(
+            r'<a class="reference internal" href="#fig-[^"]+"><span class="std std-numref">Figure',
+            article,
+        )
+        if not cited:
+            uncited.append(page.name)
+    assert not hashed, f"images whose alt text is empty or a file hash: {hashed}"
+    assert not unnumbered, f"figures without a numbered caption: {unnumbered}"
+    assert not uncited, f"notebook pages whose prose cites no figure by number: {uncited}"
+
+
+def test_answers_are_hidden_until_opened(site):
+    """An exercise's answers (admonitions of class dropdown) are closed <details> boxes."""
+    text = (site.out_dir / "notebooks/06_mismatched_filters.html").read_text(encoding="utf-8")
+    boxes = re.findall(r"<details class=\"admonition dropdown[^\"]*\"( open)?>", text)
+    assert len(boxes) >= 2 and not any(boxes), boxes
+    assert '<summary class="admonition-title">Answer to 1</summary>' in text
+
+
+@pytest.mark.parametrize(
+    "module",
+    [
+        "course.nis",
+        "course.chi2",
+        "course.lsq",
+        "course.filters",
+        "course.mismatched",
+        "course.diagnosis",
+    ],
+)
+def test_api_pages_typeset_their_formulas(visits, module):
+    """The Notes of the API reference are maths, not ASCII formulas in code literals."""
+    visit = visits[f"docs/api/modules/{module}.html"]
+    assert visit.maths >= 3 and visit.typeset == visit.maths, (visit.maths, visit.typeset)
+
+
 def test_search_finds_the_w_test(server, browser):
     page = browser.new_page()
     page.goto(server + "search.html?q=w-test", wait_until="load")

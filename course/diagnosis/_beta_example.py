@@ -26,7 +26,7 @@ def beta_drift_model(
     x0_mean: Any = (1.0, 0.0),
     x0_cov: Any = None,
 ) -> NonlinearModel:
-    """The EKF model of the lecture's example, state ``z = (beta, x)``.
+    r"""The EKF model of the lecture's example, state ``z = (beta, x)``.
 
     ``beta_{t+1} = beta_t + w1_t``,
     ``x_{t+1} = x_t - Ts beta_t x_t + Ts u_t + w2_t``,
@@ -52,11 +52,17 @@ def beta_drift_model(
         With exact Jacobians
         ``dg/dz = [[1, 0], [-Ts x, 1 - Ts beta]]`` and ``dh/dz = [0, 1]``.
 
+    See Also
+    --------
+    simulate_beta_system : Data of the same system with a given beta trajectory.
+    course.filters.extended_kalman_filter : The filter that runs this model.
+
     Notes
     -----
     LiU lecture, "Exempel på EKF som residualgenerator": to detect a sensor
-    fault ``f`` in ``y = x + f`` while ``beta`` varies slowly, augment the
-    state with ``beta`` modelled as a random walk.
+    fault :math:`f` in :math:`y = x + f` while :math:`\beta` varies slowly,
+    augment the state with :math:`\beta` modelled as a random walk,
+    :math:`\beta(t+1) = \beta(t) + w_\beta(t)`.
 
     Examples
     --------
@@ -121,7 +127,7 @@ def simulate_beta_system(
     fault: Any = None,
     batch: Any = None,
 ) -> Simulation:
-    """Simulate the lecture's system for a given ``beta`` trajectory and sensor fault.
+    r"""Simulate the lecture's system for a given ``beta`` trajectory and sensor fault.
 
     ``x_{t+1} = x_t - Ts beta_t x_t + Ts u_t + w_t``, ``y_t = x_t + f_t + e_t``.
 
@@ -148,14 +154,24 @@ def simulate_beta_system(
     outputs : (*batch, N, 1) ndarray
         ``y_t``.
 
+    See Also
+    --------
+    beta_drift_model : The filter model of this system.
+
     Notes
     -----
-    The lecture's example (LiU lecture, "Exempel på EKF
-    som residualgenerator"): ``x(t+1) = x(t) - Ts beta(t) x(t) + Ts u(t)``,
-    ``y(t) = x(t) + f(t)``, the forward-Euler discretisation of
-    ``dx/dt = -beta x + u``, here with process noise ``w ~ N(0, q_x)`` and
-    measurement noise ``e ~ N(0, r)``.  Unlike :func:`beta_drift_model`,
-    ``beta`` is a given trajectory (a ramp, a sine, ...), not a random walk.
+    The lecture's example (LiU lecture, "Exempel på EKF som
+    residualgenerator"):
+
+    .. math::
+
+        x(t+1) = x(t) - T_s \beta(t) x(t) + T_s u(t) + w(t), \qquad
+        y(t) = x(t) + f(t) + e(t),
+
+    the forward-Euler discretisation of :math:`\dot x = -\beta x + u`, here
+    with process noise :math:`w \sim N(0, q_x)` and measurement noise
+    :math:`e \sim N(0, r)`.  Unlike :func:`beta_drift_model`, :math:`\beta` is
+    a given trajectory (a ramp, a sine, ...), not a random walk.
 
     Examples
     --------

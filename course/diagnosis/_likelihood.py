@@ -40,7 +40,7 @@ from course.validation import (
 # likelihood
 # ---------------------------------------------------------------------------
 def normal_log_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
-    """``log L(theta | z)`` for independent ``z_i ~ N(theta, sigma^2)``.
+    r"""``log L(theta | z)`` for independent ``z_i ~ N(theta, sigma^2)``.
 
     Parameters
     ----------
@@ -55,13 +55,21 @@ def normal_log_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
     -------
     float or numpy.ndarray, shaped like ``theta``
 
+    See Also
+    --------
+    normal_likelihood : The likelihood itself.
+    maximum_likelihood : Its maximiser.
+
     Notes
     -----
-    ``L(theta | z) = f(z | theta) = prod_i (2 pi sigma^2)^{-1/2}
-    exp(-(z_i - theta)^2 / (2 sigma^2))`` (lecture, slides
-    "Likelihood-funktionen, normalfördelning": independence makes the joint
-    density the product).  Working with the logarithm avoids underflow for
-    many observations.
+    .. math::
+
+        L(\theta \mid z) = f(z \mid \theta)
+        = \prod_i (2\pi\sigma^2)^{-1/2} \exp\!\left(-\frac{(z_i - \theta)^2}{2\sigma^2}\right)
+
+    (lecture, slides "Likelihood-funktionen, normalfördelning": independence
+    makes the joint density the product).  Working with the logarithm avoids
+    underflow for many observations.
 
     Examples
     --------
@@ -84,7 +92,7 @@ def normal_log_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
 
 
 def normal_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
-    """``L(theta | z) = f(z | theta)`` for independent ``z_i ~ N(theta, sigma^2)``.
+    r"""``L(theta | z) = f(z | theta)`` for independent ``z_i ~ N(theta, sigma^2)``.
 
     Parameters
     ----------
@@ -99,20 +107,27 @@ def normal_likelihood(theta: Any, z: Any, *, sigma: float = 1.0) -> Any:
     -------
     float or numpy.ndarray, shaped like ``theta``
 
+    See Also
+    --------
+    normal_log_likelihood : The same in logarithms, safe for long records.
+
+    Notes
+    -----
+    .. math::
+
+        L(\theta \mid z) = \prod_i (2\pi\sigma^2)^{-1/2}
+        \exp\!\left(-\frac{(z_i - \theta)^2}{2\sigma^2}\right)
+
+    (lecture, slides "Likelihood-funktionen, normalfördelning"), computed as
+    the exponential of :func:`normal_log_likelihood`.  For :math:`z = (3, 5)`
+    and :math:`\sigma = 1` the maximum is :math:`L(4) = e^{-1}/(2\pi)`.
+    Underflows to 0 for long records: use the log-likelihood there.
+
     Examples
     --------
     >>> import numpy as np
     >>> bool(np.isclose(normal_likelihood(4.0, [3.0, 5.0]), np.exp(-1) / (2 * np.pi)))
     True
-
-    Notes
-    -----
-    ``L(theta | z) = prod_i (2 pi sigma^2)^{-1/2} exp(-(z_i - theta)^2 /
-    (2 sigma^2))`` (lecture, slides "Likelihood-funktionen,
-    normalfördelning"), computed as the exponential of
-    :func:`normal_log_likelihood`.  For ``z = (3, 5)`` and ``sigma = 1`` the
-    maximum is ``L(4) = e^{-1} / (2 pi)``.  Underflows to 0 for long records:
-    use the log-likelihood there.
     """
     value = np.exp(normal_log_likelihood(theta, z, sigma=sigma))
     return float(value) if np.ndim(value) == 0 else value
@@ -210,7 +225,7 @@ def maximum_likelihood(
     bounds=None,
     method: str | None = None,
 ) -> MLResult:
-    """Maximise ``log L(theta | z)`` over ``Theta_0`` numerically.
+    r"""Maximise ``log L(theta | z)`` over ``Theta_0`` numerically.
 
     Parameters
     ----------
@@ -232,12 +247,17 @@ def maximum_likelihood(
     -------
     MLResult
 
+    See Also
+    --------
+    normal_log_likelihood : A log-likelihood to maximise.
+    glr_test : The test built on maximised likelihoods.
+
     Notes
     -----
-    ``theta_ML = argmax L(theta | z)`` (lecture, slide "Teststorheter
-    baserade på likelihood-funktionen, forts.").  The optimiser minimises
-    ``-log L``; it is local, so start it near the answer (a moment
-    estimate, or a grid search) when the likelihood has several modes.
+    :math:`\hat\theta_{ML} = \arg\max_\theta L(\theta \mid z)` (lecture, slide
+    "Teststorheter baserade på likelihood-funktionen, forts.").  The optimiser
+    minimises :math:`-\log L`; it is local, so start it near the answer (a
+    moment estimate, or a grid search) when the likelihood has several modes.
 
     Examples
     --------
@@ -353,7 +373,7 @@ def likelihood_test(
     alpha: float = 0.05,
     name: str = "maximum-likelihood test",
 ) -> TestResult:
-    """The lecture's likelihood test quantity ``T = max over Theta_0 of L``, reject when small.
+    r"""The lecture's likelihood test quantity ``T = max over Theta_0 of L``, reject when small.
 
     Parameters
     ----------
@@ -372,14 +392,25 @@ def likelihood_test(
         rejected when the best achievable likelihood is *below* the
         critical value.
 
+    See Also
+    --------
+    prediction_error_test : The test that makes the same decisions.
+    glr_test : The likelihood ratio against an alternative.
+
     Notes
     -----
-    For this model ``max over Theta_0 of log L = -(N/2) log(2 pi sigma^2) -
-    T_pe / (2 sigma^2)`` with ``T_pe`` the prediction error of
-    :func:`prediction_error`: the likelihood test and the prediction-error
-    test make the same decisions.  The null law is ``c - chi2(N - rank)/2``
-    (lecture, "Teststorheter baserade på likelihood-funktionen, forts.":
-    "H0 is rejected when T(z) is below a threshold").
+    For this model
+
+    .. math::
+
+        \max_{\theta \in \Theta_0} \log L = -\frac N2 \log(2\pi\sigma^2)
+        - \frac{T_{pe}}{2\sigma^2}
+
+    with :math:`T_{pe}` the prediction error of :func:`prediction_error`: the
+    likelihood test and the prediction-error test make the same decisions.
+    The null law is :math:`c - \chi^2(N - \operatorname{rank})/2` (lecture,
+    "Teststorheter baserade på likelihood-funktionen, forts.": "H0 is rejected
+    when T(z) is below a threshold").
 
     Examples
     --------
@@ -420,7 +451,7 @@ def glr_test(
     bounds=None,
     name: str = "generalised likelihood ratio test",
 ) -> TestResult:
-    """Generalised likelihood ratio test, calibrated by Wilks' theorem.
+    r"""Generalised likelihood ratio test, calibrated by Wilks' theorem.
 
     Parameters
     ----------
@@ -443,20 +474,28 @@ def glr_test(
         ``statistic = 2 (max_{Theta_1} log L - max_{Theta_0} log L)``,
         ``null = chi2(|free1| - |free0|)``.
 
+    See Also
+    --------
+    linear_glr_test : The exact law for a linear-Gaussian model.
+    neyman_pearson_test : The most powerful test of two simple hypotheses.
+
     Notes
     -----
-    ``Lambda = max_{Theta_0} L / max_{Theta_1} L`` and ``-2 log Lambda`` is
-    asymptotically ``chi2(dim Theta_1 - dim Theta_0)`` under H0 (Wilks
-    1938) when the hypotheses are nested, the true parameter is an
-    *interior* point, the model is identifiable with a non-singular Fisher
-    information, and the sample is large.  It fails, for example, when the
-    null value lies on the boundary (a fault size restricted to be >= 0
-    gives a 50:50 mixture of 0 and chi2(1)), or when a parameter is
-    meaningless under H0 (the onset time of a fault of size 0).  For a
-    linear-Gaussian model with known variance the law is exact:
-    :func:`linear_glr_test`.  The lecture mentions generalised
-    Neyman-Pearson results for composite hypotheses (slide
-    "Neyman-Pearson lemma, likelihood-kvot").
+    .. math::
+
+        \Lambda = \frac{\max_{\Theta_0} L}{\max_{\Theta_1} L}, \qquad
+        -2 \log \Lambda \;\xrightarrow{d}\; \chi^2(\dim\Theta_1 - \dim\Theta_0)
+
+    under H0 (Wilks 1938) when the hypotheses are nested, the true parameter
+    is an *interior* point, the model is identifiable with a non-singular
+    Fisher information, and the sample is large.  It fails, for example, when
+    the null value lies on the boundary (a fault size restricted to be
+    :math:`\ge 0` gives a 50:50 mixture of 0 and :math:`\chi^2(1)`), or when a
+    parameter is meaningless under H0 (the onset time of a fault of size 0).
+    For a linear-Gaussian model with known variance the law is exact:
+    :func:`linear_glr_test`.  The lecture mentions generalised Neyman-Pearson
+    results for composite hypotheses (slide "Neyman-Pearson lemma,
+    likelihood-kvot").
 
     Examples
     --------
@@ -526,7 +565,7 @@ def linear_glr_test(
     alpha: float = 0.05,
     name: str = "generalised likelihood ratio test (linear)",
 ) -> TestResult:
-    """Exact GLR test of nested parameter sets in ``y = U theta + v``, known ``sigma``.
+    r"""Exact GLR test of nested parameter sets in ``y = U theta + v``, known ``sigma``.
 
     Parameters
     ----------
@@ -545,13 +584,25 @@ def linear_glr_test(
         ``statistic = (T0 - T1) / sigma^2`` with ``Ti`` the prediction
         errors under the two hypotheses, ``null = chi2(rank1 - rank0)``.
 
+    See Also
+    --------
+    glr_test : The asymptotic test for any model.
+    prediction_error : The sums of squares it compares.
+
     Notes
     -----
-    ``-2 log Lambda = (T0 - T1) / sigma^2`` for Gaussian noise of known
-    variance, and ``T0 - T1 = ||(P1 - P0) y||^2`` with ``P1 - P0`` the
-    projection on the part of range(U_free1) orthogonal to range(U_free0):
-    exactly ``sigma^2 chi2(rank1 - rank0)`` under H0, for every ``N``.
-    Wilks' theorem is exact here.
+    For Gaussian noise of known variance
+
+    .. math::
+
+        -2 \log \Lambda = \frac{T_0 - T_1}{\sigma^2}, \qquad
+        T_0 - T_1 = \lVert (P_1 - P_0) y \rVert^2,
+
+    with :math:`P_1 - P_0` the projection on the part of
+    :math:`\operatorname{range}(U_{\text{free},1})` orthogonal to
+    :math:`\operatorname{range}(U_{\text{free},0})`: exactly
+    :math:`\sigma^2 \chi^2(\operatorname{rank}_1 - \operatorname{rank}_0)` under
+    H0, for every :math:`N`.  Wilks' theorem is exact here.
 
     Examples
     --------
@@ -602,7 +653,7 @@ def neyman_pearson_test(
     alpha: float = 0.05,
     name: str = "Neyman-Pearson test",
 ) -> TestResult:
-    """Most powerful test of two simple hypotheses on a Gaussian mean.
+    r"""Most powerful test of two simple hypotheses on a Gaussian mean.
 
     Parameters
     ----------
@@ -621,17 +672,26 @@ def neyman_pearson_test(
         ``statistic = log f(z | theta1) - log f(z | theta0)``, reject when
         large; details hold the power ``P(reject | theta1)``.
 
+    See Also
+    --------
+    glr_test : The likelihood ratio with estimated parameters.
+
     Notes
     -----
     Neyman-Pearson lemma (lecture, slide "Neyman-Pearson lemma,
-    likelihood-kvot"): for ``H0: theta = theta0`` against
-    ``H1: theta = theta1`` no test of level ``alpha`` has more power than
-    the one rejecting for large ``f(z|theta1) / f(z|theta0)``.  Here
-    ``log Lambda = (||z - m0||^2 - ||z - m1||^2) / (2 sigma^2)`` with
-    ``mi = regressors @ theta_i`` is linear in ``z``: with
-    ``d = ||m1 - m0|| / sigma`` it is ``N(-d^2/2, d^2)`` under H0 and
-    ``N(d^2/2, d^2)`` under H1, so threshold and power are exact:
-    ``power = Phi(d - z_alpha)``.
+    likelihood-kvot"): for :math:`H_0: \theta = \theta_0` against
+    :math:`H_1: \theta = \theta_1` no test of level :math:`\alpha` has more
+    power than the one rejecting for large
+    :math:`f(z \mid \theta_1) / f(z \mid \theta_0)`.  Here, with
+    :math:`m_i = U\theta_i` (``regressors @ theta_i``),
+
+    .. math::
+
+        \log \Lambda = \frac{\lVert z - m_0 \rVert^2 - \lVert z - m_1 \rVert^2}{2\sigma^2}
+
+    is linear in :math:`z`: with :math:`d = \lVert m_1 - m_0 \rVert / \sigma` it
+    is :math:`N(-d^2/2, d^2)` under H0 and :math:`N(d^2/2, d^2)` under H1, so
+    threshold and power are exact: :math:`\text{power} = \Phi(d - z_\alpha)`.
 
     Examples
     --------
@@ -679,7 +739,7 @@ def mode_log_likelihoods(
     sigma: float,
     prior_std: float | None = None,
 ) -> dict:
-    """``log P(y | F)`` for every fault mode of ``y = U theta + v``.
+    r"""``log P(y | F)`` for every fault mode of ``y = U theta + v``.
 
     Parameters
     ----------
@@ -700,16 +760,26 @@ def mode_log_likelihoods(
     -------
     dict of str to float
 
+    See Also
+    --------
+    bayes_ranking : The posterior probabilities of the modes.
+
     Notes
     -----
-    The lecture (slide "Likelihood och Bayes") uses ``max L`` as
-    ``P(z | F_i)``.  Because ``Theta_NF`` lies in the closure of every
-    ``Theta_Fi``, ``max over Theta_Fi of L >= L(nominal)`` for every record:
-    with maximised likelihoods a fault mode always looks at least as likely
-    as NF, and only the priors can favour NF.  The marginal likelihood
-    charges a mode for its free parameter (an Occam factor) and prefers NF
-    when the data do not need the fault.  Under ``F`` with the prior above,
-    ``y ~ N(U nominal, sigma^2 I + prior_std^2 U_F U_F^T)``.
+    The lecture (slide "Likelihood och Bayes") uses :math:`\max L` as
+    :math:`P(z \mid F_i)`.  Because :math:`\Theta_{NF}` lies in the closure of
+    every :math:`\Theta_{F_i}`,
+    :math:`\max_{\Theta_{F_i}} L \ge L(\text{nominal})` for every record: with
+    maximised likelihoods a fault mode always looks at least as likely as NF,
+    and only the priors can favour NF.  The marginal likelihood charges a mode
+    for its free parameter (an Occam factor) and prefers NF when the data do
+    not need the fault.  Under :math:`F` with the prior above,
+
+    .. math::
+
+        y \sim N\bigl(U\theta_{\text{nominal}},\ \sigma^2 I + s^2 U_F U_F^{\mathsf T}\bigr),
+
+    with :math:`s` = ``prior_std``.
 
     Examples
     --------
@@ -796,7 +866,7 @@ class FaultRanking:
 def bayes_ranking(
     log_likelihoods: Mapping[str, float], priors: Mapping[str, float]
 ) -> FaultRanking:
-    """Rank fault modes by ``P(F | z)`` from ``log P(z | F)`` and priors ``P(F)``.
+    r"""Rank fault modes by ``P(F | z)`` from ``log P(z | F)`` and priors ``P(F)``.
 
     Parameters
     ----------
@@ -809,11 +879,19 @@ def bayes_ranking(
     -------
     FaultRanking
 
+    See Also
+    --------
+    mode_log_likelihoods : The likelihoods it weighs.
+
     Notes
     -----
-    Bayes' rule ``P(F_i | z) = P(z | F_i) P(F_i) / sum_j P(z | F_j) P(F_j)``
-    (lecture, slide "Likelihood och Bayes"), computed with log-sum-exp so
-    that tiny likelihoods do not underflow.
+    Bayes' rule (lecture, slide "Likelihood och Bayes")
+
+    .. math::
+
+        P(F_i \mid z) = \frac{P(z \mid F_i) P(F_i)}{\sum_j P(z \mid F_j) P(F_j)},
+
+    computed with log-sum-exp so that tiny likelihoods do not underflow.
 
     Examples
     --------

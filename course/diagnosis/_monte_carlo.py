@@ -22,7 +22,7 @@ from course.validation import as_callable, as_count, as_flag, as_generator, as_m
 def simulate_regression_records(
     U: Any, theta: Any, *, sigma: float, n_records: int, rng: Any
 ) -> np.ndarray:
-    """``n_records`` records of ``y = U theta + v``, ``v ~ N(0, sigma^2 I)``, as rows.
+    r"""``n_records`` records of ``y = U theta + v``, ``v ~ N(0, sigma^2 I)``, as rows.
 
     Parameters
     ----------
@@ -43,13 +43,23 @@ def simulate_regression_records(
         One record per row (records leading, the course's batch layout):
         every test quantity of this package takes it as it is.
 
+    See Also
+    --------
+    linear_test_statistics : The test quantities of these records.
+    isolation_monte_carlo : Detection and isolation rates by simulation.
+
     Notes
     -----
-    The lecture's static fault model ``y(t) = theta_1 u1(t) + theta_2 u2(t)
-    + theta_3 u3(t) + v(t)`` (LiU lecture, "Teststorheten är ett
-    modellvalideringsmått") with white Gaussian noise.  The noise is drawn
-    sample-major (an ``(N, n_records)`` draw, transposed), the order the
-    course's seeded studies were computed with.
+    The lecture's static fault model (LiU lecture, "Teststorheten är ett
+    modellvalideringsmått")
+
+    .. math::
+
+        y(t) = \theta_1 u_1(t) + \theta_2 u_2(t) + \theta_3 u_3(t) + v(t)
+
+    with white Gaussian noise.  The noise is drawn sample-major (an
+    ``(N, n_records)`` draw, transposed), the order the course's seeded studies
+    were computed with.
 
     Examples
     --------
@@ -76,7 +86,7 @@ def simulate_regression_records(
 def linear_test_statistics(
     Y: Any, U: Any, nominal: Any, tests: Sequence[Sequence[int]]
 ) -> np.ndarray:
-    """Prediction errors of several tests on many records: ``(M, n_tests)``.
+    r"""Prediction errors of several tests on many records: ``(M, n_tests)``.
 
     Parameters
     ----------
@@ -92,11 +102,16 @@ def linear_test_statistics(
     numpy.ndarray, shape (M, n_tests)
         ``T_k`` of every record, one column per test.
 
+    See Also
+    --------
+    prediction_error : The same quantity for one record.
+
     Notes
     -----
-    Column ``k`` is ``min over Theta_0^k of ||y - U theta||^2``
-    (:func:`prediction_error`), computed for all ``M`` records with one
-    SVD of the free regressors per test.
+    Column :math:`k` is
+    :math:`\min_{\theta \in \Theta_0^k} \lVert y - U\theta \rVert^2`
+    (:func:`prediction_error`), computed for all :math:`M` records with one SVD
+    of the free regressors per test.
 
     Examples
     --------
@@ -204,7 +219,7 @@ def isolation_monte_carlo(
     modes: Sequence[str] | None = None,
     exoneration: bool = False,
 ) -> IsolationResult:
-    """Simulate every fault mode, run the tests, diagnose, and tabulate.
+    r"""Simulate every fault mode, run the tests, diagnose, and tabulate.
 
     Parameters
     ----------
@@ -229,14 +244,20 @@ def isolation_monte_carlo(
     -------
     IsolationResult
 
+    See Also
+    --------
+    diagnosis_matrix : The diagnoses of each alarm pattern.
+    simulate_regression_records : The records it simulates.
+
     Notes
     -----
-    For each simulated mode ``F``: the alarm rate of test ``k`` estimates
-    ``P(T_k > J_k | F)`` (``alpha`` where the structure has a 0, the power
-    where it has an X); the membership ``P(F' in D | F)`` with ``D`` the
-    single-fault diagnoses of :func:`diagnosis_matrix`; and "exact" is
-    ``P(D = {F} | F)``.  Each is a binomial proportion over ``n_records``
-    records, with standard error at most ``0.5 / sqrt(n_records)``.
+    For each simulated mode :math:`F`: the alarm rate of test :math:`k`
+    estimates :math:`P(T_k > J_k \mid F)` (:math:`\alpha` where the structure
+    has a 0, the power where it has an X); the membership
+    :math:`P(F' \in D \mid F)` with :math:`D` the single-fault diagnoses of
+    :func:`diagnosis_matrix`; and "exact" is :math:`P(D = \{F\} \mid F)`.  Each
+    is a binomial proportion over ``n_records`` records, with standard error at
+    most :math:`0.5/\sqrt{n}`.
 
     Examples
     --------

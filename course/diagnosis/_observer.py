@@ -51,7 +51,7 @@ class ObserverResult:
 def observer_residuals(
     y: Any, u: Any, f: Any, h: Any, x0: Any, theta0: Any, K1: Any, K2: Any, *, Ts: float
 ) -> ObserverResult:
-    """Observer-based residual generator with parameter adaptation, Euler-discretised.
+    r"""Observer-based residual generator with parameter adaptation, Euler-discretised.
 
     Continuous-time design (lecture):
     ``dx_hat/dt = f(x_hat, u, theta_hat) + K1 (y - h(x_hat))``,
@@ -86,11 +86,19 @@ def observer_residuals(
         Use :meth:`ObserverResult.windowed_energy` for the lecture's
         ``T = integral over a window of (y - h(x_hat))^2``.
 
+    See Also
+    --------
+    course.filters.extended_kalman_filter : The EKF as a residual generator.
+    course.nis.windowed_sum : The window sum of the squared residual.
+
     Notes
     -----
-    LiU lecture, "Mer generella dynamiska fall": the observer with a
-    parameter update driven by the output error, and the test quantity
-    ``T(t) = int_{t-L}^{t} (y(tau) - h(x_hat(tau)))^2 dtau``.
+    LiU lecture, "Mer generella dynamiska fall": the observer with a parameter
+    update driven by the output error, and the test quantity
+
+    .. math::
+
+        T(t) = \int_{t-L}^{t} \bigl(y(\tau) - h(\hat x(\tau))\bigr)^2\, d\tau .
 
     Examples
     --------

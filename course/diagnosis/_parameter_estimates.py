@@ -26,7 +26,7 @@ from course.diagnosis._common import (
 )
 from course.linalg import check_full_column_rank, cholesky_lower, qr_solve, solve_spd, symmetrize
 from course.linalg import whiten as _whiten
-from course.results import TestResult, format_number
+from course.results import TestResult, critical_value, format_number, rejection_probability
 from course.validation import as_covariance, as_float_array, as_probability, as_vector
 
 
@@ -84,7 +84,7 @@ def _estimate_columns(Y, U, nominal, est, sigma):
 def estimate_parameters(
     y: Any, U: Any, nominal: Any, estimate: Sequence[int], *, sigma: float
 ) -> ParameterEstimate:
-    """Estimate the parameters ``estimate`` by least squares, the rest at nominal.
+    r"""Estimate the parameters ``estimate`` by least squares, the rest at nominal.
 
     Parameters
     ----------
@@ -107,13 +107,24 @@ def estimate_parameters(
         The regressors of the estimated parameters are not linearly
         independent (no excitation): the estimate is not unique.
 
+    See Also
+    --------
+    parameter_estimate_test : A test of the estimates.
+    course.linalg.qr_solve : The solver it uses.
+
     Notes
     -----
-    ``theta_hat = R^{-1} Q^T (y - U_fixed nominal_fixed)`` from the thin QR
-    factorisation ``U_est = Q R`` (:func:`course.linalg.qr_solve`), and
-    ``Cov = sigma^2 R^{-1} R^{-T}`` (``= sigma^2 (Phi^T Phi)^{-1}`` without
-    forming ``Phi^T Phi``).  The lecture's warning (slide "Teststorheter
-    baserade på parameterskattningar"): this needs excitation.
+    From the thin QR factorisation :math:`U_{\text{est}} = QR`
+    (:func:`course.linalg.qr_solve`),
+
+    .. math::
+
+        \hat\theta = R^{-1} Q^{\mathsf T} (y - U_{\text{fixed}} \theta_{\text{fixed}}), \qquad
+        \operatorname{Cov}\hat\theta = \sigma^2 R^{-1} R^{-\mathsf T}
+        \;(= \sigma^2 (\Phi^{\mathsf T}\Phi)^{-1}),
+
+    without forming :math:`\Phi^{\mathsf T}\Phi`.  The lecture's warning (slide
+    "Teststorheter baserade på parameterskattningar"): this needs excitation.
 
     Examples
     --------
@@ -138,7 +149,7 @@ def parameter_estimate_test(
     alpha: float = 0.05,
     name: str = "parameter-estimate test",
 ) -> TestResult:
-    """Test ``H0: theta = nominal`` from an estimate and its covariance.
+    r"""Test ``H0: theta = nominal`` from an estimate and its covariance.
 
     Parameters
     ----------
@@ -162,14 +173,25 @@ def parameter_estimate_test(
         ``(theta_hat - nominal)^T C^{-1} (theta_hat - nominal)`` with
         null law ``chi2(k)``.
 
+    See Also
+    --------
+    estimate_parameters : The estimates and their covariance.
+    parameter_estimate_power : Its power against a fault.
+
     Notes
     -----
-    The lecture's ``T = |theta_hat_i - theta_i^0|`` (slide "Teststorheter
-    baserade på parameterskattningar").  For a Gaussian estimate,
-    ``theta_hat - theta^0 ~ N(0, s^2)`` under H0, so ``T`` is half-normal
-    and ``P(T > s z_{alpha/2}) = alpha``: the covariance turns a false-alarm
-    rate into a threshold.  The Wald form is the same idea for a vector
-    (a quadratic form in a Gaussian vector, ``chi2(k)``).
+    The lecture's :math:`T = |\hat\theta_i - \theta_i^0|` (slide
+    "Teststorheter baserade på parameterskattningar").  For a Gaussian
+    estimate, :math:`\hat\theta - \theta^0 \sim N(0, s^2)` under H0, so
+    :math:`T` is half-normal and
+
+    .. math::
+
+        P(T > s\, z_{\alpha/2}) = \alpha:
+
+    the covariance turns a false-alarm rate into a threshold.  The Wald form
+    is the same idea for a vector (a quadratic form in a Gaussian vector,
+    :math:`\chi^2(k)`).
 
     Examples
     --------
@@ -215,7 +237,7 @@ def regression_parameter_test(
     alpha: float = 0.05,
     name: str | None = None,
 ) -> TestResult:
-    """Estimate parameters ``estimate`` and test ``theta_test = nominal_test``.
+    r"""Estimate parameters ``estimate`` and test ``theta_test = nominal_test``.
 
     Parameters
     ----------
@@ -240,11 +262,20 @@ def regression_parameter_test(
     TestResult
         See :func:`parameter_estimate_test`.
 
+    See Also
+    --------
+    parameter_estimate_test : The general form.
+
     Notes
     -----
-    The lecture's ``T1 = |theta_hat_2 - 1|`` with ``(theta_hat_1,
-    theta_hat_2) = argmin sum (y - theta_1 u1 - theta_2 u2 - u3)^2``: the
-    fault in ``theta_1`` is decoupled because ``theta_1`` is estimated too.
+    The lecture's :math:`T_1 = |\hat\theta_2 - 1|` with
+
+    .. math::
+
+        (\hat\theta_1, \hat\theta_2) = \arg\min \sum_t (y - \theta_1 u_1 - \theta_2 u_2 - u_3)^2:
+
+    the fault in :math:`\theta_1` is decoupled because :math:`\theta_1` is
+    estimated too.
 
     Examples
     --------
@@ -278,7 +309,7 @@ def parameter_estimate_power(
     sigma: float,
     alpha: float = 0.05,
 ) -> Any:
-    """Alarm probability of :func:`regression_parameter_test` when the truth is ``theta``.
+    r"""Alarm probability of :func:`regression_parameter_test` when the truth is ``theta``.
 
     Parameters
     ----------
@@ -291,16 +322,29 @@ def parameter_estimate_power(
     -------
     float or numpy.ndarray
 
+    See Also
+    --------
+    parameter_estimate_test : The test whose power this is.
+    course.chi2.chi2_power : The power of a chi-square test.
+
     Notes
     -----
-    The estimate is unbiased for the estimated parameters, but a deviation
-    of a *fixed* parameter leaks into it through the regressors:
-    ``E theta_hat = theta_est + (Phi^T Phi)^{-1} Phi^T U_fixed (theta - nominal)_fixed``.
+    The estimate is unbiased for the estimated parameters, but a deviation of
+    a *fixed* parameter leaks into it through the regressors:
+
+    .. math::
+
+        E\hat\theta = \theta_{\text{est}}
+        + (\Phi^{\mathsf T}\Phi)^{-1} \Phi^{\mathsf T} U_{\text{fixed}}
+          (\theta - \theta_{\text{nominal}})_{\text{fixed}} .
+
     That leak is the isolation problem of the lecture.  With mean shift
-    ``b`` and standard deviation ``s`` of the tested estimate, the power of
-    the two-sided test is ``Phi((b - c)/s) + Phi((-b - c)/s)`` with
-    ``c = s z_{alpha/2}``; for several tested parameters the Wald statistic
-    is ``chi2'(k, b^T C^{-1} b)`` (:func:`course.chi2.chi2_power`).
+    :math:`b` and standard deviation :math:`s` of the tested estimate, the
+    power of the two-sided test is
+    :math:`\Phi\bigl((b - c)/s\bigr) + \Phi\bigl((-b - c)/s\bigr)` with
+    :math:`c = s\, z_{\alpha/2}`; for several tested parameters the Wald
+    statistic is :math:`\chi'^2(k, b^{\mathsf T} C^{-1} b)`
+    (:func:`course.chi2.chi2_power`).
 
     Examples
     --------
@@ -325,9 +369,14 @@ def parameter_estimate_power(
     cov = cov_all[np.ix_(pos, pos)]
     if len(tested) == 1:
         s = float(np.sqrt(cov[0, 0]))
-        c = stats.norm.isf(alpha / 2)
-        b = shift[0] / s
-        power = np.asarray(stats.norm.sf(c - b) + stats.norm.cdf(-c - b))
-        return float(power) if power.ndim == 0 else power
+        region = critical_value(stats.norm(), alpha, "two-sided")
+        # the standardised estimate is N(b, 1) under the fault b = shift / s
+        power = np.array(
+            [
+                rejection_probability(stats.norm(loc=b), region, "two-sided")
+                for b in np.ravel(shift[0] / s)
+            ]
+        )
+        return float(power[0]) if not several else power
     lam = np.sum(_whiten(cholesky_lower(cov, "covariance"), shift) ** 2, axis=0)
     return chi2_power(len(tested), lam, alpha)

@@ -86,7 +86,7 @@ class RegressionFit:
 
 
 def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> RegressionFit:
-    """``min over theta of ||y - Phi theta||^2``, correct also without excitation.
+    r"""``min over theta of ||y - Phi theta||^2``, correct also without excitation.
 
     Parameters
     ----------
@@ -103,19 +103,30 @@ def least_squares_residual(Phi: Any, y: Any, rcond: float | None = None) -> Regr
     -------
     RegressionFit
 
+    See Also
+    --------
+    prediction_error : The test quantity built on it.
+    course.linalg.lstsq_min_norm : The solver it uses.
+
     Notes
     -----
-    The minimum is ``T = ||(I - Phi (Phi^T Phi)^{-1} Phi^T) y||^2`` (the
-    lecture's projection form, slide "Linjär regression;
-    minstakvadrat-metoden").  Forming ``Phi^T Phi`` squares the condition
-    number and fails when the regressors lack excitation, so the projection
-    is computed from the thin SVD (:func:`course.linalg.lstsq_min_norm`):
-    ``residual = y - W_r (W_r^T y)`` with ``W_r`` the left singular vectors
-    of the ``r`` non-negligible singular values, the orthogonal projection of
-    ``y`` on the complement of range(Phi) whatever the rank, and
-    ``theta = V_r S_r^{-1} W_r^T y``, the minimum-norm minimiser.  Every
-    minimiser gives the same residual (slide "Excitation": there is always
-    one shortest distance from a point to a subspace).
+    The minimum is (the lecture's projection form, slide "Linjär regression;
+    minstakvadrat-metoden")
+
+    .. math::
+
+        T = \lVert (I - \Phi (\Phi^{\mathsf T}\Phi)^{-1} \Phi^{\mathsf T}) y \rVert^2 .
+
+    Forming :math:`\Phi^{\mathsf T}\Phi` squares the condition number and fails
+    when the regressors lack excitation, so the projection is computed from the
+    thin SVD (:func:`course.linalg.lstsq_min_norm`):
+    :math:`\text{residual} = y - W_r (W_r^{\mathsf T} y)` with :math:`W_r` the
+    left singular vectors of the :math:`r` non-negligible singular values, the
+    orthogonal projection of :math:`y` on the complement of
+    :math:`\operatorname{range}(\Phi)` whatever the rank, and
+    :math:`\theta = V_r S_r^{-1} W_r^{\mathsf T} y`, the minimum-norm minimiser.
+    Every minimiser gives the same residual (slide "Excitation": there is
+    always one shortest distance from a point to a subspace).
 
     The regressors come first, as in :func:`course.lsq.fit` and
     :func:`course.filters.recursive_least_squares`.
@@ -160,7 +171,7 @@ def _fit_result(theta, residual, rank, N, p, layout) -> RegressionFit:
 def prediction_error(
     y: Any, U: Any, nominal: Any, free: Sequence[int] = (), rcond: float | None = None
 ) -> RegressionFit:
-    """Prediction-error test quantity ``T = min over theta in Theta_0 of ||y - U theta||^2``.
+    r"""Prediction-error test quantity ``T = min over theta in Theta_0 of ||y - U theta||^2``.
 
     Parameters
     ----------
@@ -183,12 +194,22 @@ def prediction_error(
         ``theta`` is the full parameter vector (nominal values in the fixed
         places; ``(M, p)`` for ``M`` records), ``statistic`` is ``T``.
 
+    See Also
+    --------
+    prediction_error_test : The test of this quantity.
+    least_squares_residual : The projection it computes.
+    nonlinear_prediction_error : The same for a nonlinear model.
+
     Notes
     -----
-    ``V(theta, z) = sum_t (y(t) - yhat(t|theta))^2`` and
-    ``T(z) = min over theta in Theta_0 of V(theta, z)`` (LiU lecture, slide
-    "Teststorhet baserad på prediktionsfelen").  With the fixed parameters
-    moved to the left, ``y - U_fixed nominal_fixed = U_free theta_free + v``
+    .. math::
+
+        V(\theta, z) = \sum_t \bigl(y(t) - \hat y(t \mid \theta)\bigr)^2, \qquad
+        T(z) = \min_{\theta \in \Theta_0} V(\theta, z)
+
+    (LiU lecture, slide "Teststorhet baserad på prediktionsfelen").  With the
+    fixed parameters moved to the left,
+    :math:`y - U_{\text{fixed}}\theta_{\text{fixed}} = U_{\text{free}}\theta_{\text{free}} + v`
     is a linear regression in the free parameters.
 
     Examples
@@ -224,7 +245,7 @@ def prediction_error_test(
     name: str = "prediction-error test",
     rcond: float | None = None,
 ) -> TestResult:
-    """Chi-square test of the prediction error ``T = min over Theta_0 ||y - U theta||^2``.
+    r"""Chi-square test of the prediction error ``T = min over Theta_0 ||y - U theta||^2``.
 
     Parameters
     ----------
@@ -251,10 +272,17 @@ def prediction_error_test(
     ValueError
         Bad shapes or NaN, ``sigma <= 0``, or no redundancy (``N = rank``).
 
+    See Also
+    --------
+    prediction_error : The test quantity.
+    prediction_error_power : Its power against a fault.
+    course.chi2.residual_norm_law : Its null law.
+
     Notes
     -----
-    See :func:`course.chi2.residual_norm_law` for the null law and
-    :func:`prediction_error` for ``T``.
+    Under H0, :math:`T/\sigma^2 \sim \chi^2(N - \operatorname{rank} U_{\text{free}})`;
+    see :func:`course.chi2.residual_norm_law` for the null law and
+    :func:`prediction_error` for :math:`T`.
 
     Examples
     --------
@@ -284,7 +312,7 @@ def prediction_error_test(
 def fault_noncentrality(
     U: Any, nominal: Any, free: Sequence[int], theta: Any, *, sigma: float = 1.0
 ) -> Any:
-    """Non-centrality of a test's ``T / sigma^2`` when the data come from ``theta``.
+    r"""Non-centrality of a test's ``T / sigma^2`` when the data come from ``theta``.
 
     Parameters
     ----------
@@ -300,15 +328,25 @@ def fault_noncentrality(
     float or numpy.ndarray
         ``lambda = ||(I - P)(U (theta - nominal))||^2 / sigma^2``, one per vector.
 
+    See Also
+    --------
+    prediction_error_power : The power this non-centrality gives.
+    course.chi2.noncentrality : The non-centrality a test needs for a given power.
+
     Notes
     -----
-    With ``y = U theta + v`` the residual of the test is
-    ``(I - P)(U (theta - nominal)) + (I - P) v``: the fault part is a fixed
-    vector, so ``T / sigma^2`` is non-central chi-square with this
-    non-centrality.  The free parameters' deviations are annihilated by
-    ``I - P``: the test is blind to them, which is the decoupling.  (Not to
-    be confused with :func:`course.chi2.noncentrality`, the non-centrality a
-    test *needs* for a given power.)
+    With :math:`y = U\theta + v` the residual of the test is
+
+    .. math::
+
+        (I - P)\,U(\theta - \theta_{\text{nominal}}) + (I - P)\,v,
+        \qquad \lambda = \frac{\lVert (I - P)\,U(\theta - \theta_{\text{nominal}}) \rVert^2}{\sigma^2}:
+
+    the fault part is a fixed vector, so :math:`T/\sigma^2` is non-central
+    chi-square with this non-centrality.  The free parameters' deviations are
+    annihilated by :math:`I - P`: the test is blind to them, which is the
+    decoupling.  (Not to be confused with :func:`course.chi2.noncentrality`,
+    the non-centrality a test *needs* for a given power.)
 
     Examples
     --------
@@ -337,7 +375,7 @@ def prediction_error_power(
     sigma: float,
     alpha: float = 0.05,
 ) -> Any:
-    """Probability that the prediction-error test alarms when the truth is ``theta``.
+    r"""Probability that the prediction-error test alarms when the truth is ``theta``.
 
     Parameters
     ----------
@@ -357,10 +395,20 @@ def prediction_error_power(
         :func:`course.chi2.residual_threshold`; equal to ``alpha`` when the
         fault is invisible to the test.
 
+    See Also
+    --------
+    fault_noncentrality : The non-centrality of a fault.
+    prediction_error_test : The test whose power this is.
+
     Notes
     -----
-    ``T / sigma^2 ~ chi2'(N - rank, lambda)`` (non-central chi-square, see
-    :func:`fault_noncentrality`), so the power is
+    :math:`T/\sigma^2 \sim \chi'^2(N - \operatorname{rank}, \lambda)`
+    (non-central chi-square, see :func:`fault_noncentrality`), so the power is
+
+    .. math::
+
+        P\bigl(\chi'^2(N - \operatorname{rank}, \lambda) > J/\sigma^2\bigr),
+
     :func:`course.chi2.chi2_power`: the answer to the lecture's closing
     question "how good is a test?".
 
@@ -474,7 +522,7 @@ def nonlinear_prediction_error(
     bounds=None,
     **options,
 ) -> NonlinearFit:
-    """``T = min over theta in Theta_0 of sum_t ||y(t) - yhat(t|theta)||^2`` for any model.
+    r"""``T = min over theta in Theta_0 of sum_t ||y(t) - yhat(t|theta)||^2`` for any model.
 
     Parameters
     ----------
@@ -499,13 +547,19 @@ def nonlinear_prediction_error(
     -------
     NonlinearFit
 
+    See Also
+    --------
+    prediction_error : The linear case, solved exactly.
+
     Notes
     -----
     The general form of the lecture's prediction-error test quantity (LiU
     lecture, slide "Minimering av V(θ, z)": general optimisation, system
-    identification).  The minimisation is local (trust-region reflective):
-    for a criterion with several minima, start from several ``theta_init``
-    and keep the smallest ``T``.
+    identification),
+    :math:`T(z) = \min_\theta \sum_t \bigl(y(t) - \hat y(t \mid \theta)\bigr)^2`.
+    The minimisation is local (trust-region reflective): for a criterion with
+    several minima, start from several ``theta_init`` and keep the smallest
+    :math:`T`.
 
     Examples
     --------

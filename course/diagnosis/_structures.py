@@ -76,6 +76,11 @@ class DecisionStructure:
     sensitivity : numpy.ndarray of bool
         Read-only ``(n_tests, n_modes)`` array, ``True`` for X.
 
+    See Also
+    --------
+    diagnoses : The diagnoses an alarm pattern leaves.
+    linear_decision_structure : The structure a linear model implies.
+
     Notes
     -----
     The decision structure of the LiU lecture (slide
@@ -382,6 +387,11 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
         contradicts.  All modes when nothing alarmed; empty when the alarms
         cannot be explained by any single mode.
 
+    See Also
+    --------
+    diagnosis_matrix : The diagnoses of every alarm pattern at once.
+    multiple_fault_diagnoses : Diagnoses when several faults may be present.
+
     Notes
     -----
     An alarm from test ``T`` rejects its null hypothesis, so it rules out
@@ -423,7 +433,7 @@ def diagnoses(structure: DecisionStructure, alarms, *, exoneration: bool = False
 def diagnosis_matrix(
     structure: DecisionStructure, alarms, *, exoneration: bool = False
 ) -> np.ndarray:
-    """Single-fault diagnoses of many alarm patterns at once.
+    r"""Single-fault diagnoses of many alarm patterns at once.
 
     Parameters
     ----------
@@ -438,11 +448,20 @@ def diagnosis_matrix(
     numpy.ndarray of bool, shape (M, n_modes)
         ``[m, j]`` is true when mode ``j`` is a diagnosis of pattern ``m``.
 
+    See Also
+    --------
+    diagnoses : The diagnoses of one alarm pattern.
+
     Notes
     -----
-    Mode ``j`` is inconsistent with pattern ``m`` exactly when some alarmed
-    test has a 0 for ``j``: ``any_k alarm[m, k] and not X[k, j]``, one
-    boolean matrix product for all patterns.
+    Mode :math:`j` is inconsistent with pattern :math:`m` exactly when some
+    alarmed test has a 0 for :math:`j`,
+
+    .. math::
+
+        \bigvee_k \bigl(a_{mk} \wedge \neg X_{kj}\bigr),
+
+    one boolean matrix product for all patterns.
 
     Examples
     --------
@@ -501,6 +520,10 @@ def multiple_fault_diagnoses(
         no fault) when nothing alarmed, ``[]`` when no combination explains
         the alarms.
 
+    See Also
+    --------
+    diagnoses : The single-fault diagnoses.
+
     Notes
     -----
     Conflict of alarmed test ``T``: the faults with an X in its row.  A set
@@ -556,7 +579,7 @@ def _index_sets(value, name: str, p: int) -> dict:
 def linear_decision_structure(
     U, modes: Mapping[str, Sequence[int]], tests: Mapping[str, Sequence[int]], rtol: float = 1e-9
 ) -> DecisionStructure:
-    """The decision structure that prediction-error tests really have for given signals.
+    r"""The decision structure that prediction-error tests really have for given signals.
 
     Parameters
     ----------
@@ -577,12 +600,22 @@ def linear_decision_structure(
         X where some fault in the mode leaves a residual in the test, 0
         where every fault of the mode is absorbed by the free parameters.
 
+    See Also
+    --------
+    DecisionStructure : The structure it returns.
+    prediction_error_test : The tests whose structure it is.
+
     Notes
     -----
-    The test's residual is ``(I - P) y`` with ``P`` the projection on the
-    free columns, so a fault ``U_F d`` is seen exactly when
-    ``(I - P) U_F != 0``; the lecture's "F2 is detected when U2 is not
-    parallel to U1" is the case of one free column.
+    The test's residual is :math:`(I - P)\,y` with :math:`P` the projection on
+    the free columns, so a fault :math:`U_F d` is seen exactly when
+
+    .. math::
+
+        (I - P)\,U_F \ne 0;
+
+    the lecture's "F2 is detected when :math:`U_2` is not parallel to
+    :math:`U_1`" is the case of one free column.
 
     Examples
     --------

@@ -152,7 +152,7 @@ def _prior(model, x0_mean, x0_cov):
 
 
 def riccati(model, N, x0_cov=None) -> RiccatiResult:
-    """Covariance recursion (Riccati equation) of the model's own Kalman filter.
+    r"""Covariance recursion (Riccati equation) of the model's own Kalman filter.
 
     Parameters
     ----------
@@ -168,14 +168,27 @@ def riccati(model, N, x0_cov=None) -> RiccatiResult:
         ``P_pred (N, n, n)``, ``S (N, p, p)``, ``K (N, n, p)``,
         ``P_filt (N, n, n)``.
 
+    See Also
+    --------
+    riccati_gains : The gains alone.
+    steady_state : The limit of the recursion.
+    kalman_filter : The filter that runs the recursion on data.
+
     Notes
     -----
-    ``P(0|-1) = x0_cov``; ``S_t = H P(t|t-1) H^T + R``;
-    ``K_t = P(t|t-1) H^T S_t^{-1}``; Joseph update for ``P(t|t)``;
-    ``P(t+1|t) = F P(t|t) F^T + G Q G^T``.  The gains do not depend on the
-    data, which is what a mismatched-filter analysis needs (Baram 1980,
-    (A17)-(A18): the filter's gain comes from the Riccati recursion of its
-    own model).
+    With :math:`P(0|-1)` = ``x0_cov``,
+
+    .. math::
+
+        S_t &= H P(t|t-1) H^{\mathsf T} + R, \\
+        K_t &= P(t|t-1) H^{\mathsf T} S_t^{-1}, \\
+        P(t|t) &= (I - K_t H) P(t|t-1) (I - K_t H)^{\mathsf T} + K_t R K_t^{\mathsf T}
+        \quad \text{(Joseph form)}, \\
+        P(t+1|t) &= F P(t|t) F^{\mathsf T} + G Q G^{\mathsf T}.
+
+    The gains do not depend on the data, which is what a mismatched-filter
+    analysis needs (Baram 1980, (A17)-(A18): the filter's gain comes from the
+    Riccati recursion of its own model).
 
     Examples
     --------
@@ -218,6 +231,10 @@ def riccati_gains(model, N, x0_cov=None) -> np.ndarray:
     (N, n, p) ndarray
         Measurement-update gains ``K_t = P(t|t-1) H^T S_t^{-1}``.
 
+    See Also
+    --------
+    riccati : The whole recursion, covariances included.
+
     Notes
     -----
     See :func:`riccati` (Baram 1980, (A17)-(A18): the filter's gain comes
@@ -234,7 +251,7 @@ def riccati_gains(model, N, x0_cov=None) -> np.ndarray:
 
 
 def steady_state(model) -> RiccatiResult:
-    """Stationary Kalman filter from the discrete algebraic Riccati equation.
+    r"""Stationary Kalman filter from the discrete algebraic Riccati equation.
 
     Parameters
     ----------
@@ -252,10 +269,22 @@ def steady_state(model) -> RiccatiResult:
         When the DARE has no stabilising solution (``(F, H)`` not detectable
         or ``(F, G Q^{1/2})`` not stabilisable).
 
+    See Also
+    --------
+    riccati : The time-varying recursion this is the limit of.
+
     Notes
     -----
-    ``P = F P F^T - F P H^T (H P H^T + R)^{-1} H P F^T + G Q G^T``, solved by
-    :func:`scipy.linalg.solve_discrete_are` on the dual (transposed) system.
+    The stationary prediction covariance solves the discrete algebraic Riccati
+    equation
+
+    .. math::
+
+        P = F P F^{\mathsf T} - F P H^{\mathsf T} (H P H^{\mathsf T} + R)^{-1} H P F^{\mathsf T}
+            + G Q G^{\mathsf T},
+
+    solved by :func:`scipy.linalg.solve_discrete_are` on the dual (transposed)
+    system.
 
     Examples
     --------
@@ -279,7 +308,7 @@ def steady_state(model) -> RiccatiResult:
 
 
 def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
-    """Run the Kalman filter of ``model`` on one record or a batch of records.
+    r"""Run the Kalman filter of ``model`` on one record or a batch of records.
 
     Parameters
     ----------
@@ -298,10 +327,19 @@ def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
         Per-step arrays; the covariances and gains are broadcast views of
         the single ``(N, ...)`` Riccati recursion (they do not depend on y).
 
+    See Also
+    --------
+    kf_update : One measurement update.
+    kf_predict : One time update.
+    riccati : The covariances and gains alone.
+    course.nis.nis : The normalised innovations of the result.
+
     Notes
     -----
     Each step is :func:`kf_update` then :func:`kf_predict` with offset
-    ``B u_t + G w_mean``; the innovation subtracts ``v_mean``.  Because the
+    :math:`B u_t + G \bar w`; the innovation
+    :math:`\varepsilon_t = y_t - H \hat x(t|t-1) - \bar v` subtracts the
+    measurement-noise mean :math:`\bar v` (``v_mean``).  Because the
     covariances are data-independent, they are computed once and shared by
     every run of the batch, so a batch costs little more than one run.
 
@@ -357,7 +395,7 @@ def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
 def extended_kalman_filter(
     model, y, u=None, x0_mean=None, x0_cov=None, store_covariances=True
 ) -> FilterResult:
-    """Run the EKF of a :class:`NonlinearModel` on one record or a batch.
+    r"""Run the EKF of a :class:`NonlinearModel` on one record or a batch.
 
     Parameters
     ----------
@@ -380,11 +418,17 @@ def extended_kalman_filter(
         Covariances are per run, ``(*batch, N, n, n)``, since they depend on
         the linearisation points.
 
+    See Also
+    --------
+    ekf_update : One measurement update.
+    ekf_predict : One time update.
+    kalman_filter : The linear filter.
+
     Notes
     -----
     Measurement update :func:`ekf_update`, then time update
-    :func:`ekf_predict`, for ``t = 0, ..., N-1``; every operation acts on the
-    whole batch at once.
+    :func:`ekf_predict`, for :math:`t = 0, \dots, N-1`; every operation acts on
+    the whole batch at once.
 
     Examples
     --------

@@ -134,7 +134,7 @@ def _simulation_draws(model, N, rng, batch, u):
 # the linear model
 # ---------------------------------------------------------------------------
 class LinearModel:
-    """Time-invariant linear Gaussian state-space model.
+    r"""Time-invariant linear Gaussian state-space model.
 
     ``x_{t+1} = F x_t + B u_t + G w_t``, ``y_t = H x_t + v_t`` with
     ``w_t ~ N(w_mean, Q)``, ``v_t ~ N(v_mean, R)`` independent and white, and
@@ -183,15 +183,24 @@ class LinearModel:
         ``R`` not positive definite, ``Q`` or ``x0_cov`` not positive
         semi-definite.
 
+    See Also
+    --------
+    NonlinearModel : The model of the extended Kalman filter.
+    kalman_filter : The filter of this model.
+
     Notes
     -----
     The linear special case of the lecture's state-space model
-    ``x(t+1) = g(x(t), u(t)) + G w(t)``, ``y(t) = h(x(t)) + v(t)``
-    (LiU lecture, slide "Extended Kalman Filter") with
-    ``g = F x + B u``, ``h = H x``; the noise means ``w_mean``, ``v_mean``
-    are those of Baram (1980), eqs. (2.1)-(2.2), where a filter may be
-    driven by a model other than the one that made the data.  ``R`` must be positive definite
-    so that every innovation covariance ``S = H P H^T + R`` is.
+
+    .. math::
+
+        x(t+1) = g(x(t), u(t)) + G w(t), \qquad y(t) = h(x(t)) + v(t)
+
+    (LiU lecture, slide "Extended Kalman Filter") with :math:`g = F x + B u`,
+    :math:`h = H x`; the noise means ``w_mean``, ``v_mean`` are those of Baram
+    (1980), eqs. (2.1)-(2.2), where a filter may be driven by a model other
+    than the one that made the data.  :math:`R` must be positive definite so
+    that every innovation covariance :math:`S = H P H^{\mathsf T} + R` is.
     """
 
     _no_input = "B was not given"  # completes "this model has no input (...)"
@@ -274,7 +283,7 @@ _FD_SCALE = np.finfo(float).eps ** (1.0 / 3.0)
 
 
 def numerical_jacobian(f, x, step=None) -> np.ndarray:
-    """Central-difference Jacobian of ``f`` at ``x``, vectorised over a batch.
+    r"""Central-difference Jacobian of ``f`` at ``x``, vectorised over a batch.
 
     Parameters
     ----------
@@ -291,12 +300,22 @@ def numerical_jacobian(f, x, step=None) -> np.ndarray:
     (..., k, n) ndarray
         ``J[..., i, j] = d f_i / d x_j``.
 
+    See Also
+    --------
+    NonlinearModel : The model whose Jacobians default to these.
+
     Notes
     -----
-    ``J[:, j] = (f(x + h_j e_j) - f(x - h_j e_j)) / (2 h_j)`` with
-    ``h_j = step * max(1, |x_j|)``.  All ``2 n`` perturbed points of every
-    batch member are evaluated in one call of ``f`` (an extra axis of size
-    ``n`` before the last), so the cost is one vectorised call.
+    Central differences,
+
+    .. math::
+
+        J_{:,j} = \frac{f(x + h_j e_j) - f(x - h_j e_j)}{2 h_j}, \qquad
+        h_j = \text{step} \cdot \max(1, |x_j|).
+
+    All :math:`2n` perturbed points of every batch member are evaluated in one
+    call of :math:`f` (an extra axis of size :math:`n` before the last), so the
+    cost is one vectorised call.
 
     Examples
     --------
@@ -331,7 +350,7 @@ def _check_model(model, name: str = "model") -> None:
 
 
 class NonlinearModel:
-    """Nonlinear state-space model with additive Gaussian noise.
+    r"""Nonlinear state-space model with additive Gaussian noise.
 
     ``x_{t+1} = g(x_t, u_t) + G w_t``, ``y_t = h(x_t) + v_t``, with
     ``w_t ~ N(w_mean, Q)``, ``v_t ~ N(v_mean, R)`` and
@@ -373,14 +392,25 @@ class NonlinearModel:
         at ``x0_mean`` to check the shapes they return (and a function that
         fails there is reported with the shape it was called with).
 
+    See Also
+    --------
+    LinearModel : The linear special case.
+    extended_kalman_filter : The filter of this model.
+    numerical_jacobian : The default Jacobians.
+
     Notes
     -----
-    The model of the lecture's EKF slide (LiU lecture,
-    "Extended Kalman Filter"), ``x(t+1) = g(x(t), u(t), w(t))``,
-    ``y(t) = h(x(t)) + e(t)``, restricted to additive process noise, so that
-    ``G_t = dg/dw = G`` is constant.  The Jacobians ``F_t = dg/dx`` and
-    ``H_t = dh/dx`` are the user's or central differences
-    (:func:`numerical_jacobian`).
+    The model of the lecture's EKF slide (LiU lecture, "Extended Kalman
+    Filter"),
+
+    .. math::
+
+        x(t+1) = g(x(t), u(t), w(t)), \qquad y(t) = h(x(t)) + e(t),
+
+    restricted to additive process noise, so that
+    :math:`G_t = \partial g/\partial w = G` is constant.  The Jacobians
+    :math:`F_t = \partial g/\partial x` and :math:`H_t = \partial h/\partial x`
+    are the user's or central differences (:func:`numerical_jacobian`).
     """
 
     _no_input = "n_inputs = 0"

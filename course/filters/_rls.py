@@ -116,7 +116,7 @@ def recursive_least_squares(
     theta0: Any = None,
     P0: Any = None,
 ) -> RLSResult:
-    """Recursive least squares: a Kalman filter for a random-walk parameter.
+    r"""Recursive least squares: a Kalman filter for a random-walk parameter.
 
     Model: ``theta_{t+1} = theta_t + w_t``, ``w_t ~ N(0, q)``;
     ``y_t = phi_t^T theta_t + e_t``, ``e_t ~ N(0, r)``.
@@ -147,24 +147,36 @@ def recursive_least_squares(
     -------
     RLSResult
 
+    See Also
+    --------
+    kf_update : The measurement update each step applies.
+    course.nis.windowed_nis : A recursive test quantity from the result.
+
     Notes
     -----
-    The lecture's recursive linear regression (LiU lecture,
-    "Linjär regression - rekursiv lösare"): describe the parameter as a random
-    walk and apply a standard Kalman filter; RLS is the special case
-    ``q = 0``.  Each step is :func:`kf_update` with ``H = phi_t^T``, then
-    ``P <- P + q``.  With ``q = 0`` and the diffuse start,
-    ``thetahat(t|t)`` equals the batch least-squares estimate from samples
-    ``0..t`` and ``P(t|t) = r (Phi_t^T Phi_t)^{-1}``, exactly in exact
-    arithmetic; with a prior it equals the regularised estimate minimising
-    ``||y - Phi theta||^2 / r + (theta - theta0)^T P0^{-1} (theta - theta0)``.
+    The lecture's recursive linear regression (LiU lecture, "Linjär regression
+    - rekursiv lösare"): describe the parameter as a random walk and apply a
+    standard Kalman filter; RLS is the special case :math:`q = 0`.  Each step
+    is :func:`kf_update` with :math:`H = \varphi_t^{\mathsf T}`, then
+    :math:`P \leftarrow P + q`.  With :math:`q = 0` and the diffuse start,
+    :math:`\hat\theta(t|t)` equals the batch least-squares estimate from samples
+    :math:`0, \dots, t` and :math:`P(t|t) = r (\Phi_t^{\mathsf T} \Phi_t)^{-1}`,
+    exactly in exact arithmetic; with a prior it equals the regularised
+    estimate minimising
+
+    .. math::
+
+        \frac{\lVert y - \Phi\theta \rVert^2}{r}
+        + (\theta - \theta_0)^{\mathsf T} P_0^{-1} (\theta - \theta_0).
+
     The covariances do not depend on the data, so a batch shares them.
-    Regressors beyond ``2**±256`` are scaled by a power of two ``c`` near
-    ``sqrt(max |Phi|)`` (exact: ``theta * c``, ``P * c**2``) so that ``P``,
-    which scales as ``1 / |phi|**2``, stays within double precision.  The
-    normalised innovations are independent ``N(0, 1)`` while the model holds,
-    which makes :func:`windowed_nis` of the result a recursive test quantity
-    (chapter 2, "recursive computation").
+    Regressors beyond :math:`2^{\pm 256}` are scaled by a power of two
+    :math:`c` near :math:`\sqrt{\max|\Phi|}` (exact: :math:`\theta c`,
+    :math:`P c^2`) so that :math:`P`, which scales as :math:`1/|\varphi|^2`,
+    stays within double precision.  The normalised innovations are independent
+    :math:`N(0, 1)` while the model holds, which makes
+    :func:`course.nis.windowed_nis` of the result a recursive test quantity
+    (notebook 2, "recursive computation").
 
     Examples
     --------

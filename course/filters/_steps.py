@@ -43,7 +43,7 @@ class TimeUpdate(NamedTuple):
 
 
 def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
-    """Measurement update of the Kalman filter (one step, any batch shape).
+    r"""Measurement update of the Kalman filter (one step, any batch shape).
 
     Parameters
     ----------
@@ -67,18 +67,30 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
         innovation ``eps = y - H x_pred - v_mean``, its covariance ``S``, and
         the gain ``K``.
 
+    See Also
+    --------
+    kf_predict : The time update that follows.
+    ekf_update : The same update for a nonlinear measurement.
+    kalman_filter : The whole filter.
+
     Notes
     -----
-    ``S = H P H^T + R``, ``K = P H^T S^{-1}`` (computed by a linear solve with
-    ``S``, never an inverse), ``x_filt = x_pred + K eps`` and the Joseph form
-    ``P_filt = (I - K H) P (I - K H)^T + K R K^T``, which stays symmetric and
-    positive semi-definite under rounding and equals ``(I - K H) P`` in exact
-    arithmetic; see the measurement update on the lecture's EKF slide
-    (LiU lecture, "Extended Kalman Filter").  Inputs are
-    never modified; broadcasting lets ``P`` be shared by a batch of ``x``.
-    Where ``H P H^T`` overflows (``|H| ~ 1e160``) each output is scaled by a
-    power of two first (exact), so the gain and ``P_filt`` stay right; ``S``
-    is then ``inf`` where its true value exceeds double precision.
+    .. math::
+
+        S &= H P H^{\mathsf T} + R, \qquad K = P H^{\mathsf T} S^{-1}, \qquad
+        \hat x_{\text{filt}} = \hat x_{\text{pred}} + K \varepsilon, \\
+        P_{\text{filt}} &= (I - K H) P (I - K H)^{\mathsf T} + K R K^{\mathsf T},
+
+    with :math:`K` computed by a linear solve with :math:`S`, never an inverse.
+    The Joseph form of :math:`P_{\text{filt}}` stays symmetric and positive
+    semi-definite under rounding and equals :math:`(I - K H) P` in exact
+    arithmetic; see the measurement update on the lecture's EKF slide (LiU
+    lecture, "Extended Kalman Filter").  Inputs are never modified;
+    broadcasting lets :math:`P` be shared by a batch of :math:`x`.  Where
+    :math:`H P H^{\mathsf T}` overflows (:math:`|H| \sim 10^{160}`) each output is
+    scaled by a power of two first (exact), so the gain and
+    :math:`P_{\text{filt}}` stay right; :math:`S` is then ``inf`` where its true
+    value exceeds double precision.
 
     Examples
     --------
@@ -208,7 +220,7 @@ def _gain(S, PHt):
 
 
 def kf_predict(x_filt, P_filt, F, GQG, offset=None):
-    """Time update of the Kalman filter (one step, any batch shape).
+    r"""Time update of the Kalman filter (one step, any batch shape).
 
     Parameters
     ----------
@@ -229,10 +241,20 @@ def kf_predict(x_filt, P_filt, F, GQG, offset=None):
         ``x_pred = xhat(t+1|t) = F xhat(t|t) + offset`` and
         ``P_pred = P(t+1|t) = F P(t|t) F^T + G Q G^T`` (symmetrised).
 
+    See Also
+    --------
+    kf_update : The measurement update before it.
+    ekf_predict : The same step for a nonlinear state equation.
+
     Notes
     -----
-    The time update of the lecture's EKF slide with constant ``G``
-    (LiU lecture, "Extended Kalman Filter").
+    The time update of the lecture's EKF slide with constant :math:`G` (LiU
+    lecture, "Extended Kalman Filter"):
+
+    .. math::
+
+        \hat x(t+1|t) = F \hat x(t|t) + \text{offset}, \qquad
+        P(t+1|t) = F P(t|t) F^{\mathsf T} + G Q G^{\mathsf T}.
 
     Examples
     --------
@@ -265,7 +287,7 @@ def _kf_predict(x_filt, P_filt, F, GQG, offset=None):
 
 
 def ekf_update(model, x_pred, P_pred, y):
-    """Measurement update of the extended Kalman filter (one step, any batch shape).
+    r"""Measurement update of the extended Kalman filter (one step, any batch shape).
 
     Parameters
     ----------
@@ -284,14 +306,23 @@ def ekf_update(model, x_pred, P_pred, y):
         As :func:`kf_update`, with ``eps = y - h(x_pred) - v_mean`` and
         ``H = dh/dx`` at ``x_pred``.
 
+    See Also
+    --------
+    ekf_predict : The time update that follows.
+    kf_update : The linear update it applies with the Jacobian.
+
     Notes
     -----
-    Lecture (LiU lecture, "Extended Kalman Filter"):
-    ``H_t = dh/dx`` at ``xhat(t|t-1)``,
-    ``K_t = P(t|t-1) H_t^T (H_t P(t|t-1) H_t^T + R_t)^{-1}``,
-    ``xhat(t|t) = xhat(t|t-1) + K_t (y_t - h(xhat(t|t-1)))``.  The lecture's
-    ``P(t|t) = P(t|t-1) - K_t H_t P(t|t-1)`` is replaced by the equivalent
-    Joseph form (see :func:`kf_update`).
+    Lecture (LiU lecture, "Extended Kalman Filter"): with
+    :math:`H_t = \partial h/\partial x` at :math:`\hat x(t|t-1)`,
+
+    .. math::
+
+        K_t &= P(t|t-1) H_t^{\mathsf T} \bigl(H_t P(t|t-1) H_t^{\mathsf T} + R_t\bigr)^{-1}, \\
+        \hat x(t|t) &= \hat x(t|t-1) + K_t \bigl(y_t - h(\hat x(t|t-1))\bigr).
+
+    The lecture's :math:`P(t|t) = P(t|t-1) - K_t H_t P(t|t-1)` is replaced by the
+    equivalent Joseph form (see :func:`kf_update`).
 
     Examples
     --------
@@ -339,7 +370,7 @@ def _ekf_update(model, x_pred, P_pred, y):
 
 
 def ekf_predict(model, x_filt, P_filt, u=None):
-    """Time update of the extended Kalman filter (one step, any batch shape).
+    r"""Time update of the extended Kalman filter (one step, any batch shape).
 
     Parameters
     ----------
@@ -357,13 +388,22 @@ def ekf_predict(model, x_filt, P_filt, u=None):
     TimeUpdate
         ``xhat(t+1|t)`` and ``P(t+1|t)``.
 
+    See Also
+    --------
+    ekf_update : The measurement update before it.
+    kf_predict : The linear time update.
+
     Notes
     -----
-    ``xhat(t+1|t) = g(xhat(t|t), u_t) + G w_mean`` and
-    ``P(t+1|t) = F_t P(t|t) F_t^T + G Q G^T`` with ``F_t = dg/dx`` at
-    ``xhat(t|t)`` (LiU lecture, slide "Extended Kalman
-    Filter", time update; its ``G_t = dg/dw`` is the constant ``G`` here
-    because the noise enters additively).
+    .. math::
+
+        \hat x(t+1|t) = g(\hat x(t|t), u_t) + G \bar w, \qquad
+        P(t+1|t) = F_t P(t|t) F_t^{\mathsf T} + G Q G^{\mathsf T},
+
+    with :math:`F_t = \partial g/\partial x` at :math:`\hat x(t|t)` (LiU
+    lecture, slide "Extended Kalman Filter", time update; its
+    :math:`G_t = \partial g/\partial w` is the constant :math:`G` here because
+    the noise enters additively).
 
     Examples
     --------

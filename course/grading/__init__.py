@@ -24,9 +24,12 @@ The flow
    :mod:`.sandbox.forkserver`, :mod:`.sandbox.runner`, :mod:`.sandbox.isolation`; forbidden
    calls reported by :mod:`.tripwire`), compares in the trusted parent (:mod:`.compare`), and
    records a
-   :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`), the short
+   :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`, the class
+   report ``report.html`` of :mod:`.batch.classreport`), the short
    answers' marking file (:mod:`.batch.marks`) and the LMS files (:mod:`.batch.roster`) are
    written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers.
+   ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
+   one gradebook.
 
 Modules
 -------
@@ -43,7 +46,8 @@ notebook
 tripwire
     Forbidden library functions: a warning in the self-check, a report from a grading child.
 cli
-    ``course release | grade | export | secret | submit``: the entry points into the rooms.
+    ``course release | grade | gradebook | export | secret | submit``: the entry points into
+    the rooms.
 
 ``authoring/`` what the instructor writes and hands out
     checks (the vocabulary of ``checks.py``), notebooks (solution-notebook helpers), passes
@@ -57,7 +61,7 @@ cli
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), reports (feedback, grades, results log), marks
     (short answers), identity (whose submission is whose), roster (the class, LMS grade files),
-    cluster (Dask).
+    cluster (Dask), gradebook (several assignments in one file), classreport (``report.html``).
 ``sandbox/`` the sandboxed children
     parent (the grader's handle), forkserver (the warm process children fork from), runner
     (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,

@@ -1,5 +1,5 @@
-"""The instructors' subcommands ``course release``, ``grade``, ``export`` and ``secret``, and the
-students' ``course submit`` (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``export`` and
+``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
-    from course.grading.batch.driver import grade
+    from course.grading.batch.driver import SelectionError, grade
     from course.grading.batch.marks import MarksError
     from course.grading.batch.options import GradeOptions, available_cpus
     from course.grading.sandbox.isolation import IsolationError
@@ -114,13 +114,14 @@ def _grade(args) -> int:
         cluster=args.cluster,
         announce=lambda text: print(text, file=sys.stderr),
         short_answers=Path(args.short_answers) if args.short_answers else None,
+        students=frozenset(args.student) if args.student else None,
     )
     try:
         summary = grade(solution_dir, submissions, Path(args.out), options)
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except MarksError as exc:
+    except (MarksError, SelectionError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -134,14 +135,24 @@ def _grade(args) -> int:
 
 def _class_options(args) -> dict | None:
     """The secret and the roster of ``course grade`` (None after printing why not)."""
-    from course.grading.authoring.secret import SecretError, load_secret
+    from course.grading.authoring.secret import SECRET_ENV, SecretError, load_secret
     from course.grading.batch.roster import RosterError, read_roster
 
     try:
-        secret = load_secret(args.secret)
+        secret = None if args.no_secret else load_secret(args.secret)
         roster = read_roster(args.roster) if args.roster else None
     except (SecretError, RosterError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
+        return None
+    if roster is not None and secret is None and not args.no_secret:
+        print(
+            "course grade: --roster without the class's secret: the students of an edition "
+            "exported with --secret worked on personal data drawn with that key, and without it "
+            "their personal questions would be graded against public data instead. Pass "
+            f"--secret FILE (or set {SECRET_ENV}), or --no-secret for a class whose edition was "
+            "exported with --no-secret.",
+            file=sys.stderr,
+        )
         return None
     print(
         "personal data: "
@@ -158,6 +169,23 @@ def _class_options(args) -> dict | None:
         "missing_as_zero": args.missing_as_zero,
         "lms_column": args.lms_column,
     }
+
+
+def _gradebook(args) -> int:
+    from course.grading.batch.gradebook import GradebookError, read_gradebook, write_gradebook
+    from course.grading.batch.roster import RosterError, read_roster
+
+    try:
+        roster = read_roster(args.roster) if args.roster else None
+        book = read_gradebook([Path(p) for p in args.outs])
+        written = write_gradebook(book, Path(args.out), roster, args.missing_as_zero)
+    except (GradebookError, RosterError) as exc:
+        print(f"course gradebook: {exc}", file=sys.stderr)
+        return 2
+    columns = ", ".join(f"{c.name} ({c.max_points:g})" for c in book.columns)
+    print(f"Gradebook of {len(book.columns)} assignment(s): {columns}")
+    print("Wrote " + ", ".join(str(p) for p in written))
+    return 0
 
 
 def _export(args) -> int:
@@ -361,13 +389,27 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument(
         "--regrade",
         action="store_true",
-        help="ignore previous results in OUT and grade everyone again",
+        help="ignore previous results in OUT and grade everyone again (with --student: "
+        "only those students)",
+    )
+    p_gr.add_argument(
+        "--student",
+        action="append",
+        metavar="ID",
+        default=None,
+        help="grade only this student (repeatable); the others keep their previous results",
     )
     p_gr.add_argument("--no-progress", action="store_true", help="no progress bar")
     p_gr.add_argument(
         "--secret",
         default=None,
         help="the class's key file, as given to `course export` (default: $COURSE_SECRET_FILE)",
+    )
+    p_gr.add_argument(
+        "--no-secret",
+        action="store_true",
+        help="grade on public data although a secret is set (a class whose edition was "
+        "exported with --no-secret); --roster needs --secret or this",
     )
     p_gr.add_argument(
         "--roster",
@@ -407,4 +449,23 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument("--course-dir", help=COURSE_DIR_HELP)
     p_gr.add_argument("--solutions", help="authoring folder (default: COURSE_DIR/solutions)")
     p_gr.set_defaults(func=_instructor_only(_grade))
+
+    p_gb = subparsers.add_parser(
+        "gradebook",
+        help="combine several assignments' grading outputs into one gradebook",
+        description="Read the results.jsonl of each OUT_DIR (the --out of a `course grade` run, "
+        "one per assignment) and write DEST/gradebook.csv (a column per assignment and the "
+        "total); with --roster also DEST/canvas.csv and DEST/moodle.csv.",
+    )
+    p_gb.add_argument("outs", nargs="+", metavar="OUT_DIR", help="grading output folders")
+    p_gb.add_argument("--out", required=True, metavar="DEST", help="folder to write to")
+    p_gb.add_argument(
+        "--roster", default=None, help="CSV of the class: write canvas.csv and moodle.csv too"
+    )
+    p_gb.add_argument(
+        "--missing-as-zero",
+        action="store_true",
+        help="0 for an assignment a student did not submit (default: blank)",
+    )
+    p_gb.set_defaults(func=_instructor_only(_gradebook))
     _add_class_commands(subparsers)

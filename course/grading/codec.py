@@ -105,6 +105,10 @@ def encode(value: Any, _depth: int = 0) -> Any:
             return encode(complex(value), _depth + 1)
         raise EncodingError(f"unsupported numpy scalar type {type(value).__name__}")
     if isinstance(value, np.ndarray):
+        if value.dtype.kind in "US":
+            raise EncodingError(
+                "a numpy array of strings: return a plain list of strings (arr.tolist())"
+            )
         if value.dtype.kind not in _ALLOWED_KINDS:
             raise EncodingError(f"unsupported array dtype {value.dtype} (use numbers or booleans)")
         if value.size > MAX_ELEMENTS:

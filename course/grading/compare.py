@@ -213,10 +213,13 @@ def _close(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> bool:
 
 
 def _simple_ratio(r: float) -> Fraction | None:
-    """``r`` as a small fraction (denominator <= 12, numerator <= 1000) or a power of ten."""
+    """``r`` as a small fraction (denominator <= 4, numerator <= 1000) or a power of ten.
+
+    Only the factors of common slips (2, 3/2, 4/3, ...): an exact ratio such as 16/9 would
+    give the answer away (got / ratio), and the sealed self-check does not name it either."""
     if not math.isfinite(r) or r <= 0:
         return None
-    frac = Fraction(r).limit_denominator(12)
+    frac = Fraction(r).limit_denominator(4)
     if frac.numerator <= 1000 and abs(float(frac) - r) <= 1e-6 * r:
         return frac
     exponent = round(math.log10(r))
@@ -272,6 +275,8 @@ def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> st
                 if e.size > 1:
                     what = "every element is " + what
                 return f"off by one: {what} (a 1-based index or count where 0-based is meant, or the reverse?)"
+        # no factor for integers: got / factor would be the answer (as in the seal)
+        return ""
     if e.dtype.kind == "c":
         return ""
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -1,4 +1,8 @@
-"""The MUDE sea-level data sets shipped with the course."""
+"""The MUDE sea-level data sets shipped with the course.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -32,6 +36,11 @@ def load_sea_level(case: int):
         Sea-level observations; the source states a standard deviation of 2
         for every observation (and uses alpha = 0.05).
 
+    See Also
+    --------
+    load_mauna_loa_co2 : The other data set of notebook 1.
+    fit : The least-squares fit of a record.
+
     Notes
     -----
     Data: TU Delft MUDE open course book, "overall model test" notebook,
@@ -61,6 +70,10 @@ def load_mauna_loa_co2() -> tuple[np.ndarray, np.ndarray]:
         The date of each week (a Saturday), weeks without data left out.
     co2 : ndarray, shape (2225,)
         The week's mean CO2 concentration in ppm (1999 calibration scale).
+
+    See Also
+    --------
+    load_sea_level : The other data set of notebook 1.
 
     Notes
     -----

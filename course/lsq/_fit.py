@@ -1,4 +1,8 @@
-"""The weighted least-squares fit (BLUE) in the whitened problem, and its result."""
+"""The weighted least-squares fit (BLUE) in the whitened problem, and its result.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -239,7 +243,7 @@ class LeastSquaresFit:
 
 
 def fit(A, y, Qyy=None) -> LeastSquaresFit:
-    """Weighted least-squares (BLUE) fit of ``E(y) = A x`` with ``D(y) = Qyy``.
+    r"""Weighted least-squares (BLUE) fit of ``E(y) = A x`` with ``D(y) = Qyy``.
 
     Parameters
     ----------
@@ -269,27 +273,46 @@ def fit(A, y, Qyy=None) -> LeastSquaresFit:
         ``A`` rank deficient (the dependent columns are named) or ``Qyy``
         not positive definite.
 
+    See Also
+    --------
+    overall_model_test : The test of the whole model.
+    w_tests : Baarda's test of each observation.
+    confidence_band : Confidence band of the fitted curve.
+    mdb : Minimal detectable biases.
+
     Notes
     -----
-    The estimate minimises ``(y - A x)^T Qyy^{-1} (y - A x)`` (eq. 8.5 with
-    weights); its closed form is (8.6)
+    The estimate minimises :math:`(y - Ax)^{\mathsf T} Q_{yy}^{-1} (y - Ax)`
+    (eq. 8.5 with weights); its closed form is (8.6)
 
-    .. math:: \\hat x = (A^T Q_{yy}^{-1} A)^{-1} A^T Q_{yy}^{-1} y,
-              \\quad Q_{\\hat x\\hat x} = (A^T Q_{yy}^{-1} A)^{-1} \\; (8.7),
+    .. math::
 
-    and ``ŷ = A x̂``, ``ê = y - ŷ`` (10.1), ``Q_ŷŷ = A Q_x̂x̂ A^T`` and
-    ``Q_êê = Qyy - A Q_x̂x̂ A^T`` (Section 10.3, from the error propagation
-    law 7.9). The normal equations are not used: with ``Qyy = L L^T`` and
-    the thin QR factorisation ``L^{-1} A = Q1 R``,
-    ``x̂ = R^{-1} Q1^T L^{-1} y``, ``Q_x̂x̂ = R^{-1} R^{-T}`` and, with
-    ``G = A R^{-1} = L Q1``, ``Q_ŷŷ = G G^T`` and ``Q_êê = Qyy - G G^T``.
-    The redundancy numbers ``r_i = (Q_êê Q_yy^{-1})_{ii}`` are
-    ``1 - G_i · (L^{-T} Q1)_i``; they sum to ``m - n``. The Cholesky
-    factorisation is also the check that Qyy is positive definite.
+        \hat x = (A^{\mathsf T} Q_{yy}^{-1} A)^{-1} A^{\mathsf T} Q_{yy}^{-1} y,
+        \qquad Q_{\hat x\hat x} = (A^{\mathsf T} Q_{yy}^{-1} A)^{-1} \quad (8.7),
 
-    Cost: O(m n²) time and O(m n) memory for diagonal Qyy (1-D, a diagonal
-    matrix or a diagonal sparse matrix), O(m b² + m n b) for a sparse Qyy of
-    bandwidth b after reordering, O(m³) for a dense correlated Qyy.
+    and :math:`\hat y = A\hat x`, :math:`\hat e = y - \hat y` (10.1),
+    :math:`Q_{\hat y\hat y} = A Q_{\hat x\hat x} A^{\mathsf T}` and
+    :math:`Q_{\hat e\hat e} = Q_{yy} - A Q_{\hat x\hat x} A^{\mathsf T}` (Section
+    10.3, from the error propagation law 7.9). The normal equations are not
+    used: with :math:`Q_{yy} = LL^{\mathsf T}` and the thin QR factorisation
+    :math:`L^{-1}A = Q_1 R`,
+
+    .. math::
+
+        \hat x = R^{-1} Q_1^{\mathsf T} L^{-1} y, \qquad
+        Q_{\hat x\hat x} = R^{-1} R^{-\mathsf T},
+
+    and, with :math:`G = AR^{-1} = LQ_1`, :math:`Q_{\hat y\hat y} = GG^{\mathsf T}`
+    and :math:`Q_{\hat e\hat e} = Q_{yy} - GG^{\mathsf T}`. The redundancy
+    numbers :math:`r_i = (Q_{\hat e\hat e} Q_{yy}^{-1})_{ii}` are
+    :math:`1 - G_i \cdot (L^{-\mathsf T} Q_1)_i`; they sum to :math:`m - n`. The
+    Cholesky factorisation is also the check that :math:`Q_{yy}` is positive
+    definite.
+
+    Cost: :math:`O(mn^2)` time and :math:`O(mn)` memory for diagonal
+    :math:`Q_{yy}` (1-D, a diagonal matrix or a diagonal sparse matrix),
+    :math:`O(mb^2 + mnb)` for a sparse :math:`Q_{yy}` of bandwidth :math:`b`
+    after reordering, :math:`O(m^3)` for a dense correlated :math:`Q_{yy}`.
 
     Examples
     --------

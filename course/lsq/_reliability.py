@@ -1,4 +1,8 @@
-"""Internal reliability (the minimal detectable bias) and the confidence band of a fit."""
+"""Internal reliability (the minimal detectable bias) and the confidence band of a fit.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -21,7 +25,7 @@ from course.validation import (
 # reliability
 # ---------------------------------------------------------------------------
 def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.ndarray:
-    """Minimal detectable bias of every observation (internal reliability).
+    r"""Minimal detectable bias of every observation (internal reliability).
 
     Parameters
     ----------
@@ -37,19 +41,29 @@ def mdb(fit: LeastSquaresFit, alpha: float = 0.001, power: float = 0.80) -> np.n
     ndarray, shape (m,)
         ``|∇_i|``, in the units of y; ``inf`` where an observation is untestable.
 
+    See Also
+    --------
+    w_tests : The tests whose detectable biases these are.
+    course.chi2.noncentrality : The non-centrality for a given power.
+
     Notes
     -----
-    An outlier ``∇`` in observation i shifts the mean of ``w_i`` to
-    ``∇ sqrt(c_i^T Qyy^{-1} Qee Qyy^{-1} c_i)``, so ``w_i²`` is
-    ``chi2(1, λ)`` with ``λ = ∇² c_i^T Qyy^{-1} Qee Qyy^{-1} c_i``. The
-    smallest bias found with probability ``power`` is therefore
+    An outlier :math:`\nabla` in observation :math:`i` shifts the mean of
+    :math:`w_i` to
+    :math:`\nabla \sqrt{c_i^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} c_i}`,
+    so :math:`w_i^2` is :math:`\chi^2(1, \lambda)` with
+    :math:`\lambda = \nabla^2 c_i^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} c_i`.
+    The smallest bias found with probability ``power`` is therefore
 
-    .. math:: |\\nabla_i| = \\sqrt{\\frac{\\lambda_0}
-              {c_i^T Q_{yy}^{-1} Q_{\\hat e\\hat e} Q_{yy}^{-1} c_i}}
+    .. math::
 
-    with ``λ0 = noncentrality(alpha, power, 1)``; for diagonal Qyy this is
-    ``σ_i sqrt(λ0 / r_i)`` with ``r_i`` the redundancy number. Beyond the
-    chapter; reference: Baarda (1968).
+        |\nabla_i| = \sqrt{\frac{\lambda_0}
+        {c_i^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} c_i}}
+
+    with :math:`\lambda_0` = ``noncentrality(alpha, power, 1)``; for diagonal
+    :math:`Q_{yy}` this is :math:`\sigma_i \sqrt{\lambda_0 / r_i}` with
+    :math:`r_i` the redundancy number. Beyond the chapter; reference: Baarda
+    (1968).
 
     Examples
     --------
@@ -81,7 +95,7 @@ class ConfidenceBand(NamedTuple):
 
 
 def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> ConfidenceBand:
-    """Fitted values at new design rows and their confidence half-widths.
+    r"""Fitted values at new design rows and their confidence half-widths.
 
     Parameters
     ----------
@@ -98,15 +112,27 @@ def confidence_band(fit: LeastSquaresFit, A_new: Any, level: float = 0.95) -> Co
         ``y_new_hat = A_new x̂`` and ``half_width = norm.isf((1 - level) / 2) * σ``,
         with ``σ² = diag(A_new Q_x̂x̂ A_new^T)``, each of shape ``(k,)``.
 
+    See Also
+    --------
+    fit : The fit whose curve it bands.
+
     Notes
     -----
-    Section 10.4 and Figure 10.3: with Qyy known, ``ŷ(t) = a(t)^T x̂`` is
-    normal with variance ``a(t)^T Q_x̂x̂ a(t)`` (error propagation law 7.9),
-    so the interval ``ŷ(t) ± r_α σ_ŷ(t)``, ``r_α = N_{(1-level)/2}(0,1)``
-    (1.96 for 95 %), covers the true ``E(y(t))`` with probability ``level``.
-    For day 1 of the line-fitting example ``σ_ŷ2 ≈ 0.55`` and the half-width
-    is ≈ 1.07. The variance is evaluated as ``||R^{-T} a||²`` by a
-    triangular solve.
+    Section 10.4 and Figure 10.3: with :math:`Q_{yy}` known,
+    :math:`\hat y(t) = a(t)^{\mathsf T} \hat x` is normal with variance
+    :math:`\sigma_{\hat y}^2(t) = a(t)^{\mathsf T} Q_{\hat x\hat x} a(t)` (error
+    propagation law 7.9), so the interval
+
+    .. math::
+
+        \hat y(t) \pm r_\alpha\, \sigma_{\hat y}(t), \qquad
+        r_\alpha = N_{(1-\text{level})/2}(0, 1)
+
+    (1.96 for 95 %) covers the true :math:`E\,y(t)` with probability
+    ``level``. For day 1 of the line-fitting example
+    :math:`\sigma_{\hat y_2} \approx 0.55` and the half-width is
+    :math:`\approx 1.07`. The variance is evaluated as
+    :math:`\lVert R^{-\mathsf T} a \rVert^2` by a triangular solve.
 
     Examples
     --------

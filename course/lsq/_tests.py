@@ -1,4 +1,8 @@
-"""The tests on least-squares residuals: the overall model test, Baarda's w-tests and data snooping."""
+"""The tests on least-squares residuals: the overall model test, Baarda's w-tests and data snooping.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -34,7 +38,7 @@ from course.validation import (
 # overall model test
 # ---------------------------------------------------------------------------
 def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
-    """Overall model test: is the weighted squared norm of ``ê`` too large?
+    r"""Overall model test: is the weighted squared norm of ``ê`` too large?
 
     Parameters
     ----------
@@ -55,29 +59,37 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
     ValueError
         If ``m - n = 0``: without redundancy the test is void.
 
+    See Also
+    --------
+    w_tests : Tests of the single observations.
+    data_snooping : Detection, identification and adaptation in a loop.
+    course.chi2.residual_norm_law : The chi-square law of a residual norm.
+
     Notes
     -----
-    Eq. (10.2): under H0 (``y ~ N(Ax, Qyy)``)
+    Eq. (10.2): under H0 (:math:`y \sim N(Ax, Q_{yy})`)
 
     .. math:: T = \\hat e^T Q_{yy}^{-1} \\hat e \\sim \\chi^2(m - n, 0),
 
-    rejected (right-sided) when ``T > chi2_alpha(m - n)``. For diagonal Qyy
-    ``T = Σ (ê_i / σ_i)²`` (10.3); for m repeated measurements of one
-    quantity ``T / (m - 1) = σ̂² / σ²`` (Section 10.1.4), which is why
-    ``T / (m - n)`` is reported as the (a-posteriori) variance factor. T is
-    evaluated as ``||ẽ||²`` with ``ẽ = L^{-1} ê`` the whitened residuals, the
-    same number without ``Qyy^{-1}``.
+    rejected (right-sided) when :math:`T > \chi^2_\alpha(m - n)`. For diagonal
+    :math:`Q_{yy}`, :math:`T = \sum_i (\hat e_i / \sigma_i)^2` (10.3); for
+    :math:`m` repeated measurements of one quantity
+    :math:`T / (m - 1) = \hat\sigma^2 / \sigma^2` (Section 10.1.4), which is
+    why :math:`T / (m - n)` is reported as the (a-posteriori) variance
+    factor. :math:`T` is evaluated as :math:`\lVert \tilde e \rVert^2` with
+    :math:`\tilde e = L^{-1} \hat e` the whitened residuals, the same number
+    without :math:`Q_{yy}^{-1}`.
 
-    A 1-D Qyy filled with standard deviations ``s_i`` instead of variances
+    A 1-D Qyy filled with standard deviations :math:`s_i` instead of variances
     is a likely slip that no check of Qyy alone can see (both are positive
     numbers). It shows here, and only here: the variance factor is then
-    about the typical ``s_i`` instead of 1. A :class:`UserWarning` says so
-    when Qyy was given as a 1-D array ``v``, T falls outside the central
-    range ``[chi2_{1-α}(m - n), chi2_α(m - n)]``, the same data with the
-    values read as standard deviations (``Qyy = diag(v²)``, squared norm
-    ``T₂``) give a plausible ``chi2(m - n)`` value (inside its central
+    about the typical :math:`s_i` instead of 1. A :class:`UserWarning` says so
+    when Qyy was given as a 1-D array :math:`v`, T falls outside the central
+    range :math:`[\chi^2_{1-\alpha}(m - n),\ \chi^2_\alpha(m - n)]`, the same data with the
+    values read as standard deviations (:math:`Q_{yy} = \operatorname{diag}(v^2)`, squared norm
+    :math:`T_2`) give a plausible :math:`\chi^2(m - n)` value (inside its central
     99.8 %), and the data favour that reading by a
-    likelihood ratio ``Λ`` of at least 1000. ``Λ`` is the ratio of the
+    likelihood ratio :math:`\Lambda` of at least 1000. :math:`\Lambda` is the ratio of the
     restricted likelihoods (the density of the residual contrasts, free of
     x, as in REML) of the two fully specified covariances,
 
@@ -86,8 +98,8 @@ def overall_model_test(fit: LeastSquaresFit, alpha: float = 0.05) -> TestResult:
                          {\\det A^T \\operatorname{diag}(v^2)^{-1} A}\\Big),
 
     so it weighs both the overall scale and the residuals' pattern. Under
-    H0 ``E Λ = 1`` (a density ratio), hence (Markov's inequality) ``Λ``
-    reaches 1000 in at most 0.1 % of correct fits, whatever ``v`` and A;
+    H0 :math:`E\Lambda = 1` (a density ratio), hence (Markov's inequality) :math:`\Lambda`
+    reaches 1000 in at most 0.1 % of correct fits, whatever :math:`v` and A;
     values near 1, where the two readings barely differ, stay silent. With equal values the slip
     looks exactly like a wrong variance factor, so the warning names both.
 
@@ -320,7 +332,7 @@ def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
 
 
 def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
-    """Baarda's w-test of every observation for a single outlier.
+    r"""Baarda's w-test of every observation for a single outlier.
 
     Parameters
     ----------
@@ -342,25 +354,37 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     ValueError
         If ``m - n = 0`` (nothing can be tested).
 
+    See Also
+    --------
+    overall_model_test : The test of the whole model.
+    data_snooping : The w-tests repeated after each removal.
+    mdb : The smallest outlier each w-test finds with a given power.
+
     Notes
     -----
-    The alternative hypothesis of test i is ``E(y) = A x + c_i ∇`` with
-    ``c_i`` the i-th unit vector (an outlier ``∇`` in observation i). Baarda's
+    The alternative hypothesis of test i is :math:`E(y) = Ax + c_i\nabla` with
+    :math:`c_i` the i-th unit vector (an outlier :math:`\nabla` in observation i). Baarda's
     statistic
 
     .. math:: w_i = \\frac{c_i^T Q_{yy}^{-1} \\hat e}
                          {\\sqrt{c_i^T Q_{yy}^{-1} Q_{\\hat e\\hat e} Q_{yy}^{-1} c_i}}
               \\sim N(0, 1) \\text{ under H0}
 
-    reduces for diagonal Qyy to the chapter's eq. (10.4), ``w_i = ê_i /
-    σ_êi``, and also holds for correlated observations. The critical value
-    is two-sided, ``N_{α/2}(0, 1)`` (Section 10.3). With ``Qyy = L L^T``,
-    the thin QR ``L^{-1} A = Q1 R`` and the whitened residuals ``ẽ``:
-    ``Q_yy^{-1} ê = L^{-T} ẽ`` and
-    ``c_i^T Q_yy^{-1} Q_êê Q_yy^{-1} c_i = |L^{-1} c_i|² - |Q1^T L^{-1} c_i|²``,
-    where ``|L^{-1} c_i|² = (Q_yy^{-1})_{ii}``; so the numerators and the
+    reduces for diagonal :math:`Q_{yy}` to the chapter's eq. (10.4),
+    :math:`w_i = \hat e_i / \sigma_{\hat e_i}`, and also holds for correlated
+    observations. The critical value is two-sided, :math:`N_{\alpha/2}(0, 1)`
+    (Section 10.3). With :math:`Q_{yy} = LL^{\mathsf T}`, the thin QR
+    :math:`L^{-1}A = Q_1 R` and the whitened residuals :math:`\tilde e`:
+    :math:`Q_{yy}^{-1}\hat e = L^{-\mathsf T}\tilde e` and
+
+    .. math::
+
+        c_i^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} c_i
+        = \lVert L^{-1} c_i \rVert^2 - \lVert Q_1^{\mathsf T} L^{-1} c_i \rVert^2,
+
+    where :math:`\lVert L^{-1} c_i \rVert^2 = (Q_{yy}^{-1})_{ii}`; so the numerators and the
     denominators come from one whitening solve with n + 1 right-hand sides
-    and the diagonal of ``Q_yy^{-1}`` (O(m n) for diagonal Qyy).
+    and the diagonal of :math:`Q_{yy}^{-1}` (O(m n) for diagonal Qyy).
     Reference: W. Baarda (1968), *A testing procedure for use in geodetic
     networks*, Netherlands Geodetic Commission.
 
@@ -453,7 +477,7 @@ class SnoopingResult:
 def data_snooping(
     A, y, Qyy=None, alpha: float = 0.01, max_removals: int | None = None
 ) -> SnoopingResult:
-    """Iterated w-tests: remove the worst rejected observation and refit.
+    r"""Iterated w-tests: remove the worst rejected observation and refit.
 
     Parameters
     ----------
@@ -470,31 +494,36 @@ def data_snooping(
         Removed indices (original numbering), the w-tests of every round, the
         final fit and the reason for stopping.
 
+    See Also
+    --------
+    w_tests : One round of tests.
+    overall_model_test : The detection step.
+
     Notes
     -----
-    Section 10.3: the observation with the largest ``|w_i|`` is the most
+    Section 10.3: the observation with the largest :math:`|w_i|` is the most
     likely faulty one; if its test rejects, it is removed (its row of A, its
     entry of y and its row and column of Qyy) and the estimation and
     validation are repeated, until no w-test rejects or the redundancy
-    ``m - n`` is used up. Observations without redundancy are never tested,
+    :math:`m - n` is used up. Observations without redundancy are never tested,
     and removing a testable one keeps A of full column rank. With
-    redundancy 1 all testable ``|w_i|`` are equal, so a rejection there
+    redundancy 1 all testable :math:`|w_i|` are equal, so a rejection there
     cannot tell which observation is wrong: the removal is then arbitrary
     (the first largest), which is why practitioners want redundancy to spare.
 
     Each removal is a rank-one downdate, not a fresh fit: removing
     observation i gives the same estimate, T and w-tests of the others as
-    keeping it with an outlier parameter of its own, ``E(y) = A x + c_i ∇_i``
+    keeping it with an outlier parameter of its own, :math:`E(y) = Ax + c_i\nabla_i`
     (the alternative hypothesis of its w-test). In the whitened problem that
-    adds the column ``L^{-1} c_i`` to the design, i.e. one orthonormal
-    vector ``q`` to ``Q1``; the whitened residuals lose their component
-    along ``q`` (T drops by exactly ``w_i²``), and the numerators and squared
-    denominators of the remaining ``w_j`` change by ``L^{-T} q`` terms. Qyy
+    adds the column :math:`L^{-1} c_i` to the design, i.e. one orthonormal
+    vector :math:`q` to :math:`Q_1`; the whitened residuals lose their component
+    along :math:`q` (T drops by exactly :math:`w_i^2`), and the numerators and squared
+    denominators of the remaining :math:`w_j` change by :math:`L^{-\mathsf T} q` terms. Qyy
     is factored once; a round costs O(m (n + k)) for diagonal Qyy and O(m²)
     for a dense one, against O(m n²) and O(m³) for a fresh fit. The final
     ``fit`` is computed once, on the kept observations. (Only the cut-off
     for untestable observations, a generalised redundancy below 1e-10, is
-    measured in the full model's weights ``(Q_yy^{-1})_jj``.)
+    measured in the full model's weights :math:`(Q_{yy}^{-1})_{jj}`.)
 
     Examples
     --------

@@ -1,4 +1,8 @@
-"""The moments of mismatched-filter residuals (Baram's appendix, corrected) and their Monte Carlo check."""
+"""The moments of mismatched-filter residuals (Baram's appendix, corrected) and their Monte Carlo check.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -78,6 +82,11 @@ class ResidualMoments:
     ------
     ValueError
         Shapes that do not agree, NaN or inf (when built by hand).
+
+    See Also
+    --------
+    residual_moments : The function that builds it.
+    simulate_records : Records to compare the moments with.
 
     Notes
     -----
@@ -166,7 +175,7 @@ def _check_steps(N: Any) -> int:
 
 
 def residual_moments(true_model, filter_model, N) -> ResidualMoments:
-    """Moments of the residuals of ``filter_model``'s Kalman filter on data of ``true_model``.
+    r"""Moments of the residuals of ``filter_model``'s Kalman filter on data of ``true_model``.
 
     Parameters
     ----------
@@ -182,29 +191,49 @@ def residual_moments(true_model, filter_model, N) -> ResidualMoments:
     ResidualMoments
         ``mean (N, p)``, ``cov (N, p, p)``, ``cross_cov (N, N, p, p)``.
 
+    See Also
+    --------
+    residual_moments_as_printed : The same moments with the paper's misprints.
+    simulate_records : Monte Carlo records of the same residual.
+    moment_zscores : Standardised differences between the two.
+    course.filters.riccati : The filter's own gains.
+
     Notes
     -----
-    The residual ``r_t = y_t - H^1 xhat(t|t-1) - m_v^1`` of the filter of
-    :func:`course.filters.kalman_filter` is the output of the augmented system
-    (Baram 1980, appendix, (A9)-(A15), corrected)::
+    The residual :math:`r_t = y_t - H^1 \hat x(t|t-1) - \bar v^1` of the filter
+    of :func:`course.filters.kalman_filter` is the output of the augmented
+    system (Baram 1980, appendix, (A9)-(A15), corrected), with centred noises
+    :math:`\tilde w_t = w_t - \bar w^0`, :math:`\tilde v_t = v_t - \bar v^0`:
 
-        x~_t = [x_t; xhat(t|t-1)],   x~_{t+1} = F~_t x~_t + G~_t [w_t; v_t] + u~_t,
-        F~_t = [[F^0, 0], [F^1 K_t H^0, F^1 (I - K_t H^1)]],     (A13)
-        G~_t = [[G^0, 0], [0, F^1 K_t]],                         (A14), no G^1 w^1 block
-        u~_t = [G^0 m_w^0; F^1 K_t (m_v^0 - m_v^1) + G^1 m_w^1],
-        r_t  = H~ x~_t + v_t - m_v^1,  H~ = [H^0, -H^1],        (A15)
+    .. math::
 
-    with ``K_t`` the filter's own gains (Riccati recursion of ``M^1``,
-    (A17)-(A18) corrected), ``E x~_0 = [m^0_0; m^1_0]`` (A21) and
-    ``Psi~_0 = blockdiag(Psi^0_0, 0)`` (A26).  Then
+        \tilde x_t &= \begin{bmatrix} x_t \\ \hat x(t|t-1) \end{bmatrix}, \qquad
+        \tilde x_{t+1} = \tilde F_t \tilde x_t
+            + \tilde G_t \begin{bmatrix} \tilde w_t \\ \tilde v_t \end{bmatrix} + \tilde u_t, \\
+        \tilde F_t &= \begin{bmatrix} F^0 & 0 \\ F^1 K_t H^0 & F^1 (I - K_t H^1) \end{bmatrix}
+            \quad \text{(A13)}, \qquad
+        \tilde G_t = \begin{bmatrix} G^0 & 0 \\ 0 & F^1 K_t \end{bmatrix}
+            \quad \text{(A14), no } G^1 w^1 \text{ block}, \\
+        \tilde u_t &= \begin{bmatrix} G^0 \bar w^0 \\
+            F^1 K_t (\bar v^0 - \bar v^1) + G^1 \bar w^1 \end{bmatrix}, \qquad
+        r_t = \tilde H \tilde x_t + \tilde v_t + \bar v^0 - \bar v^1, \quad
+        \tilde H = [H^0,\ -H^1] \quad \text{(A15)},
 
-    - ``E x~_{t+1} = F~_t E x~_t + u~_t``; ``m_t = H~ E x~_t + m_v^0 - m_v^1`` (A23);
-    - ``Psi~_{t+1} = F~_t Psi~_t F~_t^T + G~_t Q~ G~_t^T``,
-      ``Q~ = blockdiag(Q^0, R^0)`` (A20), (A25);
-    - ``P_t = H~ Psi~_t H~^T + R^0`` (A28);
-    - for ``j < k``: ``C(k, j) = H~ Z_{k,j}`` with ``Z_{j+1,j} = F~_j Psi~_j H~^T
-      + [0; F^1 K_j R^0]`` and ``Z_{t+1,j} = F~_t Z_{t,j}`` (A27 corrected: the
-      transition from j to k, and ``v_j`` enters the estimate through the gain).
+    with :math:`K_t` the filter's own gains (Riccati recursion of :math:`M^1`,
+    (A17)-(A18) corrected), :math:`E\tilde x_0 = [m^0_0;\ m^1_0]` (A21) and
+    :math:`\tilde\Psi_0 = \operatorname{blockdiag}(\Psi^0_0, 0)` (A26).  Then
+
+    - :math:`E\tilde x_{t+1} = \tilde F_t E\tilde x_t + \tilde u_t`;
+      :math:`m_t = \tilde H E\tilde x_t + \bar v^0 - \bar v^1` (A23);
+    - :math:`\tilde\Psi_{t+1} = \tilde F_t \tilde\Psi_t \tilde F_t^{\mathsf T}
+      + \tilde G_t \tilde Q \tilde G_t^{\mathsf T}`,
+      :math:`\tilde Q = \operatorname{blockdiag}(Q^0, R^0)` (A20), (A25);
+    - :math:`P_t = \tilde H \tilde\Psi_t \tilde H^{\mathsf T} + R^0` (A28);
+    - for :math:`j < k`: :math:`C(k, j) = \tilde H Z_{k,j}` with
+      :math:`Z_{j+1,j} = \tilde F_j \tilde\Psi_j \tilde H^{\mathsf T}
+      + [0;\ F^1 K_j R^0]` and :math:`Z_{t+1,j} = \tilde F_t Z_{t,j}` (A27
+      corrected: the transition from :math:`j` to :math:`k`, and :math:`v_j`
+      enters the estimate through the gain).
 
     Examples
     --------
@@ -240,6 +269,10 @@ def residual_moments_as_printed(true_model, filter_model, N, misprint) -> Residu
         Unknown misprint, or ``"gain_of_tested_model"`` with models of
         different state dimensions (the printed gain is then not even
         conformable with ``F^1``).
+
+    See Also
+    --------
+    residual_moments : The corrected moments.
 
     Notes
     -----
@@ -340,6 +373,11 @@ def simulate_records(true_model, filter_model, M, N, rng) -> np.ndarray:
     ndarray, shape (M, N, p)
         ``residuals[i, t]`` is ``r_{i,t}`` of the paper (record i, time t).
 
+    See Also
+    --------
+    residual_moments : The predicted moments of these records.
+    moment_zscores : How far the records are from the prediction.
+
     Notes
     -----
     The records are independent runs of ``true_model`` (Baram 1980,
@@ -400,7 +438,7 @@ class SectionMoments(NamedTuple):
 
 
 def moment_zscores(residuals: Any, moments: ResidualMoments) -> MomentZScores:
-    """Standardised differences between sample moments and ``moments``.
+    r"""Standardised differences between sample moments and ``moments``.
 
     Parameters
     ----------
@@ -418,10 +456,17 @@ def moment_zscores(residuals: Any, moments: ResidualMoments) -> MomentZScores:
         cross-covariance ``S`` (divisor ``M - 1``) and the normal-theory
         standard error ``se^2 = (P_j,aa P_k,bb + C(j, k)_ab^2) / M``.
 
+    See Also
+    --------
+    residual_moments : The predicted moments.
+    simulate_records : The records.
+
     Notes
     -----
-    If the moments are right, every entry is approximately ``N(0, 1)``;
-    a wrong formula shows up as entries of tens or hundreds.
+    Each entry is a sample moment minus its prediction, divided by its
+    standard error, :math:`z = (\hat\mu - \mu)/\widehat{\operatorname{se}}`.
+    If the moments are right, every entry is approximately :math:`N(0, 1)`; a
+    wrong formula shows up as entries of tens or hundreds.
 
     Examples
     --------

@@ -1,4 +1,8 @@
-"""The section statistics as quadratic forms in normal variables (Baram section 3) and their exact laws."""
+"""The section statistics as quadratic forms in normal variables (Baram section 3) and their exact laws.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -50,10 +54,15 @@ def mean_matrix(M: int, p: int) -> np.ndarray:
     ndarray, shape (M p, M p)
         ``A = (1/M^2) 1 1^T kron I_p``, for ``phi_j = (r_1j, ..., r_Mj)``.
 
+    See Also
+    --------
+    mean_statistic : The statistic this matrix gives as a quadratic form.
+    statistic_law : Its law.
+
     Notes
     -----
-    Baram (1980), (3.1)-(3.3).  The paper writes ``I_n``; the blocks act on
-    ``p``-dimensional residuals, so they are ``I_p``.
+    Baram (1980), (3.1)-(3.3).  The paper writes :math:`I_n`; the blocks act on
+    :math:`p`-dimensional residuals, so they are :math:`I_p`.
 
     Examples
     --------
@@ -67,7 +76,7 @@ def mean_matrix(M: int, p: int) -> np.ndarray:
 
 
 def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
-    """Matrix ``G`` of the covariance statistic as a quadratic form, ``c_j = phi_j^T G phi_j``.
+    r"""Matrix ``G`` of the covariance statistic as a quadratic form, ``c_j = phi_j^T G phi_j``.
 
     Parameters
     ----------
@@ -83,10 +92,21 @@ def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
     ndarray, shape (M p, M p)
         ``G = (1/M) J kron I_p``, or ``D (J/M) D^T`` with ``D = I_M kron v``.
 
+    See Also
+    --------
+    covariance_statistic : The statistic this matrix gives as a quadratic form.
+    statistic_law : Its law.
+
     Notes
     -----
-    Baram (1980), (3.11)-(3.15); ``J = I_M - 1 1^T / M`` removes the sample
-    mean (3.10), and needs ``kron I_p`` for vector residuals.
+    Baram (1980), (3.11)-(3.15);
+
+    .. math::
+
+        J = I_M - \tfrac1M \mathbf 1 \mathbf 1^{\mathsf T}
+
+    removes the sample mean (3.10), and needs :math:`\otimes I_p` for vector
+    residuals.
 
     Examples
     --------
@@ -106,7 +126,7 @@ def covariance_matrix(M: int, p: int, direction=None) -> np.ndarray:
 
 
 def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
-    """Matrix ``B`` of the correlation statistic, ``c(j, k) = phi(j, k)^T B phi(j, k)``.
+    r"""Matrix ``B`` of the correlation statistic, ``c(j, k) = phi(j, k)^T B phi(j, k)``.
 
     Parameters
     ----------
@@ -124,10 +144,15 @@ def correlation_matrix(M: int, p: int, directions=None) -> np.ndarray:
         ``B = (1/2M) [[0, J kron I_p], [J kron I_p, 0]]``, or with directions
         ``D B_M D^T``, ``D = blockdiag(I_M kron u, I_M kron w)``.
 
+    See Also
+    --------
+    correlation_statistic : The statistic this matrix gives as a quadratic form.
+    statistic_law : Its law.
+
     Notes
     -----
-    Baram (1980), (3.4)-(3.10), with ``J kron I_p`` for vector residuals
-    and, in (3.7)-(3.8), the left and right singular vectors of ``C(j, k)``
+    Baram (1980), (3.4)-(3.10), with :math:`J \otimes I_p` for vector residuals
+    and, in (3.7)-(3.8), the left and right singular vectors of :math:`C(j, k)`
     in place of one set of principal directions.
 
     Examples
@@ -168,6 +193,11 @@ def section_moments(moments: ResidualMoments, j: int, M: int):
         ``mean`` ``(M p,)``: ``1 kron m_j``; ``cov`` ``(M p, M p)``:
         ``I_M kron P_j`` (records are independent).
 
+    See Also
+    --------
+    pair_moments : The moments of two sections together.
+    residual_moments : The moments of the residual itself.
+
     Notes
     -----
     Baram (1980), (3.18) and (3.20).
@@ -187,7 +217,7 @@ def section_moments(moments: ResidualMoments, j: int, M: int):
 
 
 def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
-    """Mean and covariance of the stacked pair of sections ``phi(j, k) = (phi_j, phi_k)``.
+    r"""Mean and covariance of the stacked pair of sections ``phi(j, k) = (phi_j, phi_k)``.
 
     Parameters
     ----------
@@ -203,10 +233,14 @@ def pair_moments(moments: ResidualMoments, j: int, k: int, M: int):
         ``mean`` ``(2 M p,)`` and ``cov`` ``(2 M p, 2 M p)``,
         ``[[I_M kron P_j, I_M kron C(j, k)], [I_M kron C(j, k)^T, I_M kron P_k]]``.
 
+    See Also
+    --------
+    section_moments : The moments of one section.
+
     Notes
     -----
-    Baram (1980), (3.19) and (3.21)-(3.23), with ``C(j, k) = E (r_j -
-    m_j)(r_k - m_k)^T`` ((2.4) corrected).
+    Baram (1980), (3.19) and (3.21)-(3.23), with
+    :math:`C(j, k) = E\,(r_j - m_j)(r_k - m_k)^{\mathsf T}` ((2.4) corrected).
 
     Examples
     --------
@@ -245,7 +279,7 @@ def statistic_law(
     direction=None,
     full: bool = False,
 ):
-    """Exact law of a section statistic when the residuals have ``moments``.
+    r"""Exact law of a section statistic when the residuals have ``moments``.
 
     Parameters
     ----------
@@ -273,20 +307,35 @@ def statistic_law(
     WeightedChiSquare or QuadraticForm
         With ``cdf``, ``sf``, ``ppf``, ``isf``, ``mean``, ``var``, ``rvs``.
 
+    See Also
+    --------
+    mean_test : The mean test that uses this law.
+    covariance_test : The covariance test that uses it.
+    correlation_test : The correlation test that uses it.
+    course.quadform.QuadraticForm : The law of a quadratic form.
+
     Notes
     -----
     Records are independent, so the Helmert transform turns the centred
-    section into ``M - 1`` independent copies of the centred residual:
+    section into :math:`M - 1` independent copies of the centred residual:
 
-    - mean: ``rbar_j ~ N(m_j, P_j / M)``, so ``||rbar_j||^2`` is
-      ``QuadraticForm(I_p, m_j, P_j/M)``;
-    - covariance: ``c_j = (1/M) sum_{l<M} |z_l|^2``, ``z_l ~ N(0, P_j)``:
-      weights ``eig(P_j)/M``, each with ``M - 1`` degrees of freedom (hence
-      ``E c_j = (M - 1)/M tr P_j``); projected: ``(v^T P_j v / M) chi2(M - 1)``;
-    - correlation: ``c(j, k) = (1/M) sum_{l<M} z_l^T y_l`` with ``(z, y)``
-      jointly normal, covariance ``S = [[P_j, C], [C^T, P_k]]``: weights the
-      eigenvalues of ``S^{1/2} E S^{1/2} / (2M)``, ``E = [[0, I], [I, 0]]``,
-      each with ``M - 1`` degrees of freedom.
+    - mean: :math:`\bar r_j \sim N(m_j, P_j / M)`, so
+      :math:`\lVert \bar r_j \rVert^2` is ``QuadraticForm(I_p, m_j, P_j/M)``;
+    - covariance: :math:`c_j = \frac1M \sum_{l<M} \lVert z_l \rVert^2`,
+      :math:`z_l \sim N(0, P_j)`: weights :math:`\operatorname{eig}(P_j)/M`, each
+      with :math:`M - 1` degrees of freedom (hence
+      :math:`E c_j = \frac{M-1}{M} \operatorname{tr} P_j`); projected:
+      :math:`(v^{\mathsf T} P_j v / M)\,\chi^2(M - 1)`;
+    - correlation: :math:`c(j, k) = \frac1M \sum_{l<M} z_l^{\mathsf T} y_l` with
+      :math:`(z, y)` jointly normal with covariance
+
+      .. math::
+
+          S = \begin{bmatrix} P_j & C \\ C^{\mathsf T} & P_k \end{bmatrix}:
+
+      weights the eigenvalues of :math:`S^{1/2} E S^{1/2} / (2M)`,
+      :math:`E = \begin{bmatrix} 0 & I \\ I & 0 \end{bmatrix}`, each with
+      :math:`M - 1` degrees of freedom.
 
     Examples
     --------

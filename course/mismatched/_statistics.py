@@ -1,4 +1,8 @@
-"""The statistics of a cross-record section: mean, covariance and correlation."""
+"""The statistics of a cross-record section: mean, covariance and correlation.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -35,7 +39,7 @@ def _unit(v, p, name) -> np.ndarray:
 
 
 def principal_directions(moments: ResidualMoments, j: int, k: int | None = None):
-    """Principal directions of ``P_j`` or of ``C(j, k)`` under the null pair.
+    r"""Principal directions of ``P_j`` or of ``C(j, k)`` under the null pair.
 
     Parameters
     ----------
@@ -57,13 +61,19 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
         projects ``r_j`` and ``right[:, g]`` projects ``r_k``.  Both are
         named tuples: ``lam, V = ...`` and ``s, U, W = ...``.
 
+    See Also
+    --------
+    covariance_statistic : The statistic projected on these directions.
+    correlation_statistic : The cross-time statistic projected on them.
+
     Notes
     -----
-    Baram (1980), (2.7) and (2.13)-(2.15), corrected: a residual is
-    projected on a principal direction by ``v_g^T r = (V^T r)_g`` (the paper
-    prints ``a^(g) V_j r``, a row of ``V_j``); and ``C(j, k)`` is not
-    symmetric, so its left and right principal directions differ and come
-    from an SVD, with ``E c^(g)(j, k) = (M - 1)/M s_g``.
+    Baram (1980), (2.7) and (2.13)-(2.15), corrected: a residual is projected
+    on a principal direction by :math:`v_g^{\mathsf T} r = (V^{\mathsf T} r)_g`
+    (the paper prints :math:`a^{(g)} V_j r`, a row of :math:`V_j`); and
+    :math:`C(j, k)` is not symmetric, so its left and right principal
+    directions differ and come from an SVD, with
+    :math:`E\,c^{(g)}(j, k) = \frac{M-1}{M} s_g`.
 
     Examples
     --------
@@ -85,7 +95,7 @@ def principal_directions(moments: ResidualMoments, j: int, k: int | None = None)
 
 
 def mean_statistic(residuals, j: int) -> float:
-    """Mean statistic of section ``j``: the squared norm of the cross-record mean.
+    r"""Mean statistic of section ``j``: the squared norm of the cross-record mean.
 
     Parameters
     ----------
@@ -99,11 +109,23 @@ def mean_statistic(residuals, j: int) -> float:
     float
         ``||rbar_j||^2 = rbar_j^T rbar_j`` with ``rbar_j = (1/M) sum_i r_ij``.
 
+    See Also
+    --------
+    mean_test : The test of this statistic.
+    mean_matrix : The statistic as a quadratic form.
+
     Notes
     -----
-    Baram (1980), (2.5)-(2.6): the paper writes ``||rbar_j|| = rbar_j^T
-    rbar_j``; the statistic is the *squared* norm, the quadratic form
-    ``phi_j^T A phi_j`` of (3.2)-(3.3) (see :func:`mean_matrix`).
+    Baram (1980), (2.5)-(2.6): the paper writes
+    :math:`\lVert \bar r_j \rVert = \bar r_j^{\mathsf T} \bar r_j`; the
+    statistic is the *squared* norm,
+
+    .. math::
+
+        \lVert \bar r_j \rVert^2 = \bar r_j^{\mathsf T} \bar r_j
+        = \varphi_j^{\mathsf T} A \varphi_j
+
+    of (3.2)-(3.3) (see :func:`mean_matrix`).
 
     Examples
     --------
@@ -118,7 +140,7 @@ def mean_statistic(residuals, j: int) -> float:
 
 
 def covariance_statistic(residuals, j: int, direction=None) -> float:
-    """Sample covariance statistic of section ``j``.
+    r"""Sample covariance statistic of section ``j``.
 
     Parameters
     ----------
@@ -136,13 +158,23 @@ def covariance_statistic(residuals, j: int, direction=None) -> float:
         ``c_j = tr Pbar_j = (1/M) sum_i |r_ij - rbar_j|^2``, or with a
         direction ``c_j^(g) = (1/M) sum_i (v^T (r_ij - rbar_j))^2``.
 
+    See Also
+    --------
+    covariance_test : The test of this statistic.
+    covariance_matrix : The statistic as a quadratic form.
+    principal_directions : The directions of the projected statistic.
+
     Notes
     -----
     Baram (1980), (2.16)-(2.17) and (2.13)-(2.14) corrected: the projected
     statistic averages the *squared* projections (averaging the projections
-    themselves gives zero identically) and projects with ``V_j^T``.  With
-    the divisor ``M`` and the sample mean removed,
-    ``E c_j = (M - 1)/M tr P_j`` and ``E c_j^(g) = (M - 1)/M v^T P_j v``.
+    themselves gives zero identically) and projects with :math:`V_j^{\mathsf T}`.
+    With the divisor :math:`M` and the sample mean removed,
+
+    .. math::
+
+        E\,c_j = \frac{M-1}{M} \operatorname{tr} P_j, \qquad
+        E\,c_j^{(g)} = \frac{M-1}{M} v^{\mathsf T} P_j v.
 
     Examples
     --------
@@ -160,7 +192,7 @@ def covariance_statistic(residuals, j: int, direction=None) -> float:
 
 
 def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
-    """Sample correlation statistic of sections ``j`` and ``k``.
+    r"""Sample correlation statistic of sections ``j`` and ``k``.
 
     Parameters
     ----------
@@ -179,13 +211,23 @@ def correlation_statistic(residuals, j: int, k: int, directions=None) -> float:
         rbar_k)``, or with directions ``c^(g)(j, k) = (1/M) sum_i (u^T (r_ij
         - rbar_j)) (w^T (r_ik - rbar_k))``.
 
+    See Also
+    --------
+    correlation_test : The test of this statistic.
+    correlation_matrix : The statistic as a quadratic form.
+    principal_directions : The singular directions it projects on.
+
     Notes
     -----
-    Baram (1980), (2.12), and (2.7)-(2.9) with an SVD in place of the
-    principal directions of the non-symmetric ``C(j, k)``;
-    ``E c^(g)(j, k) = (M - 1)/M u^T C(j, k) w``.  With an SVD the projected
-    statistics no longer add up to the trace as (2.11)-(2.12) state (that
-    needs one orthonormal basis on both sides).
+    Baram (1980), (2.12), and (2.7)-(2.9) with an SVD in place of the principal
+    directions of the non-symmetric :math:`C(j, k)`;
+
+    .. math::
+
+        E\,c^{(g)}(j, k) = \frac{M-1}{M} u^{\mathsf T} C(j, k) w.
+
+    With an SVD the projected statistics no longer add up to the trace as
+    (2.11)-(2.12) state (that needs one orthonormal basis on both sides).
 
     Examples
     --------

@@ -1,4 +1,8 @@
-"""The mean, covariance and correlation tests and their power."""
+"""The mean, covariance and correlation tests and their power.
+
+The works cited here are in the course bibliography,
+:doc:`/docs/bibliography`.
+"""
 
 from __future__ import annotations
 
@@ -93,7 +97,7 @@ def _run_test(name, kind, residuals, j, k, null, alpha, gamma, alternative, powe
 def mean_test(
     residuals, j, null, alpha=0.05, alternative="two-sided", power_against=None
 ) -> TestResult:
-    """Mean test of section ``j`` on ``||rbar_j||^2``.
+    r"""Mean test of section ``j`` on ``||rbar_j||^2``.
 
     Parameters
     ----------
@@ -121,11 +125,18 @@ def mean_test(
         ``statistic`` from :func:`mean_statistic`, ``null`` its exact law,
         ``critical_value`` one number or a ``(lower, upper)`` pair.
 
+    See Also
+    --------
+    covariance_test : The test of the spread of a section.
+    correlation_test : The test of two sections together.
+    power : The power of these tests against an alternative.
+
     Notes
     -----
-    Baram (1980), (2.5)-(2.6) (squared norm) and (3.2)-(3.3): under the
-    null pair ``rbar_j ~ N(m_j, P_j / M)``, so the statistic is a
-    noncentral quadratic form (:class:`course.quadform.QuadraticForm`).
+    Baram (1980), (2.5)-(2.6) (squared norm) and (3.2)-(3.3): under the null
+    pair :math:`\bar r_j \sim N(m_j, P_j / M)`, so the statistic
+    :math:`\lVert \bar r_j \rVert^2` is a noncentral quadratic form
+    (:class:`course.quadform.QuadraticForm`).
 
     Examples
     --------
@@ -166,6 +177,11 @@ def covariance_test(
         ``statistic`` from :func:`covariance_statistic`, ``null`` its law
         (:func:`statistic_law`), ``details["power"]`` with ``power_against``.
 
+    See Also
+    --------
+    mean_test : The test of the mean of a section.
+    statistic_law : The law of the statistic.
+
     Notes
     -----
     Baram (1980), (2.13)-(2.17) corrected, with the weighted chi-square law
@@ -200,7 +216,7 @@ def covariance_test(
 def correlation_test(
     residuals, j, k, null, alpha=0.05, gamma=None, alternative="two-sided", power_against=None
 ) -> TestResult:
-    """Correlation test of sections ``j`` and ``k`` (trace, or a singular pair).
+    r"""Correlation test of sections ``j`` and ``k`` (trace, or a singular pair).
 
     Parameters
     ----------
@@ -217,12 +233,17 @@ def correlation_test(
     TestResult
         ``statistic`` from :func:`correlation_statistic`, ``null`` its law.
 
+    See Also
+    --------
+    mean_test : The test of the mean of a section.
+    statistic_law : The law of the statistic.
+
     Notes
     -----
-    Baram (1980), (2.7)-(2.12) with an SVD for the non-symmetric ``C(j, k)``;
-    the law has weights of both signs (the eigenvalues of
-    ``S^(1/2) [[0, I], [I, 0]] S^(1/2) / (2M)``), so Imhof's method handles
-    what a chi-square table cannot.
+    Baram (1980), (2.7)-(2.12) with an SVD for the non-symmetric
+    :math:`C(j, k)`; the law has weights of both signs (the eigenvalues of
+    :math:`S^{1/2} \begin{bmatrix} 0 & I \\ I & 0 \end{bmatrix} S^{1/2} / (2M)`),
+    so Imhof's method handles what a chi-square table cannot.
 
     Examples
     --------
@@ -279,6 +300,12 @@ def power(
     -------
     float
         ``P(statistic in critical region | alternative_moments)``.
+
+    See Also
+    --------
+    mean_test : The mean test.
+    covariance_test : The covariance test.
+    correlation_test : The correlation test.
 
     Notes
     -----

@@ -46,7 +46,7 @@ def _with_undefined_start(value: Any, name: str, consequence: str) -> tuple[np.n
 
 
 def empirical_threshold(null_statistic, alpha) -> float:
-    """Threshold with a per-sample false-alarm rate ``alpha`` from fault-free runs.
+    r"""Threshold with a per-sample false-alarm rate ``alpha`` from fault-free runs.
 
     Parameters
     ----------
@@ -69,13 +69,23 @@ def empirical_threshold(null_statistic, alpha) -> float:
         If ``null_statistic`` holds inf, or NaN other than its undefined
         start (a failed run: leaving it out would bias the threshold).
 
+    See Also
+    --------
+    windowed_nis_threshold : The threshold when the law under H0 is a chi-square.
+    alarm_statistics : False-alarm rate and detection delay of a threshold.
+
     Notes
     -----
     For test quantities whose law under H0 is not known in closed form
-    (the observer's windowed energy), ``J = F_hat^{-1}(1 - alpha)`` with
-    ``F_hat`` the empirical distribution function of the simulated values
-    (numpy's linear-interpolation quantile).  Its accuracy is that of a
-    Monte Carlo quantile: simulate many more than ``1 / alpha`` values.
+    (the observer's windowed energy), the threshold is the empirical quantile
+
+    .. math::
+
+        J = \hat F^{-1}(1 - \alpha),
+
+    with :math:`\hat F` the empirical distribution function of the simulated
+    values (numpy's linear-interpolation quantile).  Its accuracy is that of a
+    Monte Carlo quantile: simulate many more than :math:`1/\alpha` values.
 
     Examples
     --------
@@ -151,7 +161,7 @@ class AlarmStatistics:
 
 
 def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
-    """Count false alarms and measure detection delays, vectorised over runs.
+    r"""Count false alarms and measure detection delays, vectorised over runs.
 
     Parameters
     ----------
@@ -175,15 +185,27 @@ def alarm_statistics(statistic, threshold, fault_time=None) -> AlarmStatistics:
         undefined start (a failed run: counting it as "no alarm" would bias
         the rates and delays).
 
+    See Also
+    --------
+    windowed_nis_threshold : The per-sample threshold these rates estimate.
+    empirical_threshold : A threshold from simulated values.
+
     Notes
     -----
-    With alarms ``a_{i,t} = [T_{i,t} > threshold]`` and ``t_0`` the first
-    sample after the undefined start: the false-alarm rate is
-    ``sum a_{i,t} / #{(i, t) : t_0 <= t < fault_time}``, an estimate of the per-sample ``alpha`` of
+    With alarms :math:`a_{i,t} = [T_{i,t} > J]` (run :math:`i`, sample
+    :math:`t`, threshold :math:`J`), :math:`t_0` the first sample after the
+    undefined start and :math:`t_f` the fault time, the false-alarm rate is
+
+    .. math::
+
+        \hat\alpha = \frac{\sum_i \sum_{t_0 \le t < t_f} a_{i,t}}
+                          {\#\{(i, t) : t_0 \le t < t_f\}},
+
+    an estimate of the per-sample :math:`\alpha` of
     :func:`windowed_nis_threshold`; the run false-alarm probability is the
-    fraction of runs with ``max_{t < fault_time} a_{i,t} = 1``, the
-    quantity that grows with the record length (multiple testing); the
-    delay of run ``i`` is ``min{t >= fault_time : a_{i,t}} - fault_time``.
+    fraction of runs with :math:`\max_{t < t_f} a_{i,t} = 1`, the quantity that
+    grows with the record length (multiple testing); the delay of run :math:`i`
+    is :math:`\min\{t \ge t_f : a_{i,t} = 1\} - t_f`.
     The lecture leaves the choice of threshold and the quality of a test
     (false alarms, detection) to the next lecture
     (LiU lecture, last slide); these are its Monte Carlo

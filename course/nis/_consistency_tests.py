@@ -27,7 +27,7 @@ from course.validation import as_count, as_probability
 
 
 def nis_critical_values(m: Any, K: Any, alpha: float = 0.05) -> CriticalValues:
-    """Two-sided thresholds for the NIS sum ``K * eps_bar ~ chi2(m K)``.
+    r"""Two-sided thresholds for the NIS sum ``K * eps_bar ~ chi2(m K)``.
 
     Parameters
     ----------
@@ -42,10 +42,18 @@ def nis_critical_values(m: Any, K: Any, alpha: float = 0.05) -> CriticalValues:
         ``(lower, upper) = (chi2_{mK}.ppf(alpha/2), chi2_{mK}.isf(alpha/2))``;
         divide by ``K`` for thresholds on the average ``eps_bar``.
 
+    See Also
+    --------
+    nis_test : The test these thresholds belong to.
+    nis_matrix_critical_values : Thresholds of the NIS-matrix test.
+
     Notes
     -----
-    [F], eq. (4), with the ``1/K`` of the definition restored:
-    ``K eps_bar ~ chi2(mK)``.
+    [F], eq. (4), with the :math:`1/K` of the definition restored:
+
+    .. math::
+
+        K\,\bar\epsilon \sim \chi^2(mK).
 
     Examples
     --------
@@ -80,7 +88,7 @@ def _exact_false_alarm_rate(m: int, K: int, alpha: float) -> float:
 
 
 def nis_matrix_critical_values(m: Any, K: Any, alpha: float = 0.05) -> CriticalValues:
-    """Thresholds of the NIS-matrix test: ``(lower for lambda_min, upper for lambda_max)``.
+    r"""Thresholds of the NIS-matrix test: ``(lower for lambda_min, upper for lambda_max)``.
 
     Parameters
     ----------
@@ -95,13 +103,26 @@ def nis_matrix_critical_values(m: Any, K: Any, alpha: float = 0.05) -> CriticalV
         ``(lower, upper)`` with ``P(lambda_min < lower) = alpha/2`` and
         ``P(lambda_max > upper) = alpha/2`` under H0.
 
+    See Also
+    --------
+    nis_matrix_test : The test these thresholds belong to.
+    extreme_eigenvalue : The exact laws whose quantiles they are.
+    prob_eigenvalues_within : The exact size of the two-sided test.
+
     Notes
     -----
     Quantiles (``ppf``/``isf``) of the exact laws of :func:`extreme_eigenvalue`
-    ([C14]).  The false-alarm rate of "reject when either is outside" is at
-    most ``alpha`` (Bonferroni; both together are rare); its exact value is
-    ``1 - prob_eigenvalues_within(m, K, lower, upper)`` ([C17]).  Cached: a
-    study that tests many records of one size pays the root searches once.
+    ([C14]): :math:`\ell = F_{\min}^{-1}(\alpha/2)` and
+    :math:`u = F_{\max}^{-1}(1 - \alpha/2)`.  The false-alarm rate of "reject
+    when either is outside" is at most :math:`\alpha` (Bonferroni; both
+    together are rare); its exact value is
+
+    .. math::
+
+        1 - P(\ell \le \lambda_{\min},\ \lambda_{\max} \le u),
+
+    computed by :func:`prob_eigenvalues_within` ([C17]).  Cached: a study that
+    tests many records of one size pays the root searches once.
 
     Examples
     --------
@@ -125,7 +146,7 @@ def _single_record(innovations: Any, S: Any):
 
 
 def nis_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
-    """Two-sided chi-square test of the time-averaged NIS.
+    r"""Two-sided chi-square test of the time-averaged NIS.
 
     Parameters
     ----------
@@ -143,13 +164,26 @@ def nis_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
         ``chi2(m K)``, ``critical_value`` the pair ``(lower, upper)``,
         ``pvalue = 2 min(cdf, sf)``; ``details`` holds ``eps_bar``, ``m``, ``K``.
 
+    See Also
+    --------
+    nis : The NIS values it averages.
+    nis_critical_values : Its two thresholds.
+    nis_matrix_test : The test that also sees the direction of an error.
+    windowed_chi2_test : The sliding-window form for alarms in time.
+
     Notes
     -----
-    [F], eq. (4), with the poster's ``1/K``: ``eps_bar = (1/K) sum eps_k``
-    and ``K * eps_bar ~ chi2(m K)`` (not ``eps_bar`` itself, as the poster
-    states).  This is Bar-Shalom's time-average NIS test ([BS], Sec. 5.4.2).
-    Too small a statistic (the filter's ``S`` too large: a pessimistic
-    filter) is rejected as well as too large.
+    [F], eq. (4), with the poster's :math:`1/K`:
+
+    .. math::
+
+        \bar\epsilon = \frac1K \sum_{k=1}^{K} \epsilon_k, \qquad
+        K\,\bar\epsilon \sim \chi^2(mK)
+
+    (not :math:`\bar\epsilon` itself, as the poster states).  This is
+    Bar-Shalom's time-average NIS test ([BS], Sec. 5.4.2).  Too small a
+    statistic (the filter's :math:`S` too large: a pessimistic filter) is
+    rejected as well as too large.
 
     Examples
     --------
@@ -175,7 +209,7 @@ def nis_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
 
 
 def nis_matrix_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult:
-    """Test the NIS matrix through its smallest and largest eigenvalues.
+    r"""Test the NIS matrix through its smallest and largest eigenvalues.
 
     Parameters
     ----------
@@ -203,12 +237,24 @@ def nis_matrix_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult
         ``1 - P(all eigenvalues in [lower, upper])`` (slightly below
         ``alpha``), from :func:`prob_eigenvalues_within`.
 
+    See Also
+    --------
+    nis_matrix : The matrix whose extreme eigenvalues it tests.
+    nis_matrix_critical_values : Its two thresholds.
+    nis_test : The test of the trace alone.
+
     Notes
     -----
-    Under H0, ``K * Pi ~ W_m(K, I)`` ([F], eq. 3 and the "Statistics" box,
-    with the ``1/K`` restored).  An innovation covariance that is too small
-    in *some* direction pushes ``lambda_max`` up; too large in some
-    direction pulls ``lambda_min`` down, even when the trace (the NIS) is
+    Under H0 ([F], eq. 3 and the "Statistics" box, with the :math:`1/K`
+    restored)
+
+    .. math::
+
+        K\,\Pi \sim W_m(K, I).
+
+    An innovation covariance that is too small in *some* direction pushes
+    :math:`\lambda_{\max}(\Pi)` up; too large in some direction pulls
+    :math:`\lambda_{\min}(\Pi)` down, even when the trace (the NIS) is
     unchanged.
 
     Examples
@@ -248,7 +294,7 @@ def nis_matrix_test(innovations: Any, S: Any, alpha: float = 0.05) -> TestResult
 
 
 def consistency_interval(dof: Any, count: Any, alpha: float = 0.05) -> CriticalValues:
-    """Two-sided interval for an average of ``count`` independent ``chi2(dof)`` values.
+    r"""Two-sided interval for an average of ``count`` independent ``chi2(dof)`` values.
 
     Bar-Shalom's consistency bounds ([BS], Sec. 5.4.2): the **time-averaged**
     NIS of one run over ``K`` steps (``count = K``, ``dof = m``) and the
@@ -271,10 +317,23 @@ def consistency_interval(dof: Any, count: Any, alpha: float = 0.05) -> CriticalV
         ``chi2_{dof*count}.ppf(alpha/2) / count`` and
         ``chi2_{dof*count}.isf(alpha/2) / count``.
 
+    See Also
+    --------
+    nis_test : The test of a time-averaged NIS.
+    nees : The NEES values the interval also applies to.
+
     Notes
     -----
-    [BS], Sec. 5.4.2: a sum of ``count`` independent ``chi2(dof)`` values is
-    ``chi2(dof * count)``.
+    [BS], Sec. 5.4.2: a sum of :math:`n` (``count``) independent
+    :math:`\chi^2(d)` values (``dof``) is :math:`\chi^2(nd)`, so the average
+    lies in
+
+    .. math::
+
+        \left[\frac{\chi^2_{nd}(\alpha/2)}{n},\ \frac{\chi^2_{nd}(1-\alpha/2)}{n}\right]
+
+    with probability :math:`1 - \alpha` (:math:`\chi^2_{\nu}(p)` the
+    :math:`p`-quantile).
 
     Examples
     --------

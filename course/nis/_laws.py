@@ -28,7 +28,7 @@ EXACT_LAW_LIMITS = {"m": 30, "K": 100_000}
 
 
 class ExtremeEigenvalue(FrozenDistribution):
-    """Exact law of ``lambda_max`` or ``lambda_min`` of ``Pi = W/K``, ``W ~ W_m(K, I)``.
+    r"""Exact law of ``lambda_max`` or ``lambda_min`` of ``Pi = W/K``, ``W ~ W_m(K, I)``.
 
     Under H0 this is the law of the largest or smallest eigenvalue of the
     NIS matrix of ``K`` steps of ``m``-dimensional innovations.  Build it
@@ -45,66 +45,73 @@ class ExtremeEigenvalue(FrozenDistribution):
 
     Notes
     -----
-    The eigenvalues of ``W`` have the joint density
-    ``c prod_i l_i^{(K-m-1)/2} e^{-l_i/2} prod_{i<j} |l_i - l_j|``.  With
-    ``y = l/2`` and de Bruijn's integration formula, the probability that all
-    eigenvalues lie in an interval is a Pfaffian ([C14], Theorem 1;
-    [C17], Theorem 1)::
+    The eigenvalues of :math:`W \sim W_m(K, I)` have the joint density
 
-        P(all y_i in I) = Pf(A_I) / Pf(A_[0, inf)),
-        (A_I)_ij = int int_{I^2} sgn(z - y) f_i(y) f_j(z) dy dz,
+    .. math::
 
-    bordered by ``g_i = int_I f_i`` when ``m`` is odd, for any basis
-    ``f_0, ..., f_{m-1}`` of ``y^{a-1} e^{-y} p(y)`` with ``p`` of degree
-    ``< m``, ``a = (K - m + 1)/2``.  Chiani uses ``f_i = y^{a-1+i} e^{-y}``,
-    whose entries are incomplete gamma functions; at large ``K`` they agree
+        c \prod_i l_i^{(K-m-1)/2} e^{-l_i/2} \prod_{i<j} |l_i - l_j| .
+
+    With :math:`y = l/2` and de Bruijn's integration formula, the probability
+    that all eigenvalues lie in an interval :math:`I` is a Pfaffian ([C14],
+    Theorem 1; [C17], Theorem 1):
+
+    .. math::
+
+        P(\text{all } y_i \in I) = \frac{\operatorname{Pf}(A_I)}{\operatorname{Pf}(A_{[0, \infty)})},
+        \qquad
+        (A_I)_{ij} = \iint_{I^2} \operatorname{sgn}(z - y)\, f_i(y) f_j(z)\, dy\, dz,
+
+    bordered by :math:`g_i = \int_I f_i` when :math:`m` is odd, for any basis
+    :math:`f_0, \dots, f_{m-1}` of :math:`y^{a-1} e^{-y} p(y)` with :math:`p` of
+    degree :math:`< m`, :math:`a = (K - m + 1)/2`.  Chiani uses :math:`f_i = y^{a-1+i} e^{-y}`,
+    whose entries are incomplete gamma functions; at large :math:`K` they agree
     to many digits and the Pfaffian cancels catastrophically (about 17 digits
-    are lost at ``m = 6``, ``K = 1000``).  Powers of a standardised variable
-    cure large ``K`` but not large ``m``: near ``K = m`` the eigenvalues
-    spread over ``[0, 2m]`` and the skew matrix of ``w(y) u^i`` has a
-    condition number of 1e34 at ``m = 24``, ``K = 30``, so double precision
+    are lost at :math:`m = 6`, :math:`K = 1000`).  Powers of a standardised variable
+    cure large :math:`K` but not large :math:`m`: near :math:`K = m` the eigenvalues
+    spread over :math:`[0, 2m]` and the skew matrix of :math:`w(y)\, u^i` has a
+    condition number of 1e34 at :math:`m = 24`, :math:`K = 30`, so double precision
     returns nonsense even from exactly rounded entries.  Here the basis is
-    ``f_i(y) = c w(y) L_i^(K-m)(2y)``, ``w`` the Gamma(a) density and
-    ``L_i^(alpha)`` the generalised Laguerre polynomials normalised so that
-    the ``f_i`` are orthonormal for ``int f_i f_j y dy`` (a change of basis
+    :math:`f_i(y) = c\, w(y)\, L_i^{(K-m)}(2y)`, :math:`w` the Gamma(a) density and
+    :math:`L_i^{(\alpha)}` the generalised Laguerre polynomials normalised so that
+    the :math:`f_i` are orthonormal for :math:`\int f_i f_j\, y\, dy` (a change of basis
     by a triangular matrix, so the ratio of Pfaffians is unchanged).  The
-    skew matrix of ``[0, inf)`` then has a condition number below 100 for
-    every ``m <= 30`` and ``K``.  In ``v = sqrt(y)`` the basis functions are
-    ``v^(K-m) e^{-v^2}`` times polynomials, smooth at 0, so the running
-    integrals ``int_lo^z f_i`` and the entries are computed by composite
-    Gauss-Legendre quadrature (panels of width 1.5 in ``v``, 24 nodes each)
-    over the interval cut where every ``f_i`` is below 1e-30 of its largest
+    skew matrix of :math:`[0, \infty)` then has a condition number below 100 for
+    every :math:`m \le 30` and :math:`K`.  In :math:`v = \sqrt y` the basis functions are
+    :math:`v^{K-m} e^{-v^2}` times polynomials, smooth at 0, so the running
+    integrals :math:`\int_{\text{lo}}^z f_i` and the entries are computed by composite
+    Gauss-Legendre quadrature (panels of width 1.5 in :math:`v`, 24 nodes each)
+    over the interval cut where every :math:`f_i` is below 1e-30 of its largest
     value (:class:`course.nis._pfaffians._LaguerreBasis`).  Normalising by the
-    Pfaffian over ``[0, inf)`` avoids the multivariate-gamma constant.
+    Pfaffian over :math:`[0, \infty)` avoids the multivariate-gamma constant.
 
-    ``cdf`` of ``lambda_max`` uses ``I = [0, Kx/2]``; ``sf`` of
-    ``lambda_min`` uses ``I = [Kx/2, inf)``.  The complementary probability
-    is computed without the subtraction ``1 - p`` when ``p > 1/2``: with
-    ``A_full = A_I + D`` (``D`` assembled from the other interval's pieces),
-    ``p^2 = det(I - A_full^{-1} D)`` and ``1 - p = -expm1(log(p))`` with
-    ``log p = sum_k log|1 - mu_k| / 2`` over the eigenvalues ``mu_k`` of
-    ``A_full^{-1} D``, so small tail probabilities keep their relative
+    ``cdf`` of :math:`\lambda_{\max}` uses :math:`I = [0, Kx/2]`; ``sf`` of
+    :math:`\lambda_{\min}` uses :math:`I = [Kx/2, \infty)`.  The complementary probability
+    is computed without the subtraction :math:`1 - p` when :math:`p > 1/2`: with
+    :math:`A_{\text{full}} = A_I + D` (:math:`D` assembled from the other interval's pieces),
+    :math:`p^2 = \det(I - A_{\text{full}}^{-1} D)` and :math:`1 - p = -\operatorname{expm1}(\log p)` with
+    :math:`\log p = \sum_k \log|1 - \mu_k| / 2` over the eigenvalues :math:`\mu_k` of
+    :math:`A_{\text{full}}^{-1} D`, so small tail probabilities keep their relative
     accuracy.  The density is the derivative of a Pfaffian under a rank-two
-    skew update, ``d Pf(A) = -Pf([[A, U, V], [-U^T, 0, 0], [-V^T, 0, 0]])``.
-    For ``m = 1`` the law is ``chi2(K)/K``.
+    skew update, :math:`d\operatorname{Pf}(A) = -\operatorname{Pf}\begin{bmatrix} A & U & V \\ -U^{\mathsf T} & 0 & 0 \\ -V^{\mathsf T} & 0 & 0 \end{bmatrix}`.
+    For :math:`m = 1` the law is :math:`\chi^2(K)/K`.
 
     Accuracy, against Chiani's formula in his own basis evaluated with
     mpmath at a working precision raised until 30 digits settle
-    (``tests/nis_reference.py``): on the validated region ``m <= 30``,
-    ``m <= K <= 10^5`` (:data:`EXACT_LAW_LIMITS`) the absolute CDF error is
-    below ``1e-13`` at every ``K`` tested (all ``K`` from ``m`` to ``2m``
-    and ``K`` up to ``10^5``; the full grid is
+    (``tests/nis_reference.py``): on the validated region :math:`m \le 30`,
+    :math:`m \le K \le 10^5` (:data:`EXACT_LAW_LIMITS`) the absolute CDF error is
+    below :math:`10^{-13}` at every :math:`K` tested (all :math:`K` from :math:`m` to :math:`2m`
+    and :math:`K` up to :math:`10^5`; the full grid is
     ``tests/benchmarks/bench_nis.py``, a hypothesis sweep of it runs in the
-    test suite); relative error about ``1e-12`` in the tails the tests use
-    (upper tail of ``lambda_max``, lower tail of ``lambda_min``) down to
-    probabilities of ``1e-300`` (checked for ``m <= 6``; at ``m = 16`` to
-    ``30`` checked at ``1e-30``, relative error below ``1e-12``).  In the
-    opposite tails, probabilities below about ``1e-12`` are accurate in
+    test suite); relative error about :math:`10^{-12}` in the tails the tests use
+    (upper tail of :math:`\lambda_{\max}`, lower tail of :math:`\lambda_{\min}`) down to
+    probabilities of :math:`10^{-300}` (checked for :math:`m \le 6`; at :math:`m = 16` to
+    :math:`30` checked at :math:`10^{-30}`, relative error below :math:`10^{-12}`).  In the
+    opposite tails, probabilities below about :math:`10^{-12}` are accurate in
     absolute terms only.  Outside the validated region the constructor raises
     ``ValueError`` rather than return unchecked numbers.  A CDF point costs
-    about 1 ms of CPU at ``m = 30`` (building the law 2-3 ms more), a
+    about 1 ms of CPU at :math:`m = 30` (building the law 2-3 ms more), a
     quantile 10-30 ms.  Quantiles come from a safeguarded Newton iteration
-    on ``log F`` against ``log x``, started at the Tracy-Widom quantile.
+    on :math:`\log F` against :math:`\log x`, started at the Tracy-Widom quantile.
     """
 
     _bounds = (0.0, np.inf)
@@ -313,7 +320,7 @@ def _check_validated(m: int, K: int) -> None:
 
 
 class TracyWidomApproximation(FrozenDistribution):
-    """Fast approximation of an extreme-eigenvalue law: Tracy-Widom via a shifted gamma.
+    r"""Fast approximation of an extreme-eigenvalue law: Tracy-Widom via a shifted gamma.
 
     Parameters
     ----------
@@ -324,17 +331,25 @@ class TracyWidomApproximation(FrozenDistribution):
     Notes
     -----
     Johnstone's centring and scaling for real Wishart matrices ([J], Thm 1.1),
-    with ``n = K - 1/2`` and ``p = m - 1/2``::
+    with :math:`n = K - 1/2` and :math:`p = m - 1/2`:
 
-        mu = (sqrt(n) + sqrt(p))^2,   sigma = sqrt(mu) (1/sqrt(n) + 1/sqrt(p))^(1/3),
-        (lambda_max(W) - mu) / sigma  ->  TW1,
+    .. math::
 
-    and for the smallest eigenvalue (the "soft" lower edge, ``K > m``)
-    ``mu = (sqrt(n) - sqrt(p))^2``,
-    ``sigma = sqrt(mu) (1/sqrt(p) - 1/sqrt(n))^(1/3)`` and
-    ``(mu - lambda_min(W)) / sigma -> TW1``.  TW1 itself is replaced by
-    Chiani's shifted gamma ``Gamma(k, theta) - alpha`` ([C14], Sec. 5,
-    constants :data:`TW1_GAMMA`), which matches its first three moments.
+        \mu = (\sqrt n + \sqrt p)^2, \qquad
+        \sigma = \sqrt\mu \left(\frac{1}{\sqrt n} + \frac{1}{\sqrt p}\right)^{1/3}, \qquad
+        \frac{\lambda_{\max}(W) - \mu}{\sigma} \to TW_1,
+
+    and for the smallest eigenvalue (the "soft" lower edge, :math:`K > m`)
+
+    .. math::
+
+        \mu = (\sqrt n - \sqrt p)^2, \qquad
+        \sigma = \sqrt\mu \left(\frac{1}{\sqrt p} - \frac{1}{\sqrt n}\right)^{1/3}, \qquad
+        \frac{\mu - \lambda_{\min}(W)}{\sigma} \to TW_1 .
+
+    :math:`TW_1` itself is replaced by Chiani's shifted gamma
+    :math:`\Gamma(k, \theta) - \alpha` ([C14], Sec. 5, constants
+    :data:`TW1_GAMMA`), which matches its first three moments.
 
     The result is an asymptotic law (large ``m`` and ``K``) and costs what
     an approximation costs. Measured error, ``sup_x |F_TW(x) - F(x)|``
@@ -442,7 +457,7 @@ class TracyWidomApproximation(FrozenDistribution):
 
 
 def extreme_eigenvalue(m, K, which="max", method="exact"):
-    """Law of the largest or smallest eigenvalue of the NIS matrix under H0.
+    r"""Law of the largest or smallest eigenvalue of the NIS matrix under H0.
 
     ``Pi = W/K`` with ``W ~ W_m(K, I)``: the NIS matrix of ``K`` steps of
     ``m``-dimensional innovations when the filter's model is right.
@@ -476,14 +491,23 @@ def extreme_eigenvalue(m, K, which="max", method="exact"):
         for ``method="exact"`` also sizes outside the validated region
         ``m <= 30``, ``K <= 10^5`` (:data:`EXACT_LAW_LIMITS`).
 
+    See Also
+    --------
+    ExtremeEigenvalue : The exact law and how it is computed.
+    TracyWidomApproximation : The asymptotic law.
+    nis_matrix_critical_values : The thresholds of the NIS-matrix test.
+    simulate_extreme_eigenvalues : Monte Carlo draws of the same laws.
+
     Notes
     -----
-    The exact law is Chiani's Pfaffian ([C14], Theorem 1; [C17], Theorem 1)
-    evaluated in an orthonormal Laguerre basis, see :class:`ExtremeEigenvalue`;
-    its CDF is validated to better than 1e-13 (target 1e-8) for ``m <= 30``
-    and ``m <= K <= 10^5``. The
-    approximation is Johnstone's Tracy-Widom limit ([J]) with Chiani's
-    shifted gamma for TW1, see :class:`TracyWidomApproximation`.
+    The law of :math:`\lambda_{\min}` or :math:`\lambda_{\max}` of
+    :math:`W/K`, :math:`W \sim W_m(K, I)`.  The exact law is Chiani's Pfaffian
+    ([C14], Theorem 1; [C17], Theorem 1) evaluated in an orthonormal Laguerre
+    basis, see :class:`ExtremeEigenvalue`; its CDF is validated to better than
+    :math:`10^{-13}` (target :math:`10^{-8}`) for :math:`m \le 30` and
+    :math:`m \le K \le 10^5`. The approximation is Johnstone's Tracy-Widom limit
+    ([J]) with Chiani's shifted gamma for :math:`TW_1`, see
+    :class:`TracyWidomApproximation`.
 
     Examples
     --------
@@ -499,7 +523,7 @@ def extreme_eigenvalue(m, K, which="max", method="exact"):
 
 
 def prob_eigenvalues_within(m, K, lower, upper) -> float:
-    """P(every eigenvalue of ``Pi = W/K`` lies in ``[lower, upper]``), ``W ~ W_m(K, I)``.
+    r"""P(every eigenvalue of ``Pi = W/K`` lies in ``[lower, upper]``), ``W ~ W_m(K, I)``.
 
     This is ``P(lambda_min >= lower and lambda_max <= upper)``: the
     probability that the NIS-matrix test with thresholds ``(lower, upper)``
@@ -523,10 +547,21 @@ def prob_eigenvalues_within(m, K, lower, upper) -> float:
         Bad dimensions or thresholds, or sizes outside the validated region
         ``m <= 30``, ``K <= 10^5`` of the exact laws.
 
+    See Also
+    --------
+    extreme_eigenvalue : The law of each extreme eigenvalue alone.
+    nis_matrix_critical_values : Thresholds whose exact size this gives.
+
     Notes
     -----
     [C17], Theorem 1: the same Pfaffian as :class:`ExtremeEigenvalue` with
-    the entries integrated over ``[K lower/2, K upper/2]``.
+    the entries integrated over :math:`[K\ell/2,\ Ku/2]` (:math:`\ell` =
+    ``lower``, :math:`u` = ``upper``), which gives
+
+    .. math::
+
+        P(\ell \le \lambda_{\min}(W/K),\ \lambda_{\max}(W/K) \le u),
+        \qquad W \sim W_m(K, I).
 
     Examples
     --------
@@ -563,7 +598,7 @@ def simulate_extreme_eigenvalues(
     rng: Any = None,
     chunk: int = 100_000,
 ) -> EigenvaluePair:
-    """Monte Carlo draws of ``(lambda_min, lambda_max)`` of ``W/K``, ``W ~ W_m(K, I)``.
+    r"""Monte Carlo draws of ``(lambda_min, lambda_max)`` of ``W/K``, ``W ~ W_m(K, I)``.
 
     Uses Bartlett's decomposition ``W = L L^T`` with ``L`` lower triangular,
     ``L_ii = sqrt(chi2(K - i))`` (``i = 0, ..., m-1``) and standard normal
@@ -585,11 +620,20 @@ def simulate_extreme_eigenvalues(
     EigenvaluePair
         ``(lmin, lmax)``: arrays of shape ``size``, floats when ``size`` is None.
 
+    See Also
+    --------
+    extreme_eigenvalue : The exact laws these draws follow.
+
     Notes
     -----
-    Bartlett's decomposition of ``W ~ W_m(K, I)``: the squared diagonal of
-    its lower Cholesky factor is independent ``chi2(K - i)`` and the
-    entries below the diagonal are independent ``N(0, 1)``.
+    Bartlett's decomposition of :math:`W \sim W_m(K, I)`: with :math:`W = BB^{\mathsf T}`,
+    :math:`B` lower triangular,
+
+    .. math::
+
+        B_{ii}^2 \sim \chi^2(K - i + 1), \qquad B_{ij} \sim N(0, 1)\ (i > j),
+
+    all independent (:math:`i = 1, \dots, m`).
 
     Examples
     --------

@@ -84,7 +84,7 @@ def _whiten(L: np.ndarray, eps: np.ndarray) -> np.ndarray:
 # statistics
 # ---------------------------------------------------------------------------
 def nis(innovations, S) -> np.ndarray:
-    """Normalised innovation squared ``eps_k^T S_k^{-1} eps_k`` at every step.
+    r"""Normalised innovation squared ``eps_k^T S_k^{-1} eps_k`` at every step.
 
     Parameters
     ----------
@@ -107,11 +107,23 @@ def nis(innovations, S) -> np.ndarray:
     numpy.linalg.LinAlgError
         ``S`` not positive definite.
 
+    See Also
+    --------
+    nees : The same quadratic form for state errors.
+    nis_test : The test of a window's average NIS.
+    windowed_nis : The NIS summed over a sliding window.
+
     Notes
     -----
-    With ``S_k = B_k B_k^T`` (lower Cholesky factor),
-    ``eps_k^T S_k^{-1} eps_k = |B_k^{-1} eps_k|^2``; the whitened vector is
-    found by forward substitution, never with an inverse ([F], eq. 4).
+    With :math:`S_k = B_k B_k^{\mathsf T}` (lower Cholesky factor),
+
+    .. math::
+
+        \epsilon_k = \nu_k^{\mathsf T} S_k^{-1} \nu_k = \lVert B_k^{-1} \nu_k \rVert^2,
+
+    where :math:`\nu_k` is the innovation; the whitened vector
+    :math:`B_k^{-1}\nu_k` is found by forward substitution, never with an
+    inverse ([F], eq. 4).
 
     Examples
     --------
@@ -124,7 +136,7 @@ def nis(innovations, S) -> np.ndarray:
 
 
 def nees(errors, P) -> np.ndarray:
-    """Normalised estimation error squared ``e_k^T P_k^{-1} e_k`` at every step.
+    r"""Normalised estimation error squared ``e_k^T P_k^{-1} e_k`` at every step.
 
     The same computation as :func:`nis` with the estimation errors
     ``e_k = x_k - xhat_k`` (known in simulation only) and the filter's
@@ -139,10 +151,20 @@ def nees(errors, P) -> np.ndarray:
     -------
     numpy.ndarray, shape (..., K)
 
+    See Also
+    --------
+    nis : The same quadratic form for innovations.
+    consistency_interval : The interval a run-averaged NEES should lie in.
+
     Notes
     -----
-    ``e_k^T P_k^{-1} e_k = |B_k^{-1} e_k|^2`` with ``P_k = B_k B_k^T``
-    (Cholesky, forward substitution; no inverse is formed).
+    With :math:`P_k = B_k B_k^{\mathsf T}` (lower Cholesky factor),
+
+    .. math::
+
+        e_k^{\mathsf T} P_k^{-1} e_k = \lVert B_k^{-1} e_k \rVert^2,
+
+    by forward substitution; no inverse is formed.
 
     Examples
     --------
@@ -155,7 +177,7 @@ def nees(errors, P) -> np.ndarray:
 
 
 def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
-    """The NIS matrix ``Pi = (1/K) sum_k B_k^{-1} eps_k eps_k^T B_k^{-T}``.
+    r"""The NIS matrix ``Pi = (1/K) sum_k B_k^{-1} eps_k eps_k^T B_k^{-T}``.
 
     Parameters
     ----------
@@ -173,11 +195,24 @@ def nis_matrix(innovations, S, window: int | None = None) -> np.ndarray:
     numpy.ndarray
         ``(..., m, m)``, or ``(..., K - window + 1, m, m)`` with a window.
 
+    See Also
+    --------
+    nis : The NIS values; their window average is the trace of the NIS matrix.
+    nis_matrix_eigenvalues : Its extreme eigenvalues.
+    nis_matrix_test : The test built on it.
+
     Notes
     -----
-    [F], eq. (3).  Under H0, ``K * Pi ~ W_m(K, I)``: the poster states
-    ``Pi ~ W_m(K, I)``, which forgets its own ``1/K``; ``Pi`` itself has mean
-    ``I``.  Its trace is the time-averaged NIS ([F], eq. 4).
+    [F], eq. (3): with :math:`z_k = B_k^{-1}\nu_k` the whitened innovations,
+
+    .. math::
+
+        \Pi = \frac1K \sum_{k=1}^{K} z_k z_k^{\mathsf T}, \qquad
+        K\,\Pi \sim W_m(K, I) \text{ under H0}.
+
+    The poster states :math:`\Pi \sim W_m(K, I)`, which forgets its own
+    :math:`1/K`; :math:`\Pi` itself has mean :math:`I`.  Its trace is the
+    time-averaged NIS ([F], eq. 4): :math:`\operatorname{tr}\Pi = \bar\epsilon`.
 
     Examples
     --------
@@ -220,7 +255,7 @@ def _scaled_nis_matrix(z: np.ndarray, window: int | None) -> tuple[np.ndarray, n
 
 
 def nis_matrix_eigenvalues(innovations: Any, S: Any) -> EigenvaluePair:
-    """Smallest and largest eigenvalue of the NIS matrix over all steps.
+    r"""Smallest and largest eigenvalue of the NIS matrix over all steps.
 
     Works on stacks (a leading batch of Monte Carlo runs), so a detection
     study needs no Python loop over runs.
@@ -236,10 +271,20 @@ def nis_matrix_eigenvalues(innovations: Any, S: Any) -> EigenvaluePair:
     EigenvaluePair
         ``(lmin, lmax)``, arrays of shape ``(...)``.
 
+    See Also
+    --------
+    nis_matrix : The matrix whose eigenvalues these are.
+    extreme_eigenvalue : Their laws under H0.
+    nis_matrix_test : The test built on them.
+
     Notes
     -----
     Under H0 they follow :func:`extreme_eigenvalue` ``(m, K, "min")`` and
-    ``(m, K, "max")``: ``K Pi ~ W_m(K, I)`` ([F], eq. 3, ``1/K`` restored).
+    ``(m, K, "max")``, because ([F], eq. 3, :math:`1/K` restored)
+
+    .. math::
+
+        K\,\Pi \sim W_m(K, I).
 
     Examples
     --------

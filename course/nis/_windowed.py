@@ -21,7 +21,7 @@ def _window(window: Any) -> int:
 
 
 def windowed_sum(values: Any, window: Any) -> np.ndarray:
-    """Moving sum over the last axis: ``out[..., t] = sum(values[..., t-L+1 : t+1])``.
+    r"""Moving sum over the last axis: ``out[..., t] = sum(values[..., t-L+1 : t+1])``.
 
     Parameters
     ----------
@@ -39,13 +39,22 @@ def windowed_sum(values: Any, window: Any) -> np.ndarray:
         so those samples never raise an alarm and are easy to mask; a NaN
         does not spoil the windows that do not contain it.
 
+    See Also
+    --------
+    windowed_nis : The window sum of NIS values.
+
     Notes
     -----
-    Computed from cumulative sums, ``C_t = sum_{k<=t} values_k`` and
-    ``out_t = C_t - C_{t-L}``, in ``O(N)`` for any ``L``; NaN samples enter
-    the cumulative sum as 0 and are tracked by a cumulative count.  This is
-    the discrete form of the lecture's windowed test quantity
-    ``T(t) = int_{t-L}^{t} r(tau)^2 dtau`` (LiU lecture, "Mer generella
+    Computed from cumulative sums,
+
+    .. math::
+
+        C_t = \sum_{k \le t} x_k, \qquad \text{out}_t = C_t - C_{t-L},
+
+    in :math:`O(N)` for any :math:`L`; NaN samples enter the cumulative sum as
+    0 and are tracked by a cumulative count.  This is the discrete form of the
+    lecture's windowed test quantity
+    :math:`T(t) = \int_{t-L}^{t} r(\tau)^2\,d\tau` (LiU lecture, "Mer generella
     dynamiska fall").
 
     Examples
@@ -79,7 +88,7 @@ def _is_filter_output(result) -> bool:
 
 
 def windowed_nis(result: Any, window: Any) -> np.ndarray:
-    """Windowed sum of the normalised innovations squared.
+    r"""Windowed sum of the normalised innovations squared.
 
     Parameters
     ----------
@@ -94,15 +103,27 @@ def windowed_nis(result: Any, window: Any) -> np.ndarray:
         ``T_t``; NaN for ``t < L - 1`` and for windows that contain an
         undefined innovation (the diffuse start of RLS).
 
+    See Also
+    --------
+    windowed_nis_threshold : Its threshold under H0.
+    windowed_chi2_test : The same window sum as a test result.
+    nis : The NIS of each sample.
+
     Notes
     -----
-    ``T_t = sum_{k=t-L+1}^{t} eps_k^T S_k^{-1} eps_k``.  Under H0 (the
-    filter's model is true, linear Gaussian case) the normalised innovations
-    are independent ``N(0, I_p)``, so ``T_t ~ chi2(L p)`` (``p = 1`` for an
-    :class:`RLSResult`); for the EKF this holds approximately.  The
-    threshold is :func:`windowed_nis_threshold`.  It is the normalised,
-    discrete form of the lecture's ``T = int (y - h(xhat))^2`` over a window
-    (LiU lecture, "Mer generella dynamiska fall").
+    .. math::
+
+        T_t = \sum_{k=t-L+1}^{t} \nu_k^{\mathsf T} S_k^{-1} \nu_k ,
+
+    with :math:`\nu_k` the innovation and :math:`S_k` its covariance.
+
+    Under H0 (the filter's model is true, linear Gaussian case) the normalised
+    innovations are independent :math:`N(0, I_p)`, so
+    :math:`T_t \sim \chi^2(Lp)` (:math:`p = 1` for an :class:`RLSResult`); for
+    the EKF this holds approximately.  The threshold is
+    :func:`windowed_nis_threshold`.  It is the normalised, discrete form of the
+    lecture's :math:`T = \int (y - h(\hat x))^2` over a window (LiU lecture,
+    "Mer generella dynamiska fall").
 
     Examples
     --------
@@ -122,7 +143,7 @@ def windowed_nis(result: Any, window: Any) -> np.ndarray:
 
 
 def windowed_nis_threshold(window: Any, alpha: Any = 0.05, *, n_outputs: Any = 1) -> float:
-    """Threshold of the windowed NIS for a per-sample false-alarm probability ``alpha``.
+    r"""Threshold of the windowed NIS for a per-sample false-alarm probability ``alpha``.
 
     Parameters
     ----------
@@ -139,12 +160,24 @@ def windowed_nis_threshold(window: Any, alpha: Any = 0.05, *, n_outputs: Any = 1
     float
         ``chi2.isf(alpha, L p)``.
 
+    See Also
+    --------
+    windowed_nis : The test quantity this threshold is for.
+    empirical_threshold : A threshold from simulated values.
+    course.chi2.residual_norm_law : The chi-square law it is the quantile of.
+
     Notes
     -----
     Under H0 the normalised innovations of the correct (linear Gaussian)
-    filter are independent ``N(0, I_p)``, so the window sum of ``L``
-    NIS values is ``chi2(L p)`` (see :func:`windowed_chi2_test`), the law of
-    :func:`course.chi2.residual_norm_law`.
+    filter are independent :math:`N(0, I_p)`, so the window sum of :math:`L`
+    NIS values is :math:`\chi^2(Lp)` (see :func:`windowed_chi2_test`), the law of
+    :func:`course.chi2.residual_norm_law`, and
+
+    .. math::
+
+        J = \chi^2_{Lp}(1 - \alpha),
+
+    its upper :math:`\alpha` quantile (``isf``).
 
     Examples
     --------
@@ -160,7 +193,7 @@ def windowed_nis_threshold(window: Any, alpha: Any = 0.05, *, n_outputs: Any = 1
 def windowed_chi2_test(
     result: Any, window: Any, alpha: float = 0.05, t: Any = -1, n_outputs: Any = None
 ) -> TestResult:
-    """Test H0 "the filter's model holds" on the window of ``L`` samples ending at ``t``.
+    r"""Test H0 "the filter's model holds" on the window of ``L`` samples ending at ``t``.
 
     Parameters
     ----------
@@ -183,13 +216,24 @@ def windowed_chi2_test(
         Statistic ``T_t = sum NIS`` over the window, null ``chi2(L p)``,
         critical value ``chi2.isf(alpha, L p)``, p-value ``chi2.sf(T, L p)``.
 
+    See Also
+    --------
+    windowed_nis : The window sums alone.
+    windowed_nis_threshold : The threshold alone.
+    nis_test : The two-sided test of one window's average.
+
     Notes
     -----
-    Under H0 the innovations of the correct Kalman filter are independent
-    with ``eps_t ~ N(0, S_t)``, so ``eps_t^T S_t^{-1} eps_t ~ chi2(p)``
-    independently over time and the window sum is ``chi2(L p)``.  The lecture
-    builds the observer test quantity the same way, as the square of the
-    residual summed (integrated) over a window.
+    Under H0 the innovations of the correct Kalman filter are independent with
+    :math:`\nu_t \sim N(0, S_t)`, so
+
+    .. math::
+
+        \nu_t^{\mathsf T} S_t^{-1} \nu_t \sim \chi^2(p)
+
+    independently over time and the window sum is :math:`\chi^2(Lp)`.  The
+    lecture builds the observer test quantity the same way, as the square of
+    the residual summed (integrated) over a window.
 
     Examples
     --------

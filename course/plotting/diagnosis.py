@@ -50,7 +50,7 @@ def _colour(key, index):
 
 @styled
 def plot_residual_geometry(U1, U2, fault: float, ax=None):
-    """The lecture's geometric picture of ``T = min over theta1 ||(1 - theta1) U1 - f U2||^2``.
+    r"""The lecture's geometric picture of ``T = min over theta1 ||(1 - theta1) U1 - f U2||^2``.
 
     Parameters
     ----------
@@ -64,17 +64,27 @@ def plot_residual_geometry(U1, U2, fault: float, ax=None):
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    course.diagnosis.linear_decision_structure : Which faults a test sees.
+
     Notes
     -----
-    Everything happens in the plane spanned by ``U1`` and ``U2``, drawn in
-    an orthonormal basis of it: ``e1`` along ``U1``, ``e2`` the part of
-    ``U2`` orthogonal to ``U1``.  The free theta1 slides along the line
-    through ``U1``; the best it can do is the orthogonal projection of
-    ``f U2``, and ``sqrt(T)`` is the length of the perpendicular.  When
-    ``U2`` is parallel to ``U1`` the perpendicular vanishes: the fault is
-    invisible (the LiU lecture on test quantities, the geometric slide of
-    ``T = min ||(1 - theta1) U1 - (1 - theta2) U2||^2``; full reference in
-    the course bibliography, :doc:`/docs/bibliography`).
+    Everything happens in the plane spanned by :math:`U_1` and :math:`U_2`,
+    drawn in an orthonormal basis of it: :math:`e_1` along :math:`U_1`,
+    :math:`e_2` the part of :math:`U_2` orthogonal to :math:`U_1`.  The free
+    :math:`\theta_1` slides along the line through :math:`U_1`; the best it can
+    do is the orthogonal projection of :math:`f U_2`, and :math:`\sqrt T` is the
+    length of the perpendicular,
+
+    .. math::
+
+        T = \min_{\theta_1} \lVert (1 - \theta_1) U_1 - (1 - \theta_2) U_2 \rVert^2 .
+
+    When :math:`U_2` is parallel to :math:`U_1` the perpendicular vanishes: the
+    fault is invisible (the LiU lecture on test quantities, the geometric
+    slide; full reference in the course bibliography,
+    :doc:`/docs/bibliography`).
     """
     u1 = _checks.array("U1", U1, what="signal samples")
     u2 = _checks.array("U2", U2, what="signal samples")
@@ -157,6 +167,10 @@ def plot_decision_structure(structure, alarms=None, ax=None, title=None):
     Returns
     -------
     matplotlib.axes.Axes
+
+    See Also
+    --------
+    course.diagnosis.diagnoses : The diagnoses of an alarm pattern.
 
     Notes
     -----
@@ -300,7 +314,7 @@ def plot_density(theta: float, sigma: float = 1.0, z_observed=None, ax=None, z=N
 
 @styled
 def plot_likelihood(z, sigma: float = 1.0, theta=None, ax=None, show_factors: bool = True):
-    """The likelihood ``L(theta | z)`` of independent ``N(theta, sigma^2)`` observations.
+    r"""The likelihood ``L(theta | z)`` of independent ``N(theta, sigma^2)`` observations.
 
     With several observations and ``show_factors``, each factor
     ``f(z_i | theta)`` is drawn dashed; the maximum is marked.
@@ -319,11 +333,15 @@ def plot_likelihood(z, sigma: float = 1.0, theta=None, ax=None, show_factors: bo
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    course.diagnosis.normal_likelihood : The likelihood it draws.
+
     Notes
     -----
-    ``L(theta | z) = prod_i f(z_i | theta)``, maximal at the sample mean
-    (the lecture's normal-likelihood examples: ``z = 2``, and ``z = (3, 5)``
-    with the maximum at ``theta = 4``).
+    :math:`L(\theta \mid z) = \prod_i f(z_i \mid \theta)`, maximal at the
+    sample mean (the lecture's normal-likelihood examples: :math:`z = 2`, and
+    :math:`z = (3, 5)` with the maximum at :math:`\theta = 4`).
     """
     from scipy import stats
 
@@ -547,6 +565,10 @@ def plot_isolation(result, ax=None, cmap: str = "Reds"):
     Returns
     -------
     matplotlib.axes.Axes
+
+    See Also
+    --------
+    course.diagnosis.isolation_monte_carlo : The probabilities it draws.
 
     Notes
     -----

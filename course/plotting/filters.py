@@ -445,7 +445,7 @@ def plot_normalized_histogram(z, ax=None, bins=60, label="normalised innovations
 
 @styled
 def plot_kalman_timeline(result, y=None, steps=None, state=0, ax=None, nsigma=2.0, t=None):
-    """The Kalman filter's rhythm: predict, measure, update, over a few steps.
+    r"""The Kalman filter's rhythm: predict, measure, update, over a few steps.
 
     Parameters
     ----------
@@ -468,14 +468,19 @@ def plot_kalman_timeline(result, y=None, steps=None, state=0, ax=None, nsigma=2.
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    course.filters.kf_update : The measurement update it draws.
+    course.filters.kf_predict : The time update it draws.
+
     Notes
     -----
-    At each time step the prediction ``x̂(t|t-1) ± nsigma·sqrt(P(t|t-1))``
-    (light, left) meets the measurement ``y_t`` (cross); the measurement
-    update moves it by ``K_t ε_t`` and shrinks the uncertainty to
-    ``P(t|t)`` (dark, right, solid arrow); the time update carries
-    ``x̂(t|t)`` to the next prediction and lets the uncertainty grow again
-    (dashed arrow).
+    At each time step the prediction
+    :math:`\hat x(t|t-1) \pm n_\sigma \sqrt{P(t|t-1)}` (light, left) meets the
+    measurement :math:`y_t` (cross); the measurement update moves it by
+    :math:`K_t \varepsilon_t` and shrinks the uncertainty to :math:`P(t|t)`
+    (dark, right, solid arrow); the time update carries :math:`\hat x(t|t)` to
+    the next prediction and lets the uncertainty grow again (dashed arrow).
     """
     for name in ("x_pred", "P_pred", "x_filt", "P_filt"):
         if getattr(result, name, None) is None:

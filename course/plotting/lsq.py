@@ -152,7 +152,7 @@ def plot_line_fit(
 def plot_residual_segments(
     t, y, fit, design=None, ax=None, xlabel="t", ylabel="observation y", annotate=None
 ):
-    """The residuals as vertical segments between each observation and the fitted curve.
+    r"""The residuals as vertical segments between each observation and the fitted curve.
 
     Parameters
     ----------
@@ -171,11 +171,16 @@ def plot_residual_segments(
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    course.lsq.fit : The fit whose residuals it draws.
+    plot_projection_geometry : The same residuals as a vector.
+
     Notes
     -----
-    ``ê_i = y_i - ŷ_i`` is the vertical distance of observation i from the
-    curve: least squares makes ``Σ ê_i²`` (weighted by ``Q_yy``) as small as
-    any curve of the model can.
+    :math:`\hat e_i = y_i - \hat y_i` is the vertical distance of observation
+    :math:`i` from the curve: least squares makes :math:`\sum_i \hat e_i^2`
+    (weighted by :math:`Q_{yy}`) as small as any curve of the model can.
     """
     t, y = _t_and_y(t, y)
     if y.size != fit.m:
@@ -215,7 +220,7 @@ def plot_residual_segments(
 
 @styled
 def plot_projection_geometry(A, y, ax=None, labels=("$a_1$", "$a_2$")):
-    """Least squares as an orthogonal projection: ``ŷ`` in range(A), ``ê ⟂ range(A)``.
+    r"""Least squares as an orthogonal projection: ``ŷ`` in range(A), ``ê ⟂ range(A)``.
 
     Parameters
     ----------
@@ -233,16 +238,24 @@ def plot_projection_geometry(A, y, ax=None, labels=("$a_1$", "$a_2$")):
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    plot_residual_segments : The same residuals along the record.
+
     Notes
     -----
     The picture is drawn in an orthonormal basis adapted to the plane (a
     rotation of the observation space, so lengths and angles are kept):
-    range(A) is horizontal and its normal vertical.
-    The columns of A span a plane, range(A): every ``Ax`` lies in it. The
-    fitted observations ``ŷ = A x̂`` are the point of the plane closest to
-    ``y``, so the residual vector ``ê = y - ŷ`` is perpendicular to the
-    plane: ``Aᵀ ê = 0`` (the normal equations), and
-    ``‖y‖² = ‖ŷ‖² + ‖ê‖²``.
+    :math:`\operatorname{range}(A)` is horizontal and its normal vertical.  The
+    columns of :math:`A` span a plane, :math:`\operatorname{range}(A)`: every
+    :math:`Ax` lies in it. The fitted observations :math:`\hat y = A\hat x` are
+    the point of the plane closest to :math:`y`, so the residual vector
+    :math:`\hat e = y - \hat y` is perpendicular to the plane:
+
+    .. math::
+
+        A^{\mathsf T} \hat e = 0 \quad \text{(the normal equations)}, \qquad
+        \lVert y \rVert^2 = \lVert \hat y \rVert^2 + \lVert \hat e \rVert^2 .
     """
     A = _checks.array("A", A, ndim=2, what="design-matrix entries")
     y = _checks.array("y", y, what="observations")
@@ -669,6 +682,10 @@ def plot_data_snooping_loop(result=None, ax=None):
     Returns
     -------
     matplotlib.axes.Axes
+
+    See Also
+    --------
+    course.lsq.data_snooping : The loop it draws.
 
     Notes
     -----

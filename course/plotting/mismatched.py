@@ -107,7 +107,7 @@ def plot_residual_band(moments, residuals=None, output=0, ax=None, n_records=20,
 
 @styled
 def plot_records_matrix(residuals, j=None, output=0, ax=None, max_records=60):
-    """Many records at once: a records × time image, with one cross-record section marked.
+    r"""Many records at once: a records × time image, with one cross-record section marked.
 
     Parameters
     ----------
@@ -124,13 +124,17 @@ def plot_records_matrix(residuals, j=None, output=0, ax=None, max_records=60):
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    plot_cross_record_section : One column of the matrix.
+
     Notes
     -----
-    Each row is one record (one repetition of the experiment); each column
-    one time. Along a row the residuals of a mismatched filter are
-    correlated; down a column (a cross-record section ``φ_j``) they are
-    independent and identically distributed, because the records are
-    independent repetitions.
+    Each row is one record (one repetition of the experiment); each column one
+    time. Along a row the residuals of a mismatched filter are correlated; down
+    a column (a cross-record section :math:`\varphi_j`) they are independent
+    and identically distributed, because the records are independent
+    repetitions.
     """
     from matplotlib.patches import Rectangle
 

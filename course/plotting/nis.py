@@ -277,7 +277,7 @@ def plot_consistency(times, averages, interval, ax=None, label=None, ylabel="ave
 
 @styled
 def plot_whitened_scatter(z, ax=None, thresholds=None, truth=None, label="whitened innovations"):
-    """Whitened innovations as a scatter, their NIS-matrix ellipse against the unit circle.
+    r"""Whitened innovations as a scatter, their NIS-matrix ellipse against the unit circle.
 
     Parameters
     ----------
@@ -298,17 +298,29 @@ def plot_whitened_scatter(z, ax=None, thresholds=None, truth=None, label="whiten
     -------
     matplotlib.axes.Axes
 
+    See Also
+    --------
+    course.nis.nis_matrix : The matrix whose ellipse it draws.
+    course.nis.nis_matrix_critical_values : The rings of the matrix test.
+
     Notes
     -----
-    With ``Π̂ = (1/K) Σ z_k z_kᵀ`` (the NIS matrix) the ellipse is
-    ``{Π̂^{1/2} u : |u| = 1}``: its semi-axes are the square roots of the
-    eigenvalues of Π̂. The time-averaged NIS is ``(1/K) Σ |z_k|² = tr Π̂``,
-    the mean squared radius of the points: it sees only the ellipse's size,
-    drawn as the round ellipse with the same trace (the dotted circle of
-    radius ``sqrt(tr Π̂ / 2)``, which is the unit circle when ``Π̂ = I``); the
-    NIS matrix sees its shape. The frame is set by the circles and ellipses,
-    not by the farthest point, so that a single outlier cannot shrink the
-    picture; the points left outside are counted in the legend.
+    With the NIS matrix :math:`\hat\Pi = \frac1K \sum_k z_k z_k^{\mathsf T}` the
+    ellipse is :math:`\{\hat\Pi^{1/2} u : \lVert u \rVert = 1\}`: its
+    semi-axes are the square roots of the eigenvalues of :math:`\hat\Pi`. The
+    time-averaged NIS,
+
+    .. math::
+
+        \frac1K \sum_k \lVert z_k \rVert^2 = \operatorname{tr}\hat\Pi,
+
+    is the mean squared radius of the points: it sees only the ellipse's size,
+    drawn as the round ellipse with the same trace (the dotted circle of radius
+    :math:`\sqrt{\operatorname{tr}\hat\Pi / 2}`, which is the unit circle when
+    :math:`\hat\Pi = I`); the NIS matrix sees its shape. The frame is set by
+    the circles and ellipses, not by the farthest point, so that a single
+    outlier cannot shrink the picture; the points left outside are counted in
+    the legend.
     """
     z = _checks.array("z", z, ndim=2, what="whitened innovations (K x 2)")
     if z.shape[1] != 2:

@@ -15,11 +15,19 @@ What it adds to a plain Sphinx + myst-nb + numpydoc build:
 * **Offline maths.** MathJax 3 is served from the site itself (the ``django-static-mathjax``
   wheel ships it), so formulas are typeset without reaching a CDN.
 * **Entry page.** ``OUT/index.html`` forwards to the landing page ``docs/index.html``.
+* **Several numbered figures from one cell.** myst-nb gives every output of a cell the same
+  figure options, so a cell that draws two figures cannot name both. Its metadata may list
+  them instead, ``{"course": {"figures": [{"name", "caption", "alt"}, ...]}}``, one entry per
+  image output in order; each becomes a numbered, captioned figure with its own alt text.
+* **Hideable answers.** An admonition with the class ``dropdown`` (``:class: dropdown`` under
+  ``:::{admonition} Answer``) becomes an HTML ``<details>`` box, closed until the reader opens
+  it, without JavaScript and without sphinx-togglebutton or sphinx-design.
 """
 
 from __future__ import annotations
 
 import ast
+import html
 import importlib
 import inspect
 import json
@@ -29,6 +37,7 @@ import shutil
 from pathlib import Path
 
 from docutils import nodes
+from sphinx.transforms import SphinxTransform
 from sphinx.util import logging
 
 logger = logging.getLogger(__name__)
@@ -509,6 +518,72 @@ def write_entry_page(app, exception) -> None:
     )
 
 
+class CellFigures(SphinxTransform):
+    """Wrap each image output of a cell in the figure its ``course.figures`` metadata names.
+
+    Runs before ``SphinxDomains`` (850) records the labels, so ``{numref}`` finds them.
+    """
+
+    default_priority = 840
+
+    def apply(self, **kwargs) -> None:
+        for cell in list(self.document.findall(nodes.container)):
+            if cell.get("nb_element") != "cell_code":
+                continue
+            metadata = cell.get("cell_metadata") or {}
+            figures = (metadata.get("course") or {}).get("figures")
+            if not figures:
+                continue
+            bundles = [
+                node
+                for node in cell.findall(nodes.container)
+                if node.get("nb_element") == "mime_bundle"
+                and any(
+                    str(child.get("mime_type", "")).startswith("image/") for child in node.children
+                )
+            ]
+            if len(bundles) != len(figures):
+                logger.warning(
+                    f"{len(figures)} figures named in the cell's metadata, {len(bundles)} drawn",
+                    location=cell,
+                )
+                continue
+            for bundle, spec in zip(bundles, figures):
+                figure = nodes.figure()
+                figure["names"].append(nodes.fully_normalize_name(spec["name"]))
+                bundle.replace_self(figure)
+                figure += bundle
+                self.document.note_explicit_target(figure, figure)
+                for image in bundle.findall(nodes.image):
+                    image["alt"] = spec["alt"]
+                figure += nodes.caption(spec["caption"], spec["caption"])
+
+
+def dropdown_admonitions(app, doctree, docname) -> None:
+    """Turn each admonition of class ``dropdown`` into a closed ``<details>`` box (HTML only).
+
+    In Jupyter the same markdown shows the answer in plain text under its title line; on the
+    site it stays hidden until the reader clicks the title.
+    """
+    if app.builder.format != "html":
+        return
+    for node in list(doctree.findall(nodes.admonition)):
+        if "dropdown" not in node["classes"] or not node.children:
+            continue
+        title = node.children[0]
+        label = title.astext() if isinstance(title, nodes.title) else "Answer"
+        body = node.children[1:] if isinstance(title, nodes.title) else node.children
+        classes = " ".join(["admonition", *node["classes"]])
+        opening = nodes.raw(
+            "",
+            f'<details class="{html.escape(classes)}">'
+            f'<summary class="admonition-title">{html.escape(label)}</summary>',
+            format="html",
+        )
+        closing = nodes.raw("", "</details>", format="html")
+        node.replace_self([opening, *body, closing])
+
+
 def setup(app):
     app.add_config_value("course_site_notebooks", ["notebooks/*.ipynb"], "env")
     app.add_config_value("course_site_assignments", ["exercises/*/*.ipynb"], "env")
@@ -521,6 +596,8 @@ def setup(app):
     app.connect("env-get-outdated", outdated_by_teaching_map)
     app.connect("autodoc-process-docstring", add_notebook_see_also, priority=600)
     app.connect("doctree-read", add_notebook_links)
+    app.connect("doctree-resolved", dropdown_admonitions)
+    app.add_transform(CellFigures)
     app.connect("build-finished", copy_mathjax)
     app.connect("build-finished", write_entry_page)
     app.connect("build-finished", build_lite)

@@ -29,10 +29,29 @@ U1 = 1.0 + 0.5 * np.sin(2 * np.pi * T_AXIS / 20)
 U2 = np.cos(2 * np.pi * T_AXIS / 13)
 U3 = np.where((T_AXIS // 8) % 2 == 0, 1.0, -1.0)
 U = np.column_stack([U1, U2, U3])
+# The same three signals over 60 samples (a hidden case of q9 with another N).
+_T60 = np.arange(60)
+U_60 = np.column_stack(
+    [
+        1.0 + 0.5 * np.sin(2 * np.pi * _T60 / 20),
+        np.cos(2 * np.pi * _T60 / 13),
+        np.where((_T60 // 8) % 2 == 0, 1.0, -1.0),
+    ]
+)
 SIGMA = 0.2
 NOMINAL = np.ones(3)
 MODES = ["NF", "F1", "F2", "F3"]
 LECTURE = np.array([[0, 0, 1, 1], [0, 1, 0, 1], [0, 1, 1, 0]])
+# q8b: a single mode, nothing alarms, two or more fault modes remain, or no mode remains.
+Q8B_OPTIONS = [
+    "NF",
+    "F1",
+    "F2",
+    "F3",
+    "no fault detected",
+    "several faults fit",
+    "no single fault fits",
+]
 MODES5 = ["NF", "F1", "F2", "F3", "F4"]
 STRUCTURE5 = np.array([[0, 1, 1, 0, 0], [0, 0, 1, 1, 0], [0, 1, 0, 0, 1], [0, 0, 0, 1, 1]])
 Y_RECORD = U @ np.array([1.0, 1.3, 1.0]) + SIGMA * np.random.default_rng(2).standard_normal(N)
@@ -105,6 +124,13 @@ def q2():
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
     ],
+    mistakes=[
+        Mistake(
+            "looks divided by sigma^2: T1 is the plain sum of squared residuals (the threshold "
+            "of q6 carries the sigma^2)",
+            lambda y, u1, u2, u3: q3.reference(y, u1, u2, u3) / SIGMA**2,
+        ),
+    ],
     hint=(
         "Set the derivative of the sum with respect to th1 to zero: what is left is a ratio of "
         "two sums. What happens to that ratio when u1 is identically zero?",
@@ -121,6 +147,8 @@ q3.case(Y_RECORD, np.zeros(N), U2, U3, label="u1 identically zero")
 q3.case(U @ [2.5, 1.0, 1.0], U1, U2, U3, hidden=True)
 q3.case(U @ [1.0, 1.0, 0.5], U1, U2, U3, hidden=True)
 q3.case(np.arange(5.0), np.array([1.0, 0, 2, 0, 1]), np.ones(5), np.zeros(5), hidden=True)
+q3.case(U @ [1.0, 1.2, 1.0], np.zeros(N), U2, U3, hidden=True)  # u1 identically zero again
+q3.case(np.arange(6.0), np.zeros(6), np.ones(6), np.zeros(6), hidden=True)
 
 
 @CHECKS.function(
@@ -133,6 +161,15 @@ q3.case(np.arange(5.0), np.array([1.0, 0, 2, 0, 1]), np.ones(5), np.zeros(5), hi
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
+    ],
+    mistakes=[
+        Mistake(
+            "dof counts the columns of Phi: use its rank, dof = N - rank(Phi) (a column that "
+            "repeats another, or is zero, estimates nothing and costs no degree of freedom)",
+            lambda Phi, Y: RegressionResidual(
+                q4.reference(Phi, Y).T, int(np.shape(Phi)[0] - np.shape(Phi)[1])
+            ),
+        ),
     ],
     hint="Project Y onto the orthogonal complement of the column space of Phi with an SVD "
     "(or np.linalg.lstsq, which reports the rank); never solve the normal equations. "
@@ -164,6 +201,10 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
     ),
     mistakes=[
         Mistake(
+            "looks like the sum of the squared residuals: the lecture's T is their mean (1/N)",
+            lambda: float(np.sum((Y_GB - U_GB - np.mean(Y_GB - U_GB)) ** 2)),
+        ),
+        Mistake(
             "the bias was not removed: subtract its estimate b_hat before squaring",
             lambda: float(np.mean((Y_GB - U_GB) ** 2)),
         ),
@@ -191,6 +232,11 @@ def q5():
         "P1 the projection on U1; use stats.ncx2.sf. Return (J, power).",
     ),
     mistakes=[
+        Mistake(
+            "J looks like a threshold on T1/sigma^2: the test compares T1 itself, so J = sigma^2 "
+            "times the chi2 quantile",
+            lambda: ThresholdAndPower(q6.reference().J / SIGMA**2, q6.reference().power),
+        ),
         Mistake(
             "looks like chi2 with N degrees of freedom: T1 estimates one gain, so N - 1",
             lambda: _threshold_and_power(N, 0.01),
@@ -225,8 +271,12 @@ def _diagnosis(statistics, n, sigma, alpha):
 
 
 def _conclusion(diagnosis):
+    """The option of q8b that a diagnosis supports (each option's meaning is in its question)."""
     if len(diagnosis) == len(MODES):
         return "no fault detected"
+    if not diagnosis:
+        # every test alarms: every mode is ruled out, none of the single faults explains it
+        return "no single fault fits"
     if len(diagnosis) == 1:
         return diagnosis[0]
     return "several faults fit"
@@ -251,6 +301,16 @@ def q5b():
     atol=1e-9,
     hint="The three test quantities of q7, on the public record y_near: T_k leaves theta_k free "
     "and fixes the other two gains at 1.",
+    mistakes=[
+        Mistake(
+            "looks divided by sigma^2: T_k is the plain sum of squared residuals",
+            lambda: _three_statistics({"y": Y_NEAR, "U": U}) / SIGMA**2,
+        ),
+        Mistake(
+            "looks like a mean of squared residuals: T_k is their sum",
+            lambda: _three_statistics({"y": Y_NEAR, "U": U}) / N,
+        ),
+    ],
 )
 def q7_practice():
     return _three_statistics({"y": Y_NEAR, "U": U})
@@ -332,10 +392,13 @@ def q8(d):
 @CHECKS.choice(
     "q8b",
     var="mode_mine",
-    options=["NF", "F1", "F2", "F3", "no fault detected", "several faults fit"],
+    options=Q8B_OPTIONS,
     points=1,
     data="record",
-    hint="Answer with one of the options exactly as written.",
+    hint="Answer with one of the options (upper/lower case and surrounding spaces do not "
+    'matter): a single mode when the diagnosis isolates it, "no fault detected" when nothing '
+    'alarms, "several faults fit" when two or more fault modes remain, "no single fault fits" '
+    "when the diagnosis is empty.",
 )
 def q8b(d):
     return _conclusion(_diagnosis(_three_statistics(d), d["y"].size, d["sigma"], d["alpha"]))
@@ -365,15 +428,29 @@ def q8b(d):
             "returns alpha: the promised false-alarm rate, not the simulated rate",
             lambda U_, theta, sigma, alpha, n_runs, seed: float(alpha),
         ),
+        Mistake(
+            "the rate of the right statistic, but the noise drawn in another order (records in "
+            "columns?): the recipe draws ONE rng.standard_normal((n_runs, N)), row r for record r",
+            lambda U_, theta, sigma, alpha, n_runs, seed: _detection_rate(
+                U_, theta, sigma, alpha, n_runs, seed, records_in_columns=True
+            ),
+        ),
     ],
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):
     # The simulation the question prescribes, run with the case's seed: a correct answer counts
     # exactly the same detections (any vectorisation), while the exact power (the formula, not
     # a simulation) or another random sample differs from it by a Monte Carlo error.
+    return _detection_rate(U_, theta, sigma, alpha, n_runs, seed)
+
+
+def _detection_rate(U_, theta, sigma, alpha, n_runs, seed, records_in_columns=False):
+    """q9's simulation; ``records_in_columns`` draws the noise (N, n_runs) (a mistake)."""
     U_ = np.asarray(U_, dtype=float)
     rng = np.random.default_rng(seed)
-    Y = U_ @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, U_.shape[0]))
+    shape = (U_.shape[0], n_runs) if records_in_columns else (n_runs, U_.shape[0])
+    noise = rng.standard_normal(shape)
+    Y = U_ @ np.asarray(theta, dtype=float) + sigma * (noise.T if records_in_columns else noise)
     t1 = _t1_many(U_, Y)
     return float(np.mean(t1 > chi2.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
 
@@ -391,3 +468,7 @@ q9.case(U, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 4000, 8, label="no fault, alp
 q9.case(U, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 20000, 7, hidden=True)
 q9.case(U, np.array([1.8, 1.0, 1.0]), SIGMA, 0.05, 20000, 11, hidden=True)
 q9.case(U, np.array([1.0, 1.0, 1.1]), SIGMA, 0.01, 20000, 13, hidden=True)
+# Other record lengths: a detection_rate that uses the notebook's N instead of U.shape[0]
+# fails here.
+q9.case(U[:30], np.array([1.0, 1.2, 1.0]), SIGMA, 0.05, 20000, 17, hidden=True)
+q9.case(U_60, np.array([1.0, 1.0, 1.0]), SIGMA, 0.05, 20000, 19, hidden=True)

@@ -283,6 +283,13 @@ q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
                 stats.norm.sf(stats.norm.isf(alpha / 2) - np.sqrt(n) * abs(theta1 - theta0) / sigma)
             ),
         ),
+        Mistake(
+            "looks like d with sigma^2 where sigma belongs: d = sqrt(n) |theta1 - theta0| / sigma "
+            "(a distance in standard deviations, not in variances)",
+            lambda n, theta0, theta1, sigma, alpha: float(
+                stats.norm.sf(stats.norm.isf(alpha) - np.sqrt(n) * abs(theta1 - theta0) / sigma**2)
+            ),
+        ),
     ],
 )
 def q7(n, theta0, theta1, sigma, alpha):
@@ -294,6 +301,7 @@ def q7(n, theta0, theta1, sigma, alpha):
 
 q7.case(2, 0.0, 1.0, 1.0, 0.05, label="the lecture's two observations, theta1 = 1")
 q7.case(4, 0.0, 1.0, 1.0, 0.05, label="four observations")
+q7.case(5, 0.0, 0.6, 0.5, 0.05, label="five observations, sigma = 0.5")
 q7.case(10, 1.0, 0.8, 0.5, 0.01, hidden=True)
 q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
 

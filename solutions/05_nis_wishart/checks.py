@@ -63,6 +63,21 @@ EPS_GAP_LO = _record_with_eigenvalues((12, [0.26, 1.3]), np.eye(2), _rng)
 S_F = np.array([[1.5, 0.3, 0.0], [0.3, 1.0, -0.2], [0.0, -0.2, 0.7]])
 EPS_GAP_3 = _record_with_eigenvalues((10, [0.6, 1.0, 2.47]), S_F, _rng)
 
+# Public cases that see the decision (their own generator, so the records above stay as they
+# were). m = 2, K = 12, alpha = 0.05: thresholds (0.2377, 2.3303). Both extreme eigenvalues
+# outside (any "or" or "and" rule rejects, a test that never rejects does not), then only
+# lmax outside and only lmin outside (the test rejects, "and instead of or" does not).
+_rng_decision = np.random.default_rng(2026_11_26)
+EPS_BOTH_OUT = _record_with_eigenvalues((12, [0.15, 2.7]), S_A, _rng_decision)
+EPS_MAX_OUT = _record_with_eigenvalues((12, [0.9, 2.6]), S_A, _rng_decision)
+EPS_MIN_OUT = _record_with_eigenvalues((12, [0.18, 1.4]), np.eye(2), _rng_decision)
+# A public stack of S (one covariance per step), as the preamble allows: K = 6, m = 3.
+_A_STACK = _rng_decision.standard_normal((6, 3, 3))
+S_STACK = _A_STACK @ np.swapaxes(_A_STACK, -1, -2) + 0.5 * np.eye(3)
+EPS_STACK = np.einsum(
+    "kij,kj->ki", np.linalg.cholesky(S_STACK), _rng_decision.standard_normal((6, 3))
+)
+
 CHECKS = Checks(
     "05_nis_wishart",
     title="Assignment 5: the NIS matrix and Wishart eigenvalue tests",
@@ -88,6 +103,7 @@ def q1(eps, S):
 
 
 q1.case(EPS_A, S_A, label="K = 5, m = 2, one S for all steps")
+q1.case(EPS_STACK, S_STACK, label="K = 6, m = 3, a stack of S (one per step)")
 ### BEGIN HIDDEN TESTS
 q1.case(EPS_B, S_B, hidden=True)
 q1.case(EPS_C, S_C, hidden=True)
@@ -105,6 +121,30 @@ q1.case(EPS_C, S_C, hidden=True)
         "course.nis.nis_matrix_eigenvalues",
         "course.nis.nis_matrix_test",
     ],
+    mistakes=[
+        Mistake(
+            "looks like the SUM of the outer products z_k z_k^T: Pi is their mean (divide by K)",
+            lambda eps, S: q2.reference(eps, S) * np.shape(eps)[0],
+        ),
+        Mistake(
+            "looks like the outer products of eps itself: whiten first, z_k = B_k^{-1} eps_k "
+            "with S_k = B_k B_k^T",
+            lambda eps, S: np.einsum("ki,kj->ij", eps, eps) / np.shape(eps)[0],
+        ),
+        Mistake(
+            "whitened with another square root of S (the symmetric S^(1/2)?): with one S for "
+            "all steps its NIS matrix is a rotation of the right one, with the same eigenvalues "
+            "(q5 would not see it), but not the same matrix; use the lower Cholesky factor B_k "
+            "(S_k = B_k B_k^T), z_k = B_k^{-1} eps_k",
+            lambda eps, S: _nis_matrix_symmetric_root(eps, S),
+        ),
+        Mistake(
+            "whitened with the transposed factor: with S_k = B_k B_k^T (B_k lower), "
+            "z_k = B_k^{-1} eps_k; B_k^{-T} eps_k (or scipy's upper factor U_k, solve(U_k, eps_k)) "
+            "does not whiten",
+            lambda eps, S: _nis_matrix_upper_factor(eps, S),
+        ),
+    ],
     hint="Pi = (1/K) sum_k z_k z_k^T with z_k = B_k^{-1} eps_k (B_k lower Cholesky "
     "factor of S_k): the mean of the outer products of the whitened innovations. "
     "Its trace equals the average NIS of q1.",
@@ -113,7 +153,30 @@ def q2(eps, S):
     return nis.nis_matrix(eps, S)
 
 
+def _stack(eps, S):
+    eps = np.asarray(eps, dtype=float)
+    K, m = eps.shape
+    return eps, np.broadcast_to(np.asarray(S, dtype=float), (K, m, m))
+
+
+def _nis_matrix_symmetric_root(eps, S):
+    """q2 whitened with S_k^(-1/2) (symmetric) instead of the Cholesky factor (a mistake)."""
+    eps, S = _stack(eps, S)
+    w, V = np.linalg.eigh(S)
+    z = np.einsum("kij,kj,klj,kl->ki", V, 1.0 / np.sqrt(w), V, eps)
+    return z.T @ z / len(eps)
+
+
+def _nis_matrix_upper_factor(eps, S):
+    """q2 whitened with B_k^T instead of B_k (a mistake)."""
+    eps, S = _stack(eps, S)
+    B = np.linalg.cholesky(S)
+    z = np.linalg.solve(np.swapaxes(B, -1, -2), eps[:, :, None])[:, :, 0]
+    return z.T @ z / len(eps)
+
+
 q2.case(EPS_A, S_A, label="K = 5, m = 2, one S for all steps")
+q2.case(EPS_STACK, S_STACK, label="K = 6, m = 3, a stack of S (one per step)")
 ### BEGIN HIDDEN TESTS
 q2.case(EPS_B, S_B, hidden=True)
 q2.case(EPS_C, S_C, hidden=True)
@@ -180,7 +243,24 @@ def q4():
     rtol=1e-7,
     atol=1e-10,
     forbid=["course.nis.nis_matrix_test"],
+    # Order matters where two mistakes give the same value on a case: the public cases are
+    # ordered so that each mistake's FIRST failing case tells it apart (see the cases below).
     mistakes=[
+        Mistake(
+            "rejects only when BOTH extreme eigenvalues are outside: one eigenvalue outside "
+            "its threshold is enough (lmin below the lower OR lmax above the upper)",
+            lambda eps, S, alpha: _decided(eps, S, alpha, lambda low, high: low and high),
+        ),
+        Mistake(
+            "the decision is never a rejection, even with both extreme eigenvalues outside "
+            "their thresholds: is reject always False, or the comparisons the wrong way round?",
+            lambda eps, S, alpha: _decided(eps, S, alpha, lambda low, high: False),
+        ),
+        Mistake(
+            "rejects although both extreme eigenvalues lie between the thresholds: is reject "
+            "always True, or are the comparisons the wrong way round?",
+            lambda eps, S, alpha: _decided(eps, S, alpha, lambda low, high: True),
+        ),
         Mistake(
             "the decision looks one-sided: thresholds at alpha instead of alpha/2",
             lambda eps, S, alpha: q5.reference(eps, S, 2 * alpha),
@@ -200,7 +280,21 @@ def q5(eps, S, alpha):
     return MatrixTest(lmin, lmax, bool(result.reject))
 
 
+def _decided(eps, S, alpha, rule):
+    """q5 with another decision ``rule(lmin below, lmax above)`` (the mistakes of q5)."""
+    right = q5.reference(eps, S, alpha)
+    K, m = np.shape(eps)
+    lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
+    return MatrixTest(right.lmin, right.lmax, bool(rule(right.lmin < lower, right.lmax > upper)))
+
+
+# The order tells the mistakes apart: "always rejects" fails first on a case that does not
+# reject, "never rejects" on the case with both eigenvalues outside (where "and" is right),
+# "and instead of or" on a case with one eigenvalue outside, "one-sided" on the near case.
 q5.case(EPS_A, S_A, 0.05, label="K = 5, m = 2, alpha = 0.05")
+q5.case(EPS_BOTH_OUT, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, both eigenvalues outside")
+q5.case(EPS_MAX_OUT, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, only lmax outside")
+q5.case(EPS_MIN_OUT, np.eye(2), 0.05, label="K = 12, m = 2, alpha = 0.05, only lmin outside")
 q5.case(EPS_GAP_HI, S_A, 0.05, label="K = 12, m = 2, alpha = 0.05, lmax near the upper threshold")
 ### BEGIN HIDDEN TESTS
 q5.case(EPS_GAP_LO, np.eye(2), 0.05, hidden=True)
@@ -278,7 +372,7 @@ WHICH_OPTIONS = ["neither", "only the NIS test", "only the matrix test", "both"]
     options=WHICH_OPTIONS,
     points=1,
     data="record",
-    hint="Copy one of the options exactly (a string).",
+    hint="One of the options, as a string (upper/lower case and surrounding spaces do not matter).",
 )
 def q6_which(d):
     p_nis, p_matrix = _pvalues(d["eps"], d["S"], d["alpha"])
@@ -343,6 +437,14 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
     atol=1e-10,
     forbid=["course.nis.consistency_interval"],
     mistakes=[
+        Mistake(
+            "looks like the normal approximation n +- z sqrt(2n/N): the question asks for the "
+            "exact chi2(n N) quantiles of the sum, divided by N",
+            lambda: (
+                4.0 - float(stats.norm.isf(0.025)) * np.sqrt(8.0 / 50),
+                4.0 + float(stats.norm.isf(0.025)) * np.sqrt(8.0 / 50),
+            ),
+        ),
         Mistake(
             "quantiles of chi2(nN) for the SUM: the run average is that sum divided by N",
             lambda: (float(stats.chi2(200).ppf(0.025)), float(stats.chi2(200).isf(0.025))),

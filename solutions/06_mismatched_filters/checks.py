@@ -360,7 +360,7 @@ WHICH_OPTIONS = ["neither", "only the mean test", "only the correlation test", "
     options=WHICH_OPTIONS,
     points=1,
     data="experiment",
-    hint="Copy one of the options exactly (a string).",
+    hint="One of the options, as a string (upper/lower case and surrounding spaces do not matter).",
 )
 def q6_which(d):
     null = mismatched.ResidualMoments(d["mean"], d["cov"], d["cross_cov"])

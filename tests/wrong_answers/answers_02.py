@@ -95,6 +95,25 @@ WRONG = {
             _T1 + "    r = target - u1\n    return float(r @ r)\n",
         ),
         (
+            "divided by sigma^2",
+            _T1
+            + "    e = u1 @ u1\n    th = (target @ u1) / e if e > 0 else 0.0\n"
+            + "    r = target - th * u1\n    return float(r @ r) / sigma**2\n",
+        ),
+        (
+            "no u1 = 0 guard, nan turned into 0 afterwards",
+            _T1
+            + "    with np.errstate(invalid='ignore', divide='ignore'):\n"
+            + "        th = (target @ u1) / (u1 @ u1)\n"
+            + "    r = target - th * u1\n    return float(np.nan_to_num(r @ r))\n",
+        ),
+        (
+            "u1 = 0 returns 0 (nothing to fit, nothing left)",
+            _T1
+            + "    if not np.any(u1):\n        return 0.0\n"
+            + "    th = (target @ u1) / (u1 @ u1)\n    r = target - th * u1\n    return float(r @ r)\n",
+        ),
+        (
             "mean instead of sum",
             _T1
             + "    e = u1 @ u1\n    th = (target @ u1) / e if e > 0 else 0.0\n"
@@ -188,6 +207,14 @@ threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N - 1, lam)))
     ],
     "q7_practice": [
         (
+            "divided by sigma^2",
+            _T_ALL + "T_practice = np.array([_T(U, y_near, k) for k in range(3)]) / sigma**2\n",
+        ),
+        (
+            "mean of squares, not the sum",
+            _T_ALL + "T_practice = np.array([_T(U, y_near, k) for k in range(3)]) / N\n",
+        ),
+        (
             "all three gains fixed (no gain estimated)",
             "T_practice = np.array([float(np.sum((y_near - U.sum(axis=1)) ** 2))] * 3)",
         ),
@@ -259,6 +286,8 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
     "q8b": [
         ("NF always", 'mode_mine = "NF"'),
         ("F1 (first fault, a guess)", 'mode_mine = "F1"'),
+        ("no single fault fits, always", 'mode_mine = "no single fault fits"'),
+        ("several faults fit, always", 'mode_mine = "several faults fit"'),
     ],
     "q9": [
         (
@@ -298,6 +327,20 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
         (
             "returns alpha",
             "def detection_rate(U, theta, sigma, alpha, n_runs, seed):\n    return alpha\n",
+        ),
+        (
+            "the notebook's global N instead of U.shape[0]",
+            _Q9.replace("    n = U.shape[0]\n", "    n = N\n")
+            + "    Y = U @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, n))\n"
+            + _Q9_T
+            + "    return float(np.mean(T > sigma**2 * stats.chi2.isf(alpha, n - 1)))\n",
+        ),
+        (
+            "the global N in the threshold only",
+            _Q9
+            + "    Y = U @ np.asarray(theta, dtype=float) + sigma * rng.standard_normal((n_runs, n))\n"
+            + _Q9_T
+            + "    return float(np.mean(T > sigma**2 * stats.chi2.isf(alpha, N - 1)))\n",
         ),
     ],
 }
@@ -398,7 +441,9 @@ print(diagnosis_mine)
     "q8b": [
         (
             "from a dictionary",
-            """conclusion = {1: diagnosis_mine[0], 4: "no fault detected"}
+            """conclusion = {0: "no single fault fits", 4: "no fault detected"}
+if len(diagnosis_mine) == 1:
+    conclusion[1] = diagnosis_mine[0]
 mode_mine = conclusion.get(len(diagnosis_mine), "several faults fit")
 """,
         ),

@@ -248,6 +248,20 @@ power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N), N, (d
 """,
         ),
         (
+            "sigma^2 instead of sigma",
+            """def np_power(n, theta0, theta1, sigma, alpha):
+    d = np.sqrt(n) * abs(theta1 - theta0) / sigma**2
+    return float(stats.norm.sf(stats.norm.isf(alpha) - d))
+""",
+        ),
+        (
+            "sigma left out",
+            """def np_power(n, theta0, theta1, sigma, alpha):
+    d = np.sqrt(n) * abs(theta1 - theta0)
+    return float(stats.norm.sf(stats.norm.isf(alpha) - d))
+""",
+        ),
+        (
             "n / sigma instead of sqrt(n) / sigma",
             """def np_power(n, theta0, theta1, sigma, alpha):
     d = n * abs(theta1 - theta0) / sigma

@@ -74,6 +74,23 @@ WRONG = {
             + "    return np.sum(z * z, axis=1)\n",
         ),
         ("the sum over steps", _Q1 + _WHITEN + "    return float(np.sum(z * z))\n"),
+        (
+            "one S only (the first of a stack)",
+            _Q1
+            + "    eps = np.asarray(eps, float)\n"
+            + "    S = np.asarray(S, float)\n"
+            + "    B = np.linalg.cholesky(S if S.ndim == 2 else S[0])\n"
+            + "    z = np.linalg.solve(B, eps.T).T\n"
+            + "    return np.sum(z * z, axis=1)\n",
+        ),
+        (
+            "one S only (a single Cholesky factor of the stack's mean)",
+            _Q1
+            + "    eps = np.asarray(eps, float)\n"
+            + "    S = np.asarray(S, float).reshape(-1, eps.shape[1], eps.shape[1]).mean(axis=0)\n"
+            + "    z = np.linalg.solve(np.linalg.cholesky(S), eps.T).T\n"
+            + "    return np.sum(z * z, axis=1)\n",
+        ),
         ("divided by m", _Q1 + _WHITEN + "    return np.sum(z * z, axis=1) / m\n"),
         (
             "diagonal of S only",
@@ -87,6 +104,29 @@ WRONG = {
         ("sum, not mean (factor K)", _Q2 + _WHITEN + "    return z.T @ z\n"),
         ("divided by K - 1", _Q2 + _WHITEN + "    return z.T @ z / (K - 1)\n"),
         ("not whitened", _Q2 + _WHITEN + "    return eps.T @ eps / K\n"),
+        (
+            "the symmetric square root of S (scipy.linalg.sqrtm)",
+            _Q2
+            + "    import scipy.linalg\n"
+            + "    eps = np.asarray(eps, dtype=float)\n"
+            + "    K, m = eps.shape\n"
+            + "    S = np.broadcast_to(np.asarray(S, dtype=float), (K, m, m))\n"
+            + "    z = np.stack([np.linalg.solve(scipy.linalg.sqrtm(S[k]).real, eps[k]) for k in range(K)])\n"
+            + "    return z.T @ z / K\n",
+        ),
+        (
+            "sum over steps, whitened (factor K)",
+            _Q2 + _WHITEN + "    return np.einsum('ki,kj->ij', z, z)\n",
+        ),
+        (
+            "one S only (the first of a stack)",
+            _Q2
+            + "    eps = np.asarray(eps, float)\n"
+            + "    S = np.asarray(S, float)\n"
+            + "    B = np.linalg.cholesky(S if S.ndim == 2 else S[0])\n"
+            + "    z = np.linalg.solve(B, eps.T).T\n"
+            + "    return z.T @ z / len(eps)\n",
+        ),
         (
             "upper factor: B^-T eps",
             _Q2
@@ -167,6 +207,34 @@ WRONG = {
             + _Q5_RIGHT_THRESHOLDS
             + "    return (lmax, lmin, bool(lmin < lower or lmax > upper))\n",
         ),
+        ("never rejects", _Q5 + "    return (lmin, lmax, False)\n"),
+        (
+            "and instead of or",
+            _Q5
+            + _Q5_RIGHT_THRESHOLDS
+            + "    return (lmin, lmax, bool(lmin < lower and lmax > upper))\n",
+        ),
+        ("always rejects", _Q5 + "    return (lmin, lmax, True)\n"),
+        (
+            "comparisons the wrong way round",
+            _Q5
+            + _Q5_RIGHT_THRESHOLDS
+            + "    return (lmin, lmax, bool(lmin > lower or lmax < upper))\n",
+        ),
+        (
+            "only the upper threshold, at alpha/2",
+            _Q5 + _Q5_RIGHT_THRESHOLDS + "    return (lmin, lmax, bool(lmax > upper))\n",
+        ),
+        (
+            "only the lower threshold, at alpha/2",
+            _Q5 + _Q5_RIGHT_THRESHOLDS + "    return (lmin, lmax, bool(lmin < lower))\n",
+        ),
+        (
+            "reject as the string 'reject'",
+            _Q5
+            + _Q5_RIGHT_THRESHOLDS
+            + "    return (lmin, lmax, 'reject' if lmin < lower or lmax > upper else 'accept')\n",
+        ),
     ],
     "q6_practice": [
         (
@@ -244,6 +312,14 @@ WRONG = {
         (
             "chi2(n N) not divided by N",
             "nees_interval = (stats.chi2(200).ppf(0.025), stats.chi2(200).isf(0.025))",
+        ),
+        (
+            "normal approximation n +- 1.96 sqrt(2n/N)",
+            "nees_interval = (4 - 1.96 * np.sqrt(8 / 50), 4 + 1.96 * np.sqrt(8 / 50))",
+        ),
+        (
+            "normal approximation with the exact z",
+            "h = stats.norm.isf(0.025) * np.sqrt(2 * 4 / 50)\nnees_interval = (4 - h, 4 + h)",
         ),
         (
             "chi2(n) of one run",

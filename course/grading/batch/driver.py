@@ -1,13 +1,17 @@
 """``course grade``: the batch driver that grades a folder of submitted notebooks.
 
-It finds the submissions, skips students already graded with the same checks and library
-version (``results.jsonl`` makes a run resumable), grades the others in parallel, one
+It finds the submissions, skips students already graded with the same checks, library
+version and key from the same file (``results.jsonl`` records the file's sha256 and makes a run
+resumable; a resubmission is graded again), grades the others in parallel (or only the
+students ``--student`` names), one
 :class:`~course.grading.batch.session.StudentSession` each, and writes the reports
 (:mod:`course.grading.batch.reports`) as students finish.
 
 Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status),
+``report.html`` (the class report, :mod:`course.grading.batch.classreport`),
 ``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
-finish; a rerun skips students already graded with the same checks and library version).
+finish; a rerun skips students already graded with the same checks and library version from
+the same file).
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
+from course.grading.batch.classreport import write_report
 from course.grading.batch.cluster import grade_on_cluster
 from course.grading.batch.identity import resolve_identities
 from course.grading.batch.marks import (
@@ -170,7 +175,7 @@ def grade(
     out.mkdir(parents=True, exist_ok=True)
     (out / "feedback").mkdir(exist_ok=True)
     results_path = out / "results.jsonl"
-    if options.regrade and results_path.exists():
+    if options.regrade and options.students is None and results_path.exists():
         results_path.unlink()
     lock = threading.Lock()
     with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
@@ -187,33 +192,46 @@ def grade(
         )
         todo = identity.entries
         _write_conflicts(identity.conflicts, out / "identity_conflicts.csv")
+        if options.students is not None:
+            _check_selection(options.students, todo)
         previous = read_results(results_path)
+        files = {sub.student: _file_record(sub.path, submissions) for sub in todo}
         rows: dict[str, StudentResult] = {}
         pending = []
+        regraded: dict[str, int] = {}  # why students graded before were graded again
+        stale: list[str] = []  # out of date, left alone because --student chose others
+        skipped = 0  # never graded and not chosen by --student
         for sub in todo:
             old = previous.get(sub.student)
-            if (
-                old is not None
-                and old.checks_sha256 == grader.digest
-                and old.version == grader.version
-                and old.data_key == grader.data_key
-            ):
+            chosen = options.students is None or sub.student in options.students
+            why = _regrade_reason(old, grader, files[sub.student])
+            if chosen and options.regrade and old is not None:
+                why = "--regrade"
+            if old is not None and (why is None or not chosen):
                 rows[sub.student] = old
-            else:
+                if why is not None:
+                    stale.append(sub.student)
+            elif chosen:
                 pending.append(sub)
+                if why is not None:
+                    regraded[why] = regraded.get(why, 0) + 1
+            else:
+                skipped += 1
         resumed = len(rows)
-
-        paths = {sub.student: sub.path for sub in todo}
 
         def finish(row: StudentResult) -> None:
             with lock:
-                row.record_file(_file_record(paths.get(row.student), submissions))
+                row.record_file(files.get(row.student))
                 append_result(row, results_path)
                 (out / "feedback" / f"{row.student}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
                 )
                 rows[row.student] = row
 
+        if options.announce is not None and not options.cluster:
+            # before the progress bar, whose line has no end until it closes
+            iso = grader.sandbox.isolation if pending else grader.isolation
+            options.announce(iso.describe())
         try:
             from tqdm import tqdm
         except ImportError:  # pragma: no cover
@@ -232,9 +250,6 @@ def grade(
         if options.cluster:
             results = grade_on_cluster(options.cluster, grader, pending, options)
         else:
-            if options.announce is not None:
-                iso = grader.sandbox.isolation if pending else grader.isolation
-                options.announce(iso.describe())
             results = _grade_locally(grader, pending, options.jobs)
         for row in results:
             finish(row)
@@ -247,9 +262,10 @@ def grade(
             if not fb.exists():
                 fb.write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
         qids = [q.id for q in grader.questions]
-        final = [rows[sub.student] for sub in todo]
+        final = [rows[sub.student] for sub in todo if sub.student in rows]
         marking = _merge_marks(grader.checks, final, out, options, marks_in, results_path)
         write_csv(final, qids, out / "grades.csv")
+        write_report(final, grader.checks, qids, out)
         summary = Summary(
             final,
             qids,
@@ -260,10 +276,46 @@ def grade(
             out,
         )
         summary.flags = identity.flags
+        summary.regraded = regraded
+        summary.stale = stale
+        summary.unselected = skipped
         summary.marking = marking
         if options.roster is not None:
             _class_files(summary, grader, options, out)
         return summary
+
+
+class SelectionError(ValueError):
+    """``--student`` names an ID that has no submission in the folder."""
+
+
+def _check_selection(students, todo: list) -> None:
+    found = {sub.student for sub in todo}
+    unknown = sorted(set(students) - found)
+    if unknown:
+        raise SelectionError(
+            f"--student {', '.join(unknown)}: no submission with this ID in the folder "
+            f"({len(found)} submission(s) found; the ID is the one grades.csv lists)"
+        )
+
+
+def _regrade_reason(old: StudentResult | None, grader, file: dict | None) -> str | None:
+    """Why the student's previous row cannot be kept (None: it can; a student never graded
+    has no reason). A row is kept only when it was graded with the same checks, library
+    version and key, from the same file (its sha256): a resubmission is graded again."""
+    if old is None:
+        return None
+    if old.checks_sha256 != grader.digest:
+        return "checks changed"
+    if old.version != grader.version:
+        return "course version changed"
+    if old.data_key != grader.data_key:
+        return "key changed"
+    before = (old.file or {}).get("sha256") if old.has_file else None
+    now = (file or {}).get("sha256")
+    if old.has_file and before != now:
+        return "file changed"
+    return None
 
 
 def _merge_marks(checks, final: list, out: Path, options, entries, results_path: Path) -> str:

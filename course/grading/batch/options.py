@@ -51,6 +51,7 @@ class GradeOptions:
     roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
     missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
     lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
+    students: frozenset[str] | None = None  # grade only these IDs (None: everyone)
     short_answers: Path | None = None  # a filled marking file to merge (course.grading.batch.marks)
 
     def isolation(self) -> Isolation:

@@ -129,6 +129,9 @@ class Summary:
     missing: list | None = None  # roster IDs without a submission (None: no roster)
     unknown: list = field(default_factory=list)  # submissions whose ID is not on the roster
     marking: str = ""  # what happened to the short answers (course.grading.batch.marks)
+    regraded: dict = field(default_factory=dict)  # why graded again -> how many ("file changed")
+    stale: list = field(default_factory=list)  # out of date, not regraded: --student chose others
+    unselected: int = 0  # submissions never graded and not chosen by --student
 
     def class_text(self) -> str:
         """The identity flags, deleted answer cells, the roster's missing and unknown
@@ -166,12 +169,34 @@ class Summary:
             lines.append(self.marking)
         return "\n".join(lines)
 
+    def headline(self) -> str:
+        """How many were graded, why those graded before were graded again, how many were
+        kept, e.g. ``Graded 3 submission(s) (3 regraded: file changed), 29 already graded
+        (resumed)``."""
+        why = ", ".join(
+            f"{n} regraded: {reason}"
+            for reason, n in sorted(self.regraded.items(), key=lambda kv: (-kv[1], kv[0]))
+        )
+        text = (
+            f"Graded {self.graded} submission(s)"
+            + (f" ({why})" if why else "")
+            + f", {self.resumed} already graded (resumed)"
+        )
+        if self.stale:
+            text += (
+                f"; {len(self.stale)} out of date but not chosen by --student "
+                f"({', '.join(self.stale[:20])}{' …' if len(self.stale) > 20 else ''})"
+            )
+        if self.unselected:
+            text += f"; {self.unselected} never graded and not chosen by --student"
+        return (
+            text + f", in {self.seconds:.1f} s; results in {self.out} (the class report: "
+            f"{self.out / 'report.html'})"
+        )
+
     def text(self) -> str:
         n = len(self.rows)
-        lines = [
-            f"Graded {self.graded} submission(s), {self.resumed} already graded (resumed), "
-            f"in {self.seconds:.1f} s; results in {self.out}"
-        ]
+        lines = [self.headline()]
         if not n:
             return "\n".join([lines[0], self.class_text()]).rstrip()
         lines.append(f"{'question':<10}{'max':>6}{'mean':>8}{'full marks':>12}")

@@ -32,9 +32,12 @@ __all__ = [
     "Roster",
     "RosterError",
     "Student",
+    "canvas_table",
+    "moodle_table",
     "read_roster",
     "write_canvas_csv",
     "write_moodle_csv",
+    "write_table",
 ]
 
 
@@ -203,6 +206,48 @@ def _score(row: StudentResult | None, missing_as_zero: bool) -> str:
     return _points(row.total)
 
 
+def canvas_table(roster: Roster, columns: list[tuple[str, float, dict[str, str]]]) -> list:
+    """Canvas's gradebook import as rows: ``Student, ID, SIS User ID, SIS Login ID, Section``,
+    then one column per ``(name, points possible, score by student ID)``; a ``Points Possible``
+    row first, as Canvas exports it, and one row per roster student (a missing score: blank,
+    which leaves Canvas's grade unchanged)."""
+    table = [
+        ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *(c[0] for c in columns)],
+        ["    Points Possible", "", "", "", "", *(_points(c[1]) for c in columns)],
+    ]
+    for s in roster.students:
+        table.append(
+            [
+                s.sortable_name,
+                s.canvas_id,
+                s.id,
+                s.login,
+                s.section,
+                *(c[2].get(s.id, "") for c in columns),
+            ]
+        )
+    return table
+
+
+def moodle_table(roster: Roster, columns: list[tuple[str, dict[str, str]]]) -> list:
+    """Moodle's CSV grade import as rows: ``ID number, Email address, First name, Last name``
+    and one column per ``(name, text by student ID)``, one row per roster student."""
+    table = [["ID number", "Email address", "First name", "Last name", *(c[0] for c in columns)]]
+    for s in roster.students:
+        first, last = s.split_name()
+        table.append([s.id, s.email, first, last, *(c[1].get(s.id, "") for c in columns)])
+    return table
+
+
+def write_table(table: list, path: Path) -> None:
+    """Write an LMS file: CRLF rows, no cell a spreadsheet would run as a formula."""
+    _write(table, path)
+
+
+def _scores(rows: dict[str, StudentResult], roster: Roster, missing_as_zero: bool) -> dict:
+    return {s.id: _score(rows.get(s.id), missing_as_zero) for s in roster.students}
+
+
 def write_canvas_csv(
     rows: dict[str, StudentResult],
     roster: Roster,
@@ -213,22 +258,8 @@ def write_canvas_csv(
 ) -> None:
     """Canvas gradebook import: one row per roster student, matched by Canvas on ``ID`` or
     ``SIS User ID`` (our student ID); a blank score leaves Canvas's grade unchanged."""
-    table = [
-        ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", column],
-        ["    Points Possible", "", "", "", "", _points(max_points)],  # as Canvas exports it
-    ]
-    for s in roster.students:
-        table.append(
-            [
-                s.sortable_name,
-                s.canvas_id,
-                s.id,
-                s.login,
-                s.section,
-                _score(rows.get(s.id), missing_as_zero),
-            ]
-        )
-    _write(table, path)
+    columns = [(column, max_points, _scores(rows, roster, missing_as_zero))]
+    _write(canvas_table(roster, columns), path)
 
 
 def _feedback(row: StudentResult | None) -> str:
@@ -250,9 +281,6 @@ def write_moodle_csv(
 ) -> None:
     """Moodle CSV grade import: map ``ID number`` to useridnumber (or ``Email address`` to
     useremail), the assignment's column to its grade item and ``Feedback`` to its feedback."""
-    table = [["ID number", "Email address", "First name", "Last name", column, "Feedback"]]
-    for s in roster.students:
-        first, last = s.split_name()
-        row = rows.get(s.id)
-        table.append([s.id, s.email, first, last, _score(row, missing_as_zero), _feedback(row)])
-    _write(table, path)
+    feedback = {s.id: _feedback(rows.get(s.id)) for s in roster.students}
+    columns = [(column, _scores(rows, roster, missing_as_zero)), ("Feedback", feedback)]
+    _write(moodle_table(roster, columns), path)
