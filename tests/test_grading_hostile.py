@@ -200,7 +200,10 @@ def _submissions(env) -> dict[str, object]:
     _cell(nb, "code-02")["source"] = _cell(nb, "code-02")["source"].replace(
         "14.0, 20.0", "99.0, 99.0"
     )
-    _cell(nb, "setup")["source"] = _cell(nb, "setup")["source"].replace('"demo"', '"someone-else"')
+    # its own ID (a notebook declaring another's is quarantined: see the identity tests below)
+    _cell(nb, "setup")["source"] = _cell(nb, "setup")["source"].replace(
+        '"demo"', '"edited_protected"'
+    )
     subs["edited_protected"] = nb
     subs["forbidden_static"] = _with_answer(
         "q3",
@@ -595,7 +598,7 @@ def test_nothing_outside_out_changed(graded):
         assert _sha_tree(folder) == graded["before"][name], name
     assert _sha_tree(ROOT / "solutions") == graded["before_repo"]
     names = {p.name for p in graded["out"].iterdir()}
-    assert names == {"grades.csv", "results.jsonl", "feedback"}
+    assert names == {"grades.csv", "results.jsonl", "feedback", "report.html"}
 
 
 def test_solutions_folder_is_unreadable(graded):
@@ -614,7 +617,6 @@ def test_edited_protected_cells_are_not_trusted(graded):
     _expect(row, {})
     notes = " ".join(row["notes"])
     assert "'code-02' was edited" in notes
-    assert "'someone-else'" in notes and "'edited_protected'" in notes
 
 
 def test_forbidden_calls(graded):
@@ -765,3 +767,451 @@ def test_summary_names_the_slowest_students(graded):
     assert slow and all(sid in slow[0] for _, sid in times[-3:]), (slow, times[-3:])
     # a submission that times out on a question is slower than the honest solution
     assert graded["rows"]["infinite_loop"]["wall_seconds"] > TIMEOUT
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25: whose submission is whose is decided by the LMS's names, never by the notebook
+# ---------------------------------------------------------------------------------------
+def _id_notebook(path: Path, sid: str, written: str | None = None) -> Path:
+    """A notebook declaring ``sid`` (setup cell and submission metadata, with a forged time)."""
+    nb = {
+        "nbformat": 4,
+        "nbformat_minor": 5,
+        "metadata": {"course": {"submission": {"student_id": sid, "written": written or ""}}},
+        "cells": [
+            {
+                "cell_type": "code",
+                "id": "setup",
+                "metadata": {"course": {"role": "setup"}},
+                "source": f'STUDENT_ID = "{sid}"',
+                "outputs": [],
+                "execution_count": None,
+            }
+        ],
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(nb))
+    return path
+
+
+def _roster_file(tmp_path: Path):
+    from course.grading.batch.roster import read_roster
+
+    path = tmp_path / "roster.csv"
+    path.write_text(
+        "Student,ID,SIS User ID,SIS Login ID\n"
+        '"Tim, Vic",101,v1,vic\n"Lory, Mal",102,m2,mal\n"Other, Ann",103,a3,ann\n'
+    )
+    return read_roster(path)
+
+
+def _resolve(folder: Path, roster=None):
+    from course.grading.batch.driver import find_submissions
+    from course.grading.batch.identity import resolve_identities
+
+    return resolve_identities(
+        find_submissions(folder, NAME), NAME, roster.students if roster else None
+    )
+
+
+def _graded_file(identity, sid: str) -> str | None:
+    entry = next(e for e in identity.entries if e.student == sid)
+    return None if entry.path is None else entry.path.relative_to(entry.path.parents[1]).as_posix()
+
+
+def test_a_moodle_upload_cannot_take_another_students_grade(tmp_path):
+    """Issue 25.1: an extra upload in the attacker's Moodle folder declares the victim's ID and a
+    future time; the victim keeps their own file, the upload is quarantined with both names."""
+    subs = tmp_path / "subs"
+    _id_notebook(subs / "Vic Tim_11_assignsubmission_file_" / f"{NAME}.ipynb", "v1", "2020")
+    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "x.ipynb", "v1", "2999-01-01")
+    identity = _resolve(subs, _roster_file(tmp_path))
+    assert _graded_file(identity, "v1") == f"Vic Tim_11_assignsubmission_file_/{NAME}.ipynb"
+    assert [(c[0], c[1], c[2]) for c in identity.conflicts] == [
+        ("Mal Lory_12_assignsubmission_file_", "m2", "v1")
+    ]
+    m2 = next(e for e in identity.entries if e.student == "m2")
+    assert m2.refused and m2.path is None and "quarantined" in m2.note
+    assert any("QUARANTINED Mal Lory" in f and "'v1'" in f for f in identity.flags)
+
+
+def test_without_a_roster_a_claim_from_another_uploader_is_never_graded(tmp_path):
+    subs = tmp_path / "subs"
+    _id_notebook(subs / "Vic Tim_11_assignsubmission_file_" / f"{NAME}.ipynb", "v1")
+    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "x.ipynb", "v1", "2999-01-01")
+    _id_notebook(subs / "v1.ipynb", "m2")  # a file named for v1 that declares someone else
+    identity = _resolve(subs)
+    # v1.ipynb names v1 but declares m2: quarantined; the two Moodle uploads come from
+    # different uploaders and neither is named v1: neither replaces v1's work
+    assert _graded_file(identity, "v1") is None
+    assert {c[0] for c in identity.conflicts} == {
+        "v1.ipynb",
+        "Vic Tim_11_assignsubmission_file_",
+        "Mal Lory_12_assignsubmission_file_",
+    }
+    assert all(e.student != "m2" for e in identity.entries)
+
+
+def test_canvas_order_decides_between_one_students_files_not_the_written_time(tmp_path):
+    subs = tmp_path / "subs"
+    _id_notebook(subs / f"timvic_101_700_{NAME}.ipynb", "v1", "2999-01-01")  # forged time
+    _id_notebook(subs / f"timvic_LATE_101_900_{NAME}-1.ipynb", "v1", "2000-01-01")
+    # another Canvas user's upload declaring v1, with an even later file number
+    _id_notebook(subs / f"lorymal_102_950_{NAME}.ipynb", "v1", "2999-12-31")
+    identity = _resolve(subs, _roster_file(tmp_path))
+    entry = next(e for e in identity.entries if e.student == "v1")
+    assert entry.path.name == f"timvic_LATE_101_900_{NAME}-1.ipynb"
+    assert [c[:3] for c in identity.conflicts] == [(f"lorymal_102_950_{NAME}.ipynb", "m2", "v1")]
+    assert any("the last in the LMS's order" in f for f in identity.flags)
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.2 and 25.9: nothing a submission holds can stall or bloat the parent
+# ---------------------------------------------------------------------------------------
+class _Alarm:
+    """Fail (instead of hanging the suite) when the parent's work on student text takes more
+    than ``seconds``: the old code took tens of seconds on each of these inputs."""
+
+    def __init__(self, seconds: int):
+        self.seconds = seconds
+
+    def __enter__(self):
+        import signal
+
+        def stop(signum, frame):
+            raise TimeoutError(f"the parent spent more than {self.seconds} s on student text")
+
+        self.old = signal.signal(signal.SIGALRM, stop)
+        signal.alarm(self.seconds)
+
+    def __exit__(self, *exc):
+        import signal
+
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, self.old)
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "import ," * 24_000 + " b",  # 192 KB on one line (the old regex: quadratic)
+        "import " + "a, " * 64_000 + "b +",
+        "x = (" + "np, " * 60_000 + "\n.inv",  # a mention after a huge unparsable line
+        "from numpy.linalg import " + " " * 150_000 + ",",  # whitespace runs
+    ],
+)
+def test_forbidden_scan_of_unparsable_text_is_linear(source):
+    from course.grading.notebook import forbidden_mentions
+
+    with _Alarm(10):
+        found = forbidden_mentions(source, ["numpy.linalg.inv", "numpy.linalg.b"])
+    assert ("numpy.linalg.inv" in found) == source.endswith(".inv")
+    assert ("numpy.linalg.b" in found) == source.startswith("import ")
+
+
+@pytest.mark.parametrize(
+    "cell",
+    [
+        "\n".join(f"!echo {i}" for i in range(600)),  # the issue's 5 KB setup cell
+        "\n".join(f"%time x{i} = {i}" for i in range(1_500)),
+        "\n".join(f"y{i} = !ls" for i in range(1_000)),
+    ],
+)
+def test_ipython_syntax_in_a_cell_cannot_stall_the_parent(cell):
+    from course.grading.notebook import forbidden_mentions, student_id_in
+
+    with _Alarm(10):
+        assert student_id_in('STUDENT_ID = "s1"\n' + cell) in (None, "s1")
+        forbidden_mentions(cell + "\nnp.linalg.inv(A)", ["numpy.linalg.inv"])
+
+
+def test_ipython_syntax_of_an_honest_cell_is_still_understood():
+    from course.grading.notebook import forbidden_mentions, student_id_in
+
+    assert student_id_in('%matplotlib inline\n!pip list\nSTUDENT_ID = "s1"') == "s1"
+    assert forbidden_mentions("%matplotlib inline\ny = np.linalg.inv(A)", ["numpy.linalg.inv"]) == [
+        "numpy.linalg.inv"
+    ]
+
+
+def test_a_huge_cell_is_not_parsed_by_the_parent():
+    from course.grading.notebook import MAX_PARSED_CHARS, python_source
+
+    with pytest.raises(SyntaxError, match="larger than"):
+        python_source("x = 1\n" * (MAX_PARSED_CHARS // 6 + 1))
+
+
+def _handle(forbid=("numpy.linalg.inv",)):
+    from course.grading.sandbox.parent import ChildHandle
+
+    sandbox = types.SimpleNamespace(forbid=tuple(forbid), forbid_set=frozenset(forbid))
+    req_r, req_w = os.pipe()
+    resp_r, resp_w = os.pipe()
+    ev_r, ev_w = os.pipe()
+    for fd in (resp_r, ev_r, req_w):
+        os.set_blocking(fd, False)
+    child = ChildHandle(sandbox, os.getpid(), "/nonexistent", req_w, resp_r, ev_r)
+    return child, resp_w, ev_w, (req_r, req_w, resp_r, resp_w, ev_r, ev_w)
+
+
+def test_forbidden_call_reports_keep_one_entry_per_name():
+    from course.grading.tripwire import EVENT
+
+    child, _, ev_w, fds = _handle()
+    try:
+        os.set_blocking(ev_w, False)
+        record, fake = EVENT % b"numpy.linalg.inv", EVENT % b"made.up.name"
+        for _ in range(2_000):
+            os.write(ev_w, fake * 20 + record)
+            child._read_events()
+        assert len(child._events) == 1 and child.events_reported == 2_000 * 21
+        assert child.take_events() == ["numpy.linalg.inv"] and child.take_events() == []
+    finally:
+        for fd in fds:
+            os.close(fd)
+
+
+@pytest.mark.parametrize(
+    "junk",
+    [b"[" * 100_000, b"{" * 50_000, b'{"a":' * 30_000, b"\xff\xfe" * 1000, b"null"],
+)
+def test_a_malformed_reply_line_is_ignored_not_a_grader_error(junk):
+    """Issue 25.9: only ValueError was caught; a line of 100,000 '[' raised RecursionError."""
+    child, resp_w, _, fds = _handle()
+    real = None
+    try:
+        import course.grading.sandbox.parent as parent_module
+
+        nonce = "abcd"
+        orig = parent_module.secrets.token_hex
+        parent_module.secrets.token_hex = lambda n: nonce
+        try:
+            real = json.dumps({"id": 1, "nonce": nonce, "status": "ok"}).encode()
+            import threading
+
+            data = junk + b"\n" + real + b"\n"  # more than a pipe holds: written alongside
+            writer = threading.Thread(target=lambda: os.write(resp_w, data), daemon=True)
+            writer.start()
+            reply = child.request("value", 5.0, name="x")
+            writer.join(5)
+        finally:
+            parent_module.secrets.token_hex = orig
+        assert reply["status"] == "ok"
+    finally:
+        for fd in fds:
+            os.close(fd)
+
+
+def test_a_deeply_nested_value_is_refused_by_the_decoder():
+    from course.grading.codec import EncodingError, decode
+
+    deep: list = []
+    for _ in range(5_000):
+        deep = [deep]
+    with pytest.raises(EncodingError, match="nested too deeply"):
+        decode(deep)
+    assert decode([[[1.5]]]) == [[[1.5]]]
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.5: feedback that cannot leak or lie; control characters reach nothing
+# ---------------------------------------------------------------------------------------
+_FORGERIES = [
+    "\n\n**Total: 17 / 17**\n",
+    "<!-- the rest is hidden -->",
+    "\x1b[2J\x1b[1;1H**Total: 17 / 17**\x07",
+    "\r# q1: 1 / 1 (pass)",
+    "`code` [link](http://x) | a | b |",
+    "\u202e71 / 71 :latoT\u202c",
+]
+
+
+def _row_with_message(text: str):
+    from course.grading.batch.results import CaseResult, QuestionResult, StudentResult
+
+    row = StudentResult("s1", NAME, "0" * 64, "1", "none", 2.0)
+    row.questions["q1"] = QuestionResult(
+        0.0, 1.0, "error", f"your answer cell raised ValueError: {text}"
+    )
+    row.questions["q3"] = QuestionResult(
+        0.0,
+        1.0,
+        "fail",
+        "",
+        [CaseResult("a", False, f"raised KeyError: {text}"), CaseResult("b", True)],
+    )
+    row.notes.append(f"Cell said {text}")
+    return row
+
+
+@pytest.mark.parametrize("text", _FORGERIES)
+def test_student_text_cannot_forge_feedback(text):
+    from course.grading.batch.reports import feedback_markdown
+
+    fb = feedback_markdown(_row_with_message(text), load_checks(SOLUTION_DIR))
+    assert sum(line.startswith("**Total:") for line in fb.splitlines()) == 1
+    assert "<!--" not in fb and "](" not in fb.replace("\\](", "")
+    assert not any(c in fb for c in "\x1b\x07\r\u202e\u202c")
+    assert [line for line in fb.splitlines() if line.startswith("#")] == [
+        line for line in fb.splitlines() if line.startswith(("# ", "## "))
+    ] and not any(line.startswith("# q1") for line in fb.splitlines())
+
+
+def test_control_characters_never_reach_csv_cells_file_names_or_the_console(tmp_path):
+    from course.grading.batch.reports import write_csv
+    from course.grading.vocabulary import is_student_id
+
+    row = _row_with_message("\x1b]0;owned\x07 =1+1")
+    write_csv([row], ["q1", "q3"], tmp_path / "grades.csv")
+    raw = (tmp_path / "grades.csv").read_text()
+    assert "\x1b" not in raw and "\x07" not in raw
+    assert not is_student_id("s123\n") and not is_student_id("s123\x1b")
+    subs = tmp_path / "subs"
+    _id_notebook(subs / "evil\x1b[31m\x07name.ipynb", "placeholder-not-an-id")
+    identity = _resolve(subs)
+    (student,) = [e.student for e in identity.entries]
+    assert student.isprintable() and "/" not in student and "\x1b" not in student
+    assert all(flag.isprintable() for flag in identity.flags)
+
+
+def test_a_hidden_case_s_exception_shows_its_type_and_the_student_s_line_only():
+    """Issue 25.7: a function raising with its arguments put every hidden input into the
+    feedback; the parent now shows Python's exception type and the student's own line."""
+    from course.grading.batch.session import StudentSession
+
+    me = types.SimpleNamespace(
+        plan=types.SimpleNamespace(
+            answer_sources={"q3": "def f(A, y):\n    raise ValueError(repr((A, y)))\n"}
+        )
+    )
+    q = types.SimpleNamespace(id="q3")
+    secret = "[[0.3141592, 2.71828]]"
+    err = {"type": "ValueError", "message": secret, "line": 2}
+    text = StudentSession._hidden_error(me, q, err)
+    assert secret not in text and "0.314" not in text
+    assert text.startswith("ValueError at line 2 of your answer: raise ValueError(repr((A, y)))")
+    # an exception class named after the inputs, a forged line number: nothing of them shows
+    forged = {"type": "Err_0_3141592", "message": secret, "line": 99}
+    text = StudentSession._hidden_error(me, q, forged)
+    assert "3141592" not in text and text.startswith("an exception (")
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.3 (5, 6): a child cannot change the fork server's scheduling or use System V IPC
+# ---------------------------------------------------------------------------------------
+def test_seccomp_keeps_scheduling_and_sysv_ipc_to_the_child_itself():
+    import subprocess
+    import sys
+    import textwrap
+
+    from course.grading.sandbox.isolation import seccomp
+
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    code = textwrap.dedent(
+        """
+        import ctypes, os, sys
+        from course.grading.sandbox.isolation import seccomp
+        libc = ctypes.CDLL(None, use_errno=True)
+        server = int(sys.argv[1])  # a process standing for the fork server (own group)
+        def attempt(f, *args):
+            try:
+                f(*args)
+                return "yes"
+            except OSError:
+                return "no"
+        mine = os.sched_getaffinity(0)
+        assert seccomp.install()
+        print(attempt(os.sched_setaffinity, server, {min(mine)}),
+              attempt(os.setpriority, os.PRIO_PROCESS, server, 19),
+              attempt(os.setpriority, os.PRIO_USER, 54321, 19),  # a user with no processes
+              attempt(os.setpriority, os.PRIO_PGRP, server, 19),
+              attempt(os.sched_setscheduler, server, os.SCHED_IDLE, os.sched_param(0)),
+              attempt(os.sched_setparam, server, os.sched_param(0)),
+              attempt(os.sched_setscheduler, 0, os.SCHED_FIFO, os.sched_param(1)),
+              attempt(os.setpriority, os.PRIO_PROCESS, 0, -5))
+        shm = libc.shmget(0, 1 << 20, 0o1600)  # IPC_PRIVATE | IPC_CREAT
+        msg = libc.msgget(0, 0o1600)
+        sem = libc.semget(0, 1, 0o1600)
+        print("no" if shm == -1 else "yes", "no" if msg == -1 else "yes",
+              "no" if sem == -1 else "yes")
+        for ident, ctl in ((shm, libc.shmctl), (msg, libc.msgctl)):
+            if ident != -1:
+                ctl(ident, 0, None)  # IPC_RMID: leave nothing behind on the old code
+        if sem != -1:
+            libc.semctl(sem, 0, 0)
+        print(attempt(os.sched_setaffinity, 0, mine),
+              attempt(os.setpriority, os.PRIO_PROCESS, 0, os.getpriority(os.PRIO_PROCESS, 0)),
+              attempt(os.sched_setscheduler, 0, os.SCHED_OTHER, os.sched_param(0)))
+        """
+    )
+    # the target is a sleeper in its own session: on the old code the child changed only it
+    server = subprocess.Popen(["sleep", "60"], start_new_session=True)
+    try:
+        before = (os.sched_getaffinity(server.pid), os.getpriority(os.PRIO_PROCESS, server.pid))
+        out = subprocess.run(
+            [sys.executable, "-c", code, str(server.pid)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            env={**os.environ, "PYTHONPATH": str(ROOT)},
+        )
+        after = (os.sched_getaffinity(server.pid), os.getpriority(os.PRIO_PROCESS, server.pid))
+    finally:
+        server.kill()
+        server.wait()
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.split("\n")
+    assert lines[0].split() == ["no"] * 8  # nothing aimed at another process, no real time
+    assert lines[1].split() == ["no"] * 3  # no System V shared memory, queues, semaphores
+    assert lines[2].split() == ["yes"] * 3  # the child's own thread keeps its calls
+    assert after == before
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.4: a child that stays root keeps root's user ID but none of its powers
+# ---------------------------------------------------------------------------------------
+@pytest.mark.skipif(os.geteuid() != 0, reason="needs root (a root child)")
+def test_a_root_child_drops_every_capability(tmp_path):
+    import subprocess
+    import sys
+    import textwrap
+
+    host = tmp_path / "host.txt"  # a host file of another user, as a root child could reach
+    host.write_text("x")
+    os.chown(host, 65534, 65534)
+    os.chmod(host, 0o640)
+    code = textwrap.dedent(
+        f"""
+        import os, socket
+        from course.grading.sandbox.isolation import privileges
+        def attempt(f, *args):
+            try:
+                f(*args)
+                return "yes"
+            except OSError:
+                return "no"
+        privileges.drop_capabilities()
+        path = {str(host)!r}
+        print(os.geteuid(),
+              attempt(os.chmod, path, 0o666), attempt(os.chown, path, 0, 0),
+              attempt(os.utime, path, (0, 0)), attempt(socket.sethostname, socket.gethostname()),
+              attempt(os.setpriority, os.PRIO_PROCESS, 0, -1),
+              attempt(os.sched_setscheduler, 0, os.SCHED_FIFO, os.sched_param(1)),
+              attempt(os.setpriority, os.PRIO_PROCESS, 1, 0),
+              attempt(open, "/proc/self/status"))
+        print([l for l in open("/proc/self/status") if l.startswith(("CapEff", "CapBnd", "NoNewPrivs"))])
+        """
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert out.returncode == 0, out.stderr
+    first, status = out.stdout.split("\n")[:2]
+    assert first.split() == ["0"] + ["no"] * 7 + ["yes"], out.stdout
+    assert "CapEff:\\t0000000000000000" in status and "NoNewPrivs:\\t1" in status
+    assert host.stat().st_mode & 0o777 == 0o640 and host.stat().st_uid == 65534

@@ -172,12 +172,18 @@ def _decode_float(value):
     return float(value)
 
 
-def decode(data: Any, allow_band: bool = True) -> Any:
-    """Inverse of :func:`encode`; returns fresh objects (arrays are writable copies)."""
+def decode(data: Any, allow_band: bool = True, _depth: int = 0) -> Any:
+    """Inverse of :func:`encode`; returns fresh objects (arrays are writable copies).
+
+    Nesting deeper than :func:`encode` writes is refused (:class:`EncodingError`), so a
+    hostile reply cannot exhaust the parent's stack here or in the comparison."""
     if data is None or isinstance(data, (bool, int, float, str)):
         return data
+    if _depth > 60:
+        raise EncodingError("the value is nested too deeply")
+    _depth += 1
     if isinstance(data, list):
-        return [decode(v, allow_band) for v in data]
+        return [decode(v, allow_band, _depth) for v in data]
     if isinstance(data, dict):
         if len(data) == 1:
             ((tag, body),) = data.items()
@@ -191,21 +197,21 @@ def decode(data: Any, allow_band: bool = True) -> Any:
                 raw = base64.b64decode(body["data"].encode("ascii"), validate=True)
                 return np.frombuffer(raw, dtype=dtype).reshape(shape).copy()
             if tag == "__tuple__":
-                return tuple(decode(v, allow_band) for v in body)
+                return tuple(decode(v, allow_band, _depth) for v in body)
             if tag == "__namedtuple__":
                 fields = tuple(body["fields"])
                 if not _valid_fields(fields) or len(fields) != len(body["values"]):
                     raise EncodingError("malformed named tuple")
-                return _named_type(fields)(*(decode(v, allow_band) for v in body["values"]))
+                return _named_type(fields)(*(decode(v, allow_band, _depth) for v in body["values"]))
             if tag == "__band__" and allow_band:
-                return Band(decode(body[0], False), decode(body[1], False))
+                return Band(decode(body[0], False, _depth), decode(body[1], False, _depth))
             if tag == "__float__":
                 return _decode_float(data)
             if tag == "__complex__":
                 return complex(_decode_float(body[0]), _decode_float(body[1]))
         if any(k.startswith("__") for k in data):
             raise EncodingError(f"unknown tagged value {sorted(data)[:3]}")
-        return {k: decode(v, allow_band) for k, v in data.items()}
+        return {k: decode(v, allow_band, _depth) for k, v in data.items()}
     raise EncodingError(f"cannot decode {type(data).__name__}")
 
 

@@ -71,8 +71,48 @@ def _course_meta(cell) -> dict:
     return course if isinstance(course, dict) else {}
 
 
+#: Cells the trusted parent hands to IPython's input transformer at most: it re-tokenizes the
+#: whole cell once per magic or ``!`` line (up to 500 passes), so its time grows with the
+#: square of a cell full of them (600 ``!`` lines took 52 s). Larger ones are not transformed.
+MAX_TRANSFORMED_CHARS = 20_000
+MAX_TRANSFORMED_LINES = 40  # lines that look like IPython syntax
+#: Cells the parent parses at all (the syntax tree costs ~600 bytes of memory per source
+#: byte); a larger cell is :class:`SyntaxError` to every reader here.
+MAX_PARSED_CHARS = 200_000
+
+
+def _ipython_lines(source: str) -> int:
+    """How many lines may need IPython's transformer (magics, ``!cmd``, ``x?``, prompts)."""
+    return sum(
+        1
+        for line in source.splitlines()
+        if line.lstrip()[:1] in ("%", "!", "?", ">")
+        or line.rstrip().endswith("?")
+        or "= !" in line
+        or "= %" in line
+    )
+
+
 def python_source(source: str) -> str:
-    """Cell source with IPython syntax (magics, ``!cmd``) turned into plain Python."""
+    """Cell source with IPython syntax (magics, ``!cmd``) turned into plain Python.
+
+    Plain Python is returned as it is (IPython would not change it). IPython's transformer
+    runs only on a cell within :data:`MAX_TRANSFORMED_CHARS` and
+    :data:`MAX_TRANSFORMED_LINES`; a larger one comes back unchanged, so its callers see
+    a cell that does not parse (its student's problem, never the batch's). A cell beyond
+    :data:`MAX_PARSED_CHARS` raises :class:`SyntaxError`.
+    """
+    if len(source) > MAX_PARSED_CHARS:
+        raise SyntaxError(f"the cell is larger than {MAX_PARSED_CHARS:,} characters")
+    try:
+        ast.parse(source)
+        return source
+    except (SyntaxError, ValueError):
+        pass
+    except (RecursionError, MemoryError):
+        raise SyntaxError("the cell is nested too deeply to read") from None
+    if len(source) > MAX_TRANSFORMED_CHARS or _ipython_lines(source) > MAX_TRANSFORMED_LINES:
+        return source
     from IPython.core.inputtransformer2 import TransformerManager
 
     return TransformerManager().transform_cell(source)
@@ -267,6 +307,22 @@ def student_id_in(source: str) -> str | None:
     return None
 
 
+def _mentioned_in_text(source: str, name: str) -> bool:
+    r"""Whether unparsable ``source`` uses ``name`` as an attribute (``.name``) or imports it
+    (after ``import`` on its line), in time linear in the source (no backtracking pattern:
+    a 192 KB line once cost the old ``import\s.*,`` fallback 69 s)."""
+    word = re.compile(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])")
+    if re.search(rf"\.{re.escape(name)}(?![A-Za-z0-9_])", source):
+        return True
+    keyword = re.compile(r"(?<![A-Za-z0-9_])import(?![A-Za-z0-9_])")
+    for line in source.splitlines():
+        if "import" in line and name in line:
+            m = keyword.search(line)
+            if m is not None and word.search(line, m.end()) is not None:
+                return True
+    return False
+
+
 def forbidden_mentions(source: str, forbid) -> list[str]:
     """Dotted names in ``forbid`` whose last component the source uses as an attribute, imports,
     or names in a string (``getattr(m, "name")``). Unparsable source falls back to a regex."""
@@ -279,10 +335,7 @@ def forbidden_mentions(source: str, forbid) -> list[str]:
         last = dotted.rsplit(".", 1)[-1]
         found = False
         if tree is None:
-            found = (
-                re.search(rf"(\.|import\s+|import\s.*,\s*)\b{re.escape(last)}\b", source)
-                is not None
-            )
+            found = _mentioned_in_text(source, last)
         else:
             for node in ast.walk(tree):
                 if (

@@ -37,6 +37,7 @@ __all__ = [
     "answer_cell_id",
     "check_student_id",
     "is_student_id",
+    "visible_text",
 ]
 
 
@@ -62,9 +63,22 @@ STUDENT_ID_RULE = "1 to 64 letters, digits and . _ - @, starting with a letter o
 _STUDENT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._@-]{0,63}$")
 
 
+# control characters (C0, DEL, C1), and the invisible ones that reorder or hide text
+CONTROL_CHARACTERS = re.compile(
+    r"[\x00-\x1f\x7f-\x9f\u200b-\u200f\u2028-\u202e\u2066-\u2069\ufeff]"
+)
+
+
+def visible_text(text) -> str:
+    """``text`` with every control character shown as an escape (``\\x1b``, ``\\n``): student
+    text (file names, exception messages) reaching the console, a CSV cell, a file name or
+    the feedback can neither move the cursor, ring, recolour nor start a new line."""
+    return CONTROL_CHARACTERS.sub(lambda m: repr(m.group())[1:-1], str(text))
+
+
 def is_student_id(text) -> bool:
     """True when ``text`` is a well-formed student ID (not checking placeholder or demo)."""
-    return isinstance(text, str) and _STUDENT_ID.match(text) is not None
+    return isinstance(text, str) and _STUDENT_ID.fullmatch(text) is not None
 
 
 def check_student_id(student_id, where: str = "STUDENT_ID") -> str:

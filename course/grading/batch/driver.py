@@ -16,6 +16,7 @@ the same file).
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import sys
 import threading
@@ -43,6 +44,7 @@ from course.grading.batch.options import GradeOptions
 from course.grading.batch.reports import (
     Summary,
     append_result,
+    csv_text,
     feedback_markdown,
     read_results,
     write_csv,
@@ -185,10 +187,11 @@ def grade(
         identity = resolve_identities(
             find_submissions(submissions, grader.name, private_dir=solution_dir),
             grader.name,
-            options.roster.ids if options.roster is not None else None,
+            options.roster.students if options.roster is not None else None,
             grader.data_key,
         )
         todo = identity.entries
+        _write_conflicts(identity.conflicts, out / "identity_conflicts.csv")
         if options.students is not None:
             _check_selection(options.students, todo)
         previous = read_results(results_path)
@@ -354,6 +357,17 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
         if to_mark
         else f"{head or 'short answers: '}all marked ({path})"
     )
+
+
+def _write_conflicts(conflicts: list, path: Path) -> None:
+    """Every quarantined file with both IDs (the name's and the notebook's), for the record."""
+    if not conflicts:
+        path.unlink(missing_ok=True)
+        return
+    with path.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(["file", "named_as", "declares", "why"])
+        writer.writerows([csv_text(cell) for cell in row] for row in conflicts)
 
 
 def _file_record(path: Path | None, submissions: Path) -> dict | None:

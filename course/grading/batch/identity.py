@@ -1,15 +1,24 @@
-"""Whose submission is this? The student ID of each file, and every doubt about it.
+"""Whose submission is this? The student ID of each file, decided from the outside in.
 
-A submission's name is the student ID when the instructor collected ``<ID>.ipynb`` files or
-``<ID>/`` folders (the convention before submissions had metadata) or when it is the name
-``check.submit()`` writes, ``<ID>_<assignment>.ipynb``. A learning-management system renames
-uploads (``Doe_John_98765_02_test_quantities.ipynb``, or a Moodle folder
-``John Doe_1234_assignsubmission_file_``): then the ID comes from the notebook itself (the
-submission metadata ``check.submit()`` writes, else ``STUDENT_ID`` in its setup cell).
+The name the learning-management system (or the instructor) gave the file or folder decides
+whose submission it is; the ID written inside the notebook only has to agree with it:
 
-Every case where the name and the notebook disagree, where no ID can be found, where two
-files claim one ID, or where the notebook was worked on personal data issued with another key
-than the one grading uses, becomes a line of the console summary (:class:`Identity.flags`).
+* a name that is an ID (``98765.ipynb``, a folder ``98765/``, or ``98765_<assignment>.ipynb``
+  as ``check.submit()`` writes it), on the roster when there is one;
+* with a roster, the one roster student the name points at: a roster student ID, Canvas user
+  number or login as a token of the name (Canvas's ``doejohn_LATE_12345_67890_<file>``), or the
+  full name of a Moodle folder (``John Doe_1234_assignsubmission_file_``).
+
+A notebook whose declared ID (its submission metadata, else ``STUDENT_ID``) differs from the ID
+its name gives is **quarantined**: graded for nobody, reported with both IDs, and it never
+replaces another student's work. A file whose name gives no ID is graded under its declared
+ID, unless a named file claims that ID (then it is quarantined) or files from different
+uploaders claim it (then all of them are). Among several files of one student the LMS's order
+decides (Canvas's file number, then the name), never a time written inside the notebook.
+
+Every conflict (:attr:`Identity.conflicts`, with both names) and every guess becomes a line of
+the console summary (:attr:`Identity.flags`); the driver also writes the conflicts to
+``identity_conflicts.csv``.
 """
 
 from __future__ import annotations
@@ -22,7 +31,13 @@ from typing import Any
 
 from course.grading.notebook import MAX_NOTEBOOK_BYTES
 from course.grading.student.submit import saved_student_id
-from course.grading.vocabulary import DEMO_STUDENT_ID, PLACEHOLDER_ID, is_student_id
+from course.grading.vocabulary import (
+    CONTROL_CHARACTERS,
+    DEMO_STUDENT_ID,
+    PLACEHOLDER_ID,
+    is_student_id,
+    visible_text,
+)
 
 __all__ = ["Identity", "resolve_identities"]
 
@@ -35,6 +50,8 @@ class Identity:
     entries: list = field(default_factory=list)
     flags: list = field(default_factory=list)
     mismatched_keys: list = field(default_factory=list)  # files worked on other data
+    # quarantined files: (file, the ID its name gives or "", the ID it declares, why)
+    conflicts: list = field(default_factory=list)
 
 
 def _declared(path: Path | None) -> tuple[str | None, dict]:
@@ -77,10 +94,10 @@ def _contains(name: str, sid: str) -> bool:
     return re.search(rf"(?<![A-Za-z0-9]){re.escape(sid)}(?![A-Za-z0-9])", name) is not None
 
 
-def _trusted_name(name_id: str, roster: set) -> bool:
-    """Whether a name is taken as the ID against the notebook's: a roster ID when there is a
-    roster, else any well-formed ID (the instructor's renaming is deliberate)."""
-    return name_id in roster if roster else True
+def _safe_name(name: str) -> str:
+    """A file name as a row's name: control and invisible characters and path signs become
+    ``_``, so it is safe as a file name, a CSV cell and a console line."""
+    return re.sub(r"[/\\]", "_", CONTROL_CHARACTERS.sub("_", name)).lstrip(".") or "_"
 
 
 def _looks_bare(name_id: str) -> bool:
@@ -88,84 +105,204 @@ def _looks_bare(name_id: str) -> bool:
     return re.fullmatch(r"[A-Za-z0-9.@-]+", name_id) is not None
 
 
+# Canvas: "<lastfirst>[_LATE]_<user number>_<file number>_<uploaded name>"
+_CANVAS = re.compile(r"^[^_]+(?:_[^_]+)*?_(?:LATE_)?(\d+)_(\d+)_", re.IGNORECASE)
+# Moodle: "<Full Name>_<participant number>_assignsubmission_<plugin>_"
+_MOODLE = re.compile(r"^(.+?)_(\d+)_assignsubmission_", re.IGNORECASE)
+
+
+def _uploader(name: str) -> str:
+    """Who uploaded the file, as the LMS names them (Canvas user, Moodle participant)."""
+    for pattern, lms in ((_MOODLE, "moodle"), (_CANVAS, "canvas")):
+        m = pattern.match(name)
+        if m:
+            return f"{lms}:{m.group(2) if lms == 'moodle' else m.group(1)}"
+    return f"name:{name}"
+
+
+def _lms_order(name: str) -> tuple[int, str]:
+    """The LMS's order of one student's files: Canvas's file number (later uploads have larger
+    numbers), then the name."""
+    m = _CANVAS.match(name)
+    return (int(m.group(2)) if m else 0, name)
+
+
+def _full_name(text: str) -> str:
+    return " ".join(text.casefold().split())
+
+
+def _roster_named(names: list[str], roster: list) -> list[str]:
+    """The roster IDs a file or folder name points at (ID, Canvas user number, login as a token;
+    a Moodle folder's full name)."""
+    hits = set()
+    for student in roster:
+        tokens = [t for t in (student.id, student.canvas_id, student.login) if t]
+        if any(_contains(n, t) for n in names for t in tokens):
+            hits.add(student.id)
+            continue
+        full = {_full_name(f"{student.first} {student.last}"), _full_name(student.name)}
+        if student.name and "," in student.name:
+            last, first = student.name.split(",", 1)
+            full.add(_full_name(f"{first} {last}"))
+        full.discard("")
+        for n in names:
+            m = _MOODLE.match(n)
+            if m and _full_name(m.group(1)) in full:
+                hits.add(student.id)
+    return sorted(hits)
+
+
+@dataclass
+class _Claim:
+    shown: str  # the file (or folder) name as the report shows it
+    sub: Any
+    named: bool  # the LMS name gave this ID (else only the notebook declares it)
+    uploader: str
+    order: tuple[int, str]
+
+
 def resolve_identities(
     entries: list, assignment: str, roster_ids=None, data_key: str | None = None
 ) -> Identity:
     """Decide the student ID of every submission (``.student`` is its name in the folder).
 
-    The notebook's declared ID wins when the name contains it; a name that is an ID (on the
-    roster, when there is one) wins over a different declared ID (the instructor's renaming);
-    otherwise the declared ID wins over a name with extra text. Without a declared ID the name is used, or the one roster
-    ID it contains. Every disagreement and guess is flagged.
+    ``roster_ids`` are the roster's IDs, or its :class:`~course.grading.batch.roster.Student`
+    rows (then Canvas user numbers, logins and Moodle full names name students too). See the
+    module docstring for the rules; every quarantine and guess is flagged.
     """
-    roster = set(roster_ids or ())
+    students = [r for r in (roster_ids or ()) if not isinstance(r, str)]
+    roster = {r if isinstance(r, str) else r.id for r in (roster_ids or ())}
     out = Identity()
-    claimed: dict[str, list[tuple[str, Any, dict]]] = {}
+    claimed: dict[str, list[_Claim]] = {}
+    held: dict[str, Any] = {}  # a quarantined file of each ID its name gave
+
+    def quarantine(shown: str, named: str | None, declared: str, why: str) -> None:
+        out.conflicts.append((shown, named or "", declared, why))
+        out.flags.append(f"QUARANTINED {shown}: {why}")
+
     for sub in entries:
         name, path = sub.student, sub.path
         if path is None:  # refused or empty: nothing to read, the name stays
-            claimed.setdefault(name, []).append((name, sub, {}))
+            key = name if is_student_id(name) else _safe_name(name)
+            claimed.setdefault(key, []).append(_Claim(key, sub, True, f"name:{name}", (0, name)))
             continue
-        shown = path.name if path is not None and path.stem == name else name
-        names = [name] + ([path.stem] if path is not None and path.stem != name else [])
+        shown = path.name if path.stem == name else name
+        # the file's own name inside an LMS's folder is the uploader's choice, not the LMS's
+        inner = path.stem != name and _MOODLE.match(name) is None
+        names = [name] + ([path.stem] if inner else [])
         name_id = next((c for c in (_name_id(n, assignment) for n in names) if c), None)
+        if name_id is not None and roster and name_id not in roster:
+            name_id = None
+        if name_id is None and roster:
+            in_name = _roster_named(names, students) if students else []
+            if not students:
+                in_name = sorted({r for r in roster if any(_contains(n, r) for n in names)})
+            name_id = in_name[0] if len(in_name) == 1 else None
         declared, meta = _declared(path)
-        if declared is not None and any(_contains(n, declared) for n in names):
+        named = True
+        if declared is not None and (
+            declared == name_id or any(_contains(n, declared) for n in names)
+        ):
             sid = declared
-        elif declared is not None and name_id is not None and _trusted_name(name_id, roster):
-            sid = name_id
-            out.flags.append(
-                f"{shown}: the notebook says STUDENT_ID {declared!r}; graded as {name_id!r} "
-                "(the file name), with the data of that ID"
+        elif declared is not None and name_id is not None:
+            quarantine(
+                shown,
+                name_id,
+                declared,
+                f"its name makes it {name_id!r}'s submission but the notebook declares "
+                f"STUDENT_ID {declared!r}; graded for nobody (fix the notebook's ID, or rename "
+                "the file to the right ID, and grade again)",
             )
+            claimed.setdefault(name_id, [])
+            held.setdefault(name_id, sub)
+            continue
         elif declared is not None:
-            sid = declared
+            sid, named = declared, False
             out.flags.append(
                 f"{shown}: the file name does not contain the notebook's STUDENT_ID "
                 f"{declared!r}; graded as {declared!r}"
             )
-        elif name_id is not None and (not roster or name_id in roster):
+        elif name_id is not None:
             sid = name_id
             if name_id not in roster and not _looks_bare(name_id):
                 out.flags.append(
                     f"{shown}: no student ID in the notebook; graded under its file name "
                     f"{name_id!r} (rename it to <ID>.ipynb and grade again if that is wrong)"
                 )
+            elif name_id in roster and name_id not in names and name_id != name:
+                out.flags.append(
+                    f"{shown}: the notebook has no student ID; graded as {name_id!r}, the "
+                    "roster student its name points at"
+                )
         else:
-            in_name = sorted({r for r in roster if any(_contains(n, r) for n in names)})
-            if len(in_name) == 1:
-                sid = in_name[0]
-                out.flags.append(
-                    f"{shown}: the notebook has no student ID; graded as {sid!r}, the roster ID "
-                    "in its file name"
-                )
-            else:
-                sid = name_id or name
-                out.flags.append(
-                    f"{shown}: no student ID in the notebook, and the file name is not "
-                    f"{'a roster ID' if roster else 'an ID'}; graded as {sid!r} "
-                    "(rename it to <ID>.ipynb and grade again)"
-                )
+            sid = name_id or _safe_name(name)
+            out.flags.append(
+                f"{shown}: no student ID in the notebook, and the file name is not "
+                f"{'a roster ID' if roster else 'an ID'}; graded as {sid!r} "
+                "(rename it to <ID>.ipynb and grade again)"
+            )
         if data_key is not None and meta.get("data_key") not in (None, data_key):
             out.mismatched_keys.append(shown)
-        claimed.setdefault(sid, []).append((shown, sub, meta))
+        claimed.setdefault(sid, []).append(
+            _Claim(shown, sub, named, _uploader(name), _lms_order(name))
+        )
     for sid in sorted(claimed):
-        files = claimed[sid]
-        if len(files) > 1:
-            # the most recently written submission counts; the others are reported
-            files.sort(key=lambda f: (str(f[2].get("written", "")), f[0]))
-            out.flags.append(
-                f"{len(files)} submissions claim the ID {sid!r}: "
-                + ", ".join(f[0] for f in files)
-                + f"; graded {files[-1][0]} (the latest written)"
+        claims = claimed[sid]
+        if not claims:  # every file its name gave was quarantined: the row says so
+            why = "; ".join(c[0] for c in out.conflicts if c[1] == sid)
+            note = f"the submission was quarantined: it declares another student's ID ({why})"
+            out.entries.append(_refused(held[sid], sid, note))
+            continue
+        by_name = [c for c in claims if c.named]
+        if by_name:
+            for c in claims:
+                if not c.named:
+                    quarantine(
+                        c.shown,
+                        "",
+                        sid,
+                        f"the notebook declares STUDENT_ID {sid!r}, but {sid!r} has its own "
+                        f"submission ({by_name[0].shown}); graded for nobody",
+                    )
+            claims = by_name
+        elif len({c.uploader for c in claims}) > 1:
+            for c in claims:
+                quarantine(
+                    c.shown,
+                    "",
+                    sid,
+                    f"{len(claims)} files from different uploaders declare STUDENT_ID {sid!r} "
+                    f"({', '.join(x.shown for x in claims)}); none is graded (give a --roster "
+                    "so that the LMS names decide)",
+                )
+            out.entries.append(
+                _refused(
+                    claims[0].sub,
+                    sid,
+                    "the submission was quarantined: files from several uploaders claim this ID",
+                )
             )
-        out.entries.append(replace(files[-1][1], student=sid))
+            continue
+        claims.sort(key=lambda c: c.order)
+        if len(claims) > 1:
+            out.flags.append(
+                f"{len(claims)} submissions claim the ID {sid!r}: "
+                + ", ".join(c.shown for c in claims)
+                + f"; graded {claims[-1].shown} (the last in the LMS's order)"
+            )
+        out.entries.append(replace(claims[-1].sub, student=sid))
+    out.flags = [visible_text(f) for f in out.flags]  # file names reach the console
     if out.mismatched_keys:
         out.flags.append(
             f"{len(out.mismatched_keys)} submission(s) were worked on personal data issued with "
             f"another key than this run's ({data_key}): "
-            + ", ".join(out.mismatched_keys[:5])
+            + ", ".join(visible_text(k) for k in out.mismatched_keys[:5])
             + (" …" if len(out.mismatched_keys) > 5 else "")
             + "; grade with the class's --secret, or their personal questions score 0"
         )
     return out
+
+
+def _refused(sub, sid: str, note: str):
+    """A row for ``sid`` that grades nothing and says why (``sub`` is a Submission)."""
+    return replace(sub, student=sid, path=None, note=note, refused=True)

@@ -15,10 +15,12 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from course.grading.batch.results import StudentResult
+from course.grading.vocabulary import visible_text
 
 __all__ = [
     "Summary",
@@ -35,12 +37,22 @@ def _fmt_points(x: float) -> str:
     return f"{round(float(x), 2):g}"
 
 
+_MARKDOWN = re.compile(r"([\\`*_{}\[\]<>#!|~])")
+
+
+def md_text(text) -> str:
+    """Student text (messages the child produced, file names) as inert markdown on one line:
+    control characters shown as escapes, every markdown or HTML sign backslash-escaped, so it
+    can forge no heading, no ``**Total:`` line, no link and no ``<!--`` comment."""
+    return _MARKDOWN.sub(r"\\\1", visible_text(text))
+
+
 def feedback_markdown(row: StudentResult, checks) -> str:
     """The student's feedback: per question points, status, message and hint.
 
     It never shows an expected value (a case's ``detail`` stays in results.jsonl, for the
     instructor) and only the first stage of staged hints."""
-    lines = [f"# {checks.title}: feedback for {row.student}", ""]
+    lines = [f"# {checks.title}: feedback for {md_text(row.student)}", ""]
     lines.append(
         f"**Total: {_fmt_points(row.total)} / {_fmt_points(row.max)}**"
         + ("" if row.status == "ok" else f"  (status: {row.status})")
@@ -53,19 +65,19 @@ def feedback_markdown(row: StudentResult, checks) -> str:
         lines += ["", f"## {qid}: {_fmt_points(r.points)} / {_fmt_points(r.max)} ({r.status})"]
         if r.message:
             lines.append("")
-            lines.append(r.message)
+            lines.append(md_text(r.message))
         if len(r.cases) > 1 and r.status != "not answered":
             lines.append("")
             for case in r.cases:
                 lines.append(
                     f"- {'PASS' if case.ok else 'FAIL'} {case.label}"
-                    + (f": {case.message}" if case.message and not case.ok else "")
+                    + (f": {md_text(case.message)}" if case.message and not case.ok else "")
                 )
         if q is not None and q.hints and not r.full_marks and r.status != "to mark":
             # the first stage only: the later ones (the formula) stay in the self-check
             lines += ["", f"Hint: {q.hints[0]}"]
     if row.notes:
-        lines += ["", "## Notes", ""] + [f"- {n}" for n in row.notes]
+        lines += ["", "## Notes", ""] + [f"- {md_text(n)}" for n in row.notes]
     lines.append("")
     lines.append(
         f"<sub>{row.assignment} · checks {row.checks_sha256[:12]} · course {row.version}</sub>"
@@ -80,7 +92,7 @@ def csv_text(value) -> str:
     """A text cell that a spreadsheet will not run as a formula: a leading ``= + - @`` (or tab,
     carriage return) gets a ``'`` in front (OWASP's advice against CSV injection). A student
     ID is a file name, chosen by the student."""
-    text = str(value)
+    text = visible_text(value)
     return "'" + text if text.startswith(_FORMULA_START) else text
 
 

@@ -10,6 +10,7 @@ costs only the question it happened in: the child is killed, a fresh one re-runs
 
 from __future__ import annotations
 
+import builtins
 import re
 import threading
 import time
@@ -48,6 +49,8 @@ def _version() -> str:
 
 
 _HEX = re.compile(r"0x[0-9a-fA-F]{6,}")
+# the keys of a returned dict, named by compare's message: student text, cut for hidden cases
+_KEYS = re.compile(r" with keys \[.*")
 #: The longest short answer kept (characters): the rest is cut in the marking file.
 MAX_SHORT_ANSWER = 20_000
 
@@ -261,6 +264,20 @@ class StudentSession:
         if self.child is not None:
             text = text.replace(self.child.tmpdir, "<tmp>")
         return _HEX.sub("0x…", str(text))[:400]
+
+    def _hidden_error(self, q, err: dict) -> str:
+        """What a hidden case's exception may show: its type if Python's own (a class the
+        student made could be named after the inputs) and the line of the student's answer cell
+        it names, never its message (the student's code holds the hidden inputs there)."""
+        kind = err.get("type")
+        builtin = getattr(builtins, kind, None) if isinstance(kind, str) else None
+        python_s = isinstance(builtin, type) and issubclass(builtin, BaseException)
+        text = str(kind) if python_s else "an exception"
+        line = err.get("line")
+        source = self.plan.answer_sources.get(q.id, "").splitlines()
+        if isinstance(line, int) and not isinstance(line, bool) and 1 <= line <= len(source):
+            text += f" at line {line} of your answer: {source[line - 1].strip()[:200]}"
+        return text + " (a hidden case: its message is not shown)"
 
     def _err_text(self, err: dict) -> str:
         return self.clean(f"{err.get('type', 'Error')}: {err.get('message', '')}".rstrip(": "))
@@ -571,10 +588,11 @@ class StudentSession:
             err = reply.get("error") or {}
             if err.get("type") == "MemoryError":
                 run.status = GradeStatus.MEMORY  # stops the run; the message stays the first
-            run.fail(CaseResult(label, False, f"raised {self._err_text(err)}", raised=True))
+            text = self._hidden_error(q, err) if case.hidden else self._err_text(err)
+            run.fail(CaseResult(label, False, f"raised {text}", raised=True))
         elif status != ReplyStatus.OK:
-            text = f"returned something that is not plain data ({self._err_text(reply.get('error') or {})})"
-            run.fail(CaseResult(label, False, text))
+            why = "" if case.hidden else f" ({self._err_text(reply.get('error') or {})})"
+            run.fail(CaseResult(label, False, f"returned something that is not plain data{why}"))
         else:
             try:
                 got = decode(reply.get("value"), allow_band=False)
@@ -582,10 +600,11 @@ class StudentSession:
                 run.results.append(CaseResult(label, False, "unreadable result"))
                 return None
             verdict = compare(expected, got, q.rtol, q.atol, mistakes=mistakes)
+            message = _KEYS.sub("", verdict.message) if case.hidden else verdict.message
             if verdict.ok:
-                run.results.append(CaseResult(label, True, verdict.message))
+                run.results.append(CaseResult(label, True, message))
             else:  # detail: the instructor's records only (results.jsonl)
-                run.fail(CaseResult(label, False, verdict.message, detail=verdict.detail))
+                run.fail(CaseResult(label, False, message, detail=verdict.detail))
         return None
 
 

@@ -173,7 +173,10 @@ class ChildHandle:
         self.killed_by_us = False
         self._buffer = b""
         self._events_tail = b""
-        self._events: list[str] = []
+        # forbidden calls reported: only instrumented names, each once (in order) with a count,
+        # so a flood of reports costs the parent no memory
+        self._events: dict[str, int] = {}
+        self.events_reported = 0
         self._next_id = 0
         self.info: dict = {}
 
@@ -206,7 +209,12 @@ class ChildHandle:
             if not chunk:
                 return
             names, self._events_tail = parse_events(self._events_tail + chunk)
-            self._events.extend(names)
+            self.events_reported += len(names)
+            for name in names:
+                if name in self._events:
+                    self._events[name] += 1
+                elif name in self.sandbox.forbid_set:
+                    self._events[name] = 1
 
     def _readline(self, deadline: float) -> bytes:
         while b"\n" not in self._buffer:
@@ -232,7 +240,7 @@ class ChildHandle:
     def take_events(self) -> list[str]:
         """Forbidden library calls reported since the last call (in the order they happened)."""
         self._read_events()
-        events, self._events = self._events, []
+        events, self._events = list(self._events), {}
         return events
 
     def request(self, op: str, timeout: float, **fields) -> dict:
@@ -253,7 +261,7 @@ class ChildHandle:
                 line = self._readline(deadline)
                 try:
                     reply = json.loads(line)
-                except ValueError:
+                except (ValueError, RecursionError):  # deep nesting ("[[[[...") too
                     continue
                 if (
                     isinstance(reply, dict)
@@ -350,6 +358,7 @@ class Sandbox:
 
         self.preload = tuple(dict.fromkeys(PRELOAD + tuple(preload)))
         self.forbid = tuple(sorted(set(forbid)))
+        self.forbid_set = frozenset(self.forbid)
         self.deny_read = [str(Path(p).resolve()) for p in deny_read]  # named by the audit hook
         # never mounted nor allowed, should a Python folder contain one of them
         self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]

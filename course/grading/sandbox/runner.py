@@ -283,7 +283,17 @@ def preload(modules=PRELOAD) -> list:
 # --------------------------------------------------------------------------------------
 def _error_info(exc) -> dict:
     message = str(exc)
-    return {"type": type(exc).__name__, "message": message[:500]}
+    info: dict = {"type": type(exc).__name__, "message": message[:500]}
+    # the line number in the student's own cell code where it was raised (the parent shows
+    # that line from the source it holds; the last frame of a cell's code, "<...>" files)
+    tb, line = exc.__traceback__, None
+    while tb is not None:
+        if tb.tb_frame.f_code.co_filename.startswith("<"):
+            line = tb.tb_lineno
+        tb = tb.tb_next
+    if line is not None:
+        info["line"] = line
+    return info
 
 
 class RequestLoop:
@@ -479,6 +489,8 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
 
         if setup.drop_child is not None:
             privileges.drop(setup.drop_child)
+        elif os.geteuid() == 0:  # a root child: root's user ID, none of its powers
+            privileges.drop_capabilities()
         use_seccomp = bool(limits.get("seccomp", True)) and setup.seccomp and seccomp.available()
         if not use_seccomp:
             limits = dict(limits, nproc=0)  # only a backstop for non-root users

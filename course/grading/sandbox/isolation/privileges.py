@@ -5,7 +5,9 @@ whatever the other layers leave reachable. When ``course grade`` runs as root, t
 (inside bubblewrap) or each child (without it) switches to ``nobody`` — all of its user and
 group IDs, no supplementary groups — before any student code exists; from then on the kernel
 applies ordinary file permissions, and the seccomp filter (which sets ``no_new_privs``) keeps it
-from ever regaining privileges. Run without root, the grader keeps its own user.
+from ever regaining privileges. A child that must stay root (``nobody`` cannot read the Python
+installation) drops every capability and sets ``no_new_privs`` (:func:`drop_capabilities`).
+Run without root, the grader keeps its own user.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["Identity", "drop", "target"]
+__all__ = ["Identity", "drop", "drop_capabilities", "target"]
 
 Identity = tuple[int, int]  # (uid, gid)
 
@@ -54,3 +56,37 @@ def readable_by(identity: Identity, paths: list[str]) -> bool:
             os._exit(code)
     _, status = os.waitpid(pid, 0)
     return os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
+
+
+_PR_CAPBSET_DROP = 24
+_PR_SET_NO_NEW_PRIVS = 38
+_PR_CAP_AMBIENT, _PR_CAP_AMBIENT_CLEAR_ALL = 47, 4
+_CAP_VERSION_3 = 0x20080522
+
+
+def drop_capabilities() -> None:
+    """Drop every capability (bounding, ambient, effective, permitted, inheritable) and set
+    ``no_new_privs``: for a child that stays root (``nobody`` cannot read the Python
+    installation), so it cannot chown, set immutable flags, renice others, take a real-time
+    policy or set the host name. Raise OSError if the kernel refuses."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    last = 40
+    try:
+        with open("/proc/sys/kernel/cap_last_cap") as f:
+            last = int(f.read())
+    except (OSError, ValueError):
+        pass
+    for cap in range(last + 1):
+        if libc.prctl(_PR_CAPBSET_DROP, cap, 0, 0, 0) != 0 and ctypes.get_errno() != 22:
+            raise OSError(
+                ctypes.get_errno(), f"could not drop capability {cap} from the bounding set"
+            )
+    libc.prctl(_PR_CAP_AMBIENT, _PR_CAP_AMBIENT_CLEAR_ALL, 0, 0, 0)  # EINVAL on old kernels
+    header = (ctypes.c_uint32 * 2)(_CAP_VERSION_3, 0)
+    data = (ctypes.c_uint32 * 6)()  # two {effective, permitted, inheritable}: all zero
+    if libc.capset(header, data) != 0:
+        raise OSError(ctypes.get_errno(), "could not clear the capability sets")
+    if libc.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0:
+        raise OSError(ctypes.get_errno(), "could not set no_new_privs")

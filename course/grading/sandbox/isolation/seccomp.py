@@ -93,6 +93,23 @@ DENIED = (
     "init_module",
     "finit_module",
     "delete_module",
+    # System V IPC: its objects live outside the child's memory limit and outlive it (without
+    # bubblewrap's IPC namespace, even the run); POSIX shared memory is a file in its folder
+    "shmget",
+    "shmat",
+    "shmctl",
+    "msgget",
+    "msgsnd",
+    "msgrcv",
+    "msgctl",
+    "semget",
+    "semop",
+    "semtimedop",
+    "semctl",
+    # real-time and deadline scheduling (sched_setattr), and the host's names
+    "sched_setattr",
+    "sethostname",
+    "setdomainname",
 )
 #: Refused depending on their arguments (see :func:`rules`).
 _CONDITIONAL = (
@@ -106,6 +123,11 @@ _CONDITIONAL = (
     "dup2",
     "dup3",
     "close_range",
+    "sched_setaffinity",
+    "sched_setscheduler",
+    "sched_setparam",
+    "setpriority",
+    "ioprio_set",
 )
 
 # libseccomp's ABI (seccomp.h of libseccomp 2.x)
@@ -113,6 +135,7 @@ _ACT_ALLOW = 0x7FFF0000
 _ACT_ERRNO = 0x00050000
 _ATTR_ACT_BADARCH = 2
 _NE, _LE, _GE, _GT, _MASKED_EQ = 1, 3, 5, 6, 7
+_SIGN = 0x80000000  # the sign bit of an int argument
 _NR_SCMP_ERROR = -1  # a name libseccomp does not know
 
 _CLONE_THREAD = 0x00010000
@@ -177,6 +200,16 @@ def rules(pid: int, pinned_fd: int | None = None) -> list[Rule]:
         # another process: 64 bits compared, so stray high bits are refused too
         *((deny, name, ((0, _NE, pid, 0),)) for name in ("kill", "tkill", "tgkill")),
         (deny, "prlimit64", ((2, _NE, 0, 0),)),  # a new limit (the pointer is not NULL)
+        # scheduling: only the calling thread itself (pid 0), so a child can neither pin nor
+        # renice the fork server (every later student would inherit it) nor anyone else, and
+        # no real-time policy (a policy other than SCHED_OTHER, 0)
+        *((deny, name, ((0, _NE, 0, 0),)) for name in ("sched_setaffinity", "sched_setparam")),
+        (deny, "sched_setscheduler", ((0, _NE, 0, 0),)),
+        (deny, "sched_setscheduler", ((1, _NE, 0, 0),)),
+        (deny, "setpriority", ((0, _NE, 0, 0),)),  # PRIO_PGRP, PRIO_USER: others too
+        (deny, "setpriority", ((1, _NE, 0, 0),)),
+        (deny, "setpriority", ((2, _MASKED_EQ, _SIGN, _SIGN),)),  # no negative nice (root)
+        (deny, "ioprio_set", ((1, _NE, 0, 0),)),
     ]
     if pinned_fd is not None:
         pinned = (_MASKED_EQ, _LOW_WORD, pinned_fd)
