@@ -435,8 +435,16 @@ def test_pages_do_not_scroll_sideways_at_400_px(server, browser):
         width = page.evaluate("() => document.documentElement.scrollWidth")
         if width > 401:
             wide[rel] = width
+    # On a phone a figure keeps its drawn size (its labels readable) and scrolls in its box.
+    page.goto(server + "notebooks/01_least_squares_validation.html", wait_until="load")
+    scales = page.evaluate(
+        """() => Array.from(document.querySelectorAll('.cell_output img'))
+             .filter(img => img.naturalWidth > 0)
+             .map(img => img.getBoundingClientRect().width / img.naturalWidth)"""
+    )
     page.close()
     assert not wide, f"pages wider than a 400 px screen (scrollWidth): {wide}"
+    assert scales and min(scales) >= 0.95, f"figures shrunk on a 400 px screen: {scales}"
 
 
 def test_figures_show_near_their_drawn_size(server, browser):
