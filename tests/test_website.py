@@ -181,6 +181,11 @@ MATH_CHECK = """async () => {
   return [maths.length, typeset, document.querySelectorAll('mjx-merror').length];
 }"""
 
+#: Displayed width over drawn width of every loaded figure of a notebook page.
+FIGURE_SCALES = """() => Array.from(document.querySelectorAll('.cell_output img'))
+  .filter(img => img.naturalWidth > 0)
+  .map(img => img.getBoundingClientRect().width / img.naturalWidth)"""
+
 IMAGE_CHECK = """() => Array.from(document.querySelectorAll('.cell_output img')).map(
   img => [img.getAttribute('src'), img.complete && img.naturalWidth > 0])"""
 
@@ -437,11 +442,7 @@ def test_pages_do_not_scroll_sideways_at_400_px(server, browser):
             wide[rel] = width
     # On a phone a figure keeps its drawn size (its labels readable) and scrolls in its box.
     page.goto(server + "notebooks/01_least_squares_validation.html", wait_until="load")
-    scales = page.evaluate(
-        """() => Array.from(document.querySelectorAll('.cell_output img'))
-             .filter(img => img.naturalWidth > 0)
-             .map(img => img.getBoundingClientRect().width / img.naturalWidth)"""
-    )
+    scales = page.evaluate(FIGURE_SCALES)
     page.close()
     assert not wide, f"pages wider than a 400 px screen (scrollWidth): {wide}"
     assert scales and min(scales) >= 0.95, f"figures shrunk on a 400 px screen: {scales}"
@@ -454,11 +455,7 @@ def test_figures_show_near_their_drawn_size(server, browser):
     for html in sorted((ROOT / "notebooks").glob("*.ipynb")):
         rel = f"notebooks/{html.stem}.html"
         page.goto(server + rel, wait_until="load")
-        scales = page.evaluate(
-            """() => Array.from(document.querySelectorAll('.cell_output img'))
-                 .filter(img => img.naturalWidth > 0)
-                 .map(img => img.getBoundingClientRect().width / img.naturalWidth)"""
-        )
+        scales = page.evaluate(FIGURE_SCALES)
         shrunk = [round(scale, 2) for scale in scales if scale < 0.75]
         if shrunk:
             small[rel] = shrunk
