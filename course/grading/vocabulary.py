@@ -257,6 +257,7 @@ class PublicQuestion:
     hidden_cases: int = 0
     signature: dict | None = None  # type and shape of a value that is not shipped
     options: list | None = None  # a choice question's options (encoded plain data)
+    mistake_hints: dict = field(default_factory=dict)  # a declared mistake's message -> its hint
 
     @property
     def hints(self) -> list[str]:
@@ -286,6 +287,8 @@ class PublicQuestion:
             out["signature"] = self.signature
         if self.options is not None:
             out["options"] = self.options
+        if self.mistake_hints:
+            out["mistake_hints"] = dict(self.mistake_hints)
         return out
 
     @classmethod
@@ -307,6 +310,7 @@ class PublicQuestion:
             hidden_cases=int(d.get("hidden_cases", 0)),
             signature=d.get("signature"),
             options=d.get("options"),
+            mistake_hints={str(k): str(v) for k, v in d.get("mistake_hints", {}).items()},
         )
 
 

@@ -26,7 +26,7 @@ from typing import Any
 from course.grading.authoring.personal import PersonalData
 from course.grading.authoring.seal import sealed_compare
 from course.grading.codec import decode, encode
-from course.grading.compare import check_signature, describe
+from course.grading.compare import check_signature, chosen_hint, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
 from course.grading.tripwire import wrap_forbidden
@@ -224,13 +224,18 @@ class Assignment:
         return q.points * float(fraction or 0.0)
 
     # -- hints --------------------------------------------------------------------------
-    def _failed(self, q) -> str:
+    def _failed(self, q, messages=()) -> str:
         """Count one failed self-check of ``q`` and return the hint line it earns ('' if none).
 
-        After the k-th failure the student sees stage ``min(k, n) - 1`` of the n stages: a
-        nudge first, the formula only after repeated failures. The count lives in this object,
-        i.e. in the kernel's memory, and starts again with a fresh kernel.
+        The diagnosis chooses first (:func:`~course.grading.compare.chosen_hint`): a declared
+        mistake named in ``messages`` shows its own hint, an answer computed in float32 none.
+        Otherwise, after the k-th failure the student sees stage ``min(k, n) - 1`` of the n
+        stages: a nudge first, the formula only after repeated failures. The count lives in
+        this object, i.e. in the kernel's memory, and starts again with a fresh kernel.
         """
+        chosen = chosen_hint(messages, q.mistake_hints)
+        if chosen is not None:
+            return f"Hint (for this mistake): {chosen}" if chosen else ""
         self._failures[q.id] = self._failures.get(q.id, 0) + 1
         stages = q.hints
         if not stages:
@@ -277,7 +282,7 @@ class Assignment:
                 print("  PASS")
                 return 1.0
             print("  FAIL")
-            hint = self._failed(q)
+            hint = self._failed(q, [verdict.message])
             if hint:
                 print(f"      {hint}")
             print(f"      {verdict.message}")
@@ -320,6 +325,7 @@ class Assignment:
         forbidden: set[str] = set(forbidden_mentions(_source_of(func), q.forbid))
         passed = 0
         lines: list[str] = []
+        failures: list[str] = []  # the failed cases' messages: a diagnosis may choose the hint
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
@@ -346,6 +352,7 @@ class Assignment:
                 lines.append(f"  PASS: {case.label}")
             else:
                 lines.append(f"  FAIL: {case.label}\n      {message}")
+                failures.append(message)
         n = len(q.cases)
         hidden = q.hidden_cases
         more = (
@@ -364,7 +371,7 @@ class Assignment:
             )
             return 0.0
         if passed < n:
-            hint = self._failed(q)
+            hint = self._failed(q, failures)
             if hint:
                 print(f"  {hint}")
         for line in lines:
