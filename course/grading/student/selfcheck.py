@@ -30,7 +30,14 @@ from course.grading.compare import check_signature, chosen_hint, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
 from course.grading.tripwire import wrap_forbidden
-from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
+from course.grading.vocabulary import (
+    CHECKS_FILE,
+    PLACEHOLDER_ID,
+    PublicQuestion,
+    PublicSpec,
+    id_off_pattern,
+    id_pattern_in,
+)
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]
 
@@ -112,6 +119,8 @@ class Assignment:
         self.personal = PersonalData.read(folder) if data_module is None else None
         # which cell set each answer (notes an answer set outside its answer cell)
         self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
+        # the class's student ID pattern (``course export --id-pattern``), None without one
+        self.id_pattern = id_pattern_in(folder)
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -121,13 +130,34 @@ class Assignment:
             return _GradingStandIn(_GRADING)
         kind, folder = _locate(name, path)
         if kind == "json":
-            return cls(PublicSpec.read(folder), folder, student_id)
-        from course.grading.authoring.checks import load_checks
-        from course.grading.authoring.release import public_spec
+            check = cls(PublicSpec.read(folder), folder, student_id)
+        else:
+            from course.grading.authoring.checks import load_checks
+            from course.grading.authoring.release import public_spec
 
-        checks = load_checks(folder)
-        spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
-        return cls(spec, folder, student_id, data_module=checks.data_module)
+            checks = load_checks(folder)
+            spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
+            check = cls(spec, folder, student_id, data_module=checks.data_module)
+        note = check.id_note()
+        if note:
+            print(note)
+        return check
+
+    def id_note(self) -> str:
+        """What is wrong with ``STUDENT_ID`` ('' when nothing is, or none was given): still
+        the placeholder, or off the pattern of the class's IDs. Said when the self-check is
+        loaded and by ``check.all()``; ``check.submit()`` refuses such an ID."""
+        sid = self.student_id
+        if sid is None:
+            return ""
+        if sid == PLACEHOLDER_ID:
+            return (
+                f"Note: STUDENT_ID is still the placeholder {PLACEHOLDER_ID!r}: set it to your "
+                "student ID, exactly as registered, and run this cell again (your personal "
+                "data and check.submit() need it)."
+            )
+        off = id_off_pattern(sid, self.id_pattern)
+        return f"Note: {off} (check.submit() refuses it)." if off else ""
 
     # -- data ---------------------------------------------------------------------------
     def _data_mod(self):
@@ -160,6 +190,9 @@ class Assignment:
             raise ValueError(
                 "Set STUDENT_ID in the first cell to your student ID, then re-run that cell."
             )
+        off = id_off_pattern(self.student_id, self.id_pattern)
+        if off:
+            raise ValueError(off + ".")
 
     # -- submitting ---------------------------------------------------------------------
     def submit(self, notebook=None, out=None):
@@ -186,6 +219,9 @@ class Assignment:
             earned[qid] = self._check(qid, ns, None, False)
             print()
         print(public_summary(self.spec, earned))
+        note = self.id_note()
+        if note:
+            print(note)
 
     def __call__(self, qid: str, *value) -> None:
         """Self-check question ``qid``; pass ``value`` to check it instead of the notebook's."""
