@@ -23,6 +23,7 @@ from scipy import stats
 from course import diagnosis as dg
 from course.grading.authoring.checks import load_checks
 from course.grading.authoring.seal import make_salt, seal, sealed_compare
+from course.grading.batch.classreport import diagnosis
 from course.grading.compare import SINGLE_PRECISION, chosen_hint, compare, single_precision
 from course.grading.notebook import _STUDENT_ID_LINE
 from course.grading.student.selfcheck import Assignment
@@ -114,6 +115,8 @@ def test_a_float32_answer_is_told_so_at_grading_and_at_self_check_alike():
             assert "reverse order" not in v.message
     # a float64 near miss keeps its own diagnosis
     assert "close: it agrees" in compare(e, e * (1 + 3e-8), 1e-8, 1e-14).message
+    # and the class report counts float32 answers as such
+    assert diagnosis(clear.message) == ("kind", "computed in float32")
 
 
 def test_a_symmetric_answer_off_by_round_off_is_not_in_reverse_order():
