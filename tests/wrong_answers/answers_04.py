@@ -140,10 +140,14 @@ WRONG = {
         ),
         (
             "right, but computed in float32",
-            _q2(_Q2_RIGHT_LOOP).replace("dtype=float)", "dtype=np.float32)")
+            _q2(_Q2_RIGHT_LOOP)
+            .replace("dtype=float)", "dtype=np.float32)")
             .replace("float(m0), float(p0)", "np.float32(m0), np.float32(p0)")
             .replace("np.empty(y.shape)", "np.empty(y.shape, dtype=np.float32)")
-            .replace("    for t, y_t", "    a, q, r = np.float32(a), np.float32(q), np.float32(r)\n    for t, y_t"),
+            .replace(
+                "    for t, y_t",
+                "    a, q, r = np.float32(a), np.float32(q), np.float32(r)\n    for t, y_t",
+            ),
         ),
     ],
     "q3": [
