@@ -192,7 +192,7 @@ def grade(
             grader.data_key,
         )
         todo = identity.entries
-        _write_conflicts(identity.conflicts, out / "identity_conflicts.csv")
+        _write_conflicts(identity.conflicts, identity.attached, out / "identity_conflicts.csv")
         late, late_notes = _late_work(grader.checks, todo, submissions, options)
         if options.students is not None:
             _check_selection(options.students, todo)
@@ -384,15 +384,18 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
     )
 
 
-def _write_conflicts(conflicts: list, path: Path) -> None:
-    """Every quarantined file with both IDs (the name's and the notebook's), for the record."""
-    if not conflicts:
+def _write_conflicts(conflicts: list, attached: list, path: Path) -> None:
+    """Every quarantined file with both IDs (the name's and the notebook's), and every file
+    graded for its name's student although its notebook declares an ID on no roster."""
+    if not conflicts and not attached:
         path.unlink(missing_ok=True)
         return
+    rows = [(*row, "quarantined") for row in conflicts]
+    rows += [(*row, f"graded as {row[1]}") for row in attached]
     with path.open("w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
-        writer.writerow(["file", "named_as", "declares", "why"])
-        writer.writerows([csv_text(cell) for cell in row] for row in conflicts)
+        writer.writerow(["file", "named_as", "declares", "why", "decision"])
+        writer.writerows([csv_text(cell) for cell in row] for row in rows)
 
 
 def _file_record(path: Path | None, submissions: Path) -> dict | None:
