@@ -544,3 +544,21 @@ def test_the_duplicate_line_names_the_rule_it_applied(tmp_path):
         "submission number, its latest upload)" in flags
     )
     assert "graded s002_resubmitted.ipynb (the last in the LMS's order: by file name)" in flags
+
+
+def test_a_canvas_user_number_never_takes_the_time_of_the_student_with_that_id(tmp_path):
+    """Numeric IDs: Ann's Canvas user number 101 is Jane's student ID; the row "101" of the
+    timestamps file is Jane's time, not Ann's."""
+    from course.grading.batch.driver import Submission
+    from course.grading.batch.late import late_records, parse_due, parse_policy
+
+    subs = tmp_path / "subs"
+    jane = _id_notebook(subs / f"doejane_7_1_{NAME}.ipynb", "101")
+    ann = _id_notebook(subs / f"roeann_101_2_{NAME}.ipynb", "102")
+    stamps = tmp_path / "times.csv"
+    stamps.write_text("id,submitted_at\n101,2026-10-25T12:00+02:00\n")
+    entries = [Submission("101", jane), Submission("102", ann)]
+    due = parse_due("2026-10-20T23:59+02:00")
+    records, notes = late_records(entries, subs, due, parse_policy(None), stamps)
+    assert records["101"]["days"] == 5 and records["102"]["days"] == 0
+    assert "102" in notes[0] and "no row in" in notes[0]

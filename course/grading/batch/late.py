@@ -297,6 +297,8 @@ def late_records(
     if submitted_at is not None and str(submitted_at) != FILE_TIMES:
         table = read_timestamps(Path(submitted_at), zone)
     emails = {s.id: s.email.lower() for s in (roster.students if roster else ()) if s.email}
+    # an LMS number that is also a student ID names that student, never another's upload
+    student_ids = {sub.student.lower() for sub in entries}
     records: dict[str, dict] = {}
     unknown, disagree, untimed = [], [], []
     for sub in entries:
@@ -308,7 +310,7 @@ def late_records(
         if table is not None:
             keys = [sub.student.lower(), emails.get(sub.student, "")]
             lms = _MOODLE.match(name) or _CANVAS.match(name)
-            if lms:
+            if lms and lms.group(1).lower() not in student_ids:
                 keys.append(lms.group(1))
             hit = next((table[k] for k in keys if k and k in table), None)
             if hit is not None:
