@@ -386,6 +386,12 @@ def test_a_late_row_totals_after_the_deduction_everywhere(tmp_path):
     assert "-2.8 points, 9.7 instead of 12.5" in text
     assert "charged as 1 day late" in feedback_markdown(rows[2], checks)
     assert "Late" not in feedback_markdown(rows[3], checks)
+    from course.grading.batch.classreport import report_html
+
+    page = report_html(rows, checks, ["q1"])
+    assert "<h2>Late submissions</h2>" in page and "2 late" in page
+    assert "<td>s003</td><td>unknown</td><td>unknown (charged 1)</td><td>1</td>" in page
+    assert "lowest 0, highest 14" in page  # the totals after the deduction
     roster_file = tmp_path / "roster.csv"
     roster_file.write_text(CANVAS_ROSTER, encoding="utf-8")
     roster = read_roster(roster_file)

@@ -134,6 +134,7 @@ def test_a_term_from_the_secret_to_the_gradebook(tmp_path, capsys, monkeypatch):
     ] and conflicts[1][-1] == "graded as s003"  # fmt: skip
     assert "not on the class list" in (grades1 / "feedback" / "s003.md").read_text("utf-8")
     assert "Late: 1 submission(s): s004 (2 days, -" in text
+    assert f"; due {DUE}; 10 % of the points possible per started day late, at most 50 %" in text
     grades = {r["student"]: r for r in csv.DictReader((grades1 / "grades.csv").open())}
     assert sorted(grades) == ["s001", "s002", "s003", "s004"]
     assert (grades["s001"]["total"], grades["s001"]["late"], grades["s001"]["penalty"]) == (

@@ -214,15 +214,24 @@ class Summary:
                 + (f" ({', '.join(self.unknown)})" if self.unknown else "")
                 + "; LMS files: canvas.csv, moodle.csv"
             )
+        records = [r.late for r in self.rows if r.late]
         late = [r for r in self.rows if r.late and r.late.get("days") != 0]
-        if late or self.late_notes:
+        if records or self.late_notes:
+            dues = sorted({str(x["due"]) for x in records if x.get("due")})
+            rule = (
+                f"due {', '.join(dues) or 'not given'}; {records[0].get('policy')}"
+                if records
+                else ""
+            )
             lines.append(
                 f"Late: {len(late)} submission(s)"
                 + (": " if late else "")
                 + ", ".join(
-                    f"{r.student} ({_days((r.late or {}).get('days'))}, -{_fmt_points(r.penalty)} points)"
+                    f"{r.student} ({_days((r.late or {}).get('days'))}, "
+                    f"-{_fmt_points(r.penalty)} points)"
                     for r in sorted(late, key=lambda r: r.student)
                 )
+                + (f"; {rule}" if rule else "")
             )
             lines += [f"  - {note}" for note in self.late_notes]
         if self.marking:
