@@ -7,10 +7,9 @@ whose submission it is; the ID written inside the notebook only has to agree wit
   as ``check.submit()`` writes it), on the roster when there is one;
 * with a roster, the one roster student the name points at: a roster student ID, Canvas user
   number or login as a token of the name (Canvas's ``doejohn_LATE_12345_67890_<file>``), or the
-  full name of a Moodle folder (``John Doe_1234_assignsubmission_file_``).
-
-  A Canvas name's ``lastfirst`` part names the roster student of that name too, so a roster
-  without Canvas's user numbers still ties ``doejane_1234_5678_<file>`` to Jane Doe.
+  full name of a Moodle folder (``John Doe_1234_assignsubmission_file_``), or the ``lastfirst``
+  part of a Canvas name (so a roster without Canvas's user numbers still ties
+  ``doejane_1234_5678_<file>`` to Jane Doe). An ID token wins over a name.
 
 A notebook whose declared ID (its submission metadata, else ``STUDENT_ID``) is another roster
 student's, or (without a roster) differs from the ID its name gives, is **quarantined**: graded
