@@ -55,14 +55,16 @@ def late_sentence(row: StudentResult) -> str:
     if not late or late.get("days") == 0:
         return ""
     days = late.get("days")
+    percent = float(late.get("percent") or 0)
     if days is None:
-        when = (
-            "The learning-management system marked this submission late, without its time "
-            "(charged as 1 day late)"
+        when = "The learning-management system marked this submission late, without its time" + (
+            " (charged as 1 day late)" if percent else ""
         )
     else:
-        when = f"Handed in {late.get('submitted_at')}, {_days(days)} after the due date {late.get('due')}"
-    percent = float(late.get("percent") or 0)
+        when = (
+            f"Handed in {late.get('submitted_at')}, {_days(days)} after the due date "
+            f"{late.get('due')}"
+        )
     if not percent:
         return f"{when}; no late deduction."
     return (
