@@ -568,3 +568,26 @@ def test_a_canvas_user_number_never_takes_the_time_of_the_student_with_that_id(t
     records, notes = late_records(entries, subs, due, parse_policy(None), stamps)
     assert records["101"]["days"] == 5 and records["102"]["days"] == 0
     assert "102" in notes[0] and "no row in" in notes[0]
+
+
+def test_the_due_date_and_policy_of_checks_py_and_the_command_line_wins(tmp_path):
+    from types import SimpleNamespace
+
+    from course.grading.batch.driver import Submission, _late_work
+    from course.grading.batch.late import LateError, parse_due, parse_policy
+
+    subs = tmp_path / "subs"
+    path = _id_notebook(subs / f"doejane_LATE_101_501_{NAME}.ipynb", "s001")
+    entries = [Submission("s001", path)]
+    checks = SimpleNamespace(due="2026-10-20T23:59Z", late_policy="percent-per-day:5")
+    records, _ = _late_work(checks, entries, subs, _options())
+    assert records["s001"]["due"] == "2026-10-20T23:59+00:00"
+    assert records["s001"]["percent"] == 5  # _LATE_ without a time: one day
+    options = _options(due=parse_due(DUE_CLI), late_policy=parse_policy("percent-per-day:20"))
+    records, _ = _late_work(checks, entries, subs, options)
+    assert records["s001"]["due"] == DUE_CLI and records["s001"]["percent"] == 20
+    with pytest.raises(LateError, match=r"due= in checks\.py 'friday'"):
+        _late_work(SimpleNamespace(due="friday", late_policy=None), entries, subs, _options())
+
+
+DUE_CLI = "2026-10-21T12:00+02:00"
