@@ -7,7 +7,8 @@ students ``--student`` names), one
 :class:`~course.grading.batch.session.StudentSession` each, and writes the reports
 (:mod:`course.grading.batch.reports`) as students finish.
 
-Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status),
+Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status;
+``late`` and ``penalty`` when a due date is known, :mod:`course.grading.batch.late`),
 ``report.html`` (the class report, :mod:`course.grading.batch.classreport`),
 ``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
 finish; a rerun skips students already graded with the same checks and library version from
