@@ -119,8 +119,7 @@ class DIAResult:
     def __repr__(self) -> str:
         x = ", ".join(format_number(float(v), 5) for v in self.x_hat)
         return (
-            f"DIAResult(detected={self.detection.reject}, decision={self.decision!r}, "
-            f"x_hat=[{x}])"
+            f"DIAResult(detected={self.detection.reject}, decision={self.decision!r}, x_hat=[{x}])"
         )
 
 
