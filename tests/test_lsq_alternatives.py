@@ -55,8 +55,8 @@ def test_glr_of_one_observation_is_the_w_test_squared(seed, correlated):
     f = lsq.fit(A, y, Qyy)
     w = lsq.w_tests(f).statistic
     for i in range(f.m):
-        T_1 = lsq.glr_test(f, np.eye(f.m)[:, i]).statistic
-        assert T_1 == pytest.approx(w[i] ** 2, rel=1e-10, abs=1e-12)
+        statistic = lsq.glr_test(f, np.eye(f.m)[:, i]).statistic
+        assert statistic == pytest.approx(w[i] ** 2, rel=1e-10, abs=1e-12)
 
 
 @pytest.mark.parametrize("seed", range(6))
