@@ -717,7 +717,11 @@ def glr_view(size=6.0, alpha=0.05, *, sigma=2.0, ax=None, max_size=16.0):
     grid = theory_grid(0.0, max_size)
     (ax,) = _axes(ax, 1)
     at_size = {}
-    labels = {1: "w-test of obs. 4", 2: "obs. 4 and 5 together", fit.redundancy: "overall model test"}
+    labels = {
+        1: "w-test of obs. 4",
+        2: "obs. 4 and 5 together",
+        fit.redundancy: "overall model test",
+    }
     for k, (q, label) in enumerate(labels.items()):
         curve = chi2.chi2_power(q, lam_per_unit * grid**2, alpha)
         at_size[f"q = {q}"] = float(chi2.chi2_power(q, lam_per_unit * size**2, alpha))
