@@ -208,7 +208,11 @@ def _export(args) -> int:
         secret = None if args.no_secret else load_secret(args.secret)
         roster = read_roster(args.roster) if args.roster else None
         result = export(
-            args.dest, root=find_course_dir(args.course_dir), secret=secret, roster=roster
+            args.dest,
+            root=find_course_dir(args.course_dir),
+            secret=secret,
+            roster=roster,
+            id_pattern=args.id_pattern,
         )
     except (ExportError, SecretError, RosterError, OSError) as exc:
         print(f"course export: {exc}", file=sys.stderr)
@@ -234,6 +238,7 @@ def _export(args) -> int:
 def _submit(args) -> int:
     from course.grading.authoring.personal import PersonalData
     from course.grading.student.submit import Refused, make_submission, unanswered_questions
+    from course.grading.vocabulary import id_pattern_in
 
     notebook = Path(args.notebook)
     if not notebook.is_file():
@@ -242,7 +247,12 @@ def _submit(args) -> int:
     try:
         personal = PersonalData.read(notebook.parent)
         path, digest, nb = make_submission(
-            notebook, args.id, None, Path(args.out) if args.out else None, personal
+            notebook,
+            args.id,
+            None,
+            Path(args.out) if args.out else None,
+            personal,
+            id_pattern_in(notebook.parent),
         )
     except (Refused, ValueError) as exc:
         print(f"course submit: not submitted: {exc}", file=sys.stderr)
@@ -298,6 +308,14 @@ def _add_class_commands(subparsers) -> None:
         help="ignore $COURSE_SECRET_FILE: a self-learner edition",
     )
     p_ex.add_argument("--roster", default=None, help="CSV of the class (id, name, email)")
+    p_ex.add_argument(
+        "--id-pattern",
+        default=None,
+        metavar="REGEX",
+        help="the form of this class's student IDs, a regular expression a whole ID matches "
+        "(e.g. 's[0-9]{6}'): the self-check says when STUDENT_ID does not match it and "
+        "check.submit() refuses it; every roster ID must match",
+    )
     p_ex.add_argument("--course-dir", help=COURSE_DIR_HELP)
     p_ex.set_defaults(func=_instructor_only(_export))
 

@@ -77,6 +77,10 @@ class Mistake:
         or ``f(data)`` for a value question, ``f(*case_args, **case_kwargs)`` for a function
         question. Like the reference it runs in the grader and in ``course release`` (public
         cases: its value ships in ``checks.json``), never in a student's process.
+    hint : str, optional
+        The hint a student sees when the answer matches this mistake, in the self-check and
+        in the grading feedback, instead of the question's staged hint: the hint follows the
+        diagnosed mistake. Like every hint it names no value.
 
     Notes
     -----
@@ -96,6 +100,9 @@ class Mistake:
 
     message: str
     reference: Callable
+    #: The hint shown when this mistake is diagnosed, instead of the question's next staged
+    #: hint (which follows the order of the method, not the mistake); '' keeps the stages.
+    hint: str = ""
 
     def __post_init__(self):
         if not isinstance(self.message, str) or not self.message.strip():
@@ -105,6 +112,8 @@ class Mistake:
                 "Mistake(message, reference): reference must be a function computing the wrong "
                 "answer, with the signature of the question's reference"
             )
+        if not isinstance(self.hint, str):
+            raise ValueError("Mistake(message, reference, hint=...): hint must be a string")
 
 
 def _hint_stages(qid: str, hint) -> tuple[str, ...]:
@@ -155,6 +164,11 @@ class Question:
     mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
     options: tuple = ()  # a choice question's options
     rubric: str = ""  # a short-answer question's marking guide (instructors only)
+
+    @property
+    def mistake_hints(self) -> dict[str, str]:
+        """The declared mistakes' own hints, by the mistake's message."""
+        return {m.message: m.hint for m in self.mistakes if m.hint}
 
     @property
     def hints(self) -> tuple[str, ...]:

@@ -32,6 +32,7 @@ REPORT_FILE = "report.html"
 #: (text in a failed case's message, the kind of wrong answer it shows), first match wins.
 _KINDS = (
     ("raised ", "raised an exception"),
+    ("computed in single precision", "computed in float32"),
     ("transposed", "transposed"),
     ("sign is flipped", "the sign"),
     ("factor", "a constant factor"),

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from course.grading.batch.results import StudentResult
+from course.grading.compare import chosen_hint
 from course.grading.vocabulary import visible_text
 
 __all__ = [
@@ -116,9 +117,10 @@ def feedback_markdown(row: StudentResult, checks) -> str:
                     f"- {'PASS' if case.ok else 'FAIL'} {case.label}"
                     + (f": {md_text(case.message)}" if case.message and not case.ok else "")
                 )
-        if q is not None and q.hints and not r.full_marks and r.status != "to mark":
-            # the first stage only: the later ones (the formula) stay in the self-check
-            lines += ["", f"Hint: {q.hints[0]}"]
+        if q is not None and not r.full_marks and r.status != "to mark":
+            hint = _feedback_hint(q, r)
+            if hint:
+                lines += ["", f"Hint: {hint}"]
     if row.notes:
         lines += ["", "## Notes", ""] + [f"- {md_text(n)}" for n in row.notes]
     lines.append("")
@@ -126,6 +128,17 @@ def feedback_markdown(row: StudentResult, checks) -> str:
         f"<sub>{row.assignment} · checks {row.checks_sha256[:12]} · course {row.version}</sub>"
     )
     return "\n".join(lines) + "\n"
+
+
+def _feedback_hint(q, r) -> str:
+    """The hint of a question's feedback: the one a diagnosed mistake chooses (its own, or
+    none for an answer computed in float32), else the first stage only -- the later ones
+    (the formula) stay in the self-check."""
+    messages = [c.message for c in r.cases if not c.ok] or [r.message]
+    chosen = chosen_hint(messages, getattr(q, "mistake_hints", {}))
+    if chosen is not None:
+        return chosen
+    return q.hints[0] if q.hints else ""
 
 
 _FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
