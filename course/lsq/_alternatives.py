@@ -106,91 +106,91 @@ def glr_test(
 ) -> TestResult:
     r"""Generalised likelihood-ratio test of a q-dimensional alternative ``E(y) = Ax + C∇``.
 
-        Parameters
-        ----------
-        fit : LeastSquaresFit
-            Result of :func:`fit` (the null hypothesis H0: ``E(y) = Ax``).
-        C : array_like, shape (m, q) or (m,)
-            Bias columns of the alternative: the bias is ``C∇`` for an unknown
-            ``∇`` of q entries; ``[A C]`` must have full column rank and
-            ``q <= m - n``.
-        alpha : float
-            Level of significance.
-        variance : {"known", "estimated"}
-            ``"known"``: ``Qyy`` is the covariance (T_q, chi-square law);
-            ``"estimated"``: ``Qyy`` is known up to a factor σ² estimated from the
-            residuals (F statistic; needs ``q < m - n``).
+    Parameters
+    ----------
+    fit : LeastSquaresFit
+        Result of :func:`fit` (the null hypothesis H0: ``E(y) = Ax``).
+    C : array_like, shape (m, q) or (m,)
+        Bias columns of the alternative: the bias is ``C∇`` for an unknown
+        ``∇`` of q entries; ``[A C]`` must have full column rank and
+        ``q <= m - n``.
+    alpha : float
+        Level of significance.
+    variance : {"known", "estimated"}
+        ``"known"``: ``Qyy`` is the covariance (T_q, chi-square law);
+        ``"estimated"``: ``Qyy`` is known up to a factor σ² estimated from the
+        residuals (F statistic; needs ``q < m - n``).
 
-        Returns
-        -------
-        TestResult
-            ``statistic`` T_q (or F), ``dof`` q, ``null`` ``chi2(q)`` (or
-            ``F(q, m - n - q)``); ``details`` holds the estimated bias ``∇̂``,
-            the denominator degrees of freedom (F) and ``m - n``.
+    Returns
+    -------
+    TestResult
+        ``statistic`` T_q (or F), ``dof`` q, ``null`` ``chi2(q)`` (or
+        ``F(q, m - n - q)``); ``details`` holds the estimated bias ``∇̂``,
+        the denominator degrees of freedom (F) and ``m - n``.
 
-        Raises
-        ------
-        ValueError
-            ``C`` of the wrong shape or ``q > m - n``; ``variance="estimated"``
-            with ``q = m - n`` (nothing left to estimate σ² from).
-        numpy.linalg.LinAlgError
-            ``[A C]`` rank deficient (the bias is absorbed by x̂).
+    Raises
+    ------
+    ValueError
+        ``C`` of the wrong shape or ``q > m - n``; ``variance="estimated"``
+        with ``q = m - n`` (nothing left to estimate σ² from).
+    numpy.linalg.LinAlgError
+        ``[A C]`` rank deficient (the bias is absorbed by x̂).
 
-        See Also
-        --------
-        overall_model_test : The case q = m - n.
-        w_tests : The case ``C = c_i`` (``T_1 = w_i²``).
-        alternative_law : The law of the statistic under the alternative (power).
-        minimal_detectable_bias : The biases found with a given power.
+    See Also
+    --------
+    overall_model_test : The case q = m - n.
+    w_tests : The case ``C = c_i`` (``T_1 = w_i²``).
+    alternative_law : The law of the statistic under the alternative (power).
+    minimal_detectable_bias : The biases found with a given power.
 
-        Notes
-        -----
-        Teunissen (2000, *Testing theory*, chapter 3): the uniformly most powerful
-        invariant test of H0 against Ha rejects for large
+    Notes
+    -----
+    Teunissen (2000, *Testing theory*, chapter 3): the uniformly most powerful
+    invariant test of H0 against Ha rejects for large
 
-        .. math::
+    .. math::
 
-            T_q = \hat e^{\mathsf T} Q_{yy}^{-1} C\,
-                  (C^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} C)^{-1}\,
-                  C^{\mathsf T} Q_{yy}^{-1} \hat e
-            \sim \chi^2(q, 0) \text{ under H0}, \quad \chi^2(q, \lambda) \text{ under Ha},
+        T_q = \hat e^{\mathsf T} Q_{yy}^{-1} C\,
+              (C^{\mathsf T} Q_{yy}^{-1} Q_{\hat e\hat e} Q_{yy}^{-1} C)^{-1}\,
+              C^{\mathsf T} Q_{yy}^{-1} \hat e
+        \sim \chi^2(q, 0) \text{ under H0}, \quad \chi^2(q, \lambda) \text{ under Ha},
 
-        with :math:`\lambda = \nabla^{\mathsf T} C^{\mathsf T} Q_{yy}^{-1}
-        Q_{\hat e\hat e} Q_{yy}^{-1} C \nabla`. For :math:`C = c_i` it is Baarda's
-        :math:`w_i^2`; for any C of rank :math:`q = m - n` it is the overall model
-        test's :math:`\hat e^{\mathsf T} Q_{yy}^{-1}\hat e`. With σ² unknown,
-        :math:`\hat e^{\mathsf T} Q_{yy}^{-1}\hat e - T_q` is the residual norm under Ha, and
+    with :math:`\lambda = \nabla^{\mathsf T} C^{\mathsf T} Q_{yy}^{-1}
+    Q_{\hat e\hat e} Q_{yy}^{-1} C \nabla`. For :math:`C = c_i` it is Baarda's
+    :math:`w_i^2`; for any C of rank :math:`q = m - n` it is the overall model
+    test's :math:`\hat e^{\mathsf T} Q_{yy}^{-1}\hat e`. With σ² unknown,
+    :math:`\hat e^{\mathsf T} Q_{yy}^{-1}\hat e - T_q` is the residual norm under Ha, and
 
-        .. math::
+    .. math::
 
-            F = \frac{T_q / q}{(\hat e^{\mathsf T} Q_{yy}^{-1}\hat e - T_q)/(m - n - q)}
-            \sim F(q, m - n - q)
+        F = \frac{T_q / q}{(\hat e^{\mathsf T} Q_{yy}^{-1}\hat e - T_q)/(m - n - q)}
+        \sim F(q, m - n - q)
 
-        under H0, free of σ². Computed in the whitened problem: with
-        :math:`\bar C = (I - Q_1 Q_1^{\mathsf T}) L^{-1} C = Q_c R_c`,
-        :math:`T_q = \lVert Q_c^{\mathsf T} \tilde e \rVert^2` and
-        :math:`\hat\nabla = R_c^{-1} Q_c^{\mathsf T} \tilde e` (no inverse formed).
+    under H0, free of σ². Computed in the whitened problem: with
+    :math:`\bar C = (I - Q_1 Q_1^{\mathsf T}) L^{-1} C = Q_c R_c`,
+    :math:`T_q = \lVert Q_c^{\mathsf T} \tilde e \rVert^2` and
+    :math:`\hat\nabla = R_c^{-1} Q_c^{\mathsf T} \tilde e` (no inverse formed).
 
-        Examples
-        --------
-        A line with an outlier in observation 6 (the w-test example): the GLR test
-        of that one observation is the w-test squared,
+    Examples
+    --------
+    A line with an outlier in observation 6 (the w-test example): the GLR test
+    of that one observation is the w-test squared,
 
-        >>> import numpy as np
-        >>> from course.lsq import fit, w_tests
-        >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
-        >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
-        >>> f = fit(A, y, 0.01 * np.eye(10))
-        >>> T = glr_test(f, np.eye(10)[:, 6]).statistic
-        >>> round(T, 4), round(float(w_tests(f).statistic[6]) ** 2, 4)
-        (23.3158, 23.3158)
+    >>> import numpy as np
+    >>> from course.lsq import fit, w_tests
+    >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
+    >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
+    >>> f = fit(A, y, 0.01 * np.eye(10))
+    >>> T = glr_test(f, np.eye(10)[:, 6]).statistic
+    >>> round(T, 4), round(float(w_tests(f).statistic[6]) ** 2, 4)
+    (23.3158, 23.3158)
 
-        and a jump of the last three observations (q = 1, one bias for all three) is
+    and a jump of the last three observations (q = 1, one bias for all three) is
     rejected too, for the outlier makes the last points look high:
 
-        >>> jump = np.r_[np.zeros(7), np.ones(3)]
-        >>> glr_test(f, jump, alpha=0.01).reject
-        True
+    >>> jump = np.r_[np.zeros(7), np.ones(3)]
+    >>> glr_test(f, jump, alpha=0.01).reject
+    True
     """
     fit = _check_fit(fit)
     alpha = as_probability(alpha)
