@@ -20,6 +20,7 @@ import html
 from collections import Counter
 from pathlib import Path
 
+from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import GradeStatus
 
@@ -327,6 +328,8 @@ th, td { border-bottom: 1px solid #ccc; padding: 0.2rem 0.7rem; text-align: left
 figure { margin: 0.5rem 0 1rem; }
 svg { max-width: 100%; height: auto; display: block; }
 .note { color: #555; }
+.warning { border-left: 4px solid #b3261e; background: #fdf0ee; padding: 0.3rem 0.9rem;
+           margin: 0.8rem 0; }
 """
 
 
@@ -351,6 +354,19 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         f"<p>{n} student(s); total out of {data.max_points:g}: mean {sum(totals) / n:.2f}, "
         f"median {median:g}, lowest {totals[0]:g}, highest {totals[-1]:g}.</p>"
     )
+    unmarked = unmarked_counts(data.rows, checks)
+    warning = unmarked_warning(unmarked)
+    if warning:  # the totals below count them as 0: say so before any number
+        parts.append(
+            f'<div class="warning"><p><strong>{html.escape(warning)}</strong> in this report, '
+            "grades.csv and the LMS files. Mark them (<code>course mark OUT_DIR</code>) and "
+            "rerun <code>course grade</code> with <code>--short-answers</code>.</p>"
+            + _table(
+                ["question", "not marked yet", "answers"],
+                [[qid, n, given] for qid, (n, given) in unmarked.items() if n],
+            )
+            + "</div>"
+        )
     parts.append("<h2>Pass rate per question</h2>")
     parts.append(f"<figure>{_pass_rate_svg(data)}</figure>")
     rows_q = []
