@@ -91,7 +91,7 @@ class MarkingFile:
     """
 
     def __init__(self, out_dir: str | Path):
-        self.out = Path(out_dir)
+        self.out = Path(out_dir).resolve()  # the messages name it: "." would say nothing
         self.path = self.out / SHORT_ANSWERS_FILE
         if not self.path.is_file():
             raise MarksError(
@@ -183,9 +183,8 @@ class MarkingFile:
 
 
 def _box(text: str, css: str) -> str:
-    return (
-        f'<div class="{css}" style="white-space: pre-wrap">{html.escape(text, quote=False)}</div>'
-    )
+    style = "white-space: pre-wrap; border-left: 3px solid #999; padding: 0.2em 0.7em"
+    return f'<div class="{css}" style="{style}">{html.escape(text, quote=False)}</div>'
 
 
 class MarkingView:
