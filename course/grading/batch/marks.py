@@ -4,15 +4,17 @@
 
 ``student, question, answer, points_possible, points, rubric, comment, answer_id``
 
-The instructor (or a marker, in any spreadsheet) fills ``points`` (blank: not marked yet) and
-optionally ``comment`` (shown to the student), then runs ``course grade NAME SUBMISSIONS --out
+The instructor fills ``points`` (blank: not marked yet) and optionally ``comment`` (shown to
+the student) in the marking view (``course mark OUT``, :mod:`course.grading.batch.marking`) or
+any spreadsheet, then runs ``course grade NAME SUBMISSIONS --out
 OUT --short-answers FILE``. The file is checked as a whole first: an unknown student or
 question, points that are not a number between 0 and ``points_possible``, a row given twice or
 an answer changed since the file was written refuses the import, line by line, and changes
 nothing. Accepted marks are kept in ``OUT/short_answer_marks.json`` (so a regrade keeps them,
 as long as the answer is the same: ``answer_id`` is a digest of its text) and merged into
 ``grades.csv``, ``results.jsonl`` and the feedback. Text cells are written spreadsheet-safe
-(:func:`course.grading.batch.reports.csv_text`).
+(:func:`course.grading.batch.reports.csv_text`). Answers not marked yet count as 0 until they
+are, and :func:`unmarked_warning` says so in the console summary and ``report.html``.
 """
 
 from __future__ import annotations
