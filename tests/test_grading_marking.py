@@ -332,3 +332,13 @@ def test_course_mark_writes_the_marking_notebook(course, tmp_path, capsys):
     notebook.write_text(notebook.read_text().replace("# Marking the short answers", "# Mine"))
     assert write_marking_notebook(out) == notebook  # an existing notebook is kept as it is
     assert "# Mine" in notebook.read_text()
+
+
+def test_the_gradebook_warns_about_unmarked_answers(graded, tmp_path, capsys):
+    """Old code: the gradebook counted them as 0 and said nothing."""
+    from course.cli import main
+
+    _, out = graded
+    assert main(["gradebook", str(out), "--out", str(tmp_path / "book")]) == 0
+    text = capsys.readouterr().out
+    assert "WARNING: 4 short answer(s) NOT marked yet count as 0 (Items: 4)" in text

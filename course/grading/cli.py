@@ -185,6 +185,14 @@ def _gradebook(args) -> int:
     columns = ", ".join(f"{c.name} ({c.max_points:g})" for c in book.columns)
     print(f"Gradebook of {len(book.columns)} assignment(s): {columns}")
     print("Wrote " + ", ".join(str(p) for p in written))
+    unmarked = book.unmarked()
+    if unmarked:
+        print(
+            f"WARNING: {sum(unmarked.values())} short answer(s) NOT marked yet count as 0 ("
+            + ", ".join(f"{name}: {n}" for name, n in unmarked.items())
+            + "); mark them (course mark OUT_DIR), merge them (course grade … --short-answers), "
+            "then build the gradebook again"
+        )
     return 0
 
 
