@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -89,9 +90,15 @@ def test_lms_files_carry_the_unmarked_zero_visibly(graded):
     assert "not marked" not in moodle["s5"][-1]  # no answer given: a real 0
 
 
-def test_no_warning_once_everything_is_marked(course, tmp_path):
+def _copy(graded, tmp_path: Path) -> Path:
+    """A copy of the graded class's output (a rerun resumes every student: no grading)."""
     out = tmp_path / "out"
-    _grade(course, out)
+    shutil.copytree(graded[1], out)
+    return out
+
+
+def test_no_warning_once_everything_is_marked(course, graded, tmp_path):
+    out = _copy(graded, tmp_path)
     rows = list(csv.DictReader((out / "short_answers.csv").open(encoding="utf-8")))
     for r in rows:
         r["points"] = "1"
@@ -226,6 +233,8 @@ def test_points_outside_the_bounds_are_refused_and_kept_on_screen(
     assert (folder / "short_answers.csv").read_bytes() == before
     # leaving the answer is refused too: what was typed is neither lost nor changed
     assert view.next() is False and view.next_unmarked() is False
+    view.question.value = "q2"  # another question: refused too, the menu goes back
+    assert view.question.value == "q1"
     assert view.current == first and (view.points.value, view.comment.value) == (points, comment)
 
 
@@ -294,10 +303,9 @@ def test_bad_folders_and_questions_are_refused(tmp_path):
         MarkingFile(folder)
 
 
-def test_marks_from_the_view_are_merged_by_short_answers(course, tmp_path):
+def test_marks_from_the_view_are_merged_by_short_answers(course, graded, tmp_path):
     """The view's file is what --short-answers merges: grades, feedback and LMS files."""
-    out = tmp_path / "out"
-    _grade(course, out)
+    out = _copy(graded, tmp_path)
     view = MarkingView(out)
     marked = {}
     for points, comment in (("1.5", "name the dof"), ("2", "")):
@@ -317,13 +325,13 @@ def test_marks_from_the_view_are_merged_by_short_answers(course, tmp_path):
             assert comment in (out / "feedback" / f"{sid}.md").read_text()
 
 
-def test_course_mark_writes_the_marking_notebook(course, tmp_path, capsys):
+def test_course_mark_writes_the_marking_notebook(tmp_path, capsys):
     from course.cli import main
 
     out = tmp_path / "out"
     assert main(["mark", str(out), "--no-open"]) == 2
     assert "short_answers.csv does not exist" in capsys.readouterr().err
-    _grade(course, out)
+    _marking_file(out)
     assert main(["mark", str(out), "--no-open"]) == 0
     notebook = out / "marking.ipynb"
     assert str(notebook) in capsys.readouterr().out
