@@ -210,10 +210,27 @@ class MarkingView:
 
     Examples
     --------
-    In a notebook (``course mark OUT`` writes one):
+    In a notebook, ``MarkingView("grades/03")`` as the cell's last line shows the view
+    (``course mark grades/03`` writes such a notebook). Here, a marking file of one answer:
 
-    >>> from course.grading.batch.marking import MarkingView
-    >>> MarkingView("grades/03")  # doctest: +SKIP
+    >>> import csv, tempfile
+    >>> from course.grading.batch.marks import COLUMNS, answer_id
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> out = Path(tmp.name)
+    >>> text = "Because T exceeds its critical value."
+    >>> row = ["s1", "q3", text, "2", "", "names the critical value", "", answer_id(text)]
+    >>> with open(out / "short_answers.csv", "w", newline="") as f:
+    ...     csv.writer(f, lineterminator="\\n").writerows([COLUMNS, row])
+    >>> view = MarkingView(out)
+    >>> view.current.student, view.current.marked, "s1" in view.heading.value
+    ('s1', False, False)
+    >>> view.points.value = "1,5"  # what the points box sends when the marker leaves it
+    >>> view.current.points, (out / "short_answers.csv").read_text().splitlines()[1]
+    (1.5, 's1,q3,Because T exceeds its critical value.,2,1.5,names the critical value,,...')
+    >>> view.points.value = "3"  # more than the question's points: refused, nothing written
+    >>> view.current.points, "give between 0 and 2" in view.status.value
+    (1.5, True)
+    >>> tmp.cleanup()
     """
 
     def __init__(
