@@ -59,9 +59,10 @@ cli
 ``batch/`` ``course grade`` in the trusted parent
     driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
     student), plan (which of a submission's cells run, in which order), results (the typed
-    results), reports (feedback, grades, results log), marks
-    (short answers), marking (the marking view of ``course mark``), identity (whose submission is whose), roster (the class, LMS grade files),
-    cluster (Dask), gradebook (several assignments in one file), classreport (``report.html``).
+    results), reports (feedback, grades, results log), marks (short answers), marking (the
+    marking view of ``course mark``), identity (whose submission is whose), roster (the class,
+    LMS grade files), late (due dates and late penalties), cluster (Dask), gradebook (several
+    assignments in one file), classreport (``report.html``).
 ``sandbox/`` the sandboxed children
     parent (the grader's handle), forkserver (the warm process children fork from), runner
     (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,
