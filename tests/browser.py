@@ -95,10 +95,12 @@ def run_cell(page, sync_api, cell: str = ".jp-CodeCell") -> None:
     """Run the notebook cell ``cell`` (a selector) in JupyterLab: Lab drops a run request made
     before its kernel connection is up (the cell stays ``[ ]``) or asks which kernel to start
     (a dialog, accepted with its default), so run it again until it has started."""
-    # the kernel's status in the status bar (a Lab that words it otherwise: the attempts below
-    # still run the cell)
+    # the kernel is up: the toolbar's execution indicator says idle, in JupyterLab and in
+    # Notebook 7 (should a version show it otherwise, the attempts below still run the cell)
     with contextlib.suppress(sync_api.TimeoutError):
-        page.wait_for_function("document.body.innerText.includes('| Idle')", timeout=60_000)
+        page.wait_for_selector(
+            '.jp-Notebook-ExecutionIndicator[data-status="idle"]', state="attached", timeout=60_000
+        )
     for _attempt in range(6):
         dialog = page.locator(".jp-Dialog .jp-mod-accept")
         if dialog.count():

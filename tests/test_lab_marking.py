@@ -1,5 +1,6 @@
 """Issue 27 item 5: an instructor marks two short answers in the marking view, in a real
-JupyterLab and Chromium, and ``course grade --short-answers`` merges them into the grades.
+JupyterLab (and Notebook 7, ``course mark --app notebook``) and Chromium, and ``course grade
+--short-answers`` merges them into the grades.
 
 The class of ``tests/test_grading_marking.py`` (four answers to the 2-point short question q3)
 is graded with a roster; ``course mark OUT --no-open`` writes the marking notebook; JupyterLab
@@ -44,7 +45,12 @@ def _wait_status(page, text: str) -> None:
     )
 
 
-def test_marking_two_answers_in_jupyterlab_reaches_the_grades(course, tmp_path):
+# the front ends of `course mark --app lab|notebook` and the URL path each opens a notebook at
+UIS = {"lab": "lab/tree", "notebook7": "notebooks"}
+
+
+@pytest.mark.parametrize("ui", list(UIS))
+def test_marking_two_answers_in_jupyter_reaches_the_grades(course, tmp_path, ui):
     from course.cli import main
 
     out = tmp_path / "out"
@@ -57,7 +63,7 @@ def test_marking_two_answers_in_jupyterlab_reaches_the_grades(course, tmp_path):
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         page = browser.new_page(viewport={"width": 1400, "height": 1000})
         try:
-            page.goto(f"{base}/lab/tree/marking.ipynb?token={token}")
+            page.goto(f"{base}/{UIS[ui]}/marking.ipynb?token={token}")
             page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=90_000)
             run_cell(page, sync_api)
             page.wait_for_selector(".course-marking-points input", timeout=90_000)
