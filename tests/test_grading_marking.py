@@ -350,3 +350,19 @@ def test_the_gradebook_warns_about_unmarked_answers(graded, tmp_path, capsys):
     assert main(["gradebook", str(out), "--out", str(tmp_path / "book")]) == 0
     text = capsys.readouterr().out
     assert "WARNING: 4 short answer(s) NOT marked yet count as 0 (Items: 4)" in text
+
+
+def test_course_mark_opens_the_notebook_in_jupyter(tmp_path, monkeypatch, capsys):
+    import subprocess
+    import sys
+
+    from course.cli import main
+
+    out = _marking_file(tmp_path / "out")
+    calls = []
+    monkeypatch.setattr(subprocess, "call", lambda command, cwd: calls.append((command, cwd)))
+    assert main(["mark", str(out), "--no-browser"]) == 0
+    assert calls == [([sys.executable, "-m", "jupyterlab", "marking.ipynb", "--no-browser"], out)]
+    assert main(["mark", str(out), "--app", "notebook"]) == 0
+    assert calls[-1][0] == [sys.executable, "-m", "notebook", "marking.ipynb"]
+    assert "Opening" in capsys.readouterr().out
