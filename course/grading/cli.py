@@ -502,8 +502,9 @@ def add_commands(subparsers) -> None:
         "--short-answers",
         metavar="FILE",
         default=None,
-        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, with the "
-        "points column filled) into the grades and the feedback; a bad row refuses the import",
+        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, filled by "
+        "`course mark OUT` or in a spreadsheet) into the grades and the feedback; a bad row "
+        "refuses the import",
     )
     p_gr.add_argument(
         "--due",
