@@ -84,8 +84,13 @@ def test_unmarked_answers_are_a_warning_in_the_report(graded):
 
 
 def test_lms_files_carry_the_unmarked_zero_visibly(graded):
+    """The choice (docs/instructors/term.md): the LMS files carry the points so far, the
+    unmarked answer as 0, and say so wherever the file has room for words."""
     _, out = graded
+    canvas = {r[2]: r for r in csv.reader((out / "canvas.csv").open(encoding="utf-8"))}
+    assert canvas["s1"][5] == "3"  # q1 1 + q2 2 + q3 (not marked) 0
     moodle = _moodle(out)
+    assert moodle["s1"][4] == "3"
     assert "q3 0/2 not marked yet" in moodle["s1"][-1]
     assert "not marked" not in moodle["s5"][-1]  # no answer given: a real 0
 
