@@ -350,25 +350,25 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
     if not n:
         parts.append("<p>No submission was graded.</p></body></html>")
         return "\n".join(parts) + "\n"
-    totals = sorted(data.totals)
-    median = totals[n // 2] if n % 2 else (totals[n // 2 - 1] + totals[n // 2]) / 2
-    parts.append(
-        f"<p>{n} student(s); total out of {data.max_points:g}: mean {sum(totals) / n:.2f}, "
-        f"median {median:g}, lowest {totals[0]:g}, highest {totals[-1]:g}.</p>"
-    )
     unmarked = unmarked_counts(data.rows, checks)
     warning = unmarked_warning(unmarked)
-    if warning:  # the totals below count them as 0: say so before any number
+    if warning:  # every number below counts them as 0: say so first
         parts.append(
             f'<div class="warning"><p><strong>{html.escape(warning)}</strong> in this report, '
             "grades.csv and the LMS files. Mark them (<code>course mark OUT_DIR</code>) and "
             "rerun <code>course grade</code> with <code>--short-answers</code>.</p>"
             + _table(
                 ["question", "not marked yet", "answers"],
-                [[qid, n, given] for qid, (n, given) in unmarked.items() if n],
+                [[qid, todo, given] for qid, (todo, given) in unmarked.items() if todo],
             )
             + "</div>"
         )
+    totals = sorted(data.totals)
+    median = totals[n // 2] if n % 2 else (totals[n // 2 - 1] + totals[n // 2]) / 2
+    parts.append(
+        f"<p>{n} student(s); total out of {data.max_points:g}: mean {sum(totals) / n:.2f}, "
+        f"median {median:g}, lowest {totals[0]:g}, highest {totals[-1]:g}.</p>"
+    )
     parts.append("<h2>Pass rate per question</h2>")
     parts.append(f"<figure>{_pass_rate_svg(data)}</figure>")
     rows_q = []
