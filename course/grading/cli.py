@@ -1,5 +1,5 @@
-"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``export`` and
-``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``mark``,
+``export`` and ``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -196,7 +196,67 @@ def _gradebook(args) -> int:
     columns = ", ".join(f"{c.name} ({c.max_points:g})" for c in book.columns)
     print(f"Gradebook of {len(book.columns)} assignment(s): {columns}")
     print("Wrote " + ", ".join(str(p) for p in written))
+    unmarked = book.unmarked()
+    if unmarked:
+        print(
+            f"WARNING: {sum(unmarked.values())} short answer(s) NOT marked yet count as 0 ("
+            + ", ".join(f"{name}: {n}" for name, n in unmarked.items())
+            + "); mark them (course mark OUT_DIR), merge them (course grade … --short-answers), "
+            "then build the gradebook again"
+        )
     return 0
+
+
+def _mark(args) -> int:
+    import subprocess
+    from importlib.util import find_spec
+
+    from course.grading.batch.marking import write_marking_notebook
+    from course.grading.batch.marks import MarksError
+
+    try:
+        notebook = write_marking_notebook(Path(args.out_dir))
+    except MarksError as exc:
+        print(f"course mark: {exc}", file=sys.stderr)
+        return 2
+    if args.no_open:
+        print(f"Marking notebook: {notebook} (open it in Jupyter and run its cell)")
+        return 0
+    module = "jupyterlab" if args.app == "lab" else "notebook"
+    if find_spec(module) is None or find_spec("ipywidgets") is None:
+        print(
+            f"course mark: the marking view needs {module} and ipywidgets for {sys.executable} "
+            '(pip install -e ".[notebooks]"); the notebook is ready at ' + str(notebook),
+            file=sys.stderr,
+        )
+        return 2
+    command = [sys.executable, "-m", module, notebook.name]
+    command += ["--no-browser"] if args.no_browser else []
+    print(f"Opening {notebook} in Jupyter {args.app} (Ctrl-C to stop)")
+    return subprocess.call(command, cwd=notebook.parent)
+
+
+def _add_mark_command(subparsers) -> None:
+    p_mark = subparsers.add_parser(
+        "mark",
+        help="mark the short answers of a graded assignment in Jupyter",
+        description="Write OUT_DIR/marking.ipynb (unless it exists) and open it in JupyterLab: "
+        "a view of OUT_DIR/short_answers.csv that shows one answer at a time, anonymous by "
+        "default, with the rubric, a points box and a comment box. Every mark is saved into "
+        "short_answers.csv at once; merge them with `course grade NAME SUBMISSIONS --out "
+        "OUT_DIR --short-answers OUT_DIR/short_answers.csv`.",
+    )
+    p_mark.add_argument("out_dir", metavar="OUT_DIR", help="the --out folder of `course grade`")
+    p_mark.add_argument(
+        "--app", default="lab", choices=["lab", "notebook"], help="Jupyter front end"
+    )
+    p_mark.add_argument(
+        "--no-browser", action="store_true", help="start Jupyter without opening a browser"
+    )
+    p_mark.add_argument(
+        "--no-open", action="store_true", help="only write the notebook (do not start Jupyter)"
+    )
+    p_mark.set_defaults(func=_instructor_only(_mark))
 
 
 def _export(args) -> int:
@@ -460,8 +520,9 @@ def add_commands(subparsers) -> None:
         "--short-answers",
         metavar="FILE",
         default=None,
-        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, with the "
-        "points column filled) into the grades and the feedback; a bad row refuses the import",
+        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, filled by "
+        "`course mark OUT` or in a spreadsheet) into the grades and the feedback; a bad row "
+        "refuses the import",
     )
     p_gr.add_argument(
         "--due",
@@ -520,4 +581,5 @@ def add_commands(subparsers) -> None:
         help="0 for an assignment a student did not submit (default: blank)",
     )
     p_gb.set_defaults(func=_instructor_only(_gradebook))
+    _add_mark_command(subparsers)
     _add_class_commands(subparsers)

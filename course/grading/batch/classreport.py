@@ -22,6 +22,7 @@ import html
 from collections import Counter
 from pathlib import Path
 
+from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import GradeStatus
 
@@ -330,6 +331,8 @@ th, td { border-bottom: 1px solid #ccc; padding: 0.2rem 0.7rem; text-align: left
 figure { margin: 0.5rem 0 1rem; }
 svg { max-width: 100%; height: auto; display: block; }
 .note { color: #555; }
+.warning { border-left: 4px solid #b3261e; background: #fdf0ee; padding: 0.3rem 0.9rem;
+           margin: 0.8rem 0; }
 """
 
 
@@ -348,6 +351,19 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
     if not n:
         parts.append("<p>No submission was graded.</p></body></html>")
         return "\n".join(parts) + "\n"
+    unmarked = unmarked_counts(data.rows, checks)
+    warning = unmarked_warning(unmarked)
+    if warning:  # every number below counts them as 0: say so first
+        parts.append(
+            f'<div class="warning"><p><strong>{html.escape(warning)}</strong> in this report, '
+            "grades.csv and the LMS files. Mark them (<code>course mark OUT_DIR</code>) and "
+            "rerun <code>course grade</code> with <code>--short-answers</code>.</p>"
+            + _table(
+                ["question", "not marked yet", "answers"],
+                [[qid, todo, given] for qid, (todo, given) in unmarked.items() if todo],
+            )
+            + "</div>"
+        )
     totals = sorted(data.totals)
     median = totals[n // 2] if n % 2 else (totals[n // 2 - 1] + totals[n // 2]) / 2
     parts.append(

@@ -39,6 +39,8 @@ from course.grading.batch.marks import (
     save_marks,
     short_questions,
     unimported_edits,
+    unmarked_counts,
+    unmarked_warning,
     validate_marks,
     write_short_answers,
 )
@@ -370,16 +372,23 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
         and Path(options.short_answers).resolve() == path.resolve()
     )
     head = f"short answers: {imported} mark(s) imported; " if entries is not None else ""
+    # never a 0 for an unmarked answer in grades.csv or the LMS files without saying so
+    warning = unmarked_warning(unmarked_counts(final, checks))
+    if warning:
+        warning = (
+            f"\nWARNING: {warning} in grades.csv, report.html and the LMS files; mark them "
+            f"with `course mark {out}` (or fill `points` in {path}), then rerun with "
+            f"--short-answers {path}"
+        )
     edits = 0 if just_read or not path.exists() else unimported_edits(path, marks)
     if edits:
         return (
             f"{head}{path} was NOT rewritten: {edits} row(s) hold marks never imported "
-            f"(import them with --short-answers {path})"
+            f"(import them with --short-answers {path}){warning}"
         )
     to_mark = write_short_answers(final, checks, path, marks)
     return (
-        f"{head or 'short answers: '}{to_mark} to mark in {path} (fill `points`, then rerun "
-        f"with --short-answers {path})"
+        f"{head or 'short answers: '}{to_mark} to mark in {path}{warning}"
         if to_mark
         else f"{head or 'short answers: '}all marked ({path})"
     )
