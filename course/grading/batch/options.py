@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import Any
 
 from course.grading.authoring.secret import Secret
-from course.grading.batch.cluster import ConnectionFiles
 from course.grading.batch.roster import Roster
 from course.grading.sandbox.isolation import Isolation, detect
 
@@ -48,7 +47,7 @@ class GradeOptions:
     landlock: bool = True  # use Landlock when the kernel has it
     announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
     cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
-    cluster_files: ConnectionFiles | None = None  # TLS files of the connection to the scheduler
+    cluster_files: Any = None  # TLS files of the scheduler connection (cluster.ConnectionFiles)
     insecure_cluster: bool = False  # accept a plain tcp:// scheduler beyond this machine
     secret: Secret | None = None  # the instructor's key of personal data (None: public data)
     roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
