@@ -160,6 +160,40 @@ def test_workers_delete_the_files_they_were_given(class_run):
     assert class_run["after_shutdown"] == [], "left on the workers after their shutdown"
 
 
+@pytest.mark.slow  # a cluster and a grading run
+def test_a_failed_cleanup_is_reported(tmp_path, monkeypatch):
+    from course.grading.batch import clusterworker
+
+    kept: list[Path] = []
+    real_delete = clusterworker._delete
+
+    def failing_delete(folder: Path) -> None:
+        kept.append(folder)
+        real_delete(folder / NAME / "checks.py")  # not a folder: shutil leaves it all
+
+    monkeypatch.setattr(clusterworker, "_delete", failing_delete)
+    subs = _submissions(tmp_path / "subs", students=("eve",))
+    announced: list[str] = []
+    try:
+        with distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster:
+            summary = grade(
+                SOLUTION_DIR,
+                subs,
+                tmp_path / "out",
+                GradeOptions(jobs=1, progress=False, cluster=cluster, announce=announced.append),
+            )
+    finally:
+        for path in kept:
+            shutil.rmtree(path, ignore_errors=True)
+    assert summary.graded == 1 and len(kept) == 1
+    assert any(
+        "could not delete the assignment's files" in line and str(kept[0]) in line
+        for line in announced
+    ), announced
+
+
 # -- the transport ------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "address",

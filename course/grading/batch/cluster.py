@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import ipaddress
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import urlsplit
@@ -247,5 +248,14 @@ def grade_on_cluster(address, grader, pending: list, options):
         try:
             if plugin is not None:  # every worker deletes the files it was given
                 client.unregister_worker_plugin(plugin.name)
+        except Exception as exc:  # the grades stand; the instructor must hear of the files
+            message = (
+                f"a worker could not delete the assignment's files it was given "
+                f"({type(exc).__name__}: {exc}); remove them by hand"
+            )
+            if options.announce is not None:
+                options.announce(message)
+            else:
+                warnings.warn(message, RuntimeWarning, stacklevel=2)
         finally:
             client.close()

@@ -87,16 +87,20 @@ class AssignmentFiles(WorkerPlugin):
             self._grader = self._folder = None
         if grader is not None:
             grader.close()
-        if folder is None:
-            return
-        shutil.rmtree(folder, ignore_errors=True)
-        if folder.exists():
-            left = sorted(str(p) for p in folder.rglob("*"))[:5]
-            raise OSError(f"could not remove the assignment files in {folder}: {left}")
+        if folder is not None:
+            _delete(folder)
 
     async def teardown(self, worker) -> None:
         # closing waits for a build in progress: off the event loop, like the build itself
         await asyncio.to_thread(self.close)
+
+
+def _delete(folder: Path) -> None:
+    """Remove ``folder`` and everything in it; OSError naming what is left otherwise."""
+    shutil.rmtree(folder, ignore_errors=True)
+    if folder.exists():
+        left = sorted(str(p) for p in folder.rglob("*"))[:5]
+        raise OSError(f"could not remove the assignment files in {folder}: {left}")
 
 
 def _plugin(name: str) -> AssignmentFiles:
