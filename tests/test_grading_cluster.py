@@ -24,6 +24,7 @@ from course.grading.batch import session as session_module
 from course.grading.batch.cluster import ClusterError, ConnectionFiles, cluster_target
 from course.grading.batch.driver import grade
 from course.grading.batch.options import GradeOptions
+from course.grading.codec import encode
 from course.grading.sandbox.isolation import detect
 
 distributed = pytest.importorskip("distributed")
@@ -340,3 +341,39 @@ def test_the_grader_is_not_built_on_a_workers_event_loop(tmp_path, monkeypatch):
         )
     assert builds, "the worker built no grader"
     assert builds == [{"on_loop": False, "loop_ran": True}] * len(builds)
+
+
+# -- what the driver sends ------------------------------------------------------------------------
+def test_a_key_file_in_the_assignment_folder_is_not_sent(tmp_path):
+    from course.grading.batch.cluster import _bundle
+
+    folder = tmp_path / NAME
+    shutil.copytree(SOLUTION_DIR, folder)
+    assert set(_bundle(folder)) >= GIVEN
+    secret = Secret(secrets.token_bytes(32), "test")
+    (folder / "notes.txt").write_text(f"key for the term: {secret.key.hex()}\n")
+    with pytest.raises(ClusterError, match=r"notes.txt holds a class key"):
+        _bundle(folder, secret)
+    (folder / "notes.txt").write_text("# a key file\ncourse-secret-v1:" + "ab" * 32 + "\n")
+    with pytest.raises(ClusterError, match="keep key files outside"):
+        _bundle(folder)
+
+
+def test_a_grader_without_the_key_needs_each_students_seeds():
+    secret = Secret(secrets.token_bytes(32), "test")
+    keyed = session_module.AssignmentGrader(SOLUTION_DIR, GradeOptions(secret=secret))
+    seeds = keyed.student_seeds("alice")
+    assert seeds == {key: secret.seed(NAME, key, "alice") for key in keyed.checks.data_keys()}
+    worker = session_module.AssignmentGrader(SOLUTION_DIR, GradeOptions(), data_key=secret.key_id)
+    assert worker.data_key == keyed.data_key and worker.secret is None
+    with pytest.raises(ValueError, match="holds no key"):
+        worker.student_seeds("alice")  # never public data in place of the class's
+    for key, seed in seeds.items():
+        drawn = worker.checks.data_from_seed(key, seed)
+        assert json.dumps(encode(drawn)) == json.dumps(
+            encode(keyed.checks.data_for(key, "alice", secret))
+        )
+    with pytest.raises(ValueError, match="not the key id"):
+        session_module.AssignmentGrader(
+            SOLUTION_DIR, GradeOptions(secret=secret), data_key="0123456789ab"
+        )

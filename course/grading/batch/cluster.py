@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import urlsplit
 
+from course.grading.authoring.secret import KEY_FILE_PREFIX
 from course.grading.notebook import SubmissionError, read_notebook_bytes
 
 __all__ = ["ClusterError", "ConnectionFiles", "cluster_target", "grade_on_cluster"]
@@ -158,13 +159,24 @@ def check_cluster_options(options) -> None:
 
 
 # -- driver side ----------------------------------------------------------------------------------
-def _bundle(solution_dir: Path) -> dict[str, bytes]:
-    """The assignment's authoring files, relative path -> bytes."""
-    return {
+def _bundle(solution_dir: Path, secret=None) -> dict[str, bytes]:
+    """The assignment's authoring files, relative path -> bytes; refuses (:class:`ClusterError`)
+    a folder that holds a key file or the class's key, which would travel with it."""
+    bundle = {
         p.relative_to(solution_dir).as_posix(): p.read_bytes()
         for p in sorted(solution_dir.rglob("*"))
         if p.is_file() and "__pycache__" not in p.parts
     }
+    needles = [KEY_FILE_PREFIX.encode()]
+    if secret is not None:
+        needles += [secret.key, secret.key.hex().encode()]
+    for rel, content in bundle.items():
+        if any(needle in content for needle in needles):
+            raise ClusterError(
+                f"{solution_dir / rel} holds a class key, and the assignment's folder travels to "
+                "every worker: keep key files outside the course folder"
+            )
+    return bundle
 
 
 def _client(address, files: ConnectionFiles | None, insecure: bool):
@@ -193,7 +205,7 @@ def grade_on_cluster(address, grader, pending: list, options):
     client = _client(address, options.cluster_files, options.insecure_cluster)
     plugin = None
     try:
-        bundle = _bundle(grader.solution_dir)
+        bundle = _bundle(grader.solution_dir, grader.secret)
         plugin = AssignmentFiles(
             _plugin_name(grader, bundle, worker_options),
             grader.name,
