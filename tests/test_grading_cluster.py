@@ -343,6 +343,38 @@ def test_the_grader_is_not_built_on_a_workers_event_loop(tmp_path, monkeypatch):
     assert builds == [{"on_loop": False, "loop_ran": True}] * len(builds)
 
 
+@pytest.mark.slow  # a cluster
+def test_a_worker_without_walls_refuses_before_any_student(tmp_path, monkeypatch):
+    from course.grading.sandbox.isolation import IsolationError
+
+    driver, real = threading.get_ident(), GradeOptions.isolation
+
+    def isolation(self):
+        if threading.get_ident() != driver:
+            raise IsolationError("no Landlock and no user namespaces on this worker")
+        return real(self)
+
+    submitted: list[str] = []
+    real_submit = distributed.Client.submit
+
+    def submit(self, *args, **kwargs):
+        submitted.append(str(kwargs.get("key")))
+        return real_submit(self, *args, **kwargs)
+
+    monkeypatch.setattr(GradeOptions, "isolation", isolation)
+    monkeypatch.setattr(distributed.Client, "submit", submit)
+    subs = _submissions(tmp_path / "subs", students=("alice",))
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        pytest.raises(IsolationError, match="on this worker"),
+    ):
+        grade(SOLUTION_DIR, subs, tmp_path / "out", GradeOptions(progress=False, cluster=cluster))
+    assert submitted and not [key for key in submitted if key.startswith("grade-")]
+    assert not (tmp_path / "out" / "results.jsonl").exists()  # nobody was graded
+
+
 # -- what the driver sends ------------------------------------------------------------------------
 def test_a_key_file_in_the_assignment_folder_is_not_sent(tmp_path):
     from course.grading.batch.cluster import _bundle

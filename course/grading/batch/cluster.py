@@ -214,21 +214,23 @@ def grade_on_cluster(address, grader, pending: list, options):
             grader.data_key,
         )
         client.register_plugin(plugin)
+        # every worker present builds its grader first: a worker whose kernel has no walls
+        # refuses (IsolationError) before any student is sent
+        workers = list(client.scheduler_info()["workers"])
+        described = client.gather(
+            [
+                client.submit(
+                    describe_task,
+                    plugin.name,
+                    workers=[w],
+                    allow_other_workers=False,
+                    pure=False,
+                    key=f"describe-{plugin.name}-{i}",
+                )
+                for i, w in enumerate(workers)
+            ]
+        )
         if options.announce is not None:
-            workers = list(client.scheduler_info()["workers"])
-            described = client.gather(
-                [
-                    client.submit(
-                        describe_task,
-                        plugin.name,
-                        workers=[w],
-                        allow_other_workers=False,
-                        pure=False,
-                        key=f"describe-{plugin.name}-{i}",
-                    )
-                    for i, w in enumerate(workers)
-                ]
-            )
             for text in sorted(set(described)):
                 count = sum(1 for t in described if t == text)
                 options.announce(f"{count} worker(s) at {client.scheduler.address}: {text}")
