@@ -80,6 +80,7 @@ def _release(args) -> int:
 def _grade(args) -> int:
     from course.grading.batch.cluster import ClusterError, ConnectionFiles
     from course.grading.batch.driver import SelectionError, grade
+    from course.grading.batch.late import LateError, parse_due, parse_policy
     from course.grading.batch.marks import MarksError
     from course.grading.batch.options import GradeOptions, available_cpus
     from course.grading.sandbox.isolation import IsolationError
@@ -101,10 +102,20 @@ def _grade(args) -> int:
     if not submissions.is_dir():
         print(f"course grade: {submissions} is not a folder of submissions", file=sys.stderr)
         return 2
+    try:
+        late_options = {
+            "due": parse_due(args.due) if args.due else None,
+            "late_policy": parse_policy(args.late_policy) if args.late_policy else None,
+            "submitted_at": args.submitted_at,
+        }
+    except LateError as exc:
+        print(f"course grade: {exc}", file=sys.stderr)
+        return 2
     class_options = _class_options(args)
     if class_options is None:
         return 2
     options = GradeOptions(
+        **late_options,
         **class_options,
         jobs=args.jobs or available_cpus(),
         timeout=args.timeout,
@@ -126,7 +137,7 @@ def _grade(args) -> int:
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except (MarksError, SelectionError, ClusterError) as exc:
+    except (MarksError, SelectionError, LateError, ClusterError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -438,6 +449,29 @@ def add_commands(subparsers) -> None:
         default=None,
         help="merge the marks of a filled short-answer file (OUT/short_answers.csv, with the "
         "points column filled) into the grades and the feedback; a bad row refuses the import",
+    )
+    p_gr.add_argument(
+        "--due",
+        metavar="DATE",
+        default=None,
+        help="the due date, ISO 8601 with its time zone (2026-10-20T23:59+02:00); default: "
+        "due= in checks.py. Adds the late and penalty columns to grades.csv",
+    )
+    p_gr.add_argument(
+        "--late-policy",
+        metavar="RULES",
+        default=None,
+        help="late deduction, e.g. percent-per-day:10,cap:50 (percent of the points possible "
+        "per started day, at most cap) or zero-after:DATE; default: late_policy= in checks.py, "
+        "else none (late work is marked, nothing deducted)",
+    )
+    p_gr.add_argument(
+        "--submitted-at",
+        metavar="FILE",
+        default=None,
+        help="when each submission was handed in: a CSV with columns id,submitted_at (or a "
+        "Moodle grading worksheet), or 'file-times' for the files' modification times; "
+        "without it only Canvas's _LATE_ in file names marks late work",
     )
     p_gr.add_argument(
         "--cluster",

@@ -252,6 +252,13 @@ class Checks:
         Modules imported once before any student code runs (speed only).
     files : list of str
         Extra files of ``solutions/<name>/`` copied verbatim into the release (public!).
+    due : str, optional
+        The due date, an ISO 8601 date-time with its time zone (``"2026-10-20T23:59+02:00"``);
+        ``course grade --due`` overrides it. Changing it changes the checks' digest, so set it
+        before the first grading run (or pass ``--due``).
+    late_policy : str, optional
+        The late policy, e.g. ``"percent-per-day:10,cap:50"`` (see
+        :mod:`course.grading.batch.late`); ``course grade --late-policy`` overrides it.
     """
 
     def __init__(
@@ -262,6 +269,8 @@ class Checks:
         timeout: float = 10.0,
         preload=(),
         files=(),
+        due: str | None = None,
+        late_policy: str | None = None,
     ):
         if not _NAME.match(str(name)):
             raise ValueError(f"assignment name {name!r}: use letters, digits, '_', '-', '.'")
@@ -271,6 +280,8 @@ class Checks:
         self.timeout = float(timeout)
         self.preload = tuple(preload)
         self.files = tuple(files)
+        self.due = due
+        self.late_policy = late_policy
         self.questions: dict[str, Question] = {}
         self.solution_dir: Path | None = None  # set by load_checks
 

@@ -9,6 +9,8 @@ style sheet or font from outside), readable without the console:
   of ``checks.py``) and each kind of wrong answer the comparison diagnosed (a constant factor,
   the sign, the shape, off by one, ...) occurred;
 - the timeouts, forbidden calls and other abnormal ends, with the students;
+- the late submissions and their deductions (when a due date is known or the LMS marked a
+  file late);
 - the slowest students.
 
 Counts are of students: a student whose three hidden cases show the same factor counts once.
@@ -405,6 +407,10 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         _table(["question", "status", "students", "who"], abnormal) if abnormal else "<p>None.</p>"
     )
 
+    if any(r.late is not None for r in data.rows):
+        parts.append("<h2>Late submissions</h2>")
+        parts.append(_late_table(data.rows))
+
     parts.append("<h2>Slowest students</h2>")
     timed = sorted(
         (r for r in data.rows if isinstance(r.wall_seconds, (int, float))),
@@ -420,6 +426,35 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
     )
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
+
+
+def _late_table(rows: list[StudentResult]) -> str:
+    """The late submissions: when, how late, the deduction and the total after it (the
+    totals above are after the deductions too)."""
+    late = sorted((r for r in rows if r.late and r.late.get("days") != 0), key=lambda r: r.student)
+    due = sorted({str(r.late.get("due")) for r in rows if r.late and r.late.get("due")})
+    head = f"<p>Due {html.escape(', '.join(due)) if due else 'date unknown'}; {len(late)} late.</p>"
+    if not late:
+        return head
+    body = [
+        [
+            r.student,
+            r.late.get("submitted_at") or "unknown",
+            "unknown (charged 1)" if r.late.get("days") is None else r.late["days"],
+            f"{r.penalty:g}",
+            f"{r.points:g}",
+            f"{r.total:g}",
+        ]
+        for r in late
+        if r.late is not None
+    ]
+    table = _table(["student", "handed in", "days late", "deduction", "points", "total"], body)
+    policy = html.escape(str(late[0].late.get("policy") if late[0].late else ""))
+    return (
+        head
+        + table
+        + f'<p class="note">Late policy: {policy}. Totals above are after the deduction.</p>'
+    )
 
 
 def write_report(rows: list[StudentResult], checks, question_ids: list[str], out: Path) -> Path:

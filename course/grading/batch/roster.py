@@ -24,7 +24,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.batch.reports import csv_text
+from course.grading.batch.reports import csv_text, late_sentence
 from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import STUDENT_ID_RULE, is_student_id
 
@@ -269,7 +269,8 @@ def _feedback(row: StudentResult | None) -> str:
     text = f"{_points(row.total)} of {_points(row.max)} points ({'; '.join(parts)})."
     if row.status != "ok":
         text += f" Status: {row.status}."
-    return text
+    late = late_sentence(row)
+    return f"{text} {late}" if late else text
 
 
 def write_moodle_csv(
