@@ -62,8 +62,9 @@ cli
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), reports (feedback, grades, results log), marks
     (short answers), identity (whose submission is whose), roster (the class, LMS grade files),
-    cluster (Dask: the driver's side), clusterworker (a Dask worker's side), gradebook
-    (several assignments in one file), classreport (``report.html``).
+    late (due dates and late penalties), cluster (Dask: the driver's side), clusterworker (a
+    Dask worker's side), gradebook (several assignments in one file), classreport
+    (``report.html``).
 ``sandbox/`` the sandboxed children
     parent (the grader's handle), forkserver (the warm process children fork from), runner
     (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,
