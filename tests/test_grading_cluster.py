@@ -238,6 +238,10 @@ def test_the_command_refuses_plain_tcp_before_grading(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "refusing to send" in err and "--insecure-cluster" in err
     assert not out.exists()  # refused before anything was written (or connected)
+    tls = ["--cluster", "tls://127.0.0.1:1", "--tls-ca-file", str(tmp_path / "ca.pem")]
+    assert main([*args, "--no-secret", *tls, "--tls-cert", str(subs / "alice.ipynb")]) == 2
+    assert f"--tls-ca-file {tmp_path / 'ca.pem'}: no such file" in capsys.readouterr().err
+    assert not out.exists()
 
 
 def _certificates(folder: Path) -> tuple[Path, Path, Path]:
