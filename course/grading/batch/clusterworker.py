@@ -85,6 +85,7 @@ class AssignmentFiles(WorkerPlugin):
         with self._lock:
             grader, folder = self._grader, self._folder
             self._grader = self._folder = None
+        atexit.unregister(self.close)  # nor keep this run's files alive in a long-lived worker
         if grader is not None:
             grader.close()
         if folder is not None:
