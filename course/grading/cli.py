@@ -78,6 +78,7 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
+    from course.grading.batch.cluster import ClusterError, ConnectionFiles
     from course.grading.batch.driver import SelectionError, grade
     from course.grading.batch.late import LateError, parse_due, parse_policy
     from course.grading.batch.marks import MarksError
@@ -123,6 +124,10 @@ def _grade(args) -> int:
         progress=not args.no_progress,
         unsafe_no_isolation=args.unsafe_no_isolation,
         cluster=args.cluster,
+        cluster_files=ConnectionFiles(
+            *(Path(f) if f else None for f in (args.tls_ca_file, args.tls_cert, args.tls_key))
+        ),
+        insecure_cluster=args.insecure_cluster,
         announce=lambda text: print(text, file=sys.stderr),
         short_answers=Path(args.short_answers) if args.short_answers else None,
         students=frozenset(args.student) if args.student else None,
@@ -132,7 +137,7 @@ def _grade(args) -> int:
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except (MarksError, SelectionError, LateError) as exc:
+    except (MarksError, SelectionError, LateError, ClusterError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -550,8 +555,30 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument(
         "--cluster",
         metavar="ADDRESS",
-        help="grade on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786), one "
-        "task per student; needs the [cluster] extra",
+        help="grade on the Dask distributed scheduler at ADDRESS, one task per student: "
+        "tls://host:8786 with the --tls-* files, or tcp://127.0.0.1:8786 on this machine; "
+        "needs the [cluster] extra (docs/instructors/cluster.md)",
+    )
+    p_gr.add_argument(
+        "--tls-ca-file",
+        metavar="FILE",
+        default=None,
+        help="--cluster: the certificate authority that signed the scheduler's certificate",
+    )
+    p_gr.add_argument(
+        "--tls-cert", metavar="FILE", default=None, help="--cluster: this client's certificate"
+    )
+    p_gr.add_argument(
+        "--tls-key",
+        metavar="FILE",
+        default=None,
+        help="--cluster: this client's private key (if not in the --tls-cert file)",
+    )
+    p_gr.add_argument(
+        "--insecure-cluster",
+        action="store_true",
+        help="--cluster: accept a plain tcp:// scheduler on another machine (submissions and "
+        "assignment files then cross the network unencrypted; only on a private network)",
     )
     p_gr.add_argument(
         "--unsafe-no-isolation",

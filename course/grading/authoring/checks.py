@@ -35,6 +35,7 @@ __all__ = [
     "binomial_band",
     "load_checks",
     "student_rng",
+    "student_seed",
 ]
 
 
@@ -55,11 +56,17 @@ def student_rng(
     Surrounding whitespace of the ID is ignored; the seed is the same on every machine and in
     every process (Python's ``hash`` is salted per process and is never used).
     """
+    return np.random.default_rng(student_seed(assignment, key, student_id, secret))
+
+
+def student_seed(assignment: str, key: str, student_id: str, secret: Secret | None = None) -> int:
+    """The seed of :func:`student_rng`: a value derived from the key for one student's data
+    set, which is all a machine that grades that student needs (a Dask worker is sent this,
+    never the key itself)."""
     if secret is not None:
-        return np.random.default_rng(secret.seed(assignment, key, student_id))
+        return secret.seed(assignment, key, student_id)
     text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode()
-    seed = int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
-    return np.random.default_rng(seed)
+    return int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
 
 
 @dataclass(frozen=True)
@@ -556,8 +563,12 @@ class Checks:
     def data_for(self, key: str, student_id: str, secret: Secret | None = None) -> Any:
         """The per-student data set ``key`` for ``student_id`` (plain data), drawn with the
         instructor's ``secret`` when one is given (see :func:`student_rng`)."""
+        return self.data_from_seed(key, student_seed(self.name, key, student_id, secret))
+
+    def data_from_seed(self, key: str, seed: int) -> Any:
+        """The data set ``key`` drawn from ``seed`` (a :func:`student_seed`), as plain data."""
         func = getattr(self.data_module, key)
-        return decode(encode(func(student_rng(self.name, key, student_id, secret))))
+        return decode(encode(func(np.random.default_rng(seed))))
 
     def validate(self) -> None:
         """Check the question set for authoring mistakes (raises ValueError)."""

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from course.grading.batch.classreport import write_report
-from course.grading.batch.cluster import grade_on_cluster
+from course.grading.batch.cluster import check_cluster_options, grade_on_cluster
 from course.grading.batch.identity import resolve_identities
 from course.grading.batch.late import LateError, late_records, parse_due, parse_policy
 from course.grading.batch.marks import (
@@ -170,6 +170,7 @@ def grade(
 ) -> Summary:
     """Grade every submission in ``submissions`` into ``out`` (see the module docstring)."""
     options = options or GradeOptions()
+    check_cluster_options(options)  # an unusable or unencrypted address: before anything
     start = time.monotonic()
     solution_dir, submissions, out = (
         Path(solution_dir).resolve(),

@@ -49,6 +49,8 @@ class GradeOptions:
     landlock: bool = True  # use Landlock when the kernel has it
     announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
     cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
+    cluster_files: Any = None  # TLS files of the scheduler connection (cluster.ConnectionFiles)
+    insecure_cluster: bool = False  # accept a plain tcp:// scheduler beyond this machine
     secret: Secret | None = None  # the instructor's key of personal data (None: public data)
     roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
     missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
