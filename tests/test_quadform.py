@@ -35,6 +35,7 @@ from course import quadform
 from course.quadform import (
     QuadraticForm,
     WeightedChiSquare,
+    _search,
     imhof_cdf,
     imhof_sf,
     inversion_integrands,
@@ -995,26 +996,45 @@ def _random_laws(count, seed):
         yield WeightedChiSquare(weights, dof, noncentrality)
 
 
-def test_two_sided_quantiles_take_one_evaluation_and_meet_the_tolerance(monkeypatch):
-    # the search brackets each level +-0.05 std around its Liu-Tang-Zhang guess and
-    # interpolates 9 nodes: one vectorised evaluation for the pair of a two-sided
-    # region on nearly every law, and the log tail within 4 rtol of its goal
-    calls = []
-    evaluate = WeightedChiSquare._log_tail
+def test_two_sided_quantiles_take_one_path_set_up_and_meet_the_tolerance(monkeypatch):
+    # the pair of a two-sided region is found by Newton's method on the contours set
+    # up once at the Liu-Tang-Zhang guesses: on nearly every law one integral set-up
+    # per side of 0 settles every level (no second set-up, no bracketing
+    # evaluation), and the log tail is within 4 rtol of its goal
+    setups, brackets = [], []
+    newton, evaluate = _search._newton_on_path, WeightedChiSquare._log_tail
 
-    def counted(self, x, lower):
-        calls.append(x.shape)
+    def counted_newton(x, *args):
+        root, done = newton(x, *args)
+        setups.append(done.all())
+        return root, done
+
+    def counted_bracket(self, x, lower):
+        brackets.append(x.shape)
         return evaluate(self, x, lower)
 
-    monkeypatch.setattr(WeightedChiSquare, "_log_tail", counted)
+    monkeypatch.setattr(_search, "_newton_on_path", counted_newton)
+    monkeypatch.setattr(WeightedChiSquare, "_log_tail", counted_bracket)
     single, laws = 0, list(_random_laws(40, seed=7))
     for law in laws:
-        calls.clear()
+        setups.clear()
+        brackets.clear()
         lower, upper = law.ppf(0.025), law.isf(0.025)
-        single += calls == [(2, 9)]
+        single += all(setups) and not brackets
         assert abs(math.log(law.cdf(lower)) - math.log(0.025)) <= 4 * law.rtol
         assert abs(math.log(law.sf(upper)) - math.log(0.025)) <= 4 * law.rtol
     assert single >= 36
+
+
+def test_the_bracketing_search_still_meets_the_tolerance():
+    # the fallback of the Newton search (levels its paths do not settle), on
+    # positive forms (every third law of _random_laws)
+    for law in list(_random_laws(30, seed=8))[::3]:
+        levels = np.array([1e-9, 0.025, 0.5, 0.9])
+        lower = law._quantiles_by_nodes(levels, np.ones(4, dtype=bool))
+        upper = law._quantiles_by_nodes(levels, np.zeros(4, dtype=bool))
+        assert np.allclose(law.cdf(lower), levels, rtol=4e-9, atol=0)
+        assert np.allclose(law.sf(upper), levels, rtol=4e-9, atol=0)
 
 
 def test_a_two_sided_rejection_probability_is_one_evaluation_of_both_tails():

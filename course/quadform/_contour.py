@@ -378,7 +378,22 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + log_vertex
     if atol > 0:
         log_tol = np.maximum(log_tol, math.log(atol * math.pi) - e0)
-    # -- truncation (bounds in Y = Im s = b sinh u: see the docstring) ------------
+    U = _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol)
+    # -- step (the same for every point: see the docstring) ----------------------
+    step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
+    return a, b, e0, log_tol, U, step, log_vertex
+
+
+def _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol):
+    """Truncation point ``U`` of the path ``(s0, a, b)`` at ``x``: the bound of :func:`_plan`.
+
+    Valid for any vertex ``s0`` of the side's interval (not only the saddle
+    of ``x``), so a path set up at one point bounds the tail of the integral
+    at a nearby one (see :mod:`course.quadform._search`).  ``log_tol`` is the
+    log of the absolute tolerance on the integral scaled by ``exp(-e0)``,
+    ``e0 = K(s0) - s0 x``.
+    """
+    # -- truncation (bounds in Y = Im s = b sinh u: see _plan's docstring) --------
     k_e = side.k + (1.0 if pole else 0.0)
     log_tol_t = log_tol + _LOG_TRUNCATION_SHARE
     # |s'| <= sqrt(2) dY/du (a <= b) and |s| >= Y
@@ -409,10 +424,7 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
         y_normal = np.maximum(y_normal, b * np.sqrt(q * q - 1.0))
         y_need = np.minimum(y_need, y_normal)
     ratio_y = y_need / b
-    U = np.maximum(np.log(ratio_y + np.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
-    # -- step (the same for every point: see the docstring) ----------------------
-    step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
-    return a, b, e0, log_tol, U, step, log_vertex
+    return np.maximum(np.log(ratio_y + np.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
 
 
 @functools.lru_cache(maxsize=64)
@@ -462,10 +474,13 @@ def _path_coefficients(x, side, s0, a, b, k0):
     return coef, side.exponent_weights
 
 
-def _integrand(basis, coef, side, pole):
+def _integrand(basis, coef, side, pole, complex_values=False):
     """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola, from :func:`_path_coefficients`.
 
     ``coef`` is what :func:`_path_coefficients` returns (matrix, weights).
+    With ``complex_values``: the complex values before ``Im`` and ``s`` at the
+    nodes, ``(values, s)`` (the quantile search of :mod:`course.quadform._search`
+    moves the point along a fixed path with them).
 
     ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
     ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes; the
@@ -513,6 +528,8 @@ def _integrand(basis, coef, side, pole):
     value *= rows[-2]
     if pole:
         value /= s
+    if complex_values:
+        return value, s
     return value.imag
 
 
