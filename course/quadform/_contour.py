@@ -224,31 +224,35 @@ class _Side:
         the far upper tail, or of the behaviour at ``-inf`` far below a
         positive form.  ``upper`` is one flag for every point or one per point.
         """
-        if not isinstance(upper, bool):
-            ends = np.empty((3, x.size))
-            for flag, group in ((True, upper), (False, ~upper)):
-                if group.any():
-                    ends[:, group] = self.bracket(x[group], flag)
-            return ends[0], ends[1], ends[2]
         dx = self.linear(x) if self.centred else x - self.mean
         root = np.sqrt(dx * dx + 4.0 * self.var)
-        if upper:
-            # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
-            guess = 2.0 / (root - dx)
-            lo = 0.0 * x
-            if self.top is not None:
-                hi = self.s_max + lo
-                w, h, d = self.top
-                # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-                t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (
-                    2.0 * np.maximum(x, 1e-300)
-                )
-                guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
-            else:
-                # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
-                # beyond the root of sigma2 s^2 - (x - mean) s - 1
-                hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
-            return lo, hi, guess
+        if isinstance(upper, bool):
+            return self._upper_ends(x, dx, root) if upper else self._lower_ends(x, dx, root)
+        # one flag per point: both ends on every point (elementwise the values of
+        # either alone), then chosen; cheaper than splitting a few points
+        ends = zip(self._upper_ends(x, dx, root), self._lower_ends(x, dx, root))
+        lo, hi, guess = (np.where(upper, up, low) for up, low in ends)
+        return lo, hi, guess
+
+    def _upper_ends(self, x, dx, root):
+        """:meth:`bracket` of the upper tail (``dx = x - mean``, ``root`` of the Gaussian model)."""
+        # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
+        guess = 2.0 / (root - dx)
+        lo = 0.0 * x
+        if self.top is not None:
+            hi = self.s_max + lo
+            w, h, d = self.top
+            # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
+            t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * np.maximum(x, 1e-300))
+            guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
+        else:
+            # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
+            # beyond the root of sigma2 s^2 - (x - mean) s - 1
+            hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
+        return lo, hi, guess
+
+    def _lower_ends(self, x, dx, root):
+        """:meth:`bracket` of the lower tail (as :meth:`_upper_ends`)."""
         guess = -2.0 / (root + dx)
         hi = 0.0 * x
         if math.isfinite(self.s_min):
