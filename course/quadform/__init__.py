@@ -21,6 +21,8 @@ Public API
 imhof_cdf, imhof_sf
     :math:`P(Q \le c)` and :math:`P(Q > c)` of a weighted sum of noncentral chi-square
     variables, vectorised over ``c``, with a controlled error.
+imhof_cdf_batch, imhof_sf_batch
+    The same for many laws (one row of weights each) and points in one vectorised call.
 liu_tang_zhang_cdf, liu_tang_zhang_sf
     The fast four-cumulant approximation of Liu, Tang and Zhang (2009).
 inversion_integrands
@@ -86,7 +88,7 @@ Modules: ``_terms`` (validation of the terms, shared constants), ``_contour``
 Liu-Tang-Zhang approximation), ``_laws`` (the frozen laws).
 """
 
-from ._imhof import imhof_cdf, imhof_sf, inversion_integrands
+from ._imhof import imhof_cdf, imhof_cdf_batch, imhof_sf, imhof_sf_batch, inversion_integrands
 from ._laws import QuadraticForm, WeightedChiSquare
 from ._ltz import liu_tang_zhang_cdf, liu_tang_zhang_sf
 from ._terms import ATOL as ATOL
@@ -96,7 +98,9 @@ __all__ = [
     "QuadraticForm",
     "WeightedChiSquare",
     "imhof_cdf",
+    "imhof_cdf_batch",
     "imhof_sf",
+    "imhof_sf_batch",
     "inversion_integrands",
     "liu_tang_zhang_cdf",
     "liu_tang_zhang_sf",

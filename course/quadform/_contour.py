@@ -68,10 +68,10 @@ class _Side:
         )
         smallest = float(np.abs(w).min()) if r else 1.0
         positive = w_last > 0
-        self.s_max = 0.5 / w_last if positive else math.inf
-        self.s_min = 0.5 / w_first if w_first < 0 else -math.inf
+        self.s_max: Any = 0.5 / w_last if positive else math.inf
+        self.s_min: Any = 0.5 / w_first if w_first < 0 else -math.inf
         # the largest weight's term: it dominates the far upper tail
-        self.top = (w_last, h_last, d_last) if positive else None
+        self.top: Any = (w_last, h_last, d_last) if positive else None
         self.positive_form = bool(r and w_first > 0 and not sigma2)
         # Im s beyond which every |1 - 2 w s| >= 1, and log of D = prod
         # (2|w|)^(-h/2) exp(-sum d/4): |M(s)| <= D Y^-k with Y = Im s, once
@@ -107,6 +107,10 @@ class _Side:
         self.minus_w2 = -self.w2
         # per-term factors of the derivatives of K
         self.factors = _derivative_factors(w, h, d)
+
+    def points(self, i):
+        """The side of the points ``i`` of a call: the same law (see ``_batch._BatchSide``)."""
+        return self
 
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
@@ -291,6 +295,7 @@ def _saddle(x, side, upper, pole):
         return s, g2, g3
     every = far.all()
     i = None if every else np.flatnonzero(far)
+    part = side if i is None else side.points(i)  # (each point's own law in a batch)
     s_i, lo_i, hi_i, x_i, g1_i, g2_i = (
         (s.copy(), lo, hi, x, g1, g2) if every else (s[i], lo[i], hi[i], x[i], g1[i], g2[i])
     )
@@ -301,7 +306,7 @@ def _saddle(x, side, upper, pole):
         newton = s_i - g1_i / g2_i
         inside = (newton > lo_i) & (newton < hi_i)
         s_i = newton if inside.all() else np.where(inside, newton, _bisect(lo_i, hi_i))
-        g1_i, g2_i, g3_i = side.derivatives(s_i, x_i, pole)
+        g1_i, g2_i, g3_i = part.derivatives(s_i, x_i, pole)
         if i is None:
             s, g2, g3 = s_i, g2_i, g3_i
         else:
@@ -316,6 +321,7 @@ def _saddle(x, side, upper, pole):
             else:
                 i = i[far]
             s_i, lo_i, hi_i, x_i = s_i[far], lo_i[far], hi_i[far], x_i[far]
+            part = side.points(i)
             g1_i, g2_i = g1_i[far], g2_i[far]
     return s, g2, g3
 
@@ -405,8 +411,9 @@ def _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol):
     # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
     y_positive = np.maximum(a - s0, 0.0) / ratio
     log_y_need = 700.0
-    if k_e > 1:
-        log_y_need = np.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
+    if np.all(k_e > 1):  # (k_e is one number, or one per point for a batch of laws)
+        log_k = math.log(k_e - 1.0) if type(k_e) is float else np.log(k_e - 1.0)
+        log_y_need = np.minimum((log_rhs - log_k) / (k_e - 1.0), 700.0)
     algebraic = np.maximum(np.exp(log_y_need), y_positive)
     # with x > 0, exp(-s x) decays like exp(-lam Y)
     lam = np.maximum(ratio * x, 1e-300)
@@ -470,7 +477,8 @@ def _path_coefficients(x, side, s0, a, b, k0):
     path[:, 0], path[:, 1], path[:, 2] = s0, a, ib
     coef[:, -2, 0], coef[:, -2, 1], coef[:, -2, 2] = ib, ib, a
     coef[:, -3, 0], coef[:, -3, 1], coef[:, -3, 2] = -c0, -x * a, -x * ib
-    np.multiply(side.minus_w2[:, None], path[:, None, :], out=coef[:, :r, :])
+    # (minus_w2 is (r,) for one law, (points, r) for a batch of laws: see _batch)
+    np.multiply(side.minus_w2[..., None], path[:, None, :], out=coef[:, :r, :])
     if not side.centred:  # (centred: the rows hold u = z - 1, see _integrand)
         coef[:, :r, 0] += 1.0
     if side.noncentral:
@@ -518,7 +526,10 @@ def _integrand(basis, coef, side, pole, complex_values=False):
     if side.noncentral and not side.centred:
         inverse = rows[r : 2 * r]
         np.reciprocal(inverse, out=inverse)
-    e = weights @ path[..., :-2, :]
+    if weights.ndim == 1:
+        e = weights @ path[..., :-2, :]
+    else:  # (a batch of laws: each point's own weights, see _batch)
+        e = (weights[:, None, :] @ path[..., :-2, :])[:, 0]
     s = rows[-1]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
@@ -563,7 +574,9 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     for start in range(0, x.size, size):
         i = slice(start, start + size)
         coef = (
-            whole if whole is not None else _path_coefficients(x[i], side, s0[i], a[i], b[i], k0[i])
+            whole
+            if whole is not None
+            else _path_coefficients(x[i], side.points(i), s0[i], a[i], b[i], k0[i])
         )
         if one:
             f = _integrand(nodes[1][:, : nodes[0].searchsorted(U[0], "right")], coef, side, pole)
@@ -599,9 +612,9 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         nodes = _nodes(h, n, True)
         n *= 2
         if whole is not None:
-            coef = (whole[0][j], whole[1])
+            coef = (whole[0][j], whole[1] if whole[1].ndim == 1 else whole[1][j])
         else:
-            coef = _path_coefficients(x[j], side, s0[j], a[j], b[j], k0[j])
+            coef = _path_coefficients(x[j], side.points(j), s0[j], a[j], b[j], k0[j])
         if one:
             f = _integrand(nodes[1][:, : nodes[0].searchsorted(U[0], "right")], coef, side, pole)
         else:
@@ -641,14 +654,25 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
     if not every and live.any():
         i = np.flatnonzero(live)
         value[i], error[i], converged[i], blown[i] = _integrate(
-            x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step, rtol
+            x[i],
+            side.points(i),
+            pole,
+            s0[i],
+            a[i],
+            b[i],
+            k0[i],
+            e0[i],
+            log_tol[i],
+            U[i],
+            step,
+            rtol,
         )
     if blown.any():
         i = np.flatnonzero(blown)
         if opening is None:
             value[i], error[i], converged[i] = _contour(
                 x[i],
-                side,
+                side.points(i),
                 upper if isinstance(upper, bool) else upper[i],
                 pole,
                 atol,
