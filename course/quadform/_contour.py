@@ -411,8 +411,10 @@ def _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol):
     # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
     y_positive = np.maximum(a - s0, 0.0) / ratio
     log_y_need = 700.0
-    if np.all(k_e > 1):  # (k_e is one number, or one per point for a batch of laws)
-        log_k = math.log(k_e - 1.0) if type(k_e) is float else np.log(k_e - 1.0)
+    # (k_e is one number, or one per point for a batch of laws)
+    one_law = type(k_e) is float
+    if k_e > 1 if one_law else np.all(k_e > 1):
+        log_k = math.log(k_e - 1.0) if one_law else np.log(k_e - 1.0)
         log_y_need = np.minimum((log_rhs - log_k) / (k_e - 1.0), 700.0)
     algebraic = np.maximum(np.exp(log_y_need), y_positive)
     # with x > 0, exp(-s x) decays like exp(-lam Y)
