@@ -15,15 +15,16 @@ values ``v_j`` at the nodes ``s_j`` of the path at ``x0``,
     P'(\\delta) \\propto \\sum_j c_j \\operatorname{Im}\\bigl[-s_j v_j e^{-s_j \\delta}\\bigr]
 
 (``c_j`` the trapezoid weights), and Newton's method on ``log P`` converges
-without another integral: a few products over the nodes each.  At the root
-the same checks as for a fresh integral are made there: the two trapezoid
-levels agree within the tolerance, and the truncation bound of
-:func:`course.quadform._contour._truncation` at ``x0 + delta`` lies within the
-nodes.  A level whose root leaves the window ``|delta| a (cosh U - 1) <= 1``
-(where ``exp(-s delta)`` grows by at most ``e`` along the path) is set up
-again at the last estimate; the few that still fail go to the bracketing
-search of :meth:`WeightedChiSquare._quantiles` (``_search`` returns them
-unaccepted).
+without another integral: a few products over the nodes each.  The root is
+checked as a fresh integral would be: the two trapezoid levels agree within
+the tolerance (else the step is halved, new nodes only), the truncation bound
+of :func:`course.quadform._contour._truncation` at ``x0 + delta`` lies within
+the nodes, and the sum lost nothing to cancellation beyond rounding.  Moves
+are kept within ``|delta| <= 30 / (a (cosh U - 1))`` (``exp(-s delta)`` grows
+by at most ``e^30`` at the truncation point; the checks decide); a level whose
+root lies beyond is set up again at the last estimate, and the few that still
+fail go to the bracketing search of :meth:`WeightedChiSquare._quantiles_by_nodes`
+(``_search`` returns them unaccepted).
 """
 
 from __future__ import annotations
