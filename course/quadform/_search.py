@@ -79,11 +79,14 @@ def _search(sides, law_terms, offset, guess, levels, lower, atol, rtol, tol):
         return result, accepted
     with np.errstate(over="ignore", invalid="ignore"):
         x = (guess - offset) / m
-    usable = np.isfinite(x) & (x != 0)
-    for sign in (1.0, -1.0):
-        rows = np.flatnonzero(usable & ((x > 0) if sign > 0 else (x < 0)))
+    pending = np.isfinite(x) & (x != 0)
+    # a root across 0 (a mixed law) is looked for again on the other side: the
+    # path of one side is not valid beyond 0, where exp(-s x) grows along it
+    for sign in (1.0, -1.0, 1.0):
+        rows = np.flatnonzero(pending & ((x > 0) if sign > 0 else (x < 0)))
         if rows.size == 0:
             continue
+        pending[rows] = False
         side = _side(sides, sign)
         if side.huge or (side.top is None and not side.sigma2):
             continue
@@ -101,6 +104,9 @@ def _search(sides, law_terms, offset, guess, levels, lower, atol, rtol, tol):
             ok = done & (root > 0)
             result[rows[ok]] = offset + sign * m * root[ok]
             accepted[rows[ok]] = True
+            across = ~ok & (root < 0)
+            x[rows[across]] = sign * root[across]
+            pending[rows[across]] = True
             again = ~ok & np.isfinite(root) & (root > 0)
             rows, xs, wanted_lower = rows[again], root[again], wanted_lower[again]
     return result, accepted
