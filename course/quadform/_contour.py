@@ -409,7 +409,8 @@ def _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol):
     # |s'| <= sqrt(2) dY/du (a <= b) and |s| >= Y
     log_rhs = side.log_d_y + _LOG_SQRT2_OVER_PI - e0 - log_tol_t
     # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
-    y_positive = np.maximum(a - s0, 0.0) / ratio
+    a_minus_s0 = a - s0
+    y_positive = np.maximum(a_minus_s0, 0.0) / ratio
     log_y_need = 700.0
     # (k_e is one number, or one per point for a batch of laws)
     one_law = type(k_e) is float
@@ -419,7 +420,7 @@ def _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol):
     algebraic = np.maximum(np.exp(log_y_need), y_positive)
     # with x > 0, exp(-s x) decays like exp(-lam Y)
     lam = np.maximum(ratio * x, 1e-300)
-    decay = np.maximum(log_rhs - np.log(lam) + (a - s0) * x, 0.0) / lam
+    decay = np.maximum(log_rhs - np.log(lam) + a_minus_s0 * x, 0.0) / lam
     y_need = np.maximum(np.minimum(algebraic, decay), 1.0)
     if side.noncentral:
         y_need = np.maximum(y_need, 2.0 * side.y_unit)
@@ -585,7 +586,8 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         else:
             f = _integrand(nodes[1], coef, side, pole)
             f *= nodes[0] <= U[i, None]
-        chunk_blown = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
+        size_f = np.abs(f)
+        chunk_blown = ~(size_f.max(axis=1) <= _BLOWUP * size_f[:, 0])
         f[:, 0] *= 0.5
         parts.append((h * f.sum(axis=1), 2.0 * h * f[:, ::2].sum(axis=1), chunk_blown))
     if len(parts) == 1:  # (one chunk, the usual case: no copies)
@@ -625,7 +627,8 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         refined = 0.5 * total[j] + h * f.sum(axis=1)
         diff[j] = np.abs(refined - total[j])
         total[j] = refined
-    converged[active] = False
+    if active is not None and active.size:
+        converged[active] = False
     # exp(E0) |total| / pi without overflow or underflow in between
     with np.errstate(divide="ignore"):
         log_size = e0 + np.log(np.abs(total) / math.pi)
@@ -712,11 +715,18 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     cdf: Any = None
     err: Any = None
     conv: Any = None
-    negative = x < 0
-    # (every point on one side, the usual case: one pass, no copies in and out)
-    one_side = (
-        None if x.size == 0 else (-1.0 if negative.all() else 1.0 if not negative.any() else None)
-    )
+    # (every point on one side, the usual case: one pass, no copies in and out;
+    # one point, the commonest call, decided without array reductions)
+    negative: Any = None
+    if x.size == 1:
+        one_side: Any = -1.0 if x[0] < 0 else 1.0
+    else:
+        negative = x < 0
+        one_side = (
+            None
+            if x.size == 0
+            else (-1.0 if negative.all() else 1.0 if not negative.any() else None)
+        )
     passes: tuple[tuple[Any, Any], ...] = (
         ((one_side, None),) if one_side else ((1.0, ~negative), (-1.0, negative))
     )
