@@ -878,20 +878,26 @@ def test_stacked_products_match_matmul():
 
 
 # ---------------------------------------------------------------------------
-# extreme scales: the gain and the estimate are representable even where S is not
+# extreme scales: the gain and the estimate are representable even where the sum of S is
+# not; an S beyond double precision is refused (it would give a NIS of 0)
 # ---------------------------------------------------------------------------
 def test_kf_update_with_a_huge_output_matrix_still_updates():
-    # S = H P H^T + R ~ 1e320 overflows; K ~ 1/|H| and P_filt (a projection) do not.
+    # S_ii = h^2 + 1 ~ 1.4e308 are doubles, their sum is not: each output is scaled
+    h = 1.2e154
+    two = kf.kf_update(np.zeros(2), np.eye(2), [1.0, 2.0], np.diag([h, h]), np.eye(2))
+    assert np.isfinite(two.S).all()
+    np.testing.assert_allclose(np.diag(two.S), [h * h, h * h], rtol=1e-12)
+    np.testing.assert_allclose(two.x_filt * h, [1.0, 2.0], rtol=1e-12)
+    np.testing.assert_allclose(two.K * h, np.eye(2), rtol=1e-12)
+    np.testing.assert_allclose(two.P_filt, 0.0, atol=1e-300)
+
+
+def test_kf_update_refuses_an_innovation_covariance_beyond_double_precision():
+    # S = H P H^T + R ~ 1.25e320: the gain is representable but S (behind every NIS)
+    # is not; it was returned as inf, which makes the NIS 0
     h = 1e160
-    step = kf.kf_update(np.zeros(2), np.eye(2), [1.0], [[h, 0.5 * h]], [[1.0]])
-    np.testing.assert_allclose(step.x_filt * h, [0.8, 0.4], rtol=1e-12)
-    np.testing.assert_allclose(step.K[:, 0] * h, [0.8, 0.4], rtol=1e-12)
-    np.testing.assert_allclose(step.P_filt, [[0.2, -0.4], [-0.4, 0.8]], atol=1e-12)
-    assert step.S[0, 0] == np.inf  # the true S ~ 1.25e320 is beyond double precision
-    # two outputs, each scaled on its own
-    two = kf.kf_update(np.zeros(2), np.eye(2), [1.0, 2.0], np.diag([h, 1.0]), np.eye(2))
-    np.testing.assert_allclose(two.x_filt, [1.0 / h, 1.0], rtol=1e-12)
-    np.testing.assert_allclose(np.diag(two.P_filt), [0.0, 0.5], atol=1e-12)
+    with pytest.raises(ValueError, match=r"S = H P_pred H\^T \+ R exceeds.*rescale"):
+        kf.kf_update(np.zeros(2), np.eye(2), [1.0], [[h, 0.5 * h]], [[1.0]])
 
 
 def test_recursive_least_squares_is_scale_equivariant_at_extreme_scales():

@@ -17,6 +17,7 @@ from ..linalg import symmetrize
 from ..validation import as_covariance, as_finite, as_generator, as_matrix, as_vector
 from ._contour import _density, _probabilities
 from ._ltz import _ltz_matching, _ltz_points, _ltz_quantiles
+from ._search import _search
 from ._terms import (
     _ZERO_RTOL,
     ATOL,
@@ -271,6 +272,31 @@ class WeightedChiSquare(FrozenDistribution):
 
     def _quantiles(self, levels, lower):
         """The points where ``P(X <= x)`` (``lower``) or ``P(X > x)`` equals ``levels``.
+
+        Newton's method from the Liu-Tang-Zhang guess on contours set up once
+        at the guesses (:mod:`course.quadform._search`: one integral set-up for
+        every level and both tails, the derivative from the same nodes); the
+        levels it does not settle go to the bracketing search of
+        :meth:`_quantiles_by_nodes`.
+        """
+        big = levels > 0.5
+        small = np.where(big, 1.0 - levels, levels)
+        tail_lower = lower ^ big
+        guess = _ltz_quantiles(small, tail_lower, self._ltz_matching, self.offset)
+        terms = (*self._arrays, self.sigma)
+        tol = max(4.0 * self.rtol, 1e-13)
+        x, accepted = _search(
+            self._sides, terms, self.offset, guess, small, tail_lower, self.atol, self.rtol, tol
+        )
+        lo_bound, hi_bound = self._bounds
+        accepted &= (x > lo_bound) & (x < hi_bound)
+        if not accepted.all():
+            rest = ~accepted
+            x[rest] = self._quantiles_by_nodes(levels[rest], lower[rest])
+        return x
+
+    def _quantiles_by_nodes(self, levels, lower):
+        """The quantiles of :meth:`_quantiles` by a bracket and interpolation (the fallback).
 
         Usually one vectorised evaluation for every level together, instead of
         a root search per level (~12 integrals each).  (1) The Liu-Tang-Zhang
