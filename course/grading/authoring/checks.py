@@ -8,6 +8,7 @@ for the public cases), never in a student's process. See ``docs/instructors/auth
 
 from __future__ import annotations
 
+import importlib
 import hashlib
 import importlib.util
 import re
@@ -291,6 +292,16 @@ class Checks:
             if "." not in name:
                 raise ValueError(
                     f"{question.id}: forbid entries are dotted names such as 'course.lsq.w_tests', got {name!r}"
+                )
+            module_name, _, attr = name.rpartition(".")
+            try:
+                target = getattr(importlib.import_module(module_name), attr)
+            except (ImportError, AttributeError):
+                raise ValueError(f"{question.id}: forbid names {name!r}, which does not exist") from None
+            if not callable(target) or not hasattr(target, "__name__"):
+                raise ValueError(
+                    f"{question.id}: forbid lists functions and classes (a call is what counts), "
+                    f"but {name!r} is {type(target).__name__}"
                 )
         if question.data is not None and (
             self.data_module is None or not callable(getattr(self.data_module, question.data, None))
