@@ -8,8 +8,8 @@ for the public cases), never in a student's process. See ``docs/instructors/auth
 
 from __future__ import annotations
 
-import importlib
 import hashlib
+import importlib
 import importlib.util
 import re
 import sys
