@@ -52,7 +52,15 @@ import types
 import warnings
 from builtins import getattr, setattr, str  # bound before student code runs (see runner)
 
-__all__ = ["EVENT", "course_modules", "implementation", "instrument", "parse_events", "watch"]
+__all__ = [
+    "EVENT",
+    "course_modules",
+    "implementation",
+    "instrument",
+    "parse_events",
+    "resolve",
+    "watch",
+]
 
 #: The record written for one forbidden call (the name is a dotted Python name).
 EVENT = b"\x1ecourse-forbidden-call:%s\x1f"
@@ -133,6 +141,7 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
         tree = ast.parse(source)
     except SyntaxError:
         return None
+
     def here(n) -> bool:
         return (
             isinstance(n, ast.FunctionDef)
@@ -313,11 +322,7 @@ def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str
     that implements one of them with the public names it implements."""
     named: dict[str, object] = {}
     for dotted in sorted(set(names)):
-        module_name, _, attr = dotted.rpartition(".")
-        try:
-            named[dotted] = getattr(importlib.import_module(module_name), attr)
-        except (ImportError, AttributeError):
-            named[dotted] = None
+        named[dotted] = resolve(dotted)
     for dotted, obj in named.items():
         init = vars(obj).get("__init__") if isinstance(obj, type) else None
         if isinstance(init, types.FunctionType) and _is_library(str(init.__module__)):
@@ -330,6 +335,28 @@ def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str
             if id(f) not in forbidden_ids:
                 private.setdefault(f, set()).add(dotted)
     return named, private
+
+
+def resolve(dotted: str):
+    """The object a forbid entry names: ``module.function``, ``module.Class`` or
+    ``module.Class.method`` (a class or static method: its function); None when missing."""
+    parts = dotted.split(".")
+    for cut in range(len(parts) - 1, 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        owner = None
+        for attr in parts[cut:]:
+            owner, obj = obj, (vars(obj).get(attr) if isinstance(obj, type) else None)
+            if obj is None:
+                obj = getattr(owner, attr, None)
+            if obj is None:
+                return None
+        if isinstance(obj, (staticmethod, classmethod)):
+            obj = obj.__func__
+        return obj
+    return None
 
 
 def _events(names) -> bytes:
@@ -382,9 +409,13 @@ def _rewrite(names, event_fd: int, write):
             codes.append((func, func.__code__))
             func.__code__ = _replace_consts(new, mapping, mark)
             report[dotted] = "instrumented"
-        elif dotted in named:
+        elif dotted in named and isinstance(
+            sys.modules.get(dotted.rpartition(".")[0]), types.ModuleType
+        ):
             wrapped.append(_wrap_reporting(dotted, func, event_fd, event, write))
             report[dotted] = "wrapped"
+        elif dotted in named:
+            report[dotted] = "missing"  # a method that cannot be rewritten: nothing to wrap
         # a private helper that cannot be rewritten stays as it is: no public name to wrap
     return report, codes, wrapped
 

@@ -9,7 +9,6 @@ for the public cases), never in a student's process. See ``docs/instructors/auth
 from __future__ import annotations
 
 import hashlib
-import importlib
 import importlib.util
 import re
 import sys
@@ -24,6 +23,7 @@ import numpy as np
 from course.grading.authoring.secret import Secret
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
+from course.grading.tripwire import resolve
 from course.grading.vocabulary import DEMO_STUDENT_ID, QuestionKind
 
 __all__ = [
@@ -293,11 +293,9 @@ class Checks:
                 raise ValueError(
                     f"{question.id}: forbid entries are dotted names such as 'course.lsq.w_tests', got {name!r}"
                 )
-            module_name, _, attr = name.rpartition(".")
-            try:
-                target = getattr(importlib.import_module(module_name), attr)
-            except (ImportError, AttributeError):
-                raise ValueError(f"{question.id}: forbid names {name!r}, which does not exist") from None
+            target = resolve(name)
+            if target is None:
+                raise ValueError(f"{question.id}: forbid names {name!r}, which does not exist")
             if not callable(target) or not hasattr(target, "__name__"):
                 raise ValueError(
                     f"{question.id}: forbid lists functions and classes (a call is what counts), "
