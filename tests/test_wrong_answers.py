@@ -18,7 +18,8 @@ assignment's number, ``answers_01.py`` for ``01_least_squares``)::
     MANUAL = ["q6_why"]              # optional: questions graded by hand (short answers)
 
 A ``source`` is the complete replacement text of that question's answer cell in the solution
-notebook: no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
+notebook; what follows a line ``# %% added cell`` (``ADDED_CELL``) becomes a cell the student added
+at the end of the notebook (a scratch cell, e.g. a forbidden call whose numbers the answer pastes): no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
 the protected cells define and, for a question listed in ``DEPENDS``, the answers of the
 questions it depends on (the suite only places such a variant in a notebook where those are
 right). Wrong answers of a question that other questions depend on are placed where no
@@ -44,6 +45,7 @@ import json
 import os
 import re
 import sys
+import types
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -55,6 +57,7 @@ from course.grading.authoring.checks import load_checks
 from course.grading.batch.driver import grade
 from course.grading.batch.options import GradeOptions
 from course.grading.notebook import _STUDENT_ID_LINE
+from course.grading.vocabulary import answer_cell_id
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
@@ -195,17 +198,27 @@ def _solution_sources(solution_nb) -> dict[str, str]:
     }
 
 
+#: In a variant's source, the line after which the text is a cell added at the end of the notebook.
+ADDED_CELL = "# %% added cell"
+
+
 def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
-    """A copy of the solution notebook with the answer cells of ``batch`` replaced."""
+    """A copy of the solution notebook with the answer cells of ``batch`` replaced (and the
+    cells their sources add after ``ADDED_CELL`` appended at the end)."""
     nb = nbformat.from_dict(json.loads(json.dumps(solution_nb)))
     seen = set()
+    added = []
     for cell in nb.cells:
         meta = cell.get("metadata", {}).get("course", {})
         if meta.get("role") == "setup":
             cell.source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student_id}"', cell.source, 1)
         if meta.get("role") == "answer" and meta.get("question") in batch:
-            cell.source = batch[meta["question"]].source
+            answer, _, extra = batch[meta["question"]].source.partition(f"\n{ADDED_CELL}\n")
+            cell.source = answer
+            if extra:
+                added.append(nbformat.v4.new_code_cell(extra))
             seen.add(meta["question"])
+    nb.cells.extend(added)
     missing = set(batch) - seen
     assert not missing, f"no answer cell for {sorted(missing)} in the solution notebook"
     return nb
@@ -296,6 +309,16 @@ def test_right_answers_keep_full_marks(graded, key):
     assert not lost, "right answers that lost points:\n" + "\n".join(lost)
 
 
+def _running_cell(ns: dict, cell_id: str | None) -> None:
+    """Tell the self-check which cell runs, as JupyterLab does (its forbidden-call records
+    are per cell)."""
+    check = ns.get("check")
+    cells = getattr(check, "_cells", None)
+    if cells is not None:
+        check._forget_cell(types.SimpleNamespace(cell_id=cell_id))  # IPython's pre_run_cell
+        cells._cell = cell_id
+
+
 @functools.cache
 def _solution_namespace(assignment: str, student: str) -> dict:
     """The namespace of the solution notebook run in this process as ``student`` (its check
@@ -316,6 +339,7 @@ def _solution_namespace(assignment: str, student: str) -> dict:
                 source = cell.source
                 if role == "setup":
                     source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student}"', source, 1)
+                _running_cell(ns, cell.get("id"))
                 exec(compile(source, f"<{assignment}>", "exec"), ns)
     finally:
         os.chdir(here)
@@ -338,12 +362,24 @@ def test_right_answers_pass_the_public_self_check(key):
         mine = dict(ns)
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
+            _running_cell(ns, answer_cell_id(v.qid))
             exec(compile(v.source, f"<{v.qid} {v.label}>", "exec"), mine)
             check(v.qid, mine[q.target])
         out = buf.getvalue()
         if "FAIL" in out or (q.cases and "PASS" not in out):
             failed.append(f"{v.qid} {v.label!r}:\n{out}")
     assert not failed, "right answers failing the self-check:\n" + "\n".join(failed)
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_the_solution_makes_no_forbidden_call_that_counts(key):
+    """Run cell by cell as JupyterLab runs it, the solution calls no function where the
+    self-check (and the grader) counts it against a question that forbids it: the protected
+    cells and the other questions' answers may use what those allow."""
+    spec = load_spec(SPECS[key])
+    check = _solution_namespace(spec.assignment, f"{spec.student}-solution")["check"]
+    counted = {q.id: check._forbidden_calls(q) for q in check.spec.questions}
+    assert not any(counted.values()), counted
 
 
 def test_every_assignment_has_answers():

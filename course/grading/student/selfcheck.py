@@ -275,6 +275,13 @@ class Assignment:
             return
         self.calls.add((self._cell_now(), name))
 
+    def _forget_cell(self, info=None) -> None:
+        """A cell is run again: the calls its previous run made no longer stand (IPython's
+        ``pre_run_cell``; a deleted cell's calls stay until the kernel restarts)."""
+        cell = getattr(info, "cell_id", None)
+        if cell:
+            self.calls = {(c, name) for c, name in self.calls if c != cell}
+
     def _cell_now(self):
         """The running cell: its id when the front end says it, else its input number."""
         cell = getattr(self._cells, "_cell", None)
@@ -534,7 +541,22 @@ def _watch_forbidden(assignment: Assignment) -> None:
         if target is not None:
             target._record(name)
 
-    restore = watch(names, record)
+    def forget(info=None) -> None:
+        target = ref()
+        if target is not None:
+            target._forget_cell(info)
+
+    untrip = watch(names, record)
+    shell = getattr(assignment._cells, "_shell", None)
+    if shell is not None:
+        shell.events.register("pre_run_cell", forget)
+
+    def restore() -> None:
+        untrip()
+        if shell is not None:
+            with contextlib.suppress(ValueError):
+                shell.events.unregister("pre_run_cell", forget)
+
     _RESTORE.append(restore)
     weakref.finalize(assignment, _restore_if_current, restore)
 
