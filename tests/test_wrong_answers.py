@@ -19,7 +19,8 @@ assignment's number, ``answers_01.py`` for ``01_least_squares``)::
 
 A ``source`` is the complete replacement text of that question's answer cell in the solution
 notebook; what follows a line ``# %% added cell`` (``ADDED_CELL``) becomes a cell the student added
-at the end of the notebook (a scratch cell, e.g. a forbidden call whose numbers the answer pastes): no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
+right below the answer cell, after ``# %% added cell at the end`` (``ADDED_AT_END``) one added at
+the end of the notebook (scratch cells, e.g. a forbidden call whose numbers the answer pastes): no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
 the protected cells define and, for a question listed in ``DEPENDS``, the answers of the
 questions it depends on (the suite only places such a variant in a notebook where those are
 right). Wrong answers of a question that other questions depend on are placed where no
@@ -198,8 +199,10 @@ def _solution_sources(solution_nb) -> dict[str, str]:
     }
 
 
-#: In a variant's source, the line after which the text is a cell added at the end of the notebook.
+#: In a variant's source, the line after which the text is a cell the student added below the
+#: answer cell (``ADDED_CELL``) or at the end of the notebook (``ADDED_AT_END``).
 ADDED_CELL = "# %% added cell"
+ADDED_AT_END = "# %% added cell at the end"
 
 
 def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
@@ -207,18 +210,20 @@ def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
     cells their sources add after ``ADDED_CELL`` appended at the end)."""
     nb = nbformat.from_dict(json.loads(json.dumps(solution_nb)))
     seen = set()
-    added = []
+    cells, at_end = [], []
     for cell in nb.cells:
+        cells.append(cell)
         meta = cell.get("metadata", {}).get("course", {})
         if meta.get("role") == "setup":
             cell.source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student_id}"', cell.source, 1)
         if meta.get("role") == "answer" and meta.get("question") in batch:
-            answer, _, extra = batch[meta["question"]].source.partition(f"\n{ADDED_CELL}\n")
+            source, _, end = batch[meta["question"]].source.partition(f"\n{ADDED_AT_END}\n")
+            answer, _, below = source.partition(f"\n{ADDED_CELL}\n")
             cell.source = answer
-            if extra:
-                added.append(nbformat.v4.new_code_cell(extra))
+            cells += [nbformat.v4.new_code_cell(below)] if below else []
+            at_end += [nbformat.v4.new_code_cell(end)] if end else []
             seen.add(meta["question"])
-    nb.cells.extend(added)
+    nb.cells = cells + at_end
     missing = set(batch) - seen
     assert not missing, f"no answer cell for {sorted(missing)} in the solution notebook"
     return nb
@@ -361,9 +366,16 @@ def test_right_answers_pass_the_public_self_check(key):
             continue
         mine = dict(ns)
         buf = io.StringIO()
+        source, _, end = v.source.partition(f"\n{ADDED_AT_END}\n")
+        answer, _, below = source.partition(f"\n{ADDED_CELL}\n")
         with contextlib.redirect_stdout(buf):
-            _running_cell(ns, answer_cell_id(v.qid))
-            exec(compile(v.source, f"<{v.qid} {v.label}>", "exec"), mine)
+            for cell_id, text in (
+                (answer_cell_id(v.qid), answer),
+                ("added-1", below),
+                ("added-2", end),
+            ):
+                _running_cell(ns, cell_id)
+                exec(compile(text, f"<{v.qid} {v.label}>", "exec"), mine)
             check(v.qid, mine[q.target])
         out = buf.getvalue()
         if "FAIL" in out or (q.cases and "PASS" not in out):

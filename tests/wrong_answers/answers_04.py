@@ -572,6 +572,29 @@ def rls_update(theta, P, phi, y, r):
 ]
 RIGHT["q2"] += [
     (
+        "the right loop, compared with kalman_filter in a cell added below (scratch)",
+        """def normalized_innovations(y, a, q, r, m0, p0):
+    y = np.asarray(y, dtype=float)
+    x, P = float(m0), float(p0)
+    z = np.empty(y.shape)
+    for t, y_t in enumerate(y):
+        S = P + r
+        K = P / S
+        eps = y_t - x
+        z[t] = eps / np.sqrt(S)
+        x = x + K * eps
+        P = (1 - K) ** 2 * P + K**2 * r
+        x, P = a * x, a**2 * P + q
+    return z
+# %% added cell
+_model = kf.LinearModel(F=[[0.9]], H=[[1.0]], Q=[[0.5]], R=[[1.0]], x0_mean=[0.0], x0_cov=[[1.0]])
+_y = np.linspace(-1.0, 1.0, 7)
+_out = kf.kalman_filter(_model, _y[:, None])
+print(np.allclose(normalized_innovations(_y, 0.9, 0.5, 1.0, 0.0, 1.0),
+                  np.asarray(_out.eps)[:, 0] / np.sqrt(np.asarray(_out.S)[:, 0, 0])))
+""",
+    ),
+    (
         "the right loop, with kalman_filter imported and never called",
         """from course.filters import kalman_filter  # noqa: F401
 

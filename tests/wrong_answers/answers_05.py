@@ -510,9 +510,9 @@ def nis_per_step(eps, S):
 ]
 WRONG["q4"] += [
     (
-        "nis_matrix_critical_values in an added cell, numbers pasted (1/1 before)",
-        """thresholds = (0.44949981369389597, 1.7796915167114988)  # pasted from the cell below
-# %% added cell
+        "nis_matrix_critical_values in a cell added at the end, numbers pasted (1/1 before)",
+        """thresholds = (0.44949981369389597, 1.7796915167114988)  # pasted from the last cell
+# %% added cell at the end
 print(nis.nis_matrix_critical_values(2, 30, 0.05))
 """,
     ),

@@ -302,7 +302,8 @@ class StudentSession:
                     cell.question,
                     Op.RUN,
                     min(limit, max(0.1, self.deadline - time.monotonic())),
-                    added=cell.origin == CellOrigin.EXTRA,
+                    added=cell.origin == CellOrigin.EXTRA
+                    and self.plan.deleted.get(cell.question or "") != "adopted",
                     source=cell.source,
                 )
             except ChildTimeout:
@@ -344,20 +345,19 @@ class StudentSession:
         """One request to the child; forbidden calls it reported meanwhile count against
         ``question`` (they reached the parent as they happened, see course.grading.tripwire).
 
-        A cell the student ``added`` is a scratch cell: a forbidden call there also counts
-        against every value question that forbids the function, since its numbers could be
-        pasted into the answer (a function question is graded on hidden inputs instead, so
-        trying the library in a scratch cell costs it nothing)."""
+        A cell the student ``added`` (not one adopted as a deleted answer cell) is a scratch
+        cell, wherever it stands: a forbidden call there counts against every value question
+        that forbids the function, since its numbers could be pasted into the answer, and
+        against no function question (graded on hidden inputs, so trying the library in a
+        scratch cell costs it nothing)."""
         child = self.child
         assert child is not None, "ensure_child() first"
         try:
             return child.request(op, timeout, **fields)
         finally:
             called = set(child.take_events())
-            for qid in self.g.forbid_by_value if added else ():
+            for qid in self.g.forbid_by_value if added else [question] if question else []:
                 self._hit(qid, called)
-            if question:
-                self._hit(question, called)
 
     def _hit(self, question: str, called: set) -> None:
         hits = called & self.g.forbid.get(question, frozenset())
