@@ -518,6 +518,13 @@ def test_a_forbidden_import_or_another_answers_call_costs_nothing(mistakes_demo,
     assert "PASS" in out and "FAIL" not in out, out
 
     check.calls.clear()  # (q2 forbids fit too: its answer cell's call counted against q2)
+    # a scratch cell's call counts against the value question q1, not the function question q2
+    _run_cell(check, "a-scratch-cell", "fit(np.ones((2, 1)), np.ones(2))", ns)
+    assert check._forbidden_calls(check._questions["q1"]) == {"course.lsq.fit"}
+    assert check._forbidden_calls(check._questions["q2"]) == set()
+    # running the cell again without the call withdraws it (IPython's pre_run_cell)
+    check._forget_cell(type("Info", (), {"cell_id": "a-scratch-cell"})())
+    assert check._forbidden_calls(check._questions["q1"]) == set()
 
     def crit(alpha):  # imports the forbidden function and never calls it
         from course.lsq import fit  # noqa: F401

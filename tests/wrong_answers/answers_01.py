@@ -441,25 +441,7 @@ band_t2 = Band(s, float(stats.norm.isf(0.025)) * s)
 # Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
 # __import__, functools.partial, a private twin, a call in an added cell for a value);
 # an import alone, a call another question allows, and an inverse (advice) cost nothing.
-WRONG["q3"] += [
-    (
-        "aliased import of the forbidden functions",
-        """from course.lsq import fit as f, overall_model_test as omt
-
-
-def overall_model_test_stat(A, y, Qyy, alpha):
-    r = omt(f(A, y, Qyy), alpha)
-    return r.statistic, r.critical_value, r.reject
-""",
-    ),
-    (
-        "getattr and __import__",
-        """def overall_model_test_stat(A, y, Qyy, alpha):
-    m = __import__("course.lsq", fromlist=["fit"])
-    r = getattr(m, "overall_" + "model_test")(m.fit(A, y, Qyy), alpha)
-    return r.statistic, r.critical_value, r.reject
-""",
-    ),
+WRONG["q3"] += [  # one variant only: more wrong q3 would move the q6b variants to other IDs
     (
         "diagnosis.least_squares_residual on the whitened problem",
         """from course import diagnosis
@@ -477,6 +459,22 @@ def overall_model_test_stat(A, y, Qyy, alpha):
     ),
 ]
 WRONG["q4"] += [
+    (
+        "aliased import of the forbidden functions",
+        """from course.lsq import fit as f, w_tests as wt
+
+
+def w_statistics(A, y, Qyy):
+    return wt(f(A, y, Qyy), 0.05).statistic
+""",
+    ),
+    (
+        "getattr and __import__",
+        """def w_statistics(A, y, Qyy):
+    m = __import__("course.lsq", fromlist=["fit"])
+    return getattr(m, "w_" + "tests")(m.fit(A, y, Qyy), 0.05).statistic
+""",
+    ),
     (
         "functools.partial of w_tests",
         """import functools
