@@ -51,6 +51,7 @@ import textwrap
 import types
 import warnings
 from builtins import getattr, setattr, str  # bound before student code runs (see runner)
+from typing import Any
 
 __all__ = [
     "EVENT",
@@ -149,12 +150,14 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
             and min([n.lineno, *(d.lineno for d in n.decorator_list)]) == code.co_firstlineno
         )
 
-    fdef = next((n for n in tree.body if here(n)), None)
+    fdef = next((n for n in tree.body if isinstance(n, ast.FunctionDef) and here(n)), None)
     owner = None  # a method: the class statement that holds it (its other methods dropped)
     if fdef is None:
         for cdef in tree.body:
             if isinstance(cdef, ast.ClassDef):
-                fdef = next((n for n in cdef.body if here(n)), None)
+                fdef = next(
+                    (n for n in cdef.body if isinstance(n, ast.FunctionDef) and here(n)), None
+                )
                 if fdef is not None:
                     owner = cdef
                     break
@@ -189,7 +192,7 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
         for c in _codes_of(module_code)
         if c.co_name == code.co_name
         and c.co_firstlineno == code.co_firstlineno
-        and c.co_qualname == code.co_qualname
+        and getattr(c, "co_qualname", None) == getattr(code, "co_qualname", None)
     ]
     return found[0] if len(found) == 1 else None
 
@@ -342,6 +345,7 @@ def resolve(dotted: str):
     ``module.Class.method`` (a class or static method: its function); None when missing."""
     parts = dotted.split(".")
     for cut in range(len(parts) - 1, 0, -1):
+        obj: Any
         try:
             obj = importlib.import_module(".".join(parts[:cut]))
         except ImportError:
@@ -403,9 +407,14 @@ def _rewrite(names, event_fd: int, write):
             "__TW_EVENT__", repr(event)
         )
         plain = isinstance(func, types.FunctionType) and not func.__code__.co_freevars
-        original = _recompile(func, None) if plain else None
-        new = _recompile(func, prologue) if original is not None else None
-        if new is not None and original is not None and _same_code(original, func.__code__):
+        original = _recompile(func, None) if plain else None  # type: ignore[arg-type]
+        new = _recompile(func, prologue) if original is not None else None  # type: ignore[arg-type]
+        if (
+            isinstance(func, types.FunctionType)
+            and new is not None
+            and original is not None
+            and _same_code(original, func.__code__)
+        ):
             codes.append((func, func.__code__))
             func.__code__ = _replace_consts(new, mapping, mark)
             report[dotted] = "instrumented"
