@@ -545,19 +545,23 @@ def test_the_self_check_catches_private_twins_and_aliases_of_assignment_04(capsy
     check = Assignment(PublicSpec.read(folder), folder, "s1")
     from course.filters._steps import _kf_update
 
-    def twin(x_pred, P_pred, y, H, R):
-        return _kf_update(x_pred, P_pred, y, H, R)
+    def twin(theta, P, phi, y, r):  # right values, through the private implementation
+        args = (np.atleast_1d(y), np.asarray(phi, float)[None, :], np.array([[r]]))
+        out = _kf_update(np.asarray(theta, float), np.asarray(P, float), *args)
+        return out[0], out[1]
 
     from course.filters import kf_update as f
 
-    def aliased(x_pred, P_pred, y, H, R):
-        return f(x_pred, P_pred, y, H, R)
+    def aliased(theta, P, phi, y, r):
+        args = (np.atleast_1d(y), np.asarray(phi, float)[None, :], np.array([[r]]))
+        out = f(np.asarray(theta, float), np.asarray(P, float), *args)
+        return out[0], out[1]
 
     for func in (twin, aliased):
         check("q8", func)
         out = capsys.readouterr().out
         assert "FAIL: your answer calls " in out and "course.filters.kf_update" in out, out
-        assert "PASS" not in out
+        assert "PASS" not in out and "(1 of 1 give the right values)" in out, out
     del check
 
 
