@@ -196,6 +196,10 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
 
 @CHECKS.value(
     "q5",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+    ],
     var="T_bias_free",
     points=1,
     rtol=1e-8,

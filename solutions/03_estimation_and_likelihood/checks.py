@@ -104,6 +104,9 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
 
 @CHECKS.value(
     "q2",
+    forbid=[
+        "course.diagnosis.estimate_parameters",
+    ],
     var="leak_theta2",
     points=1,
     rtol=1e-8,

@@ -524,3 +524,13 @@ def T1_statistic(y, u1, u2, u3):
 """,
     ),
 ]
+WRONG["q5"] += [
+    (
+        "prediction_error with a constant regressor (not allowed)",
+        """N_gb = len(y_gb)
+T_bias_free = float(
+    dg.prediction_error(y_gb, np.column_stack([u_gb, np.ones(N_gb)]), [1.0, 0.0], [1]).statistic
+) / N_gb
+""",
+    ),
+]

@@ -525,3 +525,13 @@ def glr_nf_vs_f2(U, y, sigma):
 """,
     ),
 ]
+WRONG["q2"] += [
+    (
+        "estimate_parameters (not allowed)",
+        """leak_theta2 = float(
+    dg.estimate_parameters(U @ np.array([1.3, 1.0, 1.0]), U, [1.0, 1.0, 1.0], [1], sigma=1.0)
+    .estimate[0]
+)
+""",
+    ),
+]
