@@ -336,12 +336,12 @@ def points_cell_text(questions: dict) -> str:
     )
     if any(getattr(q, "forbid", ()) for q in qs):
         lines.append(
-            "- A library function a question does not allow earns that question 0 when it is "
-            "*called* (by any name, or through its private implementation): in the answer cell, "
-            "while your function runs, and, for a value, in any cell you add. Importing it costs "
-            "nothing. Another question's answer cell may call what that question allows; taking "
-            "this question's answer from there is against the honour code, which the grader "
-            "cannot check."
+            "- Calling a library function that a question does not allow (under any name, or "
+            "through its private implementation) earns that question 0: in its answer cell, while "
+            "your function runs, and, for a value question, in any cell you add. Importing it "
+            "costs nothing. Another question's answer cell may call what that question allows; "
+            "copying this question's answer from such a call is against the honour code, though "
+            "the grader cannot see it."
         )
     lines += [
         "",
