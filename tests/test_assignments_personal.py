@@ -104,6 +104,7 @@ PUBLIC_VALUE_ONLY = {
     "04_ekf_residuals": {"q1", "q4", "q5_practice"},
     "05_nis_wishart": {"q3", "q4", "q6_practice", "q8"},
     "06_mismatched_filters": {"q3", "q6_practice", "q7"},
+    "07_testing_theory": {"q6_practice", "q7_practice"},
 }
 
 

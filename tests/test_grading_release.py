@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -198,6 +199,9 @@ def test_every_forbidden_function_is_named_in_its_question(name):
     the release states how calls count (issue 26)."""
     checks = load_checks(SOLUTIONS / name)
     texts = _question_texts(name)
+    for qid, text in list(texts.items()):  # "Same rules as q1", "as in q5": that list applies
+        for ref in re.findall(r"\bas (?:in )?(q\w+)", text):
+            texts[qid] = text + texts.get(ref, "")
     unnamed = [
         f"{q.id}: {dotted}"
         for q in checks.questions.values()

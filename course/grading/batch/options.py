@@ -7,10 +7,12 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
 from course.grading.authoring.secret import Secret
+from course.grading.batch.late import LatePolicy
 from course.grading.batch.roster import Roster
 from course.grading.sandbox.isolation import Isolation, detect
 
@@ -53,6 +55,9 @@ class GradeOptions:
     lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
     students: frozenset[str] | None = None  # grade only these IDs (None: everyone)
     short_answers: Path | None = None  # a filled marking file to merge (course.grading.batch.marks)
+    due: datetime | None = None  # the due date (None: checks.py's due=, else no due date)
+    late_policy: LatePolicy | None = None  # None: checks.py's late_policy=, else no deduction
+    submitted_at: Path | str | None = None  # a timestamps CSV, or "file-times" (late.FILE_TIMES)
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from course.grading.authoring.personal import students_data_source
 from course.grading.authoring.release import checks_digest, load_assignment
 from course.grading.authoring.secret import public_key_id
 from course.grading.batch.options import GradeOptions
@@ -67,6 +68,8 @@ class AssignmentGrader:
         # personal data are drawn with the instructor's secret when the class has one
         self.secret = getattr(self.options, "secret", None)
         self.data_key = self.secret.key_id if self.secret is not None else public_key_id
+        # the data.py beside the student's notebook: `from data import ...` works at grading too
+        self.data_source = students_data_source(self.checks, self.secret is not None)
         self.version = _version()
         self.questions = list(self.checks.questions.values())
         # references that do not depend on the student: computed once, here, in the parent
@@ -378,6 +381,7 @@ class StudentSession:
                 "student_id": self.sid,
                 "assignment": self.g.name,
                 "data": {k: encode(v) for k, v in self.data.items()},
+                "data_module": self.g.data_source,
             }
             self.child = self.g.sandbox.start(init, self.g.options.ready_timeout)
             if not self._run_cells():
