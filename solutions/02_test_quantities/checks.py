@@ -104,6 +104,9 @@ q1.case(STRUCTURE5, MODES5, [False, True, False, True], hidden=True)
 
 @CHECKS.value(
     "q2",
+    forbid=[
+        "course.diagnosis.DecisionStructure",
+    ],
     var="hypotheses_T2",
     points=1,
     hint="Read row T2 of the five-mode structure: modes with 0 form H0, modes with X form H1. "
@@ -123,6 +126,7 @@ def q2():
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
     ],
     mistakes=[
         Mistake(
@@ -161,6 +165,7 @@ q3.case(np.arange(6.0), np.zeros(6), np.ones(6), np.zeros(6), hidden=True)
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
     ],
     mistakes=[
         Mistake(
@@ -191,6 +196,10 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
 
 @CHECKS.value(
     "q5",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+    ],
     var="T_bias_free",
     points=1,
     rtol=1e-8,
@@ -221,6 +230,9 @@ def q5():
 
 @CHECKS.value(
     "q6",
+    forbid=[
+        "course.diagnosis.prediction_error_power",
+    ],
     var="threshold_and_power",
     points=2,
     rtol=1e-6,
@@ -295,6 +307,12 @@ def q5b():
 
 @CHECKS.value(
     "q7_practice",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
+    ],
     var="T_practice",
     points=1,
     rtol=1e-6,
@@ -318,6 +336,11 @@ def q7_practice():
 
 @CHECKS.value(
     "q8_practice",
+    forbid=[
+        "course.diagnosis.diagnoses",
+        "course.diagnosis.DecisionStructure",
+        "course.diagnosis.diagnosis_matrix",
+    ],
     var="diagnosis_practice",
     points=1,
     hint="Each test alarms when T_k exceeds sigma^2 times the upper alpha quantile of the chi2 law "
@@ -336,6 +359,12 @@ def q8_practice():
 
 @CHECKS.value(
     "q7",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
+    ],
     var="T_mine",
     points=2,
     data="record",
@@ -378,6 +407,11 @@ def q8a(d):
 
 @CHECKS.value(
     "q8",
+    forbid=[
+        "course.diagnosis.diagnoses",
+        "course.diagnosis.DecisionStructure",
+        "course.diagnosis.diagnosis_matrix",
+    ],
     var="diagnosis_mine",
     points=1,
     data="record",

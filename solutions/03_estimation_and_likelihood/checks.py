@@ -104,6 +104,9 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
 
 @CHECKS.value(
     "q2",
+    forbid=[
+        "course.diagnosis.estimate_parameters",
+    ],
     var="leak_theta2",
     points=1,
     rtol=1e-8,
@@ -127,6 +130,10 @@ def q2():
 
 @CHECKS.value(
     "q3",
+    forbid=[
+        "course.diagnosis.parameter_estimate_power",
+        "course.diagnosis.prediction_error_power",
+    ],
     var="power_pair",
     points=2,
     rtol=1e-6,
@@ -203,6 +210,11 @@ q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
 
 @CHECKS.value(
     "q5",
+    forbid=[
+        "course.diagnosis.normal_likelihood",
+        "course.diagnosis.normal_log_likelihood",
+        "course.diagnosis.maximum_likelihood",
+    ],
     var="ml_35",
     points=1,
     rtol=1e-6,
@@ -266,6 +278,9 @@ q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
 
 @CHECKS.function(
     "q7",
+    forbid=[
+        "course.diagnosis.neyman_pearson_test",
+    ],
     func="np_power",
     points=2,
     rtol=1e-7,
@@ -356,6 +371,10 @@ def _posterior(y, U_, sigma, tau, priors):
 
 @CHECKS.value(
     "q9_practice",
+    forbid=[
+        "course.diagnosis.bayes_ranking",
+        "course.diagnosis.mode_log_likelihoods",
+    ],
     var="posterior_practice",
     points=1,
     rtol=1e-6,
@@ -375,6 +394,10 @@ def q9_practice():
 
 @CHECKS.value(
     "q9",
+    forbid=[
+        "course.diagnosis.bayes_ranking",
+        "course.diagnosis.mode_log_likelihoods",
+    ],
     var="posterior_mine",
     points=3,
     data="modes",

@@ -89,12 +89,17 @@ CHECKS = Checks(
     preload=["course.filters", "scipy.stats"],
 )
 
-_NO_FILTERS = [
+_NO_FILTERS = [  # every filter function of course.filters: "write the filter yourself"
     "course.filters.kalman_filter",
     "course.filters.extended_kalman_filter",
+    "course.filters.kf_predict",
     "course.filters.kf_update",
+    "course.filters.ekf_predict",
     "course.filters.ekf_update",
     "course.filters.recursive_least_squares",
+    "course.filters.riccati",
+    "course.filters.riccati_gains",
+    "course.filters.steady_state",
 ]
 
 
@@ -116,6 +121,11 @@ _Q1_MISTAKES = [
 
 @CHECKS.value(
     "q1",
+    forbid=[
+        "course.filters.steady_state",
+        "course.filters.riccati",
+        "course.filters.riccati_gains",
+    ],
     var="steady",
     mistakes=_Q1_MISTAKES,
     points=1,
@@ -237,6 +247,9 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
 
 @CHECKS.value(
     "q4",
+    forbid=[
+        "course.nis.windowed_nis_threshold",
+    ],
     var="threshold",
     points=1,
     rtol=1e-6,

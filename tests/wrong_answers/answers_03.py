@@ -383,17 +383,7 @@ leak_theta2 = np.linalg.lstsq(u2[:, None], tgt, rcond=None)[0][0]
 """,
         ),
     ],
-    "q3": [
-        (
-            "the library's power functions",
-            """theta_f = [1.0, 1.1, 1.0]
-power_pair = [
-    dg.parameter_estimate_power(U, nominal, [0, 1], 1, theta_f, sigma=sigma, alpha=0.05),
-    dg.prediction_error_power(U, nominal, [0], theta_f, sigma=sigma, alpha=0.05),
-]
-""",
-        ),
-    ],
+    "q3": [],
     "q4": [
         (
             "product of pdfs by broadcasting",
@@ -457,4 +447,97 @@ power_pair = [
 # q5's reference is a named tuple (theta_ml, L_max): a list in the same order is right too.
 RIGHT["q5"] += [
     ("a list", "ml_35 = [4.0, np.exp(-1.0) / (2 * np.pi)]\n"),
+]
+
+WRONG["q3"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "the library's power functions (not allowed)",
+        """theta_f = [1.0, 1.1, 1.0]
+power_pair = [
+    dg.parameter_estimate_power(U, nominal, [0, 1], 1, theta_f, sigma=sigma, alpha=0.05),
+    dg.prediction_error_power(U, nominal, [0], theta_f, sigma=sigma, alpha=0.05),
+]
+""",
+    ),
+]
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q4"] += [
+    (
+        "exp of normal_log_likelihood (not allowed)",
+        """def likelihood(theta, z, sigma):
+    return np.exp(dg.normal_log_likelihood(theta, z, sigma=sigma))
+""",
+    ),
+]
+WRONG["q7"] += [
+    (
+        "neyman_pearson_test's power (not allowed)",
+        """def np_power(n, theta0, theta1, sigma, alpha):
+    r = dg.neyman_pearson_test(np.zeros(n), theta0, theta1, sigma=sigma, alpha=alpha)
+    return float(r.details["power"])
+""",
+    ),
+]
+RIGHT["q1"] += [
+    (
+        "np.linalg.inv for the covariance (advice, not a rule), unused forbidden import",
+        """from course.diagnosis import estimate_parameters, regression_parameter_test  # noqa: F401
+
+
+def joint_parameter_test(U, y, sigma, alpha):
+    U = np.asarray(U, dtype=float)
+    Phi = U[:, :2]
+    C = np.linalg.inv(Phi.T @ Phi)
+    theta = C @ Phi.T @ (np.asarray(y, dtype=float) - U[:, 2])
+    s = float(sigma * np.sqrt(C[1, 1]))
+    theta2 = float(theta[1])
+    return theta2, s, bool(abs(theta2 - 1.0) > s * stats.norm.isf(alpha / 2))
+""",
+    ),
+]
+RIGHT["q3"] += [
+    (
+        "the solution, with the power functions imported and never called",
+        """from course.diagnosis import parameter_estimate_power, prediction_error_power  # noqa: F401
+
+_, s2, _ = joint_parameter_test(U, U @ nominal, sigma, 0.05)
+z = stats.norm.isf(0.025)
+b = 0.1 / s2
+p_param = stats.norm.sf(z - b) + stats.norm.cdf(-z - b)
+d = 0.1 * u2
+d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
+lam = (d_perp @ d_perp) / sigma**2
+p_pe = stats.ncx2.sf(stats.chi2.isf(0.05, N - 1), N - 1, lam)
+power_pair = (float(p_param), float(p_pe))
+""",
+    ),
+]
+RIGHT["q6"] += [
+    (
+        "the solution, with glr_test imported and never called (scored 0/2 before)",
+        """from course.diagnosis import glr_test  # noqa: F401
+
+
+def glr_nf_vs_f2(U, y, sigma):
+    U = np.asarray(U, dtype=float)
+    r0 = np.asarray(y, dtype=float) - U.sum(axis=1)
+    u = U[:, 1]
+    r1 = r0 - u * (u @ r0) / (u @ u)
+    stat = float((r0 @ r0 - r1 @ r1) / sigma**2)
+    return stat, float(stats.chi2.sf(stat, 1))
+""",
+    ),
+]
+WRONG["q2"] += [
+    (
+        "estimate_parameters (not allowed)",
+        """leak_theta2 = float(
+    dg.estimate_parameters(U @ np.array([1.3, 1.0, 1.0]), U, [1.0, 1.0, 1.0], [1], sigma=1.0)
+    .estimate[0]
+)
+""",
+    ),
 ]

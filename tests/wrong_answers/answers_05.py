@@ -419,21 +419,11 @@ RIGHT = {
     ],
     "q6_practice": [
         (
-            "nis.nis_test and nis.nis_matrix_test",
-            "pvalues_practice = (nis.nis_test(eps_practice, S_practice, 0.05).pvalue,\n"
-            "                    nis.nis_matrix_test(eps_practice, S_practice, 0.05).pvalue)",
-        ),
-        (
             "list with a print",
             _PRACTICE + _P6_NIS + "pvalues_practice = [p_nis, p_matrix]\nprint(pvalues_practice)",
         ),
     ],
     "q6": [
-        (
-            "nis.nis_test and nis.nis_matrix_test",
-            'pvalues = (nis.nis_test(mine["eps"], mine["S"], mine["alpha"]).pvalue,\n'
-            '           nis.nis_matrix_test(mine["eps"], mine["S"], mine["alpha"]).pvalue)',
-        ),
         ("list with a print", _MINE + _P6_NIS + "pvalues = [p_nis, p_matrix]\nprint(pvalues)"),
     ],
     "q6_which": [
@@ -481,6 +471,73 @@ RIGHT["q3"] += [
         """from collections import namedtuple
 Iv = namedtuple("Iv", "lo hi")
 eps_bar_interval = Iv(*(v / 20 for v in stats.chi2(60).interval(0.95)))
+""",
+    ),
+]
+
+WRONG["q6_practice"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "nis.nis_test and nis.nis_matrix_test (not allowed)",
+        "pvalues_practice = (nis.nis_test(eps_practice, S_practice, 0.05).pvalue,\n"
+        "                    nis.nis_matrix_test(eps_practice, S_practice, 0.05).pvalue)",
+    ),
+]
+
+WRONG["q6"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "nis.nis_test and nis.nis_matrix_test (not allowed)",
+        'pvalues = (nis.nis_test(mine["eps"], mine["S"], mine["alpha"]).pvalue,\n'
+        '           nis.nis_matrix_test(mine["eps"], mine["S"], mine["alpha"]).pvalue)',
+    ),
+]
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q1"] += [
+    (
+        "linalg.whitened_squared_norms (not allowed)",
+        """from course import linalg as cl
+
+
+def nis_per_step(eps, S):
+    eps = np.asarray(eps, dtype=float)
+    K, m = eps.shape
+    B = np.linalg.cholesky(np.broadcast_to(np.asarray(S, dtype=float), (K, m, m)))
+    return cl.whitened_squared_norms(B, eps)
+""",
+    ),
+]
+WRONG["q4"] += [
+    (
+        "nis_matrix_critical_values in a cell added at the end, numbers pasted (1/1 before)",
+        """thresholds = (0.44949981369389597, 1.7796915167114988)  # pasted from the last cell
+# %% added cell at the end
+print(nis.nis_matrix_critical_values(2, 30, 0.05))
+""",
+    ),
+    (
+        "nis_matrix_test's critical values on any record",
+        """r = nis.nis_matrix_test(np.ones((30, 2)), np.eye(2), 0.05)
+thresholds = (float(r.critical_value[0]), float(r.critical_value[1]))
+""",
+    ),
+]
+WRONG["q8"] += [
+    (
+        "nis_critical_values / N (not allowed)",
+        """lo, hi = nis.nis_critical_values(4, 50, 0.05)
+nees_interval = (lo / 50, hi / 50)
+""",
+    ),
+]
+RIGHT["q4"] += [
+    (
+        "the solution, and nis.nis in an added cell (forbidden only in the function question q1)",
+        """thresholds = (float(nis.extreme_eigenvalue(2, 30, "min").ppf(0.025)),
+              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.025)))
+# %% added cell
+print(nis.nis(np.ones((3, 2)), np.eye(2)))
 """,
     ),
 ]

@@ -409,3 +409,69 @@ RIGHT = {
         ),
     ],
 }
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q4"] += [
+    (
+        "covariance_statistic imported under another name",
+        """from course.mismatched import correlation_statistic as cs
+from course.mismatched import covariance_statistic as vs
+from course.mismatched import mean_statistic as ms
+
+
+def section_statistics(residuals, j, k):
+    r = np.asarray(residuals, dtype=float)
+    return float(ms(r, j)), float(vs(r, j)), float(cs(r, j, k))
+""",
+    ),
+]
+WRONG["q5"] += [
+    (
+        "course.results.critical_value (2/2 before)",
+        """from course.results import critical_value
+
+
+def covariance_critical_values(P, M, alpha):
+    law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, dtype=float)) / M, dof=M - 1.0)
+    lower, upper = critical_value(law, alpha, "two-sided")
+    return float(lower), float(upper)
+""",
+    ),
+]
+WRONG["q6_practice"] += [
+    (
+        "the private twin mismatched._statistic_law (1/1 before)",
+        """from course.mismatched._quadratic_forms import _statistic_law
+
+r = residuals_practice
+M = r.shape[0]
+law_mean = _statistic_law(null_practice, "mean", 4, M, None, None, False, 1)
+law_corr = _statistic_law(null_practice, "correlation", 4, M, 5, None, False, 1)
+rbar = r[:, 4].mean(axis=0)
+stat_mean = float(rbar @ rbar)
+dj, dk = r[:, 4] - r[:, 4].mean(axis=0), r[:, 5] - r[:, 5].mean(axis=0)
+stat_corr = float(np.mean(np.sum(dj * dk, axis=1)))
+pvalues_practice = tuple(
+    min(1.0, 2 * min(float(law.cdf(s)), float(law.sf(s))))
+    for law, s in ((law_mean, stat_mean), (law_corr, stat_corr))
+)
+""",
+    ),
+]
+WRONG["q7"] += [
+    (
+        "course.results.rejection_probability and critical_value (1/1 before)",
+        """from course import results
+
+P0 = np.array([[1.5, 0.4], [0.4, 1.0]])
+P2 = np.array([[2.2, 0.4], [0.4, 1.1]])
+law0 = WeightedChiSquare(np.linalg.eigvalsh(P0) / 20, dof=19.0)
+law2 = WeightedChiSquare(np.linalg.eigvalsh(P2) / 20, dof=19.0)
+power_cov = results.rejection_probability(
+    law2, results.critical_value(law0, 0.05, "two-sided"), "two-sided"
+)
+""",
+    ),
+]
