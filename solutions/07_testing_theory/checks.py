@@ -72,6 +72,9 @@ _TESTS = [
     "course.lsq.minimal_detectable_bias",
     "course.lsq.dia",
     "course.lsq.data_snooping",
+    # notebook 3's exact GLR test of nested linear models: T_q of whitened [A C] in one call
+    "course.diagnosis.linear_glr_test",
+    "course.diagnosis.regression_parameter_test",
 ]
 
 

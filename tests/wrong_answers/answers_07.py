@@ -98,6 +98,25 @@ WRONG = {
         ),
         ("the overall model test's T", _Q1_HEAD + "    return float(e_w @ e_w)\n"),
         (
+            "notebook 3's linear_glr_test on the whitened extended model",
+            """from course import diagnosis
+def glr_statistic(A, y, Qyy, C):
+    L = np.linalg.cholesky(Qyy)
+    U = linalg.solve_triangular(L, np.column_stack([A, C]), lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    n = np.shape(A)[1]
+    return diagnosis.linear_glr_test(y_w, U, np.zeros(U.shape[1]), range(n), sigma=1.0).statistic
+""",
+        ),
+        (
+            "the library's private modules",
+            """from course.lsq import _alternatives, _fit
+def glr_statistic(A, y, Qyy, C):
+    f = _fit.fit(np.asarray(A, dtype=float), np.asarray(y, dtype=float), Qyy)
+    return float(_alternatives.glr_test(f, C).statistic)
+""",
+        ),
+        (
             "whitened with the standard deviations only (diagonal of Qyy)",
             """def glr_statistic(A, y, Qyy, C):
     s = np.sqrt(np.diag(Qyy))
