@@ -191,7 +191,9 @@ def dia(fit: LeastSquaresFit, candidates: Any = None, alpha: float = 0.05) -> DI
     Teunissen (2018): *detection* rejects H0 when the overall model test
     does; *identification* picks the alternative with the largest
     :math:`T_{q_k}` (for single observations, the largest :math:`|w_i|`; for
-    alternatives of different dimension, the smallest p-value); *adaptation*
+    alternatives of different dimension, whose statistics are not comparable, the
+    smallest p-value under H0, compared in logarithms so that p-values below the
+    smallest float keep their order); *adaptation*
     re-estimates x under it,
 
     .. math::

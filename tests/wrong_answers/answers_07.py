@@ -117,6 +117,22 @@ def glr_statistic(A, y, Qyy, C):
 """,
         ),
         (
+            "computed in float32",
+            """def glr_statistic(A, y, Qyy, C):
+    A = np.asarray(A, dtype=np.float32)
+    y = np.asarray(y, dtype=np.float32)
+    C = np.asarray(C, dtype=np.float32)
+    L = np.linalg.cholesky(np.asarray(Qyy, dtype=np.float32))
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, y, lower=True)
+    C_w = linalg.solve_triangular(L, C, lower=True)
+    Q, _ = np.linalg.qr(A_w)
+    Qc, _ = np.linalg.qr(C_w - Q @ (Q.T @ C_w))
+    v = Qc.T @ (y_w - Q @ (Q.T @ y_w))
+    return v @ v
+""",
+        ),
+        (
             "whitened with the standard deviations only (diagonal of Qyy)",
             """def glr_statistic(A, y, Qyy, C):
     s = np.sqrt(np.diag(Qyy))
