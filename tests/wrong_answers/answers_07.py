@@ -381,6 +381,11 @@ def glr_statistic(A, y, Qyy, C):
             _DIA_BY.format(suspect="lsq.w_tests(fit, d['alpha']).largest", weights="None"),
         ),
         (
+            "data snooping (several removals)",
+            "x_dia_practice = lsq.data_snooping(practice['A'], practice['y'], practice['Qyy'], "
+            "alpha=practice['alpha']).fit.x_hat",
+        ),
+        (
             "(slope, height) order",
             "x_dia_practice = np.polyfit(np.delete(np.arange(14.0), 7), "
             "np.delete(practice['y'], 7), 1, w=1 / np.delete(np.sqrt(np.diag(practice['Qyy'])), 7))",
