@@ -207,7 +207,17 @@ q2.case(A9, Y9, Q9, np.eye(9)[:, [6, 7]], 0.10, hidden=True)
 
 
 def _f_with(
-    A, y, Qyy, C, alpha, *, sigma2_from_h0=False, dof2=None, chi2_critical=False, F_as=None
+    A,
+    y,
+    Qyy,
+    C,
+    alpha,
+    *,
+    sigma2_from_h0=False,
+    omega_over_r_minus_q=False,
+    dof2=None,
+    chi2_critical=False,
+    F_as=None,
 ):
     """F built the way a mistake builds it (``F_as``: "T" or "T/q", sigma² not estimated)."""
     f = _fit(A, y, Qyy)
@@ -215,6 +225,8 @@ def _f_with(
     r = f.redundancy
     T = float(lsq.glr_test(f, C).statistic)
     rest = f.squared_norm / r if sigma2_from_h0 else (f.squared_norm - T) / (r - q)
+    if omega_over_r_minus_q:
+        rest = f.squared_norm / (r - q)
     F = (T / q) / rest
     if F_as is not None:
         F = T if F_as == "T" else T / q
@@ -242,6 +254,11 @@ def _f_with(
             "sigma² looks estimated from the null model's residuals (Ω / (m - n)): under the "
             "alternative the bias is estimated, so use (Ω - T_q) / (m - n - q)",
             lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, sigma2_from_h0=True),
+        ),
+        Mistake(
+            "the denominator looks like Ω / (m - n - q): under the alternative the residual "
+            "norm is Ω - T_q (estimating the bias removes T_q from it)",
+            lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, omega_over_r_minus_q=True),
         ),
         Mistake(
             "F looks right but its critical value has m - n denominator degrees of freedom: "
@@ -334,6 +351,11 @@ def _tau(A, y, Qyy):
             "sigma² under the alternative of test i looks divided by m - n: that model has one "
             "parameter more (the bias of observation i), so m - n - 1 degrees of freedom",
             lambda A, y, Qyy: _t_with(A, y, Qyy, dof_drop=0),
+        ),
+        Mistake(
+            "these look like |t_i|: keep the sign of w_i (the test is two-sided, the "
+            "statistic is not)",
+            lambda A, y, Qyy: np.abs(_t_with(A, y, Qyy)),
         ),
         Mistake(
             "w_i looks divided by the estimated VARIANCE: divide by its square root, the "

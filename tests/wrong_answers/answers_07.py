@@ -256,6 +256,22 @@ def glr_statistic(A, y, Qyy, C):
 """,
         ),
         (
+            "Omega, not Omega - T_q, over m - n - q",
+            """def f_test(A, y, Qyy, C, alpha):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    q = np.shape(C)[1]
+    T = glr_statistic(A, y, Qyy, C)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    r = y_w - A_w @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    F = (T / q) / (float(r @ r) / (m - n - q))
+    critical_value = float(stats.f.isf(alpha, q, m - n - q))
+    return F, critical_value, F > critical_value
+""",
+        ),
+        (
             "T_q / q with the F threshold (sigma² as stated in Qyy)",
             """def f_test(A, y, Qyy, C, alpha):
     m, n = np.shape(A)
@@ -279,6 +295,10 @@ def glr_statistic(A, y, Qyy, C):
     "q4": [
         ("Pope's tau", _Q4_HEAD + "    return w / np.sqrt(omega / (m - n))\n"),
         ("w itself (sigma known)", _Q4_HEAD + "    return w\n"),
+        (
+            "absolute values",
+            _Q4_HEAD + "    return np.abs(w) / np.sqrt((omega - w**2) / (m - n - 1))\n",
+        ),
         (
             "normalised residuals e_i / sigma_e_i in place of w_i",
             _Q4_HEAD
