@@ -432,3 +432,25 @@ def test_chi2_log_sf_continued_fraction_matches_scipy_where_scipy_is_finite(monk
     )
     monkeypatch.setattr(_dia, "stats", types.SimpleNamespace(chi2=never_finite))
     np.testing.assert_allclose(_dia._chi2_log_sf(x, dof), expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-6, 1e8])
+def test_estimated_variance_refuses_data_that_fit_exactly(scale):
+    """Points exactly on the line leave residuals of round-off size: sigma² estimated from
+    them is 0 and the t-tests judged the rounding errors (observation 5 of this line was
+    'rejected' at 5 %). A clear ValueError instead; the known-variance tests still run."""
+    A = np.column_stack([np.ones(6), np.arange(6.0)])
+    f = lsq.fit(A, scale * (1.0 + 2.0 * np.arange(6.0)))
+    with pytest.raises(ValueError, match="fit the model exactly"):
+        lsq.w_tests(f, variance="estimated")
+    with pytest.raises(ValueError, match="fit the model exactly"):
+        lsq.glr_test(f, np.eye(6)[:, [2]], variance="estimated")
+    assert not lsq.glr_test(f, np.eye(6)[:, [2]]).reject
+    # one bias on otherwise exact data: the alternative explains everything, F is infinite
+    y = 1.0 + 2.0 * np.arange(6.0)
+    y[2] += 1.0
+    g = lsq.glr_test(lsq.fit(A, scale * y), np.eye(6)[:, 2], variance="estimated")
+    assert g.reject and g.pvalue < 1e-6
+    # small but real noise is not round-off
+    noisy = scale * (1.0 + 2.0 * np.arange(6.0) + 1e-9 * np.array([1, -2, 1, 3, -1, 0.5]))
+    assert np.all(np.isfinite(lsq.w_tests(lsq.fit(A, noisy), variance="estimated").statistic))
