@@ -565,6 +565,32 @@ def test_the_self_check_catches_private_twins_and_aliases_of_assignment_04(capsy
     del check
 
 
+def test_a_forbidden_function_called_through_its_private_module_fails_the_self_check(
+    mistakes_demo, capsys
+):
+    """The grader forbids the code, not the public name: ``course.lsq._fit.fit`` is
+    ``course.lsq.fit`` and scores 0 at grading, so the self-check must say so as well (it
+    wrapped only the public attribute, and a call made in a helper from another cell showed
+    PASS)."""
+    from course.lsq import _fit
+
+    _, _, check = mistakes_demo
+
+    def helper():  # another cell's function: the scan of the answer's source does not see it
+        return _fit.fit(np.ones((2, 1)), np.ones(2))
+
+    def crit(alpha):
+        helper()
+        from scipy.stats import norm
+
+        return float(norm.isf(alpha / 2))
+
+    check("q2", crit)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer calls course.lsq.fit" in out and "PASS" not in out
+    assert _fit.fit.__module__ == "course.lsq._fit"
+
+
 @settings(max_examples=150, deadline=None, derandomize=True, database=None)
 @given(
     expected=hnp.arrays(
