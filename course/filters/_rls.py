@@ -253,7 +253,8 @@ def recursive_least_squares(
         P = as_covariance(P0, "P0", k, allow_singular=True) * c * c
         x = np.broadcast_to(x * c, batch + (k,))
         first = start = 0
-    S_scaled = S_exponent = None
+    S_scaled: np.ndarray | None = None
+    S_exponent: np.ndarray | None = None
     for t in range(start, N):
         P_prior = P
         x, P, e, S, _ = kf_update(x, P, y[..., t, None], Phi[t][None, :], R)
@@ -261,7 +262,7 @@ def recursive_least_squares(
         if not math.isfinite(S_all[t]):
             # theta and P are right (the update scales its output), S is not a double;
             # keep S / 4^k, whose NIS (eps / 2^k)^2 / (S / 4^k) is the true one
-            if S_exponent is None:
+            if S_scaled is None or S_exponent is None:
                 S_scaled, S_exponent = S_all.copy(), np.zeros(N, dtype=int)
             S_exponent[t], S_scaled[t] = _scaled_variance(Phi[t], P_prior, r)
         elif S_scaled is not None:
