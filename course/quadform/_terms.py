@@ -80,12 +80,12 @@ def _every(a) -> bool:
     call); ``count_nonzero`` is one C call (~0.2 us).  NaN counts as nonzero
     in both.
     """
-    return np.count_nonzero(a) == a.size
+    return int(np.count_nonzero(a)) == a.size
 
 
 def _some(a) -> bool:
     """``a.any()`` as one C call (see :func:`_every`)."""
-    return np.count_nonzero(a) > 0
+    return int(np.count_nonzero(a)) > 0
 
 
 def _plain_numbers(value):
