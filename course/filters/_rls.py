@@ -189,7 +189,12 @@ def recursive_least_squares(
     Regressors beyond :math:`2^{\pm 256}` are scaled by a power of two
     :math:`c` near :math:`\sqrt{\max|\Phi|}` (exact: :math:`\theta c`,
     :math:`P c^2`) so that :math:`P`, which scales as :math:`1/|\varphi|^2`,
-    stays within double precision.  The normalised innovations are independent
+    stays within double precision.  Where an innovation variance
+    :math:`S_t = \varphi_t^{\mathsf T} P \varphi_t + r` itself exceeds double
+    precision, ``S`` holds ``inf`` there and the result keeps :math:`S_t / 4^k`
+    beside it (:math:`k` an integer), so that the NIS
+    :math:`(\varepsilon_t / 2^k)^2 / (S_t / 4^k)`, which does not depend on the
+    scale, stays right.  The normalised innovations are independent
     :math:`N(0, 1)` while the model holds, which makes
     :func:`course.nis.windowed_nis` of the result a recursive test quantity
     (notebook 2, "recursive computation").
