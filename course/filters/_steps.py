@@ -122,13 +122,23 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     if not np.isfinite(update.S).all():
         # the gain and P_filt are right (each output is scaled), but S itself is not a
         # double: returned as inf it would make the NIS 0 without a word
-        raise ValueError(
-            "the innovation covariance S = H P_pred H^T + R exceeds the range of doubles "
-            f"(~1.8e308; largest |H| = {float(np.max(np.abs(H))):.3g}, largest R = "
-            f"{float(np.max(np.abs(R))):.3g}); rescale the measurement: dividing y, H "
-            "(and v_mean) by c and R by c^2 leaves the update unchanged"
-        )
+        raise _innovation_covariance_overflow("S = H P_pred H^T + R", H, R, "y, H (and v_mean)")
     return update
+
+
+def _innovation_covariance_overflow(what: str, H, R, rescale: str) -> ValueError:
+    """The refusal of an innovation covariance beyond double precision, with the remedy.
+
+    Shared by :func:`kf_update` and the filter drivers: their gains and estimates are
+    right (each output is scaled), but ``S`` is not a double, and returned as inf it
+    would make every NIS 0.
+    """
+    return ValueError(
+        f"the innovation covariance {what} exceeds the range of doubles "
+        f"(~1.8e308; largest |H| = {float(np.max(np.abs(H))):.3g}, largest R = "
+        f"{float(np.max(np.abs(R))):.3g}); rescale the measurements: dividing {rescale} "
+        "by c and R by c^2 leaves the estimates and the NIS unchanged"
+    )
 
 
 def _state(value, name: str) -> np.ndarray:

@@ -39,7 +39,9 @@ from ._terms import (
     _STEP_CONSTANT,
     _U_MAX,
     _derivative_factors,
+    _every,
     _log1p_minus,
+    _some,
     _term_constants,
     _two_product,
 )
@@ -291,9 +293,9 @@ def _saddle(x, side, upper, pole):
     # Newton steps on the points not yet close enough (the others keep theirs),
     # on compacted copies of them: no gathering and scattering at every step
     far = np.abs(g1) > _SADDLE_TOL * np.sqrt(g2)
-    if not far.any():
+    if not _some(far):
         return s, g2, g3
-    every = far.all()
+    every = _every(far)
     i = None if every else np.flatnonzero(far)
     part = side if i is None else side.points(i)  # (each point's own law in a batch)
     s_i, lo_i, hi_i, x_i, g1_i, g2_i = (
@@ -305,16 +307,16 @@ def _saddle(x, side, upper, pole):
         lo_i = np.where(right, lo_i, s_i)
         newton = s_i - g1_i / g2_i
         inside = (newton > lo_i) & (newton < hi_i)
-        s_i = newton if inside.all() else np.where(inside, newton, _bisect(lo_i, hi_i))
+        s_i = newton if _every(inside) else np.where(inside, newton, _bisect(lo_i, hi_i))
         g1_i, g2_i, g3_i = part.derivatives(s_i, x_i, pole)
         if i is None:
             s, g2, g3 = s_i, g2_i, g3_i
         else:
             s[i], g2[i], g3[i] = s_i, g2_i, g3_i
         far = np.abs(g1_i) > _SADDLE_TOL * np.sqrt(g2_i)
-        if not far.any():
+        if not _some(far):
             break
-        if not far.all():
+        if not _every(far):
             if i is None:
                 s, g2, g3 = s.copy(), g2.copy(), g3.copy()
                 i = np.flatnonzero(far)
@@ -600,11 +602,11 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     # blown points get theirs from _contour's second path
     error = diff
     # (None: every point; the first level, with no point blown, indexes nothing)
-    active = np.flatnonzero(~blown) if blown.any() else None
+    active = np.flatnonzero(~blown) if _some(blown) else None
     for level in range(_MAX_HALVINGS + 1):
         if active is None:
             done = diff <= np.maximum(tol, rtol * np.abs(total))
-            active = np.flatnonzero(~done) if not done.all() else done[:0].nonzero()[0]
+            active = np.flatnonzero(~done) if not _every(done) else done[:0].nonzero()[0]
         else:
             j = active
             done = diff[j] <= np.maximum(tol[j], rtol * np.abs(total[j]))
@@ -647,7 +649,7 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
     a, b, e0, log_tol, U, step, log_vertex = plan
     # tails far below the smallest double: the best answer is 0
     live = e0 + log_vertex > _LOG_UNDERFLOW
-    every = live.all()
+    every = _every(live)
     if every:  # (the usual case: no copies)
         value, error, converged, blown = _integrate(
             x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol
@@ -656,7 +658,7 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
         value, error = np.zeros(x.shape), np.zeros(x.shape)
         converged = np.ones(x.shape, dtype=bool)
         blown = np.zeros(x.shape, dtype=bool)
-    if not every and live.any():
+    if not every and _some(live):
         i = np.flatnonzero(live)
         value[i], error[i], converged[i], blown[i] = _integrate(
             x[i],
@@ -672,7 +674,7 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
             step,
             rtol,
         )
-    if blown.any():
+    if _some(blown):
         i = np.flatnonzero(blown)
         if opening is None:
             value[i], error[i], converged[i] = _contour(
@@ -725,14 +727,14 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
         one_side = (
             None
             if x.size == 0
-            else (-1.0 if negative.all() else 1.0 if not negative.any() else None)
+            else (-1.0 if _every(negative) else 1.0 if not _some(negative) else None)
         )
     passes: tuple[tuple[Any, Any], ...] = (
         ((one_side, None),) if one_side else ((1.0, ~negative), (-1.0, negative))
     )
     for sign, mask in passes:
         whole = mask is None
-        if not whole and not mask.any():
+        if not whole and not _some(mask):
             continue
         side = _side(sides, sign)
         if not whole and sf is None:
@@ -755,7 +757,7 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             # a positive form: P(X <= 0) = 0, and far below the weights a closed form
             # (one test for both: x <= 0 also passes the second, the slope being > 0)
             closed = xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0)
-            if closed.any():
+            if _some(closed):
                 zero = xs <= 0
                 tiny = ~zero & closed
                 up, low, e, ok = _allocated(xs)
@@ -765,13 +767,13 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
                 todo &= ~zero & ~tiny
         for upper, group, part in side.tails(xs):
             m_ = todo if group is None else todo & group
-            every = m_.all()  # (then no copies in and out)
-            if not every and not m_.any():
+            every = _every(m_)  # (then no copies in and out)
+            if not every and not _some(m_):
                 continue
             if not every:
                 upper = upper[m_]
             # one flag when every point integrates the same tail (a single point)
-            flag = bool(upper[0]) if upper.size == 1 or upper.all() or not upper.any() else upper
+            flag = bool(upper[0]) if upper.size == 1 or _every(upper) or not _some(upper) else upper
             v, e_m, ok_m = _contour(xs if every else xs[m_], part, flag, True, atol, rtol)
             if flag is True:
                 v_up = np.minimum(np.maximum(v, 0.0), 1.0) + 0.0  # (no -0.0)
@@ -901,13 +903,13 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
     w = sides["terms"][1]
     mixed = w[0] < 0 < w[-1]
     for sign, mask in ((1.0, x > 0), (-1.0, x < 0), (1.0, x == 0)):
-        if not mask.any():
+        if not _some(mask):
             continue
         side = _side(sides, sign)
         if side.top is None and not side.sigma2:
             continue
         xs = sign * x[mask]
-        if not side.sigma2 and not xs.any():
+        if not side.sigma2 and not _some(xs):
             # x = 0: an end point of a one-signed support (never asked by the
             # base class), or inside a mixed one where the density is
             # finite only when k > 1
@@ -915,7 +917,7 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
                 out[mask] = np.inf if side.k <= 1 else _density_core(xs, side, atol, rtol)
             continue
         finite = np.isfinite(xs)  # the density vanishes at +-inf
-        if finite.any():
+        if _some(finite):
             value = np.zeros(xs.shape)
             value[finite] = _density_core(xs[finite], side, atol, rtol)
             out[mask] = value
@@ -926,6 +928,6 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
 def _density_core(x, side, atol, rtol):
     out = np.empty(x.shape)
     for is_upper, mask, part in side.groups(x):
-        if mask.any():
+        if _some(mask):
             out[mask] = _contour(x[mask], part, is_upper, False, atol, rtol)[0]
     return out
