@@ -1215,3 +1215,111 @@ def test_a_root_child_drops_every_capability(tmp_path):
     assert first.split() == ["0"] + ["no"] * 7 + ["yes"], out.stdout
     assert "CapEff:\\t0000000000000000" in status and "NoNewPrivs:\\t1" in status
     assert host.stat().st_mode & 0o777 == 0o640 and host.stat().st_uid == 65534
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.2: the parent's memory stays within a fixed bound whatever the submissions hold
+# ---------------------------------------------------------------------------------------
+_MEMORY_SCRIPT = """
+import json, sys
+from pathlib import Path
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
+
+def status(field):  # bytes; ru_maxrss would count the pages of the process that forked us
+    line = next(l for l in open("/proc/self/status") if l.startswith(field + ":"))
+    return int(line.split()[1]) * 1024
+
+solution_dir, warm, subs, out = map(Path, sys.argv[1:5])
+options = dict(jobs=2, timeout=float(sys.argv[5]), memory_mb=512, progress=False)
+grade(solution_dir, warm, out / "warm", GradeOptions(**options))  # every import, one honest run
+with open("/proc/self/clear_refs", "w") as f:
+    f.write("5")  # the high-water mark starts again from the resident size now
+idle = status("VmRSS")
+summary = grade(solution_dir, subs, out / "hostile", GradeOptions(**options))
+print(json.dumps({"idle": idle, "peak": status("VmHWM"), "seconds": summary.seconds}))
+"""
+
+
+def _huge_setup(source: str) -> dict:
+    nb = _solution()
+    _cell(nb, "setup")["source"] = source
+    return nb
+
+
+def _bloating_submissions(folder: Path) -> dict[str, str]:
+    """What each file would cost a parent that decodes it whole: gigabytes."""
+    folder.mkdir()
+    honest = json.dumps(_solution())
+    setup = _cell(_solution(), "setup")["source"]
+    files = {
+        "honest_a": honest,
+        "honest_b": honest,
+        # ~48 MB of empty lists: ~1.1 GB as Python objects
+        "fifty_mb": '{"cells": [], "metadata": {}, "x": [' + "[]," * 16_000_000 + "[]]}",
+        "deep": "[" * 5_000_000,
+        "many_cells": json.dumps(
+            {"cells": [{"cell_type": "code", "source": "x=1"}] * 200_000, "metadata": {}}
+        ),
+        "tiny_strings": json.dumps(
+            {"cells": [{"cell_type": "code", "source": ["a"] * 4_000_000}], "metadata": {}}
+        ),
+        "wide_string": json.dumps(  # one non-ASCII character makes a str 4 bytes a character
+            {"cells": [{"cell_type": "code", "source": "\U0001f600" + "a" * 40_000_000}]}
+        ),
+        "huge_setup": json.dumps(_huge_setup(setup + "x=1\n" * 200_000)),
+        "huge_answer": json.dumps(
+            _with_answer("q1", "x_hat_day1 = 0\n" + "(" * 40 + "1" + ")" * 40 + "\n" * 900_000)
+        ),
+        "reply_items": json.dumps(_with_answer("q1", "x_hat_day1 = [[]] * 2_000_000")),
+        "reply_bytes": json.dumps(_with_answer("q1", "x_hat_day1 = '\\u00e9' * 2_000_000")),
+        "reply_string": json.dumps(
+            _with_answer("q1", "x_hat_day1 = '\U0001f600' + 'a' * 7_000_000")
+        ),
+    }
+    for sid, text in files.items():
+        (folder / f"{sid}.ipynb").write_text(text)
+    return files
+
+
+def test_the_parent_s_memory_is_bounded_whatever_the_submissions_hold(tmp_path):
+    """Issue 25.2: a 1.2 MB setup cell added 687 MB to the grader, and a 50 MB notebook of
+    empty lists costs over a gigabyte to decode. Submissions are decoded in sandboxed reader
+    children now, and a reply is bounded in bytes and values before the parent decodes it:
+    the grader's peak memory stays within 300 MB of its idle size."""
+    import subprocess
+    import sys
+
+    warm, subs, out = tmp_path / "warm", tmp_path / "subs", tmp_path / "out"
+    warm.mkdir()
+    (warm / "warm.ipynb").write_text(json.dumps(_solution()))
+    _bloating_submissions(subs)
+    run = subprocess.run(
+        [sys.executable, "-c", _MEMORY_SCRIPT, SOLUTION_DIR, warm, subs, out, str(TIMEOUT)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    measured = json.loads(run.stdout.strip().splitlines()[-1])
+    grown = (measured["peak"] - measured["idle"]) / 1e6
+    rows = {
+        json.loads(line)["student"]: json.loads(line)
+        for line in (out / "hostile" / "results.jsonl").read_text().splitlines()
+    }
+    assert grown < 300, (grown, {sid: row["status"] for sid, row in rows.items()})
+    for sid in ("honest_a", "honest_b"):
+        _expect(rows[sid], {})
+    for sid in ("fifty_mb", "deep", "many_cells", "tiny_strings", "wide_string"):
+        assert rows[sid]["status"] == "invalid notebook", (sid, rows[sid])
+        assert rows[sid]["total"] == 0
+    notes = {sid: " ".join(rows[sid]["notes"]) for sid in rows}
+    assert "2,000" in notes["many_cells"] and "1,000,000 characters" in notes["tiny_strings"]
+    assert "nested" in notes["deep"] or "too large" in notes["deep"]
+    for sid in ("reply_items", "reply_bytes"):
+        _expect(rows[sid], {"q1": None})
+        assert "too large" in rows[sid]["questions"]["q1"]["message"], rows[sid]["questions"]
+    _expect(rows["reply_string"], {"q1": None})
+    _expect(rows["huge_answer"], {"q1": None})
+    _expect(rows["huge_setup"], {})

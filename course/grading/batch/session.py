@@ -25,7 +25,7 @@ from course.grading.batch.results import CaseResult, QuestionResult, StudentResu
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
-from course.grading.notebook import SubmissionError, forbidden_mentions, read_submission
+from course.grading.notebook import SubmissionError, forbidden_mentions
 from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
 from course.grading.vocabulary import (
     ABNORMAL,
@@ -98,6 +98,7 @@ class AssignmentGrader:
         self.isolation = self.options.isolation()  # refuses early where nothing walls files off
         self._sandbox: Sandbox | None = None
         self._sandbox_lock = threading.Lock()
+        self._unreadable: dict[str, str] = {}  # path -> why its reader child failed
 
     @property
     def sandbox(self) -> Sandbox:
@@ -114,6 +115,20 @@ class AssignmentGrader:
                     isolation=self.isolation,
                 )
             return self._sandbox
+
+    def declared_id(self, path: Path | None) -> tuple[str | None, dict]:
+        """The ID a submission declares and its submission metadata, read by a sandboxed
+        reader child (:meth:`~course.grading.sandbox.parent.Sandbox.read_notebook`);
+        ``(None, {})`` when it cannot be read (its session reports why)."""
+        from course.grading.batch.identity import declared_in
+
+        if path is None:
+            return None, {}
+        try:
+            return declared_in(self.sandbox.read_notebook(path, self.options.ready_timeout))
+        except SubmissionError as exc:  # kept (a line), so its session does not read it again
+            self._unreadable[str(path)] = str(exc)
+            return None, {}
 
     def close(self) -> None:
         with self._sandbox_lock:
@@ -203,8 +218,12 @@ class AssignmentGrader:
             return
         if problem:
             row.notes.append(problem[0].upper() + problem[1:] + ".")
-        try:
-            nb = read_submission(raw if raw is not None else path)
+        try:  # decoded in a sandboxed child: only a bounded part of it reaches this process
+            if raw is None and str(path) in self._unreadable:
+                raise SubmissionError(self._unreadable[str(path)])
+            nb = self.sandbox.read_notebook(
+                raw if raw is not None else path, self.options.ready_timeout
+            )
         except SubmissionError as exc:
             row.status = SubmissionStatus.INVALID_NOTEBOOK
             row.notes.append(f"The submission could not be read: {exc}.")

@@ -34,6 +34,7 @@ What a submission can still do is listed in ``docs/instructors/sandbox.md``.
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import secrets
@@ -41,6 +42,7 @@ import select
 import shutil
 import signal
 import socket
+import stat
 import subprocess
 import sys
 import tempfile
@@ -49,6 +51,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError
 from course.grading.sandbox.isolation import Isolation, detect
 from course.grading.tripwire import parse_events
 from course.grading.vocabulary import Op, ReplyStatus
@@ -64,7 +67,17 @@ __all__ = [
 ]
 
 _PACKAGE_PARENT = str(Path(__file__).resolve().parents[3])
-MAX_REPLY_BYTES = 64_000_000
+#: The longest reply line the parent takes from a child, and the most JSON values (counted as
+#: ``[``, ``{`` and ``,``) in it: decoding costs the parent up to ~4 bytes per byte of a
+#: string and ~70 bytes per value, so a reply costs it at most ~40 MB (numpy arrays travel as
+#: base64 strings, so 8 MB is an array of a million numbers). A longer reply stops the child
+#: and fails its question ("the reply was too large").
+MAX_REPLY_BYTES = 8_000_000
+MAX_REPLY_ITEMS = 200_000
+#: A reader child's reply: the reduced notebook (at most 1,000,000 characters of source,
+#: 12 bytes each at worst as JSON escapes), from a child that ran no student code.
+MAX_READ_REPLY_BYTES = 16_000_000
+_READ_FILE = "submission.ipynb"  # runner.READ_FILE (the runner is not imported by the parent)
 
 
 @dataclass
@@ -149,6 +162,37 @@ def _server_env(rundir: str) -> dict:
     return env
 
 
+def _copy_notebook(source, target: str) -> None:
+    """Write a submission (its bytes, or the file at ``source``) to ``target``, refusing a
+    symbolic link, anything but a regular file and more than ``MAX_NOTEBOOK_BYTES``; the
+    copy goes in chunks, so a file of any size costs the parent 1 MB of memory."""
+    if isinstance(source, bytes):
+        if len(source) > MAX_NOTEBOOK_BYTES:
+            raise SubmissionError(
+                f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB"
+            )
+        with open(target, "wb") as out:
+            out.write(source)
+        return
+    try:
+        fd = os.open(source, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise SubmissionError("the notebook is a symbolic link") from None
+        raise SubmissionError(f"cannot read the notebook ({exc.strerror})") from None
+    with os.fdopen(fd, "rb") as f, open(target, "wb") as out:
+        if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+            raise SubmissionError("the notebook is not a regular file")
+        copied = 0
+        while chunk := f.read(1 << 20):
+            copied += len(chunk)
+            if copied > MAX_NOTEBOOK_BYTES:
+                raise SubmissionError(
+                    f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB"
+                )
+            out.write(chunk)
+
+
 class ChildHandle:
     """The grader's (parent's) handle on one sandboxed child: requests, kill, exit status."""
 
@@ -178,6 +222,7 @@ class ChildHandle:
         self._events: dict[str, int] = {}
         self.events_reported = 0
         self._next_id = 0
+        self._max_bytes = MAX_REPLY_BYTES
         self.info: dict = {}
 
     # -- protocol -------------------------------------------------------------------------
@@ -231,7 +276,7 @@ class ChildHandle:
             if not chunk:
                 raise ChildDied(self._death_cause())
             self._buffer += chunk
-            if len(self._buffer) > MAX_REPLY_BYTES:
+            if len(self._buffer) > self._max_bytes:
                 self.kill()
                 raise ChildDied("the reply was too large")
         line, self._buffer = self._buffer.split(b"\n", 1)
@@ -243,22 +288,39 @@ class ChildHandle:
         events, self._events = list(self._events), {}
         return events
 
-    def request(self, op: str, timeout: float, **fields) -> dict:
+    def request(
+        self,
+        op: str,
+        timeout: float,
+        *,
+        max_bytes: int = MAX_REPLY_BYTES,
+        max_items: int | None = MAX_REPLY_ITEMS,
+        **fields,
+    ) -> dict:
         """Send one request and wait for its reply; on timeout the child is killed.
 
         Raises :class:`ChildTimeout` or :class:`ChildDied`; lines that are not the reply to this
-        request (wrong nonce, not JSON) are ignored, so printing cannot forge a reply. Reports
+        request (wrong nonce, not JSON) are ignored, so printing cannot forge a reply. A line
+        longer than ``max_bytes`` or with more than ``max_items`` JSON values stops the child
+        (:class:`ChildDied`, "the reply was too large") before the parent decodes it. Reports
         of forbidden calls made meanwhile are collected (:meth:`take_events`).
         """
         if not self.alive:
             raise ChildDied("the process had already ended")
         self._next_id += 1
+        self._max_bytes = max_bytes
         nonce = secrets.token_hex(8)
         deadline = time.monotonic() + timeout
         try:
             self._send({"op": op, "id": self._next_id, "nonce": nonce, **fields}, deadline)
             while True:
                 line = self._readline(deadline)
+                if (
+                    max_items is not None
+                    and line.count(b",") + line.count(b"[") + line.count(b"{") > max_items
+                ):
+                    self.kill()
+                    raise ChildDied("the reply was too large")
                 try:
                     reply = json.loads(line)
                 except (ValueError, RecursionError):  # deep nesting ("[[[[...") too
@@ -495,6 +557,40 @@ class Sandbox:
         child.info = {k: reply.get(k) for k in ("seccomp", "landlock", "uid")}
         child.take_events()  # nothing before student code counts
         return child
+
+    def read_notebook(self, source, timeout: float = 60.0) -> dict:
+        """Decode a submitted notebook (a path, or its bytes) in a sandboxed reader child.
+
+        The parent copies the file (at most :data:`~course.grading.notebook.MAX_NOTEBOOK_BYTES`,
+        refusing links and anything but a regular file) into a fresh child's folder; the
+        child, under its memory limit and before any student code, decodes it and sends back
+        only what the grader reads (:func:`~course.grading.notebook.reduce_notebook`). So
+        whatever a notebook holds (deep nesting, millions of tiny values, huge strings), it
+        costs the parent at most a few times
+        :data:`~course.grading.notebook.MAX_SOURCE_CHARS` and the reader at most ``timeout``.
+        Raises :class:`~course.grading.notebook.SubmissionError` (that student's problem).
+        """
+        child = self.start({"student_id": "", "assignment": "", "data": {}}, timeout)
+        try:
+            target = os.path.join(child.tmpdir, _READ_FILE)
+            _copy_notebook(source, target)
+            if self.isolation.drop_to is not None:
+                os.chown(target, *self.isolation.drop_to)
+            reply = child.request(Op.READ, timeout, max_bytes=MAX_READ_REPLY_BYTES, max_items=None)
+        except ChildTimeout:
+            raise SubmissionError(f"reading the notebook took longer than {timeout:g} s") from None
+        except ChildDied as exc:
+            raise SubmissionError(f"the notebook could not be read ({exc.cause})") from None
+        finally:
+            child.close()
+        nb = reply.get("notebook")
+        if reply.get("status") != ReplyStatus.OK or not isinstance(nb, dict):
+            error = reply.get("error")
+            message = error.get("message") if isinstance(error, dict) else None
+            raise SubmissionError(str(message or "the notebook could not be read")[:500])
+        if not isinstance(nb.get("cells"), list):
+            raise SubmissionError("the notebook could not be read")
+        return nb
 
     def _exit_status(self, child: ChildHandle):
         with self._lock:
