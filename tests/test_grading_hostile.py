@@ -1323,3 +1323,61 @@ def test_the_parent_s_memory_is_bounded_whatever_the_submissions_hold(tmp_path):
     _expect(rows["reply_string"], {"q1": None})
     _expect(rows["huge_answer"], {"q1": None})
     _expect(rows["huge_setup"], {})
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.3: no scheduling state crosses from one child to the next
+# ---------------------------------------------------------------------------------------
+_SCHEDULING = (
+    "import os\n"
+    "state = [sorted(os.sched_getaffinity(0)), os.getpriority(os.PRIO_PROCESS, 0),\n"
+    "         os.sched_getscheduler(0)]\n"
+)
+_PIN_AND_RENICE = """
+import os
+done = []
+server = os.getppid()  # the fork server
+for name, call in [
+    ("affinity", lambda: os.sched_setaffinity(server, {max(os.sched_getaffinity(0))})),
+    ("nice", lambda: os.setpriority(os.PRIO_PROCESS, server, 19)),
+    ("policy", lambda: os.sched_setscheduler(server, os.SCHED_IDLE, os.sched_param(0))),
+]:
+    try:
+        call()
+        done.append(name)
+    except OSError:
+        pass
+"""
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_a_child_cannot_leave_the_fork_server_pinned_or_niced(namespaces):
+    """Issue 25.5: a child pinned the fork server to one CPU and niced it to 19, and every
+    later student ran so. Seccomp refuses that, so it is off here: the server itself puts its
+    affinity, nice value and policy back before each fork."""
+    from course.grading.codec import decode
+    from course.grading.sandbox.isolation import IsolationError, detect
+    from course.grading.sandbox.parent import Limits, Sandbox
+
+    try:
+        isolation = detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    if not namespaces and isolation.landlock == 0:
+        pytest.skip("no Landlock on this kernel")
+    init = {"student_id": "s1", "assignment": NAME, "data": {}}
+    with Sandbox(limits=Limits(memory_mb=512, seccomp=False), isolation=isolation) as sandbox:
+        states, attacked = [], []
+        for attack in (_PIN_AND_RENICE, ""):
+            child = sandbox.start(init)
+            try:
+                assert child.request("run", 20, source=_SCHEDULING)["status"] == "ok"
+                states.append(decode(child.request("value", 20, name="state")["value"]))
+                if attack:
+                    assert child.request("run", 20, source=attack)["status"] == "ok"
+                    attacked = decode(child.request("value", 20, name="done")["value"])
+            finally:
+                child.close()
+    if not attacked:
+        pytest.skip("this machine refuses the calls anyway (nothing to undo)")
+    assert states[1] == states[0], (attacked, states)

@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError
+from course.grading.sandbox.forkserver import TAMPERED
 from course.grading.sandbox.isolation import Isolation, detect
 from course.grading.tripwire import parse_events
 from course.grading.vocabulary import Op, ReplyStatus
@@ -435,6 +436,7 @@ class Sandbox:
             for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
                 os.chown(folder, *self.isolation.drop_to)
         self.server_info: dict = {}
+        self.server_restarts = 0  # fork servers replaced because a child changed scheduling
         self._start_server()
 
     # -- launching ------------------------------------------------------------------------
@@ -541,6 +543,13 @@ class Sandbox:
                 reply, got = self._server_call(
                     {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
                 )
+                if reply.get("error") == TAMPERED:  # a child changed the server's scheduling
+                    self.server_restarts += 1
+                    self._stop_server()
+                    self._start_server()
+                    reply, got = self._server_call(
+                        {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
+                    )
             pid = int(reply["pid"])
             pidfd = got[0] if got else None
         finally:
@@ -605,8 +614,7 @@ class Sandbox:
             return None
         return -os.WTERMSIG(status) if os.WIFSIGNALED(status) else os.WEXITSTATUS(status)
 
-    def close(self) -> None:
-        """Stop the fork server and remove the run directory."""
+    def _stop_server(self) -> None:
         if self._sock is not None:
             with contextlib.suppress(OSError):
                 self._sock.close()
@@ -618,6 +626,10 @@ class Sandbox:
                 os.killpg(self._server.pid, signal.SIGKILL)
                 self._server.wait()
             self._server = None
+
+    def close(self) -> None:
+        """Stop the fork server and remove the run directory."""
+        self._stop_server()
         shutil.rmtree(self._rundir, ignore_errors=True)
 
     def __enter__(self):
