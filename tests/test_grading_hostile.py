@@ -1379,5 +1379,102 @@ def test_a_child_cannot_leave_the_fork_server_pinned_or_niced(namespaces):
             finally:
                 child.close()
     if not attacked:
-        pytest.skip("this machine refuses the calls anyway (nothing to undo)")
+        pytest.skip(
+            "the kernel refuses the calls here (e.g. a child without capabilities cannot change a server that has them)"
+        )
     assert states[1] == states[0], (attacked, states)
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.12: nothing a child made survives its run, and a failed cleanup is reported
+# ---------------------------------------------------------------------------------------
+def _make_undeletable(path: Path) -> bool:
+    """Make ``path`` impossible to remove for its cleanup, as an immutable file left by a
+    child would be: ``chattr +i`` as root (where the file system has the flag), else a
+    read-only folder around it (a cleanup that is not root cannot empty it)."""
+    import subprocess
+
+    if os.geteuid() == 0:
+        done = subprocess.run(["chattr", "+i", str(path)], capture_output=True)
+        return done.returncode == 0
+    os.chmod(path.parent, 0o500)
+    return True
+
+
+def _make_deletable(path: Path) -> None:
+    import subprocess
+
+    if os.geteuid() == 0:
+        subprocess.run(["chattr", "-i", str(path)], capture_output=True)
+    else:
+        os.chmod(path.parent, 0o700)
+    shutil.rmtree(path.parent, ignore_errors=True)
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_a_failed_cleanup_is_reported_in_the_row_and_on_the_console(
+    tmp_path, monkeypatch, namespaces
+):
+    """Issue 25.12: an immutable file kept the run folder in /tmp after grading and the
+    cleanup failed silently. Whatever a cleanup cannot remove is now named in the student's
+    row (``cleanup_failed``) and in the console summary; everything else is removed."""
+    from course.grading.sandbox.isolation import IsolationError, detect
+    from course.grading.sandbox.parent import ChildHandle
+
+    try:
+        detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    subs.mkdir()
+    (subs / "honest.ipynb").write_text(json.dumps(_solution()))
+    leaver = _with_answer(
+        "q1",
+        _cell(_solution(), "q1-answer")["source"]
+        + "\nimport os\nos.mkdir('kept')\nopen('kept/left.txt', 'w').write('x')\n",
+    )
+    (subs / "leaver.ipynb").write_text(json.dumps(leaver))
+    locked: list[Path] = []
+    original = ChildHandle.close
+
+    def close(self):  # the file becomes undeletable just before the cleanup, as chattr would
+        left = Path(self.tmpdir) / "kept" / "left.txt"
+        if left.exists() and left not in locked:
+            if not _make_undeletable(left):
+                pytest.skip("this file system has no immutable flag")
+            locked.append(left)
+        return original(self)
+
+    monkeypatch.setattr(ChildHandle, "close", close)
+    import tempfile
+
+    private_tmp = tmp_path / "tmp"  # the run folders of this grading only
+    private_tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(private_tmp))
+    try:
+        options = GradeOptions(
+            jobs=2, timeout=TIMEOUT, memory_mb=512, progress=False, namespaces=namespaces
+        )
+        summary = grade(SOLUTION_DIR, subs, out, options)
+        rows = {
+            json.loads(line)["student"]: json.loads(line)
+            for line in (out / "results.jsonl").read_text().splitlines()
+        }
+        left_files = sorted(p for p in private_tmp.rglob("*") if not p.is_dir())
+    finally:
+        for path in locked:
+            _make_deletable(path)
+    assert locked, (
+        "the leaver's cell did not run",
+        rows["leaver"]["questions"]["q1"],
+        rows["leaver"]["notes"],
+    )
+    assert left_files == locked  # the undeletable file, and nothing else, survived
+    assert "cleanup_failed" not in rows["honest"]
+    failed = rows["leaver"]["cleanup_failed"]
+    assert any(str(locked[0]) in f for f in failed), failed
+    text = summary.text()
+    assert "WARNING cleanup_failed" in text and str(locked[0]) in text
+    assert str(locked[0]) not in (out / "feedback" / "leaver.md").read_text()
+    _expect(rows["leaver"], {})
+    _expect(rows["honest"], {})

@@ -154,6 +154,8 @@ def _read_declared(grader: AssignmentGrader, found: list, options: GradeOptions)
     paths = [sub.path for sub in found if sub.path is not None]
     if not paths:
         return {}
+    # started by this thread: the fork server dies with the thread that started it
+    grader.sandbox  # noqa: B018
     with ThreadPoolExecutor(max_workers=max(1, int(options.jobs))) as pool:
         return dict(zip(paths, pool.map(grader.declared_id, paths)))
 
@@ -270,6 +272,7 @@ def grade(
                 bar.update(1)
         if bar is not None:
             bar.close()
+        grader.close()  # now: what its cleanup could not remove goes into the summary
         for row in rows.values():  # feedback of resumed students too (cheap, keeps OUT complete)
             fb = out / "feedback" / f"{row.student}.md"
             if not fb.exists():
@@ -293,6 +296,7 @@ def grade(
         summary.stale = stale
         summary.unselected = skipped
         summary.marking = marking
+        summary.cleanup_failed = list(grader.cleanup_failures)
         if options.roster is not None:
             _class_files(summary, grader, options, out)
         return summary

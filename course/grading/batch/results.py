@@ -86,7 +86,7 @@ class QuestionResult:
 
 
 #: StudentResult's fields that are written only when set (None: absent from the JSON row)
-_OPTIONAL = ("deleted_answers", "wall_seconds", "file")
+_OPTIONAL = ("deleted_answers", "wall_seconds", "file", "cleanup_failed")
 
 
 @dataclass
@@ -96,7 +96,9 @@ class StudentResult:
     ``status`` is a :class:`~course.grading.vocabulary.SubmissionStatus`, or the abnormal
     questions (``"q1: timeout; q3: forbidden"``); ``notes`` are for the student;
     ``deleted_answers`` maps a question whose answer cell was deleted to ``"adopted"`` (graded
-    from an added cell) or ``"missing"``; ``file`` is the graded file and its sha256."""
+    from an added cell) or ``"missing"``; ``file`` is the graded file and its sha256;
+    ``cleanup_failed`` lists what its processes left that could not be removed (instructor
+    only: ``"<path> (<reason>)"``)."""
 
     student: str
     assignment: str
@@ -112,6 +114,7 @@ class StudentResult:
     wall_seconds: float | None = None
     file: dict[str, Any] | None = None
     has_file: bool = False  # ``file`` is written (null included) once the driver recorded it
+    cleanup_failed: list[str] | None = None
     extra: dict[str, Any] = field(default_factory=dict)  # keys of other versions, kept as read
 
     def add_total(self) -> None:
@@ -142,6 +145,8 @@ class StudentResult:
             out["wall_seconds"] = self.wall_seconds
         if self.has_file:
             out["file"] = self.file
+        if self.cleanup_failed:
+            out["cleanup_failed"] = list(self.cleanup_failed)
         return out
 
     @classmethod
@@ -176,5 +181,6 @@ class StudentResult:
             wall_seconds=d.get("wall_seconds"),
             file=d.get("file"),
             has_file="file" in d,
+            cleanup_failed=d.get("cleanup_failed"),
             extra={k: v for k, v in d.items() if k not in known},
         )

@@ -99,6 +99,7 @@ class AssignmentGrader:
         self._sandbox: Sandbox | None = None
         self._sandbox_lock = threading.Lock()
         self._unreadable: dict[str, str] = {}  # path -> why its reader child failed
+        self.cleanup_failures: list[str] = []  # of sandboxes closed: "<path> (<reason>)"
 
     @property
     def sandbox(self) -> Sandbox:
@@ -131,9 +132,11 @@ class AssignmentGrader:
             return None, {}
 
     def close(self) -> None:
+        """Stop the sandbox; what no cleanup could remove is in :attr:`cleanup_failures`."""
         with self._sandbox_lock:
             if self._sandbox is not None:
                 self._sandbox.close()
+                self.cleanup_failures.extend(self._sandbox.cleanup_failures)
                 self._sandbox = None
 
     def __enter__(self):
@@ -369,6 +372,10 @@ class StudentSession:
     def _drop_child(self) -> None:
         if self.child is not None:
             self.child.close()
+            if self.child.cleanup_failed:  # the instructor's record (never the feedback)
+                self.row.cleanup_failed = (self.row.cleanup_failed or []) + [
+                    f for f in self.child.cleanup_failed if f not in (self.row.cleanup_failed or [])
+                ]
             self.child = None
 
     def ensure_child(self) -> bool:

@@ -163,6 +163,29 @@ def _server_env(rundir: str) -> dict:
     return env
 
 
+def remove_tree(path: str) -> list[str]:
+    """Remove the folder ``path`` and everything in it; what could not be removed, each as
+    ``"<path> (<reason>)"`` (at most 20; empty when all is gone). A file a child made
+    immutable (``chattr +i``) is one; the caller reports it, never silently."""
+    failed: list[str] = []
+    seen: set[str] = set()
+
+    def note(_func, where, exc_info) -> None:
+        exc = exc_info[1]
+        if isinstance(exc, FileNotFoundError) or where in seen:
+            return
+        if isinstance(exc, OSError) and exc.errno == errno.ENOTEMPTY:
+            return  # a folder that still holds what failed: that is reported itself
+        seen.add(where)
+        if len(failed) < 20:
+            failed.append(f"{where} ({getattr(exc, 'strerror', None) or exc})")
+
+    shutil.rmtree(path, onerror=note)
+    if not failed and os.path.lexists(path):
+        failed.append(f"{path} (still there)")
+    return failed
+
+
 def _copy_notebook(source, target: str) -> None:
     """Write a submission (its bytes, or the file at ``source``) to ``target``, refusing a
     symbolic link, anything but a regular file and more than ``MAX_NOTEBOOK_BYTES``; the
@@ -224,6 +247,7 @@ class ChildHandle:
         self.events_reported = 0
         self._next_id = 0
         self._max_bytes = MAX_REPLY_BYTES
+        self.cleanup_failed: list[str] = []  # what close() could not remove
         self.info: dict = {}
 
     # -- protocol -------------------------------------------------------------------------
@@ -381,7 +405,9 @@ class ChildHandle:
                     os.close(fd)
         self.req_w = self.resp_r = self.event_r = -1
         self.pidfd = None
-        shutil.rmtree(self.tmpdir, ignore_errors=True)
+        if os.path.lexists(self.tmpdir):
+            self.cleanup_failed = remove_tree(self.tmpdir)
+            self.sandbox.note_cleanup_failed(self.cleanup_failed)
 
 
 class Sandbox:
@@ -426,6 +452,9 @@ class Sandbox:
         # never mounted nor allowed, should a Python folder contain one of them
         self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]
         self._lock = threading.Lock()
+        self._failures_lock = threading.Lock()
+        #: what a child left that no cleanup could remove ("<path> (<reason>)")
+        self.cleanup_failures: list[str] = []
         self._server: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._rundir = os.path.realpath(tempfile.mkdtemp(prefix="course-grade-run-"))
@@ -501,6 +530,11 @@ class Sandbox:
             raise SandboxError(f"the fork server did not start: {log_text[-1500:]}")
         self.server_info = reply
         self.isolation = self.isolation.with_(unprivileged=bool(reply.get("unprivileged")))
+        if self.isolation.drop_to is not None and not self.isolation.unprivileged:
+            # children stay root without capabilities: a folder of nobody's on the way to
+            # theirs would keep them out of it (and out of their Landlock rule)
+            for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
+                os.chown(folder, os.getuid(), os.getgid())
 
     def _server_log(self) -> str:
         try:
@@ -528,8 +562,8 @@ class Sandbox:
     def start(self, init: dict, ready_timeout: float = 60.0) -> ChildHandle:
         """Start a child, send it ``init`` and wait until it is ready for student code."""
         tmpdir = tempfile.mkdtemp(prefix="child-", dir=self._children)
-        if self.isolation.drop_to is not None:
-            os.chown(tmpdir, *self.isolation.drop_to)
+        if self._children_drop():
+            os.chown(tmpdir, *self.isolation.drop_to)  # type: ignore[misc]
         req_r, req_w = os.pipe()
         resp_r, resp_w = os.pipe()
         event_r, event_w = os.pipe()
@@ -567,6 +601,11 @@ class Sandbox:
         child.take_events()  # nothing before student code counts
         return child
 
+    def _children_drop(self) -> bool:
+        """Whether children run as ``drop_to`` (their folders are then theirs). A child that
+        stays root has no capabilities, so it could not write a folder owned by nobody."""
+        return self.isolation.drop_to is not None and bool(self.isolation.unprivileged)
+
     def read_notebook(self, source, timeout: float = 60.0) -> dict:
         """Decode a submitted notebook (a path, or its bytes) in a sandboxed reader child.
 
@@ -583,8 +622,8 @@ class Sandbox:
         try:
             target = os.path.join(child.tmpdir, _READ_FILE)
             _copy_notebook(source, target)
-            if self.isolation.drop_to is not None:
-                os.chown(target, *self.isolation.drop_to)
+            if self._children_drop():
+                os.chown(target, *self.isolation.drop_to)  # type: ignore[misc]
             reply = child.request(Op.READ, timeout, max_bytes=MAX_READ_REPLY_BYTES, max_items=None)
         except ChildTimeout:
             raise SubmissionError(f"reading the notebook took longer than {timeout:g} s") from None
@@ -627,10 +666,17 @@ class Sandbox:
                 self._server.wait()
             self._server = None
 
+    def note_cleanup_failed(self, failed: list[str]) -> None:
+        """Record paths a cleanup could not remove (:attr:`cleanup_failures`)."""
+        with self._failures_lock:
+            self.cleanup_failures.extend(f for f in failed if f not in self.cleanup_failures)
+
     def close(self) -> None:
-        """Stop the fork server and remove the run directory."""
+        """Stop the fork server and remove the run directory (what cannot be removed is
+        recorded in :attr:`cleanup_failures`)."""
         self._stop_server()
-        shutil.rmtree(self._rundir, ignore_errors=True)
+        if os.path.lexists(self._rundir):
+            self.note_cleanup_failed(remove_tree(self._rundir))
 
     def __enter__(self):
         return self
