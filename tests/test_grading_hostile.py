@@ -1478,3 +1478,100 @@ def test_a_failed_cleanup_is_reported_in_the_row_and_on_the_console(
     assert str(locked[0]) not in (out / "feedback" / "leaver.md").read_text()
     _expect(rows["leaver"], {})
     _expect(rows["honest"], {})
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25, done when: honest students graded after a hostile batch get what a clean batch gives
+# ---------------------------------------------------------------------------------------
+_STATE_ATTACKS = {
+    "scheduler": (  # the fork server and the child itself: pinned, niced, idle
+        "import os\n"
+        "for call in (lambda: os.sched_setaffinity(os.getppid(), {0}),\n"
+        "             lambda: os.setpriority(os.PRIO_PROCESS, os.getppid(), 19),\n"
+        "             lambda: os.sched_setscheduler(os.getppid(), os.SCHED_IDLE, os.sched_param(0)),\n"
+        "             lambda: os.sched_setaffinity(0, {0}),\n"
+        "             lambda: os.setpriority(os.PRIO_PROCESS, 0, 19)):\n"
+        "    try:\n        call()\n    except OSError:\n        pass\n"
+    ),
+    "leaves_files": (  # files in its folder, /tmp and /dev/shm, a process-wide umask
+        "import os\nos.umask(0)\n"
+        "for where in ('.', '/tmp', '/dev/shm'):\n"
+        "    try:\n"
+        "        open(os.path.join(where, 'left-behind.txt'), 'w').write('x' * 100000)\n"
+        "    except OSError:\n        pass\n"
+    ),
+    "sysv": (
+        "import ctypes\nlibc = ctypes.CDLL(None)\n"
+        "shm = libc.shmget(0x5EED, 1 << 20, 0o1666)\nmsg = libc.msgget(0x5EED, 0o1666)\n"
+    ),
+    "forbidden_flood": "from course import lsq\nfor _ in range(20000):\n    lsq.fit\n",
+}
+
+
+def _honest_after_hostile_batch(folder: Path, env) -> None:
+    folder.mkdir()
+    subs = _submissions(env)
+    chosen = {k: subs[k] for k in ("infinite_loop", "memory_bomb", "fork_bomb", "output_flood")}
+    chosen |= {k: subs[k] for k in ("monkeypatch", "forbidden_runtime", "os_exit", "not_json")}
+    q1 = _cell(_solution(), "q1-answer")["source"]
+    for name, attack in _STATE_ATTACKS.items():
+        chosen[name] = _with_answer("q1", attack + "\n" + q1)
+    chosen["reply_items"] = _with_answer("q1", "x_hat_day1 = [[]] * 2_000_000")
+    for sid, nb in chosen.items():
+        text = nb if isinstance(nb, str) else json.dumps(nb)
+        (folder / f"a_{sid}.ipynb").write_text(text)  # graded before the honest ones
+    (folder / "a_deep.ipynb").write_text("[" * 200_000)
+
+
+def _comparable(row: dict, out: Path) -> dict:
+    """What a student gets: points, statuses and messages of every question, notes, feedback."""
+    kept = {k: v for k, v in row.items() if k not in ("wall_seconds", "file")}
+    kept["feedback"] = (out / "feedback" / f"{row['student']}.md").read_text()
+    return kept
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_honest_students_after_a_hostile_batch_get_what_a_clean_batch_gives(tmp_path, namespaces):
+    from course.grading.sandbox.isolation import IsolationError, detect
+
+    try:
+        detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    env = types.SimpleNamespace(
+        root=tmp_path,
+        sentinel=tmp_path / "outside" / "sentinel.txt",
+        solution_dir=SOLUTION_DIR,
+        course=ROOT,
+        home=tmp_path,
+        solution_secret=SOLUTION_DIR / "checks.py",
+        home_secret=tmp_path / "home-token.txt",
+        victim=tmp_path / "victim.ipynb",
+        port=1,
+        marker="pwned",
+        token="0",
+    )
+    env.sentinel.parent.mkdir()
+    env.sentinel.write_text("original")
+    clean, hostile = tmp_path / "clean", tmp_path / "hostile"
+    clean.mkdir()
+    _honest_after_hostile_batch(hostile, env)
+    for folder in (clean, hostile):
+        for sid in ("zz_honest_1", "zz_honest_2"):
+            (folder / f"{sid}.ipynb").write_text(json.dumps(_solution()))
+    results = {}
+    for folder in (clean, hostile):
+        out = tmp_path / f"out-{folder.name}"
+        options = GradeOptions(
+            jobs=2, timeout=TIMEOUT, memory_mb=512, progress=False, namespaces=namespaces
+        )
+        summary = grade(SOLUTION_DIR, folder, out, options)
+        rows = {r.student: r.to_json() for r in summary.rows}
+        results[folder.name] = {
+            sid: _comparable(rows[sid], out) for sid in ("zz_honest_1", "zz_honest_2")
+        }
+        assert len(rows) == len(list(folder.glob("*.ipynb")))
+    assert results["hostile"] == results["clean"]
+    for row in results["clean"].values():
+        assert row["total"] == FULL and row["status"] == "ok"
+    assert env.sentinel.read_text() == "original"
