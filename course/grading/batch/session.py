@@ -53,6 +53,9 @@ _HEX = re.compile(r"0x[0-9a-fA-F]{6,}")
 _KEYS = re.compile(r" with keys \[.*")
 #: The longest short answer kept (characters): the rest is cut in the marking file.
 MAX_SHORT_ANSWER = 20_000
+#: Cell source (characters) of notebooks read for the identity step and kept for their
+#: sessions (each then needs no second reader child); at most ~40 MB of the parent's memory.
+MAX_CACHED_CHARS = 10_000_000
 
 
 class AssignmentGrader:
@@ -99,6 +102,9 @@ class AssignmentGrader:
         self._sandbox: Sandbox | None = None
         self._sandbox_lock = threading.Lock()
         self._unreadable: dict[str, str] = {}  # path -> why its reader child failed
+        self._read_cache: dict[str, tuple[dict, int]] = {}  # path -> (reduced notebook, chars)
+        self._cached_chars = 0
+        self._read_lock = threading.Lock()
         self.cleanup_failures: list[str] = []  # of sandboxes closed: "<path> (<reason>)"
 
     @property
@@ -126,10 +132,30 @@ class AssignmentGrader:
         if path is None:
             return None, {}
         try:
-            return declared_in(self.sandbox.read_notebook(path, self.options.ready_timeout))
+            nb = self.sandbox.read_notebook(path, self.options.ready_timeout)
         except SubmissionError as exc:  # kept (a line), so its session does not read it again
             self._unreadable[str(path)] = str(exc)
             return None, {}
+        size = sum(len(cell["source"]) for cell in nb["cells"])
+        with self._read_lock:  # kept for its session while the cache stays within its bound
+            if self._cached_chars + size <= MAX_CACHED_CHARS:
+                self._read_cache[str(path)] = (nb, size)
+                self._cached_chars += size
+        return declared_in(nb)
+
+    def _read(self, path: Path | None, raw: bytes | None) -> dict:
+        """The submission's reduced notebook: as the identity step read it, else read now."""
+        if raw is None:
+            with self._read_lock:
+                nb, size = self._read_cache.pop(str(path), (None, 0))
+                self._cached_chars -= size
+            if nb is not None:
+                return nb
+            if str(path) in self._unreadable:
+                raise SubmissionError(self._unreadable[str(path)])
+        return self.sandbox.read_notebook(
+            raw if raw is not None else path, self.options.ready_timeout
+        )
 
     def close(self) -> None:
         """Stop the sandbox; what no cleanup could remove is in :attr:`cleanup_failures`."""
@@ -222,11 +248,7 @@ class AssignmentGrader:
         if problem:
             row.notes.append(problem[0].upper() + problem[1:] + ".")
         try:  # decoded in a sandboxed child: only a bounded part of it reaches this process
-            if raw is None and str(path) in self._unreadable:
-                raise SubmissionError(self._unreadable[str(path)])
-            nb = self.sandbox.read_notebook(
-                raw if raw is not None else path, self.options.ready_timeout
-            )
+            nb = self._read(path, raw)
         except SubmissionError as exc:
             row.status = SubmissionStatus.INVALID_NOTEBOOK
             row.notes.append(f"The submission could not be read: {exc}.")

@@ -618,7 +618,9 @@ class Sandbox:
         :data:`~course.grading.notebook.MAX_SOURCE_CHARS` and the reader at most ``timeout``.
         Raises :class:`~course.grading.notebook.SubmissionError` (that student's problem).
         """
-        child = self.start({"student_id": "", "assignment": "", "data": {}}, timeout)
+        child = self.start(
+            {"student_id": "", "assignment": "", "data": {}, "reader": True}, timeout
+        )
         try:
             target = os.path.join(child.tmpdir, _READ_FILE)
             _copy_notebook(source, target)
@@ -636,7 +638,10 @@ class Sandbox:
             error = reply.get("error")
             message = error.get("message") if isinstance(error, dict) else None
             raise SubmissionError(str(message or "the notebook could not be read")[:500])
-        if not isinstance(nb.get("cells"), list):
+        cells = nb.get("cells")
+        if not isinstance(cells, list) or not all(
+            isinstance(cell, dict) and isinstance(cell.get("source"), str) for cell in cells
+        ):
             raise SubmissionError("the notebook could not be read")
         return nb
 

@@ -541,7 +541,8 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
             limits = dict(limits, nproc=0)  # only a backstop for non-root users
         set_limits(limits)
         sys.dont_write_bytecode = True
-        child.shell = shell or make_shell()
+        if not init.get("reader"):  # a reader child decodes a notebook and runs no cell
+            child.shell = shell or make_shell()
         selfcheck._GRADING = {"student_id": init["student_id"], "data": init.get("data", {})}
         cap = int(limits.get("output_chars", 1_000_000))
         sys.stdout = CappedWriter(1, cap)
