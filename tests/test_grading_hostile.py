@@ -1309,6 +1309,7 @@ def test_the_parent_s_memory_is_bounded_whatever_the_submissions_hold(tmp_path):
         for line in (out / "hostile" / "results.jsonl").read_text().splitlines()
     }
     assert grown < 300, (grown, {sid: row["status"] for sid, row in rows.items()})
+    print(f"the parent grew by {grown:.0f} MB over its idle size")
     for sid in ("honest_a", "honest_b"):
         _expect(rows[sid], {})
     for sid in ("fifty_mb", "deep", "many_cells", "tiny_strings", "wide_string"):
