@@ -1576,3 +1576,28 @@ def test_honest_students_after_a_hostile_batch_get_what_a_clean_batch_gives(tmp_
     for row in results["clean"].values():
         assert row["total"] == FULL and row["status"] == "ok"
     assert env.sentinel.read_text() == "original"
+
+
+def test_a_sandbox_failure_while_reading_identities_does_not_abort_the_batch(tmp_path, monkeypatch):
+    """The identity step reads every file in a reader child; a sandbox failure there (not the
+    file's fault) must leave that file to its session, which reads it again."""
+    from course.grading.sandbox.parent import Sandbox, SandboxError
+
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    for sid in ("s1", "s2"):
+        (subs / f"{sid}.ipynb").write_text(json.dumps(_solution()))
+    original, calls = Sandbox.read_notebook, []
+
+    def flaky(self, source, timeout=60.0):
+        calls.append(source)
+        if len(calls) == 1:
+            raise SandboxError("the fork server died")
+        return original(self, source, timeout)
+
+    monkeypatch.setattr(Sandbox, "read_notebook", flaky)
+    options = GradeOptions(jobs=1, timeout=TIMEOUT, memory_mb=512, progress=False)
+    summary = grade(SOLUTION_DIR, subs, tmp_path / "out", options)
+    assert sorted(r.student for r in summary.rows) == ["s1", "s2"]
+    assert all(r.total == FULL and r.status == "ok" for r in summary.rows)
+    assert len(calls) == 3  # the failed file was read again by its session

@@ -26,7 +26,14 @@ from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
 from course.grading.notebook import SubmissionError, forbidden_mentions
-from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
+from course.grading.sandbox.parent import (
+    ChildDied,
+    ChildHandle,
+    ChildTimeout,
+    Limits,
+    Sandbox,
+    SandboxError,
+)
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -135,6 +142,8 @@ class AssignmentGrader:
             nb = self.sandbox.read_notebook(path, self.options.ready_timeout)
         except SubmissionError as exc:  # kept (a line), so its session does not read it again
             self._unreadable[str(path)] = str(exc)
+            return None, {}
+        except (SandboxError, OSError):  # the sandbox failed, not the file: its session retries
             return None, {}
         size = sum(len(cell["source"]) for cell in nb["cells"])
         with self._read_lock:  # kept for its session while the cache stays within its bound
