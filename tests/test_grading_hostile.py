@@ -1601,3 +1601,61 @@ def test_a_sandbox_failure_while_reading_identities_does_not_abort_the_batch(tmp
     assert sorted(r.student for r in summary.rows) == ["s1", "s2"]
     assert all(r.total == FULL and r.status == "ok" for r in summary.rows)
     assert len(calls) == 3  # the failed file was read again by its session
+
+
+def _fork_server_pid(top: int) -> int:
+    """The host pid of the fork server below ``top`` (bubblewrap's process): the topmost
+    descendant running the fork server's module (its children run the same command line)."""
+    parents = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+                parents[int(entry)] = int(stat.rsplit(")", 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+
+    def is_server(pid: int) -> bool:
+        try:
+            argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        except OSError:
+            return False
+        return argv[1:3] == [b"-m", b"course.grading.sandbox.forkserver"]  # not bwrap's own
+
+    level = [top]
+    while level:
+        found = [pid for pid in level if pid != top and is_server(pid)]
+        if found:
+            return found[0]
+        level = [pid for pid, ppid in parents.items() if ppid in level]
+    raise LookupError("no fork server below the sandbox's process")
+
+
+def test_a_server_that_cannot_reset_itself_is_replaced_and_its_children_live_on(monkeypatch):
+    """Should the fork server fail to put its scheduling back (here: an unprivileged server
+    without the RLIMIT_NICE to lower its nice value again, as where a grader that is not root
+    cannot raise that limit, niced to 19), later children come from a fresh server, and the
+    children the old one forked keep running."""
+    from course.grading.codec import decode
+    from course.grading.sandbox.parent import Limits, Sandbox
+
+    original = Sandbox._config
+    monkeypatch.setattr(Sandbox, "_config", lambda self: original(self) | {"nice_back": False})
+    init = {"student_id": "s1", "assignment": NAME, "data": {}}
+    with Sandbox(limits=Limits(memory_mb=512)) as sandbox:
+        if not (sandbox.isolation.bwrap and sandbox.isolation.unprivileged) or os.geteuid():
+            pytest.skip("needs an unprivileged fork server in bubblewrap, started by root")
+        first = sandbox.start(init)
+        assert first.request("run", 20, source="x = 41")["status"] == "ok"
+        os.setpriority(os.PRIO_PROCESS, _fork_server_pid(sandbox._server.pid), 19)
+        second = sandbox.start(init)
+        try:
+            assert sandbox.server_restarts == 1
+            assert second.request("run", 20, source=_SCHEDULING)["status"] == "ok"
+            nice = decode(second.request("value", 20, name="state")["value"])[1]
+            assert nice == os.getpriority(os.PRIO_PROCESS, 0)  # the grader's, not 19
+            assert first.request("run", 20, source="x += 1")["status"] == "ok"
+            assert decode(first.request("value", 20, name="x")["value"]) == 42
+        finally:
+            first.close()
+            second.close()

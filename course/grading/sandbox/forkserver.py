@@ -76,8 +76,9 @@ def _server_main(sock_fd: int, config_json: str) -> None:
 
     seccomp.die_with_parent()
     initial = _scheduling()
-    _allow_nice_back(initial[1])
     config = json.loads(config_json)
+    if config.get("nice_back", True):  # off: as where the hard limit cannot be raised
+        _allow_nice_back(initial[1])
     if os.getppid() == 1 and not config.get("namespaced"):  # the grader is already gone
         return
     sock = socket.socket(fileno=sock_fd)
@@ -118,8 +119,10 @@ def _server_main(sock_fd: int, config_json: str) -> None:
         if req["op"] == Op.SPAWN and len(fds) == 3 and not _restore_scheduling(initial):
             for fd in fds:
                 os.close(fd)
+            # the grader forks later children from a fresh server; this one forks no more but
+            # lives on (its children die with it) until the grader closes its socket
             sock.send(json.dumps({"error": TAMPERED}).encode())
-            break  # the grader starts a fresh server
+            continue
         if req["op"] == Op.SPAWN and len(fds) == 3:
             req_r, resp_w, event_w = fds
             pid = os.fork()

@@ -466,6 +466,7 @@ class Sandbox:
                 os.chown(folder, *self.isolation.drop_to)
         self.server_info: dict = {}
         self.server_restarts = 0  # fork servers replaced because a child changed scheduling
+        self._retired: list[tuple[subprocess.Popen | None, socket.socket | None]] = []
         self._start_server()
 
     # -- launching ------------------------------------------------------------------------
@@ -578,8 +579,11 @@ class Sandbox:
                     {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
                 )
                 if reply.get("error") == TAMPERED:  # a child changed the server's scheduling
+                    # a fresh server for later children; the old one stays until close(), so
+                    # the children it forked (other students') keep running
                     self.server_restarts += 1
-                    self._stop_server()
+                    self._retired.append((self._server, self._sock))
+                    self._server = self._sock = None
                     self._start_server()
                     reply, got = self._server_call(
                         {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
@@ -658,18 +662,17 @@ class Sandbox:
             return None
         return -os.WTERMSIG(status) if os.WIFSIGNALED(status) else os.WEXITSTATUS(status)
 
-    def _stop_server(self) -> None:
-        if self._sock is not None:
+    @staticmethod
+    def _stop(server: subprocess.Popen | None, sock: socket.socket | None) -> None:
+        if sock is not None:
             with contextlib.suppress(OSError):
-                self._sock.close()
-            self._sock = None
-        if self._server is not None:
+                sock.close()
+        if server is not None:
             try:
-                self._server.wait(timeout=5)
+                server.wait(timeout=5)
             except subprocess.TimeoutExpired:
-                os.killpg(self._server.pid, signal.SIGKILL)
-                self._server.wait()
-            self._server = None
+                os.killpg(server.pid, signal.SIGKILL)
+                server.wait()
 
     def note_cleanup_failed(self, failed: list[str]) -> None:
         """Record paths a cleanup could not remove (:attr:`cleanup_failures`)."""
@@ -679,7 +682,10 @@ class Sandbox:
     def close(self) -> None:
         """Stop the fork server and remove the run directory (what cannot be removed is
         recorded in :attr:`cleanup_failures`)."""
-        self._stop_server()
+        self._stop(self._server, self._sock)
+        self._server = self._sock = None
+        while self._retired:
+            self._stop(*self._retired.pop())
         if os.path.lexists(self._rundir):
             self.note_cleanup_failed(remove_tree(self._rundir))
 
