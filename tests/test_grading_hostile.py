@@ -1202,3 +1202,456 @@ def test_a_root_child_drops_every_capability(tmp_path):
     assert first.split() == ["0"] + ["no"] * 7 + ["yes"], out.stdout
     assert "CapEff:\\t0000000000000000" in status and "NoNewPrivs:\\t1" in status
     assert host.stat().st_mode & 0o777 == 0o640 and host.stat().st_uid == 65534
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.2: the parent's memory stays within a fixed bound whatever the submissions hold
+# ---------------------------------------------------------------------------------------
+_MEMORY_SCRIPT = """
+import json, sys
+from pathlib import Path
+from course.grading.batch.driver import grade
+from course.grading.batch.options import GradeOptions
+
+def status(field):  # bytes; ru_maxrss would count the pages of the process that forked us
+    line = next(l for l in open("/proc/self/status") if l.startswith(field + ":"))
+    return int(line.split()[1]) * 1024
+
+solution_dir, warm, subs, out = map(Path, sys.argv[1:5])
+options = dict(jobs=2, timeout=float(sys.argv[5]), memory_mb=512, progress=False,
+               namespaces=sys.argv[6] == "namespaces")
+grade(solution_dir, warm, out / "warm", GradeOptions(**options))  # every import, one honest run
+with open("/proc/self/clear_refs", "w") as f:
+    f.write("5")  # the high-water mark starts again from the resident size now
+idle = status("VmRSS")
+summary = grade(solution_dir, subs, out / "hostile", GradeOptions(**options))
+print(json.dumps({"idle": idle, "peak": status("VmHWM"), "seconds": summary.seconds}))
+"""
+
+
+def _huge_setup(source: str) -> dict:
+    nb = _solution()
+    _cell(nb, "setup")["source"] = source
+    return nb
+
+
+def _bloating_submissions(folder: Path) -> dict[str, str]:
+    """What each file would cost a parent that decodes it whole: gigabytes."""
+    folder.mkdir()
+    honest = json.dumps(_solution())
+    setup = _cell(_solution(), "setup")["source"]
+    files = {
+        "honest_a": honest,
+        "honest_b": honest,
+        # ~48 MB of empty lists: ~1.1 GB as Python objects
+        "fifty_mb": '{"cells": [], "metadata": {}, "x": [' + "[]," * 16_000_000 + "[]]}",
+        "deep": "[" * 5_000_000,
+        "many_cells": json.dumps(
+            {"cells": [{"cell_type": "code", "source": "x=1"}] * 200_000, "metadata": {}}
+        ),
+        "tiny_strings": json.dumps(
+            {"cells": [{"cell_type": "code", "source": ["a"] * 4_000_000}], "metadata": {}}
+        ),
+        "wide_string": json.dumps(  # one non-ASCII character makes a str 4 bytes a character
+            {"cells": [{"cell_type": "code", "source": "\U0001f600" + "a" * 40_000_000}]}
+        ),
+        "huge_setup": json.dumps(_huge_setup(setup + "x=1\n" * 200_000)),
+        "huge_answer": json.dumps(
+            _with_answer("q1", "x_hat_day1 = 0\n" + "(" * 40 + "1" + ")" * 40 + "\n" * 900_000)
+        ),
+        "reply_items": json.dumps(_with_answer("q1", "x_hat_day1 = [[]] * 2_000_000")),
+        "reply_bytes": json.dumps(_with_answer("q1", "x_hat_day1 = '\\u00e9' * 2_000_000")),
+        "reply_string": json.dumps(
+            _with_answer("q1", "x_hat_day1 = '\U0001f600' + 'a' * 7_000_000")
+        ),
+    }
+    for sid, text in files.items():
+        (folder / f"{sid}.ipynb").write_text(text)
+    return files
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_the_parent_s_memory_is_bounded_whatever_the_submissions_hold(tmp_path, namespaces):
+    """Issue 25.2: a 1.2 MB setup cell added 687 MB to the grader, and a 50 MB notebook of
+    empty lists costs over a gigabyte to decode. Submissions are decoded in sandboxed reader
+    children now, and a reply is bounded in bytes and values before the parent decodes it:
+    the grader's peak memory stays within 300 MB of its idle size."""
+    import subprocess
+    import sys
+
+    from course.grading.sandbox.isolation import IsolationError, detect
+
+    try:
+        detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    warm, subs, out = tmp_path / "warm", tmp_path / "subs", tmp_path / "out"
+    warm.mkdir()
+    (warm / "warm.ipynb").write_text(json.dumps(_solution()))
+    _bloating_submissions(subs)
+    run = subprocess.run(
+        [sys.executable, "-c", _MEMORY_SCRIPT, SOLUTION_DIR, warm, subs, out, str(TIMEOUT)]
+        + ["namespaces" if namespaces else "landlock"],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    measured = json.loads(run.stdout.strip().splitlines()[-1])
+    grown = (measured["peak"] - measured["idle"]) / 1e6
+    rows = {
+        json.loads(line)["student"]: json.loads(line)
+        for line in (out / "hostile" / "results.jsonl").read_text().splitlines()
+    }
+    assert grown < 300, (grown, {sid: row["status"] for sid, row in rows.items()})
+    print(f"the parent grew by {grown:.0f} MB over its idle size")
+    for sid in ("honest_a", "honest_b"):
+        _expect(rows[sid], {})
+    for sid in ("fifty_mb", "deep", "many_cells", "tiny_strings", "wide_string"):
+        assert rows[sid]["status"] == "invalid notebook", (sid, rows[sid])
+        assert rows[sid]["total"] == 0
+    notes = {sid: " ".join(rows[sid]["notes"]) for sid in rows}
+    assert "2,000" in notes["many_cells"] and "1,000,000 characters" in notes["tiny_strings"]
+    assert "nested" in notes["deep"] or "too large" in notes["deep"]
+    for sid in ("reply_items", "reply_bytes"):
+        _expect(rows[sid], {"q1": None})
+        assert "too large" in rows[sid]["questions"]["q1"]["message"], rows[sid]["questions"]
+    _expect(rows["reply_string"], {"q1": None})
+    _expect(rows["huge_answer"], {"q1": None})
+    _expect(rows["huge_setup"], {})
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.3: no scheduling state crosses from one child to the next
+# ---------------------------------------------------------------------------------------
+_SCHEDULING = (
+    "import os\n"
+    "state = [sorted(os.sched_getaffinity(0)), os.getpriority(os.PRIO_PROCESS, 0),\n"
+    "         os.sched_getscheduler(0)]\n"
+)
+_PIN_AND_RENICE = """
+import os
+done = []
+server = os.getppid()  # the fork server
+for name, call in [
+    ("affinity", lambda: os.sched_setaffinity(server, {max(os.sched_getaffinity(0))})),
+    ("nice", lambda: os.setpriority(os.PRIO_PROCESS, server, 19)),
+    ("policy", lambda: os.sched_setscheduler(server, os.SCHED_IDLE, os.sched_param(0))),
+]:
+    try:
+        call()
+        done.append(name)
+    except OSError:
+        pass
+"""
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_a_child_cannot_leave_the_fork_server_pinned_or_niced(namespaces):
+    """Issue 25.5: a child pinned the fork server to one CPU and niced it to 19, and every
+    later student ran so. Seccomp refuses that, so it is off here: the server itself puts its
+    affinity, nice value and policy back before each fork."""
+    from course.grading.codec import decode
+    from course.grading.sandbox.isolation import IsolationError, detect
+    from course.grading.sandbox.parent import Limits, Sandbox
+
+    try:
+        isolation = detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    if not namespaces and isolation.landlock == 0:
+        pytest.skip("no Landlock on this kernel")
+    init = {"student_id": "s1", "assignment": NAME, "data": {}}
+    with Sandbox(limits=Limits(memory_mb=512, seccomp=False), isolation=isolation) as sandbox:
+        states, attacked = [], []
+        for attack in (_PIN_AND_RENICE, ""):
+            child = sandbox.start(init)
+            try:
+                assert child.request("run", 20, source=_SCHEDULING)["status"] == "ok"
+                states.append(decode(child.request("value", 20, name="state")["value"]))
+                if attack:
+                    assert child.request("run", 20, source=attack)["status"] == "ok"
+                    attacked = decode(child.request("value", 20, name="done")["value"])
+            finally:
+                child.close()
+    if not attacked:
+        pytest.skip(
+            "the kernel refuses the calls here (e.g. a child without capabilities cannot change a server that has them)"
+        )
+    assert states[1] == states[0], (attacked, states)
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25.12: nothing a child made survives its run, and a failed cleanup is reported
+# ---------------------------------------------------------------------------------------
+def _make_undeletable(path: Path) -> bool:
+    """Make ``path`` impossible to remove for its cleanup, as an immutable file left by a
+    child would be: ``chattr +i`` as root (where the file system has the flag), else a
+    read-only folder around it (a cleanup that is not root cannot empty it)."""
+    import subprocess
+
+    if os.geteuid() == 0:
+        done = subprocess.run(["chattr", "+i", str(path)], capture_output=True)
+        return done.returncode == 0
+    os.chmod(path.parent, 0o500)
+    return True
+
+
+def _make_deletable(path: Path) -> None:
+    import subprocess
+
+    if os.geteuid() == 0:
+        subprocess.run(["chattr", "-i", str(path)], capture_output=True)
+    else:
+        os.chmod(path.parent, 0o700)
+    shutil.rmtree(path.parent, ignore_errors=True)
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_a_failed_cleanup_is_reported_in_the_row_and_on_the_console(
+    tmp_path, monkeypatch, namespaces
+):
+    """Issue 25.12: an immutable file kept the run folder in /tmp after grading and the
+    cleanup failed silently. Whatever a cleanup cannot remove is now named in the student's
+    row (``cleanup_failed``) and in the console summary; everything else is removed."""
+    from course.grading.sandbox.isolation import IsolationError, detect
+    from course.grading.sandbox.parent import ChildHandle
+
+    try:
+        detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    subs.mkdir()
+    (subs / "honest.ipynb").write_text(json.dumps(_solution()))
+    leaver = _with_answer(
+        "q1",
+        _cell(_solution(), "q1-answer")["source"]
+        + "\nimport os\nos.mkdir('kept')\nopen('kept/left.txt', 'w').write('x')\n",
+    )
+    (subs / "leaver.ipynb").write_text(json.dumps(leaver))
+    locked: list[Path] = []
+    original = ChildHandle.close
+
+    def close(self):  # the file becomes undeletable just before the cleanup, as chattr would
+        left = Path(self.tmpdir) / "kept" / "left.txt"
+        if left.exists() and left not in locked:
+            if not _make_undeletable(left):
+                pytest.skip("this file system has no immutable flag")
+            locked.append(left)
+        return original(self)
+
+    monkeypatch.setattr(ChildHandle, "close", close)
+    import tempfile
+
+    private_tmp = tmp_path / "tmp"  # the run folders of this grading only
+    private_tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(private_tmp))
+    try:
+        options = GradeOptions(
+            jobs=2, timeout=TIMEOUT, memory_mb=512, progress=False, namespaces=namespaces
+        )
+        summary = grade(SOLUTION_DIR, subs, out, options)
+        rows = {
+            json.loads(line)["student"]: json.loads(line)
+            for line in (out / "results.jsonl").read_text().splitlines()
+        }
+        left_files = sorted(p for p in private_tmp.rglob("*") if not p.is_dir())
+    finally:
+        for path in locked:
+            _make_deletable(path)
+    assert locked, (
+        "the leaver's cell did not run",
+        rows["leaver"]["questions"]["q1"],
+        rows["leaver"]["notes"],
+    )
+    assert left_files == locked  # the undeletable file, and nothing else, survived
+    assert "cleanup_failed" not in rows["honest"]
+    failed = rows["leaver"]["cleanup_failed"]
+    assert any(str(locked[0]) in f for f in failed), failed
+    text = summary.text()
+    assert "WARNING cleanup_failed" in text and str(locked[0]) in text
+    assert str(locked[0]) not in (out / "feedback" / "leaver.md").read_text()
+    _expect(rows["leaver"], {})
+    _expect(rows["honest"], {})
+
+
+# ---------------------------------------------------------------------------------------
+# issue 25, done when: honest students graded after a hostile batch get what a clean batch gives
+# ---------------------------------------------------------------------------------------
+_STATE_ATTACKS = {
+    "scheduler": (  # the fork server and the child itself: pinned, niced, idle
+        "import os\n"
+        "for call in (lambda: os.sched_setaffinity(os.getppid(), {0}),\n"
+        "             lambda: os.setpriority(os.PRIO_PROCESS, os.getppid(), 19),\n"
+        "             lambda: os.sched_setscheduler(os.getppid(), os.SCHED_IDLE, os.sched_param(0)),\n"
+        "             lambda: os.sched_setaffinity(0, {0}),\n"
+        "             lambda: os.setpriority(os.PRIO_PROCESS, 0, 19)):\n"
+        "    try:\n        call()\n    except OSError:\n        pass\n"
+    ),
+    "leaves_files": (  # files in its folder, /tmp and /dev/shm, a process-wide umask
+        "import os\nos.umask(0)\n"
+        "for where in ('.', '/tmp', '/dev/shm'):\n"
+        "    try:\n"
+        "        open(os.path.join(where, 'left-behind.txt'), 'w').write('x' * 100000)\n"
+        "    except OSError:\n        pass\n"
+    ),
+    "sysv": (
+        "import ctypes\nlibc = ctypes.CDLL(None)\n"
+        "shm = libc.shmget(0x5EED, 1 << 20, 0o1666)\nmsg = libc.msgget(0x5EED, 0o1666)\n"
+    ),
+    "forbidden_flood": "from course import lsq\nfor _ in range(20000):\n    lsq.fit\n",
+}
+
+
+def _honest_after_hostile_batch(folder: Path, env) -> None:
+    folder.mkdir()
+    subs = _submissions(env)
+    chosen = {k: subs[k] for k in ("infinite_loop", "memory_bomb", "fork_bomb", "output_flood")}
+    chosen |= {k: subs[k] for k in ("monkeypatch", "forbidden_runtime", "os_exit", "not_json")}
+    q1 = _cell(_solution(), "q1-answer")["source"]
+    for name, attack in _STATE_ATTACKS.items():
+        chosen[name] = _with_answer("q1", attack + "\n" + q1)
+    chosen["reply_items"] = _with_answer("q1", "x_hat_day1 = [[]] * 2_000_000")
+    for sid, nb in chosen.items():
+        text = nb if isinstance(nb, str) else json.dumps(nb)
+        (folder / f"a_{sid}.ipynb").write_text(text)  # graded before the honest ones
+    (folder / "a_deep.ipynb").write_text("[" * 200_000)
+
+
+def _comparable(row: dict, out: Path) -> dict:
+    """What a student gets: points, statuses and messages of every question, notes, feedback."""
+    kept = {k: v for k, v in row.items() if k not in ("wall_seconds", "file")}
+    kept["feedback"] = (out / "feedback" / f"{row['student']}.md").read_text()
+    return kept
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_honest_students_after_a_hostile_batch_get_what_a_clean_batch_gives(tmp_path, namespaces):
+    from course.grading.sandbox.isolation import IsolationError, detect
+
+    try:
+        detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    env = types.SimpleNamespace(
+        root=tmp_path,
+        sentinel=tmp_path / "outside" / "sentinel.txt",
+        solution_dir=SOLUTION_DIR,
+        course=ROOT,
+        home=tmp_path,
+        solution_secret=SOLUTION_DIR / "checks.py",
+        home_secret=tmp_path / "home-token.txt",
+        victim=tmp_path / "victim.ipynb",
+        port=1,
+        marker="pwned",
+        token="0",
+    )
+    env.sentinel.parent.mkdir()
+    env.sentinel.write_text("original")
+    clean, hostile = tmp_path / "clean", tmp_path / "hostile"
+    clean.mkdir()
+    _honest_after_hostile_batch(hostile, env)
+    for folder in (clean, hostile):
+        for sid in ("zz_honest_1", "zz_honest_2"):
+            (folder / f"{sid}.ipynb").write_text(json.dumps(_solution()))
+    results = {}
+    for folder in (clean, hostile):
+        out = tmp_path / f"out-{folder.name}"
+        options = GradeOptions(
+            jobs=2, timeout=TIMEOUT, memory_mb=512, progress=False, namespaces=namespaces
+        )
+        summary = grade(SOLUTION_DIR, folder, out, options)
+        rows = {r.student: r.to_json() for r in summary.rows}
+        results[folder.name] = {
+            sid: _comparable(rows[sid], out) for sid in ("zz_honest_1", "zz_honest_2")
+        }
+        assert len(rows) == len(list(folder.glob("*.ipynb")))
+    assert results["hostile"] == results["clean"]
+    for row in results["clean"].values():
+        assert row["total"] == FULL and row["status"] == "ok"
+    assert env.sentinel.read_text() == "original"
+
+
+def test_a_sandbox_failure_while_reading_identities_does_not_abort_the_batch(tmp_path, monkeypatch):
+    """The identity step reads every file in a reader child; a sandbox failure there (not the
+    file's fault) must leave that file to its session, which reads it again."""
+    from course.grading.sandbox.parent import Sandbox, SandboxError
+
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    for sid in ("s1", "s2"):
+        (subs / f"{sid}.ipynb").write_text(json.dumps(_solution()))
+    original, calls = Sandbox.read_notebook, []
+
+    def flaky(self, source, timeout=60.0):
+        calls.append(source)
+        if len(calls) == 1:
+            raise SandboxError("the fork server died")
+        return original(self, source, timeout)
+
+    monkeypatch.setattr(Sandbox, "read_notebook", flaky)
+    options = GradeOptions(jobs=1, timeout=TIMEOUT, memory_mb=512, progress=False)
+    summary = grade(SOLUTION_DIR, subs, tmp_path / "out", options)
+    assert sorted(r.student for r in summary.rows) == ["s1", "s2"]
+    assert all(r.total == FULL and r.status == "ok" for r in summary.rows)
+    assert len(calls) == 3  # the failed file was read again by its session
+
+
+def _fork_server_pid(top: int) -> int:
+    """The host pid of the fork server below ``top`` (bubblewrap's process): the topmost
+    descendant running the fork server's module (its children run the same command line)."""
+    parents = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+                parents[int(entry)] = int(stat.rsplit(")", 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+
+    def is_server(pid: int) -> bool:
+        try:
+            argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        except OSError:
+            return False
+        return argv[1:3] == [b"-m", b"course.grading.sandbox.forkserver"]  # not bwrap's own
+
+    level = [top]
+    while level:
+        found = [pid for pid in level if pid != top and is_server(pid)]
+        if found:
+            return found[0]
+        level = [pid for pid, ppid in parents.items() if ppid in level]
+    raise LookupError("no fork server below the sandbox's process")
+
+
+def test_a_server_that_cannot_reset_itself_is_replaced_and_its_children_live_on(monkeypatch):
+    """Should the fork server fail to put its scheduling back (here: an unprivileged server
+    without the RLIMIT_NICE to lower its nice value again, as where a grader that is not root
+    cannot raise that limit, niced to 19), later children come from a fresh server, and the
+    children the old one forked keep running."""
+    from course.grading.codec import decode
+    from course.grading.sandbox.parent import Limits, Sandbox
+
+    original = Sandbox._config
+    monkeypatch.setattr(Sandbox, "_config", lambda self: original(self) | {"nice_back": False})
+    init = {"student_id": "s1", "assignment": NAME, "data": {}}
+    with Sandbox(limits=Limits(memory_mb=512)) as sandbox:
+        if not (sandbox.isolation.bwrap and sandbox.isolation.unprivileged) or os.geteuid():
+            pytest.skip("needs an unprivileged fork server in bubblewrap, started by root")
+        first = sandbox.start(init)
+        assert first.request("run", 20, source="x = 41")["status"] == "ok"
+        os.setpriority(os.PRIO_PROCESS, _fork_server_pid(sandbox._server.pid), 19)
+        second = sandbox.start(init)
+        try:
+            assert sandbox.server_restarts == 1
+            assert second.request("run", 20, source=_SCHEDULING)["status"] == "ok"
+            nice = decode(second.request("value", 20, name="state")["value"])[1]
+            assert nice == os.getpriority(os.PRIO_PROCESS, 0)  # the grader's, not 19
+            assert first.request("run", 20, source="x += 1")["status"] == "ok"
+            assert decode(first.request("value", 20, name="x")["value"]) == 42
+        finally:
+            first.close()
+            second.close()

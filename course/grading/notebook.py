@@ -23,8 +23,6 @@ import stat
 from dataclasses import dataclass
 from typing import Any
 
-import nbformat
-
 from course.grading.vocabulary import (
     CellRole,
 )
@@ -36,6 +34,7 @@ __all__ = [
     "SubmissionError",
     "read_notebook_bytes",
     "read_submission",
+    "reduce_notebook",
     "student_id_in",
 ]
 
@@ -75,9 +74,10 @@ def _course_meta(cell) -> dict:
 #: square of a cell full of them (600 ``!`` lines took 52 s). Larger ones are not transformed.
 MAX_TRANSFORMED_CHARS = 20_000
 MAX_TRANSFORMED_LINES = 40  # lines that look like IPython syntax
-#: Cells the parent parses at all (the syntax tree costs ~600 bytes of memory per source
-#: byte); a larger cell is :class:`SyntaxError` to every reader here.
-MAX_PARSED_CHARS = 200_000
+#: Cells the parent parses at all (the syntax tree costs ~630 bytes of memory per source
+#: byte, so 50,000 characters cost ~32 MB); a larger cell is :class:`SyntaxError` to every
+#: reader here (its forbidden-call scan falls back to the linear text scan).
+MAX_PARSED_CHARS = 50_000
 
 
 def _ipython_lines(source: str) -> int:
@@ -230,6 +230,8 @@ class Release:
         return next(c for c in self.cells if c.role == CellRole.ANSWER and c.question == qid)
 
     def text(self) -> str:
+        import nbformat  # only the release writes notebooks (the fork server never does)
+
         return nbformat.writes(self.notebook) + "\n"
 
 
@@ -287,6 +289,76 @@ def read_submission(source) -> dict:
             "the file is JSON but not a Jupyter notebook (no 'cells' list; nbformat 4 expected)"
         )
     return nb
+
+
+#: What the grader keeps of a submission (:func:`reduce_notebook`): at most this many cells,
+#: this many characters of cell source in all, and this many characters in an id, a role, a
+#: question or a submission field. Outputs and other metadata are dropped unread.
+MAX_CELLS = 2_000
+MAX_SOURCE_CHARS = 1_000_000
+MAX_FIELD_CHARS = 200
+_SUBMISSION_FIELDS = 32
+
+
+def _short(value) -> str | None:
+    return value if isinstance(value, str) and len(value) <= MAX_FIELD_CHARS else None
+
+
+def reduce_notebook(nb) -> dict:
+    """The part of a decoded submission the grader reads, with bounded size.
+
+    Kept: each cell's type, id, source and ``metadata.course`` role and question, and the
+    notebook's ``metadata.course.submission`` fields (scalars, short strings); outputs and every
+    other field are dropped. The sandboxed child that decodes a submission sends only this to
+    the parent (:meth:`course.grading.sandbox.parent.Sandbox.read_notebook`), so what a notebook
+    costs the parent is bounded by :data:`MAX_CELLS`, :data:`MAX_SOURCE_CHARS` and
+    :data:`MAX_FIELD_CHARS`, whatever the file holds. :class:`SubmissionError` (that student's
+    problem) when the notebook exceeds them or is not a notebook.
+    """
+    if not isinstance(nb, dict) or not isinstance(nb.get("cells", None), list):
+        raise SubmissionError(
+            "the file is JSON but not a Jupyter notebook (no 'cells' list; nbformat 4 expected)"
+        )
+    if len(nb["cells"]) > MAX_CELLS:
+        raise SubmissionError(
+            f"the notebook has {len(nb['cells']):,} cells; the grader reads at most {MAX_CELLS:,}"
+        )
+    cells, chars = [], 0
+    for cell in nb["cells"]:
+        if not isinstance(cell, dict):
+            continue
+        source = _source(cell)
+        chars += len(source)
+        if chars > MAX_SOURCE_CHARS:
+            raise SubmissionError(
+                f"the notebook's cells hold more than {MAX_SOURCE_CHARS:,} characters of "
+                "source; the grader reads at most that (outputs do not count)"
+            )
+        meta = _course_meta(cell)
+        kept = {k: meta[k] for k in ("role", "question") if _short(meta.get(k)) is not None}
+        cells.append(
+            {
+                "cell_type": _short(cell.get("cell_type")),
+                "id": _short(cell.get("id")),
+                "source": source,
+                "metadata": {"course": kept} if kept else {},
+            }
+        )
+    top = nb.get("metadata")
+    course = top.get("course") if isinstance(top, dict) else None
+    submission = course.get("submission") if isinstance(course, dict) else None
+    fields: dict = {}
+    if isinstance(submission, dict):
+        for key, value in list(submission.items())[:_SUBMISSION_FIELDS]:
+            if _short(key) is not None and (
+                _short(value) is not None
+                or (isinstance(value, (int, float, bool)) or value is None)
+            ):
+                fields[key] = value
+    return {
+        "metadata": {"course": {"submission": fields}} if fields else {},
+        "cells": cells,
+    }
 
 
 def student_id_in(source: str) -> str | None:

@@ -199,6 +199,7 @@ class Op(_Word):
     RUN = "run"  # run one cell
     VALUE = "value"  # the value of a variable
     CALL = "call"  # call a function with plain-data arguments
+    READ = "read"  # decode the submitted notebook in the child's folder (no student code ran)
     EXIT = "exit"  # stop politely
     SPAWN = "spawn"  # parent -> fork server: fork a child
     STATUS = "status"  # parent -> fork server: exit status of a child

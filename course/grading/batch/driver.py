@@ -152,6 +152,18 @@ def find_submissions(folder: Path, assignment: str, private_dir: Path | None = N
     return [found[k] for k in sorted(found)]
 
 
+def _read_declared(grader: AssignmentGrader, found: list, options: GradeOptions) -> dict:
+    """The ID each file declares, read in sandboxed reader children (``--jobs`` at a time):
+    decoding a notebook can cost gigabytes, which must never be the grader's own memory."""
+    paths = [sub.path for sub in found if sub.path is not None]
+    if not paths:
+        return {}
+    # started by this thread: the fork server dies with the thread that started it
+    grader.sandbox  # noqa: B018
+    with ThreadPoolExecutor(max_workers=max(1, int(options.jobs))) as pool:
+        return dict(zip(paths, pool.map(grader.declared_id, paths)))
+
+
 def _grade_locally(grader: AssignmentGrader, pending: list, jobs: int):
     """Rows of ``pending`` submissions as they finish, ``jobs`` students at a time."""
     if pending:
@@ -189,11 +201,14 @@ def grade(
             if not short_questions(grader.checks):
                 raise MarksError(f"{grader.name} has no short-answer questions to mark")
             marks_in = parse_marks_csv(Path(options.short_answers), grader.checks)
+        found = find_submissions(submissions, grader.name, private_dir=solution_dir)
+        declared = _read_declared(grader, found, options)
         identity = resolve_identities(
-            find_submissions(submissions, grader.name, private_dir=solution_dir),
+            found,
             grader.name,
             options.roster.students if options.roster is not None else None,
             grader.data_key,
+            read_declared=lambda path: declared.get(path, (None, {})),
         )
         todo = identity.entries
         _write_conflicts(identity.conflicts, identity.attached, out / "identity_conflicts.csv")
@@ -269,6 +284,7 @@ def grade(
                 bar.update(1)
         if bar is not None:
             bar.close()
+        grader.close()  # now: what its cleanup could not remove goes into the summary
         for row in rows.values():  # feedback of resumed students too (cheap, keeps OUT complete)
             fb = out / "feedback" / f"{row.student}.md"
             if not fb.exists():
@@ -293,6 +309,7 @@ def grade(
         summary.unselected = skipped
         summary.marking = marking
         summary.late_notes = late_notes
+        summary.cleanup_failed = list(grader.cleanup_failures)
         if options.roster is not None:
             _class_files(summary, grader, options, out)
         return summary
@@ -413,8 +430,12 @@ def _file_record(path: Path | None, submissions: Path) -> dict | None:
     """The graded file and its sha256: the receipt ``check.submit()`` printed matches it."""
     if path is None:
         return None
-    try:
-        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    sha = hashlib.sha256()
+    try:  # in chunks: a file of any size costs the parent 1 MB
+        with open(path, "rb") as f:
+            while chunk := f.read(1 << 20):
+                sha.update(chunk)
+        digest: str | None = sha.hexdigest()
     except OSError:
         digest = None
     name = (

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -47,7 +48,7 @@ from course.grading.vocabulary import (
     visible_text,
 )
 
-__all__ = ["Identity", "resolve_identities"]
+__all__ = ["Identity", "declared_in", "resolve_identities"]
 
 
 @dataclass
@@ -66,7 +67,9 @@ class Identity:
 
 
 def _declared(path: Path | None) -> tuple[str | None, dict]:
-    """The ID the notebook declares and its submission metadata (cheap, lenient)."""
+    """The ID the notebook at ``path`` declares and its submission metadata, decoded here
+    (for tools and tests; the batch reads each file in a sandboxed child instead,
+    :meth:`~course.grading.batch.session.AssignmentGrader.declared_id`)."""
     if path is None:
         return None, {}
     try:
@@ -74,6 +77,12 @@ def _declared(path: Path | None) -> tuple[str | None, dict]:
             nb = json.loads(f.read(MAX_NOTEBOOK_BYTES).decode("utf-8", errors="replace"))
     except (OSError, ValueError, RecursionError):
         return None, {}
+    return declared_in(nb)
+
+
+def declared_in(nb) -> tuple[str | None, dict]:
+    """The ID a decoded notebook declares (its submission metadata, else ``STUDENT_ID``) and
+    its submission metadata (cheap, lenient)."""
     if not isinstance(nb, dict):
         return None, {}
     meta: dict = nb["metadata"] if isinstance(nb.get("metadata"), dict) else {}
@@ -218,14 +227,21 @@ class _Claim:
 
 
 def resolve_identities(
-    entries: list, assignment: str, roster_ids=None, data_key: str | None = None
+    entries: list,
+    assignment: str,
+    roster_ids=None,
+    data_key: str | None = None,
+    read_declared: Callable[[Path], tuple[str | None, dict]] | None = None,
 ) -> Identity:
     """Decide the student ID of every submission (``.student`` is its name in the folder).
 
     ``roster_ids`` are the roster's IDs, or its :class:`~course.grading.batch.roster.Student`
     rows (then Canvas user numbers, logins and Moodle full names name students too). See the
-    module docstring for the rules; every quarantine and guess is flagged.
+    module docstring for the rules; every quarantine and guess is flagged. ``read_declared``
+    reads the ID a file declares and its submission metadata (default: decoded in this process;
+    the batch passes a sandboxed reader).
     """
+    read_declared = read_declared or _declared
     students = [r for r in (roster_ids or ()) if not isinstance(r, str)]
     roster = {r if isinstance(r, str) else r.id for r in (roster_ids or ())}
     out = Identity()
@@ -254,7 +270,7 @@ def resolve_identities(
             if not students:
                 in_name = sorted({r for r in roster if any(_contains(n, r) for n in names)})
             name_id = in_name[0] if len(in_name) == 1 else None
-        declared, meta = _declared(path)
+        declared, meta = read_declared(path)
         named, flag = True, ""
         if declared is not None and (
             declared == name_id or any(_contains(n, declared) for n in names)

@@ -196,6 +196,7 @@ class Summary:
     stale: list = field(default_factory=list)  # out of date, not regraded: --student chose others
     unselected: int = 0  # submissions never graded and not chosen by --student
     late_notes: list = field(default_factory=list)  # late files without a time, disagreements
+    cleanup_failed: list = field(default_factory=list)  # left behind: "<path> (<reason>)"
 
     def class_text(self) -> str:
         """The identity flags, deleted answer cells, the roster's missing and unknown
@@ -251,6 +252,13 @@ class Summary:
             lines += [f"  - {note}" for note in self.late_notes]
         if self.marking:
             lines.append(self.marking)
+        if self.cleanup_failed:
+            lines.append(
+                f"WARNING cleanup_failed: {len(self.cleanup_failed)} path(s) the grading "
+                "processes left could not be removed (check them, `chattr -i` if immutable, "
+                "then delete them):"
+            )
+            lines += [f"  - {visible_text(path)}" for path in self.cleanup_failed[:20]]
         return "\n".join(lines)
 
     def headline(self) -> str:

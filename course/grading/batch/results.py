@@ -86,7 +86,7 @@ class QuestionResult:
 
 
 #: StudentResult's fields that are written only when set (None: absent from the JSON row)
-_OPTIONAL = ("deleted_answers", "wall_seconds", "file", "late")
+_OPTIONAL = ("deleted_answers", "wall_seconds", "file", "late", "cleanup_failed")
 
 
 @dataclass
@@ -98,7 +98,8 @@ class StudentResult:
     ``deleted_answers`` maps a question whose answer cell was deleted to ``"adopted"`` (graded
     from an added cell) or ``"missing"``; ``file`` is the graded file and its sha256; ``late``
     is when it was handed in and the late deduction (:mod:`course.grading.batch.late`), and
-    ``total`` is then the points after the deduction."""
+    ``total`` is then the points after the deduction; ``cleanup_failed`` lists what its
+    processes left that could not be removed (instructor only: ``"<path> (<reason>)"``)."""
 
     student: str
     assignment: str
@@ -115,6 +116,7 @@ class StudentResult:
     file: dict[str, Any] | None = None
     late: dict[str, Any] | None = None
     has_file: bool = False  # ``file`` is written (null included) once the driver recorded it
+    cleanup_failed: list[str] | None = None
     extra: dict[str, Any] = field(default_factory=dict)  # keys of other versions, kept as read
 
     @property
@@ -168,6 +170,8 @@ class StudentResult:
             out["file"] = self.file
         if self.late is not None:
             out["late"] = dict(self.late)
+        if self.cleanup_failed:
+            out["cleanup_failed"] = list(self.cleanup_failed)
         return out
 
     @classmethod
@@ -203,5 +207,6 @@ class StudentResult:
             file=d.get("file"),
             late=d.get("late"),
             has_file="file" in d,
+            cleanup_failed=d.get("cleanup_failed"),
             extra={k: v for k, v in d.items() if k not in known},
         )

@@ -27,8 +27,15 @@ from course.grading.batch.results import CaseResult, QuestionResult, StudentResu
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
-from course.grading.notebook import SubmissionError, read_submission
-from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
+from course.grading.notebook import SubmissionError
+from course.grading.sandbox.parent import (
+    ChildDied,
+    ChildHandle,
+    ChildTimeout,
+    Limits,
+    Sandbox,
+    SandboxError,
+)
 from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
@@ -55,6 +62,9 @@ _HEX = re.compile(r"0x[0-9a-fA-F]{6,}")
 _KEYS = re.compile(r" with keys \[.*")
 #: The longest short answer kept (characters): the rest is cut in the marking file.
 MAX_SHORT_ANSWER = 20_000
+#: Cell source (characters) of notebooks read for the identity step and kept for their
+#: sessions (each then needs no second reader child); at most ~40 MB of the parent's memory.
+MAX_CACHED_CHARS = 10_000_000
 
 
 class AssignmentGrader:
@@ -120,6 +130,11 @@ class AssignmentGrader:
         self.isolation = self.options.isolation()  # refuses early where nothing walls files off
         self._sandbox: Sandbox | None = None
         self._sandbox_lock = threading.Lock()
+        self._unreadable: dict[str, str] = {}  # path -> why its reader child failed
+        self._read_cache: dict[str, tuple[dict, int]] = {}  # path -> (reduced notebook, chars)
+        self._cached_chars = 0
+        self._read_lock = threading.Lock()
+        self.cleanup_failures: list[str] = []  # of sandboxes closed: "<path> (<reason>)"
 
     @property
     def sandbox(self) -> Sandbox:
@@ -137,10 +152,48 @@ class AssignmentGrader:
                 )
             return self._sandbox
 
+    def declared_id(self, path: Path | None) -> tuple[str | None, dict]:
+        """The ID a submission declares and its submission metadata, read by a sandboxed
+        reader child (:meth:`~course.grading.sandbox.parent.Sandbox.read_notebook`);
+        ``(None, {})`` when it cannot be read (its session reports why)."""
+        from course.grading.batch.identity import declared_in
+
+        if path is None:
+            return None, {}
+        try:
+            nb = self.sandbox.read_notebook(path, self.options.ready_timeout)
+        except SubmissionError as exc:  # kept (a line), so its session does not read it again
+            self._unreadable[str(path)] = str(exc)
+            return None, {}
+        except (SandboxError, OSError):  # the sandbox failed, not the file: its session retries
+            return None, {}
+        size = sum(len(cell["source"]) for cell in nb["cells"])
+        with self._read_lock:  # kept for its session while the cache stays within its bound
+            if self._cached_chars + size <= MAX_CACHED_CHARS:
+                self._read_cache[str(path)] = (nb, size)
+                self._cached_chars += size
+        return declared_in(nb)
+
+    def _read(self, path: Path | None, raw: bytes | None) -> dict:
+        """The submission's reduced notebook: as the identity step read it, else read now."""
+        if raw is None:
+            with self._read_lock:
+                nb, size = self._read_cache.pop(str(path), (None, 0))
+                self._cached_chars -= size
+            if nb is not None:
+                return nb
+            if str(path) in self._unreadable:
+                raise SubmissionError(self._unreadable[str(path)])
+        return self.sandbox.read_notebook(
+            raw if raw is not None else path, self.options.ready_timeout
+        )
+
     def close(self) -> None:
+        """Stop the sandbox; what no cleanup could remove is in :attr:`cleanup_failures`."""
         with self._sandbox_lock:
             if self._sandbox is not None:
                 self._sandbox.close()
+                self.cleanup_failures.extend(self._sandbox.cleanup_failures)
                 self._sandbox = None
 
     def __enter__(self):
@@ -238,8 +291,8 @@ class AssignmentGrader:
             return
         if problem:
             row.notes.append(problem[0].upper() + problem[1:] + ".")
-        try:
-            nb = read_submission(raw if raw is not None else path)
+        try:  # decoded in a sandboxed child: only a bounded part of it reaches this process
+            nb = self._read(path, raw)
         except SubmissionError as exc:
             row.status = SubmissionStatus.INVALID_NOTEBOOK
             row.notes.append(f"The submission could not be read: {exc}.")
@@ -406,6 +459,10 @@ class StudentSession:
     def _drop_child(self) -> None:
         if self.child is not None:
             self.child.close()
+            if self.child.cleanup_failed:  # the instructor's record (never the feedback)
+                self.row.cleanup_failed = (self.row.cleanup_failed or []) + [
+                    f for f in self.child.cleanup_failed if f not in (self.row.cleanup_failed or [])
+                ]
             self.child = None
 
     def ensure_child(self) -> bool:

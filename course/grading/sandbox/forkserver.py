@@ -9,7 +9,8 @@ it prepares everything that does not depend on the student, once:
    descriptor number reserved now;
 4. opens the Landlock allow-list (descriptors of the folders children may read).
 
-Then it forks one child per request of the grader, received on a UNIX socket together with the
+Then it forks one child per request of the grader (first putting its own CPU affinity, nice
+value and scheduling policy back as they were when it started, which every child inherits), received on a UNIX socket together with the
 child's three pipe ends, and answers with the child's pid and a pidfd (which the grader can
 signal across PID namespaces). It never runs student code itself; its children run
 :func:`course.grading.sandbox.runner.child_main` and never return.
@@ -24,7 +25,48 @@ import socket
 import sys
 import time
 
-__all__: list[str] = []
+__all__ = ["TAMPERED"]
+
+#: The server's answer to a spawn request when a child changed its scheduling state and it
+#: could not put it back: the grader replaces it with a fresh server.
+TAMPERED = "scheduling changed"
+
+
+def _scheduling() -> tuple:
+    """This process's scheduling state: CPU affinity, nice value, policy and its priority."""
+    return (
+        frozenset(os.sched_getaffinity(0)),
+        os.getpriority(os.PRIO_PROCESS, 0),
+        os.sched_getscheduler(0),
+        os.sched_getparam(0).sched_priority,
+    )
+
+
+def _restore_scheduling(initial: tuple) -> bool:
+    """Put the server's scheduling state back as it started, before each fork: children
+    inherit it, and a child may have pinned or reniced the server where seccomp does not
+    refuse that (seccomp off, or a kernel without it). False when it cannot (an unprivileged
+    server cannot lower its nice value again): the server must then be replaced."""
+    if _scheduling() == initial:
+        return True
+    affinity, nice, policy, priority = initial
+    with contextlib.suppress(OSError):
+        os.sched_setscheduler(0, policy, os.sched_param(priority))
+    with contextlib.suppress(OSError):
+        os.sched_setaffinity(0, affinity)
+    with contextlib.suppress(OSError):
+        os.setpriority(os.PRIO_PROCESS, 0, nice)
+    return _scheduling() == initial
+
+
+def _allow_nice_back(nice: int) -> None:
+    """Let the server lower its nice value back to ``nice`` once it is ``nobody`` (an
+    unprivileged process may not, unless its RLIMIT_NICE allows it: 20 - nice). Children
+    inherit the limit: it lets them go no lower than the server started."""
+    import resource
+
+    with contextlib.suppress(OSError, ValueError):
+        resource.setrlimit(resource.RLIMIT_NICE, (20 - nice, 20 - nice))
 
 
 def _server_main(sock_fd: int, config_json: str) -> None:
@@ -33,7 +75,10 @@ def _server_main(sock_fd: int, config_json: str) -> None:
     from course.grading.vocabulary import Op, ReplyStatus
 
     seccomp.die_with_parent()
+    initial = _scheduling()
     config = json.loads(config_json)
+    if config.get("nice_back", True):  # off: as where the hard limit cannot be raised
+        _allow_nice_back(initial[1])
     if os.getppid() == 1 and not config.get("namespaced"):  # the grader is already gone
         return
     sock = socket.socket(fileno=sock_fd)
@@ -71,6 +116,13 @@ def _server_main(sock_fd: int, config_json: str) -> None:
             break
         reap()
         req = json.loads(msg)
+        if req["op"] == Op.SPAWN and len(fds) == 3 and not _restore_scheduling(initial):
+            for fd in fds:
+                os.close(fd)
+            # the grader forks later children from a fresh server; this one forks no more but
+            # lives on (its children die with it) until the grader closes its socket
+            sock.send(json.dumps({"error": TAMPERED}).encode())
+            continue
         if req["op"] == Op.SPAWN and len(fds) == 3:
             req_r, resp_w, event_w = fds
             pid = os.fork()

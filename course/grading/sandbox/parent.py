@@ -34,6 +34,7 @@ What a submission can still do is listed in ``docs/instructors/sandbox.md``.
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import secrets
@@ -41,6 +42,7 @@ import select
 import shutil
 import signal
 import socket
+import stat
 import subprocess
 import sys
 import tempfile
@@ -49,6 +51,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError
+from course.grading.sandbox.forkserver import TAMPERED
 from course.grading.sandbox.isolation import Isolation, detect
 from course.grading.tripwire import parse_events
 from course.grading.vocabulary import Op, ReplyStatus
@@ -64,7 +68,17 @@ __all__ = [
 ]
 
 _PACKAGE_PARENT = str(Path(__file__).resolve().parents[3])
-MAX_REPLY_BYTES = 64_000_000
+#: The longest reply line the parent takes from a child, and the most JSON values (counted as
+#: ``[``, ``{`` and ``,``) in it: decoding costs the parent up to ~4 bytes per byte of a
+#: string and ~70 bytes per value, so a reply costs it at most ~40 MB (numpy arrays travel as
+#: base64 strings, so 8 MB is an array of a million numbers). A longer reply stops the child
+#: and fails its question ("the reply was too large").
+MAX_REPLY_BYTES = 8_000_000
+MAX_REPLY_ITEMS = 200_000
+#: A reader child's reply: the reduced notebook (at most 1,000,000 characters of source,
+#: 12 bytes each at worst as JSON escapes), from a child that ran no student code.
+MAX_READ_REPLY_BYTES = 16_000_000
+_READ_FILE = "submission.ipynb"  # runner.READ_FILE (the runner is not imported by the parent)
 
 
 @dataclass
@@ -149,6 +163,60 @@ def _server_env(rundir: str) -> dict:
     return env
 
 
+def remove_tree(path: str) -> list[str]:
+    """Remove the folder ``path`` and everything in it; what could not be removed, each as
+    ``"<path> (<reason>)"`` (at most 20; empty when all is gone). A file a child made
+    immutable (``chattr +i``) is one; the caller reports it, never silently."""
+    failed: list[str] = []
+    seen: set[str] = set()
+
+    def note(_func, where, exc_info) -> None:
+        exc = exc_info[1]
+        if isinstance(exc, FileNotFoundError) or where in seen:
+            return
+        if isinstance(exc, OSError) and exc.errno == errno.ENOTEMPTY:
+            return  # a folder that still holds what failed: that is reported itself
+        seen.add(where)
+        if len(failed) < 20:
+            failed.append(f"{where} ({getattr(exc, 'strerror', None) or exc})")
+
+    shutil.rmtree(path, onerror=note)
+    if not failed and os.path.lexists(path):
+        failed.append(f"{path} (still there)")
+    return failed
+
+
+def _copy_notebook(source, target: str) -> None:
+    """Write a submission (its bytes, or the file at ``source``) to ``target``, refusing a
+    symbolic link, anything but a regular file and more than ``MAX_NOTEBOOK_BYTES``; the
+    copy goes in chunks, so a file of any size costs the parent 1 MB of memory."""
+    if isinstance(source, bytes):
+        if len(source) > MAX_NOTEBOOK_BYTES:
+            raise SubmissionError(
+                f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB"
+            )
+        with open(target, "wb") as out:
+            out.write(source)
+        return
+    try:
+        fd = os.open(source, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise SubmissionError("the notebook is a symbolic link") from None
+        raise SubmissionError(f"cannot read the notebook ({exc.strerror})") from None
+    with os.fdopen(fd, "rb") as f, open(target, "wb") as out:
+        if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+            raise SubmissionError("the notebook is not a regular file")
+        copied = 0
+        while chunk := f.read(1 << 20):
+            copied += len(chunk)
+            if copied > MAX_NOTEBOOK_BYTES:
+                raise SubmissionError(
+                    f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB"
+                )
+            out.write(chunk)
+
+
 class ChildHandle:
     """The grader's (parent's) handle on one sandboxed child: requests, kill, exit status."""
 
@@ -178,6 +246,8 @@ class ChildHandle:
         self._events: dict[str, int] = {}
         self.events_reported = 0
         self._next_id = 0
+        self._max_bytes = MAX_REPLY_BYTES
+        self.cleanup_failed: list[str] = []  # what close() could not remove
         self.info: dict = {}
 
     # -- protocol -------------------------------------------------------------------------
@@ -231,7 +301,7 @@ class ChildHandle:
             if not chunk:
                 raise ChildDied(self._death_cause())
             self._buffer += chunk
-            if len(self._buffer) > MAX_REPLY_BYTES:
+            if len(self._buffer) > self._max_bytes:
                 self.kill()
                 raise ChildDied("the reply was too large")
         line, self._buffer = self._buffer.split(b"\n", 1)
@@ -243,22 +313,39 @@ class ChildHandle:
         events, self._events = list(self._events), {}
         return events
 
-    def request(self, op: str, timeout: float, **fields) -> dict:
+    def request(
+        self,
+        op: str,
+        timeout: float,
+        *,
+        max_bytes: int = MAX_REPLY_BYTES,
+        max_items: int | None = MAX_REPLY_ITEMS,
+        **fields,
+    ) -> dict:
         """Send one request and wait for its reply; on timeout the child is killed.
 
         Raises :class:`ChildTimeout` or :class:`ChildDied`; lines that are not the reply to this
-        request (wrong nonce, not JSON) are ignored, so printing cannot forge a reply. Reports
+        request (wrong nonce, not JSON) are ignored, so printing cannot forge a reply. A line
+        longer than ``max_bytes`` or with more than ``max_items`` JSON values stops the child
+        (:class:`ChildDied`, "the reply was too large") before the parent decodes it. Reports
         of forbidden calls made meanwhile are collected (:meth:`take_events`).
         """
         if not self.alive:
             raise ChildDied("the process had already ended")
         self._next_id += 1
+        self._max_bytes = max_bytes
         nonce = secrets.token_hex(8)
         deadline = time.monotonic() + timeout
         try:
             self._send({"op": op, "id": self._next_id, "nonce": nonce, **fields}, deadline)
             while True:
                 line = self._readline(deadline)
+                if (
+                    max_items is not None
+                    and line.count(b",") + line.count(b"[") + line.count(b"{") > max_items
+                ):
+                    self.kill()
+                    raise ChildDied("the reply was too large")
                 try:
                     reply = json.loads(line)
                 except (ValueError, RecursionError):  # deep nesting ("[[[[...") too
@@ -318,7 +405,9 @@ class ChildHandle:
                     os.close(fd)
         self.req_w = self.resp_r = self.event_r = -1
         self.pidfd = None
-        shutil.rmtree(self.tmpdir, ignore_errors=True)
+        if os.path.lexists(self.tmpdir):
+            self.cleanup_failed = remove_tree(self.tmpdir)
+            self.sandbox.note_cleanup_failed(self.cleanup_failed)
 
 
 class Sandbox:
@@ -363,6 +452,9 @@ class Sandbox:
         # never mounted nor allowed, should a Python folder contain one of them
         self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]
         self._lock = threading.Lock()
+        self._failures_lock = threading.Lock()
+        #: what a child left that no cleanup could remove ("<path> (<reason>)")
+        self.cleanup_failures: list[str] = []
         self._server: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._rundir = os.path.realpath(tempfile.mkdtemp(prefix="course-grade-run-"))
@@ -373,6 +465,8 @@ class Sandbox:
             for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
                 os.chown(folder, *self.isolation.drop_to)
         self.server_info: dict = {}
+        self.server_restarts = 0  # fork servers replaced because a child changed scheduling
+        self._retired: list[tuple[subprocess.Popen | None, socket.socket | None]] = []
         self._start_server()
 
     # -- launching ------------------------------------------------------------------------
@@ -437,6 +531,11 @@ class Sandbox:
             raise SandboxError(f"the fork server did not start: {log_text[-1500:]}")
         self.server_info = reply
         self.isolation = self.isolation.with_(unprivileged=bool(reply.get("unprivileged")))
+        if self.isolation.drop_to is not None and not self.isolation.unprivileged:
+            # children stay root without capabilities: a folder of nobody's on the way to
+            # theirs would keep them out of it (and out of their Landlock rule)
+            for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
+                os.chown(folder, os.getuid(), os.getgid())
 
     def _server_log(self) -> str:
         try:
@@ -464,8 +563,8 @@ class Sandbox:
     def start(self, init: dict, ready_timeout: float = 60.0) -> ChildHandle:
         """Start a child, send it ``init`` and wait until it is ready for student code."""
         tmpdir = tempfile.mkdtemp(prefix="child-", dir=self._children)
-        if self.isolation.drop_to is not None:
-            os.chown(tmpdir, *self.isolation.drop_to)
+        if self._children_drop():
+            os.chown(tmpdir, *self.isolation.drop_to)  # type: ignore[misc]
         req_r, req_w = os.pipe()
         resp_r, resp_w = os.pipe()
         event_r, event_w = os.pipe()
@@ -479,6 +578,16 @@ class Sandbox:
                 reply, got = self._server_call(
                     {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
                 )
+                if reply.get("error") == TAMPERED:  # a child changed the server's scheduling
+                    # a fresh server for later children; the old one stays until close(), so
+                    # the children it forked (other students') keep running
+                    self.server_restarts += 1
+                    self._retired.append((self._server, self._sock))
+                    self._server = self._sock = None
+                    self._start_server()
+                    reply, got = self._server_call(
+                        {"op": Op.SPAWN, "tmpdir": tmpdir}, fds=(req_r, resp_w, event_w)
+                    )
             pid = int(reply["pid"])
             pidfd = got[0] if got else None
         finally:
@@ -496,6 +605,50 @@ class Sandbox:
         child.take_events()  # nothing before student code counts
         return child
 
+    def _children_drop(self) -> bool:
+        """Whether children run as ``drop_to`` (their folders are then theirs). A child that
+        stays root has no capabilities, so it could not write a folder owned by nobody."""
+        return self.isolation.drop_to is not None and bool(self.isolation.unprivileged)
+
+    def read_notebook(self, source, timeout: float = 60.0) -> dict:
+        """Decode a submitted notebook (a path, or its bytes) in a sandboxed reader child.
+
+        The parent copies the file (at most :data:`~course.grading.notebook.MAX_NOTEBOOK_BYTES`,
+        refusing links and anything but a regular file) into a fresh child's folder; the
+        child, under its memory limit and before any student code, decodes it and sends back
+        only what the grader reads (:func:`~course.grading.notebook.reduce_notebook`). So
+        whatever a notebook holds (deep nesting, millions of tiny values, huge strings), it
+        costs the parent at most a few times
+        :data:`~course.grading.notebook.MAX_SOURCE_CHARS` and the reader at most ``timeout``.
+        Raises :class:`~course.grading.notebook.SubmissionError` (that student's problem).
+        """
+        child = self.start(
+            {"student_id": "", "assignment": "", "data": {}, "reader": True}, timeout
+        )
+        try:
+            target = os.path.join(child.tmpdir, _READ_FILE)
+            _copy_notebook(source, target)
+            if self._children_drop():
+                os.chown(target, *self.isolation.drop_to)  # type: ignore[misc]
+            reply = child.request(Op.READ, timeout, max_bytes=MAX_READ_REPLY_BYTES, max_items=None)
+        except ChildTimeout:
+            raise SubmissionError(f"reading the notebook took longer than {timeout:g} s") from None
+        except ChildDied as exc:
+            raise SubmissionError(f"the notebook could not be read ({exc.cause})") from None
+        finally:
+            child.close()
+        nb = reply.get("notebook")
+        if reply.get("status") != ReplyStatus.OK or not isinstance(nb, dict):
+            error = reply.get("error")
+            message = error.get("message") if isinstance(error, dict) else None
+            raise SubmissionError(str(message or "the notebook could not be read")[:500])
+        cells = nb.get("cells")
+        if not isinstance(cells, list) or not all(
+            isinstance(cell, dict) and isinstance(cell.get("source"), str) for cell in cells
+        ):
+            raise SubmissionError("the notebook could not be read")
+        return nb
+
     def _exit_status(self, child: ChildHandle):
         with self._lock:
             try:
@@ -509,20 +662,32 @@ class Sandbox:
             return None
         return -os.WTERMSIG(status) if os.WIFSIGNALED(status) else os.WEXITSTATUS(status)
 
-    def close(self) -> None:
-        """Stop the fork server and remove the run directory."""
-        if self._sock is not None:
+    @staticmethod
+    def _stop(server: subprocess.Popen | None, sock: socket.socket | None) -> None:
+        if sock is not None:
             with contextlib.suppress(OSError):
-                self._sock.close()
-            self._sock = None
-        if self._server is not None:
+                sock.close()
+        if server is not None:
             try:
-                self._server.wait(timeout=5)
+                server.wait(timeout=5)
             except subprocess.TimeoutExpired:
-                os.killpg(self._server.pid, signal.SIGKILL)
-                self._server.wait()
-            self._server = None
-        shutil.rmtree(self._rundir, ignore_errors=True)
+                os.killpg(server.pid, signal.SIGKILL)
+                server.wait()
+
+    def note_cleanup_failed(self, failed: list[str]) -> None:
+        """Record paths a cleanup could not remove (:attr:`cleanup_failures`)."""
+        with self._failures_lock:
+            self.cleanup_failures.extend(f for f in failed if f not in self.cleanup_failures)
+
+    def close(self) -> None:
+        """Stop the fork server and remove the run directory (what cannot be removed is
+        recorded in :attr:`cleanup_failures`)."""
+        self._stop(self._server, self._sock)
+        self._server = self._sock = None
+        while self._retired:
+            self._stop(*self._retired.pop())
+        if os.path.lexists(self._rundir):
+            self.note_cleanup_failed(remove_tree(self._rundir))
 
     def __enter__(self):
         return self

@@ -44,6 +44,7 @@ from builtins import (  # bound now, so a student patching builtins cannot break
 from dataclasses import dataclass, field
 
 from course.grading import codec
+from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError, reduce_notebook
 from course.grading.sandbox.isolation.audit import close_leaked, make_audit_hook, open_fds
 from course.grading.sandbox.isolation.limits import set_limits
 from course.grading.tripwire import course_modules
@@ -61,6 +62,7 @@ _UNDEFINED, _STUB = ReplyStatus.UNDEFINED.value, ReplyStatus.STUB.value
 _NOT_CALLABLE, _UNENCODABLE = ReplyStatus.NOT_CALLABLE.value, ReplyStatus.UNENCODABLE.value
 
 OUTPUT_FILE = "output.txt"
+READ_FILE = "submission.ipynb"  # the notebook a reader child decodes (copied in by the parent)
 MAX_RESPONSE_BYTES = 64_000_000
 
 
@@ -354,6 +356,49 @@ class RequestLoop:
             reply["error"] = _error_info(error)
         return reply
 
+    def op_read(self, req):
+        """Decode the submission the parent copied into this folder and send back the part the
+        grader reads (:func:`~course.grading.notebook.reduce_notebook`): a notebook that costs
+        gigabytes to decode costs them here, under this child's limits, never in the parent.
+        Only a reader child (no student code ever runs in it) gets this request."""
+        try:
+            fd = os.open(READ_FILE, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+            with os.fdopen(fd, "rb") as f:
+                raw = f.read(MAX_NOTEBOOK_BYTES + 1)
+            os.unlink(READ_FILE)
+            if len(raw) > MAX_NOTEBOOK_BYTES:
+                raise SubmissionError(
+                    f"the notebook is larger than {MAX_NOTEBOOK_BYTES // 1_000_000} MB"
+                )
+            if not raw.strip():
+                raise SubmissionError("the notebook file is empty")
+            text = raw.decode("utf-8", errors="replace")
+            del raw
+            try:
+                nb = _loads(text)
+            except ValueError as exc:
+                where = f" at line {exc.lineno}" if hasattr(exc, "lineno") else ""
+                raise SubmissionError(
+                    f"the notebook is not valid JSON ({getattr(exc, 'msg', exc)}{where})"
+                ) from None
+            except RecursionError:
+                raise SubmissionError(
+                    "the notebook is not valid JSON (too deeply nested)"
+                ) from None
+            del text
+            return {"status": _OK, "notebook": reduce_notebook(nb)}
+        except SubmissionError as exc:
+            return {"status": _ERROR, "error": {"type": "SubmissionError", "message": str(exc)}}
+        except MemoryError:
+            return {
+                "status": _ERROR,
+                "error": {
+                    "type": "SubmissionError",
+                    "message": "the notebook is too large to read within the grader's memory "
+                    "limit (clear its outputs and submit again)",
+                },
+            }
+
     def op_value(self, req):
         ns = self.shell.user_ns
         name = req["name"]
@@ -514,7 +559,8 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
             limits = dict(limits, nproc=0)  # only a backstop for non-root users
         set_limits(limits)
         sys.dont_write_bytecode = True
-        child.shell = shell or make_shell()
+        if not init.get("reader"):  # a reader child decodes a notebook and runs no cell
+            child.shell = shell or make_shell()
         selfcheck._GRADING = {"student_id": init["student_id"], "data": init.get("data", {})}
         offer_released_data(init.get("data_module"))
         cap = int(limits.get("output_chars", 1_000_000))
