@@ -133,12 +133,33 @@ TWINS = {
 
 @pytest.mark.parametrize("name", sorted(TWINS))
 def test_every_personal_value_question_has_a_public_twin(checks, name):
+    """A twin is self-checked on public data: a public value, or (issue 26: no grade on a
+    public value alone) a function of the data whose public case is the practice data and
+    whose hidden cases decide the grade."""
     c = checks[name]
     personal = {q.id for q in c.questions.values() if q.data is not None and q.kind == "value"}
     assert personal == set(TWINS[name])
     for twin in TWINS[name].values():
         q = c.questions[twin]
-        assert q.kind == "value" and q.public and q.data is None
+        if q.kind == "function":
+            assert q.public_cases and q.hidden_cases, twin
+        else:
+            assert q.kind == "value" and q.public and q.data is None
+
+
+def test_01_unweighted_largest_standardised_residual_is_not_the_blunder(checks):
+    """Old code: the largest |e_i / sigma_i| of a fit without the weights (no w-test) found
+    the blunder on ~80 % of the surveys and on every public case, so q7 and q7_practice gave it
+    full marks. Now it misses on every personal survey, a public case and the hidden ones."""
+    c = checks["01_least_squares"]
+    mod = sys.modules[c.questions["q7"].reference.__module__]
+    for sid in IDS:
+        d = c.data_for("survey", sid)
+        assert mod._unweighted_suspect(d) != c.questions["q7"].expected(data=d), sid
+    q = c.questions["q7_practice"]
+    missed = [mod._unweighted_suspect(*case.args) != q.expected(case) for case in q.cases]
+    assert any(m for m, case in zip(missed, q.cases) if not case.hidden)
+    assert sum(m for m, case in zip(missed, q.cases) if case.hidden) >= 2
 
 
 # -- Monte Carlo: the seeded simulation itself, not its law ------------------------------
