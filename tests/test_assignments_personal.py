@@ -107,6 +107,7 @@ PUBLIC_VALUE_ONLY = {
     "02_test_quantities": dict.fromkeys(
         ("q2", "q5", "q6", "q7_practice", "q8_practice"), "not converted yet"
     ),
+
     "03_estimation_and_likelihood": dict.fromkeys(
         ("q2", "q3", "q5", "q9_practice"), "not converted yet"
     ),
@@ -141,3 +142,24 @@ def test_choice_hints_do_not_demand_an_exact_copy(name):
         if q.kind == "choice":
             assert "exactly" not in q.hint, (name, q.id, q.hint)
 
+
+@pytest.mark.parametrize("key", list(KEYS))
+def test_02_q8_practice_diagnosis_is_a_mistake_only_where_it_differs(key):
+    """The practice record's diagnosis (['F2']) is the true diagnosis of about a fifth of the
+    class: it must give them full marks, and everyone else the message that names it. The
+    wrong-answer suite counts that variant as wrong only where it differs (its COINCIDES)."""
+    from course.grading.compare import compare
+
+    checks = _checks("02_test_quantities")
+    q8 = checks.questions["q8"]
+    practice = checks.questions["q8_practice"].expected()
+    outcomes = set()
+    for sid in _ids(N_CHOICE_IDS):
+        d = checks.data_for("record", sid, KEYS[key])
+        truth = q8.expected(data=d)
+        verdict = compare(truth, practice, q8.rtol, q8.atol, mistakes=q8.mistaken(data=d))
+        assert verdict.ok == (truth == practice), sid
+        if not verdict.ok:
+            assert "practice record's diagnosis" in verdict.message, (sid, verdict.message)
+        outcomes.add(verdict.ok)
+    assert outcomes == {True, False}  # both occur in a class: the suite cannot assume either

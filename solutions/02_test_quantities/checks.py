@@ -384,6 +384,15 @@ def q8a(d):
     properties="diagnosis_properties",
     hint="Each test alarms when T_k > J_mine; then apply your single_fault_diagnoses to the "
     "lecture structure LECTURE.",
+    # shown only when the answer differs from the student's own diagnosis (the right answer is
+    # compared first): for some records the two diagnoses agree, and then it is right
+    mistakes=[
+        Mistake(
+            "this is the practice record's diagnosis: apply the alarms of YOUR record "
+            "(T_mine > J_mine)",
+            lambda d: q8_practice.reference(),
+        ),
+    ],
 )
 def q8(d):
     return _diagnosis(_three_statistics(d), d["y"].size, d["sigma"], d["alpha"])

@@ -345,6 +345,17 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
     ],
 }
 
+
+def _practice_diagnosis_coincides(checks, student):
+    """The practice record's diagnosis is right for the students whose own diagnosis is the
+    same (tests/test_assignments_personal.py measures how many)."""
+    d = checks.data_for("record", student)
+    practice = checks.questions["q8_practice"].expected()
+    return checks.questions["q8"].expected(data=d) == practice
+
+
+COINCIDES = {("q8", "the practice record's diagnosis"): _practice_diagnosis_coincides}
+
 RIGHT = {
     "q1": [
         (
