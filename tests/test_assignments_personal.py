@@ -107,10 +107,6 @@ PUBLIC_VALUE_ONLY = {
     "02_test_quantities": dict.fromkeys(
         ("q2", "q5", "q6", "q7_practice", "q8_practice"), "not converted yet"
     ),
-
-    "03_estimation_and_likelihood": dict.fromkeys(
-        ("q2", "q3", "q5", "q9_practice"), "not converted yet"
-    ),
     "04_ekf_residuals": dict.fromkeys(("q1", "q4", "q5_practice"), "not converted yet"),
     "05_nis_wishart": dict.fromkeys(("q3", "q4", "q6_practice", "q8"), "not converted yet"),
     "06_mismatched_filters": dict.fromkeys(("q3", "q6_practice", "q7"), "not converted yet"),
