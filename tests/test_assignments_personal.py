@@ -107,7 +107,8 @@ PUBLIC_VALUE_ONLY = {
     "02_test_quantities": dict.fromkeys(
         ("q2", "q5", "q6", "q7_practice", "q8_practice"), "not converted yet"
     ),
-    "04_ekf_residuals": dict.fromkeys(("q1", "q4", "q5_practice"), "not converted yet"),
+    # its named mistakes and float32 answers are reworked on another branch this session
+    "04_ekf_residuals": {"q1": "not converted yet"},
     "05_nis_wishart": dict.fromkeys(("q3", "q4", "q6_practice", "q8"), "not converted yet"),
     "06_mismatched_filters": dict.fromkeys(("q3", "q6_practice", "q7"), "not converted yet"),
 }
