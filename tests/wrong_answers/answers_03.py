@@ -414,13 +414,18 @@ RIGHT = {
     ],
     "q3": [
         (
-            "the library's power functions",
+            "by hand with an explicit inverse, a list",
             """def power_pair(U, sigma, theta2, alpha):
-    theta_f = [1.0, theta2, 1.0]
-    return [
-        dg.parameter_estimate_power(U, nominal, [0, 1], 1, theta_f, sigma=sigma, alpha=alpha),
-        dg.prediction_error_power(U, nominal, [0], theta_f, sigma=sigma, alpha=alpha),
-    ]
+    U = np.asarray(U, dtype=float)
+    n = len(U)
+    s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
+    z = stats.norm.ppf(1 - alpha / 2)
+    b = abs(theta2 - 1.0) / s2
+    P1 = np.outer(U[:, 0], U[:, 0]) / (U[:, 0] @ U[:, 0])
+    d_perp = (np.eye(n) - P1) @ ((theta2 - 1.0) * U[:, 1])
+    lam = d_perp @ d_perp / sigma**2
+    return [stats.norm.cdf(b - z) + stats.norm.cdf(-b - z),
+            stats.ncx2.sf(stats.chi2.ppf(1 - alpha, n - 1), n - 1, lam)]
 """,
         ),
     ],
