@@ -110,7 +110,6 @@ PUBLIC_VALUE_ONLY = {
     # its named mistakes and float32 answers are reworked on another branch this session
     "04_ekf_residuals": {"q1": "not converted yet"},
     "05_nis_wishart": dict.fromkeys(("q3", "q4", "q6_practice", "q8"), "not converted yet"),
-    "06_mismatched_filters": dict.fromkeys(("q3", "q6_practice", "q7"), "not converted yet"),
 }
 
 
