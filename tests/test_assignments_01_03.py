@@ -250,8 +250,8 @@ def test_02_q4_dof_from_columns_is_told_to_use_the_rank(checks):
     ("qid", "wrong"),
     [
         ("q3", lambda q: lambda *args: q.reference(*args) / 0.2**2),
-        ("q6", lambda q: lambda: (q.reference().J / 0.2**2, q.reference().power)),
-        ("q7_practice", lambda q: lambda: q.reference() / 0.2**2),
+        ("q6", lambda q: lambda *a: (q.reference(*a).J / a[1] ** 2, q.reference(*a).power)),
+        ("q7_practice", lambda q: lambda *a: q.reference(*a) / 0.2**2),
     ],
 )
 def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
@@ -261,7 +261,9 @@ def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
 
 def test_02_q5_sum_for_mean_is_named(checks):
     q = checks["02_test_quantities"].questions["q5"]
-    assert "sum of the squared residuals" in _first_message(q, lambda: q.reference() * 20)
+    assert "sum of the squared residuals" in _first_message(
+        q, lambda y, u: q.reference(y, u) * len(y)
+    )
 
 
 def test_02_q9_another_draw_order_is_named(checks):
