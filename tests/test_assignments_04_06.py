@@ -202,5 +202,8 @@ def test_05_q8_normal_approximation_is_named():
     q = load_checks(ROOT / "solutions" / "05_nis_wishart").questions["q8"]
     from scipy import stats
 
-    half = float(stats.norm.isf(0.025)) * np.sqrt(2 * 4 / 50)
-    assert "normal approximation" in _first_message(q, lambda: (4 - half, 4 + half))
+    def nees_interval(n, N, alpha):
+        half = float(stats.norm.isf(alpha / 2)) * np.sqrt(2 * n / N)
+        return (n - half, n + half)
+
+    assert "normal approximation" in _first_message(q, nees_interval)

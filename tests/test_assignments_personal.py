@@ -106,7 +106,6 @@ PUBLIC_VALUE_ONLY = {
     "01_least_squares": {"q1": _WORKED_EXAMPLE, "q2": _WORKED_EXAMPLE},
     # its named mistakes and float32 answers are reworked on another branch this session
     "04_ekf_residuals": {"q1": "not converted yet"},
-    "05_nis_wishart": dict.fromkeys(("q3", "q4", "q6_practice", "q8"), "not converted yet"),
 }
 
 
