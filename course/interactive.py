@@ -1,6 +1,6 @@
 """Sliders for the notebooks: move a parameter, watch the test react.
 
-Five explorers, one per place where a student would rather move a parameter
+Seven explorers, one per place where a student would rather move a parameter
 than read a table:
 
 =====================  =========================================  ==========
@@ -11,6 +11,8 @@ explorer               sliders                                    notebook
 :func:`ekf_widget`     q_β, fault size                            04
 :func:`nis_widget`     correlation, anisotropy, K                 05
 :func:`records_widget` number of records M                        06
+:func:`glr_widget`     bias size, α                               07
+:func:`b_method_widget` α₁, γ₀                                    07
 =====================  =========================================  ==========
 
 Each explorer is split in two. Its **update function** (``omt_view``,
@@ -42,8 +44,12 @@ from .results import critical_value, rejection_probability
 from .validation import as_count, as_finite, as_positive, as_probability
 
 __all__ = [
+    "b_method_view",
+    "b_method_widget",
     "ekf_view",
     "ekf_widget",
+    "glr_view",
+    "glr_widget",
     "nis_view",
     "nis_widget",
     "omt_view",
@@ -656,3 +662,142 @@ def records_widget(**fixed):
     """A slider for the number of records over :func:`records_view` (notebook 06)."""
     sliders = {"M": _slider("int", "records M", 20, 2, 200, 1)}
     return _build(lambda **v: records_view(**v, **fixed), sliders)
+
+
+# ---------------------------------------------------------------------------
+# 07: the power of tests of different dimension, and Baarda's B-method
+# ---------------------------------------------------------------------------
+@styled
+def glr_view(size=6.0, alpha=0.05, *, sigma=2.0, ax=None, max_size=16.0):
+    r"""Power of three tests against one outlier in observation 4 of a 20-epoch line fit.
+
+    Parameters
+    ----------
+    size : float
+        The outlier marked on the curves (in the units of the record).
+    alpha : float
+        Level of every test.
+    sigma : float
+        Standard deviation of the observations.
+    ax : matplotlib axes, optional
+    max_size : float
+        Right end of the bias axis.
+
+    Returns
+    -------
+    dict
+        Power against an outlier of ``size`` in observation 4 of the w-test of
+        observation 4 (``"q = 1"``), the test of observations 4 and 5 together
+        (``"q = 2"``) and the overall model test (``"q = 18"``).
+
+    See Also
+    --------
+    course.lsq.glr_test : The tests.
+    course.lsq.alternative_law : Their laws under the outlier.
+
+    Notes
+    -----
+    Each of the three alternatives contains the outlier :math:`\nabla c_4`
+    (with the line, the overall model test's alternative spans everything), so
+    each statistic is :math:`\chi^2(q, \lambda)` with the same
+    :math:`\lambda = \nabla^2 r_4 / \sigma^2` (:math:`r_4` the redundancy number);
+    the tests differ only in how many degrees of freedom share it. The test
+    whose alternative is exactly the bias (q = 1) is the most powerful, the
+    overall model test (q = m - n) the least (Teunissen 2000).
+    """
+    from . import chi2, lsq
+
+    size = as_finite(size, "size")
+    alpha = as_probability(alpha, "alpha")
+    sigma = as_positive(sigma, "sigma")
+    max_size = as_positive(max(max_size, 1.2 * abs(size)), "max_size")
+    t = np.arange(1.0, 21.0)
+    fit = lsq.fit(np.column_stack([np.ones_like(t), t]), np.zeros(t.size), sigma**2 * np.ones(20))
+    lam_per_unit = float(fit.redundancy_numbers[4]) / sigma**2
+    grid = theory_grid(0.0, max_size)
+    (ax,) = _axes(ax, 1)
+    at_size = {}
+    labels = {
+        1: "w-test of obs. 4",
+        2: "obs. 4 and 5 together",
+        fit.redundancy: "overall model test",
+    }
+    for k, (q, label) in enumerate(labels.items()):
+        curve = chi2.chi2_power(q, lam_per_unit * grid**2, alpha)
+        at_size[f"q = {q}"] = float(chi2.chi2_power(q, lam_per_unit * size**2, alpha))
+        ax.plot(grid, curve, color=pair(k).dark, ls=pair(k).ls, label=f"{label} (q = {q})")
+        ax.plot([size], [at_size[f"q = {q}"]], "o", color=pair(k).dark, ms=7)
+    ax.axhline(alpha, color="0.5", lw=0.8, ls=":", label=rf"$\alpha$ = {alpha:g}")
+    ax.axvline(size, color="0.3", lw=1)
+    ax.set_xlabel(r"outlier $\nabla$ in observation 4")
+    ax.set_ylabel("probability of rejection")
+    ax.set_ylim(0.0, 1.02)
+    ax.set_title(f"σ = {sigma:g}, α = {alpha:g}: outlier {size:g}")
+    legend_outside(ax, where="below", ncol=2)
+    return at_size
+
+
+def glr_widget(**fixed):
+    """Sliders for the outlier size and α over :func:`glr_view` (notebook 07)."""
+    sliders = {
+        "size": _slider("float", "outlier", 6.0, 0.0, 16.0, 0.5),
+        "alpha": _slider("float", "α", 0.05, 0.001, 0.2, 0.001, readout_format=".3f"),
+    }
+    return _build(lambda **v: glr_view(**v, **fixed), sliders)
+
+
+@styled
+def b_method_view(alpha_1=0.001, power=0.80, *, max_q=30, ax=None):
+    r"""Baarda's B-method: the level ``alpha_q`` of a q-dimensional test, for q = 1..max_q.
+
+    Parameters
+    ----------
+    alpha_1 : float
+        Level of the one-dimensional tests (w-tests).
+    power : float
+        Reference power γ0.
+    max_q : int
+        Largest dimension drawn.
+    ax : matplotlib axes, optional
+
+    Returns
+    -------
+    dict
+        ``lambda0`` and ``alpha_q`` at q = 2, 5, 18 (18 = m - n of the sea-level line
+        fits) and ``max_q``.
+
+    See Also
+    --------
+    course.lsq.b_method : The computation.
+    """
+    from . import lsq
+
+    alpha_1 = as_probability(alpha_1, "alpha_1")
+    power = as_probability(power, "power")
+    max_q = as_count(max_q, "max_q", minimum=2)
+    q = np.arange(1, max_q + 1)
+    b = lsq.b_method(alpha_1, power, q)
+    (ax,) = _axes(ax, 1)
+    ax.plot(q, b.alpha_q, "o-", color=pair(0).dark, ms=4, label=r"level $\alpha_q$")
+    ax.axhline(alpha_1, color="0.5", lw=0.8, ls=":", label=rf"$\alpha_1$ = {alpha_1:g}")
+    ax.set_yscale("log")
+    ax.set_xlabel("dimension q of the test")
+    ax.set_ylabel(r"level $\alpha_q$")
+    ax.set_title(
+        rf"$\lambda_0$ = {b.lambda0:.2f}: every test detects it with probability {power:g}"
+    )
+    legend_outside(ax, where="below", ncol=2)
+    shown = {"lambda0": float(b.lambda0)}
+    for k in sorted({2, 5, 18, max_q}):
+        if k <= max_q:
+            shown[f"alpha_{k}"] = float(b.alpha_q[k - 1])
+    return shown
+
+
+def b_method_widget(**fixed):
+    """Sliders for α₁ and γ₀ over :func:`b_method_view` (notebook 07)."""
+    sliders = {
+        "alpha_1": _slider("log", "α₁", 0.001, -4, -1, 0.1, readout_format=".4f"),
+        "power": _slider("float", "power γ₀", 0.80, 0.5, 0.99, 0.01),
+    }
+    return _build(lambda **v: b_method_view(**v, **fixed), sliders)

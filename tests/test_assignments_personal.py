@@ -106,6 +106,8 @@ PUBLIC_VALUE_ONLY = {
     "01_least_squares": {"q1": _WORKED_EXAMPLE, "q2": _WORKED_EXAMPLE},
     # its named mistakes and float32 answers are reworked on another branch this session
     "04_ekf_residuals": {"q1": "not converted yet"},
+    # a new assignment (module 7) merged after this conversion
+    "07_testing_theory": dict.fromkeys(("q6_practice", "q7_practice"), "not converted yet"),
 }
 
 

@@ -8,12 +8,15 @@ from bad_input import (
     Arg,
     array,
     case,
+    choice,
     count,
     covariance,
+    generator,
     matrix,
     module_tests,
     obj,
     probability,
+    vector,
 )
 
 from course import lsq
@@ -24,6 +27,15 @@ QYY = 0.5 * np.eye(8) + 0.3 * np.exp(-np.abs(T[:, None] - T[None, :]))
 Y = A @ [1.0, 0.5] + np.array([0.3, -0.2, 0.1, 0.4, -0.5, 0.2, -0.1, 0.0])
 FIT = lsq.fit(A, Y, QYY)
 W = lsq.w_tests(FIT)
+#: Two bias columns (a jump of the last three observations, an outlier in the second).
+C2 = np.column_stack([np.r_[np.zeros(5), np.ones(3)], np.eye(8)[:, 1]])
+MDB2 = lsq.minimal_detectable_bias(FIT, C2)
+DIA_MC = lsq.dia_monte_carlo(FIT, size=20, rng=np.random.default_rng(0))
+
+
+def bias_columns(value=C2):
+    # one more column is another valid alternative (q = 3 <= m - n), not a bad input
+    return matrix(value).but(drop=("longer",))
 
 
 def design(value=A):
@@ -37,7 +49,58 @@ def fit_arg(value=FIT):
 TABLE = {
     "fit": case(lsq.fit, A=design(), y=array(Y), Qyy=covariance(QYY, none_ok=True)),
     "overall_model_test": case(lsq.overall_model_test, fit=fit_arg(), alpha=probability(0.05)),
-    "w_tests": case(lsq.w_tests, fit=fit_arg(), alpha=probability(0.05)),
+    "w_tests": case(
+        lsq.w_tests, fit=fit_arg(), alpha=probability(0.05), variance=choice("estimated")
+    ),
+    "glr_test": case(
+        lsq.glr_test,
+        fit=fit_arg(),
+        C=bias_columns(),
+        alpha=probability(0.05),
+        variance=choice("known"),
+    ),
+    "alternative_law": case(
+        lsq.alternative_law,
+        fit=fit_arg(),
+        C=bias_columns(),
+        bias=vector([0.5, 0.2]),
+        variance=choice("estimated"),
+    ),
+    "b_method": case(
+        lsq.b_method,
+        alpha_1=probability(0.001),
+        power=probability(0.8),
+        q=count(2).but(drop=("sequence",)),
+    ),
+    "minimal_detectable_bias": case(
+        lsq.minimal_detectable_bias,
+        fit=fit_arg(),
+        C=bias_columns(),
+        alpha=probability(0.001),
+        power=probability(0.8),
+    ),
+    "MinimalDetectableBias.along": case(MDB2.along, direction=vector([1.0, 0.5])),
+    "external_reliability": case(
+        lsq.external_reliability, fit=fit_arg(), C=bias_columns(), bias=vector([0.5, 0.2])
+    ),
+    "dia": case(
+        lsq.dia,
+        fit=fit_arg(),
+        candidates=obj([C2[:, 0], C2], none_ok=True),
+        alpha=probability(0.05),
+    ),
+    "DIAMonteCarlo.identification_rate": case(
+        DIA_MC.identification_rate, k=Arg(2, {"fraction": 2.5, "out of range": 8, "None": None})
+    ),
+    "dia_monte_carlo": case(
+        lsq.dia_monte_carlo,
+        fit=fit_arg(),
+        candidates=obj(None, none_ok=True),
+        alpha=probability(0.05),
+        bias=vector(np.eye(8)[3], none_ok=True),
+        size=count(50),
+        rng=generator(0),
+    ),
     "WTestResult.test": case(
         W.test, i=Arg(2, {"fraction": 2.5, "out of range": 8, "None": None, "text": "2"})
     ),
@@ -66,7 +129,12 @@ TABLE = {
 }
 
 EXEMPT = {
+    "BMethod": "a named tuple the library returns",
     "ConfidenceBand": "a named tuple the library returns",
+    "DIAMonteCarlo": "a result the library returns",
+    "DIAResult": "a result the library returns",
+    "ExternalReliability": "a named tuple the library returns",
+    "MinimalDetectableBias": "a result the library returns",
     "LeastSquaresFit": "a result the library returns",
     "SnoopingResult": "a result the library returns",
     "WTestResult": "a result the library returns",

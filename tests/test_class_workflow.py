@@ -75,6 +75,7 @@ def test_submit_refuses_a_bad_id_and_writes_nothing(tmp_path, capsys, student_id
     out = tmp_path / "out"
     out.mkdir()
     check = Assignment.load(NAME, student_id=student_id, path=EXERCISE)
+    capsys.readouterr()  # the load's note on a placeholder ID
     assert check.submit(saved, out) is None
     printed = capsys.readouterr().out
     assert printed.startswith("Not submitted:") and message in printed

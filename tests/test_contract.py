@@ -52,7 +52,10 @@ def public_tests() -> dict[str, Callable]:
         for name in getattr(module, "__all__", ()):
             obj = getattr(module, name)
             if callable(obj) and re.search(r"_tests?$", name) and not isinstance(obj, type):
-                found.setdefault(name, obj)
+                # Two modules may each have a test of one name (diagnosis.glr_test on
+                # likelihoods, lsq.glr_test on a fit): the later one is found as module.name.
+                key = name if found.get(name, obj) is obj else f"{info.name}.{name}"
+                found[key] = obj
     return found
 
 
@@ -84,9 +87,16 @@ _A = np.column_stack([np.ones(8), _T])
 _QYY = 0.5 * np.eye(8) + 0.3 * np.exp(-np.abs(_T[:, None] - _T[None, :]))
 
 
-def _lsq_fit(rng):
-    y = _A @ [1.0, 0.5] + np.linalg.cholesky(_QYY) @ rng.standard_normal(8)
+def _lsq_fit(rng, variance_factor=1.0):
+    y = _A @ [1.0, 0.5] + np.sqrt(variance_factor) * (
+        np.linalg.cholesky(_QYY) @ rng.standard_normal(8)
+    )
     return lsq.fit(_A, y, _QYY)
+
+
+#: Two bias columns for the q-dimensional tests: a jump of the last three observations and
+#: an outlier in the second.
+_C2 = np.column_stack([np.r_[np.zeros(5), np.ones(3)], np.eye(8)[:, 1]])
 
 
 # diagnosis: the lecture's three-gain regression
@@ -154,7 +164,15 @@ def _records(rng):
 
 CASES: dict[str, list[Case]] = {
     "overall_model_test": [Case(lambda rng: lsq.overall_model_test(_lsq_fit(rng)), 600)],
-    "w_tests": [Case(lambda rng: lsq.w_tests(_lsq_fit(rng)), 600)],
+    "w_tests": [
+        Case(lambda rng: lsq.w_tests(_lsq_fit(rng)), 600),
+        # sigma² estimated: calibrated whatever the true variance factor
+        Case(lambda rng: lsq.w_tests(_lsq_fit(rng, 4.0), variance="estimated"), 600),
+    ],
+    "lsq.glr_test": [
+        Case(lambda rng: lsq.glr_test(_lsq_fit(rng), _C2), 600),
+        Case(lambda rng: lsq.glr_test(_lsq_fit(rng, 0.25), _C2, variance="estimated"), 600),
+    ],
     "prediction_error_test": [
         Case(
             lambda rng: dg.prediction_error_test(

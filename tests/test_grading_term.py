@@ -18,6 +18,7 @@ import pytest
 from conftest import class_submissions
 
 from course.cli import main as course_main
+from course.grading.authoring.checks import load_checks
 from course.grading.batch.driver import SelectionError, grade
 from course.grading.batch.options import GradeOptions
 from course.grading.batch.reports import append_result
@@ -305,3 +306,288 @@ def test_class_data_stays_out_of_the_clone():
         ["git", "check-ignore", "--no-index", *names], cwd=ROOT, capture_output=True, text=True
     ).stdout.split()
     assert sorted(ignored) == sorted(names)
+
+
+# -- item 2: late work ---------------------------------------------------------------------------
+def test_late_policy_deducts_per_started_day_with_a_cap_and_a_cutoff():
+    from course.grading.batch.late import Lateness, parse_due, parse_policy
+
+    policy = parse_policy("percent-per-day:10,cap:25,zero-after:2026-10-27T23:59+02:00")
+    due = parse_due("2026-10-20T23:59+02:00")
+
+    def record(when: str | None, marked: bool = False) -> tuple:
+        r = Lateness(parse_due(when) if when else None, due, "test", marked).record(policy)
+        return r["days"], r["percent"]
+
+    assert record("2026-10-20T23:59+02:00") == (0, 0)  # on the minute: on time
+    assert record("2026-10-21T00:00+02:00") == (1, 10)  # a minute late is a started day
+    assert record("2026-10-20T22:30Z") == (1, 10)  # 00:30 in the due date's zone
+    assert record("2026-10-22T23:59+02:00") == (2, 20)
+    assert record("2026-10-23T00:00+02:00") == (3, 25)  # capped
+    assert record("2026-10-28T00:00+02:00") == (8, 100)  # after the cutoff: nothing
+    # Canvas's _LATE_ without a time: one day, and never the cutoff
+    assert record(None, marked=True) == (None, 10)
+    assert parse_policy(None).describe() == "no deduction"
+    assert "at most 25 %" in policy.describe()
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("percent-per-day:ten", "percentage between 0 and 100"),
+        ("percent-per-day:150", "percentage between 0 and 100"),
+        ("percent-per-week:10", "unknown rule 'percent-per-week:10'"),
+        ("zero-after:2026-10-27", "has no time zone"),
+        ("zero-after:next friday", "not an ISO 8601 date-time"),
+    ],
+)
+def test_late_policy_refuses_what_it_cannot_read(text, message):
+    from course.grading.batch.late import LateError, parse_policy
+
+    with pytest.raises(LateError, match=message):
+        parse_policy(text)
+
+
+def test_a_late_row_totals_after_the_deduction_everywhere(tmp_path):
+    from course.grading.batch.reports import feedback_markdown, read_results, write_csv
+    from course.grading.batch.results import QuestionResult
+    from course.grading.batch.roster import read_roster, write_canvas_csv, write_moodle_csv
+
+    def row(sid, points, late):
+        r = StudentResult(sid, NAME, "c" * 64, "v", "public", 14.0)
+        r.questions = {"q1": QuestionResult(points, 14.0, "pass" if points == 14 else "fail")}
+        r.add_total()
+        r.set_late(late)
+        return r
+
+    two_days = {"submitted_at": "2026-10-22T09:00+02:00", "due": "2026-10-20T23:59+02:00",
+                "source": "timestamps file", "days": 2, "percent": 20.0, "policy": "10 % ..."}  # fmt: skip
+    unknown = {**two_days, "submitted_at": None, "days": None, "percent": 10.0}
+    rows = [
+        row("s001", 12.5, two_days),  # 12.5 - 20 % of 14 = 9.7
+        row("s002", 14.0, None),  # nothing known: no late columns of its own
+        row("s003", 1.0, unknown),  # the deduction never takes more than the points
+        row("s004", 14.0, {**two_days, "days": 0, "percent": 0.0}),  # on time
+    ]
+    assert [r.total for r in rows] == [9.7, 14.0, 0.0, 14.0]
+    assert rows[0].penalty == 2.8 and rows[2].penalty == 1.0
+    for r in rows:
+        append_result(r, tmp_path / "results.jsonl")
+    assert read_results(tmp_path / "results.jsonl")["s001"].late == two_days  # kept on disk
+    write_csv(rows, ["q1"], tmp_path / "grades.csv")
+    table = list(csv.DictReader((tmp_path / "grades.csv").open(encoding="utf-8")))
+    assert [(r["total"], r["late"], r["penalty"]) for r in table] == [
+        ("9.7", "2", "2.8"), ("14", "", ""), ("0", "unknown", "1"), ("14", "0", "0"),
+    ]  # fmt: skip
+    checks = load_checks(SOLUTION)
+    text = feedback_markdown(rows[0], checks)
+    assert "**Total: 9.7 / 14**" in text
+    assert "2 days after the due date 2026-10-20T23:59+02:00" in text
+    assert "-2.8 points, 9.7 instead of 12.5" in text
+    assert "charged as 1 day late" in feedback_markdown(rows[2], checks)
+    assert "Late" not in feedback_markdown(rows[3], checks)
+    from course.grading.batch.classreport import report_html
+
+    page = report_html(rows, checks, ["q1"])
+    assert "<h2>Late submissions</h2>" in page and "2 late" in page
+    assert "<td>s003</td><td>unknown</td><td>unknown (charged 1)</td><td>1</td>" in page
+    assert "lowest 0, highest 14" in page  # the totals after the deduction
+    roster_file = tmp_path / "roster.csv"
+    roster_file.write_text(CANVAS_ROSTER, encoding="utf-8")
+    roster = read_roster(roster_file)
+    by_id = {r.student: r for r in rows}
+    write_canvas_csv(by_id, roster, "A1", 14, tmp_path / "canvas.csv")
+    canvas = list(csv.reader((tmp_path / "canvas.csv").open(encoding="utf-8")))
+    assert [r[5] for r in canvas[2:]] == ["9.7", "14", "0"]
+    write_moodle_csv(by_id, roster, "A1", tmp_path / "moodle.csv")
+    moodle = list(csv.reader((tmp_path / "moodle.csv").open(encoding="utf-8")))
+    assert moodle[1][4] == "9.7" and "late deduction 20 %" in moodle[1][5]
+
+
+def _id_notebook(path: Path, sid: str) -> Path:
+    """A notebook that declares ``sid`` (setup cell and submission metadata)."""
+    import json
+
+    nb = {
+        "nbformat": 4,
+        "nbformat_minor": 5,
+        "metadata": {"course": {"submission": {"student_id": sid}}},
+        "cells": [
+            {
+                "cell_type": "code",
+                "id": "setup",
+                "metadata": {"course": {"role": "setup"}},
+                "source": f'STUDENT_ID = "{sid}"',
+                "outputs": [],
+                "execution_count": None,
+            }
+        ],
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(nb))
+    return path
+
+
+def _resolved(subs: Path, roster_text: str, tmp_path: Path):
+    from course.grading.batch.driver import find_submissions
+    from course.grading.batch.identity import resolve_identities
+    from course.grading.batch.roster import read_roster
+
+    (tmp_path / "roster.csv").write_text(roster_text, encoding="utf-8")
+    roster = read_roster(tmp_path / "roster.csv")
+    return resolve_identities(find_submissions(subs, NAME), NAME, roster.students), roster
+
+
+def test_submission_times_from_a_timestamps_file_a_moodle_worksheet_and_canvas(tmp_path):
+    from course.grading.batch.late import LateError, late_records, parse_due, parse_policy
+
+    subs = tmp_path / "subs"
+    _id_notebook(subs / f"doejane_101_501_{NAME}.ipynb", "s001")
+    _id_notebook(subs / f"roeann_LATE_102_502_{NAME}.ipynb", "s002")  # no time: unknown
+    _id_notebook(subs / f"poeed_LATE_103_503_{NAME}.ipynb", "s003")
+    identity, roster = _resolved(subs, CANVAS_ROSTER, tmp_path)
+    due, policy = parse_due("2026-10-20T23:59+02:00"), parse_policy("percent-per-day:10")
+    stamps = tmp_path / "times.csv"
+    # s001 by student ID with an extension; s003 by its Canvas user number (103)
+    stamps.write_text(
+        "id,submitted_at,due\n"
+        "s001,2026-10-22T10:00+02:00,2026-10-23T23:59+02:00\n"
+        "103,2026-10-21T08:00:00+02:00,\n"
+    )
+    records, notes = late_records(identity.entries, subs, due, policy, stamps, roster)
+    assert {sid: (r["days"], r["percent"]) for sid, r in records.items()} == {
+        "s001": (0, 0), "s002": (None, 10), "s003": (1, 10),
+    }  # fmt: skip
+    assert records["s003"]["source"] == "timestamps file"
+    assert "charged as 1 day late" in notes[0] and "s002" in notes[0]
+    assert "no row in" in notes[1] and "s002" in notes[1]
+    # Moodle's grading worksheet: "Participant N" is the number in the folder's name, and its
+    # times (without a zone) are in the due date's zone
+    moodle = tmp_path / "moodle"
+    _id_notebook(moodle / "Jane Doe_11_assignsubmission_file_" / f"{NAME}.ipynb", "s001")
+    _id_notebook(moodle / "Ann Roe_12_assignsubmission_file_" / f"{NAME}.ipynb", "s002")
+    sheet = tmp_path / "worksheet.csv"
+    sheet.write_text(
+        "Identifier,Full name,Email address,Status,Grade,Last modified (submission)\n"
+        'Participant 11,Jane Doe,,Submitted,,"Tuesday, 20 October 2026, 11:59 PM"\n'
+        'Participant 12,Ann Roe,,Submitted,,"Thursday, 22 October 2026, 9:15 AM"\n'
+    )
+    identity, roster = _resolved(moodle, CANVAS_ROSTER, tmp_path)
+    records, notes = late_records(identity.entries, moodle, due, policy, sheet, roster)
+    assert records["s001"]["days"] == 0 and records["s002"]["days"] == 2 and not notes
+    assert records["s002"]["submitted_at"] == "2026-10-22T09:15+02:00"
+    # no due date: only Canvas's marker makes a record
+    records, _ = late_records(identity.entries, moodle, None, policy)
+    assert records == {}
+    sheet.write_text("Identifier,Last modified (submission)\nParticipant 11,yesterday\n")
+    with pytest.raises(LateError, match="line 2: 'yesterday' is not a time"):
+        late_records(identity.entries, moodle, due, policy, sheet, roster)
+
+
+def test_grade_without_a_due_date_refuses_a_timestamps_file(tmp_path, capsys):
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    args = ["grade", str(SOLUTION), str(subs), "--out", str(tmp_path / "out"), "--no-progress"]
+    assert course_main([*args, "--due", "2026-10-20 23:59"]) == 2
+    assert "has no time zone" in capsys.readouterr().err
+    assert course_main([*args, "--submitted-at", str(tmp_path / "t.csv")]) == 2
+    assert "--submitted-at needs a due date" in capsys.readouterr().err
+
+
+# -- item 6: Canvas and Moodle IDs ---------------------------------------------------------------
+def test_a_canvas_user_number_attaches_a_file_whose_notebook_id_is_a_typo(tmp_path):
+    subs = tmp_path / "subs"
+    _id_notebook(subs / f"poeed_103_503_{NAME}.ipynb", "s0O3")  # a typo: on no roster
+    _id_notebook(subs / f"roeann_102_502_{NAME}.ipynb", "s001")  # another roster student's
+    identity, _ = _resolved(subs, CANVAS_ROSTER, tmp_path)
+    s003 = next(e for e in identity.entries if e.student == "s003")
+    assert s003.path is not None and s003.path.name.startswith("poeed_103_")
+    assert "'s0O3' is not on the class list" in s003.note  # the student is told
+    assert [a[:3] for a in identity.attached] == [(f"poeed_103_503_{NAME}.ipynb", "s003", "s0O3")]
+    flags = "\n".join(identity.flags)
+    assert "'s0O3', which is not on the roster; graded as 's003'" in flags
+    # an ID that is another roster student's is still quarantined
+    assert [c[:3] for c in identity.conflicts] == [(f"roeann_102_502_{NAME}.ipynb", "s002", "s001")]
+
+
+def test_the_name_check_lists_only_real_problems(tmp_path):
+    """Canvas names hold no student ID; a roster with names (no Canvas numbers) still ties
+    them to their students, so only the real problems are listed."""
+    subs = tmp_path / "subs"
+    _id_notebook(subs / f"doejane_1234_5678_{NAME}.ipynb", "s001")
+    _id_notebook(subs / f"roeann_1235_5679_{NAME}.ipynb", "s002")
+    _id_notebook(subs / f"poeed_1236_5680_{NAME}.ipynb", "s0O3")  # a typo
+    _id_notebook(subs / f"kaykim_1237_5681_{NAME}.ipynb", "replace-with-your-student-id")
+    _id_notebook(subs / f"kaykim_1237_5690_{NAME}-1.ipynb", "s004")  # a second upload
+    _id_notebook(subs / f"zedzed_1238_5700_{NAME}.ipynb", "s001")  # who is this?
+    roster = 'id,name,email\ns001,Jane Doe,\ns002,"Roe, Ann",\ns003,Ed Poe,\ns004,Kim Kay,\n'
+    identity, _ = _resolved(subs, roster, tmp_path)
+    assert {e.student: e.path.name[:7] for e in identity.entries if e.path} == {
+        "s001": "doejane", "s002": "roeann_", "s003": "poeed_1", "s004": "kaykim_",
+    }  # fmt: skip
+    flags = identity.flags
+    assert len(flags) == 3, flags
+    assert "'s0O3', which is not on the roster; graded as 's003'" in flags[0] + flags[1]
+    assert any("QUARANTINED zedzed" in f for f in flags)
+    assert any(f.startswith("2 submissions claim the ID 's004'") for f in flags)
+    # a roster of bare IDs gives nothing to compare a Canvas name with: no line for a file
+    # whose notebook's ID is on the roster (zedzed's claim on s001 would quarantine both)
+    (subs / f"zedzed_1238_5700_{NAME}.ipynb").unlink()
+    identity, _ = _resolved(subs, "id\ns001\ns002\ns003\ns004\n", tmp_path)
+    assert not any("doejane" in f or "roeann" in f for f in identity.flags), identity.flags
+
+
+def test_the_duplicate_line_names_the_rule_it_applied(tmp_path):
+    subs = tmp_path / "subs"
+    _id_notebook(subs / f"doejane_101_900_{NAME}.ipynb", "s001")
+    _id_notebook(subs / f"doejane_101_700_{NAME}-1.ipynb", "s001")
+    _id_notebook(subs / "s002.ipynb", "s002")
+    _id_notebook(subs / "s002_resubmitted.ipynb", "s002")
+    identity, _ = _resolved(subs, CANVAS_ROSTER, tmp_path)
+    flags = "\n".join(identity.flags)
+    assert (
+        f"graded doejane_101_900_{NAME}.ipynb (the last in the LMS's order: the highest Canvas "
+        "submission number, its latest upload)" in flags
+    )
+    assert "graded s002_resubmitted.ipynb (the last in the LMS's order: by file name)" in flags
+
+
+def test_a_canvas_user_number_never_takes_the_time_of_the_student_with_that_id(tmp_path):
+    """Numeric IDs: Ann's Canvas user number 101 is Jane's student ID; the row "101" of the
+    timestamps file is Jane's time, not Ann's."""
+    from course.grading.batch.driver import Submission
+    from course.grading.batch.late import late_records, parse_due, parse_policy
+
+    subs = tmp_path / "subs"
+    jane = _id_notebook(subs / f"doejane_7_1_{NAME}.ipynb", "101")
+    ann = _id_notebook(subs / f"roeann_101_2_{NAME}.ipynb", "102")
+    stamps = tmp_path / "times.csv"
+    stamps.write_text("id,submitted_at\n101,2026-10-25T12:00+02:00\n")
+    entries = [Submission("101", jane), Submission("102", ann)]
+    due = parse_due("2026-10-20T23:59+02:00")
+    records, notes = late_records(entries, subs, due, parse_policy(None), stamps)
+    assert records["101"]["days"] == 5 and records["102"]["days"] == 0
+    assert "102" in notes[0] and "no row in" in notes[0]
+
+
+def test_the_due_date_and_policy_of_checks_py_and_the_command_line_wins(tmp_path):
+    from types import SimpleNamespace
+
+    from course.grading.batch.driver import Submission, _late_work
+    from course.grading.batch.late import LateError, parse_due, parse_policy
+
+    subs = tmp_path / "subs"
+    path = _id_notebook(subs / f"doejane_LATE_101_501_{NAME}.ipynb", "s001")
+    entries = [Submission("s001", path)]
+    checks = SimpleNamespace(due="2026-10-20T23:59Z", late_policy="percent-per-day:5")
+    records, _ = _late_work(checks, entries, subs, _options())
+    assert records["s001"]["due"] == "2026-10-20T23:59+00:00"
+    assert records["s001"]["percent"] == 5  # _LATE_ without a time: one day
+    options = _options(due=parse_due(DUE_CLI), late_policy=parse_policy("percent-per-day:20"))
+    records, _ = _late_work(checks, entries, subs, options)
+    assert records["s001"]["due"] == DUE_CLI and records["s001"]["percent"] == 20
+    with pytest.raises(LateError, match=r"due= in checks\.py 'friday'"):
+        _late_work(SimpleNamespace(due="friday", late_policy=None), entries, subs, _options())
+
+
+DUE_CLI = "2026-10-21T12:00+02:00"

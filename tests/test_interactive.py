@@ -124,6 +124,35 @@ def test_update_functions_refuse_bad_slider_values(call, match):
         call()
 
 
+def test_glr_view_agrees_with_the_tests_and_their_alternative_laws():
+    t = np.arange(1.0, 21.0)
+    A = np.column_stack([np.ones_like(t), t])
+    fit = lsq.fit(A, np.zeros(20), 4.0 * np.eye(20))
+    shown = interactive.glr_view(size=6.0, alpha=0.05)
+    c4 = np.eye(20)[:, 4]
+    # the bias 6 c4 written in each alternative's own columns
+    single = lsq.glr_test(fit, c4, 0.05).power(lsq.alternative_law(fit, c4, 6.0))
+    pair = np.eye(20)[:, [4, 5]]
+    double = lsq.glr_test(fit, pair, 0.05).power(lsq.alternative_law(fit, pair, [6.0, 0.0]))
+    overall = lsq.overall_model_test(fit, 0.05).power(
+        stats.ncx2(18, 36.0 * fit.redundancy_numbers[4] / 4.0)
+    )
+    assert shown["q = 1"] == pytest.approx(single, rel=1e-9)
+    assert shown["q = 2"] == pytest.approx(double, rel=1e-9)
+    assert shown["q = 18"] == pytest.approx(overall, rel=1e-9)
+    assert shown["q = 1"] > shown["q = 2"] > shown["q = 18"] > 0.05  # the narrowest test wins
+    assert interactive.glr_view(size=0.0, alpha=0.01)["q = 18"] == pytest.approx(0.01)
+
+
+def test_b_method_view_agrees_with_the_library():
+    shown = interactive.b_method_view(alpha_1=0.001, power=0.8)
+    b = lsq.b_method(0.001, 0.8, [2, 5, 18, 30])
+    assert shown["lambda0"] == pytest.approx(b.lambda0)
+    assert [shown[f"alpha_{q}"] for q in (2, 5, 18, 30)] == pytest.approx(list(b.alpha_q))
+    with pytest.raises(ValueError, match="power must exceed"):
+        interactive.b_method_view(alpha_1=0.5, power=0.3)
+
+
 def test_widget_builders_wire_sliders_that_redraw_on_release():
     pytest.importorskip("ipywidgets")
     widget = interactive.omt_widget()
@@ -139,6 +168,7 @@ def test_widget_builders_wire_sliders_that_redraw_on_release():
     assert plt.get_fignums() == []  # each figure lives on in the output area only
     U = _signals()
     assert interactive.power_widget(U=U, nominal=np.ones(3), free=[0]) is not None
+    assert interactive.glr_widget() is not None and interactive.b_method_widget() is not None
 
 
 def test_a_slider_value_the_update_refuses_is_shown_in_the_output_area():

@@ -33,11 +33,15 @@ from course.grading.authoring.release import find_solutions, release_files
 from course.grading.authoring.secret import Secret, load_secret, new_secret
 from course.grading.batch.roster import read_roster
 from course.grading.compare import compare
+from course.grading.student.selfcheck import Assignment
+from course.grading.student.submit import Refused, make_submission
+from course.grading.vocabulary import CLASS_FILE, PLACEHOLDER_ID
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
 ASSIGNMENTS = find_solutions(SOLUTIONS)
 IDS = [f"s{i:03d}" for i in range(1, 9)] + ["98765"]
+ID_PATTERN = r"s[0-9]{3}|[0-9]{5}"  # the class's IDs (course export --id-pattern)
 FIXED_SECRET = Secret(hashlib.sha256(b"course tests: a fixed class key").digest(), "tests")
 PERSONAL = [name for name in ASSIGNMENTS if load_checks(SOLUTIONS / name).data_keys()]
 
@@ -75,7 +79,12 @@ def class_edition(tmp_path_factory, class_files, releases):
     secret, roster = class_files
     dest = tmp_path_factory.mktemp("edition") / "class"
     return export(
-        dest, secret=secret, roster=read_roster(roster), check_leaks=False, releases=releases
+        dest,
+        secret=secret,
+        roster=read_roster(roster),
+        check_leaks=False,
+        releases=releases,
+        id_pattern=ID_PATTERN,
     )
 
 
@@ -186,6 +195,48 @@ def test_class_edition_ships_data_not_generators(class_edition, class_files):
         # test failed by chance when base64 data happened to contain "s003")
         assert sid not in _json_strings(json.loads((folder / PERSONAL_FILE).read_text()))
     assert secret.key.hex() not in (class_edition.dest / "EXPORT.md").read_text()
+
+
+def test_the_class_edition_checks_ids_against_the_instructors_pattern(
+    class_edition, class_files, tmp_path, capsys
+):
+    """ "abc" is not a student ID of this class: the self-check says so when it is loaded and
+    in check.all(), and check.submit() and course submit refuse it (issue 26)."""
+    folder = class_edition.folder / "course" / "materials" / "exercises" / "01_least_squares"
+    assert json.loads((folder / CLASS_FILE).read_text())["id_pattern"] == ID_PATTERN
+    check = Assignment.load("01_least_squares", student_id="abc", path=folder)
+    note = capsys.readouterr().out
+    assert "'abc' is not a student ID of this class" in note and ID_PATTERN in note
+    assert "check.submit() refuses it" in note
+    with pytest.raises(ValueError, match="not a student ID of this class"):
+        check.data("survey")
+    saved = tmp_path / "01_least_squares.ipynb"
+    shutil.copyfile(folder / "01_least_squares.ipynb", saved)
+    assert check.submit(saved, tmp_path) is None
+    assert "Not submitted: STUDENT_ID 'abc' is not a student ID of this class" in (
+        capsys.readouterr().out
+    )
+    with pytest.raises(Refused, match="not a student ID of this class"):
+        make_submission(saved, "abc", "01_least_squares", tmp_path, None, ID_PATTERN)
+    assert not list(tmp_path.glob("abc_*"))
+    # a registered ID: no note
+    Assignment.load("01_least_squares", student_id="s001", path=folder)
+    assert capsys.readouterr().out == ""
+    # without a pattern (the public edition), only the placeholder is worth a note
+    public = ROOT / "exercises" / "01_least_squares"
+    Assignment.load("01_least_squares", student_id="abc", path=public)
+    assert capsys.readouterr().out == ""
+    Assignment.load("01_least_squares", student_id=PLACEHOLDER_ID, path=public)
+    assert "still the placeholder" in capsys.readouterr().out
+
+
+def test_export_refuses_an_id_pattern_the_roster_does_not_match(tmp_path, class_files):
+    secret, roster = class_files
+    with pytest.raises(ExportError, match="1 roster ID"):
+        export(tmp_path / "a", secret=secret, roster=read_roster(roster), id_pattern=r"s[0-9]{3}")
+    with pytest.raises(ExportError, match="not a regular expression"):
+        export(tmp_path / "b", secret=secret, roster=read_roster(roster), id_pattern="s[0-9")
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
 def test_public_edition_is_the_self_learners_course(public_edition):

@@ -27,9 +27,10 @@ The flow
    :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`, the class
    report ``report.html`` of :mod:`.batch.classreport`), the short
    answers' marking file (:mod:`.batch.marks`) and the LMS files (:mod:`.batch.roster`) are
-   written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers.
+   written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers
+   (their side: :mod:`.batch.clusterworker`), which never receive the class key.
    ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
-   one gradebook.
+   one gradebook; ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter.
 
 Modules
 -------
@@ -46,7 +47,7 @@ notebook
 tripwire
     Forbidden library functions: a warning in the self-check, a report from a grading child.
 cli
-    ``course release | grade | gradebook | export | secret | submit``: the entry points into
+    ``course release | grade | gradebook | mark | export | secret | submit``: the entry points into
     the rooms.
 
 ``authoring/`` what the instructor writes and hands out
@@ -59,9 +60,11 @@ cli
 ``batch/`` ``course grade`` in the trusted parent
     driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
     student), plan (which of a submission's cells run, in which order), results (the typed
-    results), reports (feedback, grades, results log), marks
-    (short answers), identity (whose submission is whose), roster (the class, LMS grade files),
-    cluster (Dask), gradebook (several assignments in one file), classreport (``report.html``).
+    results), reports (feedback, grades, results log), marks (short answers), marking (the
+    marking view of ``course mark``), identity (whose submission is whose), roster (the class,
+    LMS grade files), late (due dates and late penalties), cluster (Dask: the driver's side),
+    clusterworker (a Dask worker's side), gradebook (several assignments in one file),
+    classreport (``report.html``).
 ``sandbox/`` the sandboxed children
     parent (the grader's handle), forkserver (the warm process children fork from), runner
     (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,

@@ -1,5 +1,5 @@
-"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``export`` and
-``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``mark``,
+``export`` and ``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -78,7 +78,9 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
+    from course.grading.batch.cluster import ClusterError, ConnectionFiles
     from course.grading.batch.driver import SelectionError, grade
+    from course.grading.batch.late import LateError, parse_due, parse_policy
     from course.grading.batch.marks import MarksError
     from course.grading.batch.options import GradeOptions, available_cpus
     from course.grading.sandbox.isolation import IsolationError
@@ -100,10 +102,20 @@ def _grade(args) -> int:
     if not submissions.is_dir():
         print(f"course grade: {submissions} is not a folder of submissions", file=sys.stderr)
         return 2
+    try:
+        late_options = {
+            "due": parse_due(args.due) if args.due else None,
+            "late_policy": parse_policy(args.late_policy) if args.late_policy else None,
+            "submitted_at": args.submitted_at,
+        }
+    except LateError as exc:
+        print(f"course grade: {exc}", file=sys.stderr)
+        return 2
     class_options = _class_options(args)
     if class_options is None:
         return 2
     options = GradeOptions(
+        **late_options,
         **class_options,
         jobs=args.jobs or available_cpus(),
         timeout=args.timeout,
@@ -112,6 +124,10 @@ def _grade(args) -> int:
         progress=not args.no_progress,
         unsafe_no_isolation=args.unsafe_no_isolation,
         cluster=args.cluster,
+        cluster_files=ConnectionFiles(
+            *(Path(f) if f else None for f in (args.tls_ca_file, args.tls_cert, args.tls_key))
+        ),
+        insecure_cluster=args.insecure_cluster,
         announce=lambda text: print(text, file=sys.stderr),
         short_answers=Path(args.short_answers) if args.short_answers else None,
         students=frozenset(args.student) if args.student else None,
@@ -121,7 +137,7 @@ def _grade(args) -> int:
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except (MarksError, SelectionError) as exc:
+    except (MarksError, SelectionError, LateError, ClusterError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -185,7 +201,67 @@ def _gradebook(args) -> int:
     columns = ", ".join(f"{c.name} ({c.max_points:g})" for c in book.columns)
     print(f"Gradebook of {len(book.columns)} assignment(s): {columns}")
     print("Wrote " + ", ".join(str(p) for p in written))
+    unmarked = book.unmarked()
+    if unmarked:
+        print(
+            f"WARNING: {sum(unmarked.values())} short answer(s) NOT marked yet count as 0 ("
+            + ", ".join(f"{name}: {n}" for name, n in unmarked.items())
+            + "); mark them (course mark OUT_DIR), merge them (course grade … --short-answers), "
+            "then build the gradebook again"
+        )
     return 0
+
+
+def _mark(args) -> int:
+    import subprocess
+    from importlib.util import find_spec
+
+    from course.grading.batch.marking import write_marking_notebook
+    from course.grading.batch.marks import MarksError
+
+    try:
+        notebook = write_marking_notebook(Path(args.out_dir))
+    except MarksError as exc:
+        print(f"course mark: {exc}", file=sys.stderr)
+        return 2
+    if args.no_open:
+        print(f"Marking notebook: {notebook} (open it in Jupyter and run its cell)")
+        return 0
+    module = "jupyterlab" if args.app == "lab" else "notebook"
+    if find_spec(module) is None or find_spec("ipywidgets") is None:
+        print(
+            f"course mark: the marking view needs {module} and ipywidgets for {sys.executable} "
+            '(pip install -e ".[notebooks]"); the notebook is ready at ' + str(notebook),
+            file=sys.stderr,
+        )
+        return 2
+    command = [sys.executable, "-m", module, notebook.name]
+    command += ["--no-browser"] if args.no_browser else []
+    print(f"Opening {notebook} in Jupyter {args.app} (Ctrl-C to stop)")
+    return subprocess.call(command, cwd=notebook.parent)
+
+
+def _add_mark_command(subparsers) -> None:
+    p_mark = subparsers.add_parser(
+        "mark",
+        help="mark the short answers of a graded assignment in Jupyter",
+        description="Write OUT_DIR/marking.ipynb (unless it exists) and open it in JupyterLab: "
+        "a view of OUT_DIR/short_answers.csv that shows one answer at a time, anonymous by "
+        "default, with the rubric, a points box and a comment box. Every mark is saved into "
+        "short_answers.csv at once; merge them with `course grade NAME SUBMISSIONS --out "
+        "OUT_DIR --short-answers OUT_DIR/short_answers.csv`.",
+    )
+    p_mark.add_argument("out_dir", metavar="OUT_DIR", help="the --out folder of `course grade`")
+    p_mark.add_argument(
+        "--app", default="lab", choices=["lab", "notebook"], help="Jupyter front end"
+    )
+    p_mark.add_argument(
+        "--no-browser", action="store_true", help="start Jupyter without opening a browser"
+    )
+    p_mark.add_argument(
+        "--no-open", action="store_true", help="only write the notebook (do not start Jupyter)"
+    )
+    p_mark.set_defaults(func=_instructor_only(_mark))
 
 
 def _export(args) -> int:
@@ -197,7 +273,11 @@ def _export(args) -> int:
         secret = None if args.no_secret else load_secret(args.secret)
         roster = read_roster(args.roster) if args.roster else None
         result = export(
-            args.dest, root=find_course_dir(args.course_dir), secret=secret, roster=roster
+            args.dest,
+            root=find_course_dir(args.course_dir),
+            secret=secret,
+            roster=roster,
+            id_pattern=args.id_pattern,
         )
     except (ExportError, SecretError, RosterError, OSError) as exc:
         print(f"course export: {exc}", file=sys.stderr)
@@ -223,6 +303,7 @@ def _export(args) -> int:
 def _submit(args) -> int:
     from course.grading.authoring.personal import PersonalData
     from course.grading.student.submit import Refused, make_submission, unanswered_questions
+    from course.grading.vocabulary import id_pattern_in
 
     notebook = Path(args.notebook)
     if not notebook.is_file():
@@ -231,7 +312,12 @@ def _submit(args) -> int:
     try:
         personal = PersonalData.read(notebook.parent)
         path, digest, nb = make_submission(
-            notebook, args.id, None, Path(args.out) if args.out else None, personal
+            notebook,
+            args.id,
+            None,
+            Path(args.out) if args.out else None,
+            personal,
+            id_pattern_in(notebook.parent),
         )
     except (Refused, ValueError) as exc:
         print(f"course submit: not submitted: {exc}", file=sys.stderr)
@@ -287,6 +373,14 @@ def _add_class_commands(subparsers) -> None:
         help="ignore $COURSE_SECRET_FILE: a self-learner edition",
     )
     p_ex.add_argument("--roster", default=None, help="CSV of the class (id, name, email)")
+    p_ex.add_argument(
+        "--id-pattern",
+        default=None,
+        metavar="REGEX",
+        help="the form of this class's student IDs, a regular expression a whole ID matches "
+        "(e.g. 's[0-9]{6}'): the self-check says when STUDENT_ID does not match it and "
+        "check.submit() refuses it; every roster ID must match",
+    )
     p_ex.add_argument("--course-dir", help=COURSE_DIR_HELP)
     p_ex.set_defaults(func=_instructor_only(_export))
 
@@ -431,14 +525,60 @@ def add_commands(subparsers) -> None:
         "--short-answers",
         metavar="FILE",
         default=None,
-        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, with the "
-        "points column filled) into the grades and the feedback; a bad row refuses the import",
+        help="merge the marks of a filled short-answer file (OUT/short_answers.csv, filled by "
+        "`course mark OUT` or in a spreadsheet) into the grades and the feedback; a bad row "
+        "refuses the import",
+    )
+    p_gr.add_argument(
+        "--due",
+        metavar="DATE",
+        default=None,
+        help="the due date, ISO 8601 with its time zone (2026-10-20T23:59+02:00); default: "
+        "due= in checks.py. Adds the late and penalty columns to grades.csv",
+    )
+    p_gr.add_argument(
+        "--late-policy",
+        metavar="RULES",
+        default=None,
+        help="late deduction, e.g. percent-per-day:10,cap:50 (percent of the points possible "
+        "per started day, at most cap) or zero-after:DATE; default: late_policy= in checks.py, "
+        "else none (late work is marked, nothing deducted)",
+    )
+    p_gr.add_argument(
+        "--submitted-at",
+        metavar="FILE",
+        default=None,
+        help="when each submission was handed in: a CSV with columns id,submitted_at (or a "
+        "Moodle grading worksheet), or 'file-times' for the files' modification times; "
+        "without it only Canvas's _LATE_ in file names marks late work",
     )
     p_gr.add_argument(
         "--cluster",
         metavar="ADDRESS",
-        help="grade on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786), one "
-        "task per student; needs the [cluster] extra",
+        help="grade on the Dask distributed scheduler at ADDRESS, one task per student: "
+        "tls://host:8786 with the --tls-* files, or tcp://127.0.0.1:8786 on this machine; "
+        "needs the [cluster] extra (docs/instructors/cluster.md)",
+    )
+    p_gr.add_argument(
+        "--tls-ca-file",
+        metavar="FILE",
+        default=None,
+        help="--cluster: the certificate authority that signed the scheduler's certificate",
+    )
+    p_gr.add_argument(
+        "--tls-cert", metavar="FILE", default=None, help="--cluster: this client's certificate"
+    )
+    p_gr.add_argument(
+        "--tls-key",
+        metavar="FILE",
+        default=None,
+        help="--cluster: this client's private key (if not in the --tls-cert file)",
+    )
+    p_gr.add_argument(
+        "--insecure-cluster",
+        action="store_true",
+        help="--cluster: accept a plain tcp:// scheduler on another machine (submissions and "
+        "assignment files then cross the network unencrypted; only on a private network)",
     )
     p_gr.add_argument(
         "--unsafe-no-isolation",
@@ -468,4 +608,5 @@ def add_commands(subparsers) -> None:
         help="0 for an assignment a student did not submit (default: blank)",
     )
     p_gb.set_defaults(func=_instructor_only(_gradebook))
+    _add_mark_command(subparsers)
     _add_class_commands(subparsers)

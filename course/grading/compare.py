@@ -19,7 +19,16 @@ import numpy as np
 
 from course.grading.codec import Band, _named_type
 
-__all__ = ["Verdict", "binomial_band", "compare", "describe"]
+__all__ = [
+    "SINGLE_PRECISION",
+    "Verdict",
+    "binomial_band",
+    "chosen_hint",
+    "compare",
+    "describe",
+    "fieldwise_mistake",
+    "single_precision",
+]
 
 
 @dataclass(frozen=True)
@@ -241,6 +250,57 @@ def _factor_text(r: float, frac: Fraction | None) -> str:
     return f"too {'large' if big else 'small'} by a factor ≈ {shown}"
 
 
+#: The diagnosis of an answer computed in single precision, the same at self-check and at
+#: grading: tolerances are set for float64 (about 16 significant digits); float32 keeps about
+#: 7, so a right method in float32 can miss a tolerance by its round-off alone.
+SINGLE_PRECISION = (
+    "computed in single precision (float32), which keeps about 7 significant digits: too few "
+    "for this tolerance; compute in float64 (numpy's default) and check again"
+)
+#: Significant bits of a half-precision number: values that need no more are left alone
+#: (0.5, 1.25, small integers are exact in every precision and tell nothing).
+_HALF_BITS = 11
+
+
+def chosen_hint(messages, mistake_hints) -> str | None:
+    """The hint the diagnosis of a failed answer chooses, or None for the question's staged
+    hints (the same rule in the self-check and in the grading feedback).
+
+    ``messages`` are the failure messages (one per failed case); ``mistake_hints`` maps a
+    declared mistake's message to its own hint. A named mistake shows its hint (dividing by S
+    where sqrt(S) is meant is not helped by "update before predicting"); an answer computed in
+    single precision shows none ('') -- its method may well be right.
+    """
+    messages = [str(m) for m in messages if m]
+    for mistake, hint in mistake_hints.items():
+        if hint and any(mistake in m for m in messages):
+            return str(hint)
+    if messages and all(SINGLE_PRECISION in m for m in messages):
+        return ""
+    return None
+
+
+def single_precision(value: np.ndarray) -> bool:
+    """Whether ``value`` was computed in float32 (or float16): its dtype says so, or every
+    non-integral element is exactly a float32 number and one needs more bits than a float16.
+
+    The codec keeps an array's dtype but turns a numpy scalar into a Python float, so a
+    float32 scalar arrives as a float64 holding a float32 number; a number computed in float64
+    is exactly a float32 number with probability about 2**-29.
+    """
+    arr = np.asarray(value)
+    if arr.dtype in (np.float32, np.float16, np.complex64):
+        return True
+    if arr.dtype.kind != "f":
+        return False
+    x = arr[np.isfinite(arr)].astype(float)
+    x = x[x != np.round(x)]
+    if x.size == 0 or not bool(np.all(x.astype(np.float32).astype(float) == x)):
+        return False
+    mantissa, _ = np.frexp(x)
+    return bool(np.any(np.mod(mantissa * 2.0**_HALF_BITS, 1.0) != 0))
+
+
 def _diagnose(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
     """:func:`_kind_of_wrong`, or '' should it fail: a diagnosis must never break a verdict."""
     try:
@@ -257,11 +317,20 @@ def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> st
     lo_rtol = max(rtol, 1e-7)  # relations hold only to round-off, whatever the tolerance
     ef = e.astype(complex if e.dtype.kind == "c" else float)
     gf = g.astype(ef.dtype)
-    if e.ndim == 2 and e.shape[0] == e.shape[1] > 1 and _close(ef, gf.T, lo_rtol, atol):
+
+    # an answer that nearly matches as it is (round-off, a symmetric matrix, a palindrome)
+    # would "match" after a transform that leaves it as it was: no relation is named then
+    near = _close(ef, gf, 4 * lo_rtol, 4 * atol)
+    if (
+        not near
+        and e.ndim == 2
+        and e.shape[0] == e.shape[1] > 1
+        and _close(ef, gf.T, lo_rtol, atol)
+    ):
         return "transposed: rows and columns are swapped"
-    if _close(ef, -gf, lo_rtol, atol):
+    if not near and _close(ef, -gf, lo_rtol, atol):
         return "the sign is flipped"
-    if e.ndim == 1 and e.size > 1 and e.dtype.kind != "c":
+    if not near and e.ndim == 1 and e.size > 1 and e.dtype.kind != "c":
         if _close(ef, gf[::-1], lo_rtol, atol):
             return "the right values in reverse order"
         if _close(np.sort(ef), np.sort(gf), lo_rtol, atol):
@@ -616,7 +685,7 @@ class _Clear(StructuralWalk):
         unfinished = not_finite(label, g, bad)
         if unfinished:
             return Verdict(False, unfinished, detail)
-        kind = _diagnose(e, g, rtol, atol)
+        kind = SINGLE_PRECISION if single_precision(arr) else _diagnose(e, g, rtol, atol)
         if not kind and bad.size > 1 and 0 < int(np.sum(bad)) < bad.size:
             sub = _diagnose(e[bad], g[bad], rtol, atol)
             kind = f"on the wrong elements {sub}" if sub else ""
@@ -630,14 +699,48 @@ def _string_detail(expected: str, got, label: str) -> str:
     return f"{label}: expected {expected!r}, got {got!r}"[:300]
 
 
-def _match_mistake(mistakes, got, rtol, atol) -> str | None:
+def _match_mistake(mistakes, expected, got, rtol, atol) -> str | None:
+    """The message of the first mistake ``got`` matches: as a whole, or else field-wise
+    (:func:`fieldwise_mistake`)."""
     for message, wrong in mistakes:
         try:
             if compare(wrong, got, rtol, atol).ok:
                 return str(message)
         except TypeError:
             continue
+    if not isinstance(expected, (tuple, list)):
+        return None
+    for message, wrong in mistakes:
+        if isinstance(wrong, (tuple, list)) and fieldwise_mistake(
+            expected, expected, wrong, got, lambda want, item: compare(want, item, rtol, atol).ok
+        ):
+            return str(message)
     return None
+
+
+def fieldwise_mistake(like, right, wrong, got, same) -> bool:
+    """Whether the result ``got`` makes a mistake in some of its fields and is right in the
+    others: every item matches its ``right`` item or its ``wrong`` one, and one matches only
+    the ``wrong`` one. ``like`` is a value of the expected type (a tuple or list), ``same(want,
+    item)`` compares one item with one item of ``right`` or ``wrong``.
+
+    So a mistake in one field (the filtered variance for P, with K right) is named although
+    the whole result matches neither the answer nor the mistake.
+    """
+    items = sequence_items(like, got)
+    if items is None or not len(items) == len(right) == len(wrong) > 1:
+        return False
+    named = False
+    for e, w, g in zip(right, wrong, items):
+        try:
+            if same(e, g):
+                continue
+            if not same(w, g):
+                return False
+        except TypeError:
+            return False
+        named = True
+    return named
 
 
 def compare(
@@ -661,8 +764,9 @@ def compare(
     The verdict's ``message`` never contains an expected value: it says what is wrong in kind
     (type, shape or length, NaN, the sign, a constant factor, transposed, another order, off
     by one, a near miss) with the tolerance. ``mistakes`` is a sequence of ``(message, wrong
-    value)``: when ``got`` matches a wrong value (and not ``expected``) its message is shown.
-    ``detail`` (expected and got, with enough digits to differ) is for instructors only;
+    value)``: when ``got`` matches a wrong value (and not ``expected``) its message is shown;
+    so it is when a tuple is right in some fields and makes the mistake in the others
+    (:func:`fieldwise_mistake`). ``detail`` (expected and got, with enough digits to differ) is for instructors only;
     ``reveal=False`` leaves it without expected values too.
 
     Examples
@@ -673,7 +777,7 @@ def compare(
     verdict = _Clear(rtol, atol).walk(expected, got, path)
     if verdict.ok:
         return verdict
-    named = _match_mistake(mistakes, got, rtol, atol) if mistakes else None
+    named = _match_mistake(mistakes, expected, got, rtol, atol) if mistakes else None
     message = f"{_label(path)}: {named}" if named else verdict.message
     return Verdict(False, message, verdict.detail if reveal else verdict.message)
 

@@ -20,6 +20,7 @@ from typing import Any
 __all__ = [
     "ABNORMAL",
     "CHECKS_FILE",
+    "CLASS_FILE",
     "DEMO_STUDENT_ID",
     "PLACEHOLDER_ID",
     "PUBLIC_FORMAT",
@@ -36,6 +37,9 @@ __all__ = [
     "SubmissionStatus",
     "answer_cell_id",
     "check_student_id",
+    "compile_id_pattern",
+    "id_off_pattern",
+    "id_pattern_in",
     "is_student_id",
     "visible_text",
 ]
@@ -81,10 +85,53 @@ def is_student_id(text) -> bool:
     return isinstance(text, str) and _STUDENT_ID.fullmatch(text) is not None
 
 
-def check_student_id(student_id, where: str = "STUDENT_ID") -> str:
+#: A graded class's rules for the student's side (``course export --id-pattern``), written
+#: beside each assignment's ``checks.json`` in the class's edition.
+CLASS_FILE = "class.json"
+
+
+def compile_id_pattern(pattern) -> re.Pattern:
+    """The instructor's ID pattern (a Python regular expression that a whole ID must match),
+    compiled; ValueError when it is not one."""
+    if not isinstance(pattern, str) or not pattern.strip():
+        raise ValueError("the student ID pattern is empty: give a regular expression")
+    try:
+        return re.compile(pattern)
+    except re.error as exc:
+        raise ValueError(
+            f"the student ID pattern {pattern!r} is not a regular expression ({exc})"
+        ) from None
+
+
+def id_pattern_in(folder) -> str | None:
+    """The class's student ID pattern from ``folder/class.json`` (None: no pattern set, or
+    no readable file: the self-check then checks only the ID's form)."""
+    try:
+        content = json.loads((Path(folder) / CLASS_FILE).read_text("utf-8"))
+        pattern = content.get("id_pattern") if isinstance(content, dict) else None
+        compile_id_pattern(pattern)
+    except (OSError, ValueError):
+        return None
+    return pattern
+
+
+def id_off_pattern(student_id: str, pattern: str | None, where: str = "STUDENT_ID") -> str:
+    """What is wrong with ``student_id`` against the class's ``pattern`` ('' when it matches,
+    or when there is no pattern)."""
+    if not pattern or compile_id_pattern(pattern).fullmatch(student_id):
+        return ""
+    return (
+        f"{where} {student_id!r} is not a student ID of this class: your instructor's IDs "
+        f"match the pattern {pattern}. Set it to your student ID exactly as registered and "
+        "run that cell again"
+    )
+
+
+def check_student_id(student_id, where: str = "STUDENT_ID", pattern: str | None = None) -> str:
     """The stripped ``student_id``, or ValueError saying what is wrong and what to do.
 
-    Refuses a missing ID, the release's placeholder, the demo ID and malformed text.
+    Refuses a missing ID, the release's placeholder, the demo ID, malformed text and, when
+    the class has one (``pattern``, see :func:`id_pattern_in`), an ID off its pattern.
     """
     sid = "" if student_id is None else str(student_id).strip()
     if not sid:
@@ -100,6 +147,9 @@ def check_student_id(student_id, where: str = "STUDENT_ID") -> str:
         )
     if not is_student_id(sid):
         raise ValueError(f"{where} {sid!r} is not a valid student ID ({STUDENT_ID_RULE})")
+    off = id_off_pattern(sid, pattern, where)
+    if off:
+        raise ValueError(off)
     return sid
 
 
@@ -257,6 +307,7 @@ class PublicQuestion:
     hidden_cases: int = 0
     signature: dict | None = None  # type and shape of a value that is not shipped
     options: list | None = None  # a choice question's options (encoded plain data)
+    mistake_hints: dict = field(default_factory=dict)  # a declared mistake's message -> its hint
 
     @property
     def hints(self) -> list[str]:
@@ -286,6 +337,8 @@ class PublicQuestion:
             out["signature"] = self.signature
         if self.options is not None:
             out["options"] = self.options
+        if self.mistake_hints:
+            out["mistake_hints"] = dict(self.mistake_hints)
         return out
 
     @classmethod
@@ -307,6 +360,7 @@ class PublicQuestion:
             hidden_cases=int(d.get("hidden_cases", 0)),
             signature=d.get("signature"),
             options=d.get("options"),
+            mistake_hints={str(k): str(v) for k, v in d.get("mistake_hints", {}).items()},
         )
 
 

@@ -19,7 +19,8 @@ fit
 overall_model_test
     ``T = ê^T Qyy^{-1} ê ~ chi2(m - n)`` under H0.
 w_tests
-    One normalised residual per observation, two-sided normal test.
+    One normalised residual per observation, two-sided normal test (or
+    Student's t when the variance factor is estimated).
 data_snooping
     Remove the most suspicious observation and refit, until nothing is rejected.
 mdb
@@ -27,6 +28,18 @@ mdb
     :func:`course.chi2.noncentrality`).
 confidence_band
     Fitted values at new design rows with their confidence half-widths.
+glr_test
+    The test of a q-dimensional alternative ``E(y) = Ax + C∇`` (T_q, or F with
+    an estimated variance); ``alternative_law`` gives its power.
+b_method
+    Baarda's B-method: the level of a q-dimensional test that detects the
+    w-tests' reference bias with the same power.
+minimal_detectable_bias
+    The minimal detectable biases of a q-dimensional alternative;
+    ``external_reliability`` their effect on x̂.
+dia
+    Detection, identification and adaptation; ``dia_monte_carlo`` the law of
+    the DIA estimator.
 load_sea_level
     The four MUDE sea-level data sets shipped with the course.
 load_mauna_loa_co2
@@ -49,7 +62,18 @@ diagonal Qyy; the m x m matrices ``Qee`` and ``Qyy_hat`` are computed when
 asked for.
 """
 
+from course.lsq._alternatives import (
+    BMethod,
+    ExternalReliability,
+    MinimalDetectableBias,
+    alternative_law,
+    b_method,
+    external_reliability,
+    glr_test,
+    minimal_detectable_bias,
+)
 from course.lsq._data import load_mauna_loa_co2, load_sea_level
+from course.lsq._dia import DIAMonteCarlo, DIAResult, dia, dia_monte_carlo
 from course.lsq._fit import LeastSquaresFit, fit
 from course.lsq._reliability import ConfidenceBand, confidence_band, mdb
 from course.lsq._tests import (
@@ -61,16 +85,28 @@ from course.lsq._tests import (
 )
 
 __all__ = [
+    "BMethod",
     "ConfidenceBand",
+    "DIAMonteCarlo",
+    "DIAResult",
+    "ExternalReliability",
     "LeastSquaresFit",
+    "MinimalDetectableBias",
     "SnoopingResult",
     "WTestResult",
+    "alternative_law",
+    "b_method",
     "confidence_band",
     "data_snooping",
+    "dia",
+    "dia_monte_carlo",
+    "external_reliability",
     "fit",
+    "glr_test",
     "load_mauna_loa_co2",
     "load_sea_level",
     "mdb",
+    "minimal_detectable_bias",
     "overall_model_test",
     "w_tests",
 ]

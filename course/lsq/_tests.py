@@ -10,10 +10,12 @@ import html
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 from scipy import linalg as sla
+from scipy import stats
 
 from course.chi2 import residual_norm_law
 from course.lsq._fit import (
@@ -210,7 +212,13 @@ class WTestResult:
     alpha : float
         Level of significance of each single test.
     null : scipy.stats frozen distribution
-        ``norm()``, the law of each ``w_i`` under H0.
+        ``norm()``, the law of each ``w_i`` under H0; ``t(m - n - 1)`` for the
+        tests with an estimated variance.
+    variance : {"known", "estimated"}
+        Whether ``Qyy`` was taken as known (Baarda's w) or its factor σ² was
+        estimated (the Student statistic ``t_i``).
+    dof : int or None
+        Degrees of freedom of the t law (``m - n - 1``); None for known variance.
     """
 
     statistic: np.ndarray
@@ -221,6 +229,8 @@ class WTestResult:
     testable: np.ndarray
     alpha: float
     null: Any
+    variance: str = "known"
+    dof: int | None = None
 
     def __iter__(self) -> Iterator[np.ndarray]:
         """``statistic, pvalue = result``, as scipy's test results unpack."""
@@ -264,8 +274,9 @@ class WTestResult:
 
     def __repr__(self) -> str:
         i = self.largest
+        variance = "" if self.variance == "known" else f", variance='estimated', dof={self.dof}"
         return (
-            f"WTestResult(m={self.statistic.shape[0]}, alpha={format_number(self.alpha)}, "
+            f"WTestResult(m={self.statistic.shape[0]}{variance}, alpha={format_number(self.alpha)}, "
             f"critical_value={format_number(self.critical_value, 5)}, largest={i}, "
             f"w_largest={format_number(float(self.statistic[i]), 5)}, rejected={self.rejected})"
         )
@@ -300,13 +311,26 @@ def _w_quantities(fit: LeastSquaresFit):
     return numerator, denom2, denom2 > _UNTESTABLE_RTOL * weight
 
 
-def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
-    """Baarda's w_i = numerator_i / sqrt(denom2_i) and their two-sided tests."""
+def _w_test_result(
+    numerator, denom2, weight, alpha: float, squared_norm: float | None = None, dof: int = 0
+) -> WTestResult:
+    """Baarda's w_i = numerator_i / sqrt(denom2_i) and their two-sided tests.
+
+    With ``squared_norm`` (the residuals' ê^T Qyy^{-1} ê) and ``dof`` (m - n - 1) the
+    variance factor is estimated: each w_i becomes Student's t_i (see :func:`w_tests`).
+    """
     testable = denom2 > _UNTESTABLE_RTOL * weight
     m = numerator.shape[0]
     w = np.full(m, np.nan)
     w[testable] = numerator[testable] / np.sqrt(denom2[testable])
     null = _standard_normal()
+    if squared_norm is not None:
+        # sigma² estimated under the alternative of test i: (Ω - w_i²)/(m - n - 1); w_i² <= Ω
+        # always (the alternative's residuals are a projection), so only round-off makes it < 0.
+        rest = np.maximum(squared_norm - w[testable] ** 2, 0.0)
+        with np.errstate(divide="ignore"):
+            w[testable] = w[testable] / np.sqrt(rest / dof)
+        null = _student(dof)
     decision = decide(null, w[testable], alpha, "two-sided")
     critical = decision.critical_value.upper
     pvalue = np.full(m, np.nan)
@@ -328,10 +352,18 @@ def _w_test_result(numerator, denom2, weight, alpha: float) -> WTestResult:
         testable=_readonly(testable),
         alpha=alpha,
         null=null,
+        variance="known" if squared_norm is None else "estimated",
+        dof=None if squared_norm is None else dof,
     )
 
 
-def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
+@lru_cache(maxsize=64)
+def _student(dof: int):
+    # Freezing a scipy distribution costs ~1 ms; Monte Carlo loops reuse it.
+    return stats.t(dof)
+
+
+def w_tests(fit: LeastSquaresFit, alpha: float = 0.05, variance: str = "known") -> WTestResult:
     r"""Baarda's w-test of every observation for a single outlier.
 
     Parameters
@@ -340,6 +372,11 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
         Result of :func:`fit`.
     alpha : float
         Level of significance of each (two-sided) test.
+    variance : {"known", "estimated"}
+        ``"known"`` (default): ``Qyy`` is the covariance, ``w_i ~ N(0, 1)``.
+        ``"estimated"``: ``Qyy`` is known up to a factor σ², estimated from
+        the residuals; each test uses Student's ``t_i ~ t(m - n - 1)`` (needs
+        ``m - n >= 2``).
 
     Returns
     -------
@@ -352,13 +389,15 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     Raises
     ------
     ValueError
-        If ``m - n = 0`` (nothing can be tested).
+        If ``m - n = 0`` (nothing can be tested), or ``m - n = 1`` with
+        ``variance="estimated"``.
 
     See Also
     --------
     overall_model_test : The test of the whole model.
     data_snooping : The w-tests repeated after each removal.
     mdb : The smallest outlier each w-test finds with a given power.
+    glr_test : The same test for a bias of any dimension (``w_i² = T_1``).
 
     Notes
     -----
@@ -388,6 +427,21 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     Reference: W. Baarda (1968), *A testing procedure for use in geodetic
     networks*, Netherlands Geodetic Commission.
 
+    With the variance factor unknown (:math:`Q_{yy} = \sigma^2 G`, G known),
+    σ² is estimated under the alternative of test i, where observation i has
+    a bias parameter of its own: :math:`\hat\sigma_i^2 = (\Omega - w_i^2)/(m - n - 1)`
+    with :math:`\Omega = \hat e^{\mathsf T} G^{-1} \hat e` (the residual norm
+    drops by exactly :math:`w_i^2` when the bias is estimated). Then
+
+    .. math:: t_i = \frac{w_i}{\hat\sigma_i} \sim t(m - n - 1) \text{ under H0},
+
+    numerator and denominator being independent. Pope (1976) divides by the
+    estimate under H0 instead, :math:`\tau_i = w_i / \sqrt{\Omega/(m - n)}`, whose
+    law is his τ distribution. The two are one test:
+    :math:`t_i^2 = (m - n - 1)\,\tau_i^2 / (m - n - \tau_i^2)` is increasing in
+    :math:`|\tau_i|`, so both reject the same observations at the same level and
+    give the same p-values (checked in the course's tests).
+
     Examples
     --------
     A line observed with sigma = 0.1 and an outlier of 0.6 at observation 6:
@@ -401,8 +455,21 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05) -> WTestResult:
     """
     fit = _check_fit(fit)
     alpha = as_probability(alpha)
+    if not isinstance(variance, str) or variance not in ("known", "estimated"):
+        raise ValueError(
+            f"variance must be 'known' (w ~ N(0, 1)) or 'estimated' (sigma² estimated from "
+            f"the residuals, t ~ t(m - n - 1)), got {variance!r}"
+        )
     _require_redundancy(fit, "w-test")
-    return _w_test_result(*fit._w_parts, alpha)
+    if variance == "known":
+        return _w_test_result(*fit._w_parts, alpha)
+    if fit.redundancy < 2:
+        raise ValueError(
+            "w-tests with an estimated variance need m - n >= 2: with m - n = 1 the "
+            "alternative of each test explains every residual and leaves nothing to "
+            "estimate sigma² from; use variance='known'"
+        )
+    return _w_test_result(*fit._w_parts, alpha, fit.squared_norm, fit.redundancy - 1)
 
 
 # ---------------------------------------------------------------------------

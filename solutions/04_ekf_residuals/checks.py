@@ -109,11 +109,18 @@ _NO_FILTERS = [
 ]
 
 
+# q = r = 1: P(t|t-1) = (1 + sqrt 5)/2, K = P/(P + 1) = (sqrt 5 - 1)/2, and the filtered
+# variance P(t|t) = (1 - K) P(t|t-1) = (sqrt 5 - 1)/2. The mistake is named field-wise: P(t|t)
+# for P with K right, or K computed from P(t|t) as well.
+_P_FILTERED = float((np.sqrt(5) - 1) / 2)
 _Q1_MISTAKES = [
     Mistake(
         "looks like the FILTERED variance P(t|t): the question asks for the prediction "
         "variance P(t|t-1), the fixed point of update + predict",
-        lambda: (float((np.sqrt(5) - 1) / 2 * (1 + np.sqrt(5)) / 2), float((np.sqrt(5) - 1) / 2)),
+        lambda: (_P_FILTERED, _P_FILTERED / (_P_FILTERED + 1)),
+        hint="P(t|t-1) is the variance BEFORE the measurement update: one step of the "
+        "recursion is update (P(t|t)) then predict (P(t|t) + q), and P(t|t-1) is its fixed "
+        "point; K = P(t|t-1)/(P(t|t-1) + r).",
     ),
 ]
 
@@ -138,6 +145,29 @@ def q1():
     return SteadyState(float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
 
 
+_Q2_NORMALISE = (
+    "Normalise each innovation by the square root of its own variance S_t = P(t|t-1) + r "
+    "(not by S_t, not by P). Return one value per sample."
+)
+
+
+def _q2_wrong(y, a, q, r, m0, p0, scale=lambda S, P: np.sqrt(S), predict_first=False):
+    """q2's filter with one slip: another scale of the innovation, or a prediction before the
+    first update (the wrong answers the feedback names)."""
+    x, P = float(m0), float(p0)
+    z = np.empty(len(y))
+    for t, y_t in enumerate(np.asarray(y, dtype=float)):
+        if predict_first:
+            x, P = a * x, a**2 * P + q
+        S = P + r
+        K = P / S
+        z[t] = (y_t - x) / scale(S, P)
+        x, P = x + K * (y_t - x), (1 - K) * P
+        if not predict_first:
+            x, P = a * x, a**2 * P + q
+    return z
+
+
 @CHECKS.function(
     "q2",
     func="normalized_innovations",
@@ -148,10 +178,35 @@ def q1():
     hint=[
         "Follow the equations above the question in their order: the first innovation uses "
         "x(0|-1) = m0 and P(0|-1) = p0, so update with y_t BEFORE predicting.",
-        "Normalise each innovation by the square root of its own variance S_t = P(t|t-1) + r "
-        "(not by S_t, not by P). Return one value per sample.",
+        _Q2_NORMALISE,
         "Per sample: innovation and S, gain, measurement update of x and P, then the time "
         "update with a and q.",
+    ],
+    mistakes=[
+        Mistake(
+            "looks divided by S_t, not by its square root: a normalised innovation has variance 1",
+            lambda y, a, q, r, m0, p0: _q2_wrong(y, a, q, r, m0, p0, scale=lambda S, P: S),
+            hint=_Q2_NORMALISE,
+        ),
+        Mistake(
+            "looks like the raw innovations: each must be divided by the square root of its "
+            "variance S_t",
+            lambda y, a, q, r, m0, p0: _q2_wrong(y, a, q, r, m0, p0, scale=lambda S, P: 1.0),
+            hint=_Q2_NORMALISE,
+        ),
+        Mistake(
+            "looks normalised by sqrt(P(t|t-1)) without r: the innovation's variance is "
+            "S_t = P(t|t-1) + r",
+            lambda y, a, q, r, m0, p0: _q2_wrong(y, a, q, r, m0, p0, scale=lambda S, P: np.sqrt(P)),
+            hint=_Q2_NORMALISE,
+        ),
+        Mistake(
+            "looks predicted before the first update: the first innovation uses x(0|-1) = m0 "
+            "and P(0|-1) = p0 as given",
+            lambda y, a, q, r, m0, p0: _q2_wrong(y, a, q, r, m0, p0, predict_first=True),
+            hint="x(0|-1) = m0 and P(0|-1) = p0 are already the prediction for the first "
+            "sample: per sample, update with y_t first, then predict the next.",
+        ),
     ],
 )
 def q2(y, a, q, r, m0, p0):

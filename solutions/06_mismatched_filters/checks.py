@@ -256,6 +256,15 @@ q4.case(R_C, 6, 1, hidden=True)
 ### END HIDDEN TESTS
 
 
+_Q5_HINTS = [
+    "Two-sided: alpha is split between the two tails.",
+    "The weights of the weighted chi-square sum are the eigenvalues of P divided by M; "
+    "each carries M - 1 degrees of freedom (not M).",
+    "course.quadform.WeightedChiSquare(weights, dof=...) has ppf and isf (notebook 06, "
+    "section 5: a law from its weights).",
+]
+
+
 @CHECKS.function(
     "q5",
     func="covariance_critical_values",
@@ -278,18 +287,15 @@ q4.case(R_C, 6, 1, hidden=True)
                     )
                 ),
             ),
+            hint=_Q5_HINTS[1],
         ),
         Mistake(
             "alpha not split: a two-sided test puts alpha/2 in each tail",
             lambda P, M, alpha: _covariance_critical_values(P, M, 2 * alpha),
+            hint=_Q5_HINTS[0],
         ),
     ],
-    hint=[
-        "Two-sided: alpha is split between the two tails.",
-        "The weights of the weighted chi-square sum are the eigenvalues of P divided by M; "
-        "each carries M - 1 degrees of freedom (not M).",
-        "course.quadform.WeightedChiSquare(weights, dof=...) has ppf and isf.",
-    ],
+    hint=_Q5_HINTS,
 )
 def q5(P, M, alpha):
     return _covariance_critical_values(P, M, alpha)

@@ -179,6 +179,12 @@ WRONG = {
     ],
     "q4": [
         (
+            "right, but computed in float32",
+            _LIK.replace("float)", "np.float32)")
+            + "    pdf = stats.norm.pdf(z[None, :], theta.reshape(-1, 1), np.float32(sigma))\n"
+            + "    return np.prod(pdf.astype(np.float32), axis=1).reshape(theta.shape)\n",
+        ),
+        (
             "the log-likelihood",
             _LIK
             + "    return np.sum(stats.norm.logpdf(z[None, :], theta.reshape(-1, 1), sigma), axis=1).reshape(theta.shape)\n",

@@ -111,6 +111,14 @@ WRONG = {
         ),
         ("one Riccati step from P = 1", "P = 1.0 - 1.0 / 2.0 + 1.0\nsteady = (P, P / (P + 1))"),
         ("gain P/r without the sum", "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / 1.0)"),
+        (
+            "filtered variance, and K computed from it",
+            "P = (np.sqrt(5) - 1) / 2\nsteady = (P, P / (P + 1))",
+        ),
+        (
+            "right, but computed in float32",
+            "P = np.float32((1 + np.sqrt(np.float32(5))) / 2)\nsteady = (P, P / (P + np.float32(1)))",
+        ),
     ],
     "q2": [
         (
@@ -149,8 +157,24 @@ WRONG = {
             "first sample dropped (off by one)",
             _q2(_Q2_RIGHT_LOOP.replace("    return z\n", "    return z[1:]\n")),
         ),
+        (
+            "right, but computed in float32",
+            _q2(_Q2_RIGHT_LOOP)
+            .replace("dtype=float)", "dtype=np.float32)")
+            .replace("float(m0), float(p0)", "np.float32(m0), np.float32(p0)")
+            .replace("np.empty(y.shape)", "np.empty(y.shape, dtype=np.float32)")
+            .replace(
+                "    for t, y_t",
+                "    a, q, r = np.float32(a), np.float32(q), np.float32(r)\n    for t, y_t",
+            ),
+        ),
     ],
     "q3": [
+        (
+            "right, but computed in float32",
+            _Q3_HEAD.replace("dtype=float", "dtype=np.float32")
+            + "    return np.convolve(z**2, np.ones(L, dtype=np.float32), mode='valid')\n",
+        ),
         (
             "sums of z, not of z^2",
             _Q3_HEAD + "    c = np.concatenate([[0.0], np.cumsum(z)])\n    return c[L:] - c[:-L]\n",

@@ -35,6 +35,7 @@ __all__ = [
     "binomial_band",
     "load_checks",
     "student_rng",
+    "student_seed",
 ]
 
 
@@ -55,11 +56,17 @@ def student_rng(
     Surrounding whitespace of the ID is ignored; the seed is the same on every machine and in
     every process (Python's ``hash`` is salted per process and is never used).
     """
+    return np.random.default_rng(student_seed(assignment, key, student_id, secret))
+
+
+def student_seed(assignment: str, key: str, student_id: str, secret: Secret | None = None) -> int:
+    """The seed of :func:`student_rng`: a value derived from the key for one student's data
+    set, which is all a machine that grades that student needs (a Dask worker is sent this,
+    never the key itself)."""
     if secret is not None:
-        return np.random.default_rng(secret.seed(assignment, key, student_id))
+        return secret.seed(assignment, key, student_id)
     text = f"{assignment}\0{key}\0{str(student_id).strip()}".encode()
-    seed = int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
-    return np.random.default_rng(seed)
+    return int.from_bytes(hashlib.sha256(text).digest()[:16], "little")
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,10 @@ class Mistake:
         or ``f(data)`` for a value question, ``f(*case_args, **case_kwargs)`` for a function
         question. Like the reference it runs in the grader and in ``course release`` (public
         cases: its value ships in ``checks.json``), never in a student's process.
+    hint : str, optional
+        The hint a student sees when the answer matches this mistake, in the self-check and
+        in the grading feedback, instead of the question's staged hint: the hint follows the
+        diagnosed mistake. Like every hint it names no value.
 
     Notes
     -----
@@ -97,6 +108,9 @@ class Mistake:
 
     message: str
     reference: Callable
+    #: The hint shown when this mistake is diagnosed, instead of the question's next staged
+    #: hint (which follows the order of the method, not the mistake); '' keeps the stages.
+    hint: str = ""
 
     def __post_init__(self):
         if not isinstance(self.message, str) or not self.message.strip():
@@ -106,6 +120,8 @@ class Mistake:
                 "Mistake(message, reference): reference must be a function computing the wrong "
                 "answer, with the signature of the question's reference"
             )
+        if not isinstance(self.hint, str):
+            raise ValueError("Mistake(message, reference, hint=...): hint must be a string")
 
 
 def _hint_stages(qid: str, hint) -> tuple[str, ...]:
@@ -156,6 +172,11 @@ class Question:
     mistakes: tuple = ()  # Mistake objects: plausible wrong answers with their messages
     options: tuple = ()  # a choice question's options
     rubric: str = ""  # a short-answer question's marking guide (instructors only)
+
+    @property
+    def mistake_hints(self) -> dict[str, str]:
+        """The declared mistakes' own hints, by the mistake's message."""
+        return {m.message: m.hint for m in self.mistakes if m.hint}
 
     @property
     def hints(self) -> tuple[str, ...]:
@@ -246,6 +267,13 @@ class Checks:
         Modules imported once before any student code runs (speed only).
     files : list of str
         Extra files of ``solutions/<name>/`` copied verbatim into the release (public!).
+    due : str, optional
+        The due date, an ISO 8601 date-time with its time zone (``"2026-10-20T23:59+02:00"``);
+        ``course grade --due`` overrides it. Changing it changes the checks' digest, so set it
+        before the first grading run (or pass ``--due``).
+    late_policy : str, optional
+        The late policy, e.g. ``"percent-per-day:10,cap:50"`` (see
+        :mod:`course.grading.batch.late`); ``course grade --late-policy`` overrides it.
     """
 
     def __init__(
@@ -256,6 +284,8 @@ class Checks:
         timeout: float = 10.0,
         preload=(),
         files=(),
+        due: str | None = None,
+        late_policy: str | None = None,
     ):
         if not _NAME.match(str(name)):
             raise ValueError(f"assignment name {name!r}: use letters, digits, '_', '-', '.'")
@@ -265,6 +295,8 @@ class Checks:
         self.timeout = float(timeout)
         self.preload = tuple(preload)
         self.files = tuple(files)
+        self.due = due
+        self.late_policy = late_policy
         self.questions: dict[str, Question] = {}
         self.solution_dir: Path | None = None  # set by load_checks
 
@@ -532,8 +564,12 @@ class Checks:
     def data_for(self, key: str, student_id: str, secret: Secret | None = None) -> Any:
         """The per-student data set ``key`` for ``student_id`` (plain data), drawn with the
         instructor's ``secret`` when one is given (see :func:`student_rng`)."""
+        return self.data_from_seed(key, student_seed(self.name, key, student_id, secret))
+
+    def data_from_seed(self, key: str, seed: int) -> Any:
+        """The data set ``key`` drawn from ``seed`` (a :func:`student_seed`), as plain data."""
         func = getattr(self.data_module, key)
-        return decode(encode(func(student_rng(self.name, key, student_id, secret))))
+        return decode(encode(func(np.random.default_rng(seed))))
 
     def validate(self) -> None:
         """Check the question set for authoring mistakes (raises ValueError)."""

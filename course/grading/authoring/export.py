@@ -43,6 +43,7 @@ from course.grading.authoring.personal import PERSONAL_FILE, build_personal_data
 from course.grading.authoring.release import find_solutions, release_files
 from course.grading.authoring.secret import Secret, public_key_id
 from course.grading.batch.roster import Roster
+from course.grading.vocabulary import CLASS_FILE, compile_id_pattern
 
 __all__ = ["DIST_NAME", "ExportError", "ExportResult", "export"]
 
@@ -109,8 +110,13 @@ def export(
     roster: Roster | None = None,
     check_leaks: bool = True,
     releases: dict[str, dict[str, bytes]] | None = None,
+    id_pattern: str | None = None,
 ) -> ExportResult:
     """Build the student distribution into ``dest`` (see the module docstring).
+
+    ``id_pattern`` (a regular expression a whole student ID matches) goes into each
+    assignment's ``class.json``: the self-check then says when ``STUDENT_ID`` is off it and
+    ``check.submit()`` refuses it. Every roster ID must match it.
 
     ``releases`` are the assignments' release files when already at hand (``{name:
     release_files(...)}``, e.g. for several editions in a row); by default they are made here.
@@ -123,6 +129,8 @@ def export(
             "a graded class needs both --secret and --roster (students get the roster's data "
             "drawn with the secret); for a self-learners' edition give neither"
         )
+    if id_pattern is not None:
+        _check_id_pattern(id_pattern, roster)
     for needed in ("course", "notebooks", "solutions", STUDENT_PAGE):
         if not (root / needed).exists():
             raise ExportError(f"{root} is not the course's repository (no {needed})")
@@ -131,7 +139,7 @@ def export(
         releases = {name: release_files(root / "solutions" / name) for name in names}
     staging = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
     try:
-        result = _build(staging, dest, root, names, releases, secret, roster)
+        result = _build(staging, dest, root, names, releases, secret, roster, id_pattern)
         if check_leaks:
             public = public_corpus(root, releases)
             needles = [
@@ -177,7 +185,22 @@ def _not_for_students(package: Path):
     return ignore
 
 
-def _build(staging, dest, root, names, releases, secret, roster) -> ExportResult:
+def _check_id_pattern(pattern: str, roster: Roster | None) -> None:
+    try:
+        compiled = compile_id_pattern(pattern)
+    except ValueError as exc:
+        raise ExportError(str(exc)) from None
+    if roster is not None:
+        off = [sid for sid in roster.ids if not compiled.fullmatch(sid)]
+        if off:
+            shown = ", ".join(repr(sid) for sid in off[:5]) + (" ..." if len(off) > 5 else "")
+            raise ExportError(
+                f"{len(off)} roster ID(s) do not match --id-pattern {pattern!r}: {shown}; "
+                "fix the pattern or the roster (those students could not submit)"
+            )
+
+
+def _build(staging, dest, root, names, releases, secret, roster, id_pattern=None) -> ExportResult:
     import course
 
     version = str(course.__version__)
@@ -197,6 +220,10 @@ def _build(staging, dest, root, names, releases, secret, roster) -> ExportResult
             keep = {q.properties for q in checks.questions.values() if q.properties}
             files["data.py"] = public_data_source(
                 files["data.py"].decode("utf-8"), keep, checks.data_keys(), name
+            ).encode()
+        if id_pattern is not None:
+            files[CLASS_FILE] = (
+                json.dumps({"format": 1, "id_pattern": id_pattern}) + "\n"
             ).encode()
         for rel, content in sorted(files.items()):
             target = materials / "exercises" / name / rel

@@ -29,6 +29,7 @@ __all__ = [
     "PersonalData",
     "build_personal_data",
     "public_data_source",
+    "students_data_source",
 ]
 
 PERSONAL_FILE = "personal_data.json"
@@ -175,3 +176,21 @@ def public_data_source(source: str, keep: Iterable[str], private: Iterable[str],
         first = min([node.lineno, *(d.lineno for d in getattr(node, "decorator_list", []))])
         parts.append("\n".join(lines[first - 1 : node.end_lineno]))
     return "\n\n\n".join(parts) + "\n"
+
+
+def students_data_source(checks, keyed: bool) -> str | None:
+    """The ``data.py`` a student has beside the notebook, as text (None: the assignment has
+    none): the released file, or its public part (:func:`public_data_source`) in a graded
+    class's edition (``keyed``: its personal data drawn with a secret). The grader offers the
+    same module to the notebook (``from data import ...``), so what runs at self-check runs
+    at grading."""
+    if checks.data_module is None or checks.solution_dir is None:
+        return None
+    path = Path(checks.solution_dir) / "data.py"
+    if not path.is_file():
+        return None
+    source = path.read_text("utf-8")
+    if keyed and checks.data_keys():
+        keep = {q.properties for q in checks.questions.values() if q.properties}
+        source = public_data_source(source, keep, checks.data_keys(), checks.name)
+    return source

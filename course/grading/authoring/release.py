@@ -99,6 +99,7 @@ def public_spec(checks: Checks) -> PublicSpec:
             data=q.data,
             properties=q.properties,
             public=q.public,
+            mistake_hints=q.mistake_hints,
         )
         if q.kind == QuestionKind.SHORT_ANSWER:
             pass  # marked by the instructor: nothing to check in the notebook

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = [
+    "KEY_FILE_PREFIX",
     "SECRET_ENV",
     "Secret",
     "SecretError",
@@ -37,7 +38,9 @@ __all__ = [
 #: The environment variable naming the key file (``--secret FILE`` wins over it).
 SECRET_ENV = "COURSE_SECRET_FILE"
 
-_PREFIX = "course-secret-v1:"
+#: How a key file's key line starts (what a scan for stray key files looks for).
+KEY_FILE_PREFIX = "course-secret-v1:"
+_PREFIX = KEY_FILE_PREFIX
 _KEY_BYTES = 32
 
 

@@ -9,6 +9,8 @@ style sheet or font from outside), readable without the console:
   of ``checks.py``) and each kind of wrong answer the comparison diagnosed (a constant factor,
   the sign, the shape, off by one, ...) occurred;
 - the timeouts, forbidden calls and other abnormal ends, with the students;
+- the late submissions and their deductions (when a due date is known or the LMS marked a
+  file late);
 - the slowest students.
 
 Counts are of students: a student whose three hidden cases show the same factor counts once.
@@ -20,6 +22,7 @@ import html
 from collections import Counter
 from pathlib import Path
 
+from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
 from course.grading.vocabulary import GradeStatus
 
@@ -30,6 +33,7 @@ REPORT_FILE = "report.html"
 #: (text in a failed case's message, the kind of wrong answer it shows), first match wins.
 _KINDS = (
     ("raised ", "raised an exception"),
+    ("computed in single precision", "computed in float32"),
     ("transposed", "transposed"),
     ("sign is flipped", "the sign"),
     ("factor", "a constant factor"),
@@ -327,6 +331,8 @@ th, td { border-bottom: 1px solid #ccc; padding: 0.2rem 0.7rem; text-align: left
 figure { margin: 0.5rem 0 1rem; }
 svg { max-width: 100%; height: auto; display: block; }
 .note { color: #555; }
+.warning { border-left: 4px solid #b3261e; background: #fdf0ee; padding: 0.3rem 0.9rem;
+           margin: 0.8rem 0; }
 """
 
 
@@ -345,6 +351,19 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
     if not n:
         parts.append("<p>No submission was graded.</p></body></html>")
         return "\n".join(parts) + "\n"
+    unmarked = unmarked_counts(data.rows, checks)
+    warning = unmarked_warning(unmarked)
+    if warning:  # every number below counts them as 0: say so first
+        parts.append(
+            f'<div class="warning"><p><strong>{html.escape(warning)}</strong> in this report, '
+            "grades.csv and the LMS files. Mark them (<code>course mark OUT_DIR</code>) and "
+            "rerun <code>course grade</code> with <code>--short-answers</code>.</p>"
+            + _table(
+                ["question", "not marked yet", "answers"],
+                [[qid, todo, given] for qid, (todo, given) in unmarked.items() if todo],
+            )
+            + "</div>"
+        )
     totals = sorted(data.totals)
     median = totals[n // 2] if n % 2 else (totals[n // 2 - 1] + totals[n // 2]) / 2
     parts.append(
@@ -405,6 +424,10 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         _table(["question", "status", "students", "who"], abnormal) if abnormal else "<p>None.</p>"
     )
 
+    if any(r.late is not None for r in data.rows):
+        parts.append("<h2>Late submissions</h2>")
+        parts.append(_late_table(data.rows))
+
     parts.append("<h2>Slowest students</h2>")
     timed = sorted(
         (r for r in data.rows if isinstance(r.wall_seconds, (int, float))),
@@ -420,6 +443,35 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
     )
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
+
+
+def _late_table(rows: list[StudentResult]) -> str:
+    """The late submissions: when, how late, the deduction and the total after it (the
+    totals above are after the deductions too)."""
+    late = sorted((r for r in rows if r.late and r.late.get("days") != 0), key=lambda r: r.student)
+    due = sorted({str(r.late.get("due")) for r in rows if r.late and r.late.get("due")})
+    head = f"<p>Due {html.escape(', '.join(due)) if due else 'date unknown'}; {len(late)} late.</p>"
+    if not late:
+        return head
+    body = [
+        [
+            r.student,
+            r.late.get("submitted_at") or "unknown",
+            "unknown (charged 1)" if r.late.get("days") is None else r.late["days"],
+            f"{r.penalty:g}",
+            f"{r.points:g}",
+            f"{r.total:g}",
+        ]
+        for r in late
+        if r.late is not None
+    ]
+    table = _table(["student", "handed in", "days late", "deduction", "points", "total"], body)
+    policy = html.escape(str(late[0].late.get("policy") if late[0].late else ""))
+    return (
+        head
+        + table
+        + f'<p class="note">Late policy: {policy}. Totals above are after the deduction.</p>'
+    )
 
 
 def write_report(rows: list[StudentResult], checks, question_ids: list[str], out: Path) -> Path:

@@ -7,7 +7,8 @@ students ``--student`` names), one
 :class:`~course.grading.batch.session.StudentSession` each, and writes the reports
 (:mod:`course.grading.batch.reports`) as students finish.
 
-Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status),
+Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status;
+``late`` and ``penalty`` when a due date is known, :mod:`course.grading.batch.late`),
 ``report.html`` (the class report, :mod:`course.grading.batch.classreport`),
 ``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
 finish; a rerun skips students already graded with the same checks and library version from
@@ -26,8 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from course.grading.batch.classreport import write_report
-from course.grading.batch.cluster import grade_on_cluster
+from course.grading.batch.cluster import check_cluster_options, grade_on_cluster
 from course.grading.batch.identity import resolve_identities
+from course.grading.batch.late import LateError, late_records, parse_due, parse_policy
 from course.grading.batch.marks import (
     SHORT_ANSWERS_FILE,
     MarksError,
@@ -37,6 +39,8 @@ from course.grading.batch.marks import (
     save_marks,
     short_questions,
     unimported_edits,
+    unmarked_counts,
+    unmarked_warning,
     validate_marks,
     write_short_answers,
 )
@@ -166,6 +170,7 @@ def grade(
 ) -> Summary:
     """Grade every submission in ``submissions`` into ``out`` (see the module docstring)."""
     options = options or GradeOptions()
+    check_cluster_options(options)  # an unusable or unencrypted address: before anything
     start = time.monotonic()
     solution_dir, submissions, out = (
         Path(solution_dir).resolve(),
@@ -191,7 +196,8 @@ def grade(
             grader.data_key,
         )
         todo = identity.entries
-        _write_conflicts(identity.conflicts, out / "identity_conflicts.csv")
+        _write_conflicts(identity.conflicts, identity.attached, out / "identity_conflicts.csv")
+        late, late_notes = _late_work(grader.checks, todo, submissions, options)
         if options.students is not None:
             _check_selection(options.students, todo)
         previous = read_results(results_path)
@@ -211,6 +217,11 @@ def grade(
                 rows[sub.student] = old
                 if why is not None:
                     stale.append(sub.student)
+                elif old.set_late(late.get(sub.student)):  # a new due date, policy or time
+                    append_result(old, results_path)
+                    (out / "feedback" / f"{old.student}.md").write_text(
+                        feedback_markdown(old, grader.checks), encoding="utf-8"
+                    )
             elif chosen:
                 pending.append(sub)
                 if why is not None:
@@ -222,6 +233,7 @@ def grade(
         def finish(row: StudentResult) -> None:
             with lock:
                 row.record_file(files.get(row.student))
+                row.set_late(late.get(row.student))
                 append_result(row, results_path)
                 (out / "feedback" / f"{row.student}.md").write_text(
                     feedback_markdown(row, grader.checks), encoding="utf-8"
@@ -280,6 +292,7 @@ def grade(
         summary.stale = stale
         summary.unselected = skipped
         summary.marking = marking
+        summary.late_notes = late_notes
         if options.roster is not None:
             _class_files(summary, grader, options, out)
         return summary
@@ -297,6 +310,22 @@ def _check_selection(students, todo: list) -> None:
             f"--student {', '.join(unknown)}: no submission with this ID in the folder "
             f"({len(found)} submission(s) found; the ID is the one grades.csv lists)"
         )
+
+
+def _late_work(checks, entries: list, submissions: Path, options: GradeOptions):
+    """The late record of each submission and the console's notes about them
+    (:mod:`course.grading.batch.late`); the command line's due date and policy win over
+    ``checks.py``'s."""
+    due = options.due
+    if due is None and getattr(checks, "due", None):
+        due = parse_due(checks.due, "due= in checks.py")
+    policy = options.late_policy or parse_policy(getattr(checks, "late_policy", None))
+    if options.submitted_at is not None and due is None:
+        raise LateError(
+            "--submitted-at needs a due date: pass --due 2026-10-20T23:59+02:00 (or set due= "
+            "in the assignment's checks.py)"
+        )
+    return late_records(entries, submissions, due, policy, options.submitted_at, options.roster)
 
 
 def _regrade_reason(old: StudentResult | None, grader, file: dict | None) -> str | None:
@@ -344,30 +373,40 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
         and Path(options.short_answers).resolve() == path.resolve()
     )
     head = f"short answers: {imported} mark(s) imported; " if entries is not None else ""
+    # never a 0 for an unmarked answer in grades.csv or the LMS files without saying so
+    warning = unmarked_warning(unmarked_counts(final, checks))
+    if warning:
+        warning = (
+            f"\nWARNING: {warning} in grades.csv, report.html and the LMS files; mark them "
+            f"with `course mark {out}` (or fill `points` in {path}), then rerun with "
+            f"--short-answers {path}"
+        )
     edits = 0 if just_read or not path.exists() else unimported_edits(path, marks)
     if edits:
         return (
             f"{head}{path} was NOT rewritten: {edits} row(s) hold marks never imported "
-            f"(import them with --short-answers {path})"
+            f"(import them with --short-answers {path}){warning}"
         )
     to_mark = write_short_answers(final, checks, path, marks)
     return (
-        f"{head or 'short answers: '}{to_mark} to mark in {path} (fill `points`, then rerun "
-        f"with --short-answers {path})"
+        f"{head or 'short answers: '}{to_mark} to mark in {path}{warning}"
         if to_mark
         else f"{head or 'short answers: '}all marked ({path})"
     )
 
 
-def _write_conflicts(conflicts: list, path: Path) -> None:
-    """Every quarantined file with both IDs (the name's and the notebook's), for the record."""
-    if not conflicts:
+def _write_conflicts(conflicts: list, attached: list, path: Path) -> None:
+    """Every quarantined file with both IDs (the name's and the notebook's), and every file
+    graded for its name's student although its notebook declares an ID on no roster."""
+    if not conflicts and not attached:
         path.unlink(missing_ok=True)
         return
+    rows = [(*row, "quarantined") for row in conflicts]
+    rows += [(*row, f"graded as {row[1]}") for row in attached]
     with path.open("w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
-        writer.writerow(["file", "named_as", "declares", "why"])
-        writer.writerows([csv_text(cell) for cell in row] for row in conflicts)
+        writer.writerow(["file", "named_as", "declares", "why", "decision"])
+        writer.writerows([csv_text(cell) for cell in row] for row in rows)
 
 
 def _file_record(path: Path | None, submissions: Path) -> dict | None:

@@ -18,7 +18,8 @@ the total:
     or leave it unmapped).
 
 A student without a submission gets an empty cell, or 0 with ``missing_as_zero``; the total
-counts an empty cell as 0.
+counts an empty cell as 0. A short answer not marked yet counts as 0 (:meth:`Gradebook.unmarked`
+counts them, and ``course gradebook`` warns).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from pathlib import Path
 from course.grading.batch.reports import csv_text, read_results
 from course.grading.batch.results import StudentResult
 from course.grading.batch.roster import Roster, canvas_table, moodle_table, write_table
+from course.grading.vocabulary import GradeStatus
 
 __all__ = ["Gradebook", "GradebookError", "read_gradebook", "write_gradebook"]
 
@@ -59,6 +61,19 @@ class Gradebook:
 
     def students(self) -> list[str]:
         return sorted({sid for c in self.columns for sid in c.rows})
+
+    def unmarked(self) -> dict[str, int]:
+        """Per column that has them: how many short answers are not marked yet (they count as
+        0 in the gradebook until they are marked and merged)."""
+        counts = {
+            c.name: sum(
+                res.status == GradeStatus.TO_MARK
+                for row in c.rows.values()
+                for res in row.questions.values()
+            )
+            for c in self.columns
+        }
+        return {name: n for name, n in counts.items() if n}
 
 
 def _points(x: float) -> str:

@@ -7,18 +7,26 @@ whose submission it is; the ID written inside the notebook only has to agree wit
   as ``check.submit()`` writes it), on the roster when there is one;
 * with a roster, the one roster student the name points at: a roster student ID, Canvas user
   number or login as a token of the name (Canvas's ``doejohn_LATE_12345_67890_<file>``), or the
-  full name of a Moodle folder (``John Doe_1234_assignsubmission_file_``).
+  full name of a Moodle folder (``John Doe_1234_assignsubmission_file_``), or the ``lastfirst``
+  part of a Canvas name (so a roster without Canvas's user numbers still ties
+  ``doejane_1234_5678_<file>`` to Jane Doe). An ID token wins over a name.
 
-A notebook whose declared ID (its submission metadata, else ``STUDENT_ID``) differs from the ID
-its name gives is **quarantined**: graded for nobody, reported with both IDs, and it never
-replaces another student's work. A file whose name gives no ID is graded under its declared
-ID, unless a named file claims that ID (then it is quarantined) or files from different
-uploaders claim it (then all of them are). Among several files of one student the LMS's order
-decides (Canvas's file number, then the name), never a time written inside the notebook.
+A notebook whose declared ID (its submission metadata, else ``STUDENT_ID``) is another roster
+student's, or (without a roster) differs from the ID its name gives, is **quarantined**: graded
+for nobody, reported with both IDs, and it never replaces another student's work. A declared ID
+that is on no roster (a typo, ``s0O3`` for ``s003``) takes nobody's work: the file is graded
+for the roster student its name gives, and reported (:attr:`Identity.attached`). A file whose
+name gives no ID is graded under its declared ID, unless a named file claims that ID (then it
+is quarantined) or files from different uploaders claim it (then all of them are). Among
+several files of one student the LMS's order decides (Canvas's file number, then the name),
+never a time written inside the notebook.
 
-Every conflict (:attr:`Identity.conflicts`, with both names) and every guess becomes a line of
-the console summary (:attr:`Identity.flags`); the driver also writes the conflicts to
-``identity_conflicts.csv``.
+Every conflict (:attr:`Identity.conflicts`, with both names), every attached file and every
+guess about the file that is graded becomes a line of the console summary
+(:attr:`Identity.flags`); the driver also writes the conflicts and attached files to
+``identity_conflicts.csv``. A file whose declared ID is on the roster and whose LMS name
+points at nobody is flagged only when the roster could have named its uploader (Canvas user
+numbers or names to compare): a roster of bare IDs gives nothing to check.
 """
 
 from __future__ import annotations
@@ -52,6 +60,9 @@ class Identity:
     mismatched_keys: list = field(default_factory=list)  # files worked on other data
     # quarantined files: (file, the ID its name gives or "", the ID it declares, why)
     conflicts: list = field(default_factory=list)
+    # files graded for the student their name gives although the notebook declares an ID on
+    # no roster: (file, the ID its name gives, the ID it declares, why)
+    attached: list = field(default_factory=list)
 
 
 def _declared(path: Path | None) -> tuple[str | None, dict]:
@@ -131,15 +142,39 @@ def _full_name(text: str) -> str:
     return " ".join(text.casefold().split())
 
 
+# Canvas's "lastfirst": the sortable name, lower case, letters and digits only
+_CANVAS_NAME = re.compile(r"^([^_]+)_(?:LATE_)?\d+_\d+_")
+
+
+def _letters(text: str) -> str:
+    return re.sub(r"[\W_]", "", text.casefold())
+
+
+def _last_first(student) -> set[str]:
+    """The ``lastfirst`` forms Canvas could have made of a roster student's name."""
+    out = {_letters(student.last + student.first)}
+    if "," in student.name:
+        last, first = student.name.split(",", 1)
+        out.add(_letters(last + first))
+    elif student.name:
+        first, _, last = student.name.strip().rpartition(" ")
+        out.add(_letters(last + first))
+    out.discard("")
+    return out
+
+
 def _roster_named(names: list[str], roster: list) -> list[str]:
-    """The roster IDs a file or folder name points at (ID, Canvas user number, login as a token;
-    a Moodle folder's full name)."""
+    """The roster IDs a file or folder name points at: an ID, Canvas user number or login as a
+    token; else a Moodle folder's full name or a Canvas name's ``lastfirst``."""
+    by_token = {
+        s.id
+        for s in roster
+        if any(_contains(n, t) for n in names for t in (s.id, s.canvas_id, s.login) if t)
+    }
+    if by_token:
+        return sorted(by_token)
     hits = set()
     for student in roster:
-        tokens = [t for t in (student.id, student.canvas_id, student.login) if t]
-        if any(_contains(n, t) for n in names for t in tokens):
-            hits.add(student.id)
-            continue
         full = {_full_name(f"{student.first} {student.last}"), _full_name(student.name)}
         if student.name and "," in student.name:
             last, first = student.name.split(",", 1)
@@ -149,7 +184,27 @@ def _roster_named(names: list[str], roster: list) -> list[str]:
             m = _MOODLE.match(n)
             if m and _full_name(m.group(1)) in full:
                 hits.add(student.id)
+            c = _CANVAS_NAME.match(n)
+            if c and _letters(c.group(1)) in _last_first(student):
+                hits.add(student.id)
     return sorted(hits)
+
+
+def _names_uploaders(roster: list) -> bool:
+    """Whether the roster can tell who uploaded an LMS file (Canvas user numbers or names)."""
+    return any(s.canvas_id or s.name or s.first or s.last for s in roster)
+
+
+def _duplicate_rule(claims: list) -> str:
+    """The rule that picked one student's file among several, in words."""
+    numbered = [c.order[0] > 0 for c in claims]
+    if all(numbered):
+        return (
+            "the last in the LMS's order: the highest Canvas submission number, its latest upload"
+        )
+    if not any(numbered):
+        return "the last in the LMS's order: by file name"
+    return "the last in the LMS's order: Canvas's submission number, then the file name"
 
 
 @dataclass
@@ -159,6 +214,7 @@ class _Claim:
     named: bool  # the LMS name gave this ID (else only the notebook declares it)
     uploader: str
     order: tuple[int, str]
+    flag: str = ""  # a doubt about this file, told when it is the file graded
 
 
 def resolve_identities(
@@ -199,11 +255,27 @@ def resolve_identities(
                 in_name = sorted({r for r in roster if any(_contains(n, r) for n in names)})
             name_id = in_name[0] if len(in_name) == 1 else None
         declared, meta = _declared(path)
-        named = True
+        named, flag = True, ""
         if declared is not None and (
             declared == name_id or any(_contains(n, declared) for n in names)
         ):
             sid = declared
+        elif declared is not None and name_id is not None and roster and declared not in roster:
+            # an ID on no roster takes nobody's work: the LMS's name decides, and it is told
+            sid = name_id
+            why = (
+                f"the notebook declares STUDENT_ID {declared!r}, which is not on the roster; "
+                f"graded as {name_id!r}, the roster student its name points at (check the "
+                "notebook's ID)"
+            )
+            out.attached.append((shown, name_id, declared, why))
+            flag = f"{shown}: {why}"
+            note = (
+                f"Your notebook's STUDENT_ID {declared!r} is not on the class list; this file "
+                f"was graded as {name_id!r}, the student its file name gives. Set the right "
+                "STUDENT_ID next time."
+            )
+            sub = replace(sub, note=f"{sub.note} {note}" if sub.note else note)
         elif declared is not None and name_id is not None:
             quarantine(
                 shown,
@@ -218,25 +290,32 @@ def resolve_identities(
             continue
         elif declared is not None:
             sid, named = declared, False
-            out.flags.append(
-                f"{shown}: the file name does not contain the notebook's STUDENT_ID "
-                f"{declared!r}; graded as {declared!r}"
-            )
+            lms_named = _CANVAS.match(name) is not None or _MOODLE.match(name) is not None
+            if not (roster and declared in roster and lms_named and not _names_uploaders(students)):
+                flag = (
+                    f"{shown}: the file name "
+                    + (
+                        "points at no roster student"
+                        if roster and lms_named
+                        else "does not contain the notebook's STUDENT_ID"
+                    )
+                    + f"; graded as {declared!r}, the notebook's STUDENT_ID"
+                )
         elif name_id is not None:
             sid = name_id
             if name_id not in roster and not _looks_bare(name_id):
-                out.flags.append(
+                flag = (
                     f"{shown}: no student ID in the notebook; graded under its file name "
                     f"{name_id!r} (rename it to <ID>.ipynb and grade again if that is wrong)"
                 )
             elif name_id in roster and name_id not in names and name_id != name:
-                out.flags.append(
+                flag = (
                     f"{shown}: the notebook has no student ID; graded as {name_id!r}, the "
                     "roster student its name points at"
                 )
         else:
             sid = name_id or _safe_name(name)
-            out.flags.append(
+            flag = (
                 f"{shown}: no student ID in the notebook, and the file name is not "
                 f"{'a roster ID' if roster else 'an ID'}; graded as {sid!r} "
                 "(rename it to <ID>.ipynb and grade again)"
@@ -244,7 +323,7 @@ def resolve_identities(
         if data_key is not None and meta.get("data_key") not in (None, data_key):
             out.mismatched_keys.append(shown)
         claimed.setdefault(sid, []).append(
-            _Claim(shown, sub, named, _uploader(name), _lms_order(name))
+            _Claim(shown, sub, named, _uploader(name), _lms_order(name), flag)
         )
     for sid in sorted(claimed):
         claims = claimed[sid]
@@ -284,11 +363,13 @@ def resolve_identities(
             )
             continue
         claims.sort(key=lambda c: c.order)
+        if claims[-1].flag:  # doubts about files not graded would be noise
+            out.flags.append(claims[-1].flag)
         if len(claims) > 1:
             out.flags.append(
                 f"{len(claims)} submissions claim the ID {sid!r}: "
                 + ", ".join(c.shown for c in claims)
-                + f"; graded {claims[-1].shown} (the last in the LMS's order)"
+                + f"; graded {claims[-1].shown} ({_duplicate_rule(claims)})"
             )
         out.entries.append(replace(claims[-1].sub, student=sid))
     out.flags = [visible_text(f) for f in out.flags]  # file names reach the console

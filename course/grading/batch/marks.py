@@ -4,15 +4,17 @@
 
 ``student, question, answer, points_possible, points, rubric, comment, answer_id``
 
-The instructor (or a marker, in any spreadsheet) fills ``points`` (blank: not marked yet) and
-optionally ``comment`` (shown to the student), then runs ``course grade NAME SUBMISSIONS --out
+The instructor fills ``points`` (blank: not marked yet) and optionally ``comment`` (shown to
+the student) in the marking view (``course mark OUT``, :mod:`course.grading.batch.marking`) or
+any spreadsheet, then runs ``course grade NAME SUBMISSIONS --out
 OUT --short-answers FILE``. The file is checked as a whole first: an unknown student or
 question, points that are not a number between 0 and ``points_possible``, a row given twice or
 an answer changed since the file was written refuses the import, line by line, and changes
 nothing. Accepted marks are kept in ``OUT/short_answer_marks.json`` (so a regrade keeps them,
 as long as the answer is the same: ``answer_id`` is a digest of its text) and merged into
 ``grades.csv``, ``results.jsonl`` and the feedback. Text cells are written spreadsheet-safe
-(:func:`course.grading.batch.reports.csv_text`).
+(:func:`course.grading.batch.reports.csv_text`). Answers not marked yet count as 0 until they
+are, and :func:`unmarked_warning` says so in the console summary and ``report.html``.
 """
 
 from __future__ import annotations
@@ -36,10 +38,15 @@ __all__ = [
     "apply_marks",
     "load_marks",
     "parse_marks_csv",
+    "parse_points",
+    "read_marking_file",
     "save_marks",
     "short_questions",
     "unimported_edits",
+    "unmarked_counts",
+    "unmarked_warning",
     "validate_marks",
+    "write_marking_file",
     "write_short_answers",
 ]
 
@@ -115,6 +122,10 @@ def _unquote(text: str) -> str:
 
 
 def _read_rows(path: Path) -> list[tuple[int, dict]]:
+    return _read_table(path)[1]
+
+
+def _read_table(path: Path) -> tuple[list[str], list[tuple[int, dict]]]:
     try:
         raw = Path(path).read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
@@ -134,7 +145,74 @@ def _read_rows(path: Path) -> list[tuple[int, dict]]:
             f"({SHORT_ANSWERS_FILE}: {', '.join(COLUMNS)})"
         )
     reader.fieldnames = header
-    return [(n, r) for n, r in enumerate(reader, start=2)]
+    return header, [(n, r) for n, r in enumerate(reader, start=2)]
+
+
+def read_marking_file(path: Path) -> tuple[list[str], list[dict]]:
+    """The header and the rows of a marking file, each cell as written (a tool that fills the
+    file in place, :mod:`course.grading.batch.marking`, writes them back unchanged)."""
+    header, rows = _read_table(path)
+    return header, [r for _, r in rows]
+
+
+def write_marking_file(path: Path, header: list[str], rows: list[dict]) -> None:
+    """Write ``rows`` (cells as :func:`read_marking_file` gave them) under ``header``; the file
+    is replaced in one step, so a reader never sees half of it."""
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=header, lineterminator="\n", extrasaction="ignore")
+    writer.writeheader()
+    writer.writerows(rows)
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(buf.getvalue(), encoding="utf-8")
+    tmp.replace(path)
+
+
+def parse_points(text: str, top: float) -> float | None:
+    """The points typed for an answer worth ``top`` points (``1.5`` or ``1,5``; blank: None, not
+    marked); :class:`MarksError` for anything that is not a number between 0 and ``top``."""
+    try:
+        points = _points(text)
+    except ValueError:
+        raise MarksError(f"{text.strip()!r} is not a number of points") from None
+    if points is not None and not (math.isfinite(points) and 0 <= points <= top):
+        raise MarksError(f"{points:g} points: give between 0 and {top:g}")
+    return points
+
+
+def unmarked_counts(rows: list[StudentResult], checks) -> dict[str, tuple[int, int]]:
+    """Per short-answer question: (answers not marked yet, answers given). An answer not
+    given is no answer to mark (it scores 0 as *not answered*)."""
+    counts = {}
+    for qid in short_questions(checks):
+        given = [
+            r.questions[qid]
+            for r in rows
+            if qid in r.questions and r.questions[qid].answer is not None
+        ]
+        counts[qid] = (sum(res.status == GradeStatus.TO_MARK for res in given), len(given))
+    return counts
+
+
+def unmarked_warning(counts: dict[str, tuple[int, int]]) -> str:
+    """The warning about answers not marked yet ('' when every answer is marked), e.g.
+    ``3 short answer(s) NOT marked yet count as 0 (q3: 2 of 6, q7: 1 of 6)``.
+
+    Examples
+    --------
+    >>> unmarked_warning({"q3": (2, 6), "q7": (0, 6)})
+    '2 short answer(s) NOT marked yet count as 0 (q3: 2 of 6 answers)'
+    >>> unmarked_warning({"q3": (0, 6)})
+    ''
+    """
+    todo = {qid: c for qid, c in counts.items() if c[0]}
+    if not todo:
+        return ""
+    per = ", ".join(f"{qid}: {n} of {given}" for qid, (n, given) in todo.items())
+    return (
+        f"{sum(n for n, _ in todo.values())} short answer(s) NOT marked yet count as 0 "
+        f"({per} answers)"
+    )
 
 
 def _points(text: str) -> float | None:

@@ -7,10 +7,12 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
 from course.grading.authoring.secret import Secret
+from course.grading.batch.late import LatePolicy
 from course.grading.batch.roster import Roster
 from course.grading.sandbox.isolation import Isolation, detect
 
@@ -47,12 +49,17 @@ class GradeOptions:
     landlock: bool = True  # use Landlock when the kernel has it
     announce: Callable[[str], None] | None = None  # told once which sandbox layers are active
     cluster: Any = None  # a Dask scheduler address (or Cluster object): one task per student
+    cluster_files: Any = None  # TLS files of the scheduler connection (cluster.ConnectionFiles)
+    insecure_cluster: bool = False  # accept a plain tcp:// scheduler beyond this machine
     secret: Secret | None = None  # the instructor's key of personal data (None: public data)
     roster: Roster | None = None  # the class: missing/unknown submissions, LMS grade files
     missing_as_zero: bool = False  # LMS files: 0 (not blank) for students without submission
     lms_column: str | None = None  # LMS files: the assignment's column (default: its title)
     students: frozenset[str] | None = None  # grade only these IDs (None: everyone)
     short_answers: Path | None = None  # a filled marking file to merge (course.grading.batch.marks)
+    due: datetime | None = None  # the due date (None: checks.py's due=, else no due date)
+    late_policy: LatePolicy | None = None  # None: checks.py's late_policy=, else no deduction
+    submitted_at: Path | str | None = None  # a timestamps CSV, or "file-times" (late.FILE_TIMES)
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from course.grading.batch.results import StudentResult
+from course.grading.compare import chosen_hint
 from course.grading.vocabulary import visible_text
 
 __all__ = [
@@ -27,6 +28,8 @@ __all__ = [
     "append_result",
     "csv_text",
     "feedback_markdown",
+    "late_cells",
+    "late_sentence",
     "read_results",
     "slowest",
     "write_csv",
@@ -47,6 +50,44 @@ def md_text(text) -> str:
     return _MARKDOWN.sub(r"\\\1", visible_text(text))
 
 
+def late_sentence(row: StudentResult) -> str:
+    """One sentence on the row's late work ("" when on time or nothing is known)."""
+    late = row.late
+    if not late or late.get("days") == 0:
+        return ""
+    days = late.get("days")
+    percent = float(late.get("percent") or 0)
+    if days is None:
+        when = "The learning-management system marked this submission late, without its time" + (
+            " (charged as 1 day late)" if percent else ""
+        )
+    else:
+        when = (
+            f"Handed in {late.get('submitted_at')}, {_days(days)} after the due date "
+            f"{late.get('due')}"
+        )
+    if not percent:
+        return f"{when}; no late deduction."
+    return (
+        f"{when}; late deduction {_fmt_points(percent)} % of the points possible "
+        f"({late.get('policy')}): -{_fmt_points(row.penalty)} points, "
+        f"{_fmt_points(row.total)} instead of {_fmt_points(row.points)}."
+    )
+
+
+def _days(days: int | None) -> str:
+    return "late by an unknown time" if days is None else f"{days} day{'s' if days != 1 else ''}"
+
+
+def late_cells(row: StudentResult) -> list[str]:
+    """grades.csv's ``late`` (days late, 0 on time, ``unknown``: marked late without a time;
+    empty: nothing known) and ``penalty`` (the points deducted)."""
+    if row.late is None:
+        return ["", ""]
+    days = row.late.get("days")
+    return ["unknown" if days is None else str(days), _fmt_points(row.penalty)]
+
+
 def feedback_markdown(row: StudentResult, checks) -> str:
     """The student's feedback: per question points, status, message and hint.
 
@@ -57,6 +98,9 @@ def feedback_markdown(row: StudentResult, checks) -> str:
         f"**Total: {_fmt_points(row.total)} / {_fmt_points(row.max)}**"
         + ("" if row.status == "ok" else f"  (status: {row.status})")
     )
+    late = late_sentence(row)
+    if late:
+        lines += ["", f"**Late:** {md_text(late)}"]
     lines += ["", "| question | points | status |", "|---|---|---|"]
     for qid, r in row.questions.items():
         lines.append(f"| {qid} | {_fmt_points(r.points)} / {_fmt_points(r.max)} | {r.status} |")
@@ -73,9 +117,10 @@ def feedback_markdown(row: StudentResult, checks) -> str:
                     f"- {'PASS' if case.ok else 'FAIL'} {case.label}"
                     + (f": {md_text(case.message)}" if case.message and not case.ok else "")
                 )
-        if q is not None and q.hints and not r.full_marks and r.status != "to mark":
-            # the first stage only: the later ones (the formula) stay in the self-check
-            lines += ["", f"Hint: {q.hints[0]}"]
+        if q is not None and not r.full_marks and r.status != "to mark":
+            hint = _feedback_hint(q, r)
+            if hint:
+                lines += ["", f"Hint: {hint}"]
     if row.notes:
         lines += ["", "## Notes", ""] + [f"- {md_text(n)}" for n in row.notes]
     lines.append("")
@@ -83,6 +128,17 @@ def feedback_markdown(row: StudentResult, checks) -> str:
         f"<sub>{row.assignment} · checks {row.checks_sha256[:12]} · course {row.version}</sub>"
     )
     return "\n".join(lines) + "\n"
+
+
+def _feedback_hint(q, r) -> str:
+    """The hint of a question's feedback: the one a diagnosed mistake chooses (its own, or
+    none for an answer computed in float32), else the first stage only -- the later ones
+    (the formula) stay in the self-check."""
+    messages = [c.message for c in r.cases if not c.ok] or [r.message]
+    chosen = chosen_hint(messages, getattr(q, "mistake_hints", {}))
+    if chosen is not None:
+        return chosen
+    return q.hints[0] if q.hints else ""
 
 
 _FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
@@ -97,9 +153,15 @@ def csv_text(value) -> str:
 
 
 def write_csv(rows: list[StudentResult], question_ids: list[str], path: Path) -> None:
+    """``grades.csv``; the ``late`` and ``penalty`` columns (:func:`late_cells`) appear when a
+    row has a late record (a due date was given, or the LMS marked a file late)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["student", *(csv_text(q) for q in question_ids), "total", "max", "status"])
+    with_late = any(r.late is not None for r in rows)
+    writer.writerow(
+        ["student", *(csv_text(q) for q in question_ids), "total", "max", "status"]
+        + (["late", "penalty"] if with_late else [])
+    )
     for row in sorted(rows, key=lambda r: r.student):
         writer.writerow(
             [
@@ -112,6 +174,7 @@ def write_csv(rows: list[StudentResult], question_ids: list[str], path: Path) ->
                 _fmt_points(row.max),
                 csv_text(row.status),
             ]
+            + (late_cells(row) if with_late else [])
         )
     path.write_text(buf.getvalue(), encoding="utf-8")
 
@@ -132,6 +195,7 @@ class Summary:
     regraded: dict = field(default_factory=dict)  # why graded again -> how many ("file changed")
     stale: list = field(default_factory=list)  # out of date, not regraded: --student chose others
     unselected: int = 0  # submissions never graded and not chosen by --student
+    late_notes: list = field(default_factory=list)  # late files without a time, disagreements
 
     def class_text(self) -> str:
         """The identity flags, deleted answer cells, the roster's missing and unknown
@@ -165,6 +229,26 @@ class Summary:
                 + (f" ({', '.join(self.unknown)})" if self.unknown else "")
                 + "; LMS files: canvas.csv, moodle.csv"
             )
+        records = [r.late for r in self.rows if r.late]
+        late = [r for r in self.rows if r.late and r.late.get("days") != 0]
+        if records or self.late_notes:
+            dues = sorted({str(x["due"]) for x in records if x.get("due")})
+            rule = (
+                f"due {', '.join(dues) or 'not given'}; {records[0].get('policy')}"
+                if records
+                else ""
+            )
+            lines.append(
+                f"Late: {len(late)} submission(s)"
+                + (": " if late else "")
+                + ", ".join(
+                    f"{r.student} ({_days((r.late or {}).get('days'))}, "
+                    f"-{_fmt_points(r.penalty)} points)"
+                    for r in sorted(late, key=lambda r: r.student)
+                )
+                + (f"; {rule}" if rule else "")
+            )
+            lines += [f"  - {note}" for note in self.late_notes]
         if self.marking:
             lines.append(self.marking)
         return "\n".join(lines)

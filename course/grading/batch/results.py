@@ -86,7 +86,7 @@ class QuestionResult:
 
 
 #: StudentResult's fields that are written only when set (None: absent from the JSON row)
-_OPTIONAL = ("deleted_answers", "wall_seconds", "file")
+_OPTIONAL = ("deleted_answers", "wall_seconds", "file", "late")
 
 
 @dataclass
@@ -96,7 +96,9 @@ class StudentResult:
     ``status`` is a :class:`~course.grading.vocabulary.SubmissionStatus`, or the abnormal
     questions (``"q1: timeout; q3: forbidden"``); ``notes`` are for the student;
     ``deleted_answers`` maps a question whose answer cell was deleted to ``"adopted"`` (graded
-    from an added cell) or ``"missing"``; ``file`` is the graded file and its sha256."""
+    from an added cell) or ``"missing"``; ``file`` is the graded file and its sha256; ``late``
+    is when it was handed in and the late deduction (:mod:`course.grading.batch.late`), and
+    ``total`` is then the points after the deduction."""
 
     student: str
     assignment: str
@@ -111,12 +113,34 @@ class StudentResult:
     deleted_answers: dict[str, str] | None = None
     wall_seconds: float | None = None
     file: dict[str, Any] | None = None
+    late: dict[str, Any] | None = None
     has_file: bool = False  # ``file`` is written (null included) once the driver recorded it
     extra: dict[str, Any] = field(default_factory=dict)  # keys of other versions, kept as read
 
+    @property
+    def points(self) -> float:
+        """The sum of the questions' points, before any late deduction."""
+        return round(sum(r.points for r in self.questions.values()), 4)
+
+    @property
+    def penalty(self) -> float:
+        """The points the late deduction takes (never more than the points earned)."""
+        percent = float((self.late or {}).get("percent") or 0.0)
+        return round(min(self.points, percent / 100 * self.max), 4)
+
     def add_total(self) -> None:
-        """``total``: the sum of the questions' points (rounded as written)."""
-        self.total = round(sum(r.points for r in self.questions.values()), 4)
+        """``total``: the sum of the questions' points less the late deduction (rounded as
+        written, never below 0)."""
+        self.total = round(self.points - self.penalty, 4)
+
+    def set_late(self, record: dict[str, Any] | None) -> bool:
+        """Attach the late record (None: nothing known) and recompute the total; True when
+        the row changed."""
+        before = (self.late, self.total)
+        self.late = record
+        if record is not None or before[0] is not None:
+            self.add_total()
+        return (self.late, self.total) != before
 
     def record_file(self, file: dict[str, Any] | None) -> None:
         self.file = file
@@ -142,6 +166,8 @@ class StudentResult:
             out["wall_seconds"] = self.wall_seconds
         if self.has_file:
             out["file"] = self.file
+        if self.late is not None:
+            out["late"] = dict(self.late)
         return out
 
     @classmethod
@@ -175,6 +201,7 @@ class StudentResult:
             deleted_answers=d.get("deleted_answers"),
             wall_seconds=d.get("wall_seconds"),
             file=d.get("file"),
+            late=d.get("late"),
             has_file="file" in d,
             extra={k: v for k, v in d.items() if k not in known},
         )

@@ -24,9 +24,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from course.grading.batch.reports import csv_text
+from course.grading.batch.reports import csv_text, late_sentence
 from course.grading.batch.results import StudentResult
-from course.grading.vocabulary import STUDENT_ID_RULE, is_student_id
+from course.grading.vocabulary import STUDENT_ID_RULE, GradeStatus, is_student_id
 
 __all__ = [
     "Roster",
@@ -265,11 +265,16 @@ def write_canvas_csv(
 def _feedback(row: StudentResult | None) -> str:
     if row is None:
         return "No submission received."
-    parts = [f"{qid} {_points(r.points)}/{_points(r.max)}" for qid, r in row.questions.items()]
+    parts = [  # an answer not marked yet says so: its 0 is no grade
+        f"{qid} {_points(r.points)}/{_points(r.max)}"
+        + (" not marked yet" if r.status == GradeStatus.TO_MARK else "")
+        for qid, r in row.questions.items()
+    ]
     text = f"{_points(row.total)} of {_points(row.max)} points ({'; '.join(parts)})."
     if row.status != "ok":
         text += f" Status: {row.status}."
-    return text
+    late = late_sentence(row)
+    return f"{text} {late}" if late else text
 
 
 def write_moodle_csv(

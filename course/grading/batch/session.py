@@ -17,6 +17,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from course.grading.authoring.checks import student_seed
+from course.grading.authoring.personal import students_data_source
 from course.grading.authoring.release import checks_digest, load_assignment
 from course.grading.authoring.secret import public_key_id
 from course.grading.batch.options import GradeOptions
@@ -58,7 +60,15 @@ MAX_SHORT_ANSWER = 20_000
 class AssignmentGrader:
     """Grades submissions of one assignment (thread-safe: one :meth:`grade_one` per thread)."""
 
-    def __init__(self, solution_dir: Path, options: GradeOptions | None = None, deny_read=()):
+    def __init__(
+        self,
+        solution_dir: Path,
+        options: GradeOptions | None = None,
+        deny_read=(),
+        data_key: str | None = None,
+    ):
+        """``data_key``: the key id of a class whose key this grader does not hold (a cluster
+        worker); each student's data then come from the seeds :meth:`grade_one` is given."""
         self.options = options if options is not None else GradeOptions()
         self.solution_dir = Path(solution_dir).resolve()
         self.checks, self.release = load_assignment(self.solution_dir)
@@ -66,7 +76,15 @@ class AssignmentGrader:
         self.digest = checks_digest(self.solution_dir, self.checks.files)
         # personal data are drawn with the instructor's secret when the class has one
         self.secret = getattr(self.options, "secret", None)
-        self.data_key = self.secret.key_id if self.secret is not None else public_key_id
+        if data_key is not None and self.secret is not None and data_key != self.secret.key_id:
+            raise ValueError(f"data_key {data_key!r} is not the key id of options.secret")
+        self.data_key = data_key or (
+            self.secret.key_id if self.secret is not None else public_key_id
+        )
+        # the data.py beside the student's notebook: `from data import ...` works at grading too
+        # (a keyed class, graded here or on a worker that holds only the key's id, gets the
+        # public part only, as its edition does)
+        self.data_source = students_data_source(self.checks, self.data_key != public_key_id)
         self.version = _version()
         self.questions = list(self.checks.questions.values())
         # references that do not depend on the student: computed once, here, in the parent
@@ -143,6 +161,15 @@ class AssignmentGrader:
         return max(60.0, 2.0 * per_q + 30.0)
 
     # -- one student ----------------------------------------------------------------------
+    def student_seeds(self, sid: str) -> dict[str, int]:
+        """The seed of each of ``sid``'s personal data sets, derived from the key here: what a
+        machine that grades ``sid`` without the key needs (see :meth:`grade_one`)."""
+        if self.secret is None and self.data_key != public_key_id:
+            raise ValueError("this grader holds no key: it cannot derive a student's seeds")
+        return {
+            key: student_seed(self.name, key, sid, self.secret) for key in self.checks.data_keys()
+        }
+
     def _row(self, sid: str) -> StudentResult:
         return StudentResult(
             student=sid,
@@ -161,13 +188,16 @@ class AssignmentGrader:
         problem: str | None = None,
         refused: bool = False,
         raw: bytes | None = None,
+        seeds: dict[str, int] | None = None,
     ) -> StudentResult:
         """Grade one submission (its notebook at ``path``, or its bytes ``raw``); never raises
-        (a grader failure is recorded in the row). ``wall_seconds`` says how long it took."""
+        (a grader failure is recorded in the row). ``wall_seconds`` says how long it took.
+        ``seeds``: the student's :meth:`student_seeds`, computed where the key is (a grader
+        without the key needs them; one with the key derives them itself)."""
         start = time.monotonic()
         row = self._row(sid)
         try:
-            self._grade(row, sid, path, problem, refused, raw)
+            self._grade(row, sid, path, problem, refused, raw, seeds)
         except Exception as exc:  # a bug or sandbox failure must not abort the batch
             for q in self.questions:
                 row.questions.setdefault(
@@ -194,6 +224,7 @@ class AssignmentGrader:
         problem: str | None,
         refused: bool = False,
         raw: bytes | None = None,
+        seeds: dict[str, int] | None = None,
     ) -> None:
         if problem and path is None and raw is None:
             row.status = SubmissionStatus.REFUSED if refused else SubmissionStatus.INVALID_NOTEBOOK
@@ -235,13 +266,20 @@ class AssignmentGrader:
             if not nb.get("cells"):
                 row.notes.append("The notebook is empty.")
             return
-        StudentSession(self, row, sid, plan).run()
+        StudentSession(self, row, sid, plan, seeds).run()
 
 
 class StudentSession:
     """Runs one student's plan, with restarts after timeouts and crashes."""
 
-    def __init__(self, grader: AssignmentGrader, row: StudentResult, sid: str, plan):
+    def __init__(
+        self,
+        grader: AssignmentGrader,
+        row: StudentResult,
+        sid: str,
+        plan,
+        seeds: dict[str, int] | None = None,
+    ):
         self.g = grader
         self.row = row
         self.sid = sid
@@ -254,9 +292,10 @@ class StudentSession:
         self.hits: dict[str, set] = {}
         self.child: ChildHandle | None = None
         self.deadline = time.monotonic() + grader.budget()
+        if seeds is None:
+            seeds = grader.student_seeds(sid)
         self.data = {
-            key: grader.checks.data_for(key, sid, grader.secret)
-            for key in grader.checks.data_keys()
+            key: grader.checks.data_from_seed(key, seeds[key]) for key in grader.checks.data_keys()
         }
 
     # -- messages -------------------------------------------------------------------------
@@ -361,6 +400,7 @@ class StudentSession:
                 "student_id": self.sid,
                 "assignment": self.g.name,
                 "data": {k: encode(v) for k, v in self.data.items()},
+                "data_module": self.g.data_source,
             }
             self.child = self.g.sandbox.start(init, self.g.options.ready_timeout)
             if not self._run_cells():

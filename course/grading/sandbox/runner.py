@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import base64  # noqa: F401  (imported before student code, used by the codec)
 import contextlib
+import importlib.abc
+import importlib.util
 import json
 import os
 import signal
@@ -278,6 +280,37 @@ def preload(modules=PRELOAD) -> list:
     return failed
 
 
+class ReleasedData(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """The import of ``data``: the ``data.py`` released beside the student's notebook, so that
+    ``from data import ...`` works at grading as at self-check (the child's folder holds no
+    file of it, and nothing of it can be changed there: the module is made from the text the
+    grader sent, when the notebook first imports it)."""
+
+    NAME = "data"
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != self.NAME:
+            return None
+        return importlib.util.spec_from_loader(fullname, self, origin="data.py")
+
+    def create_module(self, spec):
+        return None  # the default module object
+
+    def exec_module(self, module) -> None:
+        module.__file__ = "data.py"
+        exec(compile(self.source, "data.py", "exec"), module.__dict__)
+
+
+def offer_released_data(source) -> None:
+    """Make ``import data`` find the released ``data.py`` (``source``; None: there is none).
+    First on the import path, as the notebook's own folder is in the student's kernel."""
+    if isinstance(source, str) and source:
+        sys.meta_path.insert(0, ReleasedData(source))
+
+
 # --------------------------------------------------------------------------------------
 # the request loop
 # --------------------------------------------------------------------------------------
@@ -498,6 +531,7 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
         sys.dont_write_bytecode = True
         child.shell = shell or make_shell()
         selfcheck._GRADING = {"student_id": init["student_id"], "data": init.get("data", {})}
+        offer_released_data(init.get("data_module"))
         cap = int(limits.get("output_chars", 1_000_000))
         sys.stdout = CappedWriter(1, cap)
         sys.stderr = CappedWriter(2, cap // 4)

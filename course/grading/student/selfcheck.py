@@ -26,11 +26,18 @@ from typing import Any
 from course.grading.authoring.personal import PersonalData
 from course.grading.authoring.seal import sealed_compare
 from course.grading.codec import decode, encode
-from course.grading.compare import check_signature, describe
+from course.grading.compare import check_signature, chosen_hint, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
 from course.grading.notebook import forbidden_mentions
 from course.grading.tripwire import wrap_forbidden
-from course.grading.vocabulary import CHECKS_FILE, PLACEHOLDER_ID, PublicQuestion, PublicSpec
+from course.grading.vocabulary import (
+    CHECKS_FILE,
+    PLACEHOLDER_ID,
+    PublicQuestion,
+    PublicSpec,
+    id_off_pattern,
+    id_pattern_in,
+)
 
 __all__ = ["PLACEHOLDER_ID", "Assignment"]
 
@@ -112,6 +119,8 @@ class Assignment:
         self.personal = PersonalData.read(folder) if data_module is None else None
         # which cell set each answer (notes an answer set outside its answer cell)
         self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
+        # the class's student ID pattern (``course export --id-pattern``), None without one
+        self.id_pattern = id_pattern_in(folder)
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -121,13 +130,34 @@ class Assignment:
             return _GradingStandIn(_GRADING)
         kind, folder = _locate(name, path)
         if kind == "json":
-            return cls(PublicSpec.read(folder), folder, student_id)
-        from course.grading.authoring.checks import load_checks
-        from course.grading.authoring.release import public_spec
+            check = cls(PublicSpec.read(folder), folder, student_id)
+        else:
+            from course.grading.authoring.checks import load_checks
+            from course.grading.authoring.release import public_spec
 
-        checks = load_checks(folder)
-        spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
-        return cls(spec, folder, student_id, data_module=checks.data_module)
+            checks = load_checks(folder)
+            spec = PublicSpec.loads(public_spec(checks).text())  # exactly what a release ships
+            check = cls(spec, folder, student_id, data_module=checks.data_module)
+        note = check.id_note()
+        if note:
+            print(note)
+        return check
+
+    def id_note(self) -> str:
+        """What is wrong with ``STUDENT_ID`` ('' when nothing is, or none was given): still
+        the placeholder, or off the pattern of the class's IDs. Said when the self-check is
+        loaded and by ``check.all()``; ``check.submit()`` refuses such an ID."""
+        sid = self.student_id
+        if sid is None:
+            return ""
+        if sid == PLACEHOLDER_ID:
+            return (
+                f"Note: STUDENT_ID is still the placeholder {PLACEHOLDER_ID!r}: set it to your "
+                "student ID, exactly as registered, and run this cell again (your personal "
+                "data and check.submit() need it)."
+            )
+        off = id_off_pattern(sid, self.id_pattern)
+        return f"Note: {off} (check.submit() refuses it)." if off else ""
 
     # -- data ---------------------------------------------------------------------------
     def _data_mod(self):
@@ -160,6 +190,9 @@ class Assignment:
             raise ValueError(
                 "Set STUDENT_ID in the first cell to your student ID, then re-run that cell."
             )
+        off = id_off_pattern(self.student_id, self.id_pattern)
+        if off:
+            raise ValueError(off + ".")
 
     # -- submitting ---------------------------------------------------------------------
     def submit(self, notebook=None, out=None):
@@ -186,6 +219,9 @@ class Assignment:
             earned[qid] = self._check(qid, ns, None, False)
             print()
         print(public_summary(self.spec, earned))
+        note = self.id_note()
+        if note:
+            print(note)
 
     def __call__(self, qid: str, *value) -> None:
         """Self-check question ``qid``; pass ``value`` to check it instead of the notebook's."""
@@ -224,13 +260,18 @@ class Assignment:
         return q.points * float(fraction or 0.0)
 
     # -- hints --------------------------------------------------------------------------
-    def _failed(self, q) -> str:
+    def _failed(self, q, messages=()) -> str:
         """Count one failed self-check of ``q`` and return the hint line it earns ('' if none).
 
-        After the k-th failure the student sees stage ``min(k, n) - 1`` of the n stages: a
-        nudge first, the formula only after repeated failures. The count lives in this object,
-        i.e. in the kernel's memory, and starts again with a fresh kernel.
+        The diagnosis chooses first (:func:`~course.grading.compare.chosen_hint`): a declared
+        mistake named in ``messages`` shows its own hint, an answer computed in float32 none.
+        Otherwise, after the k-th failure the student sees stage ``min(k, n) - 1`` of the n
+        stages: a nudge first, the formula only after repeated failures. The count lives in
+        this object, i.e. in the kernel's memory, and starts again with a fresh kernel.
         """
+        chosen = chosen_hint(messages, q.mistake_hints)
+        if chosen is not None:
+            return f"Hint (for this mistake): {chosen}" if chosen else ""
         self._failures[q.id] = self._failures.get(q.id, 0) + 1
         stages = q.hints
         if not stages:
@@ -277,7 +318,7 @@ class Assignment:
                 print("  PASS")
                 return 1.0
             print("  FAIL")
-            hint = self._failed(q)
+            hint = self._failed(q, [verdict.message])
             if hint:
                 print(f"      {hint}")
             print(f"      {verdict.message}")
@@ -320,6 +361,7 @@ class Assignment:
         forbidden: set[str] = set(forbidden_mentions(_source_of(func), q.forbid))
         passed = 0
         lines: list[str] = []
+        failures: list[str] = []  # the failed cases' messages: a diagnosis may choose the hint
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
@@ -346,6 +388,7 @@ class Assignment:
                 lines.append(f"  PASS: {case.label}")
             else:
                 lines.append(f"  FAIL: {case.label}\n      {message}")
+                failures.append(message)
         n = len(q.cases)
         hidden = q.hidden_cases
         more = (
@@ -364,7 +407,7 @@ class Assignment:
             )
             return 0.0
         if passed < n:
-            hint = self._failed(q)
+            hint = self._failed(q, failures)
             if hint:
                 print(f"  {hint}")
         for line in lines:

@@ -93,12 +93,13 @@ def make_submission(
     assignment: str | None = None,
     out: Path | None = None,
     personal: PersonalData | None = None,
+    id_pattern: str | None = None,
 ) -> tuple[Path, str, dict]:
     """Write the submission file of a saved notebook: ``(path, sha256, notebook)``.
 
     ``student_id`` None takes it from the notebook's setup cell. Raises :class:`Refused`
-    (nothing written) on a bad ID, a notebook that is not the assignment's, or an ID that
-    the issued personal data do not know.
+    (nothing written) on a bad ID, an ID off the class's ``id_pattern`` (``class.json``), a
+    notebook that is not the assignment's, or an ID that the issued personal data do not know.
     """
     notebook = Path(notebook)
     try:
@@ -120,7 +121,7 @@ def make_submission(
     saved = saved_student_id(nb)
     where = "STUDENT_ID" if student_id is None else "the student ID"
     try:
-        sid = check_student_id(saved if student_id is None else student_id, where)
+        sid = check_student_id(saved if student_id is None else student_id, where, id_pattern)
     except ValueError as exc:
         raise Refused(str(exc)) from None
     if student_id is not None and saved is not None and saved.strip() != sid:
@@ -227,7 +228,7 @@ def submit_from_kernel(check, namespace: dict, notebook=None, out=None) -> Path 
     """``check.submit()``: refuse or write, and print what happened (never a traceback)."""
     name = check.name
     try:
-        sid = check_student_id(check.student_id)
+        sid = check_student_id(check.student_id, pattern=check.id_pattern)
     except ValueError as exc:
         print(f"Not submitted: {exc}.")
         return None
@@ -256,7 +257,7 @@ def submit_from_kernel(check, namespace: dict, notebook=None, out=None) -> Path 
     print(f"Self-checks of {name} (student {sid}):\n")
     check.all(namespace)
     try:
-        target, digest, nb = make_submission(path, sid, name, out, check.personal)
+        target, digest, nb = make_submission(path, sid, name, out, check.personal, check.id_pattern)
     except Refused as exc:
         print(f"Not submitted: {exc}.")
         return None

@@ -1,0 +1,524 @@
+"""``course mark``: marking the short answers in Jupyter, one answer at a time.
+
+:class:`MarkingView` is an ipywidgets view of a grading output folder's marking file
+(``OUT/short_answers.csv``, written by ``course grade``; :mod:`course.grading.batch.marks`). It
+shows one answer of one short-answer question at a time, with the question's rubric and points,
+a points box (a number between 0 and the question's points; ``1.5`` or ``1,5``) and a comment
+box for the student. Every mark is written into the marking file at once, so the file is always
+what ``course grade … --short-answers OUT/short_answers.csv`` merges, a spreadsheet can still
+be used for the same file, and a restarted view starts from the marks so far. Where the
+instructor stopped is kept in ``OUT/marking_progress.json``.
+
+The view is anonymous by default: it shows *answer 3 of 12*, not the student's ID (a check box
+shows the IDs). Answers come in the order of a digest of their text, not of the roster, so the
+position does not give the student away either, and answers with the same text are neighbours
+(the view says how many share it). Answers are shown as plain text (a student's HTML is never
+run in the instructor's browser).
+
+``course mark OUT`` writes ``OUT/marking.ipynb``, a notebook whose one cell shows the view, and
+opens it in JupyterLab (:func:`write_marking_notebook`). The view needs ipywidgets (the
+``notebooks`` extra); the marking file and :class:`MarkingFile` do not.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from course.grading.batch.marks import (
+    COLUMNS,
+    SHORT_ANSWERS_FILE,
+    MarksError,
+    parse_points,
+    read_marking_file,
+    write_marking_file,
+)
+from course.grading.batch.reports import csv_text
+
+__all__ = [
+    "NOTEBOOK_FILE",
+    "PROGRESS_FILE",
+    "Answer",
+    "MarkingFile",
+    "MarkingView",
+    "write_marking_notebook",
+]
+
+PROGRESS_FILE = "marking_progress.json"
+NOTEBOOK_FILE = "marking.ipynb"
+
+
+def _unquote(text: str | None) -> str:
+    """A cell as the marker reads it (without the spreadsheet guard of ``csv_text``)."""
+    text = (text or "").strip()
+    return text[1:] if text.startswith("'") and text[1:2] in ("=", "+", "-", "@") else text
+
+
+def _fmt(x: float) -> str:
+    return f"{round(float(x), 4):g}"
+
+
+@dataclass(frozen=True)
+class Answer:
+    """One row of the marking file: a student's answer to a question and its mark so far
+    (``points`` None: not marked yet)."""
+
+    student: str
+    question: str
+    text: str
+    points_possible: float
+    rubric: str
+    answer_id: str
+    points: float | None
+    comment: str
+
+    @property
+    def marked(self) -> bool:
+        return self.points is not None
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return (self.student, self.question)
+
+
+class MarkingFile:
+    """The marking file of the grading output folder ``out_dir``, read and filled in place.
+
+    ``answers`` are ordered by question (as in the file), then by a digest of the answer's text
+    (``answer_id``), then by student. :meth:`mark` writes one mark into the file at once.
+    """
+
+    def __init__(self, out_dir: str | Path):
+        self.out = Path(out_dir).resolve()  # the messages name it: "." would say nothing
+        self.path = self.out / SHORT_ANSWERS_FILE
+        if not self.path.is_file():
+            raise MarksError(
+                f"{self.path} does not exist: `course grade NAME SUBMISSIONS --out {self.out}` "
+                "writes it for an assignment with short-answer questions"
+            )
+        self.answers: list[Answer] = []
+        self.reload()
+
+    def reload(self) -> None:
+        """Read the file again (after a rerun of ``course grade`` or an edit elsewhere)."""
+        header, rows = read_marking_file(self.path)
+        missing = [c for c in COLUMNS if c not in header]
+        if missing:
+            raise MarksError(
+                f"{self.path}: no column {', '.join(missing)}; rerun `course grade` for a fresh "
+                "marking file"
+            )
+        answers, errors = [], []
+        for line, r in enumerate(rows, start=2):
+            try:
+                top = float(r["points_possible"])
+                points = parse_points(r.get("points") or "", top)
+            except (ValueError, MarksError) as exc:
+                errors.append(f"line {line}: {exc}")
+                continue
+            answers.append(
+                Answer(
+                    student=_unquote(r["student"]),
+                    question=_unquote(r["question"]),
+                    text=_unquote(r["answer"]),
+                    points_possible=top,
+                    rubric=_unquote(r["rubric"]),
+                    answer_id=(r["answer_id"] or "").strip(),
+                    points=points,
+                    comment=_unquote(r.get("comment")),
+                )
+            )
+        if errors:
+            raise MarksError(f"{self.path}: fix these rows first:\n  " + "\n  ".join(errors))
+        order = {q: i for i, q in enumerate(dict.fromkeys(a.question for a in answers))}
+        self.answers = sorted(answers, key=lambda a: (order[a.question], a.answer_id, a.student))
+
+    @property
+    def questions(self) -> list[str]:
+        """The questions with answers to mark, in the file's order."""
+        return list(dict.fromkeys(a.question for a in self.answers))
+
+    def of(self, question: str) -> list[Answer]:
+        """The answers to ``question``, in marking order."""
+        return [a for a in self.answers if a.question == question]
+
+    def find(self, key: tuple[str, str]) -> Answer | None:
+        return next((a for a in self.answers if a.key == key), None)
+
+    def mark(self, answer: Answer, points: str, comment: str = "") -> Answer:
+        """Give ``answer`` the ``points`` typed (blank: not marked) and ``comment``, and write
+        them into the file; returns the answer as marked.
+
+        :class:`MarksError` (and nothing written) for points that are not a number between 0
+        and the question's points, a comment without points (the import would refuse it), or
+        an answer that is no longer in the file (``course grade`` rewrote it for a changed
+        answer).
+        """
+        value = parse_points(points, answer.points_possible)
+        comment = comment.strip()
+        if value is None and comment:
+            raise MarksError("a comment needs points (0 is fine): give the points to save it")
+        header, rows = read_marking_file(self.path)
+        row = next(
+            (
+                r
+                for r in rows
+                if (_unquote(r["student"]), _unquote(r["question"])) == answer.key
+                and (r["answer_id"] or "").strip() == answer.answer_id
+            ),
+            None,
+        )
+        if row is None:
+            raise MarksError(
+                f"this answer is no longer in {self.path} (the student's answer changed and "
+                "`course grade` wrote a new file): reload the view"
+            )
+        row["points"] = "" if value is None else _fmt(value)
+        row["comment"] = csv_text(comment)
+        write_marking_file(self.path, header, rows)
+        self.reload()
+        return self.find(answer.key) or replace(answer, points=value, comment=comment)
+
+
+def _box(text: str, css: str) -> str:
+    style = "white-space: pre-wrap; border-left: 3px solid #999; padding: 0.2em 0.7em"
+    return f'<div class="{css}" style="{style}">{html.escape(text, quote=False)}</div>'
+
+
+class MarkingView:
+    """The marking view of the grading output folder ``out_dir``, shown by a notebook cell.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The ``--out`` folder of ``course grade`` (it holds ``short_answers.csv``).
+    question : str, optional
+        The question to start with; default: where marking stopped last time, else the first
+        answer not marked yet.
+    anonymous : bool, default True
+        Hide the students' IDs (the *show IDs* check box shows them).
+
+    Notes
+    -----
+    A mark is saved when the points or the comment box is left (Enter, Tab or a click
+    elsewhere): into ``short_answers.csv`` at once. Leaving an answer whose boxes hold
+    something that cannot be saved (points out of range, a comment without points) is refused
+    with the reason, so nothing typed is lost or silently changed. *Next unmarked* goes to the
+    next answer without points, in this question first, then in the others.
+
+    Examples
+    --------
+    In a notebook, ``MarkingView("grades/03")`` as the cell's last line shows the view
+    (``course mark grades/03`` writes such a notebook). Here, a marking file of one answer:
+
+    >>> import csv, tempfile
+    >>> from course.grading.batch.marks import COLUMNS, answer_id
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> out = Path(tmp.name)
+    >>> text = "Because T exceeds its critical value."
+    >>> row = ["s1", "q3", text, "2", "", "names the critical value", "", answer_id(text)]
+    >>> with open(out / "short_answers.csv", "w", newline="") as f:
+    ...     csv.writer(f, lineterminator="\\n").writerows([COLUMNS, row])
+    >>> view = MarkingView(out)
+    >>> view.current.student, view.current.marked, "s1" in view.heading.value
+    ('s1', False, False)
+    >>> view.points.value = "1,5"  # what the points box sends when the marker leaves it
+    >>> view.current.points, (out / "short_answers.csv").read_text().splitlines()[1]
+    (1.5, 's1,q3,Because T exceeds its critical value.,2,1.5,names the critical value,,...')
+    >>> view.points.value = "3"  # more than the question's points: refused, nothing written
+    >>> view.current.points, "give between 0 and 2" in view.status.value
+    (1.5, True)
+    >>> tmp.cleanup()
+    """
+
+    def __init__(
+        self, out_dir: str | Path, question: str | None = None, anonymous: bool = True
+    ) -> None:
+        import ipywidgets as widgets
+
+        self.file = MarkingFile(out_dir)
+        self.progress_path = self.file.out / PROGRESS_FILE
+        if question is not None and question not in self.file.questions:
+            raise ValueError(
+                f"question={question!r}: no answers to mark for it in {self.file.path} "
+                f"(questions with answers: {', '.join(self.file.questions) or 'none'})"
+            )
+        self._loading = False
+        layout = widgets.Layout(width="100%")
+        self.question = widgets.Dropdown(options=self.file.questions, description="question")
+        self.show_ids = widgets.Checkbox(value=not anonymous, description="show IDs", indent=False)
+        self.heading = widgets.HTML()
+        self.answer = widgets.HTML(layout=layout)
+        self.rubric = widgets.HTML(layout=layout)
+        self.points = widgets.Text(description="points", continuous_update=False)
+        self.comment = widgets.Textarea(
+            description="comment",
+            placeholder="shown to the student in the feedback (optional)",
+            continuous_update=False,
+            layout=widgets.Layout(width="100%", height="5em"),
+        )
+        self.status = widgets.HTML()
+        self.counts = widgets.HTML()
+        self.previous_button = widgets.Button(description="◀ previous")
+        self.next_button = widgets.Button(description="next ▶")
+        self.unmarked_button = widgets.Button(description="next unmarked", button_style="primary")
+        for name in (
+            "question",
+            "show_ids",
+            "heading",
+            "answer",
+            "rubric",
+            "points",
+            "comment",
+            "status",
+            "counts",
+        ):
+            getattr(self, name).add_class(f"course-marking-{name.replace('_', '-')}")
+        for name, button in (
+            ("previous", self.previous_button),
+            ("next", self.next_button),
+            ("next-unmarked", self.unmarked_button),
+        ):
+            button.add_class(f"course-marking-{name}")
+        self.widget = widgets.VBox(
+            [
+                widgets.HBox([self.question, self.show_ids]),
+                self.heading,
+                self.answer,
+                self.rubric,
+                self.points,
+                self.comment,
+                widgets.HBox([self.previous_button, self.next_button, self.unmarked_button]),
+                self.status,
+                self.counts,
+            ],
+            layout=layout,
+        )
+        self.widget.add_class("course-marking")
+        self.previous_button.on_click(lambda _: self.previous())
+        self.next_button.on_click(lambda _: self.next())
+        self.unmarked_button.on_click(lambda _: self.next_unmarked())
+        self.points.observe(self._edited, names="value")
+        self.comment.observe(self._edited, names="value")
+        self.show_ids.observe(lambda _: self._show(), names="value")
+        self.question.observe(self._question_chosen, names="value")
+        self.current: Answer | None = None
+        self._start(question)
+
+    # -- what the notebook shows -----------------------------------------------------------
+    def _repr_mimebundle_(self, **kwargs):
+        return self.widget._repr_mimebundle_(**kwargs)
+
+    # -- navigation ------------------------------------------------------------------------
+    @property
+    def answers(self) -> list[Answer]:
+        """The answers of the question shown, in marking order."""
+        return self.file.of(self.question.value) if self.question.value else []
+
+    @property
+    def index(self) -> int:
+        """The position of the answer shown among its question's answers (0-based)."""
+        keys = [a.key for a in self.answers]
+        return keys.index(self.current.key) if self.current is not None else 0
+
+    def previous(self) -> bool:
+        """Show the previous answer of this question; False when there is none or the answer
+        shown holds edits that cannot be saved."""
+        i = self.index
+        return i > 0 and self.go(self.answers[i - 1])
+
+    def next(self) -> bool:
+        """Show the next answer of this question (False as :meth:`previous`)."""
+        i = self.index
+        return i + 1 < len(self.answers) and self.go(self.answers[i + 1])
+
+    def next_unmarked(self) -> bool:
+        """Show the next answer without points: in this question after the one shown, then
+        from its start, then in the other questions; False when every answer is marked."""
+        if self.current is None:
+            return False
+        i, here = self.index, self.answers
+        order = here[i + 1 :] + here[:i]
+        for q in self.file.questions:
+            if q != self.current.question:
+                order += self.file.of(q)
+        target = next((a for a in order if not a.marked), None)
+        if target is None:
+            if self._leave():
+                self._say(
+                    "Every answer is marked. Merge the marks: `course grade NAME SUBMISSIONS "
+                    f"--out {self.file.out} --short-answers {self.file.path}`."
+                )
+            return False
+        return self.go(target)
+
+    def go(self, answer: Answer) -> bool:
+        """Show ``answer`` (after saving the one shown); False when the boxes of the answer
+        shown cannot be saved (the status says why)."""
+        if not self._leave():
+            return False
+        self.current = self.file.find(answer.key) or answer
+        self._loading = True
+        try:
+            self.question.value = self.current.question
+            self.points.value = "" if self.current.points is None else _fmt(self.current.points)
+            self.comment.value = self.current.comment
+        finally:
+            self._loading = False
+        self._save_progress()
+        self._show()
+        self._say("")
+        return True
+
+    def _start(self, question: str | None) -> None:
+        if not self.file.answers:
+            self._say(f"No answers to mark in {self.file.path}.")
+            for button in (self.previous_button, self.next_button, self.unmarked_button):
+                button.disabled = True
+            self.points.disabled = self.comment.disabled = True
+            return
+        saved = self._load_progress()
+        start = saved if saved is not None and question in (None, saved.question) else None
+        if start is None:
+            pool = self.file.of(question) if question else self.file.answers
+            start = next((a for a in pool if not a.marked), pool[0])
+        self.go(start)
+
+    def _question_chosen(self, change) -> None:
+        if self._loading or self.current is None or change["new"] == self.current.question:
+            return
+        pool = self.file.of(change["new"])
+        if not self.go(next((a for a in pool if not a.marked), pool[0])):
+            self._loading = True
+            try:
+                self.question.value = self.current.question  # stay: the status says why
+            finally:
+                self._loading = False
+
+    # -- marking ---------------------------------------------------------------------------
+    def _edited(self, _change) -> None:
+        if not self._loading:
+            self._save()
+
+    def _unsaved(self) -> bool:
+        a = self.current
+        if a is None:
+            return False
+        shown = "" if a.points is None else _fmt(a.points)
+        return (self.points.value.strip(), self.comment.value.strip()) != (shown, a.comment)
+
+    def _save(self) -> bool:
+        """Write the boxes' mark into the file; False (with the reason) when it cannot be."""
+        a = self.current
+        if a is None or not self._unsaved():
+            return True
+        try:
+            self.current = self.file.mark(a, self.points.value, self.comment.value)
+        except MarksError as exc:
+            self._say(f"Not saved: {exc}.", error=True)
+            return False
+        saved = self.current
+        self._say(
+            f"Saved: {_fmt(saved.points)} of {_fmt(saved.points_possible)} points."
+            if saved.points is not None
+            else "Saved: not marked."
+        )
+        self._save_progress()
+        self._show_counts()
+        return True
+
+    def _leave(self) -> bool:
+        return self._save()
+
+    # -- display ---------------------------------------------------------------------------
+    def _say(self, text: str, error: bool = False) -> None:
+        color = "#b3261e" if error else "#1a1a1a"
+        self.status.value = f'<span style="color: {color}">{html.escape(text, quote=False)}</span>'
+
+    def _show(self) -> None:
+        a = self.current
+        if a is None:
+            return
+        answers = self.answers
+        who = f" · student {html.escape(a.student)}" if self.show_ids.value else ""
+        same = sum(b.answer_id == a.answer_id for b in answers) - 1
+        twin = f" · the same text as {same} other answer(s)" if same else ""
+        self.heading.value = (
+            f"<b>{html.escape(a.question)}</b> ({_fmt(a.points_possible)} points) · answer "
+            f"{self.index + 1} of {len(answers)}{who}{twin}"
+        )
+        self.answer.value = _box(a.text, "course-marking-text")
+        self.rubric.value = "<b>Rubric:</b> " + (
+            _box(a.rubric, "course-marking-rubric-text") if a.rubric else "<i>none given</i>"
+        )
+        self.points.placeholder = f"0 to {_fmt(a.points_possible)}"
+        self.previous_button.disabled = self.index == 0
+        self.next_button.disabled = self.index + 1 >= len(answers)
+        self._show_counts()
+
+    def _show_counts(self) -> None:
+        per = [
+            f"{html.escape(q)}: {sum(a.marked for a in self.file.of(q))} of "
+            f"{len(self.file.of(q))} marked"
+            for q in self.file.questions
+        ]
+        self.counts.value = (
+            "; ".join(per)
+            + f'. <span class="course-marking-file">Marks are saved in {html.escape(str(self.file.path))}'
+            "; merge them with <code>course grade … --short-answers</code> that file.</span>"
+        )
+
+    # -- where marking stopped -------------------------------------------------------------
+    def _save_progress(self) -> None:
+        if self.current is None:
+            return
+        tmp = self.progress_path.with_name(self.progress_path.name + ".tmp")
+        a = self.current
+        tmp.write_text(json.dumps({"question": a.question, "student": a.student}), "utf-8")
+        tmp.replace(self.progress_path)
+
+    def _load_progress(self) -> Answer | None:
+        try:
+            data = json.loads(self.progress_path.read_text("utf-8"))
+            return self.file.find((str(data["student"]), str(data["question"])))
+        except (OSError, ValueError, KeyError, TypeError):
+            return None  # no progress yet, or a damaged file: start at the first unmarked
+
+
+def write_marking_notebook(out_dir: str | Path) -> Path:
+    """Write ``out_dir/marking.ipynb`` (a notebook whose cell shows :class:`MarkingView` of
+    its own folder) unless it exists; returns its path. :class:`MarksError` when the folder
+    has no marking file."""
+    import nbformat
+
+    out = Path(out_dir)
+    if not (out / SHORT_ANSWERS_FILE).is_file():
+        MarkingFile(out)  # raises with the reason
+    path = out / NOTEBOOK_FILE
+    if path.exists():
+        return path
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
+    nb.cells = [
+        nbformat.v4.new_markdown_cell(
+            "# Marking the short answers\n\n"
+            "Run the cell below. Each mark is saved into `short_answers.csv` of this folder as "
+            "soon as you leave the points or comment box; close the notebook at any time and "
+            "the view starts where you stopped. `anonymous=False` shows the students' IDs, "
+            '`question="q3"` starts at that question.\n\n'
+            "Then merge the marks into the grades, the feedback and the LMS files:\n\n"
+            "```bash\ncourse grade NAME SUBMISSIONS --out THIS_FOLDER "
+            "--short-answers THIS_FOLDER/short_answers.csv\n```"
+        ),
+        nbformat.v4.new_code_cell(
+            'from course.grading.batch.marking import MarkingView\n\nMarkingView(".")'
+        ),
+    ]
+    nbformat.write(nb, path)
+    return path

@@ -1,0 +1,87 @@
+"""Per-student data of assignment 07_testing_theory (PUBLIC: released to students).
+
+Only data generators and harmless property checks live here; the references are in checks.py,
+which is never released. ``rng`` is seeded from the student's ID by the course, so everyone
+gets their own levelling line.
+"""
+
+import numpy as np
+from scipy import stats
+
+
+def _whitened_fit(A, y, sigma):
+    """Whitened residuals, their hat-matrix diagonal and the residuals e of the weighted fit."""
+    A_w, y_w = A / sigma[:, None], y / sigma
+    Q, _ = np.linalg.qr(A_w)
+    r = y_w - Q @ (Q.T @ y_w)
+    return r, np.sum(Q * Q, axis=1), r * sigma
+
+
+def _pair_statistic(A, y, sigma, k):
+    """T_2 of the alternative "a bias in observations k and k + 1" (weighted fit)."""
+    A_w, y_w = A / sigma[:, None], y / sigma
+    Q, _ = np.linalg.qr(A_w)
+    C_w = np.eye(len(y))[:, [k, k + 1]] / sigma[:, None]
+    Qc, _ = np.linalg.qr(C_w - Q @ (Q.T @ C_w))
+    r = y_w - Q @ (Q.T @ y_w)
+    return float(np.sum((Qc.T @ r) ** 2))
+
+
+def levelling(rng):
+    """A line of 14 levelled heights with individual precisions and one blunder.
+
+    The blunder sits on a precise observation in the middle third and is large enough that
+    the overall model test detects it and the w-test identifies it; one imprecise observation
+    gets a large but acceptable error, so the largest residual |e_i| points elsewhere
+    (adapting by the largest |e| gives another line). ``pair`` names the blunder and its
+    right-hand neighbour, the two-observation alternative of q6; the neighbour has an error
+    of two to three sigma of its own, so that T_2 of the pair clearly exceeds w² of the
+    blunder alone.
+    """
+    m, alpha = 14, 0.05
+    t = np.arange(m, dtype=float)
+    A = np.column_stack([np.ones(m), t])
+    critical = stats.chi2.isf(alpha, m - 2)
+    while True:  # a few rounds at most: redraw until the design holds
+        x_true = np.array([rng.uniform(10.0, 20.0), rng.uniform(-0.5, 0.5)])
+        sigma = np.round(rng.uniform(0.5, 1.5, size=m), 3)
+        k = int(rng.integers(m // 3, m - m // 3))
+        j = int(rng.choice([i for i in range(1, m - 1) if i not in (k, k + 1)]))
+        sigma[k] = round(float(rng.uniform(0.35, 0.45)), 3)
+        sigma[j] = round(float(rng.uniform(2.8, 3.2)), 3)
+        noise = sigma * rng.standard_normal(m)
+        noise[j] = rng.choice([-1.0, 1.0]) * rng.uniform(2.0, 2.4) * sigma[j]
+        noise[k] = rng.choice([-1.0, 1.0]) * rng.uniform(6.0, 9.0) * sigma[k]
+        # the neighbour gets a smaller error of its own, so that the pair explains clearly
+        # more than the blunder alone (T_2 - w_k² > 2)
+        noise[k + 1] = rng.choice([-1.0, 1.0]) * rng.uniform(2.0, 3.0) * sigma[k + 1]
+        y = np.round(A @ x_true + noise, 3)
+        r, h, e = _whitened_fit(A, y, sigma)
+        w = r / np.sqrt(1.0 - h)
+        design = (
+            float(r @ r) > critical + 2.0  # detected, with a margin
+            and _pair_statistic(A, y, sigma, k) - w[k] ** 2 > 2.0
+            and int(np.argmax(np.abs(w))) == k  # identified by the w-test
+            and np.sort(np.abs(w))[-1] - np.sort(np.abs(w))[-2] > 0.5  # without a near tie
+            and int(np.argmax(np.abs(e))) != k  # ... but the largest |e| is elsewhere
+        )
+        if design:
+            return {
+                "t": t,
+                "A": A,
+                "y": y,
+                "Qyy": np.diag(sigma**2),
+                "alpha": alpha,
+                "pair": [k, k + 1],
+            }
+
+
+def statistic_properties(d, value):
+    """Public sanity checks of a test statistic (they do not reveal it)."""
+    return [("a non-negative number", np.ndim(value) == 0 and float(value) >= 0.0)]
+
+
+def estimate_properties(d, value):
+    """Public sanity checks of an estimate of (height at t = 0, slope)."""
+    ok = np.shape(value) == (2,) and bool(np.all(np.isfinite(np.asarray(value, dtype=float))))
+    return [("two finite numbers (height at t = 0, slope)", ok)]

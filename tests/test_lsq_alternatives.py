@@ -1,0 +1,352 @@
+"""Tests of module 7's library: q-dimensional alternatives, estimated variance, the B-method,
+reliability and DIA (course.lsq).
+
+References are independent of the library's whitened algebra: refits of the extended model
+[A C] (the alternative hypothesis fitted directly), the textbook formulas with explicit
+inverses, scipy's laws and Monte Carlo rates inside binomial bands.
+"""
+
+import numpy as np
+import pytest
+from conftest import assert_rate
+from numpy.linalg import LinAlgError
+from scipy import stats
+
+from course import chi2, lsq
+
+T10 = np.arange(10.0)
+A_LINE = np.column_stack([np.ones(10), T10])
+Y_OUTLIER = np.array([2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53])
+
+
+def random_spd(rng, m, cond=20.0):
+    Q, _ = np.linalg.qr(rng.standard_normal((m, m)))
+    return (Q * np.geomspace(1.0, cond, m)) @ Q.T
+
+
+def problem(seed, m=9, n=3, correlated=True):
+    rng = np.random.default_rng(seed)
+    t = np.linspace(-1, 2, m)
+    A = np.column_stack([t**k for k in range(n)])
+    Qyy = random_spd(rng, m) if correlated else rng.uniform(0.5, 2.0, m)
+    cov = Qyy if np.ndim(Qyy) == 2 else np.diag(Qyy)
+    y = A @ rng.normal(size=n) + np.linalg.cholesky(cov) @ rng.standard_normal(m)
+    return A, y, Qyy, cov, rng
+
+
+def textbook_T_q(A, y, cov, C):
+    """T_q by the printed formula, with explicit inverses (an independent reference)."""
+    Qi = np.linalg.inv(cov)
+    Qxx = np.linalg.inv(A.T @ Qi @ A)
+    e = y - A @ (Qxx @ A.T @ Qi @ y)
+    Qee = cov - A @ Qxx @ A.T
+    middle = np.linalg.inv(C.T @ Qi @ Qee @ Qi @ C)
+    v = C.T @ Qi @ e
+    return float(v @ middle @ v)
+
+
+# ---------------------------------------------------------------------------
+# glr_test: the special cases and the printed formula
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("correlated", [True, False])
+def test_glr_of_one_observation_is_the_w_test_squared(seed, correlated):
+    A, y, Qyy, _, _ = problem(seed, correlated=correlated)
+    f = lsq.fit(A, y, Qyy)
+    w = lsq.w_tests(f).statistic
+    for i in range(f.m):
+        statistic = lsq.glr_test(f, np.eye(f.m)[:, i]).statistic
+        assert statistic == pytest.approx(w[i] ** 2, rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_glr_with_q_equal_to_the_redundancy_is_the_overall_model_test(seed):
+    A, y, Qyy, _, rng = problem(seed)
+    f = lsq.fit(A, y, Qyy)
+    C = rng.standard_normal((f.m, f.redundancy))  # [A C] of full rank almost surely
+    glr = lsq.glr_test(f, C, alpha=0.05)
+    omt = lsq.overall_model_test(f, alpha=0.05)
+    assert glr.statistic == pytest.approx(omt.statistic, rel=1e-10)
+    assert glr.critical_value == pytest.approx(omt.critical_value, rel=1e-12)
+    assert glr.reject == omt.reject
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("q", [1, 2, 4])
+def test_glr_agrees_with_the_printed_formula_and_the_refit(seed, q):
+    A, y, Qyy, cov, rng = problem(seed)
+    f = lsq.fit(A, y, Qyy)
+    C = rng.standard_normal((f.m, q))
+    result = lsq.glr_test(f, C)
+    assert result.statistic == pytest.approx(textbook_T_q(A, y, cov, C), rel=1e-9)
+    # T_q is the drop of the residual norm when the bias is estimated: fit [A C] directly
+    extended = lsq.fit(np.column_stack([A, C]), y, Qyy)
+    assert result.statistic == pytest.approx(f.squared_norm - extended.squared_norm, rel=1e-9)
+    np.testing.assert_allclose(
+        result.details["estimated bias"], extended.x_hat[A.shape[1] :], rtol=1e-8, atol=1e-10
+    )
+    assert result.dof == q and result.null.kwds == {} and result.null.args == (q,)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_f_statistic_is_the_nested_models_f(seed):
+    A, y, Qyy, _, rng = problem(seed, m=12)
+    f = lsq.fit(A, y, Qyy)
+    C = rng.standard_normal((f.m, 2))
+    extended = lsq.fit(np.column_stack([A, C]), y, Qyy)
+    dof2 = f.redundancy - 2
+    F = ((f.squared_norm - extended.squared_norm) / 2) / (extended.squared_norm / dof2)
+    result = lsq.glr_test(f, C, alpha=0.05, variance="estimated")
+    assert result.statistic == pytest.approx(F, rel=1e-9)
+    assert result.critical_value == pytest.approx(stats.f.isf(0.05, 2, dof2), rel=1e-12)
+    assert result.pvalue == pytest.approx(stats.f.sf(F, 2, dof2), rel=1e-9)
+    assert result.details["denominator dof"] == dof2
+
+
+def test_the_f_test_does_not_depend_on_the_variance_factor():
+    A, y, Qyy, _, rng = problem(1, m=12)
+    C = rng.standard_normal((12, 2))
+    a = lsq.glr_test(lsq.fit(A, y, Qyy), C, variance="estimated")
+    b = lsq.glr_test(lsq.fit(A, y, 9.0 * Qyy), C, variance="estimated")
+    assert a.statistic == pytest.approx(b.statistic, rel=1e-10)
+    known = lsq.glr_test(lsq.fit(A, y, 9.0 * Qyy), C)
+    assert known.statistic == pytest.approx(lsq.glr_test(lsq.fit(A, y, Qyy), C).statistic / 9)
+
+
+def test_glr_refuses_a_bias_that_the_model_absorbs():
+    f = lsq.fit(A_LINE, Y_OUTLIER, 0.01 * np.eye(10))
+    with pytest.raises(LinAlgError, match="range of A"):
+        lsq.glr_test(f, T10)  # a slope error is absorbed by the slope parameter
+    with pytest.raises(LinAlgError, match="full column rank"):
+        lsq.glr_test(f, np.column_stack([np.eye(10)[:, 3], 2 * np.eye(10)[:, 3]]))
+
+
+@pytest.mark.parametrize(
+    "C, variance, match",
+    [
+        (np.ones(9), "known", "one row per observation"),
+        (np.eye(10)[:, :9], "known", "at most m - n"),
+        (np.eye(10)[:, :8], "estimated", "q < m - n"),
+        (np.eye(10)[:, 0], "unknown", "variance must be"),
+        (np.full(10, np.nan), "known", "C"),
+    ],
+)
+def test_glr_bad_input(C, variance, match):
+    f = lsq.fit(A_LINE, Y_OUTLIER, 0.01 * np.eye(10))
+    with pytest.raises(ValueError, match=match):
+        lsq.glr_test(f, C, variance=variance)
+
+
+# ---------------------------------------------------------------------------
+# power: the alternative law against Monte Carlo
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("variance, scale", [("known", 1.0), ("estimated", 1.6)])
+def test_power_from_the_alternative_law_matches_simulation(variance, scale):
+    rng = np.random.default_rng(7)
+    m = 10
+    Qyy = 0.04 * np.eye(m)
+    C = np.eye(m)[:, [4, 5]]
+    bias = scale * np.array([0.3, 0.25])
+    template = lsq.fit(A_LINE, np.zeros(m), Qyy)
+    law = lsq.alternative_law(template, C, bias, variance=variance)
+    reps = 2000
+    rejections = 0
+    for _ in range(reps):
+        y = A_LINE @ [1.0, 0.2] + C @ bias + 0.2 * rng.standard_normal(m)
+        result = lsq.glr_test(lsq.fit(A_LINE, y, Qyy), C, alpha=0.05, variance=variance)
+        rejections += result.reject
+    power = result.power(law)
+    assert 0.3 < power < 0.95  # a case that can tell a wrong law from the right one
+    assert_rate(rejections / reps, reps, power)
+
+
+def test_alternative_law_at_zero_bias_is_the_null():
+    f = lsq.fit(A_LINE, Y_OUTLIER, 0.01 * np.eye(10))
+    C = np.eye(10)[:, [2, 3]]
+    result = lsq.glr_test(f, C, alpha=0.01)
+    assert result.power(lsq.alternative_law(f, C, [0.0, 0.0])) == pytest.approx(0.01)
+
+
+# ---------------------------------------------------------------------------
+# w-tests with an estimated variance: Student's t, Pope's tau
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", range(4))
+def test_estimated_variance_w_is_the_t_statistic_of_the_outlier_parameter(seed):
+    A, y, Qyy, _, _ = problem(seed, m=11)
+    f = lsq.fit(A, y, Qyy)
+    t = lsq.w_tests(f, variance="estimated")
+    assert t.dof == f.redundancy - 1 and t.variance == "estimated"
+    for i in range(f.m):
+        extended = lsq.fit(np.column_stack([A, np.eye(f.m)[:, i]]), y, Qyy)
+        sigma2 = extended.squared_norm / extended.redundancy
+        expected = extended.x_hat[-1] / np.sqrt(sigma2 * extended.Qxx[-1, -1])
+        assert t.statistic[i] == pytest.approx(expected, rel=1e-8)
+
+
+def test_the_t_test_and_popes_tau_test_are_one_test():
+    A, y, Qyy, _, _ = problem(2, m=11)
+    f = lsq.fit(A, y, Qyy)
+    r = f.redundancy
+    w = lsq.w_tests(f).statistic
+    tau = w / np.sqrt(f.squared_norm / r)
+    # Pope's tau: tau² / r ~ Beta(1/2, (r - 1)/2) under H0, a symmetric law on [-sqrt(r), sqrt(r)]
+    p_tau = stats.beta.sf(tau**2 / r, 0.5, (r - 1) / 2)
+    t = lsq.w_tests(f, alpha=0.05, variance="estimated")
+    np.testing.assert_allclose(t.pvalue, p_tau, rtol=1e-9)
+    np.testing.assert_allclose(t.statistic**2, (r - 1) * tau**2 / (r - tau**2), rtol=1e-9)
+
+
+def test_estimated_variance_w_tests_need_two_redundant_observations():
+    f = lsq.fit(A_LINE[:3], Y_OUTLIER[:3])
+    with pytest.raises(ValueError, match="m - n >= 2"):
+        lsq.w_tests(f, variance="estimated")
+    with pytest.raises(ValueError, match="variance must be"):
+        lsq.w_tests(lsq.fit(A_LINE, Y_OUTLIER), variance="sigma")
+
+
+# ---------------------------------------------------------------------------
+# the B-method
+# ---------------------------------------------------------------------------
+def test_b_method_reference_values():
+    b = lsq.b_method(0.001, 0.80, q=[1, 2, 3, 10])
+    assert b.lambda0 == pytest.approx(17.0746, abs=5e-4)  # Baarda's lambda0 for (0.001, 80 %)
+    assert b.alpha_q[0] == pytest.approx(0.001, rel=1e-8)  # q = 1 is the w-test itself
+    assert b.critical_value_1 == pytest.approx(3.2905, abs=1e-4)
+    # every q-dimensional test at its alpha_q has power 0.80 at lambda0 (scipy's laws)
+    np.testing.assert_allclose(
+        stats.ncx2.sf(stats.chi2.isf(b.alpha_q, [1, 2, 3, 10]), [1, 2, 3, 10], b.lambda0),
+        0.80,
+        rtol=1e-8,
+    )
+    assert np.all(np.diff(b.alpha_q) > 0)  # higher dimension, larger level
+
+
+def test_b_method_tests_detect_the_reference_bias_equally_often():
+    rng = np.random.default_rng(3)
+    b = lsq.b_method(0.001, 0.80, q=3)
+    reps = 4000
+    # T_3 under a bias of non-centrality lambda0: a normal vector shifted by sqrt(lambda0)
+    z = rng.standard_normal((reps, 3))
+    z[:, 0] += np.sqrt(b.lambda0)
+    assert_rate(np.mean(np.sum(z**2, axis=1) > b.critical_value_q), reps, 0.80)
+    w = rng.standard_normal(reps) + np.sqrt(b.lambda0)
+    assert_rate(np.mean(np.abs(w) > b.critical_value_1), reps, 0.80)
+
+
+def test_b_method_bad_input():
+    with pytest.raises(ValueError, match="power must exceed"):
+        lsq.b_method(0.5, 0.2)
+    with pytest.raises(ValueError, match="q"):
+        lsq.b_method(0.001, 0.8, q=1.5)
+
+
+# ---------------------------------------------------------------------------
+# reliability
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", range(3))
+def test_one_dimensional_mdb_is_the_observations_mdb(seed):
+    A, y, Qyy, _, _ = problem(seed)
+    f = lsq.fit(A, y, Qyy)
+    expected = lsq.mdb(f, alpha=0.001, power=0.8)
+    for i in range(f.m):
+        got = lsq.minimal_detectable_bias(f, np.eye(f.m)[:, i], alpha=0.001, power=0.8)
+        assert got.lengths[0] == pytest.approx(expected[i], rel=1e-10)
+
+
+def test_mdb_along_a_direction_has_the_required_power():
+    A, y, Qyy, _, rng = problem(4, m=12)
+    f = lsq.fit(A, y, Qyy)
+    C = rng.standard_normal((12, 3))
+    region = lsq.minimal_detectable_bias(f, C, alpha=0.01, power=0.9)
+    result = lsq.glr_test(f, C, alpha=0.01)
+    for direction in [[1, 0, 0], [0.3, -1, 2], region.axes[:, 0], region.axes[:, -1]]:
+        bias = region.along(direction)
+        assert result.power(lsq.alternative_law(f, C, bias)) == pytest.approx(0.9, abs=1e-6)
+    # the semi-axes are the shortest and the longest MDB over all directions
+    sizes = [np.linalg.norm(region.along(d)) for d in rng.standard_normal((200, 3))]
+    assert region.lengths[0] <= min(sizes) + 1e-12 and max(sizes) <= region.lengths[-1] + 1e-12
+    # and the covariance of the estimated bias is the textbook inverse
+    Qi = np.linalg.inv(Qyy)
+    Qee = Qyy - A @ f.Qxx @ A.T
+    np.testing.assert_allclose(region.covariance, np.linalg.inv(C.T @ Qi @ Qee @ Qi @ C), rtol=1e-8)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_external_reliability_is_the_shift_of_the_estimate(seed):
+    A, y, Qyy, _, rng = problem(seed)
+    f = lsq.fit(A, y, Qyy)
+    C = rng.standard_normal((f.m, 2))
+    bias = np.array([0.7, -0.4])
+    er = lsq.external_reliability(f, C, bias)
+    shifted = lsq.fit(A, y + C @ bias, Qyy)
+    np.testing.assert_allclose(er.effect, shifted.x_hat - f.x_hat, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(er.bias_to_noise, er.effect / f.sigma_x_hat)
+    overall = np.sqrt(er.effect @ np.linalg.solve(f.Qxx, er.effect))
+    assert er.overall == pytest.approx(overall, rel=1e-8)
+
+
+# ---------------------------------------------------------------------------
+# DIA
+# ---------------------------------------------------------------------------
+def test_dia_adapts_to_the_identified_outlier_like_a_refit_without_it():
+    f = lsq.fit(A_LINE, Y_OUTLIER, 0.01 * np.eye(10))
+    result = lsq.dia(f, alpha=0.01)
+    assert result.identified == 6 and result.decision == "adapted: observation 6"
+    keep = np.delete(np.arange(10), 6)
+    refit = lsq.fit(A_LINE[keep], Y_OUTLIER[keep], 0.01 * np.eye(9))
+    np.testing.assert_allclose(result.x_hat, refit.x_hat, rtol=1e-10)
+    np.testing.assert_allclose(result.statistics, lsq.w_tests(f).statistic ** 2, rtol=1e-10)
+
+
+def test_dia_accepts_h0_and_keeps_the_estimate_when_nothing_is_detected():
+    y = A_LINE @ [2.0, 0.5] + 0.1 * np.random.default_rng(0).standard_normal(10)
+    f = lsq.fit(A_LINE, y, 0.01 * np.eye(10))
+    result = lsq.dia(f, alpha=0.01)
+    assert not result.detection.reject and result.identified is None
+    np.testing.assert_array_equal(result.x_hat, f.x_hat)
+
+
+def test_dia_with_candidates_of_different_dimension_adapts_to_the_extended_fit():
+    f = lsq.fit(A_LINE, Y_OUTLIER, 0.01 * np.eye(10))
+    jump = np.r_[np.zeros(6), np.ones(4)]
+    pair = np.eye(10)[:, [6, 7]]
+    result = lsq.dia(f, candidates=[jump, pair], alpha=0.01)
+    k = result.identified
+    C = [jump[:, None], pair][k]
+    extended = lsq.fit(np.column_stack([A_LINE, C]), Y_OUTLIER, 0.01 * np.eye(10))
+    np.testing.assert_allclose(result.x_hat, extended.x_hat[:2], rtol=1e-9)
+
+
+def test_dia_monte_carlo_rates_and_the_mixture():
+    f = lsq.fit(A_LINE, np.zeros(10), 0.01 * np.eye(10))
+    size = 20_000
+    null = lsq.dia_monte_carlo(f, alpha=0.05, size=size, rng=np.random.default_rng(5))
+    assert_rate(null.detection_rate, size, 0.05)
+    # the plain estimator is N(0, Qxx)
+    np.testing.assert_allclose(np.cov(null.errors_null.T), f.Qxx, rtol=0.05, atol=1e-6)
+    # under a bias of one MDB in observation 3 the w-test's power is the w-tests' 80 %, and
+    # detection + identification is rarer than detection alone
+    bias_size = lsq.mdb(f, alpha=0.001, power=0.8)[3]
+    b = bias_size * np.eye(10)[3]
+    alt = lsq.dia_monte_carlo(f, alpha=0.05, bias=b, size=size, rng=np.random.default_rng(6))
+    correct = alt.identification_rate(3)
+    assert 0.5 < correct < alt.detection_rate
+    # the DIA estimator is a mixture: unbiased plain errors are shifted by the undetected
+    # bias in some runs and adapted in others, so its slope error is not normal
+    slope = alt.errors[:, 1]
+    assert stats.normaltest(slope).pvalue < 1e-6
+    # the runs adapted to the right candidate equal the refit without observation 3
+    runs = alt.identified == 3
+    assert np.all(np.isfinite(alt.errors[runs]))
+
+
+def test_dia_monte_carlo_needs_a_generator():
+    f = lsq.fit(A_LINE, Y_OUTLIER, 0.01 * np.eye(10))
+    with pytest.raises(ValueError, match="rng is required"):
+        lsq.dia_monte_carlo(f, size=10)
+    with pytest.raises(ValueError, match="candidates"):
+        lsq.dia(f, candidates=[])
+
+
+def test_noncentrality_agrees_with_the_b_method():
+    assert lsq.b_method(0.01, 0.9).lambda0 == pytest.approx(chi2.noncentrality(0.01, 0.9, 1))

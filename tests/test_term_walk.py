@@ -1,0 +1,249 @@
+"""The term of ``docs/instructors/term.md`` walked in one go, as an instructor runs it (issue 27).
+
+Class secret, a Canvas roster export, the student edition, submissions named as Canvas names its
+downloads (a typo'd notebook ID attached by the Canvas user number, a ``_LATE_`` file with a
+time in the timestamps file, a resubmission on a second run marked ``_LATE_`` without a time),
+a due date and a late policy, two short answers marked and re-imported, a two-assignment
+gradebook; then every file the instructor uploads is checked for its columns and the
+penalised totals.
+
+The shared graded classes (``graded_class``) are graded without a secret or a roster, so this
+walk grades its own small class: four students, two assignments, four ``course grade`` runs
+of which the last only merges marks (no sandbox).
+"""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from course.cli import main as course_main
+from course.grading.authoring.checks import load_checks
+from course.grading.authoring.export import export
+from course.grading.authoring.personal import PersonalData
+from course.grading.authoring.secret import load_secret
+from course.grading.batch.roster import read_roster
+from course.grading.student.submit import make_submission
+
+ROOT = Path(__file__).resolve().parents[1]
+A1, A3 = "01_least_squares", "03_estimation_and_likelihood"
+DUE = "2026-10-20T23:59+02:00"
+ROSTER = (
+    "Student,ID,SIS User ID,SIS Login ID,Section\n"
+    "    Points Possible,,,,\n"
+    '"Doe, Jane",101,s001,jdoe,A\n'
+    '"Roe, Ann",102,s002,aroe,A\n'
+    '"Poe, Ed",103,s003,epoe,A\n'
+    '"Kay, Kim",104,s004,kkay,A\n'
+    '"Student, Test",999,,,A\n'
+)
+
+
+def _saved(tmp: Path, assignment: str, sid: str, stub: bool = False) -> Path:
+    """The notebook a student saves: the solution (or the untouched release) with their ID."""
+    source = ROOT / ("exercises" if stub else "solutions") / assignment / f"{assignment}.ipynb"
+    nb = nbformat.read(source, as_version=4)
+    for cell in nb.cells:
+        if cell.get("id") == "setup":
+            for placeholder in ('"demo"', '"replace-with-your-student-id"'):
+                cell.source = cell.source.replace(
+                    f"STUDENT_ID = {placeholder}", f'STUDENT_ID = "{sid}"'
+                )
+    path = tmp / "students" / sid / f"{assignment}.ipynb"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    nbformat.write(nb, path)
+    return path
+
+
+def _upload(path: Path, subs: Path, canvas_name: str) -> Path:
+    """Canvas's download name: ``lastfirst[_LATE]_<user number>_<submission number>_<file>``."""
+    subs.mkdir(parents=True, exist_ok=True)
+    target = subs / f"{canvas_name}_{path.name}"
+    shutil.copyfile(path, target)
+    return target
+
+
+def _table(path: Path) -> list[list[str]]:
+    return list(csv.reader(path.open(encoding="utf-8")))
+
+
+def _grade(capsys, *args: str) -> str:
+    code = course_main(["grade", *args, "--no-progress", "--jobs", "2"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    return out
+
+
+@pytest.mark.slow
+def test_a_term_from_the_secret_to_the_gradebook(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("COURSE_SECRET_FILE", raising=False)
+    # 1. the class's secret; 2. the roster (Canvas's gradebook export as it comes)
+    key = tmp_path / "class.key"
+    assert course_main(["secret", "new", str(key)]) == 0
+    capsys.readouterr()
+    secret = load_secret(str(key))
+    roster_file = tmp_path / "roster.csv"
+    roster_file.write_text(ROSTER, encoding="utf-8")
+    roster = read_roster(roster_file)
+    # 3. the student edition: every roster student's data drawn with the key
+    edition = export(tmp_path / "handout", secret=secret, roster=roster, check_leaks=False)
+    assert edition.data_key == secret.key_id and edition.students == 4
+    exercises = edition.folder / "course" / "materials" / "exercises"
+    issued = {name: PersonalData.read(exercises / name) for name in (A1, A3)}
+
+    def submit(assignment: str, sid: str, stub: bool = False) -> Path:
+        path, _, _ = make_submission(
+            _saved(tmp_path, assignment, sid, stub), None, assignment, None, issued[assignment]
+        )
+        return path
+
+    # 5. collect assignment 01 as Canvas names the downloads
+    subs1 = tmp_path / "submissions" / "01"
+    _upload(submit(A1, "s001"), subs1, "doejane_101_5001")
+    _upload(submit(A1, "s002", stub=True), subs1, "roeann_102_5002")  # untouched release
+    # Ed typed s0O3: no submit() (it refuses an ID without issued data), the raw notebook
+    _upload(_saved(tmp_path, A1, "s0O3"), subs1, "poeed_103_5003")
+    _upload(submit(A1, "s004"), subs1, "kaykim_LATE_104_5004")
+    times = tmp_path / "submitted.csv"  # the LMS's times: s004 by its ID, Ed by his user number
+    times.write_text(
+        "id,submitted_at\ns001,2026-10-20T21:00+02:00\n103,2026-10-20T23:00+02:00\n"
+        "s004,2026-10-22T09:30+02:00\n"
+    )
+    grades1 = tmp_path / "grades" / "01"
+    late = [
+        "--due",
+        DUE,
+        "--late-policy",
+        "percent-per-day:10,cap:50",
+        "--submitted-at",
+        str(times),
+    ]
+    cls = ["--roster", str(roster_file), "--secret", str(key)]
+    a1 = str(ROOT / "solutions" / A1)
+    text = _grade(capsys, a1, str(subs1), "--out", str(grades1), *cls, *late)
+    max1 = load_checks(ROOT / "solutions" / A1).max_points
+    # the typo'd ID is graded for the student Canvas names, and said so (console, csv, feedback)
+    assert "'s0O3', which is not on the roster; graded as 's003'" in text
+    conflicts = _table(grades1 / "identity_conflicts.csv")
+    assert conflicts[0][-1] == "decision" and conflicts[1][:3] == [
+        f"poeed_103_5003_{A1}.ipynb", "s003", "s0O3"
+    ] and conflicts[1][-1] == "graded as s003"  # fmt: skip
+    assert "not on the class list" in (grades1 / "feedback" / "s003.md").read_text("utf-8")
+    assert "Late: 1 submission(s): s004 (2 days, -" in text
+    assert f"; due {DUE}; 10 % of the points possible per started day late, at most 50 %" in text
+    grades = {r["student"]: r for r in csv.DictReader((grades1 / "grades.csv").open())}
+    assert sorted(grades) == ["s001", "s002", "s003", "s004"]
+    assert (grades["s001"]["total"], grades["s001"]["late"], grades["s001"]["penalty"]) == (
+        f"{max1:g}",
+        "0",
+        "0",
+    )
+    assert grades["s004"]["late"] == "2" and float(grades["s004"]["total"]) == pytest.approx(
+        0.8 * max1
+    )
+    stub_total = float(grades["s002"]["total"])
+    assert stub_total < max1
+
+    # a resubmission: Ann uploads the whole solution after the due date; Canvas marks it
+    # _LATE_, the timestamps file has no row for it: late by an unknown time, charged 1 day
+    _upload(submit(A1, "s002"), subs1, "roeann_LATE_102_5010")
+    text = _grade(capsys, a1, str(subs1), "--out", str(grades1), *cls, *late)
+    assert "Graded 1 submission(s) (1 regraded: file changed), 3 already graded" in text
+    assert "(the last in the LMS's order: the highest Canvas submission number" in text
+    assert "charged as 1 day late" in text and "s002" in text
+    grades = {r["student"]: r for r in csv.DictReader((grades1 / "grades.csv").open())}
+    assert grades["s002"]["late"] == "unknown"
+    assert float(grades["s002"]["total"]) == pytest.approx(0.9 * max1)
+    assert float(grades["s002"]["penalty"]) == pytest.approx(0.1 * max1)
+    feedback = (grades1 / "feedback" / "s004.md").read_text("utf-8")
+    assert "**Late:** Handed in 2026-10-22T09:30+02:00, 2 days after the due date" in feedback
+    report = (grades1 / "report.html").read_text("utf-8")
+    assert (
+        "<h2>Late submissions</h2>" in report
+        and "<td>s004</td><td>2026-10-22T09:30+02:00" in report
+    )
+    # 7. the files the instructor uploads for 01: penalised totals, Canvas's and Moodle's columns
+    title1 = load_checks(ROOT / "solutions" / A1).title
+    canvas = _table(grades1 / "canvas.csv")
+    assert canvas[0] == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", title1]
+    assert canvas[1][0].strip() == "Points Possible" and canvas[1][5] == f"{max1:g}"
+    by_sis = {r[2]: r for r in canvas[2:]}
+    assert sorted(by_sis) == ["s001", "s002", "s003", "s004"]  # no test student
+    assert by_sis["s004"][:2] == ["Kay, Kim", "104"]
+    for sid in by_sis:
+        assert by_sis[sid][5] == grades[sid]["total"]
+    moodle = _table(grades1 / "moodle.csv")
+    assert moodle[0] == [
+        "ID number",
+        "Email address",
+        "First name",
+        "Last name",
+        title1,
+        "Feedback",
+    ]
+    m4 = next(r for r in moodle if r[0] == "s004")
+    assert m4[4] == grades["s004"]["total"] and "late deduction 20 %" in m4[5]
+
+    # assignment 03, no due date: two short answers to mark
+    subs3 = tmp_path / "submissions" / "03"
+    _upload(submit(A3, "s001"), subs3, "doejane_101_6001")
+    _upload(submit(A3, "s004"), subs3, "kaykim_104_6004")
+    grades3 = tmp_path / "grades" / "03"
+    a3 = str(ROOT / "solutions" / A3)
+    text = _grade(capsys, a3, str(subs3), "--out", str(grades3), *cls)
+    assert "2 to mark" in text
+    marking = grades3 / "short_answers.csv"
+    rows = list(csv.DictReader(marking.open(encoding="utf-8")))
+    assert [(r["student"], r["question"]) for r in rows] == [("s001", "q3b"), ("s004", "q3b")]
+    rows[0]["points"], rows[1]["points"], rows[1]["comment"] = "1", "0,5", "Why more powerful?"
+    with marking.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    text = _grade(
+        capsys, a3, str(subs3), "--out", str(grades3), *cls, "--short-answers", str(marking)
+    )
+    assert "2 mark(s) imported" in text and "Graded 0 submission(s)" in text
+    max3 = load_checks(ROOT / "solutions" / A3).max_points
+    grades = {r["student"]: r for r in csv.DictReader((grades3 / "grades.csv").open())}
+    assert float(grades["s001"]["total"]) == max3
+    assert float(grades["s004"]["total"]) == max3 - 0.5
+    assert "Why more powerful?" in (grades3 / "feedback" / "s004.md").read_text("utf-8")
+    assert "late" not in grades["s001"]  # no due date, nothing marked late: no late columns
+
+    # 9. the gradebook of the term
+    book = tmp_path / "gradebook"
+    assert (
+        course_main(
+            [
+                "gradebook",
+                str(grades1),
+                str(grades3),
+                "--out",
+                str(book),
+                "--roster",
+                str(roster_file),
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    title3 = load_checks(ROOT / "solutions" / A3).title
+    rows = {r[0]: r for r in _table(book / "gradebook.csv")}
+    assert rows["student"] == ["student", title1, title3, "total", "max"]
+    s01 = {r["student"]: r for r in csv.DictReader((grades1 / "grades.csv").open())}
+    assert rows["s004"][1:] == [
+        s01["s004"]["total"], f"{max3 - 0.5:g}",
+        f"{float(s01['s004']['total']) + max3 - 0.5:g}", f"{max1 + max3:g}",
+    ]  # fmt: skip
+    assert rows["s002"][1:3] == [s01["s002"]["total"], ""]  # penalised, and no 03 submission
+    canvas = _table(book / "canvas.csv")
+    assert canvas[0][5:] == [title1, title3] and canvas[1][5:] == [f"{max1:g}", f"{max3:g}"]
+    assert next(r for r in canvas if r[2] == "s002")[5:] == [s01["s002"]["total"], ""]
+    moodle = _table(book / "moodle.csv")
+    assert moodle[0][4:] == [title1, title3, "Total"]
+    assert next(r for r in moodle if r[0] == "s004")[4:] == rows["s004"][1:4]

@@ -1,0 +1,470 @@
+"""Wrong and right answers of assignment 07_testing_theory (data for tests/test_wrong_answers.py).
+
+WRONG[q]: answers a class would plausibly write; each must lose points at grading.
+RIGHT[q]: correct answers written differently; each must keep full marks.
+Each source replaces the whole answer cell of q in the solution notebook (format: see the
+docstring of tests/test_wrong_answers.py).
+"""
+
+ASSIGNMENT = "07_testing_theory"
+STUDENT = "wa07"
+DEPENDS = {
+    "q2": ["q1"],
+    "q3": ["q1"],
+    "q6_practice": ["q1"],
+    "q6": ["q1"],
+    "q7": ["q7_practice"],
+}
+
+_WHITEN = """    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, y, lower=True)
+    Q, _ = np.linalg.qr(A_w)
+    e_w = y_w - Q @ (Q.T @ y_w)
+"""
+_Q1_HEAD = "def glr_statistic(A, y, Qyy, C):\n" + _WHITEN
+
+# The textbook formula with explicit inverses: a right answer, if not good numerics.
+_Q1_TEXTBOOK = """def glr_statistic(A, y, Qyy, C):
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    C = np.asarray(C, dtype=float)
+    W = np.linalg.inv(Qyy)
+    Qxx = np.linalg.inv(A.T @ W @ A)
+    e = y - A @ (Qxx @ A.T @ W @ y)
+    Qee = Qyy - A @ Qxx @ A.T
+    v = C.T @ W @ e
+    return float(v @ np.linalg.solve(C.T @ W @ Qee @ W @ C, v))
+"""
+
+_Q4_HEAD = """def t_statistics(A, y, Qyy):
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    m, n = A.shape
+    W = np.linalg.inv(Qyy)
+    Qxx = np.linalg.inv(A.T @ W @ A)
+    e = y - A @ (Qxx @ A.T @ W @ y)
+    Qee = Qyy - A @ Qxx @ A.T
+    w = (W @ e) / np.sqrt(np.diag(W @ Qee @ W))
+    omega = float(e @ W @ e)
+"""
+
+_Q9_HEAD = """def mdb_along(A, Qyy, C, alpha, power, direction):
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    W = np.linalg.inv(Qyy)
+    Qxx = np.linalg.inv(A.T @ W @ A)
+    Qee = Qyy - A @ Qxx @ A.T
+"""
+
+_DIA_BY = """def dia_estimate(d):
+    fit = lsq.fit(d["A"], d["y"], d["Qyy"])
+    if not lsq.overall_model_test(fit, d["alpha"]).reject:
+        return fit.x_hat
+    suspect = {suspect}
+    keep = np.delete(np.arange(len(d["y"])), suspect)
+    return lsq.fit(d["A"][keep], d["y"][keep], {weights}).x_hat
+
+
+x_dia_practice = dia_estimate(practice)
+"""
+
+WRONG = {
+    "q1": [
+        (
+            "C not projected (C^T Qyy^-1 C in the middle)",
+            _Q1_HEAD
+            + """    C_w = linalg.solve_triangular(L, np.asarray(C, dtype=float), lower=True)
+    v = C_w.T @ e_w
+    return float(v @ np.linalg.solve(C_w.T @ C_w, v))
+""",
+        ),
+        (
+            "unweighted",
+            """def glr_statistic(A, y, Qyy, C):
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    C = np.asarray(C, dtype=float)
+    Q, _ = np.linalg.qr(A)
+    e = y - Q @ (Q.T @ y)
+    C_bar = C - Q @ (Q.T @ C)
+    Qc, _ = np.linalg.qr(C_bar)
+    return float(np.sum((Qc.T @ e) ** 2))
+""",
+        ),
+        ("the overall model test's T", _Q1_HEAD + "    return float(e_w @ e_w)\n"),
+        (
+            "w of the first column, not squared",
+            _Q1_HEAD
+            + """    C_w = linalg.solve_triangular(L, np.asarray(C, dtype=float), lower=True)
+    c = C_w[:, 0] - Q @ (Q.T @ C_w[:, 0])
+    return float(c @ e_w / np.linalg.norm(c))
+""",
+        ),
+        (
+            "residuals not whitened before projecting",
+            _Q1_HEAD
+            + """    C_w = linalg.solve_triangular(L, np.asarray(C, dtype=float), lower=True)
+    C_bar = C_w - Q @ (Q.T @ C_w)
+    Qc, _ = np.linalg.qr(C_bar)
+    e = y - A @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    return float(np.sum((Qc.T @ e) ** 2))
+""",
+        ),
+    ],
+    "q2": [
+        (
+            "chi2 with m - n degrees of freedom",
+            """def glr_decision(A, y, Qyy, C, alpha):
+    T = glr_statistic(A, y, Qyy, C)
+    m, n = np.shape(A)
+    critical_value = float(stats.chi2.isf(alpha, m - n))
+    return T, critical_value, T > critical_value
+""",
+        ),
+        (
+            "one degree of freedom always",
+            """def glr_decision(A, y, Qyy, C, alpha):
+    T = glr_statistic(A, y, Qyy, C)
+    critical_value = float(stats.chi2.isf(alpha, 1))
+    return T, critical_value, T > critical_value
+""",
+        ),
+        (
+            "two-sided",
+            """def glr_decision(A, y, Qyy, C, alpha):
+    T = glr_statistic(A, y, Qyy, C)
+    critical_value = float(stats.chi2.isf(alpha / 2, np.shape(C)[1]))
+    return T, critical_value, T > critical_value
+""",
+        ),
+        (
+            "ppf instead of isf",
+            """def glr_decision(A, y, Qyy, C, alpha):
+    T = glr_statistic(A, y, Qyy, C)
+    critical_value = float(stats.chi2.ppf(alpha, np.shape(C)[1]))
+    return T, critical_value, T > critical_value
+""",
+        ),
+    ],
+    "q3": [
+        (
+            "sigma² from the null model",
+            """def f_test(A, y, Qyy, C, alpha):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    q = np.shape(C)[1]
+    T = glr_statistic(A, y, Qyy, C)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    r = y_w - A_w @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    F = (T / q) / (float(r @ r) / (m - n))
+    critical_value = float(stats.f.isf(alpha, q, m - n - q))
+    return F, critical_value, F > critical_value
+""",
+        ),
+        (
+            "F's denominator dof m - n",
+            """def f_test(A, y, Qyy, C, alpha):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    q = np.shape(C)[1]
+    T = glr_statistic(A, y, Qyy, C)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    r = y_w - A_w @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    F = (T / q) / ((float(r @ r) - T) / (m - n - q))
+    critical_value = float(stats.f.isf(alpha, q, m - n))
+    return F, critical_value, F > critical_value
+""",
+        ),
+        (
+            "chi-square critical value",
+            """def f_test(A, y, Qyy, C, alpha):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    q = np.shape(C)[1]
+    T = glr_statistic(A, y, Qyy, C)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    r = y_w - A_w @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    F = (T / q) / ((float(r @ r) - T) / (m - n - q))
+    critical_value = float(stats.chi2.isf(alpha, q) / q)
+    return F, critical_value, F > critical_value
+""",
+        ),
+        (
+            "T_q itself with the F threshold",
+            """def f_test(A, y, Qyy, C, alpha):
+    m, n = np.shape(A)
+    q = np.shape(C)[1]
+    T = glr_statistic(A, y, Qyy, C)
+    critical_value = float(stats.f.isf(alpha, q, m - n - q))
+    return T, critical_value, T > critical_value
+""",
+        ),
+    ],
+    "q4": [
+        ("Pope's tau", _Q4_HEAD + "    return w / np.sqrt(omega / (m - n))\n"),
+        ("w itself (sigma known)", _Q4_HEAD + "    return w\n"),
+        (
+            "dof m - n in the estimate",
+            _Q4_HEAD + "    return w / np.sqrt((omega - w**2) / (m - n))\n",
+        ),
+        ("variance, not its root", _Q4_HEAD + "    return w / ((omega - w**2) / (m - n - 1))\n"),
+    ],
+    "q5": [
+        ("alpha_1 returned", "def b_method_level(alpha_1, power, q):\n    return alpha_1\n"),
+        (
+            "lambda_0 with q degrees of freedom",
+            """def b_method_level(alpha_1, power, q):
+    lambda_0 = chi2.noncentrality(alpha_1, power, q)
+    critical = stats.ncx2.ppf(1.0 - power, q, lambda_0)
+    return float(stats.chi2.sf(critical, q))
+""",
+        ),
+        (
+            "the power-quantile",
+            """def b_method_level(alpha_1, power, q):
+    lambda_0 = chi2.noncentrality(alpha_1, power, 1)
+    critical = stats.ncx2.ppf(power, q, lambda_0)
+    return float(stats.chi2.sf(critical, q))
+""",
+        ),
+        (
+            "1 - the level",
+            """def b_method_level(alpha_1, power, q):
+    lambda_0 = chi2.noncentrality(alpha_1, power, 1)
+    critical = stats.ncx2.ppf(1.0 - power, q, lambda_0)
+    return float(stats.chi2.cdf(critical, q))
+""",
+        ),
+    ],
+    "q6_practice": [
+        (
+            "w² of the first of the pair",
+            "T_pair_practice = glr_statistic(practice['A'], practice['y'], practice['Qyy'], "
+            "np.eye(14)[:, practice['pair'][:1]])",
+        ),
+        (
+            "unweighted",
+            "T_pair_practice = glr_statistic(practice['A'], practice['y'], np.eye(14), "
+            "np.eye(14)[:, practice['pair']])",
+        ),
+        (
+            "the overall model test's T",
+            "T_pair_practice = lsq.fit(practice['A'], practice['y'], practice['Qyy']).squared_norm",
+        ),
+    ],
+    "q6": [
+        (
+            "the practice line's T_2",
+            "T_pair_mine = glr_statistic(practice['A'], practice['y'], practice['Qyy'], "
+            "np.eye(14)[:, practice['pair']])",
+        ),
+        (
+            "the neighbour pair on the other side",
+            "T_pair_mine = glr_statistic(mine['A'], mine['y'], mine['Qyy'], "
+            "np.eye(14)[:, [mine['pair'][0] - 1, mine['pair'][0]]])",
+        ),
+        (
+            "unweighted",
+            "T_pair_mine = glr_statistic(mine['A'], mine['y'], np.eye(14), "
+            "np.eye(14)[:, mine['pair']])",
+        ),
+    ],
+    "q7_practice": [
+        (
+            "no adaptation (x_hat of H0)",
+            "x_dia_practice = lsq.fit(practice['A'], practice['y'], practice['Qyy']).x_hat",
+        ),
+        (
+            "largest |e| removed",
+            _DIA_BY.format(
+                suspect="int(np.argmax(np.abs(fit.e_hat)))",
+                weights='d["Qyy"][np.ix_(keep, keep)]',
+            ),
+        ),
+        (
+            "adapted fit unweighted",
+            _DIA_BY.format(suspect="lsq.w_tests(fit, d['alpha']).largest", weights="None"),
+        ),
+        (
+            "(slope, height) order",
+            "x_dia_practice = np.polyfit(np.delete(np.arange(14.0), 7), "
+            "np.delete(practice['y'], 7), 1, w=1 / np.delete(np.sqrt(np.diag(practice['Qyy'])), 7))",
+        ),
+    ],
+    "q7": [
+        ("the practice answer", "x_dia_mine = dia_estimate(practice)"),
+        (
+            "no adaptation (x_hat of H0)",
+            "x_dia_mine = lsq.fit(mine['A'], mine['y'], mine['Qyy']).x_hat",
+        ),
+        (
+            "the pair's second observation removed",
+            "keep = np.delete(np.arange(14), mine['pair'][1])\n"
+            "x_dia_mine = lsq.fit(mine['A'][keep], mine['y'][keep], "
+            "mine['Qyy'][np.ix_(keep, keep)]).x_hat",
+        ),
+    ],
+    "q8": [
+        ("normal, null model", 'dia_law = "normal, with the covariance of the null model"'),
+        ("normal, adapted model", 'dia_law = "normal, with the covariance of the adapted model"'),
+        ("not an option", 'dia_law = "normal"'),
+    ],
+    "q9": [
+        (
+            "lambda_0 with one degree of freedom",
+            _Q9_HEAD
+            + """    M = C.T @ W @ Qee @ W @ C
+    lambda_0 = chi2.noncentrality(alpha, power, 1)
+    return np.sqrt(lambda_0 / (d @ M @ d)) * d
+""",
+        ),
+        (
+            "C not projected",
+            _Q9_HEAD
+            + """    M = C.T @ W @ C
+    lambda_0 = chi2.noncentrality(alpha, power, C.shape[1])
+    return np.sqrt(lambda_0 / (d @ M @ d)) * d
+""",
+        ),
+        (
+            "the size only",
+            _Q9_HEAD
+            + """    M = C.T @ W @ Qee @ W @ C
+    lambda_0 = chi2.noncentrality(alpha, power, C.shape[1])
+    return np.sqrt(lambda_0 / (d @ M @ d))
+""",
+        ),
+        (
+            "direction not normalised",
+            """def mdb_along(A, Qyy, C, alpha, power, direction):
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    W = np.linalg.inv(Qyy)
+    Qxx = np.linalg.inv(A.T @ W @ A)
+    Qee = Qyy - A @ Qxx @ A.T
+    M = C.T @ W @ Qee @ W @ C
+    lambda_0 = chi2.noncentrality(alpha, power, C.shape[1])
+    return np.sqrt(lambda_0 / (d @ M @ d)) * d * np.linalg.norm(d)
+""",
+        ),
+    ],
+}
+
+RIGHT = {
+    "q1": [("the textbook formula with inverses", _Q1_TEXTBOOK)],
+    "q2": [
+        (
+            "a result namedtuple-like tuple with p-value logic",
+            """def glr_decision(A, y, Qyy, C, alpha):
+    T = glr_statistic(A, y, Qyy, C)
+    q = np.asarray(C).shape[1]
+    return T, float(stats.chi2.ppf(1 - alpha, q)), bool(stats.chi2.sf(T, q) < alpha)
+""",
+        )
+    ],
+    "q3": [
+        (
+            "F from two nested weighted fits",
+            """def f_test(A, y, Qyy, C, alpha):
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    m, n = A.shape
+    q = C.shape[1]
+    s = np.linalg.cholesky(Qyy)
+    def norm2(X):
+        X_w = linalg.solve_triangular(s, X, lower=True)
+        y_w = linalg.solve_triangular(s, np.asarray(y, dtype=float), lower=True)
+        r = y_w - X_w @ np.linalg.lstsq(X_w, y_w, rcond=None)[0]
+        return float(r @ r)
+    omega0, omega_a = norm2(A), norm2(np.column_stack([A, C]))
+    F = ((omega0 - omega_a) / q) / (omega_a / (m - n - q))
+    critical_value = float(stats.f.ppf(1 - alpha, q, m - n - q))
+    return F, critical_value, F > critical_value
+""",
+        )
+    ],
+    "q6_practice": [
+        (
+            "the nested fits' drop of the residual norm",
+            """s = np.sqrt(np.diag(practice["Qyy"]))
+def norm2(X):
+    r = practice["y"] / s - (X / s[:, None]) @ np.linalg.lstsq(X / s[:, None], practice["y"] / s, rcond=None)[0]
+    return float(r @ r)
+T_pair_practice = norm2(practice["A"]) - norm2(np.column_stack([practice["A"], np.eye(14)[:, practice["pair"]]]))
+""",
+        )
+    ],
+    "q6": [
+        (
+            "lsq.glr_test (allowed here)",
+            "T_pair_mine = float(lsq.glr_test(lsq.fit(mine['A'], mine['y'], mine['Qyy']), "
+            "np.eye(14)[:, mine['pair']]).statistic)",
+        )
+    ],
+    "q7": [
+        (
+            "lsq.dia (allowed here)",
+            "x_dia_mine = lsq.dia(lsq.fit(mine['A'], mine['y'], mine['Qyy']), alpha=mine['alpha']).x_hat",
+        )
+    ],
+    "q4": [
+        (
+            "via Pope's tau",
+            _Q4_HEAD
+            + """    tau = w / np.sqrt(omega / (m - n))
+    r = m - n
+    return np.sign(tau) * np.sqrt((r - 1) * tau**2 / (r - tau**2))
+""",
+        )
+    ],
+    "q5": [
+        (
+            "a root search for alpha_q",
+            """def b_method_level(alpha_1, power, q):
+    from scipy import optimize
+    lambda_0 = chi2.noncentrality(alpha_1, power, 1)
+    gap = lambda a: stats.ncx2.sf(stats.chi2.isf(a, q), q, lambda_0) - power
+    return float(optimize.brentq(gap, 1e-12, 0.999, xtol=1e-15, rtol=1e-14))
+""",
+        )
+    ],
+    "q7_practice": [
+        (
+            "the refit as least squares by hand",
+            """def dia_estimate(d):
+    fit = lsq.fit(d["A"], d["y"], d["Qyy"])
+    if not lsq.overall_model_test(fit, d["alpha"]).reject:
+        return fit.x_hat
+    keep = np.delete(np.arange(len(d["y"])), lsq.w_tests(fit, d["alpha"]).largest)
+    s = np.sqrt(np.diag(d["Qyy"]))[keep]
+    return np.linalg.lstsq(d["A"][keep] / s[:, None], d["y"][keep] / s, rcond=None)[0]
+
+
+x_dia_practice = dia_estimate(practice)
+""",
+        )
+    ],
+    "q8": [("other case and spaces", 'dia_law = "  A mixture, not normal "')],
+    "q9": [
+        (
+            "the textbook formula",
+            _Q9_HEAD
+            + """    M = C.T @ W @ Qee @ W @ C
+    lambda_0 = chi2.noncentrality(alpha, power, C.shape[1])
+    return np.sqrt(lambda_0 / (d @ M @ d)) * d
+""",
+        )
+    ],
+}
