@@ -109,15 +109,20 @@ _NO_FILTERS = [
 ]
 
 
-# q = r = 1: P(t|t-1) = (1 + sqrt 5)/2, K = P/(P + 1) = (sqrt 5 - 1)/2, and the filtered
-# variance P(t|t) = (1 - K) P(t|t-1) = (sqrt 5 - 1)/2. The mistake is named field-wise: P(t|t)
-# for P with K right, or K computed from P(t|t) as well.
-_P_FILTERED = float((np.sqrt(5) - 1) / 2)
+# P(t|t-1) = P solves P = P - P^2/(P + r) + q, so P = (q + sqrt(q^2 + 4 q r))/2 and
+# K = P/(P + r); the filtered variance is P(t|t) = (1 - K) P = P r/(P + r) (with q = r = 1:
+# the golden ratio, 1/phi and 1/phi). The mistake is named field-wise: P(t|t) for P with K
+# right, or K computed from P(t|t) as well.
+def _p_filtered(q, r):
+    P = (q + np.sqrt(q * q + 4.0 * q * r)) / 2.0
+    return float(P * r / (P + r))
+
+
 _Q1_MISTAKES = [
     Mistake(
         "looks like the FILTERED variance P(t|t): the question asks for the prediction "
         "variance P(t|t-1), the fixed point of update + predict",
-        lambda: (_P_FILTERED, _P_FILTERED / (_P_FILTERED + 1)),
+        lambda q, r: (_p_filtered(q, r), _p_filtered(q, r) / (_p_filtered(q, r) + r)),
         hint="P(t|t-1) is the variance BEFORE the measurement update: one step of the "
         "recursion is update (P(t|t)) then predict (P(t|t) + q), and P(t|t-1) is its fixed "
         "point; K = P(t|t-1)/(P(t|t-1) + r).",
@@ -125,9 +130,9 @@ _Q1_MISTAKES = [
 ]
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q1",
-    var="steady",
+    func="steady_state",
     mistakes=_Q1_MISTAKES,
     points=1,
     rtol=1e-8,
@@ -135,14 +140,21 @@ _Q1_MISTAKES = [
     hint=[
         "P is the PREDICTION variance P(t|t-1), the fixed point of one full update + predict "
         "step of the recursion above; K follows from it. Return the pair in the order (P, K).",
-        "With a = 1: P = P - P^2/(P + r) + q. Set q = r = 1 and solve the quadratic for its "
-        "positive root; then K = P/(P + r).",
+        "With a = 1: P = P - P^2/(P + r) + q, that is P^2 - q P - q r = 0: take its positive "
+        "root; then K = P/(P + r).",
     ],
 )
-def q1():
-    model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]])
+def q1(q, r):
+    model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[q]], R=[[r]])
     ss = kf.steady_state(model)
     return SteadyState(float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
+
+
+q1.case(1.0, 1.0, label="q = r = 1")
+### BEGIN HIDDEN TESTS
+q1.case(0.2, 1.5, hidden=True)
+q1.case(3.0, 0.5, hidden=True)
+### END HIDDEN TESTS
 
 
 _Q2_NORMALISE = (

@@ -37,6 +37,8 @@ def _q2(body: str) -> str:
     return _Q2_HEAD + body
 
 
+_Q1 = "def steady_state(q, r):\n    P = (q + np.sqrt(q * q + 4 * q * r)) / 2\n"
+
 _Q3_HEAD = "def windowed_statistic(z, L):\n    z = np.asarray(z, dtype=float)\n"
 
 _Q4 = "def window_threshold(L, alpha):\n    return float({})\n"
@@ -99,25 +101,33 @@ WRONG = {
     "q1": [
         (
             "filtered variance P(t|t) instead of the prediction variance",
-            "P_pred = (1 + np.sqrt(5)) / 2\nK = P_pred / (P_pred + 1)\nsteady = ((1 - K) * P_pred, K)",
+            _Q1 + "    K = P / (P + r)\n    return ((1 - K) * P, K)\n",
         ),
-        (
-            "(K, P) order",
-            "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf / (P_inf + 1), P_inf)",
-        ),
+        ("(K, P) order", _Q1 + "    return (P / (P + r), P)\n"),
         (
             "the negative root",
-            "P_inf = (1 - np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / (P_inf + 1))",
+            _Q1.replace("(q + np.sqrt(", "(q - np.sqrt(") + "    return (P, P / (P + r))\n",
         ),
-        ("one Riccati step from P = 1", "P = 1.0 - 1.0 / 2.0 + 1.0\nsteady = (P, P / (P + 1))"),
-        ("gain P/r without the sum", "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / 1.0)"),
+        (
+            "one Riccati step from P = 1",
+            "def steady_state(q, r):\n    P = 1.0 - 1.0 / (1.0 + r) + q\n    return (P, P / (P + r))\n",
+        ),
+        ("gain P/r without the sum", _Q1 + "    return (P, P / r)\n"),
         (
             "filtered variance, and K computed from it",
-            "P = (np.sqrt(5) - 1) / 2\nsteady = (P, P / (P + 1))",
+            _Q1 + "    P = P * r / (P + r)\n    return (P, P / (P + r))\n",
         ),
         (
             "right, but computed in float32",
-            "P = np.float32((1 + np.sqrt(np.float32(5))) / 2)\nsteady = (P, P / (P + np.float32(1)))",
+            "def steady_state(q, r):\n"
+            "    q, r = np.float32(q), np.float32(r)\n"
+            "    P = (q + np.sqrt(q * q + np.float32(4) * q * r)) / np.float32(2)\n"
+            "    return (P, P / (P + r))\n",
+        ),
+        (
+            "the public case hard-wired (the golden ratio)",
+            _Q1.replace("(q + np.sqrt(q * q + 4 * q * r)) / 2", "(1 + np.sqrt(5)) / 2")
+            + "    return (P, P / (P + r))\n",
         ),
     ],
     "q2": [
@@ -376,17 +386,19 @@ RIGHT = {
     "q1": [
         (
             "kf.steady_state",
-            "ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]]))\n"
-            "steady = (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))",
+            "def steady_state(q, r):\n"
+            "    ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[q]], R=[[r]]))\n"
+            "    return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))\n",
         ),
         (
             "iterate the recursion (list)",
-            "P = 1.0\nfor _ in range(200):\n    P = P - P**2 / (P + 1) + 1\n"
-            "steady = [P, P / (P + 1)]",
+            "def steady_state(q, r):\n    P = 1.0\n    for _ in range(500):\n"
+            "        P = P - P**2 / (P + r) + q\n    return [P, P / (P + r)]\n",
         ),
         (
             "np.roots, numpy scalars, extra print",
-            "P = max(np.roots([1.0, -1.0, -1.0]))\nsteady = (P, P / (P + 1))\nprint(steady)",
+            "def steady_state(q, r):\n    P = max(np.roots([1.0, -q, -q * r]))\n"
+            "    print(P)\n    return (P, P / (P + r))\n",
         ),
     ],
     "q2": [
