@@ -48,7 +48,7 @@ import json
 import os
 import re
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import nbformat
@@ -82,7 +82,7 @@ class Spec:
     wrong: dict
     right: dict
     manual: list
-    coincides: dict
+    coincides: dict = field(default_factory=dict)
 
     @property
     def variants(self) -> list[Variant]:
