@@ -81,9 +81,35 @@ def approximation_args(function):
     )
 
 
+BATCH_WEIGHTS = np.array([[1.0, 0.5, 2.0], [0.3, -1.0, 1.5], [2.0, 0.0, 1.0]])
+
+
+def batch_args(function):
+    """Many laws (one row of weights each) at one point each, or at points per law."""
+    weights = array(BATCH_WEIGHTS, ndims=(2,))
+    return case(
+        function,
+        c=array(np.array([2.5, 1.0, 4.0]), ndims=(0, 1, 2)).but(drop=("inf",)),
+        weights=dataclasses.replace(
+            weights, extreme={"1e300": BATCH_WEIGHTS * 1e300, "1e-300": BATCH_WEIGHTS * 1e-300}
+        ),
+        dof=array(np.array([1.0, 2.0, 1.0]), ndims=(0, 1, 2), none_ok=True).but(
+            negative=[1.0, -1.0, 1.0]
+        ),
+        noncentrality=array(np.array([0.0, 1.0, 0.5]), ndims=(0, 1, 2), none_ok=True).but(
+            negative=[0.0, -1.0, 0.5]
+        ),
+        sigma=sigma(),
+        atol=tolerance(),
+        rtol=tolerance(1e-8),
+    )
+
+
 TABLE = {
     "imhof_cdf": integral_args(quadform.imhof_cdf),
     "imhof_sf": integral_args(quadform.imhof_sf),
+    "imhof_cdf_batch": batch_args(quadform.imhof_cdf_batch),
+    "imhof_sf_batch": batch_args(quadform.imhof_sf_batch),
     "liu_tang_zhang_cdf": approximation_args(quadform.liu_tang_zhang_cdf),
     "liu_tang_zhang_sf": approximation_args(quadform.liu_tang_zhang_sf),
     "inversion_integrands": case(

@@ -878,20 +878,26 @@ def test_stacked_products_match_matmul():
 
 
 # ---------------------------------------------------------------------------
-# extreme scales: the gain and the estimate are representable even where S is not
+# extreme scales: the gain and the estimate are representable even where the sum of S is
+# not; an S beyond double precision is refused (it would give a NIS of 0)
 # ---------------------------------------------------------------------------
 def test_kf_update_with_a_huge_output_matrix_still_updates():
-    # S = H P H^T + R ~ 1e320 overflows; K ~ 1/|H| and P_filt (a projection) do not.
+    # S_ii = h^2 + 1 ~ 1.4e308 are doubles, their sum is not: each output is scaled
+    h = 1.2e154
+    two = kf.kf_update(np.zeros(2), np.eye(2), [1.0, 2.0], np.diag([h, h]), np.eye(2))
+    assert np.isfinite(two.S).all()
+    np.testing.assert_allclose(np.diag(two.S), [h * h, h * h], rtol=1e-12)
+    np.testing.assert_allclose(two.x_filt * h, [1.0, 2.0], rtol=1e-12)
+    np.testing.assert_allclose(two.K * h, np.eye(2), rtol=1e-12)
+    np.testing.assert_allclose(two.P_filt, 0.0, atol=1e-300)
+
+
+def test_kf_update_refuses_an_innovation_covariance_beyond_double_precision():
+    # S = H P H^T + R ~ 1.25e320: the gain is representable but S (behind every NIS)
+    # is not; it was returned as inf, which makes the NIS 0
     h = 1e160
-    step = kf.kf_update(np.zeros(2), np.eye(2), [1.0], [[h, 0.5 * h]], [[1.0]])
-    np.testing.assert_allclose(step.x_filt * h, [0.8, 0.4], rtol=1e-12)
-    np.testing.assert_allclose(step.K[:, 0] * h, [0.8, 0.4], rtol=1e-12)
-    np.testing.assert_allclose(step.P_filt, [[0.2, -0.4], [-0.4, 0.8]], atol=1e-12)
-    assert step.S[0, 0] == np.inf  # the true S ~ 1.25e320 is beyond double precision
-    # two outputs, each scaled on its own
-    two = kf.kf_update(np.zeros(2), np.eye(2), [1.0, 2.0], np.diag([h, 1.0]), np.eye(2))
-    np.testing.assert_allclose(two.x_filt, [1.0 / h, 1.0], rtol=1e-12)
-    np.testing.assert_allclose(np.diag(two.P_filt), [0.0, 0.5], atol=1e-12)
+    with pytest.raises(ValueError, match=r"S = H P_pred H\^T \+ R exceeds.*rescale"):
+        kf.kf_update(np.zeros(2), np.eye(2), [1.0], [[h, 0.5 * h]], [[1.0]])
 
 
 def test_recursive_least_squares_is_scale_equivariant_at_extreme_scales():
@@ -909,7 +915,38 @@ def test_recursive_least_squares_is_scale_equivariant_at_extreme_scales():
     np.testing.assert_allclose(big.theta * (b / a), ref.theta, rtol=1e-12)
     np.testing.assert_allclose(big.P * (b / a) ** 2, ref.P, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(big.eps / a, ref.eps, rtol=1e-12)
+    # the first S, a^2 (1e10 + 1) ~ 6.7e309, is beyond double precision and says so (inf);
+    # the NIS, scale-free, is representable and right (it was eps^2 / inf = 0)
+    assert big.S[0] == np.inf and np.isfinite(big.S[1:]).all()
+    np.testing.assert_allclose(big.nis(), ref.nis(), rtol=1e-12)
+    np.testing.assert_allclose(
+        big.normalized_innovations(), ref.normalized_innovations(), rtol=1e-12
+    )
     # the diffuse start: regressors ~1e300 put P ~ r / |phi|^2 below double precision
     diffuse = kf.recursive_least_squares(Phi * 2.0**1000, y, r=1.0)
     plain = kf.recursive_least_squares(Phi, y, r=1.0)
     np.testing.assert_allclose(diffuse.theta[1:] * 2.0**1000, plain.theta[1:], rtol=1e-12)
+
+
+def _huge_output_model():
+    # |H| ~ 1e160: H P H^T + R ~ 1e320 is beyond double precision at every step
+    return kf.LinearModel(F=np.eye(2), H=[[1e160, 5e159]], Q=0.01 * np.eye(2), R=[[1.0]])
+
+
+def test_filter_drivers_refuse_an_innovation_covariance_beyond_double_precision():
+    # the drivers returned S = inf and so a NIS of 0 at every step, without a word
+    model = _huge_output_model()
+    _, y = model.simulate(5, np.random.default_rng(3))
+    remedy = r"S_t = H.* exceeds the range of doubles.*dividing y.* by c and R by c\^2"
+    with pytest.raises(ValueError, match=remedy + r".*"):
+        kf.kalman_filter(model, y)
+    with pytest.raises(ValueError, match=r"at step t = 0"):
+        kf.extended_kalman_filter(model, y)
+    with pytest.raises(ValueError, match=r"S_t = H P\(t\|t-1\) H\^T \+ R exceeds.*model's H"):
+        kf.riccati(model, 5)
+    # the gains alone are representable and right: K = P H^T S^-1 with H scaled by 2^-531
+    gains = kf.riccati_gains(model, 5)
+    plain = kf.LinearModel(
+        F=np.eye(2), H=[[1e160 / 2.0**531, 5e159 / 2.0**531]], Q=0.01 * np.eye(2), R=[[2.0**-1062]]
+    )
+    np.testing.assert_allclose(gains / 2.0**-531, kf.riccati_gains(plain, 5), rtol=1e-12)

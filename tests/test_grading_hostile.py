@@ -213,6 +213,13 @@ def _submissions(env) -> dict[str, object]:
             "    return r.statistic, r.critical_value, r.reject"
         ),
     )
+    solution_q3 = _cell(_solution(), "q3-answer")["source"]
+    solution_q3 = "".join(solution_q3) if isinstance(solution_q3, list) else solution_q3
+    subs["forbidden_unused_import"] = _with_answer(
+        "q3",
+        "from course.lsq import overall_model_test, fit as f\nimport course.lsq as cl\n"
+        + solution_q3,
+    )
     subs["forbidden_runtime"] = _with_answer(
         "q4",
         (
@@ -621,6 +628,8 @@ def test_edited_protected_cells_are_not_trusted(graded):
 
 def test_forbidden_calls(graded):
     _expect(graded["rows"]["forbidden_static"], {"q3": "forbidden"})
+    # an import is not a call: a right answer that imports a forbidden function keeps its points
+    _expect(graded["rows"]["forbidden_unused_import"], {})
     row = graded["rows"]["forbidden_runtime"]
     _expect(row, {"q4": "forbidden"})
     assert "course.lsq.w_tests" in row["questions"]["q4"]["message"]
@@ -892,24 +901,6 @@ class _Alarm:
 
 
 @pytest.mark.parametrize(
-    "source",
-    [
-        "import ," * 24_000 + " b",  # 192 KB on one line (the old regex: quadratic)
-        "import " + "a, " * 64_000 + "b +",
-        "x = (" + "np, " * 60_000 + "\n.inv",  # a mention after a huge unparsable line
-        "from numpy.linalg import " + " " * 150_000 + ",",  # whitespace runs
-    ],
-)
-def test_forbidden_scan_of_unparsable_text_is_linear(source):
-    from course.grading.notebook import forbidden_mentions
-
-    with _Alarm(10):
-        found = forbidden_mentions(source, ["numpy.linalg.inv", "numpy.linalg.b"])
-    assert ("numpy.linalg.inv" in found) == source.endswith(".inv")
-    assert ("numpy.linalg.b" in found) == source.startswith("import ")
-
-
-@pytest.mark.parametrize(
     "cell",
     [
         "\n".join(f"!echo {i}" for i in range(600)),  # the 5 KB setup cell
@@ -918,20 +909,16 @@ def test_forbidden_scan_of_unparsable_text_is_linear(source):
     ],
 )
 def test_ipython_syntax_in_a_cell_cannot_stall_the_parent(cell):
-    from course.grading.notebook import forbidden_mentions, student_id_in
+    from course.grading.notebook import student_id_in
 
     with _Alarm(10):
         assert student_id_in('STUDENT_ID = "s1"\n' + cell) in (None, "s1")
-        forbidden_mentions(cell + "\nnp.linalg.inv(A)", ["numpy.linalg.inv"])
 
 
 def test_ipython_syntax_of_an_honest_cell_is_still_understood():
-    from course.grading.notebook import forbidden_mentions, student_id_in
+    from course.grading.notebook import student_id_in
 
     assert student_id_in('%matplotlib inline\n!pip list\nSTUDENT_ID = "s1"') == "s1"
-    assert forbidden_mentions("%matplotlib inline\ny = np.linalg.inv(A)", ["numpy.linalg.inv"]) == [
-        "numpy.linalg.inv"
-    ]
 
 
 def test_a_huge_cell_is_not_parsed_by_the_parent():

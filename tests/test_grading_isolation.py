@@ -221,6 +221,45 @@ def test_tripwire_reports_calls_that_do_not_come_from_the_library():
     assert out[5:] == ["None", "w_tests"]
 
 
+def test_tripwire_forbids_the_private_implementation_and_classes():
+    """Forbid by the code that computes (issue 26): a private twin of a forbidden function
+    reports as the function (04 q8's ``_kf_update`` scored 2/2), a forbidden class reports from
+    its constructor, and the library's own calls of either stay silent."""
+    out = _run(
+        """
+        import os
+        import numpy as np
+        import course.filters as cf
+        import course.diagnosis as cd
+        from course.grading import tripwire
+        r, w = os.pipe()
+        os.set_blocking(r, False)
+        how = tripwire.instrument(
+            ["course.filters.kf_update", "course.diagnosis.DecisionStructure"], w
+        )
+        assert how["course.filters.kf_update"] == "instrumented", how
+        assert how["course.filters._steps._kf_update"] == "instrumented", how
+        assert how["course.diagnosis.DecisionStructure"] == "instrumented", how
+        def calls():
+            try:
+                data = os.read(r, 1 << 16)
+            except BlockingIOError:
+                data = b""
+            return ",".join(sorted({n.rsplit(".", 1)[1] for n in tripwire.parse_events(data)[0]})) or "-"
+        from course.filters._steps import _kf_update
+        x, P, y, H, R = np.zeros(1), np.eye(1), np.ones(1), np.eye(1), np.eye(1)
+        _kf_update(x, P, y, H, R)
+        print(calls())                                       # kf_update (its private twin)
+        model = cf.LinearModel(F=np.eye(1), H=np.eye(1), Q=np.eye(1), R=np.eye(1))
+        cf.kalman_filter(model, np.ones((5, 1)))
+        print(calls())                                       # - (the library's own calls)
+        s = cd.DecisionStructure([[1, 0], [0, 1]])
+        print(calls(), isinstance(s, cd.DecisionStructure))  # DecisionStructure True
+        """
+    )
+    assert out == ["kf_update", "-", "DecisionStructure", "True"], out
+
+
 def test_events_are_found_whatever_a_submission_writes_around_them():
     from course.grading.tripwire import EVENT, parse_events
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -173,6 +174,45 @@ def _nb(answer_source: str, extra=()):
             *extra,
         ],
     )
+
+
+def _question_texts(name: str) -> dict[str, str]:
+    """Each question's markdown in the released notebook: from its ``## qid`` header to the
+    next question's header."""
+    nb = json.loads((EXERCISES / name / f"{name}.ipynb").read_text("utf-8"))
+    texts: dict[str, str] = {}
+    current = None
+    for cell in nb["cells"]:
+        if cell["cell_type"] != "markdown":
+            continue
+        for line in "".join(cell["source"]).splitlines():
+            if line.startswith("## q"):
+                current = line[3:].split()[0]
+            if current is not None:
+                texts[current] = texts.get(current, "") + "\n" + line
+    return texts
+
+
+@pytest.mark.parametrize("name", ASSIGNMENTS)
+def test_every_forbidden_function_is_named_in_its_question(name):
+    """Forbidden means promised: each function a question forbids is named in its text, and
+    the release states how calls count (issue 26)."""
+    checks = load_checks(SOLUTIONS / name)
+    texts = _question_texts(name)
+    for qid, text in list(texts.items()):  # "Same rules as q1", "as in q5": that list applies
+        for ref in re.findall(r"\bas (?:in )?(q\w+)", text):
+            texts[qid] = text + texts.get(ref, "")
+    unnamed = [
+        f"{q.id}: {dotted}"
+        for q in checks.questions.values()
+        for dotted in q.forbid
+        if f"`{dotted.rsplit('.', 1)[1]}`" not in texts.get(q.id, "")
+        and f".{dotted.rsplit('.', 1)[1]}`" not in texts.get(q.id, "")
+    ]
+    assert not unnamed, f"forbidden but not named in the question: {unnamed}"
+    notebook = (EXERCISES / name / f"{name}.ipynb").read_text("utf-8")
+    if any(q.forbid for q in checks.questions.values()):
+        assert "Importing it costs nothing" in notebook and "honour code" in notebook
 
 
 def test_stub_replaces_solution_at_its_indentation():

@@ -227,7 +227,7 @@ def test_self_check_function_and_stub(check, capsys):
     check("q3", good)
     out = capsys.readouterr().out
     # a forbidden library call is a FAIL (it scores 0 at grading), not PASS plus a warning
-    assert "FAIL: your answer uses course.lsq.fit, course.lsq.overall_model_test" in out
+    assert "FAIL: your answer calls course.lsq.fit, course.lsq.overall_model_test" in out
     assert "PASS" not in out and "0 of 3 public cases count" in out
 
     def mine(A, y, Qyy, alpha):  # the fit is weighted too (a public case has Qyy != I)
@@ -380,7 +380,7 @@ CHECKS = Checks("mistakes_demo")
     points=1,
     hint=["Two-sided: alpha is split.", "z = norm.isf(alpha / 2)"],
     mistakes=[Mistake("looks one-sided: z_alpha instead of z_alpha/2", lambda: norm.isf(0.05))],
-    forbid=["scipy.stats.norm"],
+    forbid=["course.lsq.fit"],
 )
 def q1():
     return norm.isf(0.025)
@@ -461,18 +461,132 @@ def test_a_forbidden_call_fails_the_self_check(mistakes_demo, capsys):
 
     check("q2", crit)
     out = capsys.readouterr().out
-    assert "FAIL: your answer uses course.lsq.fit" in out and "scores 0 at grading" in out
+    assert "FAIL: your answer calls course.lsq.fit" in out and "scores 0 at grading" in out
     assert "PASS" not in out and "Warning" not in out
-    # a value question: the answer cell (IPython's input history) is scanned like the grader does
+
+
+def _run_cell(check, cell_id: str, source: str, ns: dict) -> None:
+    """Run ``source`` as the notebook cell ``cell_id`` (as JupyterLab tells the kernel)."""
+    check._cells._cell = cell_id
+    exec(compile(textwrap.dedent(source), f"<{cell_id}>", "exec"), ns)
+
+
+_FORBIDDEN_CALLS = {  # every path to course.lsq.fit, in the answer cell of q1 (a value question)
+    "plain": "from course import lsq\nlsq.fit(np.ones((2, 1)), np.ones(2))",
+    "alias": "from course.lsq import fit as f\nf(np.ones((2, 1)), np.ones(2))",
+    "module alias": "import course.lsq as cl\ncl.fit(np.ones((2, 1)), np.ones(2))",
+    "getattr": "import course.lsq\ngetattr(course.lsq, 'f' + 'it')(np.ones((2, 1)), np.ones(2))",
+    "__import__": "__import__('course.lsq', fromlist=['x']).fit(np.ones((2, 1)), np.ones(2))",
+    "partial": "import functools, course.lsq\nfunctools.partial(course.lsq.fit, np.ones((2, 1)))(np.ones(2))",
+    "private twin": "from course.lsq import _fit\n_fit._rcond_upper(np.ones((2, 1)))",
+}
+
+
+@pytest.mark.parametrize("how", sorted(_FORBIDDEN_CALLS))
+def test_a_forbidden_call_by_any_path_fails_a_value_question(mistakes_demo, capsys, how):
+    """The self-check uses the grader's tripwires (the function objects report, not a scan of
+    names): an alias, getattr, __import__, partial or a private helper of the function trip
+    them, in the answer cell or in a cell the student added (a scratch cell)."""
     from scipy.stats import norm
 
-    namespace = {
-        "z": norm.isf(0.025),
-        "In": ["", "from scipy.stats import norm\nz = norm.isf(0.025)"],
-    }
-    check._check("q1", namespace, None, False)
+    _, _, check = mistakes_demo
+    for cell in ("q1-answer", "a-scratch-cell"):
+        check.calls.clear()
+        ns = {"np": np, "z": norm.isf(0.025)}
+        _run_cell(check, cell, _FORBIDDEN_CALLS[how], ns)
+        check._check("q1", ns, None, False)
+        out = capsys.readouterr().out
+        assert "FAIL: your answer cell or a cell you added" in out, (cell, out)
+        assert "calls course.lsq.fit" in out
+        assert "PASS" not in out
+
+
+def test_a_forbidden_import_or_another_answers_call_costs_nothing(mistakes_demo, capsys):
+    """An import is not a call; a call in another question's answer cell (where that question
+    allows it) or while another question's check runs is not this question's."""
+    from scipy.stats import norm
+
+    _, _, check = mistakes_demo
+    ns = {"np": np, "z": norm.isf(0.025)}
+    _run_cell(check, "q1-answer", "from course.lsq import fit\nimport course.lsq as cl", ns)
+    _run_cell(check, "q2-answer", "fit(np.ones((2, 1)), np.ones(2))", ns)
+    _run_cell(check, "q2-check", "fit(np.ones((2, 1)), np.ones(2))", ns)
+    check._check("q1", ns, None, False)
     out = capsys.readouterr().out
-    assert "FAIL: your answer uses scipy.stats.norm" in out and "PASS" not in out
+    assert "PASS" in out and "FAIL" not in out, out
+
+    check.calls.clear()  # (q2 forbids fit too: its answer cell's call counted against q2)
+    # a scratch cell's call counts against the value question q1, not the function question q2
+    _run_cell(check, "a-scratch-cell", "fit(np.ones((2, 1)), np.ones(2))", ns)
+    assert check._forbidden_calls(check._questions["q1"]) == {"course.lsq.fit"}
+    assert check._forbidden_calls(check._questions["q2"]) == set()
+    # running the cell again without the call withdraws it (IPython's pre_run_cell)
+    check._forget_cell(type("Info", (), {"cell_id": "a-scratch-cell"})())
+    assert check._forbidden_calls(check._questions["q1"]) == set()
+
+    def crit(alpha):  # imports the forbidden function and never calls it
+        from course.lsq import fit  # noqa: F401
+
+        return float(norm.isf(alpha / 2))
+
+    check("q2", crit)
+    out = capsys.readouterr().out
+    assert "1 of 1 public case passes" in out and "FAIL" not in out, out
+
+
+def test_the_self_check_catches_private_twins_and_aliases_of_assignment_04(capsys):
+    """04 q8 (kf_update) and q2 (kalman_filter): the private implementation and aliased
+    imports failed at grading but passed the self-check (issue 26)."""
+    from course.grading.vocabulary import PublicSpec
+
+    folder = ROOT / "exercises" / "04_ekf_residuals"
+    check = Assignment(PublicSpec.read(folder), folder, "s1")
+    from course.filters._steps import _kf_update
+
+    def twin(theta, P, phi, y, r):  # right values, through the private implementation
+        args = (np.atleast_1d(y), np.asarray(phi, float)[None, :], np.array([[r]]))
+        out = _kf_update(np.asarray(theta, float), np.asarray(P, float), *args)
+        return out[0], out[1]
+
+    from course.filters import kf_update as f
+
+    def aliased(theta, P, phi, y, r):
+        args = (np.atleast_1d(y), np.asarray(phi, float)[None, :], np.array([[r]]))
+        out = f(np.asarray(theta, float), np.asarray(P, float), *args)
+        return out[0], out[1]
+
+    for func in (twin, aliased):
+        check("q8", func)
+        out = capsys.readouterr().out
+        assert "FAIL: your answer calls " in out and "course.filters.kf_update" in out, out
+        assert "PASS" not in out and "(1 of 1 give the right values)" in out, out
+    del check
+
+
+def test_a_forbidden_function_called_through_its_private_module_fails_the_self_check(
+    mistakes_demo, capsys
+):
+    """The grader forbids the code, not the public name: ``course.lsq._fit.fit`` is
+    ``course.lsq.fit`` and scores 0 at grading, so the self-check must say so as well (it
+    wrapped only the public attribute, and a call made in a helper from another cell showed
+    PASS)."""
+    from course.lsq import _fit
+
+    _, _, check = mistakes_demo
+
+    def helper():  # another cell's function: the scan of the answer's source does not see it
+        return _fit.fit(np.ones((2, 1)), np.ones(2))
+
+    def crit(alpha):
+        helper()
+        from scipy.stats import norm
+
+        return float(norm.isf(alpha / 2))
+
+    check("q2", crit)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer calls course.lsq.fit" in out and "PASS" not in out
+    assert _fit.fit.__module__ == "course.lsq._fit"
 
 
 @settings(max_examples=150, deadline=None, derandomize=True, database=None)

@@ -15,17 +15,9 @@ Skipped, with the reason, when Chromium or Playwright is missing (see ``tests/br
 
 from __future__ import annotations
 
-import os
-import secrets
-import socket
-import subprocess
-import sys
-import time
-import urllib.request
-
 import nbformat
 import pytest
-from browser import CHROMIUM_ARGS, chromium_or_skip
+from browser import CHROMIUM_ARGS, chromium_or_skip, jupyterlab
 
 pytestmark = pytest.mark.browser
 
@@ -41,12 +33,6 @@ UIS = {"lab": "lab/tree", "notebook7": "notebooks"}
 SLIDER_CELL = "%matplotlib inline\nfrom course import interactive\ninteractive.omt_widget()"
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
     """JupyterLab serving a folder with one notebook (its kernel named, so Lab asks nothing)."""
@@ -60,47 +46,12 @@ def lab(tmp_path_factory):
     nb.cells = [nbformat.v4.new_code_cell(SLIDER_CELL)]
     for ui in UIS:  # a notebook per interface: each gets its own kernel session
         nbformat.write(nb, folder / f"sliders-{ui}.ipynb")
-    port, token = _free_port(), secrets.token_hex(16)
-    command = [
-        sys.executable,
-        "-m",
-        "jupyterlab",
-        "--no-browser",
-        f"--port={port}",
-        "--ip=127.0.0.1",
-        f"--IdentityProvider.token={token}",
-        f"--ServerApp.root_dir={folder}",
-        "--LabApp.news_url=",  # no "get notified about Jupyter news?" prompt over the figure
-    ]
-    if hasattr(os, "geteuid") and os.geteuid() == 0:
-        command.append("--allow-root")
     home = tmp_path_factory.mktemp("home")  # a fresh Lab workspace: no restored layout
-    env = {**os.environ, "JUPYTER_CONFIG_DIR": str(home / "config"), "MPLBACKEND": "Agg"}
-    log = (folder / "lab.log").open("w")
-    server = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 90
-        while True:
-            try:
-                urllib.request.urlopen(f"{base}/api/status?token={token}", timeout=2).close()
-                break
-            except OSError:
-                if server.poll() is not None or time.monotonic() > deadline:
-                    log.flush()
-                    pytest.fail(f"JupyterLab did not start:\n{(folder / 'lab.log').read_text()}")
-                time.sleep(0.5)
+    with jupyterlab(folder, home) as (base, token):
         yield (
             {ui: f"{base}/{path}/sliders-{ui}.ipynb?token={token}" for ui, path in UIS.items()},
             folder,
         )
-    finally:
-        server.terminate()
-        try:
-            server.wait(15)
-        except subprocess.TimeoutExpired:
-            server.kill()
-        log.close()
 
 
 def _figure(page) -> str:

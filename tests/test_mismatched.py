@@ -35,6 +35,7 @@ from course.mismatched import (
     simulate_records,
     statistic_law,
 )
+from course.quadform import QuadraticForm
 from course.results import TestResult
 
 
@@ -330,6 +331,23 @@ def test_projected_statistics_need_squares_and_an_svd():
     assert abs(
         rows.mean() - (M - 1) / M * V[0] @ moments.cov[j] @ V[0]
     ) < 4.5 * rows.std() / np.sqrt(reps)
+
+
+def test_the_mean_law_is_the_quadratic_form_of_the_squared_norm():
+    # statistic_law reduces ||rbar||^2 by one eigendecomposition of a non-singular
+    # covariance; it is QuadraticForm(I, mean, cov) to rounding, and a singular
+    # covariance takes QuadraticForm itself
+    from course.mismatched._quadratic_forms import _mean_law
+
+    rng = np.random.default_rng(3)
+    for p in (1, 2, 4):
+        X = rng.normal(size=(p, p))
+        cov, mean = X @ X.T + 0.1 * np.eye(p), rng.normal(size=p)
+        fast, general = _mean_law(mean, cov), QuadraticForm(np.eye(p), mean, cov)
+        points = np.linspace(0.05, 3.0, 5) * general.mean()
+        assert np.allclose(fast.cdf(points), general.cdf(points), rtol=1e-13, atol=1e-15)
+    singular = np.array([[1.0, 1.0], [1.0, 1.0]])
+    assert isinstance(_mean_law(np.array([1.0, -1.0]), singular), QuadraticForm)
 
 
 def test_mean_statistic_is_the_squared_norm():

@@ -778,3 +778,22 @@ def test_alarm_statistics_refuses_nan_after_the_undefined_start():
         nis.alarm_statistics(T, 1.0, fault_time=3)
     T[1, 3:] = 0.0
     assert nis.alarm_statistics(T, 1.0, fault_time=3).detection_probability == 0.5
+
+
+def test_the_eigenvalue_laws_answer_beyond_the_range_of_k_x():
+    # K x / 2 overflowed (and the Laguerre blocks failed near 1e300): innovations of
+    # 1e150-1e154 with S = I raised LinAlgError from inside the laws
+    eps = np.random.default_rng(12).standard_normal((10, 3))
+    for scale in (1e150, 1e154):
+        result = nis.nis_matrix_test(eps * scale, np.eye(3))
+        assert np.isfinite(result.statistic).all()
+        assert result.reject and result.pvalue == 0.0
+    for which in ("max", "min"):
+        law = nis.extreme_eigenvalue(3, 10, which)
+        x = np.array([1e300, 1.7e308, np.inf])
+        assert law.cdf(x).tolist() == [1.0, 1.0, 1.0]
+        assert law.sf(x).tolist() == [0.0, 0.0, 0.0]
+        assert law.pdf(x[:2]).tolist() == [0.0, 0.0]
+    # far below: a p-value of +0.0, not -0.0
+    tiny = nis.nis_matrix_test(eps * 1e-160, np.eye(3))
+    assert tiny.reject and np.copysign(1.0, tiny.pvalue) == 1.0

@@ -22,7 +22,9 @@ assignment's number, ``answers_01.py`` for ``01_least_squares``)::
                                      # variant then counts as right (it must keep full marks)
 
 A ``source`` is the complete replacement text of that question's answer cell in the solution
-notebook: no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
+notebook; what follows a line ``# %% added cell`` (``ADDED_CELL``) becomes a cell the student added
+right below the answer cell, after ``# %% added cell at the end`` (``ADDED_AT_END``) one added at
+the end of the notebook (scratch cells, e.g. a forbidden call whose numbers the answer pastes): no ``### BEGIN SOLUTION`` markers, the same context cells above it. It may use what
 the protected cells define and, for a question listed in ``DEPENDS``, the answers of the
 questions it depends on (the suite only places such a variant in a notebook where those are
 right). Wrong answers of a question that other questions depend on are placed where no
@@ -48,6 +50,7 @@ import json
 import os
 import re
 import sys
+import types
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -59,6 +62,7 @@ from course.grading.authoring.checks import load_checks
 from course.grading.batch.driver import grade
 from course.grading.batch.options import GradeOptions
 from course.grading.notebook import _STUDENT_ID_LINE
+from course.grading.vocabulary import answer_cell_id
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS = ROOT / "solutions"
@@ -201,17 +205,31 @@ def _solution_sources(solution_nb) -> dict[str, str]:
     }
 
 
+#: In a variant's source, the line after which the text is a cell the student added below the
+#: answer cell (``ADDED_CELL``) or at the end of the notebook (``ADDED_AT_END``).
+ADDED_CELL = "# %% added cell"
+ADDED_AT_END = "# %% added cell at the end"
+
+
 def build_notebook(solution_nb, batch: dict[str, Variant], student_id: str):
-    """A copy of the solution notebook with the answer cells of ``batch`` replaced."""
+    """A copy of the solution notebook with the answer cells of ``batch`` replaced (and the
+    cells their sources add after ``ADDED_CELL`` appended at the end)."""
     nb = nbformat.from_dict(json.loads(json.dumps(solution_nb)))
     seen = set()
+    cells, at_end = [], []
     for cell in nb.cells:
+        cells.append(cell)
         meta = cell.get("metadata", {}).get("course", {})
         if meta.get("role") == "setup":
             cell.source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student_id}"', cell.source, 1)
         if meta.get("role") == "answer" and meta.get("question") in batch:
-            cell.source = batch[meta["question"]].source
+            source, _, end = batch[meta["question"]].source.partition(f"\n{ADDED_AT_END}\n")
+            answer, _, below = source.partition(f"\n{ADDED_CELL}\n")
+            cell.source = answer
+            cells += [nbformat.v4.new_code_cell(below)] if below else []
+            at_end += [nbformat.v4.new_code_cell(end)] if end else []
             seen.add(meta["question"])
+    nb.cells = cells + at_end
     missing = set(batch) - seen
     assert not missing, f"no answer cell for {sorted(missing)} in the solution notebook"
     return nb
@@ -334,6 +352,16 @@ def test_right_answers_keep_full_marks(graded, key):
     assert not lost, "right answers that lost points:\n" + "\n".join(lost)
 
 
+def _running_cell(ns: dict, cell_id: str | None) -> None:
+    """Tell the self-check which cell runs, as JupyterLab does (its forbidden-call records
+    are per cell)."""
+    check = ns.get("check")
+    cells = getattr(check, "_cells", None)
+    if cells is not None:
+        check._forget_cell(types.SimpleNamespace(cell_id=cell_id))  # IPython's pre_run_cell
+        cells._cell = cell_id
+
+
 @functools.cache
 def _solution_namespace(assignment: str, student: str) -> dict:
     """The namespace of the solution notebook run in this process as ``student`` (its check
@@ -354,6 +382,7 @@ def _solution_namespace(assignment: str, student: str) -> dict:
                 source = cell.source
                 if role == "setup":
                     source = _STUDENT_ID_LINE.sub(f'STUDENT_ID = "{student}"', source, 1)
+                _running_cell(ns, cell.get("id"))
                 exec(compile(source, f"<{assignment}>", "exec"), ns)
     finally:
         os.chdir(here)
@@ -375,13 +404,32 @@ def test_right_answers_pass_the_public_self_check(key):
             continue
         mine = dict(ns)
         buf = io.StringIO()
+        source, _, end = v.source.partition(f"\n{ADDED_AT_END}\n")
+        answer, _, below = source.partition(f"\n{ADDED_CELL}\n")
         with contextlib.redirect_stdout(buf):
-            exec(compile(v.source, f"<{v.qid} {v.label}>", "exec"), mine)
+            for cell_id, text in (
+                (answer_cell_id(v.qid), answer),
+                ("added-1", below),
+                ("added-2", end),
+            ):
+                _running_cell(ns, cell_id)
+                exec(compile(text, f"<{v.qid} {v.label}>", "exec"), mine)
             check(v.qid, mine[q.target])
         out = buf.getvalue()
         if "FAIL" in out or (q.cases and "PASS" not in out):
             failed.append(f"{v.qid} {v.label!r}:\n{out}")
     assert not failed, "right answers failing the self-check:\n" + "\n".join(failed)
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_the_solution_makes_no_forbidden_call_that_counts(key):
+    """Run cell by cell as JupyterLab runs it, the solution calls no function where the
+    self-check (and the grader) counts it against a question that forbids it: the protected
+    cells and the other questions' answers may use what those allow."""
+    spec = load_spec(SPECS[key])
+    check = _solution_namespace(spec.assignment, f"{spec.student}-solution")["check"]
+    counted = {q.id: check._forbidden_calls(q) for q in check.spec.questions}
+    assert not any(counted.values()), counted
 
 
 def test_every_assignment_has_answers():

@@ -25,6 +25,7 @@ from course.filters._models import (
 )
 from course.filters._steps import _ekf_predict as ekf_predict
 from course.filters._steps import _ekf_update as ekf_update
+from course.filters._steps import _innovation_covariance_overflow
 from course.filters._steps import _kf_predict as kf_predict
 from course.filters._steps import _kf_update as kf_update
 from course.linalg import readonly as _readonly
@@ -168,6 +169,12 @@ def riccati(model, N, x0_cov=None) -> RiccatiResult:
         ``P_pred (N, n, n)``, ``S (N, p, p)``, ``K (N, n, p)``,
         ``P_filt (N, n, n)``.
 
+    Raises
+    ------
+    ValueError
+        An ``S_t`` beyond double precision (``|H| ~ 1e160``; the gains alone,
+        :func:`riccati_gains`, stay right there): rescale ``H`` and ``R``.
+
     See Also
     --------
     riccati_gains : The gains alone.
@@ -199,7 +206,16 @@ def riccati(model, N, x0_cov=None) -> RiccatiResult:
     ((200, 1, 1), 0.0951)
     """
     _check_model(model)
-    N = _check_steps(N)
+    out = _riccati(model, _check_steps(N), x0_cov)
+    if not np.isfinite(out.S).all():
+        raise _innovation_covariance_overflow(
+            "S_t = H P(t|t-1) H^T + R", model.H, model.R, "the model's H"
+        )
+    return out
+
+
+def _riccati(model, N, x0_cov) -> RiccatiResult:
+    """:func:`riccati` without the check of ``S`` (the gains stay right where it overflows)."""
     _, P = _prior(model, None, x0_cov)
     n, p = model.n_states, model.n_outputs
     out = RiccatiResult(
@@ -247,7 +263,8 @@ def riccati_gains(model, N, x0_cov=None) -> np.ndarray:
     >>> riccati_gains(model, 3)[:, 0, 0].round(4)
     array([0.5   , 0.3377, 0.258 ])
     """
-    return riccati(model, N, x0_cov).K
+    _check_model(model)
+    return _riccati(model, _check_steps(N), x0_cov).K
 
 
 def steady_state(model) -> RiccatiResult:
@@ -327,6 +344,12 @@ def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
         Per-step arrays; the covariances and gains are broadcast views of
         the single ``(N, ...)`` Riccati recursion (they do not depend on y).
 
+    Raises
+    ------
+    ValueError
+        An innovation covariance beyond double precision (``|H| ~ 1e160``),
+        whose NIS would read 0: rescale ``y``, ``H`` and ``R`` as the message says.
+
     See Also
     --------
     kf_update : One measurement update.
@@ -373,6 +396,14 @@ def kalman_filter(model, y, u=None, x0_mean=None, x0_cov=None) -> FilterResult:
         P_filt[t], S_all[t], K_all[t] = Pf, S, K
         offset = Gw if Bu is None else Gw + Bu[t]
         x, P = kf_predict(xf, Pf, model.F, model.GQG, offset)
+    if not np.isfinite(S_all).all():
+        t = int(np.argmin(np.isfinite(S_all).reshape(N, -1).all(axis=1)))
+        raise _innovation_covariance_overflow(
+            f"S_t = H P(t|t-1) H^T + R (at step t = {t})",
+            model.H,
+            model.R,
+            "y, the model's H (and v_mean)",
+        )
     nb = len(batch)
     x_pred, x_filt, eps = (_batch_major(a, nb) for a in (x_pred, x_filt, eps))
 
@@ -417,6 +448,12 @@ def extended_kalman_filter(
     FilterResult
         Covariances are per run, ``(*batch, N, n, n)``, since they depend on
         the linearisation points.
+
+    Raises
+    ------
+    ValueError
+        An innovation covariance beyond double precision (a Jacobian of
+        ``h`` ~ 1e160), whose NIS would read 0: rescale ``y``, ``h`` and ``R``.
 
     See Also
     --------
@@ -470,6 +507,14 @@ def extended_kalman_filter(
         if store_covariances:
             P_pred[t], P_filt[t], K_all[t] = P, Pf, K
         x, P = ekf_predict(model, xf, Pf, None if u_t is None else u_t[t])
+    if not np.isfinite(S_all).all():
+        t = int(np.argmin(np.isfinite(S_all).reshape(N, -1).all(axis=1)))
+        raise _innovation_covariance_overflow(
+            f"S_t = H_t P(t|t-1) H_t^T + R (at step t = {t})",
+            model._jacobian_h(x_pred[t]),
+            model.R,
+            "y, h (and v_mean)",
+        )
     nb = len(batch)
     if store_covariances:
         P_pred, P_filt, K_all = (_batch_major(a, nb) for a in (P_pred, P_filt, K_all))

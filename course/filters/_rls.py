@@ -7,7 +7,8 @@ rekursiv lösare" (full reference in the course bibliography,
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -35,7 +36,10 @@ class RLSResult:
         Innovations ``y_t - phi_t^T thetahat(t-1|t-1)``; NaN up to and
         including ``first`` with the diffuse start (no prediction exists).
     S : (N,)
-        Innovation variances (NaN where ``eps`` is).
+        Innovation variances (NaN where ``eps`` is); ``inf`` where the true
+        variance exceeds double precision (``phi_t^T P phi_t ~ 1e308``), where
+        :meth:`nis` and :meth:`normalized_innovations` are still right (they
+        are computed from ``eps`` and ``S`` scaled by a power of two).
     first : int
         First sample with an estimate: 0 with a prior, ``k0 - 1`` with the
         diffuse start, where ``k0`` is the number of rows that first give
@@ -47,6 +51,10 @@ class RLSResult:
     eps: np.ndarray
     S: np.ndarray
     first: int
+    # where S overflowed: S_t = _S_scaled[t] * 4**_S_exponent[t] (else exponent 0,
+    # _S_scaled = S); None when no step overflowed
+    _S_scaled: np.ndarray | None = field(default=None, repr=False)
+    _S_exponent: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         return (
@@ -76,7 +84,8 @@ class RLSResult:
         :meth:`FilterResult.normalized_innovations` (without its trailing
         output axis: RLS has one output).
         """
-        return _unchecked._normalized(self.eps[..., None], self.S[:, None, None])[..., 0]
+        eps, S = self._scaled()
+        return _unchecked._normalized(eps[..., None], S[:, None, None])[..., 0]
 
     def nis(self) -> np.ndarray:
         """Normalised innovations squared ``eps_t^2 / S_t``, ``(*batch, N)``.
@@ -85,7 +94,14 @@ class RLSResult:
         :func:`windowed_nis` of an ``RLSResult`` is ``chi2(L)`` with a full
         window (threshold :func:`windowed_nis_threshold` with ``n_outputs=1``).
         """
-        return _unchecked._nis(self.eps[..., None], self.S[:, None, None])
+        eps, S = self._scaled()
+        return _unchecked._nis(eps[..., None], S[:, None, None])
+
+    def _scaled(self) -> tuple[np.ndarray, np.ndarray]:
+        """``eps_t / 2**k_t`` and ``S_t / 4**k_t``: representable where ``S_t`` is not."""
+        if self._S_exponent is None or self._S_scaled is None:
+            return self.eps, self.S
+        return np.ldexp(self.eps, -self._S_exponent), self._S_scaled
 
 
 def _first_full_rank(Phi: np.ndarray) -> int:
@@ -173,7 +189,12 @@ def recursive_least_squares(
     Regressors beyond :math:`2^{\pm 256}` are scaled by a power of two
     :math:`c` near :math:`\sqrt{\max|\Phi|}` (exact: :math:`\theta c`,
     :math:`P c^2`) so that :math:`P`, which scales as :math:`1/|\varphi|^2`,
-    stays within double precision.  The normalised innovations are independent
+    stays within double precision.  Where an innovation variance
+    :math:`S_t = \varphi_t^{\mathsf T} P \varphi_t + r` itself exceeds double
+    precision, ``S`` holds ``inf`` there and the result keeps :math:`S_t / 4^k`
+    beside it (:math:`k` an integer), so that the NIS
+    :math:`(\varepsilon_t / 2^k)^2 / (S_t / 4^k)`, which does not depend on the
+    scale, stays right.  The normalised innovations are independent
     :math:`N(0, 1)` while the model holds, which makes
     :func:`course.nis.windowed_nis` of the result a recursive test quantity
     (notebook 2, "recursive computation").
@@ -237,13 +258,48 @@ def recursive_least_squares(
         P = as_covariance(P0, "P0", k, allow_singular=True) * c * c
         x = np.broadcast_to(x * c, batch + (k,))
         first = start = 0
+    S_scaled: np.ndarray | None = None
+    S_exponent: np.ndarray | None = None
     for t in range(start, N):
+        P_prior = P
         x, P, e, S, _ = kf_update(x, P, y[..., t, None], Phi[t][None, :], R)
         theta[..., t, :], P_all[t], eps[..., t], S_all[t] = x, P, e[..., 0], S[0, 0]
+        if not math.isfinite(S_all[t]):
+            # theta and P are right (the update scales its output), S is not a double;
+            # keep S / 4^k, whose NIS (eps / 2^k)^2 / (S / 4^k) is the true one
+            if S_scaled is None or S_exponent is None:
+                S_scaled, S_exponent = S_all.copy(), np.zeros(N, dtype=int)
+            S_exponent[t], S_scaled[t] = _scaled_variance(Phi[t], P_prior, r)
+        elif S_scaled is not None:
+            S_scaled[t] = S_all[t]
         P = P + Qw
     if c != 1.0:
         theta, P_all = theta / c, P_all / c / c
-    return RLSResult(theta=theta, P=P_all, eps=eps, S=S_all, first=first)
+    return RLSResult(
+        theta=theta,
+        P=P_all,
+        eps=eps,
+        S=S_all,
+        first=first,
+        _S_scaled=S_scaled,
+        _S_exponent=S_exponent,
+    )
+
+
+def _scaled_variance(phi: np.ndarray, P: np.ndarray, r: float) -> tuple[int, float]:
+    """``k`` and ``(phi^T P phi + r) / 4**k`` near 1, for an innovation variance beyond doubles.
+
+    ``phi / 2**k`` and ``r / 4**k`` are exact (powers of two), so only the rounding of
+    an ordinary-sized sum remains.
+    """
+    largest_phi = float(np.max(np.abs(phi)))
+    largest_p = float(np.max(np.diagonal(P)))
+    k = max(
+        int(np.frexp(largest_phi)[1]) + int(np.frexp(math.sqrt(largest_p))[1]),
+        int(np.frexp(math.sqrt(r))[1]),
+    )
+    phi_scaled = np.ldexp(phi, -k)
+    return k, float(phi_scaled @ P @ phi_scaled) + math.ldexp(r, -2 * k)
 
 
 def _regressor_scale(Phi: np.ndarray) -> float:

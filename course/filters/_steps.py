@@ -67,6 +67,14 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
         innovation ``eps = y - H x_pred - v_mean``, its covariance ``S``, and
         the gain ``K``.
 
+    Raises
+    ------
+    ValueError
+        Wrong shapes, NaN or inf; ``S = H P_pred H^T + R`` beyond double
+        precision (rescale ``y``, ``H`` and ``R``).
+    numpy.linalg.LinAlgError
+        ``S`` not positive definite.
+
     See Also
     --------
     kf_predict : The time update that follows.
@@ -89,8 +97,8 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
     broadcasting lets :math:`P` be shared by a batch of :math:`x`.  Where
     :math:`H P H^{\mathsf T}` overflows (:math:`|H| \sim 10^{160}`) each output is
     scaled by a power of two first (exact), so the gain and
-    :math:`P_{\text{filt}}` stay right; :math:`S` is then ``inf`` where its true
-    value exceeds double precision.
+    :math:`P_{\text{filt}}` stay right; where :math:`S` itself exceeds double
+    precision a ``ValueError`` says so (an infinite :math:`S` would make the NIS 0).
 
     Examples
     --------
@@ -110,7 +118,27 @@ def kf_update(x_pred, P_pred, y, H, R, v_mean=None):
             raise ValueError(
                 f"v_mean must have length p = {y.shape[-1]} like y, got {v_mean.shape}"
             )
-    return _kf_update(x_pred, P_pred, y, H, R, v_mean)
+    update = _kf_update(x_pred, P_pred, y, H, R, v_mean)
+    if not np.isfinite(update.S).all():
+        # the gain and P_filt are right (each output is scaled), but S itself is not a
+        # double: returned as inf it would make the NIS 0 without a word
+        raise _innovation_covariance_overflow("S = H P_pred H^T + R", H, R, "y, H (and v_mean)")
+    return update
+
+
+def _innovation_covariance_overflow(what: str, H, R, rescale: str) -> ValueError:
+    """The refusal of an innovation covariance beyond double precision, with the remedy.
+
+    Shared by :func:`kf_update` and the filter drivers: their gains and estimates are
+    right (each output is scaled), but ``S`` is not a double, and returned as inf it
+    would make every NIS 0.
+    """
+    return ValueError(
+        f"the innovation covariance {what} exceeds the range of doubles "
+        f"(~1.8e308; largest |H| = {float(np.max(np.abs(H))):.3g}, largest R = "
+        f"{float(np.max(np.abs(R))):.3g}); rescale the measurements: dividing {rescale} "
+        "by c and R by c^2 leaves the estimates and the NIS unchanged"
+    )
 
 
 def _state(value, name: str) -> np.ndarray:

@@ -34,7 +34,6 @@ __all__ = [
     "Release",
     "ReleaseCell",
     "SubmissionError",
-    "forbidden_mentions",
     "read_notebook_bytes",
     "read_submission",
     "student_id_in",
@@ -305,53 +304,3 @@ def student_id_in(source: str) -> str | None:
         ):
             return node.value.value
     return None
-
-
-def _mentioned_in_text(source: str, name: str) -> bool:
-    r"""Whether unparsable ``source`` uses ``name`` as an attribute (``.name``) or imports it
-    (after ``import`` on its line), in time linear in the source (no backtracking pattern:
-    a 192 KB line once cost the old ``import\s.*,`` fallback 69 s)."""
-    word = re.compile(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])")
-    if re.search(rf"\.{re.escape(name)}(?![A-Za-z0-9_])", source):
-        return True
-    keyword = re.compile(r"(?<![A-Za-z0-9_])import(?![A-Za-z0-9_])")
-    for line in source.splitlines():
-        if "import" in line and name in line:
-            m = keyword.search(line)
-            if m is not None and word.search(line, m.end()) is not None:
-                return True
-    return False
-
-
-def forbidden_mentions(source: str, forbid) -> list[str]:
-    """Dotted names in ``forbid`` whose last component the source uses as an attribute, imports,
-    or names in a string (``getattr(m, "name")``). Unparsable source falls back to a regex."""
-    hits = []
-    try:
-        tree = ast.parse(python_source(source))
-    except (SyntaxError, ValueError):
-        tree = None
-    for dotted in forbid:
-        last = dotted.rsplit(".", 1)[-1]
-        found = False
-        if tree is None:
-            found = _mentioned_in_text(source, last)
-        else:
-            for node in ast.walk(tree):
-                if (
-                    (isinstance(node, ast.Attribute) and node.attr == last)
-                    or (
-                        isinstance(node, ast.ImportFrom) and any(a.name == last for a in node.names)
-                    )
-                    or (
-                        isinstance(node, ast.Import)
-                        and any(a.name == dotted or a.name.endswith("." + last) for a in node.names)
-                    )
-                    or (isinstance(node, ast.Constant) and node.value == last)
-                ):
-                    found = True
-                if found:
-                    break
-        if found:
-            hits.append(dotted)
-    return hits

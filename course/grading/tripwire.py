@@ -14,6 +14,12 @@ it. The seccomp filter keeps the pipe's descriptor from being closed or replaced
 Landlock keeps the library's sources unreadable, so a module cannot be re-imported from
 source to get a function without the report.
 
+A forbidden function's private implementation is forbidden with it: :func:`implementation`
+follows the calls in its source to the private functions of its own package (and of the shared
+``course._*`` modules), transitively, and each of those reports the public name(s) it implements,
+so ``course.filters._steps._kf_update`` counts as ``course.filters.kf_update``. What is forbidden
+is the code that computes, not the name.
+
 Calls made by the library itself (``data_snooping`` calling ``w_tests``) are not reported.
 Whether a caller is library code does not depend on anything a submission can set: the caller
 frame must run a code object that belonged to the library before student code ran (compared by
@@ -27,23 +33,35 @@ What remains possible (see ``docs/instructors/authoring.md``): rewriting compile
 gives a function without the report; that is plagiarism of the library, not a sandbox escape.
 A library function that takes a callback calls it as library code.
 
-:func:`wrap_forbidden` is the student self-check's version: a friendly warning in the student's
-own Jupyter, with no security claim.
+:func:`watch` is the student self-check's version: the same rewriting, the same functions and
+the same rule for who counts as the library, reporting to a Python callable instead of a pipe,
+and undone by the function it returns (no security claim: it runs in the student's own Jupyter).
 """
 
 from __future__ import annotations
 
 import ast
 import importlib
+import inspect
 import linecache
 import os
 import re
 import sys
+import textwrap
 import types
 import warnings
 from builtins import getattr, setattr, str  # bound before student code runs (see runner)
+from typing import Any
 
-__all__ = ["EVENT", "instrument", "parse_events", "wrap_forbidden"]
+__all__ = [
+    "EVENT",
+    "course_modules",
+    "implementation",
+    "instrument",
+    "parse_events",
+    "resolve",
+    "watch",
+]
 
 #: The record written for one forbidden call (the name is a dotted Python name).
 EVENT = b"\x1ecourse-forbidden-call:%s\x1f"
@@ -124,16 +142,25 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
         tree = ast.parse(source)
     except SyntaxError:
         return None
-    fdef = next(
-        (
-            n
-            for n in tree.body
-            if isinstance(n, ast.FunctionDef)
+
+    def here(n) -> bool:
+        return (
+            isinstance(n, ast.FunctionDef)
             and n.name == code.co_name
             and min([n.lineno, *(d.lineno for d in n.decorator_list)]) == code.co_firstlineno
-        ),
-        None,
-    )
+        )
+
+    fdef = next((n for n in tree.body if isinstance(n, ast.FunctionDef) and here(n)), None)
+    owner = None  # a method: the class statement that holds it (its other methods dropped)
+    if fdef is None:
+        for cdef in tree.body:
+            if isinstance(cdef, ast.ClassDef):
+                fdef = next(
+                    (n for n in cdef.body if isinstance(n, ast.FunctionDef) and here(n)), None
+                )
+                if fdef is not None:
+                    owner = cdef
+                    break
     if fdef is None:
         return None
     if prologue is not None:
@@ -149,17 +176,23 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
         stmt = ast.parse(prologue).body[0]
         ast.increment_lineno(stmt, anchor - 1)
         body.insert(at, stmt)
-    tree.body = [n for n in tree.body if n is fdef or not isinstance(n, ast.FunctionDef)]
+    if owner is not None:
+        owner.body = [n for n in owner.body if n is fdef or not isinstance(n, ast.FunctionDef)]
+        owner.decorator_list = []
+    keep = owner if owner is not None else fdef
+    tree.body = [
+        n for n in tree.body if n is keep or not isinstance(n, (ast.FunctionDef, ast.ClassDef))
+    ]
     flags = code.co_flags & _FUTURE_FLAGS
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SyntaxWarning)  # the prologue calls string placeholders
         module_code = compile(tree, code.co_filename, "exec", flags, dont_inherit=True)
     found = [
         c
-        for c in module_code.co_consts
-        if isinstance(c, types.CodeType)
-        and c.co_name == code.co_name
+        for c in _codes_of(module_code)
+        if c.co_name == code.co_name
         and c.co_firstlineno == code.co_firstlineno
+        and getattr(c, "co_qualname", None) == getattr(code, "co_qualname", None)
     ]
     return found[0] if len(found) == 1 else None
 
@@ -193,26 +226,157 @@ def _same_code(a: types.CodeType, b: types.CodeType) -> bool:
 _KEEP: list = []
 
 
-def instrument(names, event_fd: int) -> dict[str, str]:
-    """Instrument the forbidden functions ``names`` (dotted) to report to ``event_fd``.
+def course_modules() -> list[str]:
+    """Every module of the course library (not the grader's own, which pull in nbformat).
 
-    Call once, in the warm process, after every library module is imported and before student
-    code exists. Returns ``{name: how}`` with ``how`` one of ``"instrumented"``, ``"wrapped"``
-    (not a plain function with source: a reporting wrapper replaces the module attribute, a
-    weaker guard) or ``"missing"``.
-    """
-    functions = list(_library_functions())
-    targets: dict[str, types.FunctionType | None] = {}
-    for dotted in sorted(set(names)):
-        module_name, _, attr = dotted.rpartition(".")
-        try:
-            obj = getattr(importlib.import_module(module_name), attr)
-        except (ImportError, AttributeError):
-            targets[dotted] = None
+    The grader imports them all before student code (a child may not read the library's
+    sources), and so does the self-check before :func:`watch`, so that every library module's
+    namespace is known as the library's when a forbidden function asks who called it."""
+    import pkgutil
+
+    import course
+
+    names = ["course"]
+    skip = ("course.__main__", "course.cli", "course.grading")
+    for info in pkgutil.walk_packages(course.__path__, "course."):
+        if not any(info.name == s or info.name.startswith(s + ".") for s in skip):
+            names.append(info.name)
+    return names
+
+
+def _resolve(expr: ast.expr, namespace: dict):
+    """The object a call's function expression names (``f``, ``module.f``), or None."""
+    if isinstance(expr, ast.Name):
+        return namespace.get(expr.id)
+    if isinstance(expr, ast.Attribute):
+        base = _resolve(expr.value, namespace)
+        if isinstance(base, (types.ModuleType, type)):
+            return getattr(base, expr.attr, None)
+    return None
+
+
+def _callees(func: types.FunctionType) -> list[types.FunctionType]:
+    """The library functions ``func``'s source calls by a name it can resolve (its module's
+    globals): calls, not mere mentions, so that a helper handed to scipy as a callback is not
+    taken for the implementation."""
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(func)))
+    except (OSError, TypeError, SyntaxError):
+        return []
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call):
+            target = _resolve(node.func, func.__globals__)
+            if isinstance(target, types.FunctionType) and target not in out:
+                out.append(target)
+    return out
+
+
+def _topic(module_name: str) -> str:
+    """``course.filters`` for ``course.filters._steps``: the package a function belongs to."""
+    return ".".join(module_name.split(".")[:2])
+
+
+def _public_ids() -> set[int]:
+    """Ids of the functions that some public name of the library reaches (``course.x.f``)."""
+    ids: set[int] = set()
+    for name, module in list(sys.modules.items()):
+        if module is None or not _is_library(name):
             continue
-        targets[dotted] = obj
-    instrumented_ids = {id(f) for f in targets.values() if isinstance(f, types.FunctionType)}
-    trusted = [c for f in functions if id(f) not in instrumented_ids for c in _codes_of(f.__code__)]
+        if any(part.startswith("_") for part in name.split(".")):
+            continue
+        public = getattr(module, "__all__", None)
+        names = public if public is not None else [n for n in vars(module) if n[:1] != "_"]
+        for attr in names:
+            obj = vars(module).get(attr)
+            if isinstance(obj, types.FunctionType):
+                ids.add(id(obj))
+    return ids
+
+
+def implementation(func, public_ids: set[int] | None = None) -> list[types.FunctionType]:
+    """The private functions that compute ``func``: those its source calls, transitively,
+    that are library functions of its own package (``course.filters._steps._kf_update`` for
+    ``course.filters.kf_update``) or of a shared internal module (``course._unchecked``) and
+    that no public name reaches. ``func`` itself is not in the list."""
+    if not isinstance(func, types.FunctionType):
+        return []
+    public = _public_ids() if public_ids is None else public_ids
+    topic = _topic(str(func.__module__ or ""))
+
+    def private_here(f: types.FunctionType) -> bool:
+        module_name = str(getattr(f, "__module__", "") or "")
+        if not _is_library(module_name) or id(f) in public:
+            return False
+        return _topic(module_name) == topic or module_name.split(".")[1][:1] == "_"
+
+    found: list[types.FunctionType] = []
+    todo = [func]
+    while todo:
+        for callee in _callees(todo.pop()):
+            if callee is not func and callee not in found and private_here(callee):
+                found.append(callee)
+                todo.append(callee)
+    return found
+
+
+def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str]]]:
+    """The forbidden objects by dotted name (None when missing), and every private function
+    that implements one of them with the public names it implements."""
+    named: dict[str, object] = {}
+    for dotted in sorted(set(names)):
+        named[dotted] = resolve(dotted)
+    for dotted, obj in named.items():
+        init = vars(obj).get("__init__") if isinstance(obj, type) else None
+        if isinstance(init, types.FunctionType) and _is_library(str(init.__module__)):
+            named[dotted] = init  # a class: its constructor reports
+    public = _public_ids()
+    forbidden_ids = {id(f) for f in named.values()}
+    private: dict[types.FunctionType, set[str]] = {}
+    for dotted, func in named.items():
+        for f in implementation(func, public):
+            if id(f) not in forbidden_ids:
+                private.setdefault(f, set()).add(dotted)
+    return named, private
+
+
+def resolve(dotted: str):
+    """The object a forbid entry names: ``module.function``, ``module.Class`` or
+    ``module.Class.method`` (a class or static method: its function); None when missing."""
+    parts = dotted.split(".")
+    for cut in range(len(parts) - 1, 0, -1):
+        obj: Any
+        try:
+            obj = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        owner = None
+        for attr in parts[cut:]:
+            owner, obj = obj, (vars(obj).get(attr) if isinstance(obj, type) else None)
+            if obj is None:
+                obj = getattr(owner, attr, None)
+            if obj is None:
+                return None
+        if isinstance(obj, (staticmethod, classmethod)):
+            obj = obj.__func__
+        return obj
+    return None
+
+
+def _events(names) -> bytes:
+    return b"".join(EVENT % n.encode("ascii") for n in sorted(names))
+
+
+def _rewrite(names, event_fd: int, write):
+    """Rewrite the forbidden functions ``names`` and their private implementation to call
+    ``write(event_fd, events)`` when called from outside the library. Returns the report
+    ``{name: how}`` and what undoes it: ``(function, original code)`` pairs and
+    ``(module, attr, original)`` triples of wrapped attributes."""
+    named, private = _targets(names)
+    functions = list(_library_functions())
+    rewritten_ids = {id(f) for f in named.values() if isinstance(f, types.FunctionType)}
+    rewritten_ids |= {id(f) for f in private}
+    trusted = [c for f in functions if id(f) not in rewritten_ids for c in _codes_of(f.__code__)]
     _KEEP.extend(trusted)
     module_dicts = [
         vars(m) for n, m in list(sys.modules.items()) if m is not None and _is_library(n)
@@ -222,82 +386,103 @@ def instrument(names, event_fd: int) -> dict[str, str]:
     mapping = {
         _P_FRAME: sys._getframe,
         _P_ID: id,
-        _P_WRITE: os.write,
+        _P_WRITE: write,
         _P_GLOBALS: frozenset(id(d) for d in module_dicts),
         _P_CODES: frozenset(id(c) for c in trusted),
         _P_MARK: mark,
     }
     report: dict[str, str] = {}
-    for dotted, func in targets.items():
+    codes: list[tuple[types.FunctionType, types.CodeType]] = []
+    wrapped: list[tuple] = []
+    jobs = [(dotted, func, {dotted}) for dotted, func in named.items()]
+    jobs += [
+        (f"{f.__module__}.{f.__qualname__}", f, implements) for f, implements in private.items()
+    ]
+    for dotted, func, implements in jobs:
         if func is None:
             report[dotted] = "missing"
             continue
-        event = EVENT % dotted.encode("ascii")
+        event = _events(implements)
         prologue = _PROLOGUE.replace("__TW_FD__", str(int(event_fd))).replace(
             "__TW_EVENT__", repr(event)
         )
         plain = isinstance(func, types.FunctionType) and not func.__code__.co_freevars
-        original = _recompile(func, None) if plain else None
-        new = _recompile(func, prologue) if original is not None else None
-        if new is not None and original is not None and _same_code(original, func.__code__):
+        original = _recompile(func, None) if plain else None  # type: ignore[arg-type]
+        new = _recompile(func, prologue) if original is not None else None  # type: ignore[arg-type]
+        if (
+            isinstance(func, types.FunctionType)
+            and new is not None
+            and original is not None
+            and _same_code(original, func.__code__)
+        ):
+            codes.append((func, func.__code__))
             func.__code__ = _replace_consts(new, mapping, mark)
             report[dotted] = "instrumented"
-        else:
-            _wrap_reporting(dotted, func, event_fd, event)
+        elif dotted in named and isinstance(
+            sys.modules.get(dotted.rpartition(".")[0]), types.ModuleType
+        ):
+            wrapped.append(_wrap_reporting(dotted, func, event_fd, event, write))
             report[dotted] = "wrapped"
+        elif dotted in named:
+            report[dotted] = "missing"  # a method that cannot be rewritten: nothing to wrap
+        # a private helper that cannot be rewritten stays as it is: no public name to wrap
+    return report, codes, wrapped
+
+
+def instrument(names, event_fd: int) -> dict[str, str]:
+    """Instrument the forbidden functions ``names`` (dotted), and their private implementation
+    (:func:`implementation`), to report to ``event_fd``.
+
+    Call once, in the warm process, after every library module is imported and before student
+    code exists. Returns ``{name: how}`` with ``how`` one of ``"instrumented"``, ``"wrapped"``
+    (not a plain function with source: a reporting wrapper replaces the module attribute, a
+    weaker guard) or ``"missing"``; the private functions rewritten are listed too, by their
+    own dotted names.
+    """
+    report, _, _ = _rewrite(names, event_fd, os.write)
     linecache.clearcache()  # no library source left in memory for a child to read
     return report
 
 
-def _wrap_reporting(dotted: str, func, event_fd: int, event: bytes) -> None:
+def watch(names, record):
+    """The self-check's tripwires: :func:`instrument`'s rewriting, reporting to ``record``.
+
+    Every call of a forbidden function in ``names`` (or of its private implementation) from
+    outside the library, by any path (an alias, ``getattr``, ``functools.partial``, a private
+    twin), calls ``record(dotted)`` with the public name, before the function runs. Import the
+    library first (:func:`course_modules`): the modules imported later do not count as the
+    library.
+
+    Returns
+    -------
+    callable
+        Puts every function back as it was.
+    """
+
+    def write(_fd, event: bytes) -> None:
+        for name in parse_events(event)[0]:
+            record(name)
+
+    _, codes, wrapped = _rewrite(names, 0, write)
+
+    def restore() -> None:
+        for func, code in reversed(codes):
+            func.__code__ = code
+        for module, attr, original in reversed(wrapped):
+            setattr(module, attr, original)
+
+    return restore
+
+
+def _wrap_reporting(dotted: str, func, event_fd: int, event: bytes, write=os.write):
     module_name, _, attr = dotted.rpartition(".")
     module = importlib.import_module(module_name)
 
     def reporting(*args, **kwargs):
-        os.write(event_fd, event)
+        write(event_fd, event)
         return func(*args, **kwargs)
 
     reporting.__name__ = getattr(func, "__name__", attr)
     reporting.__doc__ = getattr(func, "__doc__", None)
     setattr(module, attr, reporting)
-
-
-def wrap_forbidden(dotted: str, record, user_ns: dict | None = None):
-    """Replace the function ``dotted`` (``"package.module.name"``) by a reporting wrapper.
-
-    For the student's self-check only (a warning before grading, no security claim).
-
-    Parameters
-    ----------
-    dotted : str
-        Full dotted name of the function.
-    record : callable
-        ``record(dotted)``, called before the original on each call from notebook code.
-    user_ns : dict, optional
-        The notebook's namespace, which counts as notebook code even if it is named like a
-        library module.
-
-    Returns
-    -------
-    tuple or None
-        ``(module, attr, original)`` to put the original back, or None when there is no such
-        function (nothing is wrapped).
-    """
-    module_name, _, attr = dotted.rpartition(".")
-    try:
-        module = importlib.import_module(module_name)
-        original = getattr(module, attr)
-    except (ImportError, AttributeError):
-        return None
-
-    def wrapper(*args, __original=original, __name=dotted, **kwargs):
-        caller = sys._getframe(1).f_globals
-        # calls from inside the library (e.g. data_snooping -> w_tests) are allowed
-        if caller is user_ns or not str(caller.get("__name__", "")).startswith("course."):
-            record(__name)
-        return __original(*args, **kwargs)
-
-    wrapper.__name__ = getattr(original, "__name__", attr)
-    wrapper.__doc__ = getattr(original, "__doc__", None)
-    setattr(module, attr, wrapper)
-    return module, attr, original
+    return module, attr, func

@@ -20,7 +20,12 @@ from scipy import stats
 
 from course.chi2 import noncentrality, residual_norm_law
 from course.linalg import readonly
-from course.lsq._fit import LeastSquaresFit, _check_fit, _require_redundancy
+from course.lsq._fit import (
+    LeastSquaresFit,
+    _check_fit,
+    _require_redundancy,
+    _require_residuals_for_sigma,
+)
 from course.results import TestResult, format_number
 from course.validation import (
     as_count,
@@ -132,7 +137,8 @@ def glr_test(
     ------
     ValueError
         ``C`` of the wrong shape or ``q > m - n``; ``variance="estimated"``
-        with ``q = m - n`` (nothing left to estimate σ² from).
+        with ``q = m - n`` (nothing left to estimate σ² from) or with data
+        that the model fits exactly (residuals at round-off level).
     numpy.linalg.LinAlgError
         ``[A C]`` rank deficient (the bias is absorbed by x̂).
 
@@ -214,6 +220,7 @@ def glr_test(
             "explains every residual and nothing is left to estimate sigma² from; use "
             "variance='known', or test fewer bias parameters"
         )
+    _require_residuals_for_sigma(fit, "the GLR test")
     rest = max(fit.squared_norm - T_q, 0.0)
     details["denominator dof"] = remaining
     statistic = np.inf if rest == 0.0 else (T_q / q) / (rest / remaining)

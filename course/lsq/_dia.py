@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 from scipy import linalg as sla
-from scipy import stats
+from scipy import special, stats
 
 from course.linalg import readonly
 from course.lsq._alternatives import _bias_columns, _bias_space
@@ -69,12 +69,50 @@ def _candidates(fit: LeastSquaresFit, candidates: Any) -> _Candidates:
     return _Candidates(names, tuple(bases), np.array(dims), tuple(adapt), tuple(maps))
 
 
+def _chi2_log_sf(x: np.ndarray, dof: np.ndarray) -> np.ndarray:
+    """``log P(chi2(dof) > x)``, finite where scipy's ``chi2.logsf`` underflows to -inf.
+
+    scipy computes ``log(sf)``, so beyond about ``x = 1500`` every statistic gets -inf and
+    large statistics of different dimensions can no longer be ranked. There the upper
+    incomplete gamma function ``Q(s, z)`` (``s = dof/2``, ``z = x/2``; the far tail, so
+    ``z > s + 1``) is evaluated in logarithms by its continued fraction (modified Lentz).
+    """
+    x, dof = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(dof, dtype=float))
+    out = np.array(stats.chi2.logsf(x, dof), dtype=float)
+    far = np.isneginf(out) & (x / 2.0 > dof / 2.0 + 1.0)
+    if np.any(far):
+        s, z = dof[far] / 2.0, x[far] / 2.0
+        tiny = 1e-300
+        b = z + 1.0 - s
+        c = np.full_like(z, 1.0 / tiny)
+        d = 1.0 / b
+        h = d.copy()
+        for i in range(1, 300):
+            a = -i * (i - s)
+            b = b + 2.0
+            d = a * d + b
+            d = np.where(np.abs(d) < tiny, tiny, d)
+            c = b + a / c
+            c = np.where(np.abs(c) < tiny, tiny, c)
+            d = 1.0 / d
+            delta = d * c
+            h = h * delta
+            if np.all(np.abs(delta - 1.0) < 1e-15):
+                break
+        out[far] = -z + s * np.log(z) - special.gammaln(s) + np.log(h)
+    return out
+
+
 def _identify(statistics: np.ndarray, dims: np.ndarray) -> np.ndarray:
-    """Index of the most significant alternative per row (largest T for equal q)."""
+    """Index of the most significant alternative per row (largest T for equal q).
+
+    With candidates of different dimension the statistics are not comparable; each is
+    ranked by its p-value under H0 (the smallest wins), compared in logarithms so that
+    very large statistics, whose p-values underflow to 0, keep their order.
+    """
     if np.all(dims == dims[0]):
         return np.argmax(statistics, axis=-1)
-    # Different dimensions: compare by the probability of so large a value under H0.
-    return np.argmin(stats.chi2.sf(statistics, dims), axis=-1)
+    return np.argmin(_chi2_log_sf(statistics, dims), axis=-1)
 
 
 @dataclass(frozen=True, repr=False, eq=False)
@@ -153,7 +191,9 @@ def dia(fit: LeastSquaresFit, candidates: Any = None, alpha: float = 0.05) -> DI
     Teunissen (2018): *detection* rejects H0 when the overall model test
     does; *identification* picks the alternative with the largest
     :math:`T_{q_k}` (for single observations, the largest :math:`|w_i|`; for
-    alternatives of different dimension, the smallest p-value); *adaptation*
+    alternatives of different dimension, whose statistics are not comparable, the
+    smallest p-value under H0, compared in logarithms so that p-values below the
+    smallest float keep their order); *adaptation*
     re-estimates x under it,
 
     .. math::

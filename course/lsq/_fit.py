@@ -396,6 +396,25 @@ def _check_fit(value) -> LeastSquaresFit:
     return value
 
 
+def _require_residuals_for_sigma(result: LeastSquaresFit, what: str) -> None:
+    """Refuse to estimate sigma² from residuals that are only round-off.
+
+    Data that the model fits exactly leave residuals of the size of the rounding errors of
+    the fit; sigma² estimated from them is 0 up to round-off, and t or F statistics built on
+    it would test the rounding errors (they can reject).
+    """
+    y_w = result._covariance.whiten(result.y)
+    scale = float(y_w @ y_w)
+    roundoff = (16.0 * result.m * np.finfo(float).eps) ** 2 * scale
+    if result.squared_norm <= roundoff:
+        raise ValueError(
+            f"{what} with variance='estimated' needs residuals: the data fit the model "
+            f"exactly (the residual norm {result.squared_norm:.3g} is at the level of "
+            "rounding errors), so sigma² would be estimated as 0 and the test would judge "
+            "round-off; use variance='known' with the stated Qyy"
+        )
+
+
 def _require_redundancy(result: LeastSquaresFit, what: str) -> None:
     if result.redundancy == 0:
         raise ValueError(

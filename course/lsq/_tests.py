@@ -25,6 +25,7 @@ from course.lsq._fit import (
     _check_fit,
     _readonly,
     _require_redundancy,
+    _require_residuals_for_sigma,
     _standard_normal,
     fit,
 )
@@ -390,7 +391,8 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05, variance: str = "known") 
     ------
     ValueError
         If ``m - n = 0`` (nothing can be tested), or ``m - n = 1`` with
-        ``variance="estimated"``.
+        ``variance="estimated"``, or ``variance="estimated"`` with data that
+        the model fits exactly (residuals at round-off level: σ̂² = 0).
 
     See Also
     --------
@@ -469,6 +471,7 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05, variance: str = "known") 
             "alternative of each test explains every residual and leaves nothing to "
             "estimate sigma² from; use variance='known'"
         )
+    _require_residuals_for_sigma(fit, "the w-test")
     return _w_test_result(*fit._w_parts, alpha, fit.squared_norm, fit.redundancy - 1)
 
 

@@ -144,9 +144,19 @@ class ExtremeEigenvalue(FrozenDistribution):
     def _inside_and_outside(self, x: np.ndarray, density: bool = False):
         """(P(all eigenvalues on this law's side of x), its complement[, pdf])."""
         shape = np.shape(x)
-        t = self.K * np.asarray(x, dtype=float).reshape(-1) / 2.0
+        with np.errstate(over="ignore"):  # (K x / 2 beyond the doubles: capped below)
+            t = self.K * np.asarray(x, dtype=float).reshape(-1) / 2.0
+        # Beyond t_cap = 2 m K + 2000 every eigenvalue of W/2 lies below t but with
+        # probability below exp(-1500) (lambda_max <= trace, a chi2(m K), and
+        # Chernoff's bound): the answer is exact in doubles, and the blocks of
+        # the Laguerre basis are not evaluated there (they overflow near 1e300).
+        beyond = t >= 2.0 * self.m * self.K + 2000.0
+        t = np.where(beyond, 1.0, t)
         J_in, g_in = self._side(t, self._inside)
         inside = np.clip(_pfaffian(_augment(J_in, g_in)) / self._pf_full, 0.0, 1.0)
+        # P(every eigenvalue <= t) is 1 beyond t_cap: "inside" for lambda_max, "outside"
+        # for lambda_min (whose inside is every eigenvalue >= t)
+        inside[beyond] = 1.0 if self._inside == "low" else 0.0
         outside = 1.0 - inside
         big = inside > 0.5
         if np.any(big):
@@ -157,17 +167,15 @@ class ExtremeEigenvalue(FrozenDistribution):
             mu = np.linalg.eigvals(np.linalg.solve(self._A_full, D))
             with np.errstate(divide="ignore"):
                 log_inside = 0.25 * np.sum(np.log1p(np.abs(mu) ** 2 - 2.0 * mu.real), axis=-1)
-            outside[big] = np.clip(-np.expm1(log_inside), 0.0, 1.0)
+            outside[big] = np.clip(-np.expm1(log_inside), 0.0, 1.0) + 0.0  # (no -0.0)
+            outside[big & beyond] = 0.0 if self._inside == "low" else 1.0
             # Near 1 the direct Pfaffian carries ~1e-14 noise; 1 - (accurate
             # small complement) is monotone there.
             inside[big] = 1.0 - outside[big]
         if not density:
             return inside.reshape(shape), outside.reshape(shape)
-        return (
-            inside.reshape(shape),
-            outside.reshape(shape),
-            self._density(t, J_in, g_in).reshape(shape),
-        )
+        density_values = np.where(beyond, 0.0, self._density(t, J_in, g_in))
+        return inside.reshape(shape), outside.reshape(shape), density_values.reshape(shape)
 
     def _density(self, t, J, g):
         """pdf at x = 2t/K from the derivative of the inside Pfaffian."""
@@ -190,9 +198,13 @@ class ExtremeEigenvalue(FrozenDistribution):
         return outside if self.which == "max" else inside
 
     def _pdf(self, x):
-        t = self.K * np.asarray(x, dtype=float).reshape(-1) / 2.0
+        with np.errstate(over="ignore"):
+            t = self.K * np.asarray(x, dtype=float).reshape(-1) / 2.0
+        # (0 beyond the cap of _inside_and_outside, where the basis is not evaluated)
+        beyond = t >= 2.0 * self.m * self.K + 2000.0
+        t = np.where(beyond, 1.0, t)
         J, g = self._side(t, self._inside)
-        return self._density(t, J, g).reshape(np.shape(x))
+        return np.where(beyond, 0.0, self._density(t, J, g)).reshape(np.shape(x))
 
     def _rvs(self, size, rng):
         lmin, lmax = simulate_extreme_eigenvalues(self.m, self.K, size, rng=rng)

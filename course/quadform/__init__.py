@@ -21,6 +21,8 @@ Public API
 imhof_cdf, imhof_sf
     :math:`P(Q \le c)` and :math:`P(Q > c)` of a weighted sum of noncentral chi-square
     variables, vectorised over ``c``, with a controlled error.
+imhof_cdf_batch, imhof_sf_batch
+    The same for many laws (one row of weights each) and points in one vectorised call.
 liu_tang_zhang_cdf, liu_tang_zhang_sf
     The fast four-cumulant approximation of Liu, Tang and Zhang (2009).
 inversion_integrands
@@ -76,17 +78,24 @@ precision (skewness below 1e-100) and the normal limit is used, on cumulants
 scaled by a power of two so that no sum overflows.
 
 Quantiles (``ppf``, ``isf``, critical values) are found for every level, and
-both tails, in one vectorised evaluation as a rule (nodes around the
-Liu-Tang-Zhang guess), a few where that guess is off: see
-``WeightedChiSquare._quantiles``.  A two-sided critical region is one search,
-and its rejection probability under another law one evaluation of both tails.
+both tails, by Newton's method on contours set up once at the Liu-Tang-Zhang
+guesses: moving the point along a fixed contour multiplies the integrand by
+:math:`e^{-s \delta}`, so the tail probability and its derivative at any
+nearby point come from the same nodes, and each root is checked as a fresh
+integral would be (``_search``); the levels it does not settle take a
+bracketing search.  A two-sided critical region is one integral set-up, and
+its rejection probability under another law one evaluation of both tails.
+Many laws at their points are one vectorised integral too
+(:func:`imhof_cdf_batch`).
 
 Modules: ``_terms`` (validation of the terms, shared constants), ``_contour``
-(the vectorised integral), ``_imhof`` (the public integrals), ``_ltz`` (the
-Liu-Tang-Zhang approximation), ``_laws`` (the frozen laws).
+(the vectorised integral), ``_batch`` (the same for many laws at once),
+``_search`` (quantiles by Newton's method on a fixed contour), ``_imhof`` (the
+public integrals), ``_ltz`` (the Liu-Tang-Zhang approximation), ``_laws`` (the
+frozen laws).
 """
 
-from ._imhof import imhof_cdf, imhof_sf, inversion_integrands
+from ._imhof import imhof_cdf, imhof_cdf_batch, imhof_sf, imhof_sf_batch, inversion_integrands
 from ._laws import QuadraticForm, WeightedChiSquare
 from ._ltz import liu_tang_zhang_cdf, liu_tang_zhang_sf
 from ._terms import ATOL as ATOL
@@ -96,7 +105,9 @@ __all__ = [
     "QuadraticForm",
     "WeightedChiSquare",
     "imhof_cdf",
+    "imhof_cdf_batch",
     "imhof_sf",
+    "imhof_sf_batch",
     "inversion_integrands",
     "liu_tang_zhang_cdf",
     "liu_tang_zhang_sf",

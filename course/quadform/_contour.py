@@ -39,7 +39,9 @@ from ._terms import (
     _STEP_CONSTANT,
     _U_MAX,
     _derivative_factors,
+    _every,
     _log1p_minus,
+    _some,
     _term_constants,
     _two_product,
 )
@@ -68,10 +70,10 @@ class _Side:
         )
         smallest = float(np.abs(w).min()) if r else 1.0
         positive = w_last > 0
-        self.s_max = 0.5 / w_last if positive else math.inf
-        self.s_min = 0.5 / w_first if w_first < 0 else -math.inf
+        self.s_max: Any = 0.5 / w_last if positive else math.inf
+        self.s_min: Any = 0.5 / w_first if w_first < 0 else -math.inf
         # the largest weight's term: it dominates the far upper tail
-        self.top = (w_last, h_last, d_last) if positive else None
+        self.top: Any = (w_last, h_last, d_last) if positive else None
         self.positive_form = bool(r and w_first > 0 and not sigma2)
         # Im s beyond which every |1 - 2 w s| >= 1, and log of D = prod
         # (2|w|)^(-h/2) exp(-sum d/4): |M(s)| <= D Y^-k with Y = Im s, once
@@ -107,6 +109,10 @@ class _Side:
         self.minus_w2 = -self.w2
         # per-term factors of the derivatives of K
         self.factors = _derivative_factors(w, h, d)
+
+    def points(self, i):
+        """The side of the points ``i`` of a call: the same law (see ``_batch._BatchSide``)."""
+        return self
 
     @classmethod
     def mirrored(cls, w, h, d, sigma2):
@@ -224,31 +230,35 @@ class _Side:
         the far upper tail, or of the behaviour at ``-inf`` far below a
         positive form.  ``upper`` is one flag for every point or one per point.
         """
-        if not isinstance(upper, bool):
-            ends = np.empty((3, x.size))
-            for flag, group in ((True, upper), (False, ~upper)):
-                if group.any():
-                    ends[:, group] = self.bracket(x[group], flag)
-            return ends[0], ends[1], ends[2]
         dx = self.linear(x) if self.centred else x - self.mean
         root = np.sqrt(dx * dx + 4.0 * self.var)
-        if upper:
-            # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
-            guess = 2.0 / (root - dx)
-            lo = 0.0 * x
-            if self.top is not None:
-                hi = self.s_max + lo
-                w, h, d = self.top
-                # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-                t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (
-                    2.0 * np.maximum(x, 1e-300)
-                )
-                guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
-            else:
-                # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
-                # beyond the root of sigma2 s^2 - (x - mean) s - 1
-                hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
-            return lo, hi, guess
+        if isinstance(upper, bool):
+            return self._upper_ends(x, dx, root) if upper else self._lower_ends(x, dx, root)
+        # one flag per point: both ends on every point (elementwise the values of
+        # either alone), then chosen; cheaper than splitting a few points
+        ends = zip(self._upper_ends(x, dx, root), self._lower_ends(x, dx, root))
+        lo, hi, guess = (np.where(upper, up, low) for up, low in ends)
+        return lo, hi, guess
+
+    def _upper_ends(self, x, dx, root):
+        """:meth:`bracket` of the upper tail (``dx = x - mean``, ``root`` of the Gaussian model)."""
+        # Gaussian model K'(s) = mean + var s: var s^2 - (x - mean) s - 1 = 0
+        guess = 2.0 / (root - dx)
+        lo = 0.0 * x
+        if self.top is not None:
+            hi = self.s_max + lo
+            w, h, d = self.top
+            # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
+            t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * np.maximum(x, 1e-300))
+            guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
+        else:
+            # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
+            # beyond the root of sigma2 s^2 - (x - mean) s - 1
+            hi = (dx + np.sqrt(dx * dx + 4.0 * self.sigma2)) / (2.0 * self.sigma2)
+        return lo, hi, guess
+
+    def _lower_ends(self, x, dx, root):
+        """:meth:`bracket` of the lower tail (as :meth:`_upper_ends`)."""
         guess = -2.0 / (root + dx)
         hi = 0.0 * x
         if math.isfinite(self.s_min):
@@ -283,10 +293,11 @@ def _saddle(x, side, upper, pole):
     # Newton steps on the points not yet close enough (the others keep theirs),
     # on compacted copies of them: no gathering and scattering at every step
     far = np.abs(g1) > _SADDLE_TOL * np.sqrt(g2)
-    if not far.any():
+    if not _some(far):
         return s, g2, g3
-    every = far.all()
+    every = _every(far)
     i = None if every else np.flatnonzero(far)
+    part = side if i is None else side.points(i)  # (each point's own law in a batch)
     s_i, lo_i, hi_i, x_i, g1_i, g2_i = (
         (s.copy(), lo, hi, x, g1, g2) if every else (s[i], lo[i], hi[i], x[i], g1[i], g2[i])
     )
@@ -296,22 +307,23 @@ def _saddle(x, side, upper, pole):
         lo_i = np.where(right, lo_i, s_i)
         newton = s_i - g1_i / g2_i
         inside = (newton > lo_i) & (newton < hi_i)
-        s_i = newton if inside.all() else np.where(inside, newton, _bisect(lo_i, hi_i))
-        g1_i, g2_i, g3_i = side.derivatives(s_i, x_i, pole)
+        s_i = newton if _every(inside) else np.where(inside, newton, _bisect(lo_i, hi_i))
+        g1_i, g2_i, g3_i = part.derivatives(s_i, x_i, pole)
         if i is None:
             s, g2, g3 = s_i, g2_i, g3_i
         else:
             s[i], g2[i], g3[i] = s_i, g2_i, g3_i
         far = np.abs(g1_i) > _SADDLE_TOL * np.sqrt(g2_i)
-        if not far.any():
+        if not _some(far):
             break
-        if not far.all():
+        if not _every(far):
             if i is None:
                 s, g2, g3 = s.copy(), g2.copy(), g3.copy()
                 i = np.flatnonzero(far)
             else:
                 i = i[far]
             s_i, lo_i, hi_i, x_i = s_i[far], lo_i[far], hi_i[far], x_i[far]
+            part = side.points(i)
             g1_i, g2_i = g1_i[far], g2_i[far]
     return s, g2, g3
 
@@ -378,20 +390,39 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
     log_tol = (math.log(rtol * _SQRT_2PI) if rtol else -math.inf) + log_vertex
     if atol > 0:
         log_tol = np.maximum(log_tol, math.log(atol * math.pi) - e0)
-    # -- truncation (bounds in Y = Im s = b sinh u: see the docstring) ------------
+    U = _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol)
+    # -- step (the same for every point: see the docstring) ----------------------
+    step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
+    return a, b, e0, log_tol, U, step, log_vertex
+
+
+def _truncation(x, side, pole, s0, a, b, ratio, e0, log_tol):
+    """Truncation point ``U`` of the path ``(s0, a, b)`` at ``x``: the bound of :func:`_plan`.
+
+    Valid for any vertex ``s0`` of the side's interval (not only the saddle
+    of ``x``), so a path set up at one point bounds the tail of the integral
+    at a nearby one (see :mod:`course.quadform._search`).  ``log_tol`` is the
+    log of the absolute tolerance on the integral scaled by ``exp(-e0)``,
+    ``e0 = K(s0) - s0 x``.
+    """
+    # -- truncation (bounds in Y = Im s = b sinh u: see _plan's docstring) --------
     k_e = side.k + (1.0 if pole else 0.0)
     log_tol_t = log_tol + _LOG_TRUNCATION_SHARE
     # |s'| <= sqrt(2) dY/du (a <= b) and |s| >= Y
     log_rhs = side.log_d_y + _LOG_SQRT2_OVER_PI - e0 - log_tol_t
     # Re s >= s0 - a + (a/b) Y: beyond y_positive, Re s >= 0 and |exp(-s x)| <= 1
-    y_positive = np.maximum(a - s0, 0.0) / ratio
+    a_minus_s0 = a - s0
+    y_positive = np.maximum(a_minus_s0, 0.0) / ratio
     log_y_need = 700.0
-    if k_e > 1:
-        log_y_need = np.minimum((log_rhs - math.log(k_e - 1.0)) / (k_e - 1.0), 700.0)
+    # (k_e is one number, or one per point for a batch of laws)
+    one_law = type(k_e) is float
+    if k_e > 1 if one_law else np.all(k_e > 1):
+        log_k = math.log(k_e - 1.0) if one_law else np.log(k_e - 1.0)
+        log_y_need = np.minimum((log_rhs - log_k) / (k_e - 1.0), 700.0)
     algebraic = np.maximum(np.exp(log_y_need), y_positive)
     # with x > 0, exp(-s x) decays like exp(-lam Y)
     lam = np.maximum(ratio * x, 1e-300)
-    decay = np.maximum(log_rhs - np.log(lam) + (a - s0) * x, 0.0) / lam
+    decay = np.maximum(log_rhs - np.log(lam) + a_minus_s0 * x, 0.0) / lam
     y_need = np.maximum(np.minimum(algebraic, decay), 1.0)
     if side.noncentral:
         y_need = np.maximum(y_need, 2.0 * side.y_unit)
@@ -409,10 +440,7 @@ def _plan(x, side, upper, pole, atol, rtol, s0, g2, g3, k0, opening=None):
         y_normal = np.maximum(y_normal, b * np.sqrt(q * q - 1.0))
         y_need = np.minimum(y_need, y_normal)
     ratio_y = y_need / b
-    U = np.maximum(np.log(ratio_y + np.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
-    # -- step (the same for every point: see the docstring) ----------------------
-    step = min(_STEP_CONSTANT / -math.log(max(rtol, 1e-16)), _MAX_STEP)
-    return a, b, e0, log_tol, U, step, log_vertex
+    return np.maximum(np.log(ratio_y + np.sqrt(ratio_y * ratio_y + 1.0)), 1.0)
 
 
 @functools.lru_cache(maxsize=64)
@@ -454,7 +482,8 @@ def _path_coefficients(x, side, s0, a, b, k0):
     path[:, 0], path[:, 1], path[:, 2] = s0, a, ib
     coef[:, -2, 0], coef[:, -2, 1], coef[:, -2, 2] = ib, ib, a
     coef[:, -3, 0], coef[:, -3, 1], coef[:, -3, 2] = -c0, -x * a, -x * ib
-    np.multiply(side.minus_w2[:, None], path[:, None, :], out=coef[:, :r, :])
+    # (minus_w2 is (r,) for one law, (points, r) for a batch of laws: see _batch)
+    np.multiply(side.minus_w2[..., None], path[:, None, :], out=coef[:, :r, :])
     if not side.centred:  # (centred: the rows hold u = z - 1, see _integrand)
         coef[:, :r, 0] += 1.0
     if side.noncentral:
@@ -462,10 +491,13 @@ def _path_coefficients(x, side, s0, a, b, k0):
     return coef, side.exponent_weights
 
 
-def _integrand(basis, coef, side, pole):
+def _integrand(basis, coef, side, pole, complex_values=False):
     """``Im[exp(E(s) - E0) s'(u) [/ s]]`` on the hyperbola, from :func:`_path_coefficients`.
 
     ``coef`` is what :func:`_path_coefficients` returns (matrix, weights).
+    With ``complex_values``: the complex values before ``Im`` and ``s`` at the
+    nodes, ``(values, s)`` (the quantile search of :mod:`course.quadform._search`
+    moves the point along a fixed path with them).
 
     ``s(u) = s0 + a(cosh u - 1) + i b sinh u``, ``E(s) = K(s) - s x``;
     ``basis`` holds the rows ``1, cosh u - 1, sinh u`` of the nodes; the
@@ -499,7 +531,10 @@ def _integrand(basis, coef, side, pole):
     if side.noncentral and not side.centred:
         inverse = rows[r : 2 * r]
         np.reciprocal(inverse, out=inverse)
-    e = weights @ path[..., :-2, :]
+    if weights.ndim == 1:
+        e = weights @ path[..., :-2, :]
+    else:  # (a batch of laws: each point's own weights, see _batch)
+        e = (weights[:, None, :] @ path[..., :-2, :])[:, 0]
     s = rows[-1]
     if side.sigma2:
         # k0 = K(s0) holds sigma2 s0^2 / 2
@@ -513,6 +548,8 @@ def _integrand(basis, coef, side, pole):
     value *= rows[-2]
     if pole:
         value /= s
+    if complex_values:
+        return value, s
     return value.imag
 
 
@@ -542,14 +579,17 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     for start in range(0, x.size, size):
         i = slice(start, start + size)
         coef = (
-            whole if whole is not None else _path_coefficients(x[i], side, s0[i], a[i], b[i], k0[i])
+            whole
+            if whole is not None
+            else _path_coefficients(x[i], side.points(i), s0[i], a[i], b[i], k0[i])
         )
         if one:
             f = _integrand(nodes[1][:, : nodes[0].searchsorted(U[0], "right")], coef, side, pole)
         else:
             f = _integrand(nodes[1], coef, side, pole)
             f *= nodes[0] <= U[i, None]
-        chunk_blown = ~(np.abs(f).max(axis=1) <= _BLOWUP * np.abs(f[:, 0]))
+        size_f = np.abs(f)
+        chunk_blown = ~(size_f.max(axis=1) <= _BLOWUP * size_f[:, 0])
         f[:, 0] *= 0.5
         parts.append((h * f.sum(axis=1), 2.0 * h * f[:, ::2].sum(axis=1), chunk_blown))
     if len(parts) == 1:  # (one chunk, the usual case: no copies)
@@ -562,11 +602,11 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
     # blown points get theirs from _contour's second path
     error = diff
     # (None: every point; the first level, with no point blown, indexes nothing)
-    active = np.flatnonzero(~blown) if blown.any() else None
+    active = np.flatnonzero(~blown) if _some(blown) else None
     for level in range(_MAX_HALVINGS + 1):
         if active is None:
             done = diff <= np.maximum(tol, rtol * np.abs(total))
-            active = np.flatnonzero(~done) if not done.all() else done[:0].nonzero()[0]
+            active = np.flatnonzero(~done) if not _every(done) else done[:0].nonzero()[0]
         else:
             j = active
             done = diff[j] <= np.maximum(tol[j], rtol * np.abs(total[j]))
@@ -578,9 +618,9 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         nodes = _nodes(h, n, True)
         n *= 2
         if whole is not None:
-            coef = (whole[0][j], whole[1])
+            coef = (whole[0][j], whole[1] if whole[1].ndim == 1 else whole[1][j])
         else:
-            coef = _path_coefficients(x[j], side, s0[j], a[j], b[j], k0[j])
+            coef = _path_coefficients(x[j], side.points(j), s0[j], a[j], b[j], k0[j])
         if one:
             f = _integrand(nodes[1][:, : nodes[0].searchsorted(U[0], "right")], coef, side, pole)
         else:
@@ -589,7 +629,8 @@ def _integrate(x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol):
         refined = 0.5 * total[j] + h * f.sum(axis=1)
         diff[j] = np.abs(refined - total[j])
         total[j] = refined
-    converged[active] = False
+    if active is not None and active.size:
+        converged[active] = False
     # exp(E0) |total| / pi without overflow or underflow in between
     with np.errstate(divide="ignore"):
         log_size = e0 + np.log(np.abs(total) / math.pi)
@@ -608,7 +649,7 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
     a, b, e0, log_tol, U, step, log_vertex = plan
     # tails far below the smallest double: the best answer is 0
     live = e0 + log_vertex > _LOG_UNDERFLOW
-    every = live.all()
+    every = _every(live)
     if every:  # (the usual case: no copies)
         value, error, converged, blown = _integrate(
             x, side, pole, s0, a, b, k0, e0, log_tol, U, step, rtol
@@ -617,17 +658,28 @@ def _contour(x, side, upper, pole, atol, rtol, opening=None):
         value, error = np.zeros(x.shape), np.zeros(x.shape)
         converged = np.ones(x.shape, dtype=bool)
         blown = np.zeros(x.shape, dtype=bool)
-    if not every and live.any():
+    if not every and _some(live):
         i = np.flatnonzero(live)
         value[i], error[i], converged[i], blown[i] = _integrate(
-            x[i], side, pole, s0[i], a[i], b[i], k0[i], e0[i], log_tol[i], U[i], step, rtol
+            x[i],
+            side.points(i),
+            pole,
+            s0[i],
+            a[i],
+            b[i],
+            k0[i],
+            e0[i],
+            log_tol[i],
+            U[i],
+            step,
+            rtol,
         )
-    if blown.any():
+    if _some(blown):
         i = np.flatnonzero(blown)
         if opening is None:
             value[i], error[i], converged[i] = _contour(
                 x[i],
-                side,
+                side.points(i),
                 upper if isinstance(upper, bool) else upper[i],
                 pole,
                 atol,
@@ -665,17 +717,24 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
     cdf: Any = None
     err: Any = None
     conv: Any = None
-    negative = x < 0
-    # (every point on one side, the usual case: one pass, no copies in and out)
-    one_side = (
-        None if x.size == 0 else (-1.0 if negative.all() else 1.0 if not negative.any() else None)
-    )
+    # (every point on one side, the usual case: one pass, no copies in and out;
+    # one point, the commonest call, decided without array reductions)
+    negative: Any = None
+    if x.size == 1:
+        one_side: Any = -1.0 if x[0] < 0 else 1.0
+    else:
+        negative = x < 0
+        one_side = (
+            None
+            if x.size == 0
+            else (-1.0 if _every(negative) else 1.0 if not _some(negative) else None)
+        )
     passes: tuple[tuple[Any, Any], ...] = (
         ((one_side, None),) if one_side else ((1.0, ~negative), (-1.0, negative))
     )
     for sign, mask in passes:
         whole = mask is None
-        if not whole and not mask.any():
+        if not whole and not _some(mask):
             continue
         side = _side(sides, sign)
         if not whole and sf is None:
@@ -698,7 +757,7 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
             # a positive form: P(X <= 0) = 0, and far below the weights a closed form
             # (one test for both: x <= 0 also passes the second, the slope being > 0)
             closed = xs * side.zero_slope <= _NEAR_ZERO * (side.k + 1.0)
-            if closed.any():
+            if _some(closed):
                 zero = xs <= 0
                 tiny = ~zero & closed
                 up, low, e, ok = _allocated(xs)
@@ -708,13 +767,13 @@ def _probabilities(x, w, h, d, sigma, atol, rtol, sides=None):
                 todo &= ~zero & ~tiny
         for upper, group, part in side.tails(xs):
             m_ = todo if group is None else todo & group
-            every = m_.all()  # (then no copies in and out)
-            if not every and not m_.any():
+            every = _every(m_)  # (then no copies in and out)
+            if not every and not _some(m_):
                 continue
             if not every:
                 upper = upper[m_]
             # one flag when every point integrates the same tail (a single point)
-            flag = bool(upper[0]) if upper.size == 1 or upper.all() or not upper.any() else upper
+            flag = bool(upper[0]) if upper.size == 1 or _every(upper) or not _some(upper) else upper
             v, e_m, ok_m = _contour(xs if every else xs[m_], part, flag, True, atol, rtol)
             if flag is True:
                 v_up = np.minimum(np.maximum(v, 0.0), 1.0) + 0.0  # (no -0.0)
@@ -844,13 +903,13 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
     w = sides["terms"][1]
     mixed = w[0] < 0 < w[-1]
     for sign, mask in ((1.0, x > 0), (-1.0, x < 0), (1.0, x == 0)):
-        if not mask.any():
+        if not _some(mask):
             continue
         side = _side(sides, sign)
         if side.top is None and not side.sigma2:
             continue
         xs = sign * x[mask]
-        if not side.sigma2 and not xs.any():
+        if not side.sigma2 and not _some(xs):
             # x = 0: an end point of a one-signed support (never asked by the
             # base class), or inside a mixed one where the density is
             # finite only when k > 1
@@ -858,7 +917,7 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
                 out[mask] = np.inf if side.k <= 1 else _density_core(xs, side, atol, rtol)
             continue
         finite = np.isfinite(xs)  # the density vanishes at +-inf
-        if finite.any():
+        if _some(finite):
             value = np.zeros(xs.shape)
             value[finite] = _density_core(xs[finite], side, atol, rtol)
             out[mask] = value
@@ -869,6 +928,6 @@ def _density(x, w, h, d, sigma, atol, rtol, sides=None):
 def _density_core(x, side, atol, rtol):
     out = np.empty(x.shape)
     for is_upper, mask, part in side.groups(x):
-        if mask.any():
+        if _some(mask):
             out[mask] = _contour(x[mask], part, is_upper, False, atol, rtol)[0]
     return out

@@ -17,6 +17,7 @@ from ..linalg import symmetrize
 from ..validation import as_covariance, as_finite, as_generator, as_matrix, as_vector
 from ._contour import _density, _probabilities
 from ._ltz import _ltz_matching, _ltz_points, _ltz_quantiles
+from ._search import _search
 from ._terms import (
     _ZERO_RTOL,
     ATOL,
@@ -37,6 +38,9 @@ _LTZ_BRACKET = 0.05
 _NODES = 9
 # ... the Chebyshev-Lobatto points of [-1, 1], increasing
 _CHEBYSHEV = np.cos(np.pi * np.arange(_NODES) / (_NODES - 1))[::-1]
+# Evaluations of a quantile's estimate in the bracket before the root search takes it
+# (a safeguarded Newton-secant step each; bisection alone would need ~50).
+_POLISH_STEPS = 60
 
 
 # ---------------------------------------------------------------------------
@@ -272,6 +276,31 @@ class WeightedChiSquare(FrozenDistribution):
     def _quantiles(self, levels, lower):
         """The points where ``P(X <= x)`` (``lower``) or ``P(X > x)`` equals ``levels``.
 
+        Newton's method from the Liu-Tang-Zhang guess on contours set up once
+        at the guesses (:mod:`course.quadform._search`: one integral set-up for
+        every level and both tails, the derivative from the same nodes); the
+        levels it does not settle go to the bracketing search of
+        :meth:`_quantiles_by_nodes`.
+        """
+        big = levels > 0.5
+        small = np.where(big, 1.0 - levels, levels)
+        tail_lower = lower ^ big
+        guess = _ltz_quantiles(small, tail_lower, self._ltz_matching, self.offset)
+        terms = (*self._arrays, self.sigma)
+        tol = max(4.0 * self.rtol, 1e-13)
+        x, accepted = _search(
+            self._sides, terms, self.offset, guess, small, tail_lower, self.atol, self.rtol, tol
+        )
+        lo_bound, hi_bound = self._bounds
+        accepted &= (x > lo_bound) & (x < hi_bound)
+        if not accepted.all():
+            rest = ~accepted
+            x[rest] = self._quantiles_by_nodes(levels[rest], lower[rest])
+        return x
+
+    def _quantiles_by_nodes(self, levels, lower):
+        """The quantiles of :meth:`_quantiles` by a bracket and interpolation (the fallback).
+
         Usually one vectorised evaluation for every level together, instead of
         a root search per level (~12 integrals each).  (1) The Liu-Tang-Zhang
         approximation (:func:`_ltz_quantiles`, closed form) guesses each
@@ -281,13 +310,15 @@ class WeightedChiSquare(FrozenDistribution):
         misses take a grid around a normal guess (steps of the standard
         deviation, and points approaching a bound geometrically) and then the 7
         inner Chebyshev points of the grid's bracket.  (3) The inverse of the
-        log tail probability is interpolated through the 9 values; it is
-        accepted where the interpolant through the 7 inner nodes agrees with it
-        within the integrals' accuracy in log tail (``4 rtol``), elsewhere
-        Newton/secant steps polish it.  Next to a bound the coordinate is
-        ``log|x - b|``, in which the log tail of a one-signed form is nearly
-        linear (``P(X <= x) ~ C x^k``).  A level the grid does not bracket
-        either falls back to the root search of :meth:`_root`.
+        log tail probability interpolated through the 9 values gives the first
+        estimate; an estimate is accepted only where the log tail evaluated
+        there meets its goal within the integrals' accuracy (``4 rtol``), and
+        until then Newton/secant steps inside the bracket (which each value
+        narrows; bisection where a step would leave it) improve it.  Next to a
+        bound the coordinate is ``log|x - b|``, in which the log tail of a
+        one-signed form is nearly linear (``P(X <= x) ~ C x^k``).  A level the
+        grid does not bracket either, or not settled in ``_POLISH_STEPS``
+        evaluations, falls back to the root search of :meth:`_root`.
         """
         # the search runs on the smaller tail (1 - p is exact for p >= 1/2)
         big = levels > 0.5
@@ -392,57 +423,60 @@ class WeightedChiSquare(FrozenDistribution):
         rows = np.flatnonzero(found)
         if rows.size:
             kind, y_left, y_right, g_nodes = kind[rows], y_left[rows], y_right[rows], g_nodes[rows]
-            # (3) the inverse t(g) interpolated through the 9 nodes, and through every
-            # other one: their difference bounds the error of the coarse one, and
-            # the fine one is far better (the rule converges geometrically); g is
-            # mapped to [-1, 1] as t is, so the interpolation is scale-free
+            # (3) the inverse t(g) interpolated through the 9 nodes gives the first
+            # estimate (g is mapped to [-1, 1] as t is, so the interpolation is
+            # scale-free), and its slope the first Newton step
             g_mid = 0.5 * (g_nodes[:, -1] + g_nodes[:, 0])
             g_half = 0.5 * (g_nodes[:, -1] - g_nodes[:, 0])
             g_unit = (g_nodes - g_mid[:, None]) / g_half[:, None]
-            goal_unit = (goal[rows] - g_mid) / g_half
+            goal_rows = goal[rows]
+            goal_unit = (goal_rows - g_mid) / g_half
             t_nodes = np.broadcast_to(t, g_unit.shape)
-            y_mid, y_half = 0.5 * (y_left + y_right), 0.5 * (y_right - y_left)
-            # the fine interpolant at the goal and 1e-6 to either side (its slope), in one call
+            # the interpolant at the goal and 1e-6 to either side (its slope), in one call
             fine = _lagrange(g_unit, t_nodes, goal_unit[:, None] + np.array([0.0, 1e-6, -1e-6]))
-            y = y_mid + y_half * fine[:, 0]
-            coarse = y_mid + y_half * _lagrange(g_unit[:, 1:-1], t_nodes[:, 1:-1], goal_unit)
             with np.errstate(divide="ignore", invalid="ignore"):
-                # d g / d y from the interpolant's slope at the estimate
-                slope = (g_half / y_half) * 2e-6 / (fine[:, 1] - fine[:, 2])
-            y_low = np.minimum(y_left, y_right)
-            y_high = np.maximum(y_left, y_right)
-            y = np.minimum(np.maximum(y, y_low), y_high)
-            # the fine interpolant is accepted where the coarse one is within the
-            # integrals' accuracy of it in log tail (so the fine one, far better, is
-            # too); elsewhere the estimate is checked, then Newton steps on the
-            # interpolant's slope (a secant once two values are known), kept inside
-            # the bracket, until the log tail meets its goal within that accuracy
+                slope = g_half * 2e-6 / (fine[:, 1] - fine[:, 2])  # d g / d t
+            # the bracket: the adjacent nodes around the goal (g increases along t,
+            # and g_nodes[:, 0] < goal <= g_nodes[:, -1])
+            right = np.argmax(g_nodes >= goal_rows[:, None], axis=1)
+            t_low, t_high = t[right - 1], t[right]
+            inside = (fine[:, 0] > t_low) & (fine[:, 0] < t_high)
+            at = np.where(inside, fine[:, 0], 0.5 * (t_low + t_high))
+            y_mid, y_half = 0.5 * (y_left + y_right), 0.5 * (y_right - y_left)
+            # an estimate is accepted only where the log tail evaluated there meets its
+            # goal within the integrals' accuracy (4 rtol); until then Newton steps on
+            # the interpolant's slope (a secant once two values are known) inside the
+            # bracket, which every value narrows, and bisection where a step would
+            # leave it (agreement of two interpolants, the old rule, is no proof: it
+            # accepted a tail 1.8e-8 off at level 1e-9)
             tol = max(4.0 * self.rtol, 1e-13)
-            todo = np.flatnonzero(~(np.abs((y - coarse) * slope) <= tol))
+            todo = np.arange(rows.size)
             previous = None
-            for _ in range(8):
+            for _ in range(_POLISH_STEPS):
                 if todo.size == 0:
                     break
-                g_y = self._log_tail(
-                    self._from_y(y[todo], kind[todo], lo_bound, hi_bound)[:, None],
-                    lower[rows[todo]],
-                )[:, 0]
-                gap = g_y - goal[rows[todo]]
-                if previous is not None:
-                    y_prev, gap_prev = previous
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        secant = (gap - gap_prev) / (y[todo] - y_prev)
-                    slope[todo] = np.where(np.isfinite(secant) & (secant != 0), secant, slope[todo])
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    step = -gap / slope[todo]
-                previous_y = y[todo].copy()
-                y[todo] = np.clip(
-                    y[todo] + np.where(np.isfinite(step), step, 0.0), y_low[todo], y_high[todo]
+                x_at = self._from_y(
+                    y_mid[todo] + y_half[todo] * at[todo], kind[todo], lo_bound, hi_bound
                 )
-                keep = np.abs(gap) > tol
-                previous = previous_y[keep], gap[keep]
-                todo = todo[keep]
-            result[rows] = self._from_y(y, kind, lo_bound, hi_bound)
+                gap = self._log_tail(x_at[:, None], lower[rows[todo]])[:, 0] - goal_rows[todo]
+                keep = ~(np.abs(gap) <= tol)
+                todo, gap, here = todo[keep], gap[keep], at[todo][keep]
+                below = gap < 0
+                t_low[todo] = np.where(below, here, t_low[todo])
+                t_high[todo] = np.where(below, t_high[todo], here)
+                if previous is not None:
+                    at_prev, gap_prev = previous
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        secant = (gap - gap_prev[keep]) / (here - at_prev[keep])
+                    slope[todo] = np.where(np.isfinite(secant) & (secant > 0), secant, slope[todo])
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    step = here - gap / slope[todo]
+                bisect = ~((step > t_low[todo]) & (step < t_high[todo]))
+                at[todo] = np.where(bisect, 0.5 * (t_low[todo] + t_high[todo]), step)
+                previous = here, gap
+            result[rows] = self._from_y(y_mid + y_half * at, kind, lo_bound, hi_bound)
+            # (the few still unsettled take the root search below)
+            found[rows[todo]] = False
         for row in np.flatnonzero(~found):
             func = self.cdf if lower[row] else self.sf
             result[row] = self._root(func, float(levels[row]), bool(lower[row]))

@@ -73,6 +73,21 @@ _LOG2 = math.log(2.0)
 # ---------------------------------------------------------------------------
 # validation of the chi-square terms
 # ---------------------------------------------------------------------------
+def _every(a) -> bool:
+    """``a.all()`` without its cost on the few elements of a scalar call.
+
+    The method goes through numpy's Python layer (~1.5 us, a dozen times a
+    call); ``count_nonzero`` is one C call (~0.2 us).  NaN counts as nonzero
+    in both.
+    """
+    return int(np.count_nonzero(a)) == a.size
+
+
+def _some(a) -> bool:
+    """``a.any()`` as one C call (see :func:`_every`)."""
+    return int(np.count_nonzero(a)) > 0
+
+
 def _plain_numbers(value):
     """``value`` as a float array when it is a list or tuple of finite Python floats and ints.
 
@@ -87,7 +102,7 @@ def _plain_numbers(value):
         if value.ndim != 1 or value.size == 0 or value.dtype.kind not in "fiu":
             return None
         array = value.astype(float)
-        return array if np.isfinite(array).all() else None
+        return array if _every(np.isfinite(array)) else None
     if type(value) not in (list, tuple) or not value:
         return None
     for entry in value:
@@ -98,7 +113,7 @@ def _plain_numbers(value):
         array = np.array(value, dtype=float)
     except OverflowError:
         return None
-    return array if np.isfinite(array).all() else None
+    return array if _every(np.isfinite(array)) else None
 
 
 def _per_term(value, name, size, default):
@@ -164,7 +179,7 @@ def _terms(weights, dof, noncentrality, sigma=0.0):
 def _merged(columns, sigma=0.0):
     """``(w, h, d, sigma)`` from validated rows ``(w, h, d)``: zeros dropped, sorted, equal merged."""
     w = columns[0]
-    if not w.all():
+    if not _every(w):
         columns = columns[:, w != 0]
     if columns.shape[1] > 1:
         columns = columns[:, columns[0].argsort(kind="stable")]
@@ -196,7 +211,7 @@ def _term_constants(w, h, d):
     positive = w > 0
     log_d = -0.5 * h * (np.log(np.abs(w)) + math.log(2.0))
     quarter = 0.25 / w * positive
-    if not d.any():  # (central: the same values without the zero terms)
+    if not _some(d):  # (central: the same values without the zero terms)
         zero = 0.0 * d
         return zero, 0.5 * h, w * h, 2.0 * w * w * h, log_d, zero, h * quarter, log_d * positive
     h_d = h + d
@@ -219,7 +234,7 @@ def _derivative_factors(w, h, d):
     ``K'' = sum t^2 c2 + t^3 n2``, ``K''' = sum t^3 c3 + t^4 n3``.
     """
     hw = h * w
-    if not d.any():  # (central: the noncentral factors are never used)
+    if not _some(d):  # (central: the noncentral factors are never used)
         return 2.0 * w, hw, None, 2.0 * w * hw, 8.0 * w * w * hw, None, None
     dw = d * w
     return 2.0 * w, hw, dw, 2.0 * w * hw, 8.0 * w * w * hw, 4.0 * w * dw, 24.0 * w * w * dw
@@ -248,7 +263,7 @@ def _log1p_minus(u):
     small = np.abs(u) < 0.25
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         out = np.log1p(u) - u
-        if small.any():
+        if _some(small):
             us = u[small]
             v = us / (2.0 + us)
             v2 = v * v
@@ -287,7 +302,7 @@ def _points(c):
 
 
 def _warn_unconverged(conv, err, stacklevel=4):
-    if not conv.all():
+    if not _every(conv):
         warnings.warn(
             f"imhof: requested accuracy not reached at {int(np.sum(~conv))} point(s) "
             f"(largest error estimate {float(np.max(err[~conv])):.2g})",

@@ -121,7 +121,13 @@ def q2():
     points=3,
     rtol=1e-6,
     atol=1e-8,
-    forbid=["course.lsq.overall_model_test", "course.lsq.fit", "course.lsq.data_snooping"],
+    forbid=[
+        "course.lsq.overall_model_test",
+        "course.lsq.fit",
+        "course.lsq.data_snooping",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error",
+    ],
     hint=(
         "Does your T change when Qyy changes? Each residual must be weighed by the precision of "
         "its observation.",

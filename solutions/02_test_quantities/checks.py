@@ -105,6 +105,9 @@ q1.case(STRUCTURE5, MODES5, [False, True, False, True], hidden=True)
 @CHECKS.function(
     "q2",
     func="hypotheses",
+    forbid=[
+        "course.diagnosis.DecisionStructure",
+    ],
     points=1,
     hint="Read row k of the structure: modes with 0 form H0, modes with X (1) form H1. "
     "Return (list_H0, list_H1), each in column order.",
@@ -140,6 +143,7 @@ q2.case(STRUCTURE5, MODES5, 3, hidden=True)
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
     ],
     mistakes=[
         Mistake(
@@ -178,6 +182,7 @@ q3.case(np.arange(6.0), np.zeros(6), np.ones(6), np.zeros(6), hidden=True)
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
     ],
     mistakes=[
         Mistake(
@@ -209,6 +214,10 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
 @CHECKS.function(
     "q5",
     func="bias_free_T",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+    ],
     points=1,
     rtol=1e-8,
     atol=1e-12,
@@ -251,6 +260,9 @@ q5.case(
 @CHECKS.function(
     "q6",
     func="threshold_and_power",
+    forbid=[
+        "course.diagnosis.prediction_error_power",
+    ],
     points=2,
     rtol=1e-6,
     atol=1e-9,
@@ -342,6 +354,12 @@ def q5b():
 @CHECKS.function(
     "q7_practice",
     func="three_statistics",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
+    ],
     points=1,
     rtol=1e-6,
     atol=1e-9,
@@ -365,6 +383,11 @@ def q7_practice(U_, y):
 @CHECKS.function(
     "q8_practice",
     func="single_fault_diagnosis",
+    forbid=[
+        "course.diagnosis.diagnoses",
+        "course.diagnosis.DecisionStructure",
+        "course.diagnosis.diagnosis_matrix",
+    ],
     points=1,
     hint="Each test alarms when T_k exceeds sigma^2 times the upper alpha quantile of the chi2 law "
     "of T_k / sigma^2: how many degrees of freedom does T_k have when one gain is estimated? "
@@ -404,6 +427,12 @@ q8_practice.case(U, _Y_NEAR3, SIGMA, 0.01, hidden=True)
 
 @CHECKS.value(
     "q7",
+    forbid=[
+        "course.diagnosis.prediction_error",
+        "course.diagnosis.least_squares_residual",
+        "course.diagnosis.prediction_error_test",
+        "course.diagnosis.linear_test_statistics",
+    ],
     var="T_mine",
     points=2,
     data="record",
@@ -446,6 +475,11 @@ def q8a(d):
 
 @CHECKS.value(
     "q8",
+    forbid=[
+        "course.diagnosis.diagnoses",
+        "course.diagnosis.DecisionStructure",
+        "course.diagnosis.diagnosis_matrix",
+    ],
     var="diagnosis_mine",
     points=1,
     data="record",

@@ -105,6 +105,9 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
 @CHECKS.function(
     "q2",
     func="leak_theta2",
+    forbid=[
+        "course.diagnosis.estimate_parameters",
+    ],
     points=1,
     rtol=1e-8,
     atol=1e-10,
@@ -155,6 +158,10 @@ q2.case(_modes_U(51), 1.2, hidden=True)
 @CHECKS.function(
     "q3",
     func="power_pair",
+    forbid=[
+        "course.diagnosis.parameter_estimate_power",
+        "course.diagnosis.prediction_error_power",
+    ],
     points=2,
     rtol=1e-6,
     atol=1e-9,
@@ -240,6 +247,11 @@ q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
 @CHECKS.function(
     "q5",
     func="maximum_likelihood",
+    forbid=[
+        "course.diagnosis.normal_likelihood",
+        "course.diagnosis.normal_log_likelihood",
+        "course.diagnosis.maximum_likelihood",
+    ],
     points=1,
     rtol=1e-6,
     atol=1e-300,  # relative only: likelihoods of many observations are tiny
@@ -313,6 +325,9 @@ q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
 
 @CHECKS.function(
     "q7",
+    forbid=[
+        "course.diagnosis.neyman_pearson_test",
+    ],
     func="np_power",
     points=2,
     rtol=1e-7,
@@ -407,6 +422,10 @@ def _posterior(y, U_, sigma, tau, priors):
 @CHECKS.function(
     "q9_practice",
     func="posteriors",
+    forbid=[
+        "course.diagnosis.bayes_ranking",
+        "course.diagnosis.mode_log_likelihoods",
+    ],
     points=1,
     rtol=1e-6,
     atol=1e-300,
@@ -437,6 +456,10 @@ for _seed in (61, 62, 63, 64):
 
 @CHECKS.value(
     "q9",
+    forbid=[
+        "course.diagnosis.bayes_ranking",
+        "course.diagnosis.mode_log_likelihoods",
+    ],
     var="posterior_mine",
     points=3,
     data="modes",

@@ -100,12 +100,17 @@ CHECKS = Checks(
     preload=["course.filters", "scipy.stats"],
 )
 
-_NO_FILTERS = [
+_NO_FILTERS = [  # every filter function of course.filters: "write the filter yourself"
     "course.filters.kalman_filter",
     "course.filters.extended_kalman_filter",
+    "course.filters.kf_predict",
     "course.filters.kf_update",
+    "course.filters.ekf_predict",
     "course.filters.ekf_update",
     "course.filters.recursive_least_squares",
+    "course.filters.riccati",
+    "course.filters.riccati_gains",
+    "course.filters.steady_state",
 ]
 
 
@@ -133,6 +138,11 @@ _Q1_MISTAKES = [
 @CHECKS.function(
     "q1",
     func="steady_state",
+    forbid=[
+        "course.filters.steady_state",
+        "course.filters.riccati",
+        "course.filters.riccati_gains",
+    ],
     mistakes=_Q1_MISTAKES,
     points=1,
     rtol=1e-8,
@@ -261,6 +271,9 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
 @CHECKS.function(
     "q4",
     func="window_threshold",
+    forbid=[
+        "course.nis.windowed_nis_threshold",
+    ],
     points=1,
     rtol=1e-6,
     atol=1e-8,

@@ -93,7 +93,12 @@ CHECKS = Checks(
     points=2,
     rtol=1e-9,
     atol=1e-12,
-    forbid=["course.nis.nis", "course.nis.nees", "course.nis.nis_matrix"],
+    forbid=[
+        "course.nis.nis",
+        "course.nis.nees",
+        "course.nis.nis_matrix",
+        "course.linalg.whitened_squared_norms",
+    ],
     hint="For each step solve with the Cholesky factor: z = solve(B_k, eps_k) with "
     "S_k = B_k B_k^T, then NIS_k = z @ z. S is one (m, m) matrix or a (K, m, m) "
     "stack: np.broadcast_to(S, (K, m, m)) handles both.",
@@ -189,7 +194,11 @@ q2.case(EPS_C, S_C, hidden=True)
     points=1,
     rtol=1e-7,
     atol=1e-10,
-    forbid=["course.nis.consistency_interval", "course.nis.nis_critical_values"],
+    forbid=[
+        "course.nis.consistency_interval",
+        "course.nis.nis_critical_values",
+        "course.nis.nis_test",
+    ],
     mistakes=[
         Mistake(
             "the poster's law: eps_bar itself is not chi2(mK) -- with the 1/K average, K times "
@@ -232,7 +241,7 @@ q3.case(1, 8, 0.1, hidden=True)
     points=1,
     rtol=1e-7,
     atol=1e-10,
-    forbid=["course.nis.nis_matrix_critical_values"],
+    forbid=["course.nis.nis_matrix_critical_values", "course.nis.nis_matrix_test"],
     mistakes=[
         Mistake(
             "alpha not split: each of the two thresholds gets alpha/2",
@@ -344,6 +353,10 @@ def _pvalues(eps, S, alpha):
 @CHECKS.function(
     "q6_practice",
     func="nis_pvalues",
+    forbid=[
+        "course.nis.nis_test",
+        "course.nis.nis_matrix_test",
+    ],
     points=1,
     rtol=1e-6,
     atol=1e-9,
@@ -380,6 +393,10 @@ for _seed in (40, 41, 46, 54):  # a wrong correlation, a wrong scale, consistent
 
 @CHECKS.value(
     "q6",
+    forbid=[
+        "course.nis.nis_test",
+        "course.nis.nis_matrix_test",
+    ],
     var="pvalues",
     points=2,
     rtol=1e-6,
@@ -469,7 +486,11 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
     points=1,
     rtol=1e-7,
     atol=1e-10,
-    forbid=["course.nis.consistency_interval"],
+    forbid=[
+        "course.nis.consistency_interval",
+        "course.nis.nis_critical_values",
+        "course.nis.nis_test",
+    ],
     mistakes=[
         Mistake(
             "looks like the normal approximation n +- z sqrt(2n/N): the question asks for the "

@@ -32,6 +32,12 @@ _FORBID_TESTS = [
     "course.mismatched.correlation_test",
     "course.mismatched.statistic_law",
     "course.mismatched.power",
+    # a critical value, p-value or power of a law in one line (issue 26)
+    "course.results.critical_value",
+    "course.results.rejection_probability",
+    "course.results.decide",
+    "course.results.TestResult.from_null",
+    "course.results.TestResult.power",
 ]
 
 # a reduced-order pair (2 true states, 1 filter state) and a same-order pair with two outputs

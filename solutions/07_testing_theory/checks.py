@@ -33,6 +33,9 @@ def _correlated(m, rho, scale=1.0):
     return scale * rho ** np.abs(idx[:, None] - idx[None, :])
 
 
+# The same line with correlated noise: a public case where Qyy is not a multiple of I.
+Q10C = _correlated(10, 0.6, 0.01)
+
 # Hidden data: a quadratic model with correlated noise, and a line with individual sigmas.
 _RNG = np.random.default_rng(20261127)
 T12 = np.linspace(-1.0, 1.0, 12)
@@ -68,11 +71,18 @@ _TESTS = [
     "course.lsq.minimal_detectable_bias",
     "course.lsq.dia",
     "course.lsq.data_snooping",
+    # notebook 3's exact GLR test of nested linear models: T_q of whitened [A C] in one call
+    "course.diagnosis.linear_glr_test",
+    "course.diagnosis.regression_parameter_test",
 ]
 
 
 def _fit(A, y, Qyy):
     return lsq.fit(np.asarray(A, dtype=float), np.asarray(y, dtype=float), Qyy)
+
+
+def _diagonal_only(Qyy):
+    return np.diag(np.diag(np.asarray(Qyy, dtype=float)))
 
 
 def _unprojected_T(A, y, Qyy, C):
@@ -116,6 +126,11 @@ def _unprojected_T(A, y, Qyy, C):
             "columns of C",
             lambda A, y, Qyy, C: _fit(A, y, Qyy).squared_norm,
         ),
+        Mistake(
+            "only the diagonal of Qyy was used: with correlated observations whiten with the "
+            "full Cholesky factor of Qyy",
+            lambda A, y, Qyy, C: lsq.glr_test(_fit(A, y, _diagonal_only(Qyy)), C).statistic,
+        ),
     ],
 )
 def q1(A, y, Qyy, C):
@@ -124,6 +139,7 @@ def q1(A, y, Qyy, C):
 
 q1.case(A10, Y10, Q10, UNIT10[:, [6]], label="the notebook's line, C = c_6 (q = 1)")
 q1.case(A10, Y10, Q10, UNIT10[:, [6, 7]], label="the same line, C = [c_6 c_7] (q = 2)")
+q1.case(A10, Y10, Q10C, UNIT10[:, [6, 7]], label="C = [c_6 c_7], correlated noise (rho = 0.6)")
 ### BEGIN HIDDEN TESTS
 q1.case(A10, Y10, Q10, JUMP10, hidden=True)
 q1.case(A12, Y12, Q12, np.eye(12)[:, [3, 4]], hidden=True)
@@ -168,6 +184,11 @@ def _decision(A, y, Qyy, C, alpha, dof):
             "the critical value looks two-sided (alpha/2): T_q rejects in the upper tail only",
             lambda A, y, Qyy, C, alpha: _decision(A, y, Qyy, C, alpha / 2, np.shape(C)[1]),
         ),
+        Mistake(
+            "the critical value looks like the LOWER alpha-quantile (ppf(alpha)): T_q rejects "
+            "when it is large, so the threshold leaves alpha in the upper tail",
+            lambda A, y, Qyy, C, alpha: _decision(A, y, Qyy, C, 1.0 - alpha, np.shape(C)[1]),
+        ),
     ],
 )
 def q2(A, y, Qyy, C, alpha):
@@ -184,14 +205,30 @@ q2.case(A9, Y9, Q9, np.eye(9)[:, [6, 7]], 0.10, hidden=True)
 ### END HIDDEN TESTS
 
 
-def _f_with(A, y, Qyy, C, alpha, *, sigma2_from_h0=False, dof2=None, chi2_critical=False):
-    """F built the way a mistake builds it."""
+def _f_with(
+    A,
+    y,
+    Qyy,
+    C,
+    alpha,
+    *,
+    sigma2_from_h0=False,
+    omega_over_r_minus_q=False,
+    dof2=None,
+    chi2_critical=False,
+    F_as=None,
+):
+    """F built the way a mistake builds it (``F_as``: "T" or "T/q", sigma² not estimated)."""
     f = _fit(A, y, Qyy)
     q = np.shape(C)[1]
     r = f.redundancy
     T = float(lsq.glr_test(f, C).statistic)
     rest = f.squared_norm / r if sigma2_from_h0 else (f.squared_norm - T) / (r - q)
+    if omega_over_r_minus_q:
+        rest = f.squared_norm / (r - q)
     F = (T / q) / rest
+    if F_as is not None:
+        F = T if F_as == "T" else T / q
     dof2 = r - q if dof2 is None else dof2
     critical = float(stats.chi2.isf(alpha, q) / q if chi2_critical else stats.f.isf(alpha, q, dof2))
     return (F, critical, bool(critical < F))
@@ -218,6 +255,11 @@ def _f_with(A, y, Qyy, C, alpha, *, sigma2_from_h0=False, dof2=None, chi2_critic
             lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, sigma2_from_h0=True),
         ),
         Mistake(
+            "the denominator looks like Ω / (m - n - q): under the alternative the residual "
+            "norm is Ω - T_q (estimating the bias removes T_q from it)",
+            lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, omega_over_r_minus_q=True),
+        ),
+        Mistake(
             "F looks right but its critical value has m - n denominator degrees of freedom: "
             "the alternative uses q more parameters, leaving m - n - q",
             lambda A, y, Qyy, C, alpha: _f_with(
@@ -228,6 +270,16 @@ def _f_with(A, y, Qyy, C, alpha, *, sigma2_from_h0=False, dof2=None, chi2_critic
             "the critical value looks like chi2(q)/q: with sigma² estimated the law is F, "
             "with heavier tails",
             lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, chi2_critical=True),
+        ),
+        Mistake(
+            "F looks like T_q itself: sigma² is unknown, so divide T_q / q by its estimate "
+            "under the alternative",
+            lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, F_as="T"),
+        ),
+        Mistake(
+            "F looks like T_q / q, with sigma² taken as known (as stated in Qyy): divide by "
+            "the estimate of sigma² under the alternative",
+            lambda A, y, Qyy, C, alpha: _f_with(A, y, Qyy, C, alpha, F_as="T/q"),
         ),
     ],
 )
@@ -248,6 +300,24 @@ q3.case(A9, Y9, Q9, np.eye(9)[:, [7]], 0.05, hidden=True)
 # ---------------------------------------------------------------------------
 # q4: the w-test with an estimated variance
 # ---------------------------------------------------------------------------
+def _t_with(A, y, Qyy, *, dof_drop=1, root=True):
+    """t_i built the way a mistake builds it."""
+    f = _fit(A, y, Qyy)
+    w = np.asarray(lsq.w_tests(f).statistic)
+    estimate = (f.squared_norm - w**2) / (f.redundancy - dof_drop)
+    return w / (np.sqrt(estimate) if root else estimate)
+
+
+def _t_from_normalised_residuals(A, y, Qyy):
+    """t_i built from e_i / sigma_e_i instead of w_i (right only for a diagonal Qyy)."""
+    f = _fit(A, y, Qyy)
+    Qyy = np.asarray(Qyy, dtype=float)
+    A = np.asarray(A, dtype=float)
+    Qxx_At = np.linalg.solve(A.T @ np.linalg.solve(Qyy, A), A.T)
+    v = np.asarray(f.e_hat) / np.sqrt(np.diag(Qyy) - np.einsum("ij,ji->i", A, Qxx_At))
+    return v / np.sqrt((f.squared_norm - v**2) / (f.redundancy - 1))
+
+
 def _tau(A, y, Qyy):
     f = _fit(A, y, Qyy)
     return np.asarray(lsq.w_tests(f).statistic) / np.sqrt(f.squared_norm / f.redundancy)
@@ -276,6 +346,33 @@ def _tau(A, y, Qyy):
             "these are Baarda's w_i with sigma taken as known: divide by the estimated sigma",
             lambda A, y, Qyy: np.asarray(lsq.w_tests(_fit(A, y, Qyy)).statistic),
         ),
+        Mistake(
+            "sigma² under the alternative of test i looks divided by m - n: that model has one "
+            "parameter more (the bias of observation i), so m - n - 1 degrees of freedom",
+            lambda A, y, Qyy: _t_with(A, y, Qyy, dof_drop=0),
+        ),
+        Mistake(
+            "these look like |t_i|: keep the sign of w_i (the test is two-sided, the "
+            "statistic is not)",
+            lambda A, y, Qyy: np.abs(_t_with(A, y, Qyy)),
+        ),
+        Mistake(
+            "w_i looks divided by the estimated VARIANCE: divide by its square root, the "
+            "estimated sigma",
+            lambda A, y, Qyy: _t_with(A, y, Qyy, root=False),
+        ),
+        Mistake(
+            "only the diagonal of Qyy was used: with correlated observations w_i needs the "
+            "full Qyy (whiten with its Cholesky factor)",
+            lambda A, y, Qyy: np.asarray(
+                lsq.w_tests(_fit(A, y, _diagonal_only(Qyy)), variance="estimated").statistic
+            ),
+        ),
+        Mistake(
+            "e_i / sigma_e_i is w_i only for uncorrelated observations: with a full Qyy, "
+            "w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii)",
+            lambda A, y, Qyy: _t_from_normalised_residuals(A, y, Qyy),
+        ),
     ],
 )
 def q4(A, y, Qyy):
@@ -284,6 +381,7 @@ def q4(A, y, Qyy):
 
 q4.case(A10, Y10, Q10, label="the notebook's line")
 q4.case(A10, Y10, 4.0 * Q10, label="the same line with sigma stated 0.2")
+q4.case(A10, Y10, Q10C, label="the same line with correlated noise (rho = 0.6)")
 ### BEGIN HIDDEN TESTS
 q4.case(A12, Y12, Q12, hidden=True)
 q4.case(A9, Y9, Q9, hidden=True)
@@ -323,6 +421,19 @@ def _b_level_with(alpha_1, power, q, *, lambda_dof=1, quantile=None):
             "the critical value looks like the power-quantile of chi2(q, lambda_0): the test "
             "must reject with probability power, so take the (1 - power) quantile",
             lambda alpha_1, power, q: _b_level_with(alpha_1, power, q, quantile=power),
+        ),
+        Mistake(
+            "looks like 1 - alpha_q, the probability BELOW the critical value: the level is "
+            "the upper-tail probability P(chi2(q) > critical value)",
+            lambda alpha_1, power, q: 1.0 - _b_level_with(alpha_1, power, q),
+        ),
+        Mistake(
+            "this looks like the POWER of the q-dimensional test at level alpha_1 for the bias "
+            "lambda_0: the question asks for the level alpha_q at which that power equals "
+            "the given one",
+            lambda alpha_1, power, q: float(
+                stats.ncx2.sf(stats.chi2.isf(alpha_1, q), q, chi2.noncentrality(alpha_1, power, 1))
+            ),
         ),
     ],
 )
@@ -390,13 +501,24 @@ def q6_practice(line):
     atol=1e-8,
     hint="The same as q6_practice, on your own line mine: C = the columns mine['pair'] of the "
     "identity, weights mine['Qyy'].",
-    mistakes=_PAIR_MISTAKES,
+    mistakes=_PAIR_MISTAKES
+    + [
+        Mistake(
+            "this is T_2 of the public practice line: compute it on your own line mine",
+            lambda d: _pair_T(PRACTICE),
+        ),
+        Mistake(
+            "this is T_2 of another pair of observations: C holds the two columns of the "
+            "identity named by mine['pair']",
+            lambda d: _pair_T({**d, "pair": [d["pair"][0] - 1, d["pair"][0]]}),
+        ),
+    ],
 )
 def q6(d):
     return _pair_T(d)
 
 
-def _dia_estimate(d, remove=None, Qyy=...):
+def _dia_estimate(d, remove=None, Qyy=..., weighted_refit=True):
     """The DIA estimate: the refit without the identified (or the given) observation."""
     Qyy = d["Qyy"] if Qyy is ... else Qyy
     A, y = d["A"], d["y"]
@@ -406,7 +528,7 @@ def _dia_estimate(d, remove=None, Qyy=...):
             return np.asarray(f.x_hat)
         remove = int(lsq.w_tests(f, d["alpha"]).largest)
     keep = np.delete(np.arange(len(y)), remove)
-    sub = None if Qyy is None else np.asarray(Qyy)[np.ix_(keep, keep)]
+    sub = None if Qyy is None or not weighted_refit else np.asarray(Qyy)[np.ix_(keep, keep)]
     return np.asarray(_fit(A[keep], y[keep], sub).x_hat)
 
 
@@ -426,6 +548,16 @@ _DIA_MISTAKES = [
     Mistake(
         "looks unweighted: the Qyy of the data was ignored", lambda d: _dia_estimate(d, Qyy=None)
     ),
+    Mistake(
+        "the right observation was removed, but the refit without it is unweighted: keep "
+        "the weights of the other observations",
+        lambda d: _dia_estimate(d, weighted_refit=False),
+    ),
+    Mistake(
+        "the line was refitted without the second observation of the pair: remove the "
+        "observation that the w-tests identify, not a suspect named in the data",
+        lambda d: _dia_estimate(d, remove=d["pair"][1]),
+    ),
 ]
 
 
@@ -437,7 +569,18 @@ _DIA_MISTAKES = [
     atol=1e-8,
     hint="Detect with the overall model test at d['alpha'], identify the largest |w|, adapt by "
     "fitting the line without it; return (height at t = 0, slope).",
-    mistakes=_DIA_MISTAKES,
+    # data snooping removes observations until no w-test rejects: on the practice line three
+    # (on almost every personal line more than one, but not on all: so only here)
+    mistakes=[
+        *_DIA_MISTAKES,
+        Mistake(
+            "several observations were removed (data snooping repeats the w-tests until none "
+            "rejects): the DIA procedure adapts once, to the one identified alternative",
+            lambda d: np.asarray(
+                lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).fit.x_hat
+            ),
+        ),
+    ],
 )
 def q7_practice(d):
     return _dia_estimate(d)
@@ -467,7 +610,13 @@ for _q in (q6_practice, q7_practice):
     rtol=1e-6,
     atol=1e-8,
     hint="The same procedure as q7_practice on your own line mine.",
-    mistakes=_DIA_MISTAKES,
+    mistakes=_DIA_MISTAKES
+    + [
+        Mistake(
+            "this is the DIA estimate of the public practice line: run it on your own line mine",
+            lambda d: _dia_estimate(PRACTICE),
+        )
+    ],
 )
 def q7(d):
     return _dia_estimate(d)
@@ -538,6 +687,14 @@ def _mdb_with(A, Qyy, C, alpha, power, direction, *, lambda_dof=None, projected=
             "of the bias the model absorbs cannot be detected",
             lambda A, Qyy, C, alpha, power, direction: _mdb_with(
                 A, Qyy, C, alpha, power, direction, projected=False
+            ),
+        ),
+        Mistake(
+            "the bias points along direction but its length is off by the length of "
+            "direction: normalise d to a unit vector before scaling it",
+            lambda A, Qyy, C, alpha, power, direction: (
+                _mdb_with(A, Qyy, C, alpha, power, direction)
+                * np.linalg.norm(np.asarray(direction, dtype=float))
             ),
         ),
     ],

@@ -506,3 +506,85 @@ def band_95(A, Qyy, a):
 """,
     ),
 ]
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q3"] += [  # one variant only: more wrong q3 would move the q6b variants to other IDs
+    (
+        "diagnosis.least_squares_residual on the whitened problem",
+        """from course import diagnosis
+
+
+def overall_model_test_stat(A, y, Qyy, alpha):
+    L = np.linalg.cholesky(Qyy)
+    fit_w = diagnosis.least_squares_residual(
+        linalg.solve_triangular(L, A, lower=True), linalg.solve_triangular(L, y, lower=True)
+    )
+    T = float(fit_w.statistic)
+    critical_value = float(stats.chi2.isf(alpha, fit_w.dof))
+    return T, critical_value, T > critical_value
+""",
+    ),
+]
+WRONG["q4"] += [
+    (
+        "aliased import of the forbidden functions",
+        """from course.lsq import fit as f, w_tests as wt
+
+
+def w_statistics(A, y, Qyy):
+    return wt(f(A, y, Qyy), 0.05).statistic
+""",
+    ),
+    (
+        "getattr and __import__",
+        """def w_statistics(A, y, Qyy):
+    m = __import__("course.lsq", fromlist=["fit"])
+    return getattr(m, "w_" + "tests")(m.fit(A, y, Qyy), 0.05).statistic
+""",
+    ),
+    (
+        "functools.partial of w_tests",
+        """import functools
+
+import course.lsq as cl
+
+
+def w_statistics(A, y, Qyy):
+    return functools.partial(cl.w_tests, alpha=0.05)(cl.fit(A, y, Qyy)).statistic
+""",
+    ),
+]
+RIGHT["q3"] += [
+    (
+        "the solution, with forbidden functions imported and never called",
+        """from course.lsq import data_snooping, fit, overall_model_test  # noqa: F401 (never called)
+import course.lsq as cl  # noqa: F401
+
+
+def overall_model_test_stat(A, y, Qyy, alpha):
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, y, lower=True)
+    x_hat = np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    r = y_w - A_w @ x_hat
+    T = float(r @ r)
+    critical_value = float(stats.chi2.isf(alpha, A.shape[0] - A.shape[1]))
+    return T, critical_value, T > critical_value
+""",
+    ),
+    (
+        "np.linalg.inv(Qyy) (advice, not a rule)",
+        """def overall_model_test_stat(A, y, Qyy, alpha):
+    A, y, W = np.asarray(A, float), np.asarray(y, float), np.linalg.inv(Qyy)
+    x_hat = np.linalg.solve(A.T @ W @ A, A.T @ W @ y)
+    e = y - A @ x_hat
+    T = float(e @ W @ e)
+    critical_value = float(stats.chi2.isf(alpha, A.shape[0] - A.shape[1]))
+    return T, critical_value, T > critical_value
+""",
+    ),
+]

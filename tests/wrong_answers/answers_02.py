@@ -499,3 +499,72 @@ mode_mine = conclusion.get(len(diagnosis_mine), "several faults fit")
         ),
     ],
 }
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q2"] += [
+    (
+        "DecisionStructure(...).hypotheses (not allowed)",
+        """def hypotheses(sensitivity, modes, k):
+    h = dg.DecisionStructure(np.asarray(sensitivity), modes=list(modes)).hypotheses(f"T{k + 1}")
+    return (list(h.null), list(h.alternative))
+""",
+    ),
+]
+WRONG["q3"] += [
+    (
+        "linear_test_statistics in one line",
+        """def T1_statistic(y, u1, u2, u3):
+    U_ = np.column_stack([u1, u2, u3])
+    return float(dg.linear_test_statistics(np.asarray(y, float)[None], U_, [1.0, 1.0, 1.0], [[0]])[0, 0])
+""",
+    ),
+    (
+        "least_squares_residual through an alias",
+        """from course.diagnosis import least_squares_residual as lsr
+
+
+def T1_statistic(y, u1, u2, u3):
+    y, u1, u2, u3 = (np.asarray(a, dtype=float) for a in (y, u1, u2, u3))
+    return float(lsr(u1[:, None], y - u2 - u3).statistic)
+""",
+    ),
+]
+WRONG["q7_practice"] += [
+    (
+        "prediction_error per test (not allowed)",
+        """def three_statistics(U, y):
+    return np.array(
+        [float(dg.prediction_error(y, U, [1.0, 1.0, 1.0], [k]).statistic) for k in range(3)]
+    )
+""",
+    ),
+]
+RIGHT["q3"] += [
+    (
+        "the solution, with the forbidden functions imported and never called",
+        """from course.diagnosis import least_squares_residual, prediction_error  # noqa: F401
+
+
+def T1_statistic(y, u1, u2, u3):
+    y, u1, u2, u3 = (np.asarray(a, dtype=float) for a in (y, u1, u2, u3))
+    target = y - u2 - u3
+    energy = u1 @ u1
+    theta1 = (target @ u1) / energy if energy > 0 else 0.0
+    r = target - theta1 * u1
+    return float(r @ r)
+""",
+    ),
+]
+WRONG["q5"] += [
+    (
+        "prediction_error with a constant regressor (not allowed)",
+        """def bias_free_T(y, u):
+    n = len(y)
+    return float(
+        dg.prediction_error(y, np.column_stack([u, np.ones(n)]), [1.0, 0.0], [1]).statistic
+    ) / n
+""",
+    ),
+]

@@ -510,3 +510,99 @@ RIGHT["q5"] += [
 """,
     ),
 ]
+
+WRONG["q3"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "the library's power functions (not allowed)",
+        """def power_pair(U, sigma, theta2, alpha):
+    theta_f = [1.0, theta2, 1.0]
+    return [
+        dg.parameter_estimate_power(U, nominal, [0, 1], 1, theta_f, sigma=sigma, alpha=alpha),
+        dg.prediction_error_power(U, nominal, [0], theta_f, sigma=sigma, alpha=alpha),
+    ]
+""",
+    ),
+]
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q4"] += [
+    (
+        "exp of normal_log_likelihood (not allowed)",
+        """def likelihood(theta, z, sigma):
+    return np.exp(dg.normal_log_likelihood(theta, z, sigma=sigma))
+""",
+    ),
+]
+WRONG["q7"] += [
+    (
+        "neyman_pearson_test's power (not allowed)",
+        """def np_power(n, theta0, theta1, sigma, alpha):
+    r = dg.neyman_pearson_test(np.zeros(n), theta0, theta1, sigma=sigma, alpha=alpha)
+    return float(r.details["power"])
+""",
+    ),
+]
+RIGHT["q1"] += [
+    (
+        "np.linalg.inv for the covariance (advice, not a rule), unused forbidden import",
+        """from course.diagnosis import estimate_parameters, regression_parameter_test  # noqa: F401
+
+
+def joint_parameter_test(U, y, sigma, alpha):
+    U = np.asarray(U, dtype=float)
+    Phi = U[:, :2]
+    C = np.linalg.inv(Phi.T @ Phi)
+    theta = C @ Phi.T @ (np.asarray(y, dtype=float) - U[:, 2])
+    s = float(sigma * np.sqrt(C[1, 1]))
+    theta2 = float(theta[1])
+    return theta2, s, bool(abs(theta2 - 1.0) > s * stats.norm.isf(alpha / 2))
+""",
+    ),
+]
+RIGHT["q3"] += [
+    (
+        "the solution, with the power functions imported and never called",
+        """from course.diagnosis import parameter_estimate_power, prediction_error_power  # noqa: F401
+
+
+def power_pair(U, sigma, theta2, alpha):
+    U = np.asarray(U, dtype=float)
+    n_obs = U.shape[0]
+    _, s2, _ = joint_parameter_test(U, U @ nominal, sigma, alpha)
+    z = stats.norm.isf(alpha / 2)
+    b = (theta2 - 1.0) / s2
+    p_param = stats.norm.sf(z - b) + stats.norm.cdf(-z - b)
+    d = (theta2 - 1.0) * U[:, 1]
+    d_perp = d - U[:, 0] * (U[:, 0] @ d) / (U[:, 0] @ U[:, 0])
+    lam = (d_perp @ d_perp) / sigma**2
+    return float(p_param), float(stats.ncx2.sf(stats.chi2.isf(alpha, n_obs - 1), n_obs - 1, lam))
+""",
+    ),
+]
+RIGHT["q6"] += [
+    (
+        "the solution, with glr_test imported and never called (scored 0/2 before)",
+        """from course.diagnosis import glr_test  # noqa: F401
+
+
+def glr_nf_vs_f2(U, y, sigma):
+    U = np.asarray(U, dtype=float)
+    r0 = np.asarray(y, dtype=float) - U.sum(axis=1)
+    u = U[:, 1]
+    r1 = r0 - u * (u @ r0) / (u @ u)
+    stat = float((r0 @ r0 - r1 @ r1) / sigma**2)
+    return stat, float(stats.chi2.sf(stat, 1))
+""",
+    ),
+]
+WRONG["q2"] += [
+    (
+        "estimate_parameters (not allowed)",
+        """def leak_theta2(U, theta1):
+    data = U @ np.array([theta1, 1.0, 1.0])
+    return float(dg.estimate_parameters(data, U, [1.0, 1.0, 1.0], [1], sigma=1.0).estimate[0])
+""",
+    ),
+]

@@ -385,12 +385,6 @@ WRONG = {
 RIGHT = {
     "q1": [
         (
-            "kf.steady_state",
-            "def steady_state(q, r):\n"
-            "    ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[q]], R=[[r]]))\n"
-            "    return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))\n",
-        ),
-        (
             "iterate the recursion (list)",
             "def steady_state(q, r):\n    P = 1.0\n    for _ in range(500):\n"
             "        P = P - P**2 / (P + r) + q\n    return [P, P / (P + r)]\n",
@@ -429,7 +423,6 @@ RIGHT = {
     ],
     "q4": [
         ("ppf(1 - alpha)", _Q4.format("stats.chi2.ppf(1 - alpha, L)")),
-        ("nis.windowed_nis_threshold", _Q4.format("nis.windowed_nis_threshold(L, alpha)")),
         (
             "numpy scalar with a print",
             "def window_threshold(L, alpha):\n"
@@ -619,3 +612,147 @@ COINCIDES = {
     ("q7_why", "model, always (the lecture's answer)"): _cause_coincides("model"),
     ("q7_why", "noise, always"): _cause_coincides("noise"),
 }
+WRONG["q1"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "kf.steady_state (not allowed)",
+        "def steady_state(q, r):\n"
+        "    ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[q]], R=[[r]]))\n"
+        "    return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))\n",
+    ),
+]
+
+WRONG["q4"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "nis.windowed_nis_threshold (not allowed)",
+        _Q4.format("nis.windowed_nis_threshold(L, alpha)"),
+    ),
+]
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q2"] += [
+    (
+        "kalman_filter imported under another name",
+        """from course.filters import kalman_filter as f
+
+
+def normalized_innovations(y, a, q, r, m0, p0):
+    model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[m0], x0_cov=[[p0]])
+    out = f(model, np.asarray(y, dtype=float)[:, None])
+    return np.asarray(out.eps)[:, 0] / np.sqrt(np.asarray(out.S)[:, 0, 0])
+""",
+    ),
+    (
+        "the module under another name (import course.filters as cf)",
+        """import course.filters as cf
+
+
+def normalized_innovations(y, a, q, r, m0, p0):
+    model = cf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[m0], x0_cov=[[p0]])
+    out = cf.kalman_filter(model, np.asarray(y, dtype=float)[:, None])
+    return np.asarray(out.eps)[:, 0] / np.sqrt(np.asarray(out.S)[:, 0, 0])
+""",
+    ),
+]
+WRONG["q3"] += [
+    (
+        "windowed_sum imported under another name",
+        """from course.nis import windowed_sum as ws
+
+
+def windowed_statistic(z, L):
+    return ws(np.asarray(z, dtype=float) ** 2, L)[L - 1 :]
+""",
+    ),
+]
+WRONG["q8"] += [
+    (
+        "kf_update imported under another name",
+        """from course.filters import kf_update as f
+
+
+def rls_update(theta, P, phi, y, r):
+    out = f(np.asarray(theta, float), np.asarray(P, float), np.atleast_1d(y),
+            np.asarray(phi, float)[None, :], np.array([[r]]))
+    return out[0], out[1]
+""",
+    ),
+    (
+        "the private twin course.filters._steps._kf_update (2/2 before)",
+        """from course.filters._steps import _kf_update
+
+
+def rls_update(theta, P, phi, y, r):
+    out = _kf_update(np.asarray(theta, float), np.asarray(P, float), np.atleast_1d(y),
+                     np.asarray(phi, float)[None, :], np.array([[r]]))
+    return out[0], out[1]
+""",
+    ),
+    (
+        "getattr(kf, 'kf_update')",
+        """def rls_update(theta, P, phi, y, r):
+    step = getattr(kf, "kf_" + "update")
+    out = step(np.asarray(theta, float), np.asarray(P, float), np.atleast_1d(y),
+               np.asarray(phi, float)[None, :], np.array([[r]]))
+    return out[0], out[1]
+""",
+    ),
+]
+RIGHT["q2"] += [
+    (
+        "the right loop, compared with kalman_filter in a cell added below (scratch)",
+        """def normalized_innovations(y, a, q, r, m0, p0):
+    y = np.asarray(y, dtype=float)
+    x, P = float(m0), float(p0)
+    z = np.empty(y.shape)
+    for t, y_t in enumerate(y):
+        S = P + r
+        K = P / S
+        eps = y_t - x
+        z[t] = eps / np.sqrt(S)
+        x = x + K * eps
+        P = (1 - K) ** 2 * P + K**2 * r
+        x, P = a * x, a**2 * P + q
+    return z
+# %% added cell
+_model = kf.LinearModel(F=[[0.9]], H=[[1.0]], Q=[[0.5]], R=[[1.0]], x0_mean=[0.0], x0_cov=[[1.0]])
+_y = np.linspace(-1.0, 1.0, 7)
+_out = kf.kalman_filter(_model, _y[:, None])
+print(np.allclose(normalized_innovations(_y, 0.9, 0.5, 1.0, 0.0, 1.0),
+                  np.asarray(_out.eps)[:, 0] / np.sqrt(np.asarray(_out.S)[:, 0, 0])))
+""",
+    ),
+    (
+        "the right loop, with kalman_filter imported and never called",
+        """from course.filters import kalman_filter  # noqa: F401
+
+
+def normalized_innovations(y, a, q, r, m0, p0):
+    y = np.asarray(y, dtype=float)
+    x, P = float(m0), float(p0)
+    z = np.empty(y.shape)
+    for t, y_t in enumerate(y):
+        S = P + r
+        K = P / S
+        eps = y_t - x
+        z[t] = eps / np.sqrt(S)
+        x = x + K * eps
+        P = (1 - K) ** 2 * P + K**2 * r
+        x, P = a * x, a**2 * P + q
+    return z
+""",
+    ),
+]
+RIGHT["q8"] += [
+    (
+        "np.linalg.inv(S) (advice, not a rule)",
+        """def rls_update(theta, P, phi, y, r):
+    theta, P = np.asarray(theta, float), np.asarray(P, float)
+    H = np.asarray(phi, float)[None, :]
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + r)
+    P_new = P - K @ H @ P
+    return theta + K @ (np.atleast_1d(y) - H @ theta), (P_new + P_new.T) / 2
+""",
+    ),
+]

@@ -481,21 +481,11 @@ RIGHT = {
     ],
     "q6_practice": [
         (
-            "nis.nis_test and nis.nis_matrix_test",
-            "def nis_pvalues(eps, S):\n"
-            "    return (nis.nis_test(eps, S, 0.05).pvalue, nis.nis_matrix_test(eps, S, 0.05).pvalue)\n",
-        ),
-        (
             "list with a print",
             _PV + "    print(p_nis, p_matrix)\n    return [p_nis, p_matrix]\n",
         ),
     ],
     "q6": [
-        (
-            "nis.nis_test and nis.nis_matrix_test",
-            'pvalues = (nis.nis_test(mine["eps"], mine["S"], mine["alpha"]).pvalue,\n'
-            '           nis.nis_matrix_test(mine["eps"], mine["S"], mine["alpha"]).pvalue)',
-        ),
         ("list with a print", _MINE + _P6_NIS + "pvalues = [p_nis, p_matrix]\nprint(pvalues)"),
     ],
     "q6_which": [
@@ -547,6 +537,77 @@ Iv = namedtuple("Iv", "lo hi")
 
 def eps_bar_interval(m, K, alpha):
     return Iv(*(v / K for v in stats.chi2(m * K).interval(1 - alpha)))
+""",
+    ),
+]
+
+WRONG["q6_practice"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "nis.nis_test and nis.nis_matrix_test (not allowed)",
+        "def nis_pvalues(eps, S):\n"
+        "    return (nis.nis_test(eps, S, 0.05).pvalue, nis.nis_matrix_test(eps, S, 0.05).pvalue)\n",
+    ),
+]
+
+WRONG["q6"] += [  # a one-line library answer is on the list now (issue 26)
+    (
+        "nis.nis_test and nis.nis_matrix_test (not allowed)",
+        'pvalues = (nis.nis_test(mine["eps"], mine["S"], mine["alpha"]).pvalue,\n'
+        '           nis.nis_matrix_test(mine["eps"], mine["S"], mine["alpha"]).pvalue)',
+    ),
+]
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q1"] += [
+    (
+        "linalg.whitened_squared_norms (not allowed)",
+        """from course import linalg as cl
+
+
+def nis_per_step(eps, S):
+    eps = np.asarray(eps, dtype=float)
+    K, m = eps.shape
+    B = np.linalg.cholesky(np.broadcast_to(np.asarray(S, dtype=float), (K, m, m)))
+    return cl.whitened_squared_norms(B, eps)
+""",
+    ),
+]
+WRONG["q4"] += [
+    (
+        "nis_matrix_critical_values in a cell added at the end, numbers pasted (1/1 before)",
+        """def matrix_thresholds(m, K, alpha):
+    return (0.44949981369389597, 1.7796915167114988)  # pasted from the last cell
+# %% added cell at the end
+print(nis.nis_matrix_critical_values(2, 30, 0.05))
+""",
+    ),
+    (
+        "nis_matrix_test's critical values on any record",
+        """def matrix_thresholds(m, K, alpha):
+    r = nis.nis_matrix_test(np.ones((K, m)), np.eye(m), alpha)
+    return (float(r.critical_value[0]), float(r.critical_value[1]))
+""",
+    ),
+]
+WRONG["q8"] += [
+    (
+        "nis_critical_values / N (not allowed)",
+        """def nees_interval(n, N, alpha):
+    lo, hi = nis.nis_critical_values(n, N, alpha)
+    return (lo / N, hi / N)
+""",
+    ),
+]
+RIGHT["q4"] += [
+    (
+        "the solution, and nis.nis in an added cell (forbidden only in the function question q1)",
+        """def matrix_thresholds(m, K, alpha):
+    return (float(nis.extreme_eigenvalue(m, K, "min").ppf(alpha / 2)),
+            float(nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2)))
+# %% added cell
+print(nis.nis(np.ones((3, 2)), np.eye(2)))
 """,
     ),
 ]

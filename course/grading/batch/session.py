@@ -27,7 +27,7 @@ from course.grading.batch.results import CaseResult, QuestionResult, StudentResu
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
-from course.grading.notebook import SubmissionError, forbidden_mentions, read_submission
+from course.grading.notebook import SubmissionError, read_submission
 from course.grading.sandbox.parent import ChildDied, ChildHandle, ChildTimeout, Limits, Sandbox
 from course.grading.vocabulary import (
     ABNORMAL,
@@ -112,6 +112,10 @@ class AssignmentGrader:
         )
         #: question -> the forbidden functions it names (reports of others are ignored)
         self.forbid = {q.id: frozenset(q.forbid) for q in self.questions}
+        #: the questions graded on a value the student could paste from a scratch cell
+        self.forbid_by_value = [
+            q.id for q in self.questions if q.forbid and q.kind != QuestionKind.FUNCTION
+        ]
         self._deny_read = [solutions_root, *deny_read]
         self.isolation = self.options.isolation()  # refuses early where nothing walls files off
         self._sandbox: Sandbox | None = None
@@ -337,6 +341,8 @@ class StudentSession:
                     cell.question,
                     Op.RUN,
                     min(limit, max(0.1, self.deadline - time.monotonic())),
+                    added=cell.origin == CellOrigin.EXTRA
+                    and self.plan.deleted.get(cell.question or "") != "adopted",
                     source=cell.source,
                 )
             except ChildTimeout:
@@ -372,19 +378,30 @@ class StudentSession:
             self.row.notes.append(f"{message[0].upper() + message[1:]}; it was skipped ({status}).")
         self._drop_child()
 
-    def _request(self, question: str | None, op: Op, timeout: float, **fields) -> dict:
+    def _request(
+        self, question: str | None, op: Op, timeout: float, *, added: bool = False, **fields
+    ) -> dict:
         """One request to the child; forbidden calls it reported meanwhile count against
-        ``question`` (they reached the parent as they happened, see course.grading.tripwire)."""
+        ``question`` (they reached the parent as they happened, see course.grading.tripwire).
+
+        A cell the student ``added`` (not one adopted as a deleted answer cell) is a scratch
+        cell, wherever it stands: a forbidden call there counts against every value question
+        that forbids the function, since its numbers could be pasted into the answer, and
+        against no function question (graded on hidden inputs, so trying the library in a
+        scratch cell costs it nothing)."""
         child = self.child
         assert child is not None, "ensure_child() first"
         try:
             return child.request(op, timeout, **fields)
         finally:
-            called = child.take_events()
-            forbidden = self.g.forbid.get(question, frozenset()) if question else frozenset()
-            hits = [name for name in called if name in forbidden]
-            if hits and question:
-                self.hits.setdefault(question, set()).update(hits)
+            called = set(child.take_events())
+            for qid in self.g.forbid_by_value if added else [question] if question else []:
+                self._hit(qid, called)
+
+    def _hit(self, question: str, called: set) -> None:
+        hits = called & self.g.forbid.get(question, frozenset())
+        if hits:
+            self.hits.setdefault(question, set()).update(hits)
 
     def _drop_child(self) -> None:
         if self.child is not None:
@@ -440,13 +457,6 @@ class StudentSession:
             )
         if q.kind == QuestionKind.SHORT_ANSWER:
             return self._grade_short_answer(q)
-        static = forbidden_mentions(self.plan.answer_sources.get(q.id, ""), q.forbid)
-        if static:
-            return _question_result(
-                q,
-                GradeStatus.FORBIDDEN,
-                f"the answer uses {', '.join(static)}, which this question forbids",
-            )
         if not self.ensure_child():
             return _question_result(
                 q, GradeStatus.SKIPPED, "not graded: the time budget for this submission ran out"

@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 from course.grading import codec
 from course.grading.sandbox.isolation.audit import close_leaked, make_audit_hook, open_fds
 from course.grading.sandbox.isolation.limits import set_limits
+from course.grading.tripwire import course_modules
 from course.grading.vocabulary import Op, ReplyStatus
 
 _dumps = json.dumps
@@ -246,22 +247,6 @@ PRELOAD = (
     "course.lsq",
     "course.grading.student.selfcheck",
 )
-
-
-def course_modules() -> list[str]:
-    """Every module of the course library (not the grader's own, which pull in nbformat):
-    imported before student code, because a child may not read the library's sources
-    (:mod:`course.grading.sandbox.isolation.paths`)."""
-    import pkgutil
-
-    import course
-
-    names = ["course"]
-    skip = ("course.__main__", "course.cli", "course.grading")
-    for info in pkgutil.walk_packages(course.__path__, "course."):
-        if not any(info.name == s or info.name.startswith(s + ".") for s in skip):
-            names.append(info.name)
-    return names
 
 
 def preload(modules=PRELOAD) -> list:

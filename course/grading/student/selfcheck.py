@@ -5,8 +5,12 @@ shipped in ``checks.json`` (their expected values sealed: :mod:`course.grading.a
 first, more after repeated failures, counted in this kernel) and what is wrong IN KIND (shape,
 NaN, sign, a constant factor, transposed, off by one, another order, a declared mistake) with the
 tolerance. It never prints an expected value, never shows test code, and says how many hidden
-cases run at grading. A forbidden library call is a FAIL, as it scores 0 at grading. ``check("q1", value)`` checks an explicit
-value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
+cases run at grading. A forbidden library call is a FAIL, as it scores 0 at grading: from the
+setup cell on, the forbidden functions report every call from the notebook, whatever the path
+(the grader's tripwires, :func:`course.grading.tripwire.watch`); an import alone costs nothing.
+A function question counts the calls of its public cases and of its answer cell; a value
+question those of its answer cell and of cells the student added (not another question's
+answer cell), as the grader does. ``check("q1", value)`` checks an explicit value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
 
 In the grader's sandbox the same setup cell returns a silent stand-in (no checks run in the
 student's process); see :mod:`course.grading.sandbox.runner`.
@@ -15,11 +19,11 @@ student's process); see :mod:`course.grading.sandbox.runner`.
 from __future__ import annotations
 
 import contextlib
-import inspect
 import json
 import os
 import re
 import sys
+import weakref
 from pathlib import Path
 from typing import Any
 
@@ -28,13 +32,13 @@ from course.grading.authoring.seal import sealed_compare
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, chosen_hint, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
-from course.grading.notebook import forbidden_mentions
-from course.grading.tripwire import wrap_forbidden
+from course.grading.tripwire import course_modules, watch
 from course.grading.vocabulary import (
     CHECKS_FILE,
     PLACEHOLDER_ID,
     PublicQuestion,
     PublicSpec,
+    answer_cell_id,
     id_off_pattern,
     id_pattern_in,
 )
@@ -121,6 +125,11 @@ class Assignment:
         self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
         # the class's student ID pattern (``course export --id-pattern``), None without one
         self.id_pattern = id_pattern_in(folder)
+        # forbidden calls from the notebook: (cell, name) pairs, and the names called while a
+        # question's public cases run (the question's id -> names)
+        self.calls: set[tuple] = set()
+        self._running: set[str] | None = None
+        _watch_forbidden(self)
 
     @classmethod
     def load(cls, name: str, student_id: str | None = None, path=None):
@@ -253,10 +262,7 @@ class Assignment:
         if q.kind == "function":
             fraction = self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
         else:
-            source = None if explicit else _answer_source(ns, q.target)
-            fraction = self._check_value(
-                q, value if explicit else ns.get(q.target, _MISSING), source
-            )
+            fraction = self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
         return q.points * float(fraction or 0.0)
 
     # -- hints --------------------------------------------------------------------------
@@ -286,12 +292,81 @@ class Assignment:
         print(f"  not answered yet: {why}")
 
     def _forbidden_fail(self, q, names) -> None:
+        where = (
+            "your answer"
+            if q.kind == "function"
+            else "your answer cell or a cell you added (they run at grading too)"
+        )
         print(
-            f"  FAIL: your answer uses {', '.join(sorted(names))}, which this question forbids: "
-            "it scores 0 at grading whatever it returns. Compute it with numpy instead."
+            f"  FAIL: {where} calls {', '.join(sorted(names))} (or its private implementation), "
+            "which this question forbids: it scores 0 at grading whatever it returns. Compute it "
+            "with numpy instead; if you deleted the call, restart the kernel and run all cells."
         )
 
-    def _check_value(self, q, got, source: str | None):  # -> 1.0 or 0.0 when public, else None
+    # -- forbidden calls ----------------------------------------------------------------
+    def _record(self, name: str) -> None:
+        """A forbidden function was called from the notebook (by the tripwires)."""
+        if self._running is not None:
+            self._running.add(name)  # while the self-check runs the student's function
+            return
+        self.calls.add((self._cell_now(), name))
+
+    def _forget_cell(self, info=None) -> None:
+        """A cell is run again: the calls its previous run made no longer stand (IPython's
+        ``pre_run_cell``; a deleted cell's calls stay until the kernel restarts)."""
+        cell = getattr(info, "cell_id", None)
+        if cell:
+            self.calls = {(c, name) for c, name in self.calls if c != cell}
+
+    def _cell_now(self):
+        """The running cell: its id when the front end says it, else its input number."""
+        cell = getattr(self._cells, "_cell", None)
+        if cell:
+            return str(cell)
+        shell = getattr(self._cells, "_shell", None)
+        history = getattr(shell, "user_ns", {}).get("In") if shell is not None else None
+        return ("In", len(history) - 1) if isinstance(history, list) else None
+
+    def _cell_question(self, cell) -> str | None:
+        """Whose cell ``cell`` is: a question's id for its answer cell, "" for another cell
+        (added or protected), None when unknown (outside a notebook)."""
+        if isinstance(cell, str):
+            for qid in self._questions:
+                if cell == answer_cell_id(qid):
+                    return qid
+            return None if cell.endswith("-check") else ""
+        if isinstance(cell, tuple):
+            shell = getattr(self._cells, "_shell", None)
+            history = getattr(shell, "user_ns", {}).get("In", [])
+            source = history[cell[1]] if 0 <= cell[1] < len(history) else ""
+            for q in self._questions.values():
+                if q.target and _defines(source, q.target):
+                    return q.id
+            return ""
+        return None
+
+    def _forbidden_calls(self, q) -> set[str]:
+        """The forbidden functions of ``q`` that the notebook called where grading counts them
+        (:meth:`_record`): its answer cell, and for a value question also the added cells."""
+        if not q.forbid:
+            return set()
+        mine = {q.id, ""} if q.kind != "function" else {q.id}
+        return {
+            name
+            for cell, name in self.calls
+            if name in q.forbid and self._cell_question(cell) in mine
+        }
+
+    @contextlib.contextmanager
+    def _running_cases(self, into: set):
+        """Count the forbidden calls made while the student's function runs into ``into``."""
+        self._running = into
+        try:
+            yield
+        finally:
+            self._running = None
+
+    def _check_value(self, q, got):  # -> 1.0 or 0.0 when public, else None
         if got is _MISSING:
             return self._not_answered(q, f"no variable {q.target} (run your answer cell first)")
         if got is Ellipsis:
@@ -304,7 +379,7 @@ class Assignment:
             if hint:
                 print(f"      {hint}")
             return
-        forbidden = forbidden_mentions(source, q.forbid) if source and q.forbid else []
+        forbidden = self._forbidden_calls(q)
         if forbidden:
             self._forbidden_fail(q, forbidden)
             hint = self._failed(q)
@@ -358,14 +433,14 @@ class Assignment:
             if hint:
                 print(f"      {hint}")
             return
-        forbidden: set[str] = set(forbidden_mentions(_source_of(func), q.forbid))
+        forbidden: set[str] = self._forbidden_calls(q)
         passed = 0
         lines: list[str] = []
         failures: list[str] = []  # the failed cases' messages: a diagnosis may choose the hint
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
-                with _tripwires(q.forbid, forbidden):
+                with self._running_cases(forbidden):
                     got = func(*args, **kwargs)
             except NotImplementedError:
                 return self._not_answered(q, f"{q.target} raises NotImplementedError")
@@ -383,6 +458,7 @@ class Assignment:
                         None,
                         f"returned {describe(got)}, which is not plain data ({exc})",
                     )
+            forbidden &= set(q.forbid)
             if verdict is not None and verdict.ok:
                 passed += 1
                 lines.append(f"  PASS: {case.label}")
@@ -456,25 +532,15 @@ class _Missing:
 _MISSING = _Missing()
 
 
-def _source_of(func) -> str:
-    """The source of a student's function ('' when Python cannot find it)."""
-    try:
-        return inspect.getsource(func)
-    except (OSError, TypeError):
-        return ""
-
-
-def _answer_source(ns: dict, target: str) -> str | None:
-    """The last notebook cell that assigns ``target`` (IPython's input history ``In``), the
-    same text the grader scans for forbidden names; None outside IPython."""
-    history = ns.get("In")
-    if not isinstance(history, list):
-        return None
-    assigns = re.compile(rf"^\s*{re.escape(target)}\s*(?::[^=]*)?=(?!=)", re.MULTILINE)
-    for source in reversed(history):
-        if isinstance(source, str) and assigns.search(source):
-            return source
-    return None
+def _defines(source: str, target: str) -> bool:
+    """Whether a cell's ``source`` assigns or defines ``target`` at the start of a line."""
+    return bool(
+        re.search(
+            rf"^\s*(?:def\s+{re.escape(target)}\s*\(|{re.escape(target)}\s*(?::[^=]*)?=(?!=))",
+            source,
+            re.MULTILINE,
+        )
+    )
 
 
 def _sig_text(sig) -> str:
@@ -489,16 +555,51 @@ def _sig_text(sig) -> str:
     return next(iter(sig))
 
 
-@contextlib.contextmanager
-def _tripwires(forbid, hits: set):
-    """Temporarily wrap forbidden library functions to notice calls from the notebook."""
-    restore = []
-    try:
-        for dotted in forbid:
-            wrapped = wrap_forbidden(dotted, hits.add)
-            if wrapped is not None:
-                restore.append(wrapped)
-        yield
-    finally:
-        for module, attr, original in reversed(restore):
-            setattr(module, attr, original)
+#: Undoes the tripwires of the self-check loaded last (one per kernel: loading again replaces them).
+_RESTORE: list = []
+
+
+def _watch_forbidden(assignment: Assignment) -> None:
+    """Set the grader's tripwires on the forbidden functions of ``assignment`` in this kernel
+    (:func:`course.grading.tripwire.watch`), reporting to it while it lives."""
+    while _RESTORE:
+        _RESTORE.pop()()
+    names = sorted({name for q in assignment.spec.questions for name in q.forbid})
+    if not names:
+        return
+    import importlib
+
+    for module in course_modules():  # every library module counts as the library
+        with contextlib.suppress(Exception):
+            importlib.import_module(module)
+    ref = weakref.ref(assignment)
+
+    def record(name: str) -> None:
+        target = ref()
+        if target is not None:
+            target._record(name)
+
+    def forget(info=None) -> None:
+        target = ref()
+        if target is not None:
+            target._forget_cell(info)
+
+    untrip = watch(names, record)
+    shell = getattr(assignment._cells, "_shell", None)
+    if shell is not None:
+        shell.events.register("pre_run_cell", forget)
+
+    def restore() -> None:
+        untrip()
+        if shell is not None:
+            with contextlib.suppress(ValueError):
+                shell.events.unregister("pre_run_cell", forget)
+
+    _RESTORE.append(restore)
+    weakref.finalize(assignment, _restore_if_current, restore)
+
+
+def _restore_if_current(restore) -> None:
+    if restore in _RESTORE:
+        _RESTORE.remove(restore)
+        restore()
