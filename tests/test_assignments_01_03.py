@@ -133,12 +133,33 @@ TWINS = {
 
 @pytest.mark.parametrize("name", sorted(TWINS))
 def test_every_personal_value_question_has_a_public_twin(checks, name):
+    """A twin is self-checked on public data: a public value, or (issue 26: no grade on a
+    public value alone) a function of the data whose public case is the practice data and
+    whose hidden cases decide the grade."""
     c = checks[name]
     personal = {q.id for q in c.questions.values() if q.data is not None and q.kind == "value"}
     assert personal == set(TWINS[name])
     for twin in TWINS[name].values():
         q = c.questions[twin]
-        assert q.kind == "value" and q.public and q.data is None
+        if q.kind == "function":
+            assert q.public_cases and q.hidden_cases, twin
+        else:
+            assert q.kind == "value" and q.public and q.data is None
+
+
+def test_01_unweighted_largest_standardised_residual_is_not_the_blunder(checks):
+    """Old code: the largest |e_i / sigma_i| of a fit without the weights (no w-test) found
+    the blunder on ~80 % of the surveys and on every public case, so q7 and q7_practice gave it
+    full marks. Now it misses on every personal survey, a public case and the hidden ones."""
+    c = checks["01_least_squares"]
+    mod = sys.modules[c.questions["q7"].reference.__module__]
+    for sid in IDS:
+        d = c.data_for("survey", sid)
+        assert mod._unweighted_suspect(d) != c.questions["q7"].expected(data=d), sid
+    q = c.questions["q7_practice"]
+    missed = [mod._unweighted_suspect(*case.args) != q.expected(case) for case in q.cases]
+    assert any(m for m, case in zip(missed, q.cases) if not case.hidden)
+    assert sum(m for m, case in zip(missed, q.cases) if case.hidden) >= 2
 
 
 # -- Monte Carlo: the seeded simulation itself, not its law ------------------------------
@@ -229,8 +250,8 @@ def test_02_q4_dof_from_columns_is_told_to_use_the_rank(checks):
     ("qid", "wrong"),
     [
         ("q3", lambda q: lambda *args: q.reference(*args) / 0.2**2),
-        ("q6", lambda q: lambda: (q.reference().J / 0.2**2, q.reference().power)),
-        ("q7_practice", lambda q: lambda: q.reference() / 0.2**2),
+        ("q6", lambda q: lambda *a: (q.reference(*a).J / a[1] ** 2, q.reference(*a).power)),
+        ("q7_practice", lambda q: lambda *a: q.reference(*a) / 0.2**2),
     ],
 )
 def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
@@ -240,7 +261,9 @@ def test_02_one_over_sigma_squared_is_named(checks, qid, wrong):
 
 def test_02_q5_sum_for_mean_is_named(checks):
     q = checks["02_test_quantities"].questions["q5"]
-    assert "sum of the squared residuals" in _first_message(q, lambda: q.reference() * 20)
+    assert "sum of the squared residuals" in _first_message(
+        q, lambda y, u: q.reference(y, u) * len(y)
+    )
 
 
 def test_02_q9_another_draw_order_is_named(checks):

@@ -35,8 +35,11 @@ PHI = (1 + np.sqrt(5)) / 2  # 04 q1: P(t|t-1) with q = r = 1; K = 1/PHI; P(t|t) 
 # -- right answers computed in float32 --------------------------------------------------------
 F32 = {
     "04_ekf_residuals": {
-        "q1": "P = np.float32((1 + np.sqrt(np.float32(5))) / 2)\n"
-        "steady = (P, P / (P + np.float32(1)))\n",
+        "q1": """def steady_state(q, r):
+    q, r = np.float32(q), np.float32(r)
+    P = (q + np.sqrt(q * q + np.float32(4) * q * r)) / np.float32(2)
+    return (P, P / (P + r))
+""",
         "q2": """def normalized_innovations(y, a, q, r, m0, p0):
     y = np.asarray(y, dtype=np.float32)
     a, q, r = np.float32(a), np.float32(q), np.float32(r)
@@ -74,7 +77,11 @@ Q2_BY_S = (
     .replace("eps / np.sqrt(S)", "eps / S")
 )
 # 04 q1 with the filtered variance for P and K right: a mistake in one field of the pair
-Q1_FILTERED_P = "P = (1 + np.sqrt(5)) / 2\nK = P / (P + 1)\nsteady = ((1 - K) * P, K)\n"
+Q1_FILTERED_P = """def steady_state(q, r):
+    P = (q + np.sqrt(q * q + 4 * q * r)) / 2
+    K = P / (P + r)
+    return ((1 - K) * P, K)
+"""
 
 
 def _namespace(source: str) -> dict:

@@ -32,6 +32,7 @@ from course.grading.authoring.seal import (
     stated_band,
 )
 from course.grading.codec import Band, decode
+from course.grading.compare import compare
 
 ROOT = Path(__file__).resolve().parents[1]
 ASSIGNMENTS = find_solutions(ROOT / "solutions")
@@ -116,12 +117,22 @@ def answers_in_file(name: str, folder: Path) -> list[str]:
         )
         for q in data["questions"]
     }
+    input_strings = {  # likewise a name among the inputs (a mode of a structure)
+        q["id"]: {
+            x
+            for c in q["cases"]
+            for x in file_leaves([c.get("args"), c.get("kwargs")])
+            if isinstance(x, str)
+        }
+        for q in data["questions"]
+    }
     found = []
     for where, value, rtol, atol in graded_references(name):
         own = inputs.get(where.split()[0], np.array([]))
+        own_strings = input_strings.get(where.split()[0], set())
         for leaf in leaves(value, []):
             if isinstance(leaf, str):
-                if len(leaf) >= 2 and leaf in strings and leaf not in options:
+                if len(leaf) >= 2 and leaf in strings and leaf not in options | own_strings:
                     found.append(f"{where}: the string {leaf!r}")
             elif isinstance(leaf, (int, float, complex)) and not isinstance(leaf, bool):
                 x = leaf.real if isinstance(leaf, complex) else float(leaf)
@@ -147,7 +158,8 @@ def test_released_checks_hold_no_graded_answer(name):
 @pytest.mark.parametrize("name", ASSIGNMENTS)
 def test_the_scan_finds_answers_shipped_in_the_clear(name, tmp_path):
     """The scan is not blind: with the public values encoded by the codec, as format 1 shipped
-    them, it finds every public value question that has a distinctive number or string."""
+    them, it finds every public value, and the first public case of every function question,
+    that has a distinctive number or string."""
     from course.grading.authoring.checks import load_checks
     from course.grading.codec import encode
     from course.grading.vocabulary import DEMO_STUDENT_ID
@@ -160,13 +172,21 @@ def test_the_scan_finds_answers_shipped_in_the_clear(name, tmp_path):
     wanted = set()
     for entry in data["questions"]:
         q = checks.questions[entry["id"]]
-        if q.kind == "value" and entry["cases"]:
-            value = q.expected(data=checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None)
+        if q.kind in ("value", "function") and entry["cases"]:
+            if q.kind == "function":  # its first public case (issue 26: most questions are)
+                value = q.expected(q.public_cases[0])
+            else:
+                personal = checks.data_for(q.data, DEMO_STUDENT_ID) if q.data else None
+                value = q.expected(data=personal)
             entry["cases"][0]["expected"] = encode(value)
+            # an item equal to one of the question's own (public) inputs is no answer
+            own = file_leaves([[c.get("args"), c.get("kwargs")] for c in entry["cases"]])
+            own_numbers = [float(x) for x in own if isinstance(x, (int, float))]
             if any(
-                (len(x) >= 2 and x not in options)
+                (len(x) >= 2 and x not in options and x not in own)
                 if isinstance(x, str)
                 else _distinctive(float(x), q.atol + q.rtol * abs(x) + 1e-12 * abs(x))
+                and float(x) not in own_numbers
                 for x in leaves(value, [])
                 if not isinstance(x, (bool, complex)) and x is not None
             ):
@@ -293,8 +313,6 @@ def test_structure_in_the_clear_values_sealed():
         (0.7320508, lambda e: e * 4 / 3, "too large by a factor ≈ 1.33 (= 4/3)"),
         (np.array([1.5, -2.25, 3.0]), lambda e: e[::-1], "reverse order"),
         (np.array([1.5, -2.25, 3.0, 7.0]), lambda e: e[[1, 0, 3, 2]], "a permutation"),
-        (np.array([3, 7, 9]), lambda e: e + 1, "off by one: every element is one too large"),
-        (4, lambda e: e - 1, "off by one: one too small"),
         (np.array([1.5, 2.25]), lambda e: e**2, "the square of the answer"),
         (np.array([1.5, 2.25]), lambda e: np.sqrt(e), "square root"),
         (np.array([1.5, 2.25]), lambda e: np.zeros(2), "all zeros"),
@@ -309,6 +327,18 @@ def test_kind_of_wrong_without_the_expected_value(e, got, words):
         seal(e, 1e-8, 1e-10, SALT), got(np.asarray(e) if not isinstance(e, str) else e)
     )
     assert not v.ok and words in v.message, v.message
+
+
+@pytest.mark.parametrize(
+    "e, got",
+    [(4, 5), (4, 3), (np.array([3, 7, 9]), np.array([4, 8, 10])), (np.array([0, 3]), [-1, 2])],
+)
+def test_an_integer_answer_is_not_named_by_its_neighbour(e, got):
+    """Issue 26: "off by one: one too large" told a student the index (got - 1); an integer
+    answer gets no relation to the right one, in the self-check as at grading."""
+    for v in (sealed_compare(seal(e, 0, 0, SALT), got), compare(e, got, 0, 0)):
+        assert not v.ok
+        assert "one too" not in v.message and "off by one" not in v.message, v.message
 
 
 def test_declared_mistake_fires_on_a_match():

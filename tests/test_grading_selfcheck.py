@@ -92,8 +92,6 @@ def test_compare_reports_shape_where_and_tolerance_never_the_expected_value():
         (np.array([[1.0, 2.0, 3.0]]), np.array([[1.0], [2.0], [3.0]]), "transposed"),
         (np.array([1.0, 2.0, 3.0]), np.array([2.0, 3.0, 1.0]), "another order"),
         (np.array([1.0, 2.0, 3.0]), np.array([3.0, 2.0, 1.0]), "reverse order"),
-        (4, 5, "off by one: one too large"),
-        (np.array([0, 3]), np.array([1, 4]), "off by one: every element is one too large"),
         (np.array([1.0, 2.0]), np.array([1.0, np.nan]), "got NaN at [1]"),
         (2.0, 4.0, "tolerance |got - expected| <= atol"),
         (["NF", "F1"], ["F1", "NF"], "the right items in another order"),

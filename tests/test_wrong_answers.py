@@ -16,6 +16,10 @@ assignment's number, ``answers_01.py`` for ``01_least_squares``)::
         "q1": [("lsq.fit", "x_hat_day1 = lsq.fit(A, y_day1).x_hat")],  # must keep FULL marks
     }
     MANUAL = ["q6_why"]              # optional: questions graded by hand (short answers)
+    COINCIDES = {                    # optional: (qid, label) of a WRONG method on personal data
+        ("q6b", "alpha / 2"): f,     # that gives some students the right answer by chance:
+    }                                # f(checks, student_id) is True for those, where the
+                                     # variant then counts as right (it must keep full marks)
 
 A ``source`` is the complete replacement text of that question's answer cell in the solution
 notebook; what follows a line ``# %% added cell`` (``ADDED_CELL``) becomes a cell the student added
@@ -47,7 +51,7 @@ import os
 import re
 import sys
 import types
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import nbformat
@@ -82,6 +86,7 @@ class Spec:
     wrong: dict
     right: dict
     manual: list
+    coincides: dict = field(default_factory=dict)
 
     @property
     def variants(self) -> list[Variant]:
@@ -105,6 +110,7 @@ def load_spec(path: Path) -> Spec:
         wrong=dict(mod.WRONG),
         right=dict(mod.RIGHT),
         manual=list(getattr(mod, "MANUAL", [])),
+        coincides=dict(getattr(mod, "COINCIDES", {})),
     )
 
 
@@ -302,10 +308,42 @@ def test_answers_cover_every_question(key):
     )
 
 
+def _right_by_chance(spec: Spec, v: Variant, student: str) -> bool:
+    """A wrong method whose answer is, for this student's data, the right one (COINCIDES):
+    where the suite packs a variant depends on the other variants, so whose data it meets
+    does too; it counts as wrong only where it differs from the student's true answer."""
+    same = spec.coincides.get((v.qid, v.label))
+    return same is not None and bool(same(_checks(spec.assignment), student.removeprefix("'")))
+
+
+@functools.cache
+def _checks(assignment: str):
+    return load_checks(SOLUTIONS / assignment)
+
+
 @pytest.mark.parametrize("key", sorted(SPECS))
 def test_wrong_answers_lose_points(graded, key):
-    kept = [_describe(v, r) for v, r in graded(key) if not v.right and r["points"] >= r["max"]]
+    spec = load_spec(SPECS[key])
+    rows = [(v, r) for v, r in graded(key) if not v.right]
+    kept = [
+        _describe(v, r)
+        for v, r in rows
+        if r["points"] >= r["max"] and not _right_by_chance(spec, v, r["student"])
+    ]
     assert not kept, "wrong answers with full marks:\n" + "\n".join(kept)
+    lost = [
+        _describe(v, r)
+        for v, r in rows
+        if r["points"] < r["max"] and _right_by_chance(spec, v, r["student"])
+    ]
+    assert not lost, "answers right for this student that lost points:\n" + "\n".join(lost)
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_coinciding_wrong_answers_are_declared_by_their_label(key):
+    spec = load_spec(SPECS[key])
+    labels = {(qid, label) for qid, entries in spec.wrong.items() for label, _ in entries}
+    assert set(spec.coincides) <= labels, sorted(set(spec.coincides) - labels)
 
 
 @pytest.mark.parametrize("key", sorted(SPECS))

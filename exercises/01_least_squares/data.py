@@ -19,12 +19,19 @@ def _weighted_T_and_w(A, y, sigma):
     return float(r @ r), r / np.sqrt(1.0 - np.sum(Q * Q, axis=1)), r * sigma
 
 
+def _unweighted_residuals(A, y):
+    """The residuals of the fit that ignores Qyy (Qyy = I)."""
+    Q, _ = np.linalg.qr(A)
+    return y - Q @ (Q.T @ y)
+
+
 def survey(rng):
     """A levelling survey along a line: 12 heights with individual precisions and ONE blunder.
 
     The blunder sits on a precise observation and one imprecise observation gets a large but
-    acceptable error, so the largest residual |e_i| is NOT the blunder: only the w-test, which
-    weighs each residual by its own standard deviation, finds it. The blunder's size puts the
+    acceptable error, so the largest residual |e_i| is NOT the blunder, nor is the largest
+    |e_i / sigma_i| of a fit that ignores the weights: only the w-test, which weighs each
+    residual of the weighted fit by its own standard deviation, finds it. The blunder's size puts the
     overall model test statistic T just above or just below its critical value (about half
     of the class on each side), so the verdict depends on each student's data and method:
     chi2 with m or m - 1 degrees of freedom, alpha / 2, or ignoring Qyy change it.
@@ -65,6 +72,9 @@ def survey(rng):
             and int(np.argmax(np.abs(w))) == k
             and abs(w[k]) > z  # data snooping finds the blunder first
             and int(np.argmax(np.abs(e))) != k  # ... but the largest |e| is elsewhere
+            # ... and so is the largest |e_i / sigma_i| of an UNWEIGHTED fit, a method that
+            # finds the blunder on most surveys without being a w-test
+            and int(np.argmax(np.abs(_unweighted_residuals(A, y)) / s)) != k
         )
         if design:
             return {"t": t, "A": A, "y": y, "Qyy": np.diag(s**2), "alpha": alpha}

@@ -54,7 +54,6 @@ SIGMA_PRACTICE = np.array(
     [0.967, 0.871, 0.855, 1.291, 0.433, 0.677, 2.979, 0.798, 1.467, 1.420, 1.136, 1.253]
 )
 A_PRACTICE = np.column_stack([np.ones(12), np.arange(12.0)])
-Q_PRACTICE = np.diag(SIGMA_PRACTICE**2)
 
 CHECKS = Checks(
     "01_least_squares",
@@ -219,73 +218,156 @@ q4.case(A6, Y6, Q6, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q5",
-    var="band_t2",
+    func="band_95",
     points=1,
     rtol=1e-4,  # the printed 1.96 is as right as norm.isf(0.025) = 1.959964
     atol=1e-8,
     hint=(
-        "y_hat_2 = a^T x_hat is a linear function of x_hat: propagate Qxx through a.",
-        "sigma of y_hat at t = 2 is sqrt(a^T Qxx a) with a = (1, 2); the 95 % half-width "
+        "a^T x_hat is a linear function of x_hat: propagate Qxx through a. Qxx depends on A "
+        "and Qyy only, not on y.",
+        "Qxx = (A^T Qyy^{-1} A)^{-1} (weighted), sigma = sqrt(a^T Qxx a); the 95 % half-width "
         "multiplies it by scipy.stats.norm.isf(0.025). Return (sigma, half_width).",
     ),
     mistakes=[
         Mistake(
             "the half-width looks one-sided (z_0.05): a 95 % interval leaves 2.5 % in each tail",
-            lambda: (_sigma_t2(), float(stats.norm.isf(0.05)) * _sigma_t2()),
+            lambda A, Qyy, a: _band(A, Qyy, a, float(stats.norm.isf(0.05))),
         ),
         Mistake(
             "looks like the variance a^T Qxx a, not its square root",
-            lambda: (_sigma_t2() ** 2, float(stats.norm.isf(0.025)) * _sigma_t2() ** 2),
+            lambda A, Qyy, a: _band(A, Qyy, a, float(stats.norm.isf(0.025)), squared=True),
+        ),
+        Mistake(
+            "Qyy looks ignored: Qxx = (A^T A)^{-1} holds only for Qyy = I; weigh with Qyy^{-1}",
+            lambda A, Qyy, a: _band(A, np.eye(np.shape(A)[0]), a, float(stats.norm.isf(0.025))),
         ),
     ],
 )
-def q5():
-    f = lsq.fit(A_LINE, Y_DAY1)
-    _, half = lsq.confidence_band(f, np.array([[1.0, 2.0]]), level=0.95)
-    return Band95(float(f.sigma_y_hat[1]), float(half[0]))
+def q5(A, Qyy, a):
+    f = lsq.fit(A, np.zeros(np.shape(A)[0]), Qyy)  # Qxx does not depend on the data
+    _, half = lsq.confidence_band(f, np.atleast_2d(a), level=0.95)
+    return Band95(float(np.sqrt(a @ f.Qxx @ a)), float(half[0]))
 
 
-def _sigma_t2():
-    return float(lsq.fit(A_LINE, Y_DAY1).sigma_y_hat[1])
+def _band(A, Qyy, a, z, squared=False):
+    """(sigma, z sigma) of a^T x_hat for the fit with design A and covariance Qyy (with the
+    variance in place of sigma when ``squared``)."""
+    a = np.asarray(a, dtype=float)
+    var = float(a @ lsq.fit(A, np.zeros(np.shape(A)[0]), Qyy).Qxx @ a)
+    s = var if squared else np.sqrt(var)
+    return (float(s), z * float(s))
 
 
-@CHECKS.value(
+q5.case(A_LINE, I4, np.array([1.0, 2.0]), label="day 1 of the line fit at t = 2 (Qyy = I)")
+q5.case(
+    A_LINE,
+    np.diag([1.0, 4.0, 4.0, 1.0]),
+    np.array([1.0, 2.0]),
+    label="the line fit at t = 2 with sigma = 2 for the two middle observations",
+)
+### BEGIN HIDDEN TESTS
+q5.case(A_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), np.array([1.0, 0.5]), hidden=True)
+q5.case(A_QUAD, np.diag([1.0, 4.0, 4.0, 1.0]), np.array([1.0, 2.5, 3.125]), hidden=True)
+q5.case(A6, Q6, A6[2], hidden=True)
+### END HIDDEN TESTS
+
+
+def _practice_survey(y, sigma):
+    return {"A": A_PRACTICE, "y": y, "Qyy": np.diag(sigma**2), "alpha": 0.01}
+
+
+def _drawn_survey(seed):
+    """A survey of data.survey's design (the students' own), drawn with a fixed seed."""
+    d = data.survey(np.random.default_rng(seed))
+    return {key: d[key] for key in ("A", "y", "Qyy", "alpha")}
+
+
+@CHECKS.function(
     "q6_practice",
-    var="T_practice",
+    func="survey_T",
     points=1,
     rtol=1e-6,
     atol=1e-8,
-    hint="The same computation as q6, on the public survey of the notebook: fit with its "
-    "(diagonal, not identity) Qyy and take the overall model test statistic.",
+    hint="The same computation as q3, on a survey given as a dict like mine (keys 'A', 'y', "
+    "'Qyy', 'alpha'): fit with its (diagonal, not identity) Qyy and return the overall model "
+    "test statistic T.",
     mistakes=[
         Mistake(
-            "T looks unweighted: Qyy was ignored",
-            lambda: lsq.fit(A_PRACTICE, Y_PRACTICE).squared_norm,
-        )
+            "T looks unweighted: the survey's Qyy was ignored",
+            lambda survey: lsq.fit(survey["A"], survey["y"]).squared_norm,
+        ),
+        Mistake(
+            "each squared residual looks divided by sigma instead of sigma^2 (the variance)",
+            lambda survey: float(
+                np.sum(
+                    lsq.fit(survey["A"], survey["y"], survey["Qyy"]).e_hat ** 2
+                    / np.sqrt(np.diag(survey["Qyy"]))
+                )
+            ),
+        ),
     ],
 )
-def q6_practice():
-    return lsq.overall_model_test(lsq.fit(A_PRACTICE, Y_PRACTICE, Q_PRACTICE), 0.01).statistic
+def q6_practice(survey):
+    fit = lsq.fit(survey["A"], survey["y"], survey["Qyy"])
+    return lsq.overall_model_test(fit, survey["alpha"]).statistic
 
 
-@CHECKS.value(
+def _unweighted_suspect(survey):
+    """The largest |e_i / sigma_i| of the UNWEIGHTED fit: no w-test, though it often finds the
+    same observation (data.survey's design makes it differ)."""
+    e = lsq.fit(survey["A"], survey["y"]).e_hat
+    return int(np.argmax(np.abs(e) / np.sqrt(np.diag(survey["Qyy"]))))
+
+
+_NOT_W_TEST = (
+    "this is the largest |e_i / sigma_i| of a fit WITHOUT the weights: the w-test fits with Qyy "
+    "and divides each residual by its own standard deviation sigma_ei (from Qee)"
+)
+_LARGEST_E = (
+    "this is the largest |e|, not the largest |w|: a residual is large or small only relative "
+    "to its own standard deviation"
+)
+
+
+@CHECKS.function(
     "q7_practice",
-    var="suspect_practice",
+    func="first_suspect",
     points=1,
-    hint="Data snooping on the public survey: the observation with the largest |w| (each residual "
-    "divided by ITS OWN standard deviation), as a 0-based index.",
+    hint=(
+        "Data snooping on a survey given as a dict like mine: the observation with the largest "
+        "|w| (each residual of the WEIGHTED fit divided by ITS OWN standard deviation), as a "
+        "0-based index.",
+        "lsq.data_snooping(survey['A'], survey['y'], survey['Qyy'], alpha=survey['alpha']) "
+        "lists the removed observations in their original numbering; return the first as an int.",
+    ),
     mistakes=[
         Mistake(
-            "this is the largest |e|, not the largest |w|: a residual is large or small only "
-            "relative to its own standard deviation",
-            lambda: int(np.argmax(np.abs(lsq.fit(A_PRACTICE, Y_PRACTICE, Q_PRACTICE).e_hat))),
-        )
+            _LARGEST_E,
+            lambda survey: int(
+                np.argmax(np.abs(lsq.fit(survey["A"], survey["y"], survey["Qyy"]).e_hat))
+            ),
+        ),
+        Mistake(_NOT_W_TEST, _unweighted_suspect),
     ],
 )
-def q7_practice():
-    return int(lsq.data_snooping(A_PRACTICE, Y_PRACTICE, Q_PRACTICE, alpha=0.01).removed[0])
+def q7_practice(survey):
+    snooping = lsq.data_snooping(survey["A"], survey["y"], survey["Qyy"], alpha=survey["alpha"])
+    return int(snooping.removed[0])
+
+
+# Public: the notebook's practice survey, and one more survey of the students' design, on
+# which the largest |e_i / sigma_i| of an unweighted fit is not the blunder (on the practice
+# survey it happens to be, so that wrong method must lose a public case here).
+for _q in (q6_practice, q7_practice):
+    _q.case(_practice_survey(Y_PRACTICE, SIGMA_PRACTICE), label="the notebook's practice survey")
+    _q.case(_drawn_survey(2027), label="another survey of the same design")
+### BEGIN HIDDEN TESTS
+for _q in (q6_practice, q7_practice):
+    for _seed in (31, 32, 33):
+        _q.case(_drawn_survey(_seed), hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(
@@ -332,9 +414,10 @@ def q6b(d):
     "first; give its 0-based index as an int.",
     mistakes=[
         Mistake(
-            "this is the largest |e|, not the largest |w|",
+            _LARGEST_E,
             lambda d: int(np.argmax(np.abs(lsq.fit(d["A"], d["y"], d["Qyy"]).e_hat))),
-        )
+        ),
+        Mistake(_NOT_W_TEST, _unweighted_suspect),
     ],
 )
 def q7(d):
@@ -349,11 +432,13 @@ def q7(d):
     atol=0.1 / 20000,  # the same count of rejections: a fraction k / n_runs, exactly
     rtol=0.0,
     hint=(
-        "Follow the recipe exactly: rng = np.random.default_rng(seed), ONE call "
-        "Z = rng.standard_normal((n_runs, m)) (row r for data set r), L = np.linalg.cholesky(Qyy), "
-        "and data set r is bias + L z_r.",
-        "Then fit each data set with the weights Qyy, compute its T and count T > "
-        "stats.chi2.isf(alpha, m - n). Return the fraction of the n_runs data sets rejected.",
+        "The grader repeats your simulation, so the random numbers must be drawn in the same "
+        "order: rng = np.random.default_rng(seed), ONE call Z = rng.standard_normal((n_runs, m)) "
+        "(row r for data set r), L = np.linalg.cholesky(Qyy), and data set r is bias + L z_r.",
+        "Each data set is fitted with the weights Qyy and tested like q3: n = A.shape[1] "
+        "parameters are estimated from m observations, so T has m - n degrees of freedom. "
+        "Count T > stats.chi2.isf(alpha, m - n) and return the fraction of the n_runs data sets "
+        "rejected.",
     ),
     mistakes=[
         Mistake(

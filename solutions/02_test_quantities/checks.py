@@ -102,18 +102,35 @@ q1.case(STRUCTURE5, MODES5, [True, True, False, False], hidden=True)
 q1.case(STRUCTURE5, MODES5, [False, True, False, True], hidden=True)
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q2",
+    func="hypotheses",
     forbid=[
         "course.diagnosis.DecisionStructure",
     ],
-    var="hypotheses_T2",
     points=1,
-    hint="Read row T2 of the five-mode structure: modes with 0 form H0, modes with X form H1. "
-    "Give (list_H0, list_H1), each in column order.",
+    hint="Read row k of the structure: modes with 0 form H0, modes with X (1) form H1. "
+    "Return (list_H0, list_H1), each in column order.",
+    mistakes=[
+        Mistake(
+            "H0 and H1 look swapped: H0 holds the modes the test does NOT react to (a 0 in its "
+            "row), H1 those it reacts to",
+            lambda sensitivity, modes, k: tuple(q2.reference(sensitivity, modes, k)[::-1]),
+        ),
+    ],
 )
-def q2():
-    return Hypotheses(["NF", "F1", "F4"], ["F2", "F3"])
+def q2(sensitivity, modes, k):
+    row = np.asarray(sensitivity)[int(k)]
+    return Hypotheses(
+        [m for m, x in zip(modes, row) if not x], [m for m, x in zip(modes, row) if x]
+    )
+
+
+q2.case(STRUCTURE5, MODES5, 1, label="the five-mode structure, test T2 (row 1)")
+### BEGIN HIDDEN TESTS
+q2.case(LECTURE, MODES, 0, hidden=True)
+q2.case(STRUCTURE5, MODES5, 3, hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.function(
@@ -194,13 +211,13 @@ q4.case(np.column_stack([np.zeros(12), _B]), _R.standard_normal(12), hidden=True
 q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q5",
+    func="bias_free_T",
     forbid=[
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
     ],
-    var="T_bias_free",
     points=1,
     rtol=1e-8,
     atol=1e-12,
@@ -211,29 +228,41 @@ q4.case(np.zeros((6, 2)), np.arange(6.0), hidden=True)
     mistakes=[
         Mistake(
             "looks like the sum of the squared residuals: the lecture's T is their mean (1/N)",
-            lambda: float(np.sum((Y_GB - U_GB - np.mean(Y_GB - U_GB)) ** 2)),
+            lambda y, u: float(np.sum((_gb(y, u) - np.mean(_gb(y, u))) ** 2)),
         ),
         Mistake(
             "the bias was not removed: subtract its estimate b_hat before squaring",
-            lambda: float(np.mean((Y_GB - U_GB) ** 2)),
+            lambda y, u: float(np.mean(_gb(y, u) ** 2)),
         ),
         Mistake(
             "looks like the sample variance with 1/(N - 1): the lecture's T divides by N",
-            lambda: float(np.var(Y_GB - U_GB, ddof=1)),
+            lambda y, u: float(np.var(_gb(y, u), ddof=1)),
         ),
     ],
 )
-def q5():
-    b_hat = np.mean(Y_GB - U_GB)
-    return float(np.mean((Y_GB - U_GB - b_hat) ** 2))
+def q5(y, u):
+    return float(np.var(_gb(y, u)))  # (1/N) sum (y - u - b_hat)^2, b_hat = mean(y - u)
 
 
-@CHECKS.value(
+def _gb(y, u):
+    return np.asarray(y, dtype=float) - np.asarray(u, dtype=float)
+
+
+q5.case(Y_GB, U_GB, label="the notebook's gain-and-bias sensor, N = 20")
+### BEGIN HIDDEN TESTS
+q5.case(2.0 * U_GB - 0.3 + 0.1 * np.random.default_rng(6).standard_normal(N_GB), U_GB, hidden=True)
+q5.case(
+    np.linspace(0.0, 1.0, 7) + 0.5 + 0.02 * np.arange(7) ** 2, np.linspace(0.0, 1.0, 7), hidden=True
+)
+### END HIDDEN TESTS
+
+
+@CHECKS.function(
     "q6",
+    func="threshold_and_power",
     forbid=[
         "course.diagnosis.prediction_error_power",
     ],
-    var="threshold_and_power",
     points=2,
     rtol=1e-6,
     atol=1e-9,
@@ -247,30 +276,47 @@ def q5():
         Mistake(
             "J looks like a threshold on T1/sigma^2: the test compares T1 itself, so J = sigma^2 "
             "times the chi2 quantile",
-            lambda: ThresholdAndPower(q6.reference().J / SIGMA**2, q6.reference().power),
+            lambda U_, sigma, theta2, alpha: ThresholdAndPower(
+                q6.reference(U_, sigma, theta2, alpha).J / sigma**2,
+                q6.reference(U_, sigma, theta2, alpha).power,
+            ),
         ),
         Mistake(
             "looks like chi2 with N degrees of freedom: T1 estimates one gain, so N - 1",
-            lambda: _threshold_and_power(N, 0.01),
+            lambda U_, sigma, theta2, alpha: _threshold_and_power(
+                U_, sigma, theta2, alpha, np.shape(U_)[0]
+            ),
         ),
         Mistake(
             "looks two-sided (alpha/2): the test alarms in the upper tail only",
-            lambda: _threshold_and_power(N - 1, 0.005),
+            lambda U_, sigma, theta2, alpha: _threshold_and_power(
+                U_, sigma, theta2, alpha / 2, np.shape(U_)[0] - 1
+            ),
         ),
     ],
 )
-def q6():
-    J = chi2.residual_threshold(N - 1, 0.01, sigma=SIGMA)
-    power = dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.15, 1.0], sigma=SIGMA, alpha=0.01)
+def q6(U_, sigma, theta2, alpha):
+    n = np.shape(U_)[0]
+    J = chi2.residual_threshold(n - 1, alpha, sigma=sigma)
+    theta = [1.0, theta2, 1.0]
+    power = dg.prediction_error_power(U_, NOMINAL, [0], theta, sigma=sigma, alpha=alpha)
     return ThresholdAndPower(J, power)
 
 
-def _threshold_and_power(dof, alpha):
+def _threshold_and_power(U_, sigma, theta2, alpha, dof):
     """(J, power) of q6 with other degrees of freedom or level (the mistakes)."""
-    J = float(SIGMA**2 * stats.chi2.isf(alpha, dof))
-    d = 0.15 * U2
-    d_perp = d - U1 * (U1 @ d) / (U1 @ U1)
-    return (J, float(stats.ncx2.sf(J / SIGMA**2, dof, (d_perp @ d_perp) / SIGMA**2)))
+    U_ = np.asarray(U_, dtype=float)
+    J = float(sigma**2 * stats.chi2.isf(alpha, dof))
+    d = (theta2 - 1.0) * U_[:, 1]
+    d_perp = d - U_[:, 0] * (U_[:, 0] @ d) / (U_[:, 0] @ U_[:, 0])
+    return (J, float(stats.ncx2.sf(J / sigma**2, dof, (d_perp @ d_perp) / sigma**2)))
+
+
+q6.case(U, SIGMA, 1.15, 0.01, label="the notebook's signals, theta2 = 1.15, alpha = 0.01")
+### BEGIN HIDDEN TESTS
+q6.case(U, 0.1, 0.9, 0.05, hidden=True)
+q6.case(U_60, 0.25, 1.2, 0.01, hidden=True)
+### END HIDDEN TESTS
 
 
 def _three_statistics(d):
@@ -305,56 +351,78 @@ def q5b():
     return "yes"
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q7_practice",
+    func="three_statistics",
     forbid=[
         "course.diagnosis.prediction_error",
         "course.diagnosis.least_squares_residual",
         "course.diagnosis.prediction_error_test",
         "course.diagnosis.linear_test_statistics",
     ],
-    var="T_practice",
     points=1,
     rtol=1e-6,
     atol=1e-9,
-    hint="The three test quantities of q7, on the public record y_near: T_k leaves theta_k free "
-    "and fixes the other two gains at 1.",
+    hint="The three test quantities of q7: T_k leaves theta_k free and fixes the other two "
+    "gains at 1. Return them in the order T1, T2, T3.",
     mistakes=[
         Mistake(
             "looks divided by sigma^2: T_k is the plain sum of squared residuals",
-            lambda: _three_statistics({"y": Y_NEAR, "U": U}) / SIGMA**2,
+            lambda U_, y: _three_statistics({"y": y, "U": U_}) / SIGMA**2,
         ),
         Mistake(
             "looks like a mean of squared residuals: T_k is their sum",
-            lambda: _three_statistics({"y": Y_NEAR, "U": U}) / N,
+            lambda U_, y: _three_statistics({"y": y, "U": U_}) / np.shape(U_)[0],
         ),
     ],
 )
-def q7_practice():
-    return _three_statistics({"y": Y_NEAR, "U": U})
+def q7_practice(U_, y):
+    return _three_statistics({"y": y, "U": U_})
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q8_practice",
+    func="single_fault_diagnosis",
     forbid=[
         "course.diagnosis.diagnoses",
         "course.diagnosis.DecisionStructure",
         "course.diagnosis.diagnosis_matrix",
     ],
-    var="diagnosis_practice",
     points=1,
     hint="Each test alarms when T_k exceeds sigma^2 times the upper alpha quantile of the chi2 law "
-    "of T_k / sigma^2: how many degrees of freedom does T_k have when one gain is estimated?",
+    "of T_k / sigma^2: how many degrees of freedom does T_k have when one gain is estimated? "
+    "Then your single_fault_diagnoses of q1 with the lecture structure LECTURE.",
     mistakes=[
         Mistake(
             "the alarms look like a threshold with chi2(N) or at alpha/2: one test sees this "
             "small fault only just, so the threshold must be exactly sigma^2 chi2_alpha(N - 1)",
-            lambda: _diagnosis(_three_statistics({"y": Y_NEAR, "U": U}), N + 1, SIGMA, 0.01),
+            lambda U_, y, sigma, alpha: _diagnosis(
+                _three_statistics({"y": y, "U": U_}), np.shape(U_)[0] + 1, sigma, alpha
+            ),
         ),
     ],
 )
-def q8_practice():
-    return _diagnosis(_three_statistics({"y": Y_NEAR, "U": U}), N, SIGMA, 0.01)
+def q8_practice(U_, y, sigma, alpha):
+    return _diagnosis(_three_statistics({"y": y, "U": U_}), np.shape(U_)[0], sigma, alpha)
+
+
+def _record_case(seed):
+    d = data.record(np.random.default_rng(seed))
+    return d["U"], d["y"], d["sigma"], d["alpha"]
+
+
+q7_practice.case(U, Y_NEAR, label="the notebook's public record y_near")
+q8_practice.case(
+    U, Y_NEAR, SIGMA, 0.01, label="the notebook's public record, sigma 0.2, alpha 0.01"
+)
+### BEGIN HIDDEN TESTS
+for _seed in (20, 22, 28, 29):  # records of data.record in F1, NF, F3 and none of them
+    q7_practice.case(*_record_case(_seed)[:2], hidden=True)
+    q8_practice.case(*_record_case(_seed), hidden=True)
+# a small F3 (theta3 = 1.08) that T1 sees only just: chi2(N) or alpha/2 change the diagnosis
+_Y_NEAR3 = U @ np.array([1.0, 1.0, 1.08]) + SIGMA * np.random.default_rng(143).standard_normal(N)
+q8_practice.case(U, _Y_NEAR3, SIGMA, 0.01, hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(
@@ -418,6 +486,15 @@ def q8a(d):
     properties="diagnosis_properties",
     hint="Each test alarms when T_k > J_mine; then apply your single_fault_diagnoses to the "
     "lecture structure LECTURE.",
+    # shown only when the answer differs from the student's own diagnosis (the right answer is
+    # compared first): for some records the two diagnoses agree, and then it is right
+    mistakes=[
+        Mistake(
+            "this is the practice record's diagnosis: apply the alarms of YOUR record "
+            "(T_mine > J_mine)",
+            lambda d: q8_practice.reference(U, Y_NEAR, SIGMA, 0.01),
+        ),
+    ],
 )
 def q8(d):
     return _diagnosis(_three_statistics(d), d["y"].size, d["sigma"], d["alpha"])

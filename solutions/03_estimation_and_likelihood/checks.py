@@ -102,70 +102,106 @@ q1.case(U, _record([1.0, 1.0, 1.4], 4), SIGMA, 0.01, hidden=True)
 q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q2",
+    func="leak_theta2",
     forbid=[
         "course.diagnosis.estimate_parameters",
     ],
-    var="leak_theta2",
     points=1,
     rtol=1e-8,
     atol=1e-10,
     hint=(
-        "Here theta1 is NOT estimated: it is fixed at 1, so the unmodelled part 0.3 u1 of the "
-        "data stays in what the regression on u2 sees.",
+        "Here theta1 is NOT estimated: it is fixed at 1, so the unmodelled part "
+        "(theta1 - 1) u1 of the data stays in what the regression on u2 sees.",
         "Regress the noise-free data minus u1 - u3 on u2 alone: the estimate is the ratio "
-        "u2'(data - u1 - u3) / u2'u2, with data = U (1.3, 1, 1).",
+        "u2'(data - u1 - u3) / u2'u2, with data = U (theta1, 1, 1).",
     ),
     mistakes=[
         Mistake(
             "1 is what the JOINT estimate gives (it decouples F1); here theta1 is fixed at 1",
-            lambda: 1.0,
+            lambda U_, theta1: 1.0,
+        ),
+        Mistake(
+            "u1 looks not subtracted: theta1 is fixed at 1 in the model, so the regression on "
+            "u2 sees the data minus u1 - u3",
+            lambda U_, theta1: _leak(U_, theta1) + _ratio(U_),
         ),
     ],
 )
-def q2():
-    return float(1.0 + 0.3 * (U2 @ U1) / (U2 @ U2))
+def q2(U_, theta1):
+    return _leak(U_, theta1)
 
 
-@CHECKS.value(
+def _ratio(U_):
+    """u2'u1 / u2'u2: how much of u1 a regression on u2 alone takes for u2."""
+    U_ = np.asarray(U_, dtype=float)
+    return float((U_[:, 1] @ U_[:, 0]) / (U_[:, 1] @ U_[:, 1]))
+
+
+def _leak(U_, theta1):
+    return 1.0 + (theta1 - 1.0) * _ratio(U_)
+
+
+def _modes_U(seed):
+    """The signals of a record of data.modes (the students' design), drawn with a fixed seed."""
+    return data.modes(np.random.default_rng(seed))["U"]
+
+
+q2.case(U, 1.3, label="the context's signals, theta1 = 1.3")
+### BEGIN HIDDEN TESTS
+q2.case(U, 0.8, hidden=True)
+q2.case(_modes_U(51), 1.2, hidden=True)
+### END HIDDEN TESTS
+
+
+@CHECKS.function(
     "q3",
+    func="power_pair",
     forbid=[
         "course.diagnosis.parameter_estimate_power",
         "course.diagnosis.prediction_error_power",
     ],
-    var="power_pair",
     points=2,
     rtol=1e-6,
     atol=1e-9,
     hint=(
-        "Under the fault, theta2_hat - 1 is normal with mean 0.1 and the std s of q1; the test "
-        "rejects in BOTH tails. T1/sigma^2 is non-central chi2 under the fault.",
-        "Parameter test: b = 0.1, s = std of theta2_hat (joint estimate), power = "
+        "Under the fault, theta2_hat - 1 is normal with mean b = theta2 - 1 and the std s of "
+        "q1; the test rejects in BOTH tails. T1/sigma^2 is non-central chi2 under the fault.",
+        "Parameter test: s = std of theta2_hat (joint estimate), power = "
         "Phi(b/s - z) + Phi(-b/s - z) with z = norm.isf(alpha/2). Prediction-error test T1 "
-        "(theta1 free): non-central chi2(N - 1) with lambda = ||(I - P1) u2 0.1||^2 / sigma^2.",
+        "(theta1 free): non-central chi2(N - 1) with lambda = ||(I - P1) u2 b||^2 / sigma^2.",
     ),
     mistakes=[
         Mistake(
             "the parameter test's power looks like one tail only: it rejects in both",
-            lambda: (_one_tail_power(), _q3_pe_power()),
+            lambda U_, sigma, theta2, alpha: (
+                _one_tail_power(U_, sigma, theta2, alpha),
+                _pe_power(U_, sigma, theta2, alpha),
+            ),
         ),
     ],
 )
-def q3():
-    theta = [1.0, 1.1, 1.0]
-    p_param = dg.parameter_estimate_power(U, NOMINAL, [0, 1], 1, theta, sigma=SIGMA, alpha=0.05)
-    p_pe = dg.prediction_error_power(U, NOMINAL, [0], theta, sigma=SIGMA, alpha=0.05)
-    return PowerPair(p_param, p_pe)
+def q3(U_, sigma, theta2, alpha):
+    theta = [1.0, theta2, 1.0]
+    p_param = dg.parameter_estimate_power(U_, NOMINAL, [0, 1], 1, theta, sigma=sigma, alpha=alpha)
+    return PowerPair(p_param, _pe_power(U_, sigma, theta2, alpha))
 
 
-def _q3_pe_power():
-    return dg.prediction_error_power(U, NOMINAL, [0], [1.0, 1.1, 1.0], sigma=SIGMA, alpha=0.05)
+def _pe_power(U_, sigma, theta2, alpha):
+    return dg.prediction_error_power(U_, NOMINAL, [0], [1.0, theta2, 1.0], sigma=sigma, alpha=alpha)
 
 
-def _one_tail_power():
-    s = _joint(U, U @ NOMINAL, SIGMA, 0.05)[1]
-    return float(stats.norm.sf(stats.norm.isf(0.025) - 0.1 / s))
+def _one_tail_power(U_, sigma, theta2, alpha):
+    s = _joint(U_, np.asarray(U_) @ NOMINAL, sigma, alpha)[1]
+    return float(stats.norm.sf(stats.norm.isf(alpha / 2) - abs(theta2 - 1.0) / s))
+
+
+q3.case(U, SIGMA, 1.1, 0.05, label="F2 with theta2 = 1.1, alpha = 0.05")
+### BEGIN HIDDEN TESTS
+q3.case(U, SIGMA, 0.93, 0.10, hidden=True)
+q3.case(_modes_U(52), 0.15, 1.06, 0.10, hidden=True)
+### END HIDDEN TESTS
 
 
 CHECKS.short_answer(
@@ -208,31 +244,42 @@ q4.case(np.array([0.5, 1.0, 4.0]), np.array([1.0, 2.0, 0.5, 3.0]), 2.0, hidden=T
 q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q5",
+    func="maximum_likelihood",
     forbid=[
         "course.diagnosis.normal_likelihood",
         "course.diagnosis.normal_log_likelihood",
         "course.diagnosis.maximum_likelihood",
     ],
-    var="ml_35",
     points=1,
     rtol=1e-6,
-    atol=1e-9,
+    atol=1e-300,  # relative only: likelihoods of many observations are tiny
     hint=(
-        "Maximise L(theta | 3, 5) for N(theta, 1); your likelihood function of q4 evaluates it.",
-        "The maximiser is the sample mean; give (theta_ml, L(theta_ml | 3, 5)), the likelihood "
+        "Maximise L(theta | z) for N(theta, sigma^2); your likelihood function of q4 evaluates it.",
+        "The maximiser is the sample mean; return (theta_ml, L(theta_ml | z)), the likelihood "
         "itself, not its logarithm.",
     ),
     mistakes=[
         Mistake(
             "the second value looks like the log-likelihood at the maximum",
-            lambda: (4.0, float(-1.0 - np.log(2 * np.pi))),
+            lambda z, sigma: (
+                float(np.mean(z)),
+                float(np.sum(stats.norm.logpdf(z, np.mean(z), sigma))),
+            ),
         ),
     ],
 )
-def q5():
-    return MaximumLikelihood(4.0, float(np.exp(-1.0) / (2 * np.pi)))
+def q5(z, sigma):
+    theta_ml = float(np.mean(z))
+    return MaximumLikelihood(theta_ml, float(np.prod(stats.norm.pdf(z, theta_ml, sigma))))
+
+
+q5.case(np.array([3.0, 5.0]), 1.0, label="the lecture's z = (3, 5), sigma = 1")
+### BEGIN HIDDEN TESTS
+q5.case(np.array([1.0, 2.0, 0.5, 3.0]), 2.0, hidden=True)
+q5.case(np.array([-1.0, 4.0, 2.5]), 0.5, hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.function(
@@ -329,10 +376,13 @@ q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
     atol=0.1 / 20000,  # the same count of alarms: a fraction k / n_runs, exactly
     rtol=0.0,
     hint=(
-        "Follow the recipe exactly: rng = np.random.default_rng(seed) and ONE call "
-        "rng.standard_normal((n_runs, n)), row r the sample r.",
-        "-2 log Lambda = n max(0, mean)^2 of each row; return the fraction above "
-        "stats.chi2.isf(alpha, 1).",
+        "The grader repeats your simulation with the case's seed, so draw the samples as the "
+        "question says: rng = np.random.default_rng(seed) and ONE call "
+        "rng.standard_normal((n_runs, n)), row r the sample r (a loop of draws or the shape "
+        "(n, n_runs) gives other samples).",
+        "On the boundary the constrained estimate is max(0, mean of the row), so "
+        "-2 log Lambda = n max(0, mean)^2 is exactly 0 for about half of the rows; return the "
+        "fraction of rows above stats.chi2.isf(alpha, 1) (not a theoretical rate).",
     ),
     mistakes=[
         Mistake(
@@ -369,13 +419,13 @@ def _posterior(y, U_, sigma, tau, priors):
     return np.array([post[m] for m in MODES])
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q9_practice",
+    func="posteriors",
     forbid=[
         "course.diagnosis.bayes_ranking",
         "course.diagnosis.mode_log_likelihoods",
     ],
-    var="posterior_practice",
     points=1,
     rtol=1e-6,
     atol=1e-300,
@@ -384,12 +434,24 @@ def _posterior(y, U_, sigma, tau, priors):
     mistakes=[
         Mistake(
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
-            lambda: _maximised(Y_MODES, U, SIGMA, PRIORS),
+            lambda y, U_, sigma, tau, priors: _maximised(y, U_, sigma, priors),
         ),
     ],
 )
-def q9_practice():
-    return _posterior(Y_MODES, U, SIGMA, 0.3, PRIORS)
+def q9_practice(y, U_, sigma, tau, priors):
+    return _posterior(y, U_, sigma, tau, priors)
+
+
+def _modes_case(seed):
+    d = data.modes(np.random.default_rng(seed))
+    return d["y"], d["U"], d["sigma"], d["tau"], d["priors"]
+
+
+q9_practice.case(Y_MODES, U, SIGMA, 0.3, PRIORS, label="the notebook's practice record")
+### BEGIN HIDDEN TESTS
+for _seed in (61, 62, 63, 64):
+    q9_practice.case(*_modes_case(_seed), hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(

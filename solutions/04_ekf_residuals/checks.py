@@ -24,8 +24,9 @@ Alarm = namedtuple("Alarm", "threshold first_alarm")
 FalseAlarms = namedtuple("FalseAlarms", "count_constant count_random_walk")
 RLSUpdate = namedtuple("RLSUpdate", "theta_new P_new")
 
-# The fixed record of q7: the notebook's context cell builds the same one with the same seed
-# (4062: a threshold with L - 1 degrees of freedom counts 19 false alarms instead of 14).
+# The public practice record of q7_practice: the notebook's context cell builds the same one
+# with the same seed (4062: a threshold with L - 1 degrees of freedom counts 19 false alarms
+# instead of 14). Each student's q7 record comes from data.drift.
 TS, Q_X, R = 0.1, 1e-4, 2.5e-3
 N7, T_FAULT7 = 200, 150
 _t7 = np.arange(N7)
@@ -41,6 +42,16 @@ _, Y7 = dg.simulate_beta_system(
     x0=0.5,
     fault=np.where(_t7 >= T_FAULT7, 0.2, 0.0),
 )
+PRACTICE7 = {
+    "Ts": TS,
+    "q_x": Q_X,
+    "r": R,
+    "u": U7,
+    "y": Y7,
+    "t_fault": T_FAULT7,
+    "window": 10,
+    "alpha": 0.001,
+}
 
 # The public practice record of q5_practice (built the same way in the notebook's context
 # cell): a smaller sensor offset (0.2) at t = 120, so the windowed NIS crosses the threshold
@@ -103,15 +114,20 @@ _NO_FILTERS = [  # every filter function of course.filters: "write the filter yo
 ]
 
 
-# q = r = 1: P(t|t-1) = (1 + sqrt 5)/2, K = P/(P + 1) = (sqrt 5 - 1)/2, and the filtered
-# variance P(t|t) = (1 - K) P(t|t-1) = (sqrt 5 - 1)/2. The mistake is named field-wise: P(t|t)
-# for P with K right, or K computed from P(t|t) as well.
-_P_FILTERED = float((np.sqrt(5) - 1) / 2)
+# P(t|t-1) = P solves P = P - P^2/(P + r) + q, so P = (q + sqrt(q^2 + 4 q r))/2 and
+# K = P/(P + r); the filtered variance is P(t|t) = (1 - K) P = P r/(P + r) (with q = r = 1:
+# the golden ratio, 1/phi and 1/phi). The mistake is named field-wise: P(t|t) for P with K
+# right, or K computed from P(t|t) as well.
+def _p_filtered(q, r):
+    P = (q + np.sqrt(q * q + 4.0 * q * r)) / 2.0
+    return float(P * r / (P + r))
+
+
 _Q1_MISTAKES = [
     Mistake(
         "looks like the FILTERED variance P(t|t): the question asks for the prediction "
         "variance P(t|t-1), the fixed point of update + predict",
-        lambda: (_P_FILTERED, _P_FILTERED / (_P_FILTERED + 1)),
+        lambda q, r: (_p_filtered(q, r), _p_filtered(q, r) / (_p_filtered(q, r) + r)),
         hint="P(t|t-1) is the variance BEFORE the measurement update: one step of the "
         "recursion is update (P(t|t)) then predict (P(t|t) + q), and P(t|t-1) is its fixed "
         "point; K = P(t|t-1)/(P(t|t-1) + r).",
@@ -119,14 +135,14 @@ _Q1_MISTAKES = [
 ]
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q1",
+    func="steady_state",
     forbid=[
         "course.filters.steady_state",
         "course.filters.riccati",
         "course.filters.riccati_gains",
     ],
-    var="steady",
     mistakes=_Q1_MISTAKES,
     points=1,
     rtol=1e-8,
@@ -134,14 +150,21 @@ _Q1_MISTAKES = [
     hint=[
         "P is the PREDICTION variance P(t|t-1), the fixed point of one full update + predict "
         "step of the recursion above; K follows from it. Return the pair in the order (P, K).",
-        "With a = 1: P = P - P^2/(P + r) + q. Set q = r = 1 and solve the quadratic for its "
-        "positive root; then K = P/(P + r).",
+        "With a = 1: P = P - P^2/(P + r) + q, that is P^2 - q P - q r = 0: take its positive "
+        "root; then K = P/(P + r).",
     ],
 )
-def q1():
-    model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]])
+def q1(q, r):
+    model = kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[q]], R=[[r]])
     ss = kf.steady_state(model)
     return SteadyState(float(ss.P_pred[0, 0]), float(ss.K[0, 0]))
+
+
+q1.case(1.0, 1.0, label="q = r = 1")
+### BEGIN HIDDEN TESTS
+q1.case(0.2, 1.5, hidden=True)
+q1.case(3.0, 0.5, hidden=True)
+### END HIDDEN TESTS
 
 
 _Q2_NORMALISE = (
@@ -245,12 +268,12 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q4",
+    func="window_threshold",
     forbid=[
         "course.nis.windowed_nis_threshold",
     ],
-    var="threshold",
     points=1,
     rtol=1e-6,
     atol=1e-8,
@@ -258,15 +281,15 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
         Mistake(
             "L - 1 degrees of freedom: nothing is estimated from the window, so a sum of L "
             "squares keeps all L",
-            lambda: float(stats.chi2.isf(0.001, 9)),
+            lambda L, alpha: float(stats.chi2.isf(alpha, L - 1)) if L > 1 else np.nan,
         ),
         Mistake(
             "looks two-sided: only LARGE sums alarm, so all of alpha belongs in the upper tail",
-            lambda: float(stats.chi2.isf(0.0005, 10)),
+            lambda L, alpha: float(stats.chi2.isf(alpha / 2, L)),
         ),
         Mistake(
             "a lower-tail quantile: the alarm is for large sums (isf, not ppf)",
-            lambda: float(stats.chi2.ppf(0.001, 10)),
+            lambda L, alpha: float(stats.chi2.ppf(alpha, L)),
         ),
     ],
     hint=[
@@ -276,8 +299,16 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
         "alpha quantile, scipy.stats.chi2.isf.",
     ],
 )
-def q4():
-    return float(stats.chi2.isf(0.001, 10))
+def q4(L, alpha):
+    return float(stats.chi2.isf(alpha, L))
+
+
+q4.case(10, 0.001, label="L = 10, alpha = 0.001")
+### BEGIN HIDDEN TESTS
+q4.case(5, 0.01, hidden=True)
+q4.case(12, 0.002, hidden=True)
+q4.case(3, 0.05, hidden=True)
+### END HIDDEN TESTS
 
 
 def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None, shift=0):
@@ -297,16 +328,24 @@ def _first_alarm(y, u, window, alpha, Ts=TS, q_beta=1e-4, q_x=Q_X, r=R, dof=None
 
 
 def _alarm_mistakes(record):
-    """The declared mistakes of q5_practice / q5; ``record(d)`` gives (y, u, window, alpha)."""
+    """The declared mistakes of q5_practice / q5; ``record(arg)`` gives the record dict."""
+
+    def settings(rec):
+        return rec["y"], rec["u"], rec["window"], rec["alpha"], rec["Ts"], rec["q_beta"]
+
+    def wrong(arg, **change):
+        rec = record(arg)
+        return _first_alarm(*settings(rec), q_x=rec["q_x"], r=rec["r"], **change)
+
     return [
         Mistake(
             "threshold with L - 1 degrees of freedom: a window of L squared normalised "
             "innovations is chi2 with L degrees of freedom",
-            lambda *d: _first_alarm(*record(*d)[:3], record(*d)[3], dof=record(*d)[2] - 1),
+            lambda arg: wrong(arg, dof=record(arg)["window"] - 1),
         ),
         Mistake(
             "looks like the index of the window's FIRST sample: a window belongs to its last one",
-            lambda *d: _first_alarm(*record(*d), shift=1 - record(*d)[2]),
+            lambda arg: wrong(arg, shift=1 - record(arg)["window"]),
         ),
     ]
 
@@ -322,17 +361,40 @@ _HINT_ALARM = [
 ]
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q5_practice",
-    var="alarm_practice",
+    func="find_alarm",
     points=1,
     rtol=1e-6,
     atol=1e-8,
     hint=_HINT_ALARM,
-    mistakes=_alarm_mistakes(lambda: (Y_PRACTICE, U7, 10, 0.001)),
+    mistakes=_alarm_mistakes(lambda record: record),
 )
-def q5_practice():
-    return _first_alarm(Y_PRACTICE, U7, 10, 0.001)
+def q5_practice(record):
+    return _record_alarm(record)
+
+
+def _record_alarm(d):
+    return _first_alarm(
+        d["y"], d["u"], d["window"], d["alpha"], d["Ts"], d["q_beta"], d["q_x"], d["r"]
+    )
+
+
+PRACTICE5 = {
+    "Ts": TS,
+    "q_x": Q_X,
+    "r": R,
+    "q_beta": 1e-4,
+    "u": U7,
+    "y": Y_PRACTICE,
+    "window": 10,
+    "alpha": 0.001,
+}
+q5_practice.case(PRACTICE5, label="the notebook's practice record")
+### BEGIN HIDDEN TESTS
+for _seed in (71, 72, 73):
+    q5_practice.case(data.record(np.random.default_rng(_seed)), hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(
@@ -344,12 +406,10 @@ def q5_practice():
     data="record",
     properties="record_alarm_properties",
     hint=["Do q5_practice first: the same code must pass its public check there.", *_HINT_ALARM],
-    mistakes=_alarm_mistakes(lambda d: (d["y"], d["u"], d["window"], d["alpha"])),
+    mistakes=_alarm_mistakes(lambda d: d),
 )
 def q5(d):
-    return _first_alarm(
-        d["y"], d["u"], d["window"], d["alpha"], d["Ts"], d["q_beta"], d["q_x"], d["r"]
-    )
+    return _record_alarm(d)
 
 
 FalseAlarmRates = namedtuple("FalseAlarmRates", "rate_last rate_any")
@@ -418,44 +478,104 @@ q6.case(1.0, 0.01, 0.5, 30, 5, 0.01, 20000, 7, hidden=True)
 ### END HIDDEN TESTS
 
 
+def _false_alarms(d, q_betas=(0.0, 1e-4), dof=None, before=None):
+    """(count_constant, count_random_walk) of the record ``d`` of data.drift; ``dof`` and
+    ``before`` make the declared mistakes (another threshold, windows after the fault too)."""
+    L, alpha = d["window"], d["alpha"]
+    thr = nis.windowed_nis_threshold(L, alpha) if dof is None else stats.chi2.isf(alpha, dof)
+    before = d["t_fault"] if before is None else before
+    counts = []
+    for q_beta in q_betas:
+        model = dg.beta_drift_model(
+            Ts=d["Ts"], q_beta=q_beta, q_x=d["q_x"], r=d["r"], x0_mean=(1.0, 0.5)
+        )
+        T = nis.windowed_nis(kf.extended_kalman_filter(model, d["y"], d["u"]), L)
+        with np.errstate(invalid="ignore"):
+            counts.append(int(np.sum(T[:before] > thr)))
+    return FalseAlarms(*counts)
+
+
+_HINT_COUNTS = [
+    "Count alarms only BEFORE the fault (t < record['t_fault']): every one of them is false. "
+    "The first L - 1 values of nis.windowed_nis are NaN (no full window yet).",
+    "Run kf.extended_kalman_filter with q_beta=0.0 and with q_beta=1e-4 on the same "
+    "(record['y'], record['u']); count the samples t < record['t_fault'] where "
+    "nis.windowed_nis(result, record['window']) exceeds "
+    "nis.windowed_nis_threshold(record['window'], record['alpha']). Return "
+    "(count_constant, count_random_walk).",
+]
+_COUNT_MISTAKES = [
+    Mistake(
+        "windows after the fault look counted too: only those that end before it are false alarms",
+        lambda d: _false_alarms(d, before=len(d["y"])),
+    ),
+    Mistake(
+        "threshold with L - 1 degrees of freedom: a window of L squared normalised "
+        "innovations is chi2 with L degrees of freedom",
+        lambda d: _false_alarms(d, dof=d["window"] - 1),
+    ),
+]
+
+
+@CHECKS.function(
+    "q7_practice",
+    func="count_false_alarms",
+    points=1,
+    rtol=0,
+    atol=0,
+    hint=_HINT_COUNTS,
+    mistakes=_COUNT_MISTAKES,
+)
+def q7_practice(record):
+    return _false_alarms(record)
+
+
+def _drift_case(seed):
+    return data.drift(np.random.default_rng(seed))
+
+
+q7_practice.case(PRACTICE7, label="the notebook's practice record")
+### BEGIN HIDDEN TESTS
+for _seed in (81, 85, 86, 89):
+    q7_practice.case(_drift_case(_seed), hidden=True)
+### END HIDDEN TESTS
+
+
 @CHECKS.value(
     "q7",
     var="false_alarms",
     points=2,
     rtol=0,
     atol=0,
-    public=False,
+    data="drift",
+    properties="drift_count_properties",
     hint=[
-        "Count alarms only BEFORE the fault (t < t_fault7): every one of them is false. "
-        "The first L - 1 values of nis.windowed_nis are NaN (no full window yet).",
-        "Run kf.extended_kalman_filter with q_beta=0.0 and with q_beta=1e-4 on the same "
-        "(y7, u7); count the samples t < t_fault7 where nis.windowed_nis(result, 10) exceeds "
-        "nis.windowed_nis_threshold(10, 0.001). Return (count_constant, count_random_walk).",
+        "Do q7_practice first: the same function must pass its public check there.",
+        *_HINT_COUNTS,
     ],
+    mistakes=_COUNT_MISTAKES,
 )
-def q7():
-    thr = nis.windowed_nis_threshold(10, 0.001)
-    counts = []
-    for q_beta in (0.0, 1e-4):
-        model = dg.beta_drift_model(Ts=TS, q_beta=q_beta, q_x=Q_X, r=R, x0_mean=(1.0, 0.5))
-        T = nis.windowed_nis(kf.extended_kalman_filter(model, Y7, U7), 10)
-        with np.errstate(invalid="ignore"):
-            counts.append(int(np.sum(T[:T_FAULT7] > thr)))
-    return FalseAlarms(*counts)
+def q7(d):
+    return _false_alarms(d)
 
 
 @CHECKS.choice(
     "q7_why",
     var="false_alarm_cause",
-    options=["model", "threshold", "fault", "noise"],
+    options=["model", "noise", "threshold", "fault"],
     points=1,
-    hint='Answer one of "model", "threshold", "fault" or "noise". Which of the two filters '
-    "raises the alarms, and what differs between the two?",
+    data="drift",
+    hint='Answer one of "model", "noise", "threshold" or "fault". Which of your two filters '
+    "raises the alarms: one of them, or both?",
 )
-def q7_why():
-    # Both filters share the threshold, r and the data, and every counted window ends before
-    # the fault: only the model of beta differs, and only the constant-beta filter alarms.
-    return "model"
+def q7_why(d):
+    # data.drift makes one of two records: beta drifts (only the constant-beta filter alarms:
+    # its model is wrong) or the sensor is noisier than the r both filters assume (both alarm).
+    # The threshold and the windows (all before the fault) are the same for both filters.
+    random_walk = data._windowed_alarms(
+        d["y"], d["u"], d["Ts"], 1e-4, d["q_x"], d["r"], d["window"], d["alpha"], d["t_fault"]
+    )
+    return "noise" if random_walk >= 5 else "model"
 
 
 @CHECKS.function(

@@ -188,9 +188,9 @@ q2.case(EPS_C, S_C, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q3",
-    var="eps_bar_interval",
+    func="eps_bar_interval",
     points=1,
     rtol=1e-7,
     atol=1e-10,
@@ -203,11 +203,17 @@ q2.case(EPS_C, S_C, hidden=True)
         Mistake(
             "the poster's law: eps_bar itself is not chi2(mK) -- with the 1/K average, K times "
             "eps_bar is",
-            lambda: (float(stats.chi2(60).ppf(0.025)), float(stats.chi2(60).isf(0.025))),
+            lambda m, K, alpha: (
+                float(stats.chi2(m * K).ppf(alpha / 2)),
+                float(stats.chi2(m * K).isf(alpha / 2)),
+            ),
         ),
         Mistake(
-            "alpha not split: a two-sided 95 % interval leaves 2.5 % in each tail",
-            lambda: (float(stats.chi2(60).ppf(0.05)) / 20, float(stats.chi2(60).isf(0.05)) / 20),
+            "alpha not split: a two-sided interval leaves alpha/2 in each tail",
+            lambda m, K, alpha: (
+                float(stats.chi2(m * K).ppf(alpha)) / K,
+                float(stats.chi2(m * K).isf(alpha)) / K,
+            ),
         ),
     ],
     hint=[
@@ -217,14 +223,21 @@ q2.case(EPS_C, S_C, hidden=True)
         "K * eps_bar ~ chi2(m K): divide the two quantiles of chi2(m K) by K.",
     ],
 )
-def q3():
-    law = stats.chi2(60)
-    return Interval(float(law.ppf(0.025)) / 20, float(law.isf(0.025)) / 20)
+def q3(m, K, alpha):
+    law = stats.chi2(m * K)
+    return Interval(float(law.ppf(alpha / 2)) / K, float(law.isf(alpha / 2)) / K)
 
 
-@CHECKS.value(
+q3.case(3, 20, 0.05, label="m = 3, K = 20, 95 %")
+### BEGIN HIDDEN TESTS
+q3.case(2, 50, 0.01, hidden=True)
+q3.case(1, 8, 0.1, hidden=True)
+### END HIDDEN TESTS
+
+
+@CHECKS.function(
     "q4",
-    var="thresholds",
+    func="matrix_thresholds",
     points=1,
     rtol=1e-7,
     atol=1e-10,
@@ -232,7 +245,9 @@ def q3():
     mistakes=[
         Mistake(
             "alpha not split: each of the two thresholds gets alpha/2",
-            lambda: tuple(float(v) for v in nis.nis_matrix_critical_values(2, 30, 0.1)),
+            lambda m, K, alpha: tuple(
+                float(v) for v in nis.nis_matrix_critical_values(m, K, 2 * alpha)
+            ),
         ),
     ],
     hint=[
@@ -241,8 +256,15 @@ def q3():
         "upper quantile of the law of lambda_max (isf): nis.extreme_eigenvalue(m, K, which).",
     ],
 )
-def q4():
-    return nis.nis_matrix_critical_values(2, 30, 0.05)
+def q4(m, K, alpha):
+    return nis.nis_matrix_critical_values(m, K, alpha)
+
+
+q4.case(2, 30, 0.05, label="m = 2, K = 30, alpha = 0.05")
+### BEGIN HIDDEN TESTS
+q4.case(3, 12, 0.1, hidden=True)
+q4.case(2, 60, 0.01, hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.function(
@@ -328,22 +350,22 @@ def _pvalues(eps, S, alpha):
     return PValues(float(p_nis), float(p_matrix))
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q6_practice",
+    func="nis_pvalues",
     forbid=[
         "course.nis.nis_test",
         "course.nis.nis_matrix_test",
     ],
-    var="pvalues_practice",
     points=1,
     rtol=1e-6,
     atol=1e-9,
     mistakes=[
         Mistake(
             "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)",
-            lambda: (
-                float(stats.chi2(120).sf(np.sum(nis.nis(EPS_PRACTICE, S_PRACTICE)))),
-                _pvalues(EPS_PRACTICE, S_PRACTICE, 0.05)[1],
+            lambda eps, S: (
+                float(stats.chi2(np.size(eps)).sf(np.sum(nis.nis(eps, S)))),
+                _pvalues(eps, S, 0.05)[1],
             ),
         ),
     ],
@@ -353,8 +375,20 @@ def _pvalues(eps, S, alpha):
         "p_matrix uses F_min at lmin and 1 - F_max at lmax of nis.extreme_eigenvalue(m, K, ...).",
     ],
 )
-def q6_practice():
-    return _pvalues(EPS_PRACTICE, S_PRACTICE, 0.05)
+def q6_practice(eps, S):
+    return _pvalues(eps, S, 0.05)
+
+
+def _record_case(seed):
+    d = data.record(np.random.default_rng(seed))
+    return d["eps"], d["S"]
+
+
+q6_practice.case(EPS_PRACTICE, S_PRACTICE, label="the notebook's practice record")
+### BEGIN HIDDEN TESTS
+for _seed in (40, 41, 46, 54):  # a wrong correlation, a wrong scale, consistent, p_matrix = 1
+    q6_practice.case(*_record_case(_seed), hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(
@@ -446,9 +480,9 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
 ### END HIDDEN TESTS
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q8",
-    var="nees_interval",
+    func="nees_interval",
     points=1,
     rtol=1e-7,
     atol=1e-10,
@@ -461,23 +495,33 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
         Mistake(
             "looks like the normal approximation n +- z sqrt(2n/N): the question asks for the "
             "exact chi2(n N) quantiles of the sum, divided by N",
-            lambda: (
-                4.0 - float(stats.norm.isf(0.025)) * np.sqrt(8.0 / 50),
-                4.0 + float(stats.norm.isf(0.025)) * np.sqrt(8.0 / 50),
+            lambda n, N, alpha: (
+                n - float(stats.norm.isf(alpha / 2)) * np.sqrt(2.0 * n / N),
+                n + float(stats.norm.isf(alpha / 2)) * np.sqrt(2.0 * n / N),
             ),
         ),
         Mistake(
             "quantiles of chi2(nN) for the SUM: the run average is that sum divided by N",
-            lambda: (float(stats.chi2(200).ppf(0.025)), float(stats.chi2(200).isf(0.025))),
+            lambda n, N, alpha: (
+                float(stats.chi2(n * N).ppf(alpha / 2)),
+                float(stats.chi2(n * N).isf(alpha / 2)),
+            ),
         ),
     ],
     hint=[
         "Averaging over N runs works like averaging over K steps in q3: which multiple of "
         "the average is chi-square, and with how many degrees of freedom?",
         "Each run's NEES is chi2(n); the sum over N independent runs is chi2(n N).",
-        "Take the two-sided 95 % quantiles of chi2(n N) and divide them by N.",
+        "Take the two-sided quantiles of chi2(n N) (alpha/2 in each tail) and divide them by N.",
     ],
 )
-def q8():
-    law = stats.chi2(200)
-    return Interval(float(law.ppf(0.025)) / 50, float(law.isf(0.025)) / 50)
+def q8(n, N, alpha):
+    law = stats.chi2(n * N)
+    return Interval(float(law.ppf(alpha / 2)) / N, float(law.isf(alpha / 2)) / N)
+
+
+q8.case(4, 50, 0.05, label="n = 4 states, N = 50 runs, 95 %")
+### BEGIN HIDDEN TESTS
+q8.case(2, 20, 0.01, hidden=True)
+q8.case(6, 100, 0.1, hidden=True)
+### END HIDDEN TESTS

@@ -191,9 +191,9 @@ q2.case(*_model_args(_C0, _C1, K_C), hidden=True)
 P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q3",
-    var="expected_c",
+    func="expected_c",
     points=1,
     rtol=1e-9,
     atol=1e-12,
@@ -201,7 +201,7 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
         Mistake(
             "tr(P_j) would be the expectation around the TRUE mean; the sample mean is "
             "subtracted here",
-            lambda: float(np.trace(P_Q3)),
+            lambda P, M: float(np.trace(P)),
         ),
     ],
     hint=[
@@ -210,8 +210,15 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
         "E[c_j] = (M - 1)/M tr(P_j): the divisor is M, but only M - 1 degrees of freedom remain.",
     ],
 )
-def q3():
-    return 3.0 / 4.0 * float(np.trace(P_Q3))
+def q3(P, M):
+    return (M - 1.0) / M * float(np.trace(P))
+
+
+q3.case(P_Q3, 4, label="P = [[2, .5], [.5, 1]], M = 4")
+### BEGIN HIDDEN TESTS
+q3.case(np.diag([3.0, 1.0, 0.2]), 10, hidden=True)
+q3.case(np.array([[2.4]]), 2, hidden=True)
+### END HIDDEN TESTS
 
 
 _rng = np.random.default_rng(20250606)
@@ -312,11 +319,8 @@ q5.case(np.diag([3.0, 1.0, 0.2]), 6, 0.01, hidden=True)
 ### END HIDDEN TESTS
 
 
-# The public practice experiment of q6_practice (the notebook's context cell builds the same):
-# records of the null pair itself, so both p-values are moderate and every mistake shows.
+# q6_practice's sections j = 4 and k = 5, as in the notebook's practice question.
 J_PRACTICE = 4
-R_PRACTICE = mismatched.simulate_records(data.M0, data.M1, 30, 12, np.random.default_rng(601))
-NULL_PRACTICE = mismatched.residual_moments(data.M0, data.M1, 12)
 
 
 def _pvalues(residuals, j, k, null, alpha):
@@ -334,17 +338,65 @@ _HINT_PVALUES = [
 ]
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q6_practice",
-    var="pvalues_practice",
+    func="two_sided_pvalues",
     points=1,
     rtol=1e-6,
     atol=1e-9,
     forbid=_FORBID_TESTS,
     hint=_HINT_PVALUES,
 )
-def q6_practice():
-    return _pvalues(R_PRACTICE, J_PRACTICE, J_PRACTICE + 1, NULL_PRACTICE, 0.05)
+def q6_practice(r, mean, cov, cross_cov, j, k):
+    null = mismatched.ResidualMoments(mean, cov, cross_cov)
+    return _pvalues(r, j, k, null, 0.05)
+
+
+def _experiment_case(seed, Q, R, drift=None):
+    """(records, mean, cov, cross_cov, j, k) of a practice-design experiment for a model under
+    test like M0 with the noise Q, R; the records come from it, or with ``drift`` from a model
+    whose drift state starts elsewhere (the alternative of data.experiment). Other noises
+    than M0's: the null moments of the notebook's pair would ship q2's answer (a public
+    case) or match every student's issued data (a hidden one)."""
+    m0 = filters.LinearModel(
+        F=data.M0.F,
+        H=data.M0.H,
+        Q=np.diag(Q),
+        R=[[R]],
+        x0_mean=data.M0.x0_mean,
+        x0_cov=data.M0.x0_cov,
+        w_mean=data.M0.w_mean,
+        v_mean=data.M0.v_mean,
+    )
+    source = m0  # the model the records come from
+    if drift is not None:
+        source = filters.LinearModel(
+            F=m0.F,
+            H=m0.H,
+            Q=m0.Q,
+            R=m0.R,
+            x0_mean=[0.0, drift],
+            x0_cov=m0.x0_cov,
+            w_mean=m0.w_mean,
+            v_mean=m0.v_mean,
+        )
+    null = mismatched.residual_moments(m0, data.M1, 12)
+    records = mismatched.simulate_records(source, data.M1, 30, 12, np.random.default_rng(seed))
+    j = 2 + seed % 6
+    return records, np.array(null.mean), np.array(null.cov), np.array(null.cross_cov), j, j + 1
+
+
+q6_practice.case(
+    *_experiment_case(602, (0.4, 0.03), 0.8)[:4],
+    J_PRACTICE,
+    J_PRACTICE + 1,
+    label="a public experiment of the practice design (another model pair), j = 4, k = 5",
+)
+### BEGIN HIDDEN TESTS
+q6_practice.case(*_experiment_case(91, (0.6, 0.01), 1.1), hidden=True)
+q6_practice.case(*_experiment_case(92, (0.45, 0.025), 0.9, drift=2.0), hidden=True)
+q6_practice.case(*_experiment_case(93, (0.55, 0.02), 1.3), hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(
@@ -397,9 +449,9 @@ P0_Q7 = np.array([[1.5, 0.4], [0.4, 1.0]])
 P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q7",
-    var="power_cov",
+    func="power_cov",
     points=1,
     rtol=1e-6,
     atol=1e-9,
@@ -407,7 +459,7 @@ P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
     mistakes=[
         Mistake(
             "looks like 1 - power: the probability that the test does NOT reject",
-            lambda: 1.0 - q7.reference(),
+            lambda P0, P2, M, alpha: 1.0 - q7.reference(P0, P2, M, alpha),
         ),
     ],
     hint=[
@@ -417,7 +469,16 @@ P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
         "the law of c_j under P2.",
     ],
 )
-def q7():
-    lower, upper = _covariance_critical_values(P0_Q7, 20, 0.05)
-    law = WeightedChiSquare(np.linalg.eigvalsh(P2_Q7) / 20, dof=19.0)
+def q7(P0, P2, M, alpha):
+    lower, upper = _covariance_critical_values(P0, M, alpha)
+    law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P2, float)) / M, dof=M - 1.0)
     return float(law.cdf(lower) + law.sf(upper))
+
+
+q7.case(
+    P0_Q7, P2_Q7, 20, 0.05, label="P0 = [[1.5, .4], [.4, 1]], P2 = [[2.2, .4], [.4, 1.1]], M = 20"
+)
+### BEGIN HIDDEN TESTS
+q7.case(np.array([[1.0]]), np.array([[1.6]]), 15, 0.10, hidden=True)
+q7.case(np.diag([2.0, 1.0, 0.5]), np.diag([1.2, 0.8, 0.5]), 30, 0.01, hidden=True)
+### END HIDDEN TESTS

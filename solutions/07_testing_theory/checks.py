@@ -5,7 +5,6 @@ are sent to the student's function only at grading time.
 """
 
 from collections import namedtuple
-from functools import partial
 
 import numpy as np
 from scipy import stats
@@ -460,11 +459,6 @@ def _pair_T(d, Qyy=...):
     return float(lsq.glr_test(f, np.eye(len(d["y"]))[:, d["pair"]]).statistic)
 
 
-def _on_practice(mistakes):
-    """The personal question's mistakes, evaluated on the public practice line."""
-    return [Mistake(m.message, partial(m.reference, PRACTICE)) for m in mistakes]
-
-
 _PAIR_MISTAKES = [
     Mistake("looks unweighted: the Qyy of the data was ignored", lambda d: _pair_T(d, None)),
     Mistake(
@@ -483,18 +477,18 @@ _PAIR_MISTAKES = [
 ]
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q6_practice",
-    var="T_pair_practice",
+    func="pair_statistic",
     points=1,
     rtol=1e-6,
     atol=1e-8,
-    hint="Your glr_statistic on the practice line, with C the two columns of the identity "
-    "named by practice['pair'].",
-    mistakes=_on_practice(_PAIR_MISTAKES),
+    hint="Your glr_statistic on a line given as a dict like practice, with C the two columns "
+    "of the identity named by line['pair'] and the weights line['Qyy'].",
+    mistakes=_PAIR_MISTAKES,
 )
-def q6_practice():
-    return _pair_T(PRACTICE)
+def q6_practice(line):
+    return _pair_T(line)
 
 
 @CHECKS.value(
@@ -567,31 +561,44 @@ _DIA_MISTAKES = [
 ]
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q7_practice",
-    var="x_dia_practice",
+    func="dia_estimate",
     points=1,
     rtol=1e-6,
     atol=1e-8,
-    hint="Detect with the overall model test at practice['alpha'], identify the largest |w|, "
-    "adapt by fitting the line without it; store (height at t = 0, slope).",
+    hint="Detect with the overall model test at d['alpha'], identify the largest |w|, adapt by "
+    "fitting the line without it; return (height at t = 0, slope).",
     # data snooping removes observations until no w-test rejects: on the practice line three
     # (on almost every personal line more than one, but not on all: so only here)
-    mistakes=_on_practice(_DIA_MISTAKES)
-    + [
+    mistakes=[
+        *_DIA_MISTAKES,
         Mistake(
             "several observations were removed (data snooping repeats the w-tests until none "
             "rejects): the DIA procedure adapts once, to the one identified alternative",
-            lambda: np.asarray(
-                lsq.data_snooping(
-                    PRACTICE["A"], PRACTICE["y"], PRACTICE["Qyy"], alpha=PRACTICE["alpha"]
-                ).fit.x_hat
+            lambda d: np.asarray(
+                lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).fit.x_hat
             ),
-        )
+        ),
     ],
 )
-def q7_practice():
-    return _dia_estimate(PRACTICE)
+def q7_practice(d):
+    return _dia_estimate(d)
+
+
+def _line(d):
+    """A levelling line as the notebook's practice dict (without the times t)."""
+    return {key: d[key] for key in ("A", "y", "Qyy", "alpha", "pair")}
+
+
+# public: the notebook's practice line; hidden: lines of the students' design (data.levelling)
+for _q in (q6_practice, q7_practice):
+    _q.case(_line(PRACTICE), label="the notebook's practice line")
+### BEGIN HIDDEN TESTS
+for _q in (q6_practice, q7_practice):
+    for _seed in (71, 72, 73):
+        _q.case(_line(data.levelling(np.random.default_rng(_seed))), hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.value(

@@ -35,6 +35,11 @@ _Q4_HEAD = """def w_statistics(A, y, Qyy):
     e = y - A @ (Qxx @ A.T @ W @ y)
     Qee = Qyy - A @ Qxx @ A.T
 """
+_Q5_HEAD = """def band_95(A, Qyy, a):
+    A = np.asarray(A, dtype=float)
+    W = np.linalg.inv(Qyy)
+    s = float(np.sqrt(a @ np.linalg.inv(A.T @ W @ A) @ a))
+"""
 _Q8_HEAD = """def rejection_rate(A, Qyy, alpha, n_runs, seed, bias):
     rng = np.random.default_rng(seed)
     A = np.asarray(A, dtype=float)
@@ -125,36 +130,31 @@ WRONG = {
     "q5": [
         (
             "one-sided 95 %: norm.isf(0.05)",
-            """Qxx = np.linalg.inv(A.T @ A)
-a = np.array([1.0, 2.0])
-s = float(np.sqrt(a @ Qxx @ a))
-band_t2 = (s, float(stats.norm.isf(0.05)) * s)
-""",
+            _Q5_HEAD + "    return s, float(stats.norm.isf(0.05)) * s\n",
         ),
         (
             "variance instead of sigma",
-            """Qxx = np.linalg.inv(A.T @ A)
-a = np.array([1.0, 2.0])
-v = float(a @ Qxx @ a)
-band_t2 = (v, float(stats.norm.isf(0.025)) * v)
-""",
+            _Q5_HEAD + "    v = s**2\n    return v, float(stats.norm.isf(0.025)) * v\n",
         ),
-        ("sigma of the observation (1)", "band_t2 = (1.0, float(stats.norm.isf(0.025)))"),
         (
-            "t = 1 instead of t = 2 (first row of A)",
-            """Qxx = np.linalg.inv(A.T @ A)
-a = A[0]
-s = float(np.sqrt(a @ Qxx @ a))
-band_t2 = (s, float(stats.norm.isf(0.025)) * s)
+            "Qyy ignored: Qxx = (A^T A)^-1",
+            """def band_95(A, Qyy, a):
+    A = np.asarray(A, dtype=float)
+    s = float(np.sqrt(a @ np.linalg.inv(A.T @ A) @ a))
+    return s, float(stats.norm.isf(0.025)) * s
 """,
         ),
         (
-            "Student t with 2 dof instead of the normal",
-            """Qxx = np.linalg.inv(A.T @ A)
-a = np.array([1.0, 2.0])
-s = float(np.sqrt(a @ Qxx @ a))
-band_t2 = (s, float(stats.t.isf(0.025, 2)) * s)
-""",
+            "sigma of the observation (1)",
+            "def band_95(A, Qyy, a):\n    return 1.0, float(stats.norm.isf(0.025))\n",
+        ),
+        (
+            "Student t with m - n dof instead of the normal",
+            _Q5_HEAD + "    return s, float(stats.t.isf(0.025, A.shape[0] - A.shape[1])) * s\n",
+        ),
+        (
+            "the day-1 answer hard-coded",
+            "def band_95(A, Qyy, a):\n    return 0.5477226, 1.0735165\n",
         ),
     ],
     "q6": [
@@ -195,6 +195,13 @@ suspect_mine = int(np.argmax(np.abs(fit_mine.e_hat)))
             "snooping without the weights",
             """snooping = lsq.data_snooping(mine["A"], mine["y"], np.eye(len(mine["y"])), alpha=mine["alpha"])
 suspect_mine = int(snooping.removed[0])
+""",
+        ),
+        (
+            "largest |e_i / sigma_i| of the unweighted fit (not a w-test)",
+            """x_u = np.linalg.lstsq(mine["A"], mine["y"], rcond=None)[0]
+e_u = mine["y"] - mine["A"] @ x_u
+suspect_mine = int(np.argmax(np.abs(e_u) / np.sqrt(np.diag(mine["Qyy"]))))
 """,
         ),
         ("the demo student's index hard-coded", "suspect_mine = " + DEMO_SUSPECT),
@@ -257,31 +264,85 @@ WRONG["q6b"] = [
 WRONG["q6_practice"] = [
     (
         "unweighted T (Qyy ignored)",
-        """x_p = np.linalg.lstsq(A_practice, y_practice, rcond=None)[0]
-T_practice = float(np.sum((y_practice - A_practice @ x_p) ** 2))
+        """def survey_T(survey):
+    x = np.linalg.lstsq(survey["A"], survey["y"], rcond=None)[0]
+    return float(np.sum((survey["y"] - survey["A"] @ x) ** 2))
 """,
     ),
     (
         "divided by sigma instead of sigma^2",
-        """f_p = lsq.fit(A_practice, y_practice, Q_practice)
-T_practice = float(np.sum(f_p.e_hat**2 / sigma_practice))
+        """def survey_T(survey):
+    f = lsq.fit(survey["A"], survey["y"], survey["Qyy"])
+    return float(np.sum(f.e_hat**2 / np.sqrt(np.diag(survey["Qyy"]))))
+""",
+    ),
+    (
+        "the public survey's Qyy instead of the argument's",
+        """def survey_T(survey):
+    T, _, _ = overall_model_test_stat(survey["A"], survey["y"], Q_practice, survey["alpha"])
+    return T
+""",
+    ),
+    (
+        "the practice answer hard-coded",
+        """def survey_T(survey):
+    T, _, _ = overall_model_test_stat(A_practice, y_practice, Q_practice, alpha_practice)
+    return T
 """,
     ),
 ]
 WRONG["q7_practice"] = [
     (
         "1-based index",
-        """suspect_practice = int(lsq.data_snooping(A_practice, y_practice, Q_practice, alpha=alpha_practice).removed[0]) + 1""",
+        """def first_suspect(survey):
+    s = lsq.data_snooping(survey["A"], survey["y"], survey["Qyy"], alpha=survey["alpha"])
+    return int(s.removed[0]) + 1
+""",
     ),
     (
         "largest |e| instead of the largest |w|",
-        """suspect_practice = int(np.argmax(np.abs(lsq.fit(A_practice, y_practice, Q_practice).e_hat)))""",
+        """def first_suspect(survey):
+    return int(np.argmax(np.abs(lsq.fit(survey["A"], survey["y"], survey["Qyy"]).e_hat)))
+""",
     ),
     (
         "snooping without the weights",
-        """suspect_practice = int(lsq.data_snooping(A_practice, y_practice, np.eye(12), alpha=0.01).removed[0])""",
+        """def first_suspect(survey):
+    s = lsq.data_snooping(survey["A"], survey["y"], np.eye(len(survey["y"])), alpha=survey["alpha"])
+    return int(s.removed[0])
+""",
+    ),
+    (
+        "largest |e_i / sigma_i| of the unweighted fit (not a w-test)",
+        """def first_suspect(survey):
+    x = np.linalg.lstsq(survey["A"], survey["y"], rcond=None)[0]
+    e = survey["y"] - survey["A"] @ x
+    return int(np.argmax(np.abs(e) / np.sqrt(np.diag(survey["Qyy"]))))
+""",
     ),
 ]
+
+
+def _verdict_coincides(level_factor: float, dof_minus: int):
+    """A wrong threshold (alpha scaled, m - dof_minus degrees of freedom) gives the right verdict
+    for the students whose T is on the same side of both thresholds (about half of them)."""
+
+    def same(checks, student):
+        from scipy import stats
+
+        d = checks.data_for("survey", student)
+        statistic = checks.questions["q6"].expected(data=d)
+        wrong = statistic > stats.chi2.isf(d["alpha"] * level_factor, len(d["y"]) - dof_minus)
+        return ("rejected" if wrong else "accepted") == checks.questions["q6b"].expected(data=d)
+
+    return same
+
+
+COINCIDES = {
+    ("q6b", "chi2 with m degrees of freedom"): _verdict_coincides(1.0, 0),
+    ("q6b", "chi2 with m - 1 degrees of freedom"): _verdict_coincides(1.0, 1),
+    ("q6b", "two-sided: alpha / 2"): _verdict_coincides(0.5, 2),
+}
 
 RIGHT = {
     "q1": [
@@ -333,17 +394,18 @@ RIGHT = {
     "q5": [
         (
             "lsq.confidence_band",
-            """f1 = lsq.fit(A, y_day1)
-_, half = lsq.confidence_band(f1, np.array([[1.0, 2.0]]), level=0.95)
-band_t2 = [float(f1.sigma_y_hat[1]), float(half[0])]
+            """def band_95(A, Qyy, a):
+    f = lsq.fit(A, np.zeros(len(A)), Qyy)
+    _, half = lsq.confidence_band(f, np.array([a]), level=0.95)
+    return [float(np.sqrt(a @ f.Qxx @ a)), float(half[0])]
 """,
         ),
         (
-            "explicit inverse and norm.ppf(0.975)",
-            """Qxx = np.linalg.inv(A.T @ A)
-a = np.array([1.0, 2.0])
-s = np.sqrt(a @ Qxx @ a)
-band_t2 = (s, stats.norm.ppf(0.975) * s)
+            "explicit inverses and norm.ppf(0.975)",
+            """def band_95(A, Qyy, a):
+    W = np.linalg.inv(Qyy)
+    s = np.sqrt(a @ np.linalg.inv(A.T @ W @ A) @ a)
+    return (s, stats.norm.ppf(0.975) * s)
 """,
         ),
     ],
@@ -405,13 +467,19 @@ RIGHT["q6b"] = [
 RIGHT["q6_practice"] = [
     (
         "lsq",
-        "T_practice = lsq.overall_model_test(lsq.fit(A_practice, y_practice, Q_practice), 0.01).statistic",
+        """def survey_T(survey):
+    f = lsq.fit(survey["A"], survey["y"], survey["Qyy"])
+    return lsq.overall_model_test(f, survey["alpha"]).statistic
+""",
     ),
 ]
 RIGHT["q7_practice"] = [
     (
         "largest |w| (numpy int)",
-        """suspect_practice = np.argmax(np.abs(lsq.w_tests(lsq.fit(A_practice, y_practice, Q_practice), 0.01).statistic))""",
+        """def first_suspect(survey):
+    f = lsq.fit(survey["A"], survey["y"], survey["Qyy"])
+    return np.argmax(np.abs(lsq.w_tests(f, survey["alpha"]).statistic))
+""",
     ),
 ]
 
@@ -419,21 +487,22 @@ RIGHT["q7_practice"] = [
 # their own with other field names, is as right as a plain tuple.
 RIGHT["q5"] += [
     (
-        "a list of numpy floats",
-        """fit_day1 = lsq.fit(A, y_day1)
-a = np.array([1.0, 2.0])
-s = np.sqrt(a @ fit_day1.Qxx @ a)
-band_t2 = [s, stats.norm.isf(0.025) * s]
+        "a list of numpy floats, by Cholesky",
+        """def band_95(A, Qyy, a):
+    L = np.linalg.cholesky(Qyy)
+    Aw = linalg.solve_triangular(L, A, lower=True)
+    s = np.sqrt(a @ np.linalg.solve(Aw.T @ Aw, a))
+    return [s, stats.norm.isf(0.025) * s]
 """,
     ),
     (
         "a named tuple of the student's own",
         """from collections import namedtuple
 Band = namedtuple("Band", "sd hw")
-fit_day1 = lsq.fit(A, y_day1)
-a = np.array([1.0, 2.0])
-s = float(np.sqrt(a @ fit_day1.Qxx @ a))
-band_t2 = Band(s, float(stats.norm.isf(0.025)) * s)
+def band_95(A, Qyy, a):
+    f = lsq.fit(A, np.zeros(len(A)), Qyy)
+    s = float(np.sqrt(a @ f.Qxx @ a))
+    return Band(s, float(stats.norm.isf(0.025)) * s)
 """,
     ),
 ]

@@ -11,8 +11,8 @@ STUDENT = "wa02"
 DEPENDS = {
     "q7_practice": ["q4"],
     "q8_practice": ["q1", "q7_practice"],
-    "q7": ["q4", "q7_practice"],
-    "q8": ["q1", "q7", "q8a"],
+    "q7": ["q7_practice"],
+    "q8": ["q1", "q7", "q8a", "q8_practice"],
     "q8b": ["q8"],
 }
 
@@ -31,6 +31,26 @@ _T_ALL = """def _T(U_, y_, k):
     r = target - u * (u @ target) / (u @ u)
     return float(r @ r)
 
+"""
+_HYP = """def hypotheses(sensitivity, modes, k):
+    row = np.asarray(sensitivity)[k]
+    return ([m for m, x in zip(modes, row) if {h0}], [m for m, x in zip(modes, row) if {h1}])
+"""
+_BF = """def bias_free_T(y, u):
+    r = np.asarray(y, dtype=float) - np.asarray(u, dtype=float)
+"""
+_TP = """def threshold_and_power(U, sigma, theta2, alpha):
+    U = np.asarray(U, dtype=float)
+    n = U.shape[0]
+    J = sigma**2 * stats.chi2.isf(alpha, n - 1)
+    d = (theta2 - 1.0) * U[:, 1]
+    d_perp = d - U[:, 0] * (U[:, 0] @ d) / (U[:, 0] @ U[:, 0])
+    lam = (d_perp @ d_perp) / sigma**2
+    return float(J), float(stats.ncx2.sf(J / sigma**2, n - 1, lam))
+"""
+_SFD = """def single_fault_diagnosis(U, y, sigma, alpha):
+    J = sigma**2 * stats.chi2.isf({level}, {dof})
+    return single_fault_diagnoses(LECTURE, MODES, three_statistics(U, y) > J)
 """
 _Q9 = """def detection_rate(U, theta, sigma, alpha, n_runs, seed):
     rng = np.random.default_rng(seed)
@@ -80,9 +100,18 @@ WRONG = {
         ),
     ],
     "q2": [
-        ("H0 and H1 swapped", 'hypotheses_T2 = (["F2", "F3"], ["NF", "F1", "F4"])'),
-        ("NF forgotten in H0", 'hypotheses_T2 = (["F1", "F4"], ["F2", "F3"])'),
-        ("row T1 read instead of T2", 'hypotheses_T2 = (["NF", "F3", "F4"], ["F1", "F2"])'),
+        ("H0 and H1 swapped", _HYP.format(h0="x != 0", h1="x == 0")),
+        ("NF forgotten in H0", _HYP.format(h0="x == 0 and m != 'NF'", h1="x != 0")),
+        (
+            "the next row read (T_k for row k)",
+            _HYP.replace("[k]", "[k + 1 if k + 1 < len(sensitivity) else 0]").format(
+                h0="x == 0", h1="x != 0"
+            ),
+        ),
+        (
+            "the public answer hard-coded",
+            'def hypotheses(sensitivity, modes, k):\n    return (["NF", "F1", "F4"], ["F2", "F3"])\n',
+        ),
     ],
     "q3": [
         (
@@ -159,98 +188,79 @@ WRONG = {
     "q5": [
         (
             "sum instead of mean (1/N forgotten)",
-            "b_hat = np.mean(y_gb - u_gb)\nT_bias_free = float(np.sum((y_gb - u_gb - b_hat) ** 2))",
+            _BF + "    return float(np.sum((r - np.mean(r)) ** 2))\n",
         ),
-        ("bias not removed", "T_bias_free = float(np.mean((y_gb - u_gb) ** 2))"),
+        ("bias not removed", _BF + "    return float(np.mean(r**2))\n"),
+        ("sample variance with 1/(N - 1)", _BF + "    return float(np.var(r, ddof=1))\n"),
         (
-            "sample variance with 1/(N - 1)",
-            "T_bias_free = float(np.var(y_gb - u_gb, ddof=1))",
+            "the notebook's record whatever the arguments",
+            "def bias_free_T(y, u):\n    return float(np.var(y_gb - u_gb))\n",
         ),
     ],
     "q5b": [("no", 'bias_decoupled = "no"')],
     "q6": [
-        (
-            "dof N instead of N - 1",
-            """J = sigma**2 * stats.chi2.isf(0.01, N)
-d = 0.15 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-lam = (d_perp @ d_perp) / sigma**2
-threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N, lam)))
-""",
-        ),
+        ("dof N instead of N - 1", _TP.replace("n - 1", "n")),
         (
             "threshold not scaled by sigma^2",
-            """J = stats.chi2.isf(0.01, N - 1)
-d = 0.15 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-lam = (d_perp @ d_perp) / sigma**2
-threshold_and_power = (float(J), float(stats.ncx2.sf(J, N - 1, lam)))
-""",
+            _TP.replace("J = sigma**2 * stats", "J = stats").replace("J / sigma**2", "J"),
         ),
         (
             "lambda without projecting out u1",
-            """J = sigma**2 * stats.chi2.isf(0.01, N - 1)
-d = 0.15 * u2
-lam = (d @ d) / sigma**2
-threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N - 1, lam)))
-""",
+            _TP.replace("d - U[:, 0] * (U[:, 0] @ d) / (U[:, 0] @ U[:, 0])", "d"),
         ),
+        ("alpha / 2", _TP.replace("isf(alpha,", "isf(alpha / 2,")),
         (
-            "alpha / 2",
-            """J = sigma**2 * stats.chi2.isf(0.005, N - 1)
-d = 0.15 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-lam = (d_perp @ d_perp) / sigma**2
-threshold_and_power = (float(J), float(stats.ncx2.sf(J / sigma**2, N - 1, lam)))
-""",
+            "the context's u1, u2 and N instead of U's",
+            _TP.replace("U[:, 0]", "u1")
+            .replace("U[:, 1]", "u2")
+            .replace("n = U.shape[0]", "n = N"),
         ),
     ],
     "q7_practice": [
         (
             "divided by sigma^2",
-            _T_ALL + "T_practice = np.array([_T(U, y_near, k) for k in range(3)]) / sigma**2\n",
+            _T_ALL
+            + "def three_statistics(U, y):\n"
+            + "    return np.array([_T(U, y, k) for k in range(3)]) / sigma**2\n",
         ),
         (
             "mean of squares, not the sum",
-            _T_ALL + "T_practice = np.array([_T(U, y_near, k) for k in range(3)]) / N\n",
+            _T_ALL
+            + "def three_statistics(U, y):\n"
+            + "    return np.array([_T(U, y, k) for k in range(3)]) / len(y)\n",
         ),
         (
             "all three gains fixed (no gain estimated)",
-            "T_practice = np.array([float(np.sum((y_near - U.sum(axis=1)) ** 2))] * 3)",
+            "def three_statistics(U, y):\n    return np.array([float(np.sum((y - U.sum(axis=1)) ** 2))] * 3)\n",
         ),
         (
             "T_k estimates all three gains",
-            """r = y_near - U @ np.linalg.lstsq(U, y_near, rcond=None)[0]
-T_practice = np.array([r @ r] * 3)
+            """def three_statistics(U, y):
+    r = y - U @ np.linalg.lstsq(U, y, rcond=None)[0]
+    return np.array([r @ r] * 3)
 """,
         ),
     ],
     "q8_practice": [
+        ("chi2(N) instead of chi2(N - 1)", _SFD.format(level="alpha", dof="len(y)")),
+        ("alpha / 2", _SFD.format(level="alpha / 2", dof="len(y) - 1")),
         (
-            "chi2(N) instead of chi2(N - 1)",
-            """J_practice = sigma**2 * stats.chi2.isf(0.01, N)
-diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_practice)
-""",
-        ),
-        (
-            "alpha / 2",
-            """J_practice = sigma**2 * stats.chi2.isf(0.005, N - 1)
-diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_practice)
-""",
+            "the practice sigma 0.2 whatever the record",
+            _SFD.format(level="alpha", dof="len(y) - 1").replace("sigma**2", "0.2**2"),
         ),
     ],
     "q7": [
         (
             "the practice record instead of mine",
-            "T_mine = np.array([decoupled_T(U, y_near, k) for k in range(3)])",
+            "T_mine = three_statistics(U, y_near)",
         ),
         (
             "tests in the wrong order (T3, T2, T1)",
-            'T_mine = np.array([decoupled_T(mine["U"], mine["y"], k) for k in (2, 1, 0)])',
+            'T_mine = three_statistics(mine["U"], mine["y"])[::-1]',
         ),
         (
             "divided by sigma^2",
-            'T_mine = np.array([decoupled_T(mine["U"], mine["y"], k) for k in range(3)]) / mine["sigma"] ** 2',
+            'T_mine = three_statistics(mine["U"], mine["y"]) / mine["sigma"] ** 2',
         ),
         ("the demo student's T hard-coded", "T_mine = " + DEMO_T),
     ],
@@ -280,7 +290,7 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
         ),
         (
             "the practice record's diagnosis",
-            "diagnosis_mine = single_fault_diagnoses(LECTURE, MODES, T_practice > 0.2**2 * stats.chi2.isf(0.01, N - 1))",
+            "diagnosis_mine = single_fault_diagnosis(U, y_near, 0.2, 0.01)",
         ),
     ],
     "q8b": [
@@ -345,6 +355,18 @@ diagnosis_practice = single_fault_diagnoses(LECTURE, MODES, T_practice > J_pract
     ],
 }
 
+
+def _practice_diagnosis_coincides(checks, student):
+    """The practice record's diagnosis is right for the students whose own diagnosis is the
+    same (tests/test_assignments_personal.py measures how many)."""
+    d = checks.data_for("record", student)
+    q = checks.questions["q8_practice"]
+    practice = q.expected(q.public_cases[0])
+    return checks.questions["q8"].expected(data=d) == practice
+
+
+COINCIDES = {("q8", "the practice record's diagnosis"): _practice_diagnosis_coincides}
+
 RIGHT = {
     "q1": [
         (
@@ -361,7 +383,12 @@ RIGHT = {
     "q2": [
         (
             "tuples and a print",
-            'hypotheses_T2 = [("NF", "F1", "F4"), ("F2", "F3")]\nprint(hypotheses_T2)',
+            """def hypotheses(sensitivity, modes, k):
+    h = (tuple(m for m, x in zip(modes, sensitivity[k]) if not x),
+         tuple(m for m, x in zip(modes, sensitivity[k]) if x))
+    print(h)
+    return [list(h[0]), list(h[1])]
+""",
         )
     ],
     "q3": [
@@ -386,7 +413,7 @@ RIGHT = {
         ),
     ],
     "q5": [
-        ("np.var (1/N)", "T_bias_free = np.var(y_gb - u_gb)"),
+        ("np.var (1/N)", "def bias_free_T(y, u):\n    return np.var(np.subtract(y, u))\n"),
     ],
     "q5b": [("Yes, with spaces and capitals", 'bias_decoupled = " Yes "')],
     "q6": [
@@ -394,22 +421,29 @@ RIGHT = {
             "chi2.residual_threshold and a projector",
             """from course.chi2 import residual_threshold
 
-J = residual_threshold(N - 1, 0.01, sigma=sigma)
-P = np.eye(N) - np.outer(u1, u1) / (u1 @ u1)
-lam = np.sum((P @ (0.15 * u2)) ** 2) / sigma**2
-threshold_and_power = [J, stats.ncx2.sf(J / sigma**2, N - 1, lam)]
+
+def threshold_and_power(U, sigma, theta2, alpha):
+    n = len(U)
+    J = residual_threshold(n - 1, alpha, sigma=sigma)
+    P = np.eye(n) - np.outer(U[:, 0], U[:, 0]) / (U[:, 0] @ U[:, 0])
+    lam = np.sum((P @ ((theta2 - 1) * U[:, 1])) ** 2) / sigma**2
+    return [J, stats.ncx2.sf(J / sigma**2, n - 1, lam)]
 """,
         ),
     ],
     "q7_practice": [
-        ("by hand, as a list", _T_ALL + "T_practice = [_T(U, y_near, k) for k in range(3)]\n"),
+        (
+            "by hand, as a list",
+            _T_ALL + "def three_statistics(U, y):\n    return [_T(U, y, k) for k in range(3)]\n",
+        ),
     ],
     "q8_practice": [
         (
             "alarms by hand, as a tuple",
-            """J_p = sigma**2 * stats.chi2.ppf(0.99, N - 1)
-alarms_p = [bool(T > J_p) for T in T_practice]
-diagnosis_practice = tuple(single_fault_diagnoses(LECTURE, MODES, alarms_p))
+            """def single_fault_diagnosis(U, y, sigma, alpha):
+    J_p = sigma**2 * stats.chi2.ppf(1 - alpha, len(y) - 1)
+    alarms_p = [bool(T > J_p) for T in three_statistics(U, y)]
+    return tuple(single_fault_diagnoses(LECTURE, MODES, alarms_p))
 """,
         ),
     ],
@@ -472,11 +506,9 @@ mode_mine = conclusion.get(len(diagnosis_mine), "several faults fit")
 WRONG["q2"] += [
     (
         "DecisionStructure(...).hypotheses (not allowed)",
-        """h = dg.DecisionStructure(
-    [[0, 1, 1, 0, 0], [0, 0, 1, 1, 0], [0, 1, 0, 0, 1], [0, 0, 0, 1, 1]],
-    modes=["NF", "F1", "F2", "F3", "F4"],
-).hypotheses("T2")
-hypotheses_T2 = (list(h.null), list(h.alternative))
+        """def hypotheses(sensitivity, modes, k):
+    h = dg.DecisionStructure(np.asarray(sensitivity), modes=list(modes)).hypotheses(f"T{k + 1}")
+    return (list(h.null), list(h.alternative))
 """,
     ),
 ]
@@ -502,9 +534,10 @@ def T1_statistic(y, u1, u2, u3):
 WRONG["q7_practice"] += [
     (
         "prediction_error per test (not allowed)",
-        """T_practice = np.array(
-    [float(dg.prediction_error(y_near, U, [1.0, 1.0, 1.0], [k]).statistic) for k in range(3)]
-)
+        """def three_statistics(U, y):
+    return np.array(
+        [float(dg.prediction_error(y, U, [1.0, 1.0, 1.0], [k]).statistic) for k in range(3)]
+    )
 """,
     ),
 ]
@@ -527,10 +560,11 @@ def T1_statistic(y, u1, u2, u3):
 WRONG["q5"] += [
     (
         "prediction_error with a constant regressor (not allowed)",
-        """N_gb = len(y_gb)
-T_bias_free = float(
-    dg.prediction_error(y_gb, np.column_stack([u_gb, np.ones(N_gb)]), [1.0, 0.0], [1]).statistic
-) / N_gb
+        """def bias_free_T(y, u):
+    n = len(y)
+    return float(
+        dg.prediction_error(y, np.column_stack([u, np.ones(n)]), [1.0, 0.0], [1]).statistic
+    ) / n
 """,
     ),
 ]

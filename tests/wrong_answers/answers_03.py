@@ -29,6 +29,33 @@ _LIK = """def likelihood(theta, z, sigma):
     theta = np.asarray(theta, dtype=float)
     z = np.asarray(z, dtype=float)
 """
+_LEAK = """def leak_theta2(U, theta1):
+    U = np.asarray(U, dtype=float)
+    u1_, u2_ = U[:, 0], U[:, 1]
+"""
+_PP = """def power_pair(U, sigma, theta2, alpha):
+    U = np.asarray(U, dtype=float)
+    n = U.shape[0]
+    s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
+    z = stats.norm.isf(alpha / 2)
+    b = theta2 - 1.0
+    d = (theta2 - 1.0) * U[:, 1]
+    d_perp = d - U[:, 0] * (U[:, 0] @ d) / (U[:, 0] @ U[:, 0])
+    p_pe = float(stats.ncx2.sf(stats.chi2.isf(alpha, n - 1), n - 1, (d_perp @ d_perp) / sigma**2))
+"""
+_ML = """def maximum_likelihood(z, sigma):
+    z = np.asarray(z, dtype=float)
+    t = float(np.mean(z))
+"""
+_POST_HEAD = """def posteriors(y, U, sigma, tau, priors):
+    n = len(y)
+    mean = U @ np.ones(3)
+    log_l = [stats.multivariate_normal(mean, sigma**2 * np.eye(n)).logpdf(y)]
+    for i in range(3):
+        ui = U[:, i]
+        cov = sigma**2 * np.eye(n) + tau**2 * np.outer(ui, ui)
+        log_l.append(stats.multivariate_normal(mean, cov).logpdf(y))
+"""
 _Q8 = """def boundary_false_alarm(n, alpha, n_runs, seed):
     rng = np.random.default_rng(seed)
 """
@@ -102,52 +129,52 @@ WRONG = {
         ),
     ],
     "q2": [
-        ("the joint estimate (decoupled: 1)", "leak_theta2 = 1.0"),
-        ("the leak alone, without the 1", "leak_theta2 = float(0.3 * (u2 @ u1) / (u2 @ u2))"),
-        ("divided by u1'u1", "leak_theta2 = float(1 + 0.3 * (u2 @ u1) / (u1 @ u1))"),
+        ("the joint estimate (decoupled: 1)", "def leak_theta2(U, theta1):\n    return 1.0\n"),
         (
-            "theta1 = 1.5 (the context's record)",
-            "leak_theta2 = float(1 + 0.5 * (u2 @ u1) / (u2 @ u2))",
+            "the leak alone, without the 1",
+            _LEAK + "    return float((theta1 - 1) * (u2_ @ u1_) / (u2_ @ u2_))\n",
+        ),
+        (
+            "divided by u1'u1",
+            _LEAK + "    return float(1 + (theta1 - 1) * (u2_ @ u1_) / (u1_ @ u1_))\n",
+        ),
+        (
+            "u1 not subtracted (theta1 u1 + u2 regressed on u2)",
+            _LEAK + "    return float(u2_ @ (theta1 * u1_ + u2_) / (u2_ @ u2_))\n",
+        ),
+        (
+            "the context's signals u1, u2 instead of U's",
+            "def leak_theta2(U, theta1):\n    return float(1 + (theta1 - 1) * (u2 @ u1) / (u2 @ u2))\n",
+        ),
+        (
+            "the public answer hard-coded",
+            "def leak_theta2(U, theta1):\n    return 1.2215142211441814\n",
         ),
     ],
     "q3": [
         (
             "one tail of the parameter test only",
-            """s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
-p_param = stats.norm.sf(stats.norm.isf(0.025) - 0.1 / s2)
-d = 0.1 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N - 1), N - 1, (d_perp @ d_perp) / sigma**2)))
-""",
+            _PP + "    return float(stats.norm.sf(z - b / s2)), p_pe\n",
         ),
         (
             "one-sided z_alpha in the parameter test",
-            """s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
-z = stats.norm.isf(0.05)
-p_param = stats.norm.sf(z - 0.1 / s2) + stats.norm.cdf(-z - 0.1 / s2)
-d = 0.1 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N - 1), N - 1, (d_perp @ d_perp) / sigma**2)))
-""",
+            _PP.replace("z = stats.norm.isf(alpha / 2)", "z = stats.norm.isf(alpha)")
+            + "    return float(stats.norm.sf(z - b / s2) + stats.norm.cdf(-z - b / s2)), p_pe\n",
         ),
         (
             "lambda without projecting out u1",
-            """s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
-z = stats.norm.isf(0.025)
-p_param = stats.norm.sf(z - 0.1 / s2) + stats.norm.cdf(-z - 0.1 / s2)
-d = 0.1 * u2
-power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N - 1), N - 1, (d @ d) / sigma**2)))
-""",
+            _PP.replace("d_perp = d - U[:, 0] * (U[:, 0] @ d) / (U[:, 0] @ U[:, 0])", "d_perp = d")
+            + "    return float(stats.norm.sf(z - b / s2) + stats.norm.cdf(-z - b / s2)), p_pe\n",
         ),
         (
             "dof N in the prediction-error test",
-            """s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
-z = stats.norm.isf(0.025)
-p_param = stats.norm.sf(z - 0.1 / s2) + stats.norm.cdf(-z - 0.1 / s2)
-d = 0.1 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N), N, (d_perp @ d_perp) / sigma**2)))
-""",
+            _PP.replace("n - 1", "n")
+            + "    return float(stats.norm.sf(z - b / s2) + stats.norm.cdf(-z - b / s2)), p_pe\n",
+        ),
+        (
+            "the public fault 0.1 and alpha 0.05 hard-wired",
+            _PP.replace("theta2 - 1.0", "0.1").replace("alpha", "0.05")
+            + "    return float(stats.norm.sf(z - b / s2) + stats.norm.cdf(-z - b / s2)), p_pe\n",
         ),
     ],
     "q4": [
@@ -178,11 +205,22 @@ power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N), N, (d
         ),
     ],
     "q5": [
-        ("the log of the maximum", "ml_35 = (4.0, float(-1.0 - np.log(2 * np.pi)))"),
-        ("one density factor", "ml_35 = (4.0, float(stats.norm.pdf(3.0, 4.0, 1.0)))"),
+        (
+            "the log of the maximum",
+            _ML + "    return t, float(np.sum(stats.norm.logpdf(z, t, sigma)))\n",
+        ),
+        ("one density factor", _ML + "    return t, float(stats.norm.pdf(z[0], t, sigma))\n"),
         (
             "theta at the first observation",
-            "ml_35 = (3.0, float(stats.norm.pdf(3.0, 3.0, 1.0) * stats.norm.pdf(5.0, 3.0, 1.0)))",
+            _ML + "    return float(z[0]), float(np.prod(stats.norm.pdf(z, z[0], sigma)))\n",
+        ),
+        (
+            "sigma^2 passed as the scale",
+            _ML + "    return t, float(np.prod(stats.norm.pdf(z, t, sigma**2)))\n",
+        ),
+        (
+            "the lecture's answer hard-coded",
+            "def maximum_likelihood(z, sigma):\n    return 4.0, float(np.exp(-1.0) / (2 * np.pi))\n",
         ),
     ],
     "q6": [
@@ -306,38 +344,34 @@ power_pair = (float(p_param), float(stats.ncx2.sf(stats.chi2.isf(0.05, N), N, (d
     "q9_practice": [
         (
             "maximised instead of marginal likelihood",
-            _MAXIMISED + "posterior_practice = maximised_posteriors(y_modes, U, sigma, priors)\n",
+            _MAXIMISED
+            + "def posteriors(y, U, sigma, tau, priors):\n"
+            + "    return maximised_posteriors(y, U, sigma, priors)\n",
         ),
         (
             "priors forgotten",
-            """def posteriors(y_, U_, sigma_, tau_, priors_):
-    n_ = len(y_)
-    mean_ = U_ @ np.ones(3)
-    log_l = [stats.multivariate_normal(mean_, sigma_**2 * np.eye(n_)).logpdf(y_)]
-    for i in range(3):
-        ui = U_[:, i]
-        cov = sigma_**2 * np.eye(n_) + tau_**2 * np.outer(ui, ui)
-        log_l.append(stats.multivariate_normal(mean_, cov).logpdf(y_))
-    log_l = np.array(log_l)
+            _POST_HEAD
+            + """    log_l = np.array(log_l)
     return np.exp(log_l - np.logaddexp.reduce(log_l))
-
-posterior_practice = posteriors(y_modes, U, sigma, tau, priors)
 """,
         ),
         (
             "tau instead of tau^2",
-            """def posteriors(y_, U_, sigma_, tau_, priors_):
-    n_ = len(y_)
-    mean_ = U_ @ np.ones(3)
-    log_l = [stats.multivariate_normal(mean_, sigma_**2 * np.eye(n_)).logpdf(y_)]
-    for i in range(3):
-        ui = U_[:, i]
-        cov = sigma_**2 * np.eye(n_) + tau_ * np.outer(ui, ui)
-        log_l.append(stats.multivariate_normal(mean_, cov).logpdf(y_))
-    log_post = np.array(log_l) + np.log(priors_)
+            _POST_HEAD.replace("tau**2", "tau")
+            + """    log_post = np.array(log_l) + np.log(priors)
+    return np.exp(log_post - np.logaddexp.reduce(log_post))
+""",
+        ),
+        (
+            "the practice record's posterior whatever the record",
+            _POST_HEAD.replace(
+                "def posteriors(y, U, sigma, tau, priors):", "def _post(y, U, sigma, tau, priors):"
+            )
+            + """    log_post = np.array(log_l) + np.log(priors)
     return np.exp(log_post - np.logaddexp.reduce(log_post))
 
-posterior_practice = posteriors(y_modes, U, sigma, tau, priors)
+def posteriors(y, U_, sigma_, tau_, priors_):
+    return _post(y_modes, U, sigma, tau, priors)
 """,
         ),
     ],
@@ -378,12 +412,29 @@ RIGHT = {
     "q2": [
         (
             "by least squares on the noise-free record",
-            """tgt = U @ np.array([1.3, 1.0, 1.0]) - u1 - u3
-leak_theta2 = np.linalg.lstsq(u2[:, None], tgt, rcond=None)[0][0]
+            """def leak_theta2(U, theta1):
+    tgt = U @ np.array([theta1, 1.0, 1.0]) - U[:, 0] - U[:, 2]
+    return np.linalg.lstsq(U[:, 1:2], tgt, rcond=None)[0][0]
 """,
         ),
     ],
-    "q3": [],
+    "q3": [
+        (
+            "by hand with an explicit inverse, a list",
+            """def power_pair(U, sigma, theta2, alpha):
+    U = np.asarray(U, dtype=float)
+    n = len(U)
+    s2 = sigma * np.sqrt(np.linalg.inv(U[:, :2].T @ U[:, :2])[1, 1])
+    z = stats.norm.ppf(1 - alpha / 2)
+    b = abs(theta2 - 1.0) / s2
+    P1 = np.outer(U[:, 0], U[:, 0]) / (U[:, 0] @ U[:, 0])
+    d_perp = (np.eye(n) - P1) @ ((theta2 - 1.0) * U[:, 1])
+    lam = d_perp @ d_perp / sigma**2
+    return [stats.norm.cdf(b - z) + stats.norm.cdf(-b - z),
+            stats.ncx2.sf(stats.chi2.ppf(1 - alpha, n - 1), n - 1, lam)]
+""",
+        ),
+    ],
     "q4": [
         (
             "product of pdfs by broadcasting",
@@ -392,8 +443,14 @@ leak_theta2 = np.linalg.lstsq(u2[:, None], tgt, rcond=None)[0][0]
     ],
     "q5": [
         (
-            "median and the closed form",
-            "ml_35 = [np.median([3.0, 5.0]), np.exp(-1.0) / (2 * np.pi)]",
+            "the closed form of the maximum",
+            """def maximum_likelihood(z, sigma):
+    z = np.asarray(z, dtype=float)
+    t = z.mean()
+    n = z.size
+    L = (2 * np.pi * sigma**2) ** (-n / 2) * np.exp(-np.sum((z - t) ** 2) / (2 * sigma**2))
+    return [t, L]
+""",
         ),
     ],
     "q6": [
@@ -431,8 +488,7 @@ leak_theta2 = np.linalg.lstsq(u2[:, None], tgt, rcond=None)[0][0]
     "q9_practice": [
         (
             "Cholesky log-densities by hand, a list",
-            _OWN_POSTERIOR
-            + "posterior_practice = own_posteriors(y_modes, U, sigma, tau, priors)\n",
+            _OWN_POSTERIOR + "posteriors = own_posteriors\n",
         ),
     ],
     "q9": [
@@ -444,19 +500,26 @@ leak_theta2 = np.linalg.lstsq(u2[:, None], tgt, rcond=None)[0][0]
     ],
 }
 
-# q5's reference is a named tuple (theta_ml, L_max): a list in the same order is right too.
+# q5's reference is a named tuple (theta_ml, L_max): a tuple in the same order is right too.
 RIGHT["q5"] += [
-    ("a list", "ml_35 = [4.0, np.exp(-1.0) / (2 * np.pi)]\n"),
+    (
+        "via the likelihood of q4, a tuple",
+        """def maximum_likelihood(z, sigma):
+    t = sum(z) / len(z)
+    return (t, float(likelihood(np.array([t]), z, sigma)[0]))
+""",
+    ),
 ]
 
 WRONG["q3"] += [  # a one-line library answer is on the list now (issue 26)
     (
         "the library's power functions (not allowed)",
-        """theta_f = [1.0, 1.1, 1.0]
-power_pair = [
-    dg.parameter_estimate_power(U, nominal, [0, 1], 1, theta_f, sigma=sigma, alpha=0.05),
-    dg.prediction_error_power(U, nominal, [0], theta_f, sigma=sigma, alpha=0.05),
-]
+        """def power_pair(U, sigma, theta2, alpha):
+    theta_f = [1.0, theta2, 1.0]
+    return [
+        dg.parameter_estimate_power(U, nominal, [0, 1], 1, theta_f, sigma=sigma, alpha=alpha),
+        dg.prediction_error_power(U, nominal, [0], theta_f, sigma=sigma, alpha=alpha),
+    ]
 """,
     ),
 ]
@@ -503,15 +566,18 @@ RIGHT["q3"] += [
         "the solution, with the power functions imported and never called",
         """from course.diagnosis import parameter_estimate_power, prediction_error_power  # noqa: F401
 
-_, s2, _ = joint_parameter_test(U, U @ nominal, sigma, 0.05)
-z = stats.norm.isf(0.025)
-b = 0.1 / s2
-p_param = stats.norm.sf(z - b) + stats.norm.cdf(-z - b)
-d = 0.1 * u2
-d_perp = d - u1 * (u1 @ d) / (u1 @ u1)
-lam = (d_perp @ d_perp) / sigma**2
-p_pe = stats.ncx2.sf(stats.chi2.isf(0.05, N - 1), N - 1, lam)
-power_pair = (float(p_param), float(p_pe))
+
+def power_pair(U, sigma, theta2, alpha):
+    U = np.asarray(U, dtype=float)
+    n_obs = U.shape[0]
+    _, s2, _ = joint_parameter_test(U, U @ nominal, sigma, alpha)
+    z = stats.norm.isf(alpha / 2)
+    b = (theta2 - 1.0) / s2
+    p_param = stats.norm.sf(z - b) + stats.norm.cdf(-z - b)
+    d = (theta2 - 1.0) * U[:, 1]
+    d_perp = d - U[:, 0] * (U[:, 0] @ d) / (U[:, 0] @ U[:, 0])
+    lam = (d_perp @ d_perp) / sigma**2
+    return float(p_param), float(stats.ncx2.sf(stats.chi2.isf(alpha, n_obs - 1), n_obs - 1, lam))
 """,
     ),
 ]
@@ -534,10 +600,9 @@ def glr_nf_vs_f2(U, y, sigma):
 WRONG["q2"] += [
     (
         "estimate_parameters (not allowed)",
-        """leak_theta2 = float(
-    dg.estimate_parameters(U @ np.array([1.3, 1.0, 1.0]), U, [1.0, 1.0, 1.0], [1], sigma=1.0)
-    .estimate[0]
-)
+        """def leak_theta2(U, theta1):
+    data = U @ np.array([theta1, 1.0, 1.0])
+    return float(dg.estimate_parameters(data, U, [1.0, 1.0, 1.0], [1], sigma=1.0).estimate[0])
 """,
     ),
 ]

@@ -9,10 +9,12 @@ wa04-k: wa04-1 has window 10 and alpha 0.001 (the practice record's settings), w
 
 ASSIGNMENT = "04_ekf_residuals"
 STUDENT = "wa04"
+DEPENDS = {"q7": ["q7_practice"], "q7_why": ["q7"]}
 
 # The demo student's personal answer (window 8, alpha 0.001: a false alarm at t = 11), as a
 # student copying a classmate's screen would hard-code it.
 DEMO_ALARM = "(26.124481558376143, 11)"
+DEMO_COUNTS = "(46, 0)"
 
 _Q2_HEAD = """def normalized_innovations(y, a, q, r, m0, p0):
     y = np.asarray(y, dtype=float)
@@ -35,10 +37,17 @@ def _q2(body: str) -> str:
     return _Q2_HEAD + body
 
 
+_Q1 = "def steady_state(q, r):\n    P = (q + np.sqrt(q * q + 4 * q * r)) / 2\n"
+
 _Q3_HEAD = "def windowed_statistic(z, L):\n    z = np.asarray(z, dtype=float)\n"
 
-_Q5P_T = """model = dg.beta_drift_model(Ts=0.1, q_beta=1e-4, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
-T_practice = nis.windowed_nis(kf.extended_kalman_filter(model, y_practice, u_practice), 10)
+_Q4 = "def window_threshold(L, alpha):\n    return float({})\n"
+
+_Q5P_T = """def find_alarm(record):
+    model = dg.beta_drift_model(Ts=record["Ts"], q_beta=record["q_beta"], q_x=record["q_x"],
+                                r=record["r"], x0_mean=(1.0, 0.5))
+    L, alpha = record["window"], record["alpha"]
+    T_practice = nis.windowed_nis(kf.extended_kalman_filter(model, record["y"], record["u"]), L)
 """
 _Q5_T = """model = dg.beta_drift_model(Ts=mine["Ts"], q_beta=mine["q_beta"], q_x=mine["q_x"],
                             r=mine["r"], x0_mean=(1.0, 0.5))
@@ -64,9 +73,21 @@ _Q6_HEAD = """def false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
 
 _Q7_HEAD = """T7 = {}
 for q_beta in (0.0, 1e-4):
-    m7 = dg.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
-    T7[q_beta] = np.nan_to_num(nis.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10))
+    m7 = dg.beta_drift_model(Ts=mine7["Ts"], q_beta=q_beta, q_x=mine7["q_x"], r=mine7["r"],
+                             x0_mean=(1.0, 0.5))
+    T7[q_beta] = np.nan_to_num(nis.windowed_nis(kf.extended_kalman_filter(m7, mine7["y"], mine7["u"]), 10))
 thr7 = nis.windowed_nis_threshold(10, 0.001)
+t_fault7 = mine7["t_fault"]
+"""
+
+_Q7P = """def count_false_alarms(record):
+    L, alpha, t_f = record["window"], record["alpha"], record["t_fault"]
+    T7 = {}
+    for q_beta in (0.0, 1e-4):
+        m7 = dg.beta_drift_model(Ts=record["Ts"], q_beta=q_beta, q_x=record["q_x"], r=record["r"],
+                                 x0_mean=(1.0, 0.5))
+        T7[q_beta] = np.nan_to_num(nis.windowed_nis(kf.extended_kalman_filter(m7, record["y"], record["u"]), L))
+    thr7 = nis.windowed_nis_threshold(L, alpha)
 """
 
 _Q8_HEAD = """def rls_update(theta, P, phi, y, r):
@@ -80,25 +101,33 @@ WRONG = {
     "q1": [
         (
             "filtered variance P(t|t) instead of the prediction variance",
-            "P_pred = (1 + np.sqrt(5)) / 2\nK = P_pred / (P_pred + 1)\nsteady = ((1 - K) * P_pred, K)",
+            _Q1 + "    K = P / (P + r)\n    return ((1 - K) * P, K)\n",
         ),
-        (
-            "(K, P) order",
-            "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf / (P_inf + 1), P_inf)",
-        ),
+        ("(K, P) order", _Q1 + "    return (P / (P + r), P)\n"),
         (
             "the negative root",
-            "P_inf = (1 - np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / (P_inf + 1))",
+            _Q1.replace("(q + np.sqrt(", "(q - np.sqrt(") + "    return (P, P / (P + r))\n",
         ),
-        ("one Riccati step from P = 1", "P = 1.0 - 1.0 / 2.0 + 1.0\nsteady = (P, P / (P + 1))"),
-        ("gain P/r without the sum", "P_inf = (1 + np.sqrt(5)) / 2\nsteady = (P_inf, P_inf / 1.0)"),
+        (
+            "one Riccati step from P = 1",
+            "def steady_state(q, r):\n    P = 1.0 - 1.0 / (1.0 + r) + q\n    return (P, P / (P + r))\n",
+        ),
+        ("gain P/r without the sum", _Q1 + "    return (P, P / r)\n"),
         (
             "filtered variance, and K computed from it",
-            "P = (np.sqrt(5) - 1) / 2\nsteady = (P, P / (P + 1))",
+            _Q1 + "    P = P * r / (P + r)\n    return (P, P / (P + r))\n",
         ),
         (
             "right, but computed in float32",
-            "P = np.float32((1 + np.sqrt(np.float32(5))) / 2)\nsteady = (P, P / (P + np.float32(1)))",
+            "def steady_state(q, r):\n"
+            "    q, r = np.float32(q), np.float32(r)\n"
+            "    P = (q + np.sqrt(q * q + np.float32(4) * q * r)) / np.float32(2)\n"
+            "    return (P, P / (P + r))\n",
+        ),
+        (
+            "the public case hard-wired (the golden ratio)",
+            _Q1.replace("(q + np.sqrt(q * q + 4 * q * r)) / 2", "(1 + np.sqrt(5)) / 2")
+            + "    return (P, P / (P + r))\n",
         ),
     ],
     "q2": [
@@ -177,40 +206,48 @@ WRONG = {
         ),
     ],
     "q4": [
-        ("lower tail chi2.ppf(alpha)", "threshold = stats.chi2.ppf(0.001, 10)"),
-        ("two-sided alpha/2", "threshold = stats.chi2.isf(0.0005, 10)"),
-        ("L - 1 degrees of freedom", "threshold = stats.chi2.isf(0.001, 9)"),
-        ("normal approximation", "threshold = 10 + stats.norm.isf(0.001) * np.sqrt(2 * 10)"),
-        ("divided by L (mean scale)", "threshold = stats.chi2.isf(0.001, 10) / 10"),
+        ("lower tail chi2.ppf(alpha)", _Q4.format("stats.chi2.ppf(alpha, L)")),
+        ("two-sided alpha/2", _Q4.format("stats.chi2.isf(alpha / 2, L)")),
+        ("L - 1 degrees of freedom", _Q4.format("stats.chi2.isf(alpha, L - 1)")),
+        ("normal approximation", _Q4.format("L + stats.norm.isf(alpha) * np.sqrt(2 * L)")),
+        ("divided by L (mean scale)", _Q4.format("stats.chi2.isf(alpha, L) / L")),
+        ("the public case hard-wired", _Q4.format("stats.chi2.isf(0.001, 10)")),
     ],
     "q5_practice": [
         (
             "L - 1 degrees of freedom",
             _Q5P_T
-            + "thr = stats.chi2.isf(0.001, 9)\n"
-            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')})",
+            + "    thr = stats.chi2.isf(alpha, L - 1)\n"
+            + f"    return thr, {_FIRST.format(T='T_practice', thr='thr')}\n",
         ),
         (
             "window-start index",
             _Q5P_T
-            + "thr = stats.chi2.isf(0.001, 10)\n"
-            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')} - 9)",
+            + "    thr = stats.chi2.isf(alpha, L)\n"
+            + f"    return thr, {_FIRST.format(T='T_practice', thr='thr')} - (L - 1)\n",
         ),
         (
             "two-sided alpha/2",
             _Q5P_T
-            + "thr = stats.chi2.isf(0.0005, 10)\n"
-            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')})",
+            + "    thr = stats.chi2.isf(alpha / 2, L)\n"
+            + f"    return thr, {_FIRST.format(T='T_practice', thr='thr')}\n",
         ),
         (
             "1-based sample number",
             _Q5P_T
-            + "thr = stats.chi2.isf(0.001, 10)\n"
-            + f"alarm_practice = (thr, {_FIRST.format(T='T_practice', thr='thr')} + 1)",
+            + "    thr = stats.chi2.isf(alpha, L)\n"
+            + f"    return thr, {_FIRST.format(T='T_practice', thr='thr')} + 1\n",
+        ),
+        (
+            "the practice record's window and alpha whatever the record",
+            _Q5P_T.replace('record["window"], record["alpha"]', "10, 0.001")
+            + "    thr = stats.chi2.isf(alpha, L)\n"
+            + f"    return thr, {_FIRST.format(T='T_practice', thr='thr')}\n",
         ),
         (
             "the fault onset instead of the alarm",
-            "alarm_practice = (stats.chi2.isf(0.001, 10), t_fault_practice)",
+            "def find_alarm(record):\n"
+            "    return stats.chi2.isf(record['alpha'], record['window']), t_fault_practice\n",
         ),
     ],
     "q5": [
@@ -293,6 +330,31 @@ WRONG = {
             _Q7_HEAD + "false_alarms = tuple(int(np.sum(T7[qb][:t_fault7 + 9] > thr7)) "
             "for qb in (0.0, 1e-4))",
         ),
+        ("the demo student's counts hard-coded", f"false_alarms = {DEMO_COUNTS}"),
+    ],
+    "q7_practice": [
+        (
+            "counts over the whole record (after the fault too)",
+            _Q7P + "    return tuple(int(np.sum(T7[qb] > thr7)) for qb in (0.0, 1e-4))\n",
+        ),
+        (
+            "order swapped",
+            _Q7P + "    return tuple(int(np.sum(T7[qb][:t_f] > thr7)) for qb in (1e-4, 0.0))\n",
+        ),
+        (
+            "threshold with L - 1 degrees of freedom",
+            _Q7P.replace("nis.windowed_nis_threshold(L, alpha)", "stats.chi2.isf(alpha, L - 1)")
+            + "    return tuple(int(np.sum(T7[qb][:t_f] > thr7)) for qb in (0.0, 1e-4))\n",
+        ),
+        (
+            "the public record whatever the argument",
+            _Q7P.replace('record["y"], record["u"]', "y7, u7")
+            + "    return tuple(int(np.sum(T7[qb][:t_f] > thr7)) for qb in (0.0, 1e-4))\n",
+        ),
+        (
+            "the public answer hard-coded",
+            "def count_false_alarms(record):\n    return (14, 0)\n",
+        ),
     ],
     "q8": [
         (
@@ -324,12 +386,13 @@ RIGHT = {
     "q1": [
         (
             "iterate the recursion (list)",
-            "P = 1.0\nfor _ in range(200):\n    P = P - P**2 / (P + 1) + 1\n"
-            "steady = [P, P / (P + 1)]",
+            "def steady_state(q, r):\n    P = 1.0\n    for _ in range(500):\n"
+            "        P = P - P**2 / (P + r) + q\n    return [P, P / (P + r)]\n",
         ),
         (
             "np.roots, numpy scalars, extra print",
-            "P = max(np.roots([1.0, -1.0, -1.0]))\nsteady = (P, P / (P + 1))\nprint(steady)",
+            "def steady_state(q, r):\n    P = max(np.roots([1.0, -q, -q * r]))\n"
+            "    print(P)\n    return (P, P / (P + r))\n",
         ),
     ],
     "q2": [
@@ -359,25 +422,26 @@ RIGHT = {
         ),
     ],
     "q4": [
-        ("ppf(1 - alpha)", "threshold = stats.chi2.ppf(1 - 0.001, 10)"),
+        ("ppf(1 - alpha)", _Q4.format("stats.chi2.ppf(1 - alpha, L)")),
         (
             "numpy scalar with a print",
-            "threshold = np.float64(stats.chi2.isf(0.001, 10))\nprint(round(threshold, 2))",
+            "def window_threshold(L, alpha):\n"
+            "    c = np.float64(stats.chi2.isf(alpha, L))\n    print(round(c, 2))\n    return c\n",
         ),
     ],
     "q5_practice": [
         (
             "nis.windowed_nis_threshold and np.argmax, list",
             _Q5P_T
-            + "thr = nis.windowed_nis_threshold(10, 0.001)\n"
-            + "alarm_practice = [thr, int(np.argmax(np.nan_to_num(T_practice) > thr))]",
+            + "    thr = nis.windowed_nis_threshold(L, alpha)\n"
+            + "    return [thr, int(np.argmax(np.nan_to_num(T_practice) > thr))]\n",
         ),
         (
             "loop, numpy int",
             _Q5P_T
-            + "thr = stats.chi2.isf(0.001, 10)\n"
-            + "first = next(t for t in range(len(T_practice)) if T_practice[t] > thr)\n"
-            + "alarm_practice = (thr, np.int64(first))",
+            + "    thr = stats.chi2.isf(alpha, L)\n"
+            + "    first = next(t for t in range(len(T_practice)) if T_practice[t] > thr)\n"
+            + "    return (thr, np.int64(first))\n",
         ),
     ],
     "q5": [
@@ -424,10 +488,25 @@ RIGHT = {
             """counts = []
 for q_beta in (0.0, 1e-4):
     m7 = dg.beta_drift_model(Ts=0.1, q_beta=q_beta, q_x=1e-4, r=2.5e-3, x0_mean=(1.0, 0.5))
-    T7 = nis.windowed_nis(kf.extended_kalman_filter(m7, y7, u7), 10)
+    T7 = nis.windowed_nis(kf.extended_kalman_filter(m7, mine7["y"], mine7["u"]), 10)
     with np.errstate(invalid="ignore"):
-        counts.append(np.count_nonzero(T7[:t_fault7] > stats.chi2.isf(0.001, 10)))
+        counts.append(np.count_nonzero(T7[: mine7["t_fault"]] > stats.chi2.isf(0.001, 10)))
 false_alarms = counts""",
+        ),
+    ],
+    "q7_practice": [
+        (
+            "np.count_nonzero with errstate, a list",
+            """def count_false_alarms(record):
+    out = []
+    for q_beta in (0.0, 1e-4):
+        m = dg.beta_drift_model(Ts=record["Ts"], q_beta=q_beta, q_x=record["q_x"], r=record["r"],
+                                x0_mean=(1.0, 0.5))
+        T = nis.windowed_nis(kf.extended_kalman_filter(m, record["y"], record["u"]), record["window"])
+        with np.errstate(invalid="ignore"):
+            out.append(np.count_nonzero(T[: record["t_fault"]] > stats.chi2.isf(record["alpha"], record["window"])))
+    return out
+""",
         ),
     ],
     "q8": [
@@ -502,24 +581,50 @@ RIGHT["q6"] += [
     ),
 ]
 
-# q7_why: the "why?" of q7 as a choice graded automatically; every other option loses the point.
-WRONG["q7_why"] = [
-    (option, f'false_alarm_cause = "{option}"') for option in ("threshold", "fault", "noise")
+# q7_why: the cause of the false alarms of the student's own q7 record ("model" when only the
+# constant-beta filter alarms, "noise" when both do); a fixed option is right for some of the
+# class only (COINCIDES), a rule that ignores which filters alarm for none.
+_CAUSE = {
+    "threshold": 'false_alarm_cause = "threshold"',
+    "fault": 'false_alarm_cause = "fault"',
+    "model, always (the lecture's answer)": 'false_alarm_cause = "model"',
+    "noise, always": 'false_alarm_cause = "noise"',
+    "the cause read backwards": 'false_alarm_cause = "model" if false_alarms[1] >= 5 else "noise"',
+}
+WRONG["q7_why"] = list(_CAUSE.items())
+RIGHT["q7_why"] = [
+    (
+        "capitals and spaces, by comparing the counts",
+        'false_alarm_cause = " Noise " if false_alarms[1] > false_alarms[0] / 4 else " Model "',
+    )
 ]
-RIGHT["q7_why"] = [("capitals and spaces", 'false_alarm_cause = " Model "')]
 
+
+def _cause_coincides(option):
+    def same(checks, student):
+        d = checks.data_for("drift", student)
+        return checks.questions["q7_why"].reference(d) == option
+
+    return same
+
+
+COINCIDES = {
+    ("q7_why", "model, always (the lecture's answer)"): _cause_coincides("model"),
+    ("q7_why", "noise, always"): _cause_coincides("noise"),
+}
 WRONG["q1"] += [  # a one-line library answer is on the list now (issue 26)
     (
         "kf.steady_state (not allowed)",
-        "ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[1.0]], R=[[1.0]]))\n"
-        "steady = (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))",
+        "def steady_state(q, r):\n"
+        "    ss = kf.steady_state(kf.LinearModel(F=[[1.0]], H=[[1.0]], Q=[[q]], R=[[r]]))\n"
+        "    return (float(ss.P_pred[0, 0]), float(ss.K[0, 0]))\n",
     ),
 ]
 
 WRONG["q4"] += [  # a one-line library answer is on the list now (issue 26)
     (
         "nis.windowed_nis_threshold (not allowed)",
-        "threshold = nis.windowed_nis_threshold(10, 0.001)",
+        _Q4.format("nis.windowed_nis_threshold(L, alpha)"),
     ),
 ]
 

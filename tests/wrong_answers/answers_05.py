@@ -48,8 +48,21 @@ p_matrix = float(min(1.0, 2 * min(F_min, sf_max)))
 _P6_NIS = (
     "p_nis = float(min(1.0, 2 * min(stats.chi2(m * K).cdf(total), stats.chi2(m * K).sf(total))))\n"
 )
-_PRACTICE = _P6.format(eps="eps_practice", S="S_practice")
 _MINE = _P6.format(eps='mine["eps"]', S='mine["S"]')
+
+_EB = "def eps_bar_interval(m, K, alpha):\n    return ({lo}, {hi})\n"
+_MT = "def matrix_thresholds(m, K, alpha):\n    return (float({lo}), float({hi}))\n"
+_NI = "def nees_interval(n, N, alpha):\n    return ({lo}, {hi})\n"
+_PV = """def nis_pvalues(eps, S):
+    eps = np.asarray(eps, dtype=float)
+    K, m = eps.shape
+    total = float(np.sum(nis_per_step(eps, S)))
+    values = np.linalg.eigvalsh(nis_matrix(eps, S))
+    F_min = nis.extreme_eigenvalue(m, K, "min").cdf(values[0])
+    sf_max = nis.extreme_eigenvalue(m, K, "max").sf(values[-1])
+    p_matrix = float(min(1.0, 2 * min(F_min, sf_max)))
+    p_nis = float(min(1.0, 2 * min(stats.chi2(m * K).cdf(total), stats.chi2(m * K).sf(total))))
+"""
 
 _Q7 = """def false_alarm_rate(m, K, alpha, n_runs, seed):
     rng = np.random.default_rng(seed)
@@ -138,44 +151,75 @@ WRONG = {
     "q3": [
         (
             "the poster's law: chi2(mK) for eps_bar itself",
-            "eps_bar_interval = (stats.chi2(60).ppf(0.025), stats.chi2(60).isf(0.025))",
+            _EB.format(
+                lo="stats.chi2(m * K).ppf(alpha / 2)", hi="stats.chi2(m * K).isf(alpha / 2)"
+            ),
         ),
         (
-            "alpha not split (0.05 in each tail)",
-            "eps_bar_interval = (stats.chi2(60).ppf(0.05) / 20, stats.chi2(60).isf(0.05) / 20)",
+            "alpha not split (alpha in each tail)",
+            _EB.format(
+                lo="stats.chi2(m * K).ppf(alpha) / K", hi="stats.chi2(m * K).isf(alpha) / K"
+            ),
         ),
         (
             "divided by m K",
-            "eps_bar_interval = (stats.chi2(60).ppf(0.025) / 60, stats.chi2(60).isf(0.025) / 60)",
+            _EB.format(
+                lo="stats.chi2(m * K).ppf(alpha / 2) / (m * K)",
+                hi="stats.chi2(m * K).isf(alpha / 2) / (m * K)",
+            ),
         ),
         (
             "dof m K - 1",
-            "eps_bar_interval = (stats.chi2(59).ppf(0.025) / 20, stats.chi2(59).isf(0.025) / 20)",
+            _EB.format(
+                lo="stats.chi2(m * K - 1).ppf(alpha / 2) / K",
+                hi="stats.chi2(m * K - 1).isf(alpha / 2) / K",
+            ),
         ),
         (
             "chi2(m) per step, divided by K",
-            "eps_bar_interval = (stats.chi2(3).ppf(0.025) / 20, stats.chi2(3).isf(0.025) / 20)",
+            _EB.format(
+                lo="stats.chi2(m).ppf(alpha / 2) / K", hi="stats.chi2(m).isf(alpha / 2) / K"
+            ),
+        ),
+        (
+            "the public case hard-wired (95 %, m K = 60)",
+            _EB.format(lo="stats.chi2(60).ppf(0.025) / K", hi="stats.chi2(60).isf(0.025) / K"),
         ),
     ],
     "q4": [
         (
             "alpha not split",
-            'thresholds = (float(nis.extreme_eigenvalue(2, 30, "min").ppf(0.05)),\n'
-            '              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.05)))',
+            _MT.format(
+                lo='nis.extreme_eigenvalue(m, K, "min").ppf(alpha)',
+                hi='nis.extreme_eigenvalue(m, K, "max").isf(alpha)',
+            ),
         ),
         (
             "both from the law of lambda_max",
-            'thresholds = (float(nis.extreme_eigenvalue(2, 30, "max").ppf(0.025)),\n'
-            '              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.025)))',
+            _MT.format(
+                lo='nis.extreme_eigenvalue(m, K, "max").ppf(alpha / 2)',
+                hi='nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2)',
+            ),
         ),
         (
             "chi2(m K)/K thresholds of the NIS test",
-            "thresholds = (stats.chi2(60).ppf(0.025) / 30, stats.chi2(60).isf(0.025) / 30)",
+            _MT.format(
+                lo="stats.chi2(m * K).ppf(alpha / 2) / K", hi="stats.chi2(m * K).isf(alpha / 2) / K"
+            ),
         ),
         (
             "upper tail for the lower threshold",
-            'thresholds = (float(nis.extreme_eigenvalue(2, 30, "min").isf(0.025)),\n'
-            '              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.025)))',
+            _MT.format(
+                lo='nis.extreme_eigenvalue(m, K, "min").isf(alpha / 2)',
+                hi='nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2)',
+            ),
+        ),
+        (
+            "the public case hard-wired (m = 2, K = 30)",
+            _MT.format(
+                lo='nis.extreme_eigenvalue(2, 30, "min").ppf(alpha / 2)',
+                hi='nis.extreme_eigenvalue(2, 30, "max").isf(alpha / 2)',
+            ),
         ),
     ],
     "q5": [
@@ -239,21 +283,23 @@ WRONG = {
     "q6_practice": [
         (
             "one-sided NIS p-value (sf)",
-            _PRACTICE + "pvalues_practice = (float(stats.chi2(m * K).sf(total)), p_matrix)",
+            _PV + "    return (float(stats.chi2(m * K).sf(total)), p_matrix)\n",
         ),
         (
             "chi2(mK) at the average, not the sum",
-            _PRACTICE.replace("total = float(np.sum(", "total = float(np.mean(")
-            + _P6_NIS
-            + "pvalues_practice = (p_nis, p_matrix)",
+            _PV.replace("total = float(np.sum(", "total = float(np.mean(")
+            + "    return (p_nis, p_matrix)\n",
         ),
         (
             "no factor 2 in p_matrix",
-            _PRACTICE.replace("2 * min(F_min, sf_max)", "min(F_min, sf_max)")
-            + _P6_NIS
-            + "pvalues_practice = (p_nis, p_matrix)",
+            _PV.replace("2 * min(F_min, sf_max)", "min(F_min, sf_max)")
+            + "    return (p_nis, p_matrix)\n",
         ),
-        ("(p_matrix, p_nis) order", _PRACTICE + _P6_NIS + "pvalues_practice = (p_matrix, p_nis)"),
+        ("(p_matrix, p_nis) order", _PV + "    return (p_matrix, p_nis)\n"),
+        (
+            "the practice answer hard-coded",
+            f"def nis_pvalues(eps, S):\n    return {PRACTICE_PVALUES}\n",
+        ),
     ],
     "q6": [
         ("the demo student's answer hard-coded", f"pvalues = {DEMO_PVALUES}"),
@@ -311,31 +357,44 @@ WRONG = {
     "q8": [
         (
             "chi2(n N) not divided by N",
-            "nees_interval = (stats.chi2(200).ppf(0.025), stats.chi2(200).isf(0.025))",
+            _NI.format(
+                lo="stats.chi2(n * N).ppf(alpha / 2)", hi="stats.chi2(n * N).isf(alpha / 2)"
+            ),
         ),
         (
             "normal approximation n +- 1.96 sqrt(2n/N)",
-            "nees_interval = (4 - 1.96 * np.sqrt(8 / 50), 4 + 1.96 * np.sqrt(8 / 50))",
+            _NI.format(lo="n - 1.96 * np.sqrt(2 * n / N)", hi="n + 1.96 * np.sqrt(2 * n / N)"),
         ),
         (
             "normal approximation with the exact z",
-            "h = stats.norm.isf(0.025) * np.sqrt(2 * 4 / 50)\nnees_interval = (4 - h, 4 + h)",
+            _NI.format(
+                lo="n - stats.norm.isf(alpha / 2) * np.sqrt(2 * n / N)",
+                hi="n + stats.norm.isf(alpha / 2) * np.sqrt(2 * n / N)",
+            ),
         ),
         (
             "chi2(n) of one run",
-            "nees_interval = (stats.chi2(4).ppf(0.025), stats.chi2(4).isf(0.025))",
+            _NI.format(lo="stats.chi2(n).ppf(alpha / 2)", hi="stats.chi2(n).isf(alpha / 2)"),
         ),
         (
             "divided by n N",
-            "nees_interval = (stats.chi2(200).ppf(0.025) / 200, stats.chi2(200).isf(0.025) / 200)",
+            _NI.format(
+                lo="stats.chi2(n * N).ppf(alpha / 2) / (n * N)",
+                hi="stats.chi2(n * N).isf(alpha / 2) / (n * N)",
+            ),
         ),
         (
             "alpha not split",
-            "nees_interval = (stats.chi2(200).ppf(0.05) / 50, stats.chi2(200).isf(0.05) / 50)",
+            _NI.format(
+                lo="stats.chi2(n * N).ppf(alpha) / N", hi="stats.chi2(n * N).isf(alpha) / N"
+            ),
         ),
         (
             "dof n N - 1",
-            "nees_interval = (stats.chi2(199).ppf(0.025) / 50, stats.chi2(199).isf(0.025) / 50)",
+            _NI.format(
+                lo="stats.chi2(n * N - 1).ppf(alpha / 2) / N",
+                hi="stats.chi2(n * N - 1).isf(alpha / 2) / N",
+            ),
         ),
     ],
 }
@@ -383,19 +442,22 @@ RIGHT = {
     "q3": [
         (
             "chi2.interval",
-            "eps_bar_interval = tuple(np.array(stats.chi2(60).interval(0.95)) / 20)",
+            "def eps_bar_interval(m, K, alpha):\n"
+            "    return tuple(np.array(stats.chi2(m * K).interval(1 - alpha)) / K)\n",
         ),
         (
             "the gamma law of eps_bar, list",
-            "law = stats.gamma(a=30, scale=2 / 20)\n"
-            "eps_bar_interval = [law.ppf(0.025), law.ppf(0.975)]",
+            "def eps_bar_interval(m, K, alpha):\n"
+            "    law = stats.gamma(a=m * K / 2, scale=2 / K)\n"
+            "    return [law.ppf(alpha / 2), law.ppf(1 - alpha / 2)]\n",
         ),
     ],
     "q4": [
         (
             "ppf(1 - alpha/2) for the upper one, list",
-            'thresholds = [nis.extreme_eigenvalue(2, 30, "min").ppf(0.025),\n'
-            '              nis.extreme_eigenvalue(2, 30, "max").ppf(0.975)]',
+            "def matrix_thresholds(m, K, alpha):\n"
+            '    return [nis.extreme_eigenvalue(m, K, "min").ppf(alpha / 2),\n'
+            '            nis.extreme_eigenvalue(m, K, "max").ppf(1 - alpha / 2)]\n',
         ),
     ],
     "q5": [
@@ -420,7 +482,7 @@ RIGHT = {
     "q6_practice": [
         (
             "list with a print",
-            _PRACTICE + _P6_NIS + "pvalues_practice = [p_nis, p_matrix]\nprint(pvalues_practice)",
+            _PV + "    print(p_nis, p_matrix)\n    return [p_nis, p_matrix]\n",
         ),
     ],
     "q6": [
@@ -458,7 +520,8 @@ RIGHT = {
     "q8": [
         (
             "chi2.interval, list",
-            "nees_interval = list(np.array(stats.chi2(200).interval(0.95)) / 50)",
+            "def nees_interval(n, N, alpha):\n"
+            "    return list(np.array(stats.chi2(n * N).interval(1 - alpha)) / N)\n",
         ),
     ],
 }
@@ -470,7 +533,10 @@ RIGHT["q3"] += [
         "a named tuple of the student's own",
         """from collections import namedtuple
 Iv = namedtuple("Iv", "lo hi")
-eps_bar_interval = Iv(*(v / 20 for v in stats.chi2(60).interval(0.95)))
+
+
+def eps_bar_interval(m, K, alpha):
+    return Iv(*(v / K for v in stats.chi2(m * K).interval(1 - alpha)))
 """,
     ),
 ]
@@ -478,8 +544,8 @@ eps_bar_interval = Iv(*(v / 20 for v in stats.chi2(60).interval(0.95)))
 WRONG["q6_practice"] += [  # a one-line library answer is on the list now (issue 26)
     (
         "nis.nis_test and nis.nis_matrix_test (not allowed)",
-        "pvalues_practice = (nis.nis_test(eps_practice, S_practice, 0.05).pvalue,\n"
-        "                    nis.nis_matrix_test(eps_practice, S_practice, 0.05).pvalue)",
+        "def nis_pvalues(eps, S):\n"
+        "    return (nis.nis_test(eps, S, 0.05).pvalue, nis.nis_matrix_test(eps, S, 0.05).pvalue)\n",
     ),
 ]
 
@@ -511,31 +577,35 @@ def nis_per_step(eps, S):
 WRONG["q4"] += [
     (
         "nis_matrix_critical_values in a cell added at the end, numbers pasted (1/1 before)",
-        """thresholds = (0.44949981369389597, 1.7796915167114988)  # pasted from the last cell
+        """def matrix_thresholds(m, K, alpha):
+    return (0.44949981369389597, 1.7796915167114988)  # pasted from the last cell
 # %% added cell at the end
 print(nis.nis_matrix_critical_values(2, 30, 0.05))
 """,
     ),
     (
         "nis_matrix_test's critical values on any record",
-        """r = nis.nis_matrix_test(np.ones((30, 2)), np.eye(2), 0.05)
-thresholds = (float(r.critical_value[0]), float(r.critical_value[1]))
+        """def matrix_thresholds(m, K, alpha):
+    r = nis.nis_matrix_test(np.ones((K, m)), np.eye(m), alpha)
+    return (float(r.critical_value[0]), float(r.critical_value[1]))
 """,
     ),
 ]
 WRONG["q8"] += [
     (
         "nis_critical_values / N (not allowed)",
-        """lo, hi = nis.nis_critical_values(4, 50, 0.05)
-nees_interval = (lo / 50, hi / 50)
+        """def nees_interval(n, N, alpha):
+    lo, hi = nis.nis_critical_values(n, N, alpha)
+    return (lo / N, hi / N)
 """,
     ),
 ]
 RIGHT["q4"] += [
     (
         "the solution, and nis.nis in an added cell (forbidden only in the function question q1)",
-        """thresholds = (float(nis.extreme_eigenvalue(2, 30, "min").ppf(0.025)),
-              float(nis.extreme_eigenvalue(2, 30, "max").isf(0.025)))
+        """def matrix_thresholds(m, K, alpha):
+    return (float(nis.extreme_eigenvalue(m, K, "min").ppf(alpha / 2)),
+            float(nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2)))
 # %% added cell
 print(nis.nis(np.ones((3, 2)), np.eye(2)))
 """,

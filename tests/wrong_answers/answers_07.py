@@ -68,9 +68,6 @@ _DIA_BY = """def dia_estimate(d):
     suspect = {suspect}
     keep = np.delete(np.arange(len(d["y"])), suspect)
     return lsq.fit(d["A"][keep], d["y"][keep], {weights}).x_hat
-
-
-x_dia_practice = dia_estimate(practice)
 """
 
 WRONG = {
@@ -349,17 +346,26 @@ def glr_statistic(A, y, Qyy, C):
     "q6_practice": [
         (
             "w² of the first of the pair",
-            "T_pair_practice = glr_statistic(practice['A'], practice['y'], practice['Qyy'], "
-            "np.eye(14)[:, practice['pair'][:1]])",
+            "def pair_statistic(line):\n"
+            "    return glr_statistic(line['A'], line['y'], line['Qyy'], "
+            "np.eye(len(line['y']))[:, line['pair'][:1]])\n",
         ),
         (
             "unweighted",
-            "T_pair_practice = glr_statistic(practice['A'], practice['y'], np.eye(14), "
-            "np.eye(14)[:, practice['pair']])",
+            "def pair_statistic(line):\n"
+            "    n = len(line['y'])\n"
+            "    return glr_statistic(line['A'], line['y'], np.eye(n), np.eye(n)[:, line['pair']])\n",
         ),
         (
             "the overall model test's T",
-            "T_pair_practice = lsq.fit(practice['A'], practice['y'], practice['Qyy']).squared_norm",
+            "def pair_statistic(line):\n"
+            "    return lsq.fit(line['A'], line['y'], line['Qyy']).squared_norm\n",
+        ),
+        (
+            "the practice pair whatever the line",
+            "def pair_statistic(line):\n"
+            "    return glr_statistic(line['A'], line['y'], line['Qyy'], "
+            "np.eye(len(line['y']))[:, [7, 8]])\n",
         ),
     ],
     "q6": [
@@ -387,7 +393,7 @@ def glr_statistic(A, y, Qyy, C):
     "q7_practice": [
         (
             "no adaptation (x_hat of H0)",
-            "x_dia_practice = lsq.fit(practice['A'], practice['y'], practice['Qyy']).x_hat",
+            "def dia_estimate(d):\n    return lsq.fit(d['A'], d['y'], d['Qyy']).x_hat\n",
         ),
         (
             "largest |e| removed",
@@ -407,8 +413,10 @@ def glr_statistic(A, y, Qyy, C):
         ),
         (
             "(slope, height) order",
-            "x_dia_practice = np.polyfit(np.delete(np.arange(14.0), 7), "
-            "np.delete(practice['y'], 7), 1, w=1 / np.delete(np.sqrt(np.diag(practice['Qyy'])), 7))",
+            _DIA_BY.format(
+                suspect="lsq.w_tests(fit, d['alpha']).largest",
+                weights='d["Qyy"][np.ix_(keep, keep)]',
+            ).replace(").x_hat", ").x_hat[::-1]"),
         ),
     ],
     "q7": [
@@ -538,11 +546,16 @@ def glr_decision(A, y, Qyy, C, alpha):
     "q6_practice": [
         (
             "the nested fits' drop of the residual norm",
-            """s = np.sqrt(np.diag(practice["Qyy"]))
-def norm2(X):
-    r = practice["y"] / s - (X / s[:, None]) @ np.linalg.lstsq(X / s[:, None], practice["y"] / s, rcond=None)[0]
-    return float(r @ r)
-T_pair_practice = norm2(practice["A"]) - norm2(np.column_stack([practice["A"], np.eye(14)[:, practice["pair"]]]))
+            """def pair_statistic(line):
+    s = np.sqrt(np.diag(line["Qyy"]))
+
+    def norm2(X):
+        Xw = X / s[:, None]
+        r = line["y"] / s - Xw @ np.linalg.lstsq(Xw, line["y"] / s, rcond=None)[0]
+        return float(r @ r)
+
+    C = np.eye(len(line["y"]))[:, line["pair"]]
+    return norm2(line["A"]) - norm2(np.column_stack([line["A"], C]))
 """,
         )
     ],
@@ -624,9 +637,6 @@ T_pair_practice = norm2(practice["A"]) - norm2(np.column_stack([practice["A"], n
     keep = np.delete(np.arange(len(d["y"])), lsq.w_tests(fit, d["alpha"]).largest)
     s = np.sqrt(np.diag(d["Qyy"]))[keep]
     return np.linalg.lstsq(d["A"][keep] / s[:, None], d["y"][keep] / s, rcond=None)[0]
-
-
-x_dia_practice = dia_estimate(practice)
 """,
         )
     ],

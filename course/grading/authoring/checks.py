@@ -94,8 +94,9 @@ class Mistake:
     -----
     A case whose answer matches a mistake within the question's tolerance scores 0 like any
     other wrong answer; the mistake only changes the message. Automatic diagnostics (shape,
-    NaN, sign, a constant factor, transposed, off by one, a permutation) need no declaration:
-    declare the mistakes that are specific to the method taught.
+    NaN, sign, a constant factor, transposed, a permutation) need no declaration: declare the
+    mistakes that are specific to the method taught. An integer answer (an index, a count) gets
+    no relation to the right one, whose message would give it away.
 
     Examples
     --------
