@@ -228,6 +228,20 @@ def _submissions(env) -> dict[str, object]:
             "    return getattr(lsq, 'w_' + 'tests')(f(A, y, Qyy), 0.05).statistic"
         ),
     )
+    # right values through the private implementation of the forbidden w_tests, imported
+    # before the function runs (issue 26): a function question's call reports it as w_tests
+    subs["forbidden_private_twin"] = _with_answer(
+        "q4",
+        _cell(_solution(), "q4-answer")["source"]
+        .replace(
+            "def w_statistics", "from course.lsq._tests import _w_test_result\n\n\ndef w_statistics"
+        )
+        .replace(
+            "    return numerator / denominator",
+            "    w = numerator / denominator\n"
+            "    return _w_test_result(w, np.ones_like(w), np.ones_like(w), 0.05).statistic",
+        ),
+    )
     # the demo student's right T, computed (a hard-coded number went stale when the data changed)
     checks = load_checks(SOLUTION_DIR)
     demo_t = checks.questions["q6"].expected(data=checks.data_for("survey", "demo"))
@@ -631,6 +645,9 @@ def test_forbidden_calls(graded):
     # an import is not a call: a right answer that imports a forbidden function keeps its points
     _expect(graded["rows"]["forbidden_unused_import"], {})
     row = graded["rows"]["forbidden_runtime"]
+    _expect(row, {"q4": "forbidden"})
+    assert "course.lsq.w_tests" in row["questions"]["q4"]["message"]
+    row = graded["rows"]["forbidden_private_twin"]
     _expect(row, {"q4": "forbidden"})
     assert "course.lsq.w_tests" in row["questions"]["q4"]["message"]
 

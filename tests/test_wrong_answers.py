@@ -32,7 +32,9 @@ dependent question is graded.
 
 To stay cheap, the suite packs the variants of different questions into few notebooks
 (questions are graded independently; a notebook holds at most one variant per question, every
-other answer cell keeps the solution) and grades them with the real grader,
+other answer cell keeps the solution, and no variant there rebinds a name another question's answer
+binds: the grader reads the notebook's final names, so a q6 cell that redefines q6_practice's
+function would be graded in its place) and grades them with the real grader,
 ``course.grading.batch.driver.grade``, in the assignment's graded class that the whole-class tests
 share (``graded_class`` in ``tests/conftest.py``).
 
@@ -130,6 +132,30 @@ def _defined(source: str) -> set[str]:
     return names
 
 
+def _bound(source: str) -> set[str]:
+    """Every name an answer cell binds at top level: what it defines and what it imports."""
+    names = _defined(source)
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return names
+    for node in tree.body:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {(a.asname or a.name).split(".")[0] for a in node.names}
+    return names
+
+
+def _clobbers(batch: dict, solutions: dict) -> bool:
+    """Whether a cell of ``batch`` rebinds a name another question's answer binds (its graded
+    function or variable, or a global that function reads): the grader calls a function and
+    reads a variable as they stand when the notebook ends, so a later question's cell that
+    redefines ``two_sided_pvalues`` would be graded in place of q6_practice's variant."""
+    bound = {q: _bound(v.source) for q, v in batch.items()}
+    return any(
+        bound[q] & (bound[p] | _bound(solutions.get(p, ""))) for q in batch for p in batch if p != q
+    )
+
+
 def _mentions(source: str, names: set[str]) -> bool:
     try:
         used = {n.id for n in ast.walk(ast.parse(source)) if isinstance(n, ast.Name)}
@@ -175,7 +201,8 @@ def pack(spec: Spec, solutions: dict | None = None) -> list[dict[str, Variant]]:
     """First-fit packing of the variants into notebooks (one variant per question per notebook).
 
     A variant joins a notebook only when no answer graded there relies (directly, or through a
-    solution cell) on a wrong variant. ``solutions``: question -> the solution's answer source.
+    solution cell) on a wrong variant, and no two answers there bind the same name (see
+    :func:`_clobbers`). ``solutions``: question -> the solution's answer source.
     """
     needs = _Needs(spec.depends, solutions or {})
     batches: list[dict[str, Variant]] = []
@@ -188,7 +215,7 @@ def pack(spec: Spec, solutions: dict | None = None) -> list[dict[str, Variant]]:
                 p in trial and not trial[p].right
                 for r in trial
                 for p in needs(r, trial[r].source, trial)
-            ):
+            ) or _clobbers(trial, solutions or {}):
                 continue
             batch[v.qid] = v
             break
@@ -465,6 +492,33 @@ def test_packing_respects_dependencies():
             assert batch["q3"].right
         if "q7" in batch and "q3" in batch and "q6" not in batch:  # q7 -> solution q6 -> q3
             assert batch["q3"].right
+
+
+def test_packing_keeps_apart_answers_that_rebind_each_others_names():
+    """The grader calls q6_practice's ``two_sided_pvalues`` as it stands when the notebook
+    ends: a q6 variant that redefines it (a right one) hid the private-twin variant of
+    q6_practice (scored 1/1 in the suite, forbidden on its own), and wrong q6 copies made wrong
+    q6_practice variants lose points for q6's mistake. Imports rebind names too."""
+    twin = "from m import _law\n\n\ndef pv(r):\n    return _law(r)"
+    spec = Spec(
+        "x",
+        "s",
+        {},
+        {"q6_practice": [("twin", twin)], "q2": [("alias f", "from m import kf as f")]},
+        {
+            "q6": [("copies pv", "def pv(r):\n    return 1.0\n\n\npvalues = pv(3)")],
+            "q8": [("alias f", "from m import upd as f\nstep = f(1)")],
+        },
+        [],
+    )
+    solutions = {"q6_practice": "def pv(r):\n    return r", "q6": "pvalues = pv(2)", "q2": "y = 1"}
+    for batch in pack(spec, solutions):
+        assert not {"q6", "q6_practice"} <= set(batch), batch  # q6 rebinds pv
+        assert not {"q2", "q8"} <= set(batch), batch  # both bind f
+    # answers that bind different names still share a notebook
+    spec.right["q6"] = [("own name", "pvalues = 2.0")]
+    spec.right["q8"] = [("own name", "step = 1")]
+    assert len(pack(spec, solutions)) == 1
 
 
 def _natural(qid: str) -> list:

@@ -449,13 +449,14 @@ def covariance_critical_values(P, M, alpha):
 """,
     ),
 ]
-# Left out: the private twin mismatched._statistic_law called INSIDE q6_practice's function
-# (now a function question) is caught by the self-check but scores 1/1 at grading -- a gap of
-# the grader's tripwire reported with issue 26; the value-question form it was written for is
-# gone. Restore this variant when the grader catches it:
-_Q6P_PRIVATE_TWIN = (
-    "the private twin mismatched._statistic_law (1/1 before)",
-    """from course.mismatched import ResidualMoments
+# The private twin mismatched._statistic_law called INSIDE q6_practice's function: forbidden at
+# self-check and at grading. It once showed 1/1 here because the suite packed it beside a q6
+# variant that redefines two_sided_pvalues, and the grader calls the function as the notebook
+# leaves it; the packing now keeps answers that rebind each other's names apart.
+WRONG["q6_practice"] += [
+    (
+        "the private twin mismatched._statistic_law (1/1 before)",
+        """from course.mismatched import ResidualMoments
 from course.mismatched._quadratic_forms import _statistic_law
 
 
@@ -473,7 +474,8 @@ def two_sided_pvalues(r, mean, cov, cross_cov, j, k):
         for law, s in ((law_mean, stat_mean), (law_corr, stat_corr))
     )
 """,
-)
+    ),
+]
 WRONG["q7"] += [
     (
         "course.results.rejection_probability and critical_value (1/1 before)",
