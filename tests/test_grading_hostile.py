@@ -18,6 +18,7 @@ import csv
 import hashlib
 import json
 import os
+import platform
 import secrets
 import shutil
 import socket
@@ -1219,6 +1220,181 @@ def test_a_root_child_drops_every_capability(tmp_path):
     assert first.split() == ["0"] + ["no"] * 7 + ["yes"], out.stdout
     assert "CapEff:\\t0000000000000000" in status and "NoNewPrivs:\\t1" in status
     assert host.stat().st_mode & 0o777 == 0o640 and host.stat().st_uid == 65534
+
+
+# ioctl requests are laid out differently there (_IOC_WRITE is 4, shifted by 29)
+_OTHER_IOC_LAYOUT = platform.machine().startswith(("ppc", "powerpc", "mips", "sparc", "alpha"))
+
+
+def test_seccomp_refuses_every_change_of_file_metadata(tmp_path):
+    """Issue 25.4 for every child, root or not: a child of an ordinary grader owns that user's
+    files as a root child owns root's. chmod, chown, utime, extended attributes and chattr's
+    inode flags are refused with EPERM (not merely unsupported here), by path, descriptor and
+    ``dir_fd``; reading metadata and writing the file stay allowed."""
+    import subprocess
+    import sys
+    import textwrap
+
+    from course.grading.sandbox.isolation import seccomp
+
+    if not seccomp.available():
+        pytest.skip("no libseccomp on this machine")
+    target = tmp_path / "mine.txt"
+    target.write_text("x")
+    target.chmod(0o640)
+    os.utime(target, (1_000_000_000, 1_000_000_000))
+    before = target.stat()
+    code = textwrap.dedent(
+        f"""
+        import errno, fcntl, os, struct
+        from course.grading.sandbox.isolation import seccomp
+        path = {str(target)!r}
+        def answer(f, *args, **kwargs):
+            try:
+                f(*args, **kwargs)
+                return "yes"
+            except OSError as exc:
+                return "EPERM" if exc.errno == errno.EPERM else "other"
+        fd = os.open(path, os.O_RDWR)
+        handle = os.open(os.path.dirname(path), os.O_PATH | os.O_DIRECTORY)
+        name = os.path.basename(path)
+        no_flags = struct.pack("l", 0)  # chattr's flags, all off (a fresh file has none)
+        write = 4 << 29 if {_OTHER_IOC_LAYOUT!r} else 1 << 30  # _IOW of this architecture
+        set_flags = write | (struct.calcsize("l") << 16) | (ord("f") << 8) | 2
+        set_fsxattr = write | (28 << 16) | (ord("X") << 8) | 32
+        assert seccomp.install()
+        st = os.stat(path)
+        print(answer(os.chmod, path, 0o666), answer(os.chmod, fd, 0o666),
+              answer(os.chmod, name, 0o666, dir_fd=handle),
+              answer(os.chown, path, st.st_uid, st.st_gid), answer(os.chown, fd, -1, -1),
+              answer(os.chown, name, -1, -1, dir_fd=handle), answer(os.lchown, path, -1, -1),
+              answer(os.utime, path, (0, 0)), answer(os.utime, fd, (0, 0)),
+              answer(os.utime, name, (0, 0), dir_fd=handle), answer(os.utime, path, None),
+              answer(os.setxattr, path, "user.mark", b"x"), answer(os.setxattr, fd, "user.mark", b"x"),
+              answer(os.removexattr, path, "user.mark"),
+              answer(fcntl.ioctl, fd, set_flags, no_flags),
+              answer(fcntl.ioctl, fd, set_fsxattr, bytes(28)))
+        print(answer(os.stat, path), answer(os.write, fd, b"y"))
+        """
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert out.returncode == 0, out.stderr
+    refused, allowed = out.stdout.split("\n")[:2]
+    assert refused.split() == ["EPERM"] * 16, out.stdout
+    assert allowed.split() == ["yes", "yes"]
+    after = target.stat()
+    assert (after.st_mode, after.st_uid, after.st_gid) == (
+        before.st_mode,
+        before.st_uid,
+        before.st_gid,
+    )
+
+
+_METADATA_ATTACK = """
+import ctypes, gc, os
+for f in gc.get_objects():  # the audit hook off first: only the kernel's answer counts
+    if type(f).__name__ == 'function' and f.__name__ == 'hook' and f.__closure__:
+        for name, cell in zip(f.__code__.co_freevars, f.__closure__):
+            if name == 'blocked':
+                cell.cell_contents = frozenset()
+            elif name == 'path_events':
+                cell.cell_contents = {}
+def attempt(f, *args, **kwargs):
+    try:
+        f(*args, **kwargs)
+        return 'yes'
+    except OSError:
+        return 'no'
+folder = os.path.dirname(HOST)
+handle = os.open(folder, os.O_PATH | os.O_DIRECTORY)  # Landlock lets any path be walked
+# a file it may read, root's where Python is installed by root: the same mode, owner and
+# times back (harmless should the call pass), by descriptor
+fd = os.open(os.__file__, os.O_RDONLY)
+st = os.fstat(fd)
+name = os.path.basename(HOST)
+host = [
+    attempt(os.chmod, HOST, 0o666),
+    attempt(os.chmod, name, 0o666, dir_fd=handle),
+    attempt(os.chmod, fd, st.st_mode & 0o7777),
+    attempt(os.chmod, folder, 0o777),
+    attempt(os.utime, HOST, (0, 0)),
+    attempt(os.utime, name, (0, 0), dir_fd=handle),
+    attempt(os.utime, fd, ns=(st.st_atime_ns, st.st_mtime_ns)),
+    attempt(os.chown, HOST, 0, 0),
+    attempt(os.chown, name, 0, 0, dir_fd=handle),
+    attempt(os.chown, fd, st.st_uid, st.st_gid),
+    attempt(os.setxattr, HOST, 'user.mark', b'x'),
+    attempt(os.removexattr, HOST, 'user.kept'),
+]
+with open('mine.txt', 'w') as f:  # its own folder stays writable
+    own_write = 'yes' if f.write('x') == 1 else 'no'
+own = [
+    attempt(os.chmod, 'mine.txt', 0o600),
+    attempt(os.utime, 'mine.txt', (0, 0)),
+    attempt(os.chown, 'mine.txt', 0, 0),
+]
+"""
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="needs root (a child that stays root)")
+def test_a_root_child_cannot_change_the_metadata_of_host_files(tmp_path):
+    """Issue 25.10: with Landlock alone and children that stay root, a child turned a host
+    file from 640 to 666 with mtime 0 and made the grader's folders 0777 through O_PATH
+    handles: Landlock has no right for metadata, and as the owner (uid 0) of root's files it
+    needs no capability. Seccomp refuses chmod, chown, utime and extended attributes outright,
+    by path, descriptor or ``dir_fd``, for every child (also on its own files)."""
+    from course.grading.codec import decode
+    from course.grading.sandbox.isolation import IsolationError, detect
+    from course.grading.sandbox.parent import Limits, Sandbox
+
+    try:
+        isolation = detect(namespaces=False)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    if isolation.landlock == 0 or not isolation.seccomp:
+        pytest.skip("needs Landlock and libseccomp")
+    folder = tmp_path / "grader-output"  # root's, as the grader's folders are
+    folder.mkdir(mode=0o755)
+    host = folder / "grades.csv"
+    host.write_text("s1,17\n")
+    host.chmod(0o640)
+    try:
+        os.setxattr(host, "user.kept", b"1")
+        xattrs = True
+    except OSError:  # a file system without user attributes (tmpfs before Linux 6.6)
+        xattrs = False
+    os.utime(host, (1_000_000_000, 1_000_000_000))
+    before = [(p.stat().st_mode, p.stat().st_uid, p.stat().st_mtime_ns) for p in (folder, host)]
+    # the child stays root: no user to switch to, as where nobody cannot read the Python
+    # installation
+    isolation = isolation.with_(drop_to=None)
+    source = _METADATA_ATTACK.replace("HOST", repr(str(host)))
+    with Sandbox(limits=Limits(memory_mb=512), isolation=isolation) as sandbox:
+        child = sandbox.start({"student_id": "s1", "assignment": NAME, "data": {}})
+        try:
+            info = child.info
+            reply = child.request("run", 20, source=source)
+            assert reply["status"] == "ok", reply
+            answers = {
+                name: decode(child.request("value", 20, name=name)["value"])
+                for name in ("host", "own", "own_write")
+            }
+        finally:
+            child.close()
+    assert info["uid"] == 0 and info["landlock"] and info["seccomp"], info
+    after = [(p.stat().st_mode, p.stat().st_uid, p.stat().st_mtime_ns) for p in (folder, host)]
+    assert after == before
+    if xattrs:
+        assert os.listxattr(host) == ["user.kept"]
+    assert answers["host"] == ["no"] * 12, answers
+    assert answers["own"] == ["no"] * 3, answers  # one policy: metadata is never a child's
+    assert answers["own_write"] == "yes"
 
 
 # ---------------------------------------------------------------------------------------

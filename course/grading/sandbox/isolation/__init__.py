@@ -5,7 +5,8 @@ namespaces
 landlock
     The kernel's allow-list of what each child may read and write; no TCP, no signals out.
 seccomp
-    The kernel refuses processes, exec, ptrace, sockets, raising limits, new namespaces.
+    The kernel refuses processes, exec, ptrace, sockets, raising limits, new namespaces,
+    changes of file metadata.
 privileges
     Children started by root switch to ``nobody``.
 limits
@@ -62,7 +63,7 @@ class Isolation:
             what += ", signals and abstract sockets" if self.landlock >= 6 else ""
             out.append(f"Landlock ABI {self.landlock} ({what})")
         if self.seccomp:
-            out.append("seccomp (processes, exec, ptrace, sockets, namespaces)")
+            out.append("seccomp (processes, exec, ptrace, sockets, namespaces, file metadata)")
         if self.drop_to is not None and self.unprivileged:
             out.append(f"unprivileged user (uid {self.drop_to[0]})")
         elif self.drop_to is None and os.geteuid() != 0:

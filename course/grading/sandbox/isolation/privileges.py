@@ -6,7 +6,9 @@ whatever the other layers leave reachable. When ``course grade`` runs as root, t
 group IDs, no supplementary groups — before any student code exists; from then on the kernel
 applies ordinary file permissions, and the seccomp filter (which sets ``no_new_privs``) keeps it
 from ever regaining privileges. A child that must stay root (``nobody`` cannot read the Python
-installation) drops every capability and sets ``no_new_privs`` (:func:`drop_capabilities`).
+installation) drops every capability and sets ``no_new_privs`` (:func:`drop_capabilities`);
+what the owner of root's files may still do to them without a capability (chmod, utime,
+extended attributes, chattr flags) the seccomp filter refuses.
 Run without root, the grader keeps its own user.
 """
 
@@ -68,7 +70,8 @@ def drop_capabilities() -> None:
     """Drop every capability (bounding, ambient, effective, permitted, inheritable) and set
     ``no_new_privs``: for a child that stays root (``nobody`` cannot read the Python
     installation), so it cannot chown, set immutable flags, renice others, take a real-time
-    policy or set the host name. Raise OSError if the kernel refuses."""
+    policy or set the host name (changing the metadata of files it owns, root's, is left to
+    the seccomp filter). Raise OSError if the kernel refuses."""
     import ctypes
 
     libc = ctypes.CDLL(None, use_errno=True)

@@ -13,6 +13,12 @@ Installed in the child right before student code runs, it makes the KERNEL refus
 - leaving or rebuilding its confinement: ``unshare``, ``setns``, mounts, ``chroot``,
   ``pivot_root``, ``bpf``, ``userfaultfd``, ``perf_event_open``, kernel keys and modules,
   ``open_by_handle_at``,
+- changing the metadata of any file: ``chmod``, ``chown`` and ``utime`` in every form (by path,
+  descriptor or ``dir_fd``), extended attributes (``setxattr``/``removexattr`` and kin) and
+  the inode flags of ``chattr`` (``FS_IOC_SETFLAGS``, ``FS_IOC_FSSETXATTR``): Landlock has no
+  right for metadata, so without this a child could change any file its user owns that it can
+  reach by name (a root child: root-owned host files; a child of an ordinary grader: that
+  user's files), even where it may neither read nor write it,
 - closing or replacing one pinned descriptor (``close``, ``dup2``/``dup3``, ``close_range``):
   the pipe on which forbidden library calls are reported to the grader
   (:mod:`course.grading.tripwire`),
@@ -48,7 +54,16 @@ import functools
 import os
 import platform
 
-__all__ = ["DENIED", "available", "die_with_parent", "export_pfc", "install", "rules"]
+__all__ = [
+    "DENIED",
+    "IF_KNOWN",
+    "METADATA",
+    "available",
+    "die_with_parent",
+    "export_pfc",
+    "install",
+    "rules",
+]
 
 #: Refused outright with EPERM (a name that does not exist on an architecture, e.g. ``fork``
 #: on aarch64, is known to libseccomp and simply matches nothing there).
@@ -111,6 +126,36 @@ DENIED = (
     "sethostname",
     "setdomainname",
 )
+#: File metadata, refused outright with EPERM for every child (also in its own folder): Landlock
+#: has no right for it, and the owner of a file (root for root's files, when a child has to stay
+#: root) may change it without any capability.
+METADATA = (
+    "chmod",
+    "fchmod",
+    "fchmodat",
+    "chown",
+    "fchown",
+    "lchown",
+    "fchownat",
+    "chown32",  # the 16-bit-uid architectures' (32-bit ARM, i386) names
+    "fchown32",
+    "lchown32",
+    "utime",
+    "utimes",
+    "futimesat",
+    "utimensat",
+    "utimensat_time64",
+    "setxattr",
+    "lsetxattr",
+    "fsetxattr",
+    "removexattr",
+    "lremovexattr",
+    "fremovexattr",
+)
+#: Refused like :data:`METADATA` where this libseccomp knows the name (calls newer than its
+#: release; one it does not know stays open: libseccomp 2.5.4 knows ``fchmodat2`` but not
+#: the ``*xattrat`` calls of Linux 6.13 nor ``file_setattr`` of 6.17).
+IF_KNOWN = ("fchmodat2", "setxattrat", "removexattrat", "file_setattr")
 #: Refused depending on their arguments (see :func:`rules`).
 _CONDITIONAL = (
     "clone",
@@ -128,6 +173,7 @@ _CONDITIONAL = (
     "sched_setparam",
     "setpriority",
     "ioprio_set",
+    "ioctl",
 )
 
 # libseccomp's ABI (seccomp.h of libseccomp 2.x)
@@ -142,6 +188,23 @@ _CLONE_THREAD = 0x00010000
 _LOW_WORD = 0xFFFFFFFF  # the kernel reads an int: the low 32 bits of the register
 # clone's flags are its first argument, except on s390 (where they come second)
 _CLONE_FLAGS = 1 if platform.machine().startswith("s390") else 0
+
+
+def _iow(kind: str, number: int, size: int) -> int:
+    """The Linux ioctl request ``_IOW(kind, number, size)`` of this machine's architecture."""
+    if platform.machine().startswith(("ppc", "powerpc", "mips", "sparc", "alpha")):
+        return (4 << 29) | (size << 16) | (ord(kind) << 8) | number  # _IOC_WRITE is 4 there
+    return (1 << 30) | (size << 16) | (ord(kind) << 8) | number
+
+
+#: ``chattr``'s requests: FS_IOC_SETFLAGS (a long), FS_IOC32_SETFLAGS (an int) and
+#: FS_IOC_FSSETXATTR (a 28-byte struct fsxattr); immutable and append-only need a capability,
+#: the other flags (no atime, synchronous, no dump, ...) only the file's owner.
+_SET_INODE_FLAGS = (
+    _iow("f", 2, ctypes.sizeof(ctypes.c_long)),
+    _iow("f", 2, 4),
+    _iow("X", 32, 28),
+)
 
 
 class _ArgCmp(ctypes.Structure):
@@ -191,7 +254,8 @@ def _errno(code: int) -> int:
 
 
 def rules(pid: int, pinned_fd: int | None = None) -> list[Rule]:
-    """The filter's rules for the process ``pid`` (every call not named is allowed)."""
+    """The filter's rules for the process ``pid`` (every call not named is allowed; a name
+    of :data:`IF_KNOWN` this libseccomp does not know is left out when the filter is built)."""
     deny = _errno(errno.EPERM)
     out: list[Rule] = [(deny, name, ()) for name in DENIED]
     out += [
@@ -210,6 +274,9 @@ def rules(pid: int, pinned_fd: int | None = None) -> list[Rule]:
         (deny, "setpriority", ((1, _NE, 0, 0),)),
         (deny, "setpriority", ((2, _MASKED_EQ, _SIGN, _SIGN),)),  # no negative nice (root)
         (deny, "ioprio_set", ((1, _NE, 0, 0),)),
+        *((deny, name, ()) for name in (*METADATA, *IF_KNOWN)),
+        # the kernel reads the request as an unsigned int: its low 32 bits decide
+        *((deny, "ioctl", ((1, _MASKED_EQ, _LOW_WORD, request),)) for request in _SET_INODE_FLAGS),
     ]
     if pinned_fd is not None:
         pinned = (_MASKED_EQ, _LOW_WORD, pinned_fd)
@@ -233,7 +300,7 @@ def _unknown_names() -> tuple[str, ...]:
         return ()
     return tuple(
         name
-        for name in (*DENIED, *_CONDITIONAL)
+        for name in (*DENIED, *METADATA, *_CONDITIONAL)
         if lib.seccomp_syscall_resolve_name(name.encode()) == _NR_SCMP_ERROR
     )
 
@@ -258,6 +325,8 @@ def _build(pid: int, pinned_fd: int | None) -> int:
         for action, name, comparisons in rules(pid, pinned_fd):
             args = (_ArgCmp * max(1, len(comparisons)))(*(_ArgCmp(*c) for c in comparisons))
             number = lib.seccomp_syscall_resolve_name(name.encode())
+            if number == _NR_SCMP_ERROR and name in IF_KNOWN:
+                continue  # newer than this libseccomp
             code = lib.seccomp_rule_add_array(ctx, action, number, len(comparisons), args)
             if code != 0:
                 raise OSError(-code, f"seccomp rule for {name}: {os.strerror(-code)}")
