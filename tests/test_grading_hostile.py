@@ -71,6 +71,10 @@ def _cell(nb: dict, cell_id: str) -> dict:
     return next(c for c in nb["cells"] if c.get("id") == cell_id)
 
 
+# 01 q1 is a function question: an answer whose reply is huge returns the huge value
+_Q1_RETURNS = "def line_estimate(t, y):\n    return "
+
+
 def _with_answer(qid: str, source: str, nb: dict | None = None) -> dict:
     nb = copy.deepcopy(nb or _solution())
     _cell(nb, f"{qid}-answer")["source"] = source
@@ -120,7 +124,8 @@ def _submissions(env) -> dict[str, object]:
         (
             "import subprocess\n"
             "subprocess.run(['sh', '-c', 'echo pwned > /tmp/course_pwned'])\n"
-            "e_hat_day2 = 0"
+            "def line_residuals(t, y):\n"
+            "    return 0"
         ),
     )
     subs["output_flood"] = _with_answer(
@@ -132,8 +137,9 @@ def _submissions(env) -> dict[str, object]:
             "print('x' * 50_000_000)\n"
             "import sys\n"
             "sys.stderr.write('y' * 10_000_000)\n"
-            "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
-            "e_hat_day2 = y_day2 - A @ x_hat_day2"
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return y - A @ np.linalg.lstsq(A, y, rcond=None)[0]"
         ),
     )
     forged = json.dumps({"id": 1, "nonce": "0", "status": "ok", "value": [12.0, 3.0]})
@@ -149,7 +155,8 @@ def _submissions(env) -> dict[str, object]:
             "    except OSError:\n"
             "        pass\n"
             "print('q1: PASS 1/1 points')\n"
-            "x_hat_day1 = np.array([0.0, 0.0])"
+            "def line_estimate(t, y):\n"
+            "    return np.array([0.0, 0.0])"
         ),
     )
     subs["monkeypatch"] = _with_answer(
@@ -166,24 +173,31 @@ def _submissions(env) -> dict[str, object]:
             "json.loads = lambda *a, **k: {}\n"
             "import course.grading.codec as codec\n"
             "codec.encode = lambda v: [12.0, 3.0]\n"
-            "x_hat_day1 = np.array([0.0, 0.0])"
+            "def line_estimate(t, y):\n"
+            "    return np.array([0.0, 0.0])"
         ),
     )
     subs["writes_outside"] = _with_answer(
         "q1",
         (
             f"open({str(sentinel)!r}, 'w').write('overwritten')\n"
-            "x_hat_day1 = np.linalg.lstsq(A, y_day1, rcond=None)[0]"
+            "def line_estimate(t, y):\n"
+            "    return np.polyfit(t, y, 1)[::-1]"
         ),
     )
     subs["deletes_outside"] = _with_answer(
-        "q2", (f"import os, shutil\nos.remove({str(sentinel)!r})\ne_hat_day2 = 0")
+        "q2",
+        (
+            f"import os, shutil\nos.remove({str(sentinel)!r})\n"
+            "def line_residuals(t, y):\n    return 0"
+        ),
     )
     subs["reads_solutions"] = _with_answer(
         "q1",
         (
             f"source = open({str(env.solution_dir / 'checks.py')!r}).read()\n"
-            "x_hat_day1 = np.array([12.0, 3.0])"
+            "def line_estimate(t, y):\n"
+            "    return np.array([12.0, 3.0])"
         ),
     )
     nb = _solution()
@@ -334,8 +348,9 @@ def _issue_11_attacks(env) -> dict[str, object]:
             f"    os.rename('README.md', '{marker}.md', src_dir_fd=cfd, dst_dir_fd=cfd)\n"
             "except OSError:\n"
             "    pass\n"
-            "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
-            "e_hat_day2 = y_day2 - A @ x_hat_day2\n"
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return y - A @ np.linalg.lstsq(A, y, rcond=None)[0]"
         ),
     )
     # switching the audit hook off through gc, then reading, writing and connecting freely
@@ -683,10 +698,10 @@ def test_feedback_hides_hidden_cases_and_code(graded):
     for sid in graded["rows"]:
         fb = (graded["out"] / "feedback" / f"{sid}.md").read_text()
         assert "def q3" not in fb and "A_SEA" not in fb and "binomial_band" not in fb
-        assert (
-            "hidden case" not in fb
-            or "expected" not in fb.split("hidden case", 1)[1].split("\n", 1)[0]
-        )
+        if "hidden case" in fb:
+            line = fb.split("hidden case", 1)[1].split("\n", 1)[0]
+            # the tolerance rule "|got - expected| <= atol + rtol |expected|" names no value
+            assert "expected" not in line.split("tolerance ", 1)[0], line
 
 
 def test_rerun_resumes_and_regrade_is_identical(graded, tmp_path):
@@ -1450,12 +1465,19 @@ def _bloating_submissions(folder: Path) -> dict[str, str]:
         ),
         "huge_setup": json.dumps(_huge_setup(setup + "x=1\n" * 200_000)),
         "huge_answer": json.dumps(
-            _with_answer("q1", "x_hat_day1 = 0\n" + "(" * 40 + "1" + ")" * 40 + "\n" * 900_000)
+            _with_answer(
+                "q1",
+                "def line_estimate(t, y):\n    return 0\n"
+                + "(" * 40
+                + "1"
+                + ")" * 40
+                + "\n" * 900_000,
+            )
         ),
-        "reply_items": json.dumps(_with_answer("q1", "x_hat_day1 = [[]] * 2_000_000")),
-        "reply_bytes": json.dumps(_with_answer("q1", "x_hat_day1 = '\\u00e9' * 2_000_000")),
+        "reply_items": json.dumps(_with_answer("q1", _Q1_RETURNS + "[[]] * 2_000_000")),
+        "reply_bytes": json.dumps(_with_answer("q1", _Q1_RETURNS + "'\\u00e9' * 2_000_000")),
         "reply_string": json.dumps(
-            _with_answer("q1", "x_hat_day1 = '\U0001f600' + 'a' * 7_000_000")
+            _with_answer("q1", _Q1_RETURNS + "'\U0001f600' + 'a' * 7_000_000")
         ),
     }
     for sid, text in files.items():
@@ -1706,7 +1728,7 @@ def _honest_after_hostile_batch(folder: Path, env) -> None:
     q1 = _cell(_solution(), "q1-answer")["source"]
     for name, attack in _STATE_ATTACKS.items():
         chosen[name] = _with_answer("q1", attack + "\n" + q1)
-    chosen["reply_items"] = _with_answer("q1", "x_hat_day1 = [[]] * 2_000_000")
+    chosen["reply_items"] = _with_answer("q1", _Q1_RETURNS + "[[]] * 2_000_000")
     for sid, nb in chosen.items():
         text = nb if isinstance(nb, str) else json.dumps(nb)
         (folder / f"a_{sid}.ipynb").write_text(text)  # graded before the honest ones

@@ -204,9 +204,9 @@ def check(monkeypatch):
 
 
 def test_self_check_pass_fail_hint_first(check, capsys):
-    check("q1", np.array([12.0, 3.0]))
+    check("q1", lambda t, y: np.polyfit(t, y, 1)[::-1])
     assert "PASS" in capsys.readouterr().out
-    check("q2", np.array([6.0, -4.0, -10.0, 9.0]))
+    check("q2", lambda t, y: np.array([6.0, -4.0, -10.0, 9.0]))  # day 2's last residual is 8
     out = capsys.readouterr().out
     assert "FAIL" in out and out.index("Hint") < out.index("the worst at [3]")
     assert "tolerance" in out and "8.0" not in out and "expected 8" not in out
@@ -300,7 +300,7 @@ def test_staged_hints_count_failures_in_the_kernel(tmp_path, capsys):
 
 
 def test_self_check_finds_answers_in_the_caller_namespace(check, capsys):
-    x_hat_day1 = ...  # noqa: F841  (a stub)
+    line_estimate = ...  # noqa: F841  (a stub)
     check("q1")
     assert "not answered yet" in capsys.readouterr().out
 

@@ -37,7 +37,7 @@ def _term_submissions(name: str, subs: Path) -> None:
         return None
     (subs / "term-full.ipynb").write_bytes((SOLUTION / f"{NAME}.ipynb").read_bytes())
     (subs / "term-stub.ipynb").write_bytes((EXERCISE / f"{NAME}.ipynb").read_bytes())
-    # a named mistake of checks.py (q1: day 2's data) and a kind of wrong (q2: the sign)
+    # a named mistake of checks.py (q1: the order) and a kind of wrong (q2: another order)
     nb = nbformat.read(SOLUTION / f"{NAME}.ipynb", as_version=4)
     for cell in nb.cells:
         course = cell.get("metadata", {}).get("course", {})
@@ -48,9 +48,10 @@ def _term_submissions(name: str, subs: Path) -> None:
 
 
 WRONG = {
-    "q1": "x_hat_day1 = np.linalg.lstsq(A, y_day2, rcond=None)[0]",
-    "q2": "x_hat_day2 = np.linalg.lstsq(A, y_day2, rcond=None)[0]\n"
-    "e_hat_day2 = A @ x_hat_day2 - y_day2",
+    "q1": "def line_estimate(t, y):\n    return np.polyfit(t, y, 1)",
+    "q2": "def line_residuals(t, y):\n"
+    "    A = np.column_stack([np.ones(len(t)), t])\n"
+    "    return np.sort(y - A @ np.linalg.lstsq(A, y, rcond=None)[0])",
 }
 
 
@@ -189,9 +190,9 @@ def _report(graded) -> str:
 
 def test_report_counts_mistakes_and_cases(graded_class):
     text = _report(graded_class(NAME))
-    # q1 of term-wrong matched checks.py's named mistake; q2's residuals have the sign flipped
-    assert "<td>q1</td><td>named mistake</td><td>this is the estimate of day 2&#x27;s data" in text
-    assert "<td>q2</td><td>kind of wrong</td><td>the sign</td>" in text
+    # q1 of term-wrong matched checks.py's named mistake; q2's residuals come sorted
+    assert "<td>q1</td><td>named mistake</td><td>the order looks like (velocity, position)" in text
+    assert "<td>q2</td><td>kind of wrong</td><td>another order</td>" in text
     assert text.count("<svg") == 2 and text.count("<rect") > 10
     for forbidden in ("http://", "https://", "<script", "<link"):
         assert forbidden not in text  # self-contained: nothing fetched, nothing run

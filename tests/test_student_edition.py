@@ -469,8 +469,8 @@ assert "site-packages" in course.__file__, course.__file__
 STUDENT_ID = "98765"
 from course.grading import Assignment
 check = Assignment.load("01_least_squares", student_id=STUDENT_ID)
-A = np.column_stack([np.ones(4), np.arange(1.0, 5.0)])
-x_hat_day1 = np.linalg.lstsq(A, np.array([14.0, 20.0, 20.0, 24.0]), rcond=None)[0]
+def line_estimate(t, y):
+    return np.linalg.lstsq(np.column_stack([np.ones(len(t)), t]), y, rcond=None)[0]
 check("q1")
 mine = check.data("survey")
 print("survey", mine["A"].shape)

@@ -9,12 +9,12 @@ assignment's number, ``answers_01.py`` for ``01_least_squares``)::
     DEPENDS = {"q6": ["q3"]}         # optional: q6's solution cell uses q3's answer (its function)
     WRONG = {                        # per question id: answers a class would plausibly write;
         "q1": [                      # each must score LESS than the question's points
-            ("unweighted fit", "x_hat_day1 = np.linalg.lstsq(A, y_day2, rcond=None)[0]"),
+            ("(slope, intercept)", "def line_estimate(t, y): return np.polyfit(t, y, 1)"),
         ],
     }
-    RIGHT = {                        # per question id: correct answers written differently
-        "q1": [("lsq.fit", "x_hat_day1 = lsq.fit(A, y_day1).x_hat")],  # must keep FULL marks
-    }
+    RIGHT = {                        # per question id: correct answers written differently;
+        "q1": [("reversed", "def line_estimate(t, y): return np.polyfit(t, y, 1)[::-1]")],
+    }                                # each must keep FULL marks
     MANUAL = ["q6_why"]              # optional: questions graded by hand (short answers)
     COINCIDES = {                    # optional: (qid, label) of a WRONG method on personal data
         ("q6b", "alpha / 2"): f,     # that gives some students the right answer by chance:

@@ -27,6 +27,10 @@ Y_DAY1 = np.array([14.0, 20.0, 20.0, 24.0])
 Y_DAY2 = np.array([28.0, 20.0, 16.0, 36.0])
 I4 = np.eye(4)
 
+# A falling line at uneven times (a hidden case of q1 and q2).
+T_UNEVEN = np.array([0.5, 1.0, 2.5, 4.0, 7.0])
+Y_UNEVEN = np.array([3.1, 2.2, 0.4, -1.9, -6.3])
+
 # Sea level 1998-2002 (t centred on 2000), and a quadratic model of day 2.
 A_SEA = np.column_stack([np.ones(5), np.arange(-2.0, 3.0)])
 Y_SEA = np.array([25.0, 24.0, 27.0, 26.0, 28.0])
@@ -64,55 +68,80 @@ CHECKS = Checks(
 )
 
 
-@CHECKS.value(
+@CHECKS.function(
     "q1",
-    var="x_hat_day1",
+    func="line_estimate",
     points=1,
     rtol=1e-8,
     atol=1e-8,
     hint=(
-        "Two unknowns: the position at t0 and the velocity. Which data set does q1 ask for?",
+        "Two unknowns: the position at t0 and the velocity. Build A from the t you are given "
+        "(its length is len(t), not always 4).",
         "Stack a column of ones and the times into A, then solve the least-squares problem "
-        "(np.linalg.lstsq, or lsq.fit). The chapter's answer is a round pair.",
+        "(np.linalg.lstsq, or lsq.fit) and return x_hat = (position at t0, velocity). On day 1 "
+        "the chapter's answer is a round pair.",
     ),
     mistakes=[
-        Mistake("this is the estimate of day 2's data, not day 1's", lambda: _fit(Y_DAY2)),
         Mistake(
             "the order looks like (velocity, position): x_hat is (x1, x2) = (position at t0, "
-            "velocity), the columns of A",
-            lambda: _fit(Y_DAY1)[::-1],
+            "velocity), the columns of A (np.polyfit returns the highest power first)",
+            lambda t, y: _line_fit(t, y).x_hat[::-1],
         ),
     ],
 )
-def q1():
-    return lsq.fit(A_LINE, Y_DAY1).x_hat
+def q1(t, y):
+    return _line_fit(t, y).x_hat
 
 
-def _fit(y):
-    return lsq.fit(A_LINE, y).x_hat
+def _line_fit(t, y):
+    """The least-squares fit of y = x1 + x2 t (Qyy = I)."""
+    t = np.asarray(t, dtype=float)
+    return lsq.fit(np.column_stack([np.ones_like(t), t]), np.asarray(y, dtype=float))
 
 
-@CHECKS.value(
+# Public: the chapter's worked examples (the self-check reproduces its numbers); hidden: other
+# lines, other lengths, uneven times and a falling line, on which the grade rests.
+q1.case(T_LINE, Y_DAY1, label="day 1 of the chapter's line fit")
+### BEGIN HIDDEN TESTS
+q1.case(np.arange(-2.0, 3.0), Y_SEA, hidden=True)
+q1.case(np.linspace(0.0, 5.0, 6), Y6, hidden=True)
+q1.case(T_UNEVEN, Y_UNEVEN, hidden=True)
+### END HIDDEN TESTS
+
+
+@CHECKS.function(
     "q2",
-    var="e_hat_day2",
+    func="line_residuals",
     points=1,
     rtol=1e-8,
     atol=1e-8,
     hint=(
-        "Residuals belong to one fit: estimate x_hat from day 2's data, then compare.",
-        "Residuals are observations minus adjusted observations: e = y - A x_hat, in the order "
-        "of the observations.",
+        "Residuals belong to one fit: estimate x_hat from the y you are given (q1's function), "
+        "then compare.",
+        "Residuals are observations minus adjusted observations: e = y - A x_hat, one per "
+        "observation, in the order of the observations.",
     ),
     mistakes=[
-        Mistake("these are the residuals of day 1", lambda: lsq.fit(A_LINE, Y_DAY1).e_hat),
         Mistake(
-            "day 2's data minus day 1's fit: x_hat must come from the same data",
-            lambda: Y_DAY2 - A_LINE @ lsq.fit(A_LINE, Y_DAY1).x_hat,
+            "the sign looks flipped: e = y - A x_hat (observed minus adjusted), not A x_hat - y",
+            lambda t, y: -_line_fit(t, y).e_hat,
+        ),
+        Mistake(
+            "these look like the squared residuals: return e itself, with its sign",
+            lambda t, y: _line_fit(t, y).e_hat ** 2,
         ),
     ],
 )
-def q2():
-    return lsq.fit(A_LINE, Y_DAY2).e_hat
+def q2(t, y):
+    return _line_fit(t, y).e_hat
+
+
+q2.case(T_LINE, Y_DAY2, label="day 2 of the chapter's line fit")
+### BEGIN HIDDEN TESTS
+q2.case(T_LINE, Y_DAY1, hidden=True)
+q2.case(np.arange(-2.0, 3.0), Y_SEA, hidden=True)
+q2.case(T_UNEVEN, Y_UNEVEN, hidden=True)
+### END HIDDEN TESTS
 
 
 @CHECKS.function(

@@ -55,31 +55,57 @@ _Q8_SIM = """    Y = np.asarray(bias, dtype=float)[:, None] + L @ rng.standard_n
 
 WRONG = {
     "q1": [
-        ("day 2's data", "x_hat_day1 = np.linalg.lstsq(A, y_day2, rcond=None)[0]"),
-        ("(slope, intercept) order", "x_hat_day1 = np.polyfit(t, y_day1, 1)"),
-        ("no intercept column", "x_hat_day1 = np.linalg.lstsq(t[:, None], y_day1, rcond=None)[0]"),
-        ("mean and zero slope", "x_hat_day1 = np.array([y_day1.mean(), 0.0])"),
+        (
+            "(slope, intercept) order",
+            "def line_estimate(t, y):\n    return np.polyfit(t, y, 1)",
+        ),
+        (
+            "no intercept column",
+            "def line_estimate(t, y):\n"
+            "    return np.linalg.lstsq(np.asarray(t)[:, None], y, rcond=None)[0]",
+        ),
+        (
+            "mean and zero slope",
+            "def line_estimate(t, y):\n    return np.array([np.mean(y), 0.0])",
+        ),
+        (
+            "the global A (length 4 only)",
+            "def line_estimate(t, y):\n    return np.linalg.lstsq(A, y, rcond=None)[0]",
+        ),
+        (
+            "hard-coded day-1 values",
+            "def line_estimate(t, y):\n    return np.array([12.0, 3.0])",
+        ),
     ],
     "q2": [
         (
             "sign: A x_hat - y",
-            "e_hat_day2 = A @ np.linalg.lstsq(A, y_day2, rcond=None)[0] - y_day2",
-        ),
-        (
-            "day 1's residuals",
-            "e_hat_day2 = y_day1 - A @ np.linalg.lstsq(A, y_day1, rcond=None)[0]",
-        ),
-        (
-            "day 1's estimate on day 2's data",
-            "e_hat_day2 = y_day2 - A @ np.linalg.lstsq(A, y_day1, rcond=None)[0]",
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return A @ np.linalg.lstsq(A, y, rcond=None)[0] - y",
         ),
         (
             "squared residuals",
-            "e_hat_day2 = (y_day2 - A @ np.linalg.lstsq(A, y_day2, rcond=None)[0]) ** 2",
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return (y - A @ np.linalg.lstsq(A, y, rcond=None)[0]) ** 2",
         ),
         (
             "sorted residuals",
-            "e_hat_day2 = np.sort(y_day2 - A @ np.linalg.lstsq(A, y_day2, rcond=None)[0])",
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return np.sort(y - A @ np.linalg.lstsq(A, y, rcond=None)[0])",
+        ),
+        (
+            "day 1's estimate on any data",
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return y - A @ np.linalg.lstsq(A, y_day1, rcond=None)[0]",
+        ),
+        (
+            "hard-coded day-2 residuals",
+            "def line_residuals(t, y):\n"
+            "    return y_day2 - A @ np.linalg.lstsq(A, y_day2, rcond=None)[0]",
         ),
     ],
     "q3": [
@@ -346,16 +372,33 @@ COINCIDES = {
 
 RIGHT = {
     "q1": [
-        ("lsq.fit, with a print", "x_hat_day1 = lsq.fit(A, y_day1).x_hat\nprint(x_hat_day1)"),
+        (
+            "lsq.fit, with a print",
+            "def line_estimate(t, y):\n"
+            "    x = lsq.fit(np.column_stack([np.ones(len(t)), t]), y).x_hat\n"
+            "    print(x)\n"
+            "    return x",
+        ),
         (
             "normal equations, as a list",
-            "x_hat_day1 = list(np.linalg.solve(A.T @ A, A.T @ y_day1))",
+            "def line_estimate(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return list(np.linalg.solve(A.T @ A, A.T @ np.asarray(y)))",
         ),
-        ("polyfit reversed", "x_hat_day1 = np.polyfit(t, y_day1, 1)[::-1]"),
+        ("polyfit reversed", "def line_estimate(t, y):\n    return np.polyfit(t, y, 1)[::-1]"),
     ],
     "q2": [
-        ("lsq.fit", "e_hat_day2 = lsq.fit(A, y_day2).e_hat"),
-        ("projector, as a list", "e_hat_day2 = list((np.eye(4) - A @ np.linalg.pinv(A)) @ y_day2)"),
+        (
+            "lsq.fit",
+            "def line_residuals(t, y):\n"
+            "    return lsq.fit(np.column_stack([np.ones(len(t)), t]), y).e_hat",
+        ),
+        (
+            "projector, as a list",
+            "def line_residuals(t, y):\n"
+            "    A = np.column_stack([np.ones(len(t)), t])\n"
+            "    return list((np.eye(len(t)) - A @ np.linalg.pinv(A)) @ np.asarray(y))",
+        ),
     ],
     "q3": [
         (
