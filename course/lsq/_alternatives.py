@@ -66,8 +66,8 @@ class _BiasSpace:
         return int(self.Rc.shape[0])
 
 
-def _bias_columns(fit: LeastSquaresFit, C: Any, name: str = "C") -> np.ndarray:
-    """``C`` as an (m, q) matrix (a vector is one column), checked against the fit."""
+def _bias_matrix(fit: LeastSquaresFit, C: Any, name: str = "C") -> np.ndarray:
+    """``C`` as an (m, q) matrix (a vector is one column) with one row per observation."""
     C = as_float_array(C, name)
     if C.ndim == 1:
         C = C[:, None]
@@ -77,6 +77,12 @@ def _bias_columns(fit: LeastSquaresFit, C: Any, name: str = "C") -> np.ndarray:
             f"{name} must have one row per observation (m = {fit.m}), got shape {C.shape}; "
             "its columns span the bias C∇ of the alternative hypothesis"
         )
+    return C
+
+
+def _bias_columns(fit: LeastSquaresFit, C: Any, name: str = "C") -> np.ndarray:
+    """:func:`_bias_matrix`, with no more columns than a test can have (``q <= m - n``)."""
+    C = _bias_matrix(fit, C, name)
     q = C.shape[1]
     if q > fit.redundancy:
         raise ValueError(
@@ -568,12 +574,7 @@ def external_reliability(fit: LeastSquaresFit, C: Any, bias: Any) -> ExternalRel
     (array([ 1. , -0.3]), 0.837)
     """
     fit = _check_fit(fit)
-    C = as_float_array(C, "C")
-    if C.ndim == 1:
-        C = C[:, None]
-    C = as_matrix(C, "C")
-    if C.shape[0] != fit.m:
-        raise ValueError(f"C must have one row per observation (m = {fit.m}), got shape {C.shape}")
+    C = _bias_matrix(fit, C)  # any q: an undetectable bias still moves x̂
     bias = as_vector(np.atleast_1d(as_float_array(bias, "bias")), "bias", C.shape[1])
     shift_w = fit._covariance.whiten(C @ bias)
     coordinates = fit._Q1.T @ shift_w

@@ -17,10 +17,11 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import special, stats
 
+from course.chi2 import residual_threshold
 from course.linalg import readonly
 from course.lsq._alternatives import _bias_columns, _bias_space
 from course.lsq._fit import LeastSquaresFit, _check_fit, _require_redundancy
-from course.lsq._tests import overall_model_test
+from course.lsq._tests import _w_quantities, overall_model_test
 from course.results import TestResult, format_number
 from course.validation import as_count, as_float_array, as_generator, as_probability, as_vector
 
@@ -39,8 +40,7 @@ class _Candidates:
 def _candidates(fit: LeastSquaresFit, candidates: Any) -> _Candidates:
     if candidates is None:
         # Every observation that can be tested: its own outlier (the w-tests' alternatives).
-        _, denom2, weight = fit._w_parts
-        testable = np.flatnonzero(denom2 > 1e-10 * weight)
+        testable = np.flatnonzero(_w_quantities(fit)[2])
         if testable.size == 0:
             raise ValueError("no observation can be tested (no redundancy anywhere)")
         columns = [np.eye(fit.m)[:, i] for i in testable]
@@ -348,7 +348,7 @@ def dia_monte_carlo(
     cands = _candidates(fit, candidates)
     m = fit.m
     b = np.zeros(m) if bias is None else as_vector(as_float_array(bias, "bias"), "bias", m)
-    critical = float(stats.chi2.isf(alpha, fit.redundancy))
+    critical = residual_threshold(fit.redundancy, alpha)  # the overall model test's
     Q1 = fit._Q1
     noise = rng.standard_normal((size, m)) + fit._covariance.whiten(b)
     coefficients = noise @ Q1
