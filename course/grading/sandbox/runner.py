@@ -301,6 +301,18 @@ def offer_released_data(source) -> None:
 # --------------------------------------------------------------------------------------
 # the request loop
 # --------------------------------------------------------------------------------------
+def _value_reply(value) -> dict:
+    """The reply carrying an answer (a variable's value or a function's result): ``...`` is a
+    stub left unanswered; anything the codec cannot carry is reported, not raised."""
+    if value is Ellipsis:
+        return {"status": _STUB}
+    try:
+        with _TRUSTED:
+            return {"status": _OK, "value": _encode(value)}
+    except BaseException as exc:
+        return {"status": _UNENCODABLE, "error": _error_info(exc)}
+
+
 def _error_info(exc) -> dict:
     message = str(exc)
     info: dict = {"type": type(exc).__name__, "message": message[:500]}
@@ -404,14 +416,7 @@ class RequestLoop:
         name = req["name"]
         if name not in ns:
             return {"status": _UNDEFINED}
-        value = ns[name]
-        if value is Ellipsis:
-            return {"status": _STUB}
-        try:
-            with _TRUSTED:
-                return {"status": _OK, "value": _encode(value)}
-        except BaseException as exc:
-            return {"status": _UNENCODABLE, "error": _error_info(exc)}
+        return _value_reply(ns[name])
 
     def op_call(self, req):
         ns = self.shell.user_ns
@@ -432,13 +437,7 @@ class RequestLoop:
             return {"status": _STUB}
         except BaseException as exc:  # includes SystemExit and KeyboardInterrupt from student code
             return {"status": _ERROR, "error": _error_info(exc)}
-        if out is Ellipsis:
-            return {"status": _STUB}
-        try:
-            with _TRUSTED:
-                return {"status": _OK, "value": _encode(out)}
-        except BaseException as exc:
-            return {"status": _UNENCODABLE, "error": _error_info(exc)}
+        return _value_reply(out)
 
     def serve(self) -> None:
         while True:
