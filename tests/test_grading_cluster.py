@@ -195,6 +195,46 @@ def test_a_failed_cleanup_is_reported(tmp_path, monkeypatch):
     ), announced
 
 
+def test_the_driver_holds_a_bounded_window_of_notebooks(tmp_path, monkeypatch):
+    """Each submission sent to the cluster holds its bytes (up to 50 MB) in the driver until
+    its task is done: the driver reads them as the window moves (two per worker thread), not
+    the whole class before the first result (issue 25 item 2: the parent's memory must not
+    grow with the class)."""
+    from course.grading.batch import cluster as cluster_module
+    from course.grading.batch import driver
+
+    reads: list[str] = []
+    real_read = cluster_module.read_notebook_bytes
+
+    def counting_read(path):
+        reads.append(Path(path).name)
+        return real_read(path)
+
+    read_at_each_result: list[int] = []
+    real_grade_on_cluster = cluster_module.grade_on_cluster
+
+    def watched(*args, **kwargs):
+        for row in real_grade_on_cluster(*args, **kwargs):
+            read_at_each_result.append(len(reads))
+            yield row
+
+    monkeypatch.setattr(cluster_module, "read_notebook_bytes", counting_read)
+    monkeypatch.setattr(driver, "grade_on_cluster", watched)
+    subs = _submissions(tmp_path / "subs")  # five students
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        summary = grade(
+            SOLUTION_DIR,
+            subs,
+            tmp_path / "out",
+            GradeOptions(jobs=1, progress=False, cluster=cluster),
+        )
+    assert summary.graded == 5 and len(reads) == 5
+    # one thread: two notebooks in flight, one more read after each result
+    assert read_at_each_result == [2, 3, 4, 5, 5], read_at_each_result
+
+
 # -- the transport ------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "address",

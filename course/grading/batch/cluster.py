@@ -29,6 +29,7 @@ import hashlib
 import ipaddress
 import warnings
 from dataclasses import dataclass
+from itertools import islice
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -216,7 +217,8 @@ def grade_on_cluster(address, grader, pending: list, options):
         client.register_plugin(plugin)
         # every worker present builds its grader first: a worker whose kernel has no walls
         # refuses (IsolationError) before any student is sent
-        workers = list(client.scheduler_info()["workers"])
+        worker_info = client.scheduler_info()["workers"]
+        workers = list(worker_info)
         described = client.gather(
             [
                 client.submit(
@@ -234,30 +236,38 @@ def grade_on_cluster(address, grader, pending: list, options):
             for text in sorted(set(described)):
                 count = sum(1 for t in described if t == text)
                 options.announce(f"{count} worker(s) at {client.scheduler.address}: {text}")
-        futures = []
-        for sub in pending:
+
+        def submit(sub):
             raw, note, refused = None, sub.note, sub.refused
             if sub.path is not None:
                 try:
                     raw = read_notebook_bytes(sub.path)  # read here: links were refused here
                 except SubmissionError as exc:
                     note = str(exc)
-            futures.append(
-                client.submit(
-                    grade_task,
-                    plugin.name,
-                    sub.student,
-                    raw,
-                    note,
-                    refused,
-                    grader.student_seeds(sub.student),
-                    key=f"grade-{grader.name}-{sub.student}-{hashlib.sha1(raw or b'').hexdigest()[:10]}",
-                    pure=False,
-                    retries=1,
-                )
+            return client.submit(
+                grade_task,
+                plugin.name,
+                sub.student,
+                raw,
+                note,
+                refused,
+                grader.student_seeds(sub.student),
+                key=f"grade-{grader.name}-{sub.student}-{hashlib.sha1(raw or b'').hexdigest()[:10]}",
+                pure=False,
+                retries=1,
             )
-        for future in as_completed(futures):
+
+        # A bounded window of submissions in flight: each holds up to a 50 MB notebook in this
+        # process until its task is done, so reading the whole class first would grow the
+        # driver with the class's size; two tasks per worker thread keep every worker busy.
+        threads = sum(w.get("nthreads", 1) for w in worker_info.values())
+        waiting = iter(pending)
+        running = as_completed([submit(sub) for sub in islice(waiting, 2 * max(threads, 1))])
+        for future in running:
             yield future.result()
+            following = next(waiting, None)
+            if following is not None:
+                running.add(submit(following))
     finally:
         try:
             if plugin is not None:  # every worker deletes the files it was given
