@@ -27,6 +27,11 @@ def _pair_statistic(A, y, sigma, k):
     return float(np.sum((Qc.T @ r) ** 2))
 
 
+def _clear_of(value, mistaken, rtol=1e-2):
+    """``mistaken`` differs from ``value`` by more than ``rtol`` relative (10^4 tolerances)."""
+    return abs(value - mistaken) > rtol * abs(value)
+
+
 def levelling(rng):
     """A line of 14 levelled heights with individual precisions and one blunder.
 
@@ -36,7 +41,8 @@ def levelling(rng):
     (adapting by the largest |e| gives another line). ``pair`` names the blunder and its
     right-hand neighbour, the two-observation alternative of q6; the neighbour has an error
     of two to three sigma of its own, so that T_2 of the pair clearly exceeds w² of the
-    blunder alone.
+    blunder alone. A line on which T_2 of the neighbouring pair on the other side, or T_2
+    without the weights, comes within 1 % of T_2 is redrawn: q6 declares both as mistakes.
     """
     m, alpha = 14, 0.05
     t = np.arange(m, dtype=float)
@@ -58,9 +64,13 @@ def levelling(rng):
         y = np.round(A @ x_true + noise, 3)
         r, h, e = _whitened_fit(A, y, sigma)
         w = r / np.sqrt(1.0 - h)
+        T_pair = _pair_statistic(A, y, sigma, k)
         design = (
             float(r @ r) > critical + 2.0  # detected, with a margin
-            and _pair_statistic(A, y, sigma, k) - w[k] ** 2 > 2.0
+            and T_pair - w[k] ** 2 > 2.0
+            # a wrong pair or dropped weights must miss q6's tolerance (rtol 1e-6) by far
+            and _clear_of(T_pair, _pair_statistic(A, y, sigma, k - 1))
+            and _clear_of(T_pair, _pair_statistic(A, y, np.ones(m), k))
             and int(np.argmax(np.abs(w))) == k  # identified by the w-test
             and np.sort(np.abs(w))[-1] - np.sort(np.abs(w))[-2] > 0.5  # without a near tie
             and int(np.argmax(np.abs(e))) != k  # ... but the largest |e| is elsewhere
