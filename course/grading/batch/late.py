@@ -249,7 +249,7 @@ _EXTENSION_COLUMNS = {"id": ("id", "student", "studentid", "sisuserid", "idnumbe
 
 
 def read_extensions(path: Path) -> dict[tuple[str, str], datetime]:
-    """``{(student ID, assignment): own due date}`` of an extensions CSV (header
+    r"""``{(student ID, assignment): own due date}`` of an extensions CSV (header
     ``id,assignment,due``; see the module docstring). One fixed dialect (RFC 4180: comma,
     double quotes), never sniffed: a student's ID is data, not a hint about the format.
 
