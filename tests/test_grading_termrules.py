@@ -37,7 +37,7 @@ SCORES = {  # assignment -> (points possible, {student: points}); absent: no sub
     "A3": (10, {"s1": 6, "s2": 9, "s3": 8, "s4": 7, "s5": 8}),
     "A4": (20, {"s1": 18, "s2": 15, "s3": 10, "s4": 20}),  # s5 is exempt from the exam
 }
-RULES = {
+RULES: dict = {
     "categories": [
         {"name": "homework", "weight": 40, "assignments": ["A1", "A2", "A3"], "drop_lowest": 1},
         {"name": "exam", "weight": 60, "assignments": ["A4"]},
