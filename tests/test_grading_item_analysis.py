@@ -108,6 +108,8 @@ def test_a_question_everyone_gets_right_has_no_discrimination_and_no_flag():
     rows = [_row(f"s{i}", {"q1": (1, 1), "q2": (i % 2, 1)}) for i in range(6)]
     q1 = item_analysis(rows, ["q1", "q2"])[0]
     assert (q1.difficulty, q1.discrimination, q1.flagged) == (1.0, None, False)
+    rows[0].questions["q2"].status = "to mark"  # not marked yet: no score, left out
+    assert item_analysis(rows, ["q1", "q2"])[1].students == 5
 
 
 def test_every_table_of_the_report_is_a_csv_beside_it_with_student_text_as_data(tmp_path):

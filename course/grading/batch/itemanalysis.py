@@ -1,6 +1,7 @@
 """Item analysis of a graded class: which questions work, for the class report.
 
-Per question, over the students graded on it (a question not answered scores 0):
+Per question, over the students graded on it (a question not answered scores 0; a short
+answer not marked yet is left out of its question, having no score yet):
 
 difficulty
     the mean share of the points, ``p = mean(points / max)`` (1: everyone full marks);
@@ -35,6 +36,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from course.grading.batch.results import StudentResult
+from course.grading.vocabulary import GradeStatus
 
 __all__ = ["FLAG_BELOW", "MIN_STUDENTS", "ItemStats", "item_analysis"]
 
@@ -101,7 +103,9 @@ def item_analysis(rows: list[StudentResult], question_ids: list[str]) -> list[It
     """
     out = []
     for qid in question_ids:
-        graded = [r for r in rows if qid in r.questions]
+        graded = [
+            r for r in rows if qid in r.questions and r.questions[qid].status != GradeStatus.TO_MARK
+        ]
         scores, rest = [], []
         kinds: Counter[str] = Counter()
         for r in graded:
