@@ -208,13 +208,50 @@ def test_grade_extensions_move_one_students_due_date(tmp_path):
     assert (records["s2"]["days"], records["s2"]["due"]) == (0, "2026-10-23T23:59+02:00")
 
 
+def test_course_grade_extensions_reach_late_work_by_folder_name_or_title(tmp_path):
+    from types import SimpleNamespace
+
+    from course.grading.batch.driver import Submission, _late_work
+    from course.grading.batch.options import GradeOptions
+
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    entries = []
+    for sid in ("s1", "s2", "s3"):
+        (subs / f"{sid}.ipynb").write_text("{}")
+        entries.append(Submission(sid, subs / f"{sid}.ipynb"))
+    stamps = tmp_path / "times.csv"
+    stamps.write_text("id,submitted_at\n" + "".join(f"{s},2026-10-22T09:00+02:00\n" for s in
+                                                    ("s1", "s2", "s3")))  # fmt: skip
+    ext = tmp_path / "extensions.csv"
+    ext.write_text(
+        "id,assignment,due\n"
+        "s2,01_least_squares,2026-10-23T23:59+02:00\n"  # by folder name
+        "s3,Least squares,2026-10-24T23:59+02:00\n"  # by title
+        "s1,02_other,2026-10-30T23:59+02:00\n"  # another assignment's: not this one's
+    )
+    checks = SimpleNamespace(
+        name="01_least_squares",
+        title="Least squares",
+        due="2026-10-20T23:59+02:00",
+        late_policy="percent-per-day:10",
+    )
+    options = GradeOptions(jobs=1, progress=False, submitted_at=stamps, extensions=ext)
+    records, _ = _late_work(checks, entries, subs, options)
+    assert [records[s]["percent"] for s in ("s1", "s2", "s3")] == [20, 0, 0]
+    assert records["s3"]["due"] == "2026-10-24T23:59+02:00"
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
         ("student;assignment;due\ns1;A1;2026-10-23T23:59Z\n", "needs the header id,assignment,due"),
         ("id,assignment,due\ns1,A1,friday\n", "line 2: due 'friday'"),
         ("id,assignment,due\ns1,A1,2026-10-23T23:59\n", "no time zone"),
-        ("id,assignment,due\ns1,A1,2026-10-23T23:59Z\ns1,A1,2026-10-24T23:59Z\n", "a second"),
+        (
+            "id,assignment,due\ns1,A1,2026-10-23T23:59+00:00\ns1,A1,2026-10-24T23:59+00:00\n",
+            "a second",
+        ),
     ],
 )
 def test_an_extensions_file_that_cannot_be_read_is_refused(tmp_path, text, message):
