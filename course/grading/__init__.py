@@ -25,12 +25,13 @@ The flow
    calls reported by :mod:`.tripwire`), compares in the trusted parent (:mod:`.compare`), and
    records a
    :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`, the class
-   report ``report.html`` of :mod:`.batch.classreport`), the short
+   report ``report.html`` of :mod:`.batch.classreport`, with its item analysis,
+   :mod:`.batch.itemanalysis`, and similarity hints, :mod:`.batch.similarity`), the short
    answers' marking file (:mod:`.batch.marks`) and the LMS files (:mod:`.batch.roster`) are
    written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers
    (their side: :mod:`.batch.clusterworker`), which never receive the class key.
    ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
-   one gradebook; ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter.
+   one gradebook, under the term's rules (:mod:`.batch.termrules`); ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter.
 
 Modules
 -------
@@ -64,7 +65,8 @@ cli
     marking view of ``course mark``), identity (whose submission is whose), roster (the class,
     LMS grade files), late (due dates and late penalties), cluster (Dask: the driver's side),
     clusterworker (a Dask worker's side), gradebook (several assignments in one file),
-    classreport (``report.html``).
+    termrules (the term's weights, letters, exemptions), classreport (``report.html``),
+    itemanalysis (its per-question statistics), similarity (its similarity hints).
 ``sandbox/`` the sandboxed children
     parent (the grader's handle), forkserver (the warm process children fork from), runner
     (the child), isolation (the layers, one per module: namespaces, landlock, seccomp,

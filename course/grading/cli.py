@@ -107,6 +107,7 @@ def _grade(args) -> int:
             "due": parse_due(args.due) if args.due else None,
             "late_policy": parse_policy(args.late_policy) if args.late_policy else None,
             "submitted_at": args.submitted_at,
+            "extensions": Path(args.extensions) if args.extensions else None,
         }
     except LateError as exc:
         print(f"course grade: {exc}", file=sys.stderr)
@@ -190,12 +191,14 @@ def _class_options(args) -> dict | None:
 def _gradebook(args) -> int:
     from course.grading.batch.gradebook import GradebookError, read_gradebook, write_gradebook
     from course.grading.batch.roster import RosterError, read_roster
+    from course.grading.batch.termrules import TermError, read_term
 
     try:
         roster = read_roster(args.roster) if args.roster else None
+        rules = read_term(args.rules) if args.rules else None
         book = read_gradebook([Path(p) for p in args.outs])
-        written = write_gradebook(book, Path(args.out), roster, args.missing_as_zero)
-    except (GradebookError, RosterError) as exc:
+        written = write_gradebook(book, Path(args.out), roster, args.missing_as_zero, rules)
+    except (GradebookError, RosterError, TermError) as exc:
         print(f"course gradebook: {exc}", file=sys.stderr)
         return 2
     columns = ", ".join(f"{c.name} ({c.max_points:g})" for c in book.columns)
@@ -553,6 +556,14 @@ def add_commands(subparsers) -> None:
         "without it only Canvas's _LATE_ in file names marks late work",
     )
     p_gr.add_argument(
+        "--extensions",
+        metavar="FILE",
+        default=None,
+        help="students' own due dates: a CSV with the header id,assignment,due (one row per "
+        "student and assignment, due in ISO 8601 with its zone); the same file the term's "
+        "rules name (docs/instructors/term.md)",
+    )
+    p_gr.add_argument(
         "--cluster",
         metavar="ADDRESS",
         help="grade on the Dask distributed scheduler at ADDRESS, one task per student: "
@@ -606,6 +617,14 @@ def add_commands(subparsers) -> None:
         "--missing-as-zero",
         action="store_true",
         help="0 for an assignment a student did not submit (default: blank)",
+    )
+    p_gb.add_argument(
+        "--rules",
+        metavar="TERM_JSON",
+        default=None,
+        help="the term's rules (weights, drop-lowest, letters or pass mark, exemptions, "
+        "extensions): a JSON file, see docs/instructors/term.md; adds the category, final "
+        "percent and letter columns",
     )
     p_gb.set_defaults(func=_instructor_only(_gradebook))
     _add_mark_command(subparsers)

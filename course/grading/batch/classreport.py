@@ -11,24 +11,39 @@ style sheet or font from outside), readable without the console:
 - the timeouts, forbidden calls and other abnormal ends, with the students;
 - the late submissions and their deductions (when a due date is known or the LMS marked a
   file late);
-- the slowest students.
+- the slowest students;
+- the item analysis per question (difficulty, discrimination, the share of each diagnosed
+  kind; questions that do not discriminate flagged, :mod:`course.grading.batch.itemanalysis`);
+- similarity hints: students whose answer code is the same after normalising names, literals
+  and layout (:mod:`course.grading.batch.similarity`), for the instructor to look at.
 
 Counts are of students: a student whose three hidden cases show the same factor counts once.
+
+Each table is also written beside ``report.html`` as ``report-<table>.csv`` (:data:`TABLES`):
+RFC 4180 CSV (comma, double quotes, CRLF rows, UTF-8), the cells as the page shows them and
+student text kept as it is (data, to read into a spreadsheet, not to open as a formula sheet).
 """
 
 from __future__ import annotations
 
+import csv
 import html
+import io
 from collections import Counter
 from pathlib import Path
 
+from course.grading.batch.itemanalysis import FLAG_BELOW, MIN_STUDENTS, item_analysis
 from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
+from course.grading.batch.similarity import similar_groups
 from course.grading.vocabulary import GradeStatus
 
-__all__ = ["diagnosis", "report_html", "write_report"]
+__all__ = ["TABLES", "diagnosis", "report_html", "report_tables", "write_report"]
 
 REPORT_FILE = "report.html"
+#: The report's tables, each also written as ``report-<name>.csv`` when the page has it.
+TABLES = ("unmarked", "questions", "items", "kinds", "wrong", "abnormal", "late", "slowest",
+          "similar")  # fmt: skip
 
 #: (text in a failed case's message, the kind of wrong answer it shows), first match wins.
 _KINDS = (
@@ -315,7 +330,10 @@ def _pct(rate: float | None) -> str:
     return "—" if rate is None else f"{100 * rate:.0f} %"
 
 
-def _table(head: list[str], rows: list[list]) -> str:
+def _table(head: list[str], rows: list[list], name: str = "", into: dict | None = None) -> str:
+    """An HTML table (every cell escaped); with ``into``, also kept there as ``name``'s CSV."""
+    if into is not None:
+        into[name] = (list(head), [[str(c) for c in row] for row in rows])
     cells = "".join(f"<th>{html.escape(h)}</th>" for h in head)
     body = "".join(
         "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows
@@ -338,7 +356,19 @@ svg { max-width: 100%; height: auto; display: block; }
 
 def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> str:
     """The class report of ``rows`` as one self-contained HTML page."""
+    return _report(rows, checks, question_ids)[0]
+
+
+def report_tables(
+    rows: list[StudentResult], checks, question_ids: list[str]
+) -> dict[str, tuple[list[str], list[list[str]]]]:
+    """The report's tables by name (:data:`TABLES`): ``(header, rows)``, cells as shown."""
+    return _report(rows, checks, question_ids)[1]
+
+
+def _report(rows: list[StudentResult], checks, question_ids: list[str]) -> tuple[str, dict]:
     data = _Class(rows, checks, question_ids)
+    tables: dict[str, tuple[list[str], list[list[str]]]] = {}
     title = f"{checks.title}: class report"
     parts = [
         "<!DOCTYPE html>",
@@ -350,7 +380,7 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
     n = len(data.rows)
     if not n:
         parts.append("<p>No submission was graded.</p></body></html>")
-        return "\n".join(parts) + "\n"
+        return "\n".join(parts) + "\n", tables
     unmarked = unmarked_counts(data.rows, checks)
     warning = unmarked_warning(unmarked)
     if warning:  # every number below counts them as 0: say so first
@@ -361,6 +391,8 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
             + _table(
                 ["question", "not marked yet", "answers"],
                 [[qid, todo, given] for qid, (todo, given) in unmarked.items() if todo],
+                "unmarked",
+                tables,
             )
             + "</div>"
         )
@@ -388,7 +420,12 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
             ]
         )
     parts.append(
-        _table(["question", "points", "mean", "full marks", "public cases", "hidden cases"], rows_q)
+        _table(
+            ["question", "points", "mean", "full marks", "public cases", "hidden cases"],
+            rows_q,
+            "questions",
+            tables,
+        )
     )
     parts.append(
         '<p class="note">Full marks: share of students. Public and hidden cases: share of the '
@@ -405,7 +442,7 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         for what, count in data.kinds[qid].most_common():
             wrong.append([qid, "kind of wrong", what, count])
     parts.append(
-        _table(["question", "diagnosis", "what", "students"], wrong)
+        _table(["question", "diagnosis", "what", "students"], wrong, "wrong", tables)
         if wrong
         else "<p>No wrong answer was diagnosed.</p>"
     )
@@ -421,12 +458,14 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         for status, students in sorted(data.abnormal[qid].items())
     ]
     parts.append(
-        _table(["question", "status", "students", "who"], abnormal) if abnormal else "<p>None.</p>"
+        _table(["question", "status", "students", "who"], abnormal, "abnormal", tables)
+        if abnormal
+        else "<p>None.</p>"
     )
 
     if any(r.late is not None for r in data.rows):
         parts.append("<h2>Late submissions</h2>")
-        parts.append(_late_table(data.rows))
+        parts.append(_late_table(data.rows, tables))
 
     parts.append("<h2>Slowest students</h2>")
     timed = sorted(
@@ -437,15 +476,87 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         _table(
             ["student", "seconds", "status"],
             [[r.student, f"{float(r.wall_seconds or 0):.2f}", r.status] for r in timed[:5]],
+            "slowest",
+            tables,
         )
         if timed
         else "<p>No times recorded.</p>"
     )
+    parts += _item_sections(data, tables)
     parts.append("</body></html>")
-    return "\n".join(parts) + "\n"
+    return "\n".join(parts) + "\n", tables
 
 
-def _late_table(rows: list[StudentResult]) -> str:
+def _rounded(x: float | None) -> str:
+    return "—" if x is None else f"{x:.2f}"
+
+
+def _item_sections(data: _Class, tables: dict) -> list[str]:
+    """The item analysis, the kinds per question and the similarity hints."""
+    stats = item_analysis(data.rows, data.qids)
+    parts = ["<h2>Item analysis</h2>"]
+    parts.append(
+        _table(
+            ["question", "students", "difficulty", "discrimination", "check"],
+            [
+                [
+                    s.question,
+                    s.students,
+                    _rounded(s.difficulty),
+                    _rounded(s.discrimination),
+                    "flagged: discrimination near zero or negative (a wrong expected value? "
+                    "ambiguous?)"
+                    if s.flagged
+                    else "",
+                ]
+                for s in stats
+            ],
+            "items",
+            tables,
+        )
+    )
+    parts.append(
+        '<p class="note">Difficulty: the mean share of the points (1: everyone full marks). '
+        "Discrimination: the point-biserial (item-rest) correlation of the question's score "
+        "with the student's points on the other questions; — when either has no spread. "
+        f"Flagged below {FLAG_BELOW:g} (from {MIN_STUDENTS} students): strong students do no "
+        "better on the question than weak ones, or worse.</p>"
+    )
+    kinds = [[s.question, kind, f"{share:.2f}"] for s in stats for kind, share in s.kinds.items()]
+    parts.append("<h3>Diagnosed kinds per question</h3>")
+    parts.append(
+        _table(["question", "kind", "share of students"], kinds, "kinds", tables)
+        if kinds
+        else "<p>No failed case.</p>"
+    )
+    groups = similar_groups(
+        (qid, r.student, r.questions[qid].fingerprint)
+        for qid in data.qids
+        for r in data.rows
+        if qid in r.questions
+    )
+    parts.append("<h2>Similar answers (hints)</h2>")
+    parts.append(
+        _table(
+            ["question", "students", "who"],
+            [[qid, len(who), ", ".join(who)] for qid, who in groups],
+            "similar",
+            tables,
+        )
+        if groups
+        else "<p>No two answers alike.</p>"
+    )
+    parts.append(
+        '<p class="note">Answers whose code is the same once names, the spelling of literals, '
+        "comments and layout are set aside (the handed-out skeleton left out, very short "
+        "answers not compared). A hint to put the answers side by side, not evidence of "
+        "copying: students can arrive at the same code independently. Never shown to "
+        "students.</p>"
+    )
+    return parts
+
+
+def _late_table(rows: list[StudentResult], tables: dict | None = None) -> str:
     """The late submissions: when, how late, the deduction and the total after it (the
     totals above are after the deductions too)."""
     late = sorted((r for r in rows if r.late and r.late.get("days") != 0), key=lambda r: r.student)
@@ -465,7 +576,9 @@ def _late_table(rows: list[StudentResult]) -> str:
         for r in late
         if r.late is not None
     ]
-    table = _table(["student", "handed in", "days late", "deduction", "points", "total"], body)
+    table = _table(
+        ["student", "handed in", "days late", "deduction", "points", "total"], body, "late", tables
+    )
     policy = html.escape(str(late[0].late.get("policy") if late[0].late else ""))
     return (
         head
@@ -475,7 +588,20 @@ def _late_table(rows: list[StudentResult]) -> str:
 
 
 def write_report(rows: list[StudentResult], checks, question_ids: list[str], out: Path) -> Path:
-    """Write ``out/report.html``; returns its path."""
+    """Write ``out/report.html`` and its tables' CSV files beside it (a table the page no
+    longer has loses its CSV); returns the page's path."""
+    page, tables = _report(rows, checks, question_ids)
     path = Path(out) / REPORT_FILE
-    path.write_text(report_html(rows, checks, question_ids), encoding="utf-8")
+    path.write_text(page, encoding="utf-8")
+    for name in TABLES:
+        target = Path(out) / f"report-{name}.csv"
+        if name not in tables:
+            target.unlink(missing_ok=True)
+            continue
+        head, body = tables[name]
+        buf = io.StringIO()
+        writer = csv.writer(buf, dialect="excel", lineterminator="\r\n")
+        writer.writerow(head)
+        writer.writerows(body)
+        target.write_text(buf.getvalue(), encoding="utf-8", newline="")
     return path

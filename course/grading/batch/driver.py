@@ -29,7 +29,14 @@ from pathlib import Path
 from course.grading.batch.classreport import write_report
 from course.grading.batch.cluster import check_cluster_options, grade_on_cluster
 from course.grading.batch.identity import resolve_identities
-from course.grading.batch.late import LateError, late_records, parse_due, parse_policy
+from course.grading.batch.late import (
+    LateError,
+    extensions_for,
+    late_records,
+    parse_due,
+    parse_policy,
+    read_extensions,
+)
 from course.grading.batch.marks import (
     SHORT_ANSWERS_FILE,
     MarksError,
@@ -342,7 +349,14 @@ def _late_work(checks, entries: list, submissions: Path, options: GradeOptions):
             "--submitted-at needs a due date: pass --due 2026-10-20T23:59+02:00 (or set due= "
             "in the assignment's checks.py)"
         )
-    return late_records(entries, submissions, due, policy, options.submitted_at, options.roster)
+    extensions = None
+    if options.extensions is not None:  # this assignment's rows, by its folder name or title
+        extensions = extensions_for(
+            read_extensions(Path(options.extensions)), checks.name, getattr(checks, "title", "")
+        )
+    return late_records(
+        entries, submissions, due, policy, options.submitted_at, options.roster, extensions
+    )
 
 
 def _regrade_reason(old: StudentResult | None, grader, file: dict | None) -> str | None:

@@ -16,6 +16,12 @@ When a submission was handed in comes from what the learning-management system (
 * Canvas's ``_LATE_`` marker in a file name (``doejane_LATE_1234_5678_<file>``): late, by a time
   Canvas does not say.
 
+Extensions (``--extensions FILE``, also named by the term's rules, see
+:mod:`course.grading.batch.termrules`) are a CSV with the header ``id,assignment,due``: the
+student ID, the assignment (its folder name, ``01_least_squares``, or its title) and the
+student's own due date (ISO 8601 with its zone). It is read with one fixed dialect (comma,
+double quotes, UTF-8), never guessed; its due date wins over a timestamps file's ``due``.
+
 The late policy (``--late-policy``, or ``Checks(..., late_policy=...)``) is a comma-separated
 list, e.g. ``percent-per-day:10,cap:50`` or ``percent-per-day:10,zero-after:2026-10-27T23:59Z``:
 
@@ -53,6 +59,7 @@ __all__ = [
     "late_records",
     "parse_due",
     "parse_policy",
+    "read_extensions",
     "read_timestamps",
 ]
 
@@ -237,6 +244,61 @@ def read_timestamps(path: Path, zone) -> dict[str, tuple[datetime | None, dateti
     return out
 
 
+_EXTENSION_COLUMNS = {"id": ("id", "student", "studentid", "sisuserid", "idnumber"),
+                      "assignment": ("assignment",), "due": ("due", "newdue", "duedate")}  # fmt: skip
+
+
+def read_extensions(path: Path) -> dict[tuple[str, str], datetime]:
+    r"""``{(student ID, assignment): own due date}`` of an extensions CSV (header
+    ``id,assignment,due``; see the module docstring). One fixed dialect (RFC 4180: comma,
+    double quotes), never sniffed: a student's ID is data, not a hint about the format.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "extensions.csv"
+    >>> _ = f.write_text("id,assignment,due\ns001,01_least_squares,2026-10-23T23:59+02:00\n")
+    >>> read_extensions(f)[("s001", "01_least_squares")].isoformat()
+    '2026-10-23T23:59:00+02:00'
+    """
+    try:
+        text = Path(path).read_text("utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise LateError(f"cannot read the extensions file {path}: {exc}") from None
+    reader = csv.reader(io.StringIO(text))
+    header = [_key(h) for h in next(reader, [])]
+    found = {
+        name: next((header.index(c) for c in choices if c in header), None)
+        for name, choices in _EXTENSION_COLUMNS.items()
+    }
+    cols = {name: i for name, i in found.items() if i is not None}
+    if len(cols) != len(found):
+        raise LateError(
+            f"the extensions file {path} needs the header id,assignment,due (a comma-separated "
+            "CSV); found " + (", ".join(repr(h) for h in header if h) or "nothing")
+        )
+    out: dict[tuple[str, str], datetime] = {}
+    for line_no, row in enumerate(reader, start=2):
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) <= max(cols.values()):
+            raise LateError(f"{path}, line {line_no}: give id, assignment and due")
+        sid, assignment, due = (row[cols[c]].strip() for c in ("id", "assignment", "due"))
+        if not sid or not assignment:
+            raise LateError(f"{path}, line {line_no}: the id and the assignment must be given")
+        key = (sid, assignment)
+        if key in out:
+            raise LateError(f"{path}, line {line_no}: a second extension of {sid} for {assignment}")
+        out[key] = parse_due(due, f"{path}, line {line_no}: due")
+    return out
+
+
+def extensions_for(table: dict[tuple[str, str], datetime], *names: str) -> dict[str, datetime]:
+    """The extensions of one assignment, by student ID (``names``: its folder name, title)."""
+    wanted = {n for n in names if n}
+    return {sid: due for (sid, assignment), due in table.items() if assignment in wanted}
+
+
 @dataclass(frozen=True)
 class Lateness:
     """What is known about one submission's time, as its row's ``late`` record."""
@@ -285,12 +347,15 @@ def late_records(
     policy: LatePolicy,
     submitted_at: str | Path | None = None,
     roster=None,
+    extensions: dict[str, datetime] | None = None,
 ) -> tuple[dict[str, dict], list[str]]:
     """The ``late`` record of every resolved submission that has one, and the console's notes.
 
-    A submission gets a record when there is a due date, or when the LMS marked it late. The
-    time comes from the timestamps file (or the file times), else Canvas's ``_LATE_``.
+    A submission gets a record when there is a due date (the class's, or the student's own in
+    ``extensions``, by student ID), or when the LMS marked it late. The time comes from the
+    timestamps file (or the file times), else Canvas's ``_LATE_``.
     """
+    extensions = extensions or {}
     submissions = Path(submissions).resolve()
     zone = due.tzinfo if due is not None else None
     table = None
@@ -323,6 +388,7 @@ def late_records(
             source = "file time"
         if when is None and marked:
             source = "Canvas's _LATE_ in the file name"
+        own_due = extensions.get(sub.student, own_due)
         if due is None and own_due is None and not marked:
             continue
         lateness = Lateness(when, own_due or due, source or "no time known", marked)

@@ -60,6 +60,7 @@ class GradeOptions:
     due: datetime | None = None  # the due date (None: checks.py's due=, else no due date)
     late_policy: LatePolicy | None = None  # None: checks.py's late_policy=, else no deduction
     submitted_at: Path | str | None = None  # a timestamps CSV, or "file-times" (late.FILE_TIMES)
+    extensions: Path | None = None  # a CSV id,assignment,due of students' own due dates
 
     def isolation(self) -> Isolation:
         """The sandbox layers (raises IsolationError where none walls off the file system)."""

@@ -48,7 +48,9 @@ class QuestionResult:
     :class:`~course.grading.vocabulary.GradeStatus`), the student's message and the cases.
 
     ``answer``: a short answer's text, kept for the instructor's marking (``None``: not
-    written)."""
+    written). ``fingerprint``: the answer code's normalised fingerprint
+    (:func:`course.grading.batch.similarity.fingerprint`), for the report's similarity hints
+    only (``None``: none, not written)."""
 
     points: float
     max: float
@@ -56,6 +58,7 @@ class QuestionResult:
     message: str = ""
     cases: list[CaseResult] = field(default_factory=list)
     answer: str | None = None
+    fingerprint: str | None = None
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -67,6 +70,8 @@ class QuestionResult:
         }
         if self.answer is not None:
             out["answer"] = self.answer
+        if self.fingerprint is not None:
+            out["fingerprint"] = self.fingerprint
         return out
 
     @classmethod
@@ -78,6 +83,7 @@ class QuestionResult:
             message=d["message"],
             cases=[CaseResult.from_json(c) for c in d["cases"]],
             answer=d.get("answer"),
+            fingerprint=d.get("fingerprint"),
         )
 
     @property

@@ -24,6 +24,7 @@ from course.grading.authoring.secret import public_key_id
 from course.grading.batch.options import GradeOptions
 from course.grading.batch.plan import build_plan
 from course.grading.batch.results import CaseResult, QuestionResult, StudentResult
+from course.grading.batch.similarity import fingerprint
 from course.grading.codec import EncodingError, decode, encode
 from course.grading.compare import compare
 from course.grading.items import choice_verdict, is_unanswered_text
@@ -40,6 +41,7 @@ from course.grading.vocabulary import (
     ABNORMAL,
     PLACEHOLDER_ID,
     CellOrigin,
+    CellRole,
     GradeStatus,
     Op,
     QuestionKind,
@@ -126,6 +128,12 @@ class AssignmentGrader:
         self.forbid_by_value = [
             q.id for q in self.questions if q.forbid and q.kind != QuestionKind.FUNCTION
         ]
+        #: question -> the answer cell as handed out (left out of the similarity fingerprint)
+        self.skeletons = {
+            c.question: c.source
+            for c in self.release.cells
+            if c.role == CellRole.ANSWER and c.cell_type == "code" and c.question
+        }
         self._deny_read = [solutions_root, *deny_read]
         self.isolation = self.options.isolation()  # refuses early where nothing walls files off
         self._sandbox: Sandbox | None = None
@@ -324,6 +332,20 @@ class AssignmentGrader:
                 row.notes.append("The notebook is empty.")
             return
         StudentSession(self, row, sid, plan, seeds).run()
+        self._fingerprint(row, plan)
+
+    def _fingerprint(self, row: StudentResult, plan) -> None:
+        """Each answer's code fingerprint, for the report's similarity hints (bounded: see
+        :mod:`course.grading.batch.similarity`; computed here, from the sources the reader
+        child handed over, never by running anything)."""
+        for qid, source in plan.answer_sources.items():
+            res = row.questions.get(qid)
+            if res is None or res.status == GradeStatus.NOT_ANSWERED:
+                continue
+            try:
+                res.fingerprint = fingerprint(source, self.skeletons.get(qid, ""))
+            except Exception:  # a hint that fails is no hint; it must never cost the grade
+                res.fingerprint = None
 
 
 class StudentSession:
