@@ -80,6 +80,7 @@ def _release(args) -> int:
 def _grade(args) -> int:
     from course.grading.batch.cluster import ClusterError, ConnectionFiles
     from course.grading.batch.driver import SelectionError, grade
+    from course.grading.batch.intake import IntakeError
     from course.grading.batch.late import LateError, parse_due, parse_policy
     from course.grading.batch.marks import MarksError
     from course.grading.batch.options import GradeOptions, available_cpus
@@ -99,8 +100,12 @@ def _grade(args) -> int:
         )
         return 2
     submissions = Path(args.submissions)
-    if not submissions.is_dir():
-        print(f"course grade: {submissions} is not a folder of submissions", file=sys.stderr)
+    if not (submissions.is_dir() or submissions.suffix.lower() == ".zip"):
+        print(
+            f"course grade: {submissions} is neither a folder of submissions nor an LMS's "
+            "download (.zip)",
+            file=sys.stderr,
+        )
         return 2
     try:
         late_options = {
@@ -137,7 +142,7 @@ def _grade(args) -> int:
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except (MarksError, SelectionError, LateError, ClusterError) as exc:
+    except (MarksError, SelectionError, LateError, ClusterError, IntakeError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -460,7 +465,7 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument(
         "assignment", metavar="NAME", help="assignment name (or path to its solutions folder)"
     )
-    p_gr.add_argument("submissions", metavar="SUBMISSIONS", help="folder of submissions")
+    p_gr.add_argument("submissions", metavar="SUBMISSIONS", help="folder of submissions, or the LMS's download (Canvas's or Moodle's .zip)")
     p_gr.add_argument("--out", required=True, help="output folder")
     p_gr.add_argument(
         "--jobs",

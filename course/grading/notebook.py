@@ -258,7 +258,7 @@ def read_notebook_bytes(path) -> bytes:
     """The bytes of a submitted notebook, refusing a symbolic link (even one swapped in after
     the submissions were listed) and anything larger than :data:`MAX_NOTEBOOK_BYTES` + 1."""
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)  # a FIFO never waits
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise SubmissionError("the notebook is a symbolic link") from None
