@@ -97,7 +97,7 @@ def lms_name(name: str, assignment: str, folder: bool = False, moodle: bool = Fa
         found = canvas_name(name) or moodle_name(name)
     if found is not None:
         return found
-    stem = name[: -len(".ipynb")] if name.endswith(".ipynb") and not folder else name
+    stem = name if folder or "." not in name[1:] else name.rsplit(".", 1)[0]
     sid = plain_id(stem, assignment)
     return LmsName("id", sid) if sid is not None else LmsName("other", person=name)
 
