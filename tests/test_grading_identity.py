@@ -123,9 +123,7 @@ def _notebook(path: Path, sid: str | None, assignment: str = NAME) -> Path:
     nb = {
         "nbformat": 4,
         "nbformat_minor": 5,
-        "metadata": {
-            "course": {"assignment": assignment, "submission": {"student_id": declared}}
-        },
+        "metadata": {"course": {"assignment": assignment, "submission": {"student_id": declared}}},
         "cells": [
             {
                 "cell_type": "code",
@@ -214,7 +212,7 @@ def test_a_moodle_display_name_cannot_borrow_a_participant_number(tmp_path):
     roster = _roster(
         tmp_path,
         "Identifier,Full name,ID number\nParticipant 111,Vic Tim,victim1\n"
-        f"Participant 112,Zed_111_assignsubmission_file_,mallory\n",
+        "Participant 112,Zed_111_assignsubmission_file_,mallory\n",
     )
     identity = _resolve(subs, roster)
     assert next(e for e in identity.entries if e.student == "victim1").path.parent.name == (

@@ -465,7 +465,11 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument(
         "assignment", metavar="NAME", help="assignment name (or path to its solutions folder)"
     )
-    p_gr.add_argument("submissions", metavar="SUBMISSIONS", help="folder of submissions, or the LMS's download (Canvas's or Moodle's .zip)")
+    p_gr.add_argument(
+        "submissions",
+        metavar="SUBMISSIONS",
+        help="folder of submissions, or the LMS's download (Canvas's or Moodle's .zip)",
+    )
     p_gr.add_argument("--out", required=True, help="output folder")
     p_gr.add_argument(
         "--jobs",
