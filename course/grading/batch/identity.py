@@ -384,23 +384,29 @@ def _duplicate_rule(claims: list[_Candidate]) -> str:
     return "the last in the LMS's order: Canvas's submission number, then the file name"
 
 
-def _choose(sid: str, group: list[_Candidate], directory: _Directory, out: Identity):
-    """The one submission of ``sid`` among its files, and the console's lines about the
-    others (files not graded, several notebooks)."""
-    group.sort(key=_Candidate.key)
-    best = group[-1]
+def _doubt(best: _Candidate, sid: str, directory: _Directory, out: Identity):
+    """The graded file's submission, with a note when its notebook declares another ID; the
+    console's line about any doubt on it."""
     sub = best.sub
-    if best.declared not in (None, sid) and best.gradable:
+    if best.declared not in (None, sid):
         sub = _mismatch(best, directory, out)
-    elif best.gradable and best.owner is None and not best.doubt:
+    elif best.owner is None and not best.doubt:
         best.doubt = _unnamed_doubt(best, directory)
-    elif best.gradable and best.name.kind == "id" and not _looks_bare(sid) and not best.declared:
+    elif best.name.kind == "id" and not _looks_bare(sid) and not best.declared:
         best.doubt = (
             f"{best.shown}: no student ID in the notebook; graded under its file name {sid!r} "
             "(rename it to <ID>.ipynb and grade again if that is wrong)"
         )
     if best.doubt:
         out.flags.append(best.doubt)
+    return sub
+
+
+def _choose(sid: str, group: list[_Candidate], directory: _Directory, out: Identity):
+    """The one submission of ``sid`` among its files, and the console's lines about the
+    others (files not graded, several notebooks)."""
+    group.sort(key=_Candidate.key)
+    best = group[-1]
     notebooks = [c for c in group if c.gradable]
     if len(notebooks) > 1:
         out.flags.append(
@@ -408,14 +414,15 @@ def _choose(sid: str, group: list[_Candidate], directory: _Directory, out: Ident
             + ", ".join(c.shown for c in notebooks)
             + f"; graded {best.shown} ({_duplicate_rule(notebooks)})"
         )
-    unfit = [_unfit_note(c) for c in group if not c.gradable]
-    for c, note in zip([c for c in group if not c.gradable], unfit, strict=True):
-        out.flags.append(f"{c.shown} ({sid}): {note}")
+    unfit = [(c, _unfit_note(c)) for c in group if not c.gradable]
+    out.flags.extend(f"{c.shown} ({sid}): {note}" for c, note in unfit)
+    notes = "; ".join(note for _, note in unfit)
     if not best.gradable:
         refused = best.sub.refused or bool(best.why_not)
-        return replace(sub, student=sid, path=None, note="; ".join(unfit), refused=refused)
+        return replace(best.sub, student=sid, path=None, note=notes, refused=refused)
+    sub = _doubt(best, sid, directory, out)
     if unfit:
-        also = "also " + "; ".join(unfit) + " (not graded)"
+        also = f"also {notes} (not graded)"
         sub = replace(sub, note=f"{sub.note} {also}" if sub.note else also)
     return replace(sub, student=sid)
 
@@ -436,6 +443,21 @@ def _warning(cands: list[_Candidate], directory: _Directory) -> str:
         "ID column; Moodle: the grading worksheet, or a roster with the students' names) so "
         "that the uploader decides."
     )
+
+
+def _finish_flags(out: Identity, data_key: str | None) -> None:
+    """The console's lines made safe to print, the warning first, the key mismatches last."""
+    out.flags = [visible_text(f) for f in out.flags]  # file names reach the console
+    if out.warning:
+        out.flags.insert(0, out.warning)
+    if out.mismatched_keys:
+        out.flags.append(
+            f"{len(out.mismatched_keys)} submission(s) were worked on personal data issued with "
+            f"another key than this run's ({data_key}): "
+            + ", ".join(visible_text(k) for k in out.mismatched_keys[:5])
+            + (" …" if len(out.mismatched_keys) > 5 else "")
+            + "; grade with the class's --secret, or their personal questions score 0"
+        )
 
 
 def resolve_identities(
@@ -465,23 +487,11 @@ def resolve_identities(
         if c.sid is not None:
             groups.setdefault(c.sid, []).append(c)
     contested = {e.student for e in out.entries}
-    for sid in sorted(groups):
-        if sid in contested:
-            continue
+    for sid in sorted(set(groups) - contested):
         out.entries.append(_choose(sid, groups[sid], directory, out))
         chosen = groups[sid][-1]
         if data_key is not None and chosen.meta.get("data_key") not in (None, data_key):
             out.mismatched_keys.append(chosen.shown)
     out.entries.sort(key=lambda e: e.student)
-    out.flags = [visible_text(f) for f in out.flags]  # file names reach the console
-    if out.warning:
-        out.flags.insert(0, out.warning)
-    if out.mismatched_keys:
-        out.flags.append(
-            f"{len(out.mismatched_keys)} submission(s) were worked on personal data issued with "
-            f"another key than this run's ({data_key}): "
-            + ", ".join(visible_text(k) for k in out.mismatched_keys[:5])
-            + (" …" if len(out.mismatched_keys) > 5 else "")
-            + "; grade with the class's --secret, or their personal questions score 0"
-        )
+    _finish_flags(out, data_key)
     return out
