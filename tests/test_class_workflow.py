@@ -203,7 +203,9 @@ def test_console_flags_every_name_mismatch(graded):
         "'s006', the notebook's STUDENT_ID" in text
     )
     conflicts = list(csv.reader((out / "identity_conflicts.csv").open(encoding="utf-8")))
-    assert [r[:3] + r[-1:] for r in conflicts[1:]] == [["s003.ipynb", "s003", "s004", "graded as s003"]]
+    assert [r[:3] + r[-1:] for r in conflicts[1:]] == [
+        ["s003.ipynb", "s003", "s004", "graded as s003"]
+    ]
     assert "worked on personal data issued with another key" in text and "s007_01" in text
     assert "doejane" not in text  # a renamed file whose name holds the right ID is fine
     assert "Roster: 4 missing (s001, s004, s005, s008), 1 not on the roster (zz9)" in text

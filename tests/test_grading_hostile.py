@@ -848,8 +848,8 @@ def _roster_file(tmp_path: Path):
 
 
 def _resolve(folder: Path, roster=None):
-    from course.grading.batch.intake import find_submissions
     from course.grading.batch.identity import resolve_identities
+    from course.grading.batch.intake import find_submissions
 
     return resolve_identities(
         find_submissions(folder, NAME), NAME, roster.students if roster else None
@@ -889,7 +889,9 @@ def test_without_a_roster_a_claim_from_another_uploader_is_never_graded(tmp_path
     identity = _resolve(subs)
     assert _graded_file(identity, "v1") == f"Vic Tim_11_assignsubmission_file_/{NAME}.ipynb"
     assert _graded_file(identity, "m2") == f"Mal Lory_12_assignsubmission_file_/{NAME}.ipynb"
-    assert [c[0] for c in identity.conflicts] == ["Mal Lory_12_assignsubmission_file_/victim1.ipynb"]
+    assert [c[0] for c in identity.conflicts] == [
+        "Mal Lory_12_assignsubmission_file_/victim1.ipynb"
+    ]
     assert identity.flags[0].startswith("WARNING: 3 file(s) are named by an LMS")
     # two uploaders with nothing but the same ID: nothing tells whose it is, both are held
     (subs / "Mal Lory_12_assignsubmission_file_" / f"{NAME}.ipynb").unlink()

@@ -430,8 +430,8 @@ def _id_notebook(path: Path, sid: str) -> Path:
 
 
 def _resolved(subs: Path, roster_text: str, tmp_path: Path):
-    from course.grading.batch.intake import find_submissions
     from course.grading.batch.identity import resolve_identities
+    from course.grading.batch.intake import find_submissions
     from course.grading.batch.roster import read_roster
 
     (tmp_path / "roster.csv").write_text(roster_text, encoding="utf-8")

@@ -271,7 +271,7 @@ class _Resolver:
                 )
             elif c.declared is not None:
                 claims.setdefault(c.declared, set()).add(c.name.uploader)
-        own = {}
+        own: dict[str, set[str]] = {}
         for sid, uploaders in claims.items():
             if len(uploaders) == 1:
                 own.setdefault(next(iter(uploaders)), set()).add(sid)
