@@ -432,3 +432,51 @@ def test_an_archive_beyond_its_budget_is_refused(tmp_path, monkeypatch):
     (tmp_path / "not.zip").write_bytes(b"PK\x03\x04 not really")
     with pytest.raises(intake.IntakeError, match="cannot read the archive"):
         unpack_archive(tmp_path / "not.zip", tmp_path / "dest")
+
+
+# -- feedback back through the LMS (issue 35 item 1) --------------------------------------------
+def test_feedback_zips_are_named_as_each_lms_handed_the_files_out(tmp_path, capsys):
+    from course.cli import main as course_main
+    from course.grading.batch.lmsfeedback import feedback_html, feedback_name
+    from course.grading.batch.reports import append_result
+    from course.grading.batch.results import StudentResult
+
+    out = tmp_path / "out"
+    (out / "feedback").mkdir(parents=True)
+    files = {
+        "s001": f"doejane_101_5001_{NAME}.ipynb",
+        "s002": f"roeann_LATE_102_5010_{NAME}-1.ipynb",
+        "s003": f"Ed Poe_13_assignsubmission_file_/work/{NAME}.ipynb",
+        "s004": None,  # quarantined: no graded file
+        "s005": f"s005_{NAME}.ipynb",  # named by ID, not by an LMS
+    }
+    for sid, name in files.items():
+        row = StudentResult(sid, NAME, "c" * 64, "1", "public", 14.0, total=7.0)
+        row.record_file(None if name is None else {"name": name, "sha256": "0" * 64})
+        append_result(row, out / "results.jsonl")
+        (out / "feedback" / f"{sid}.md").write_text(
+            f"# Feedback: {sid}\n\n- q1: <script>alert(1)</script> & more\n\n**Total: 7 / 14**\n"
+        )
+    assert course_main(["feedback", str(out), "--lms", "canvas"]) == 0
+    printed = capsys.readouterr().out
+    assert "feedback for 2 student(s)" in printed
+    assert "s004: no graded file" in printed and "s005: its file was not named by Canvas" in printed
+    with zipfile.ZipFile(out / "canvas_feedback.zip") as zf:
+        assert sorted(zf.namelist()) == [
+            f"doejane_101_5001_{NAME}.html",
+            f"roeann_LATE_102_5010_{NAME}-1.html",
+        ]
+        page = zf.read(f"doejane_101_5001_{NAME}.html").decode()
+    assert "<script>" not in page and "&lt;script&gt;alert(1)&lt;/script&gt; &amp; more" in page
+    assert "<h1>Feedback: s001</h1>" in page
+    assert course_main(["feedback", str(out), "--lms", "moodle"]) == 0
+    with zipfile.ZipFile(out / "moodle_feedback.zip") as zf:
+        assert zf.namelist() == ["Ed Poe_13_assignsubmission_file_/feedback.html"]
+    # every name keeps the numbers the LMS reads from the name it handed out
+    for sid in ("s001", "s002"):
+        mine, theirs = canvas_name(feedback_name(files[sid], "canvas")), canvas_name(files[sid])
+        assert (mine.number, mine.order, mine.late) == (theirs.number, theirs.order, theirs.late)
+    flat = feedback_name("Ed Poe_13_assignsubmission_file_notebook.ipynb", "moodle")
+    assert flat == "Ed Poe_13_assignsubmission_file_/feedback.html"
+    assert feedback_name(f"doejane_101_5001_{NAME}.ipynb", "moodle") is None
+    assert "<li>" in feedback_html("- a", "t") and "<p>x &lt; y</p>" in feedback_html("x < y", "t")

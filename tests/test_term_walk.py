@@ -353,6 +353,19 @@ def test_a_class_graded_straight_from_the_lms_downloads(tmp_path, capsys, monkey
     assert by_sis["s006"][:2] == ["Lory, Mal", "106"]
     for sid in ("s001", "s002", "s003", "s006"):
         assert by_sis[sid][5] == grades[sid]["total"]
+    # the feedback back through Canvas's Re-Upload Submissions (issue 35 item 1)
+    downloads = zipfile.ZipFile(tmp_path / "downloads" / "submissions.zip").namelist()
+    assert course_main(["feedback", str(out), "--lms", "canvas"]) == 0
+    assert "Not in it (2): s004: not graded (refused); s005: not graded (refused)" in (
+        capsys.readouterr().out
+    )
+    names = zipfile.ZipFile(out / "canvas_feedback.zip").namelist()
+    graded = {
+        f"doejane_101_5001_{A1}", f"roeann_LATE_102_5010_{A1}-1", f"poeed_103_5003_{A1}",
+        "lorymal_106_5006_s001",
+    }  # fmt: skip
+    assert sorted(names) == sorted(f"{stem}.html" for stem in graded)
+    assert all(f"{n[: -len('.html')]}.ipynb" in downloads for n in names)
 
     # Moodle: the zip and its grading worksheet (roster, participant numbers and times at once)
     archive, sheet = _moodle_zip(tmp_path)
@@ -372,3 +385,13 @@ def test_a_class_graded_straight_from_the_lms_downloads(tmp_path, capsys, monkey
     m2 = next(r for r in moodle if r[0] == "s002")
     assert m2[1:4] == ["ar@x", "Ann", "Roe"] and m2[4] == grades["s002"]["total"]
     assert "late deduction 20 %" in m2[5]
+    # the feedback back through Moodle's "Upload multiple feedback files in a zip"
+    assert course_main(["feedback", str(out), "--lms", "moodle"]) == 0
+    folders = {n.split("/")[0] for n in zipfile.ZipFile(archive).namelist()}
+    names = zipfile.ZipFile(out / "moodle_feedback.zip").namelist()
+    assert len(names) == 3 and all(n.endswith("/feedback.html") for n in names)
+    assert {n.split("/")[0] for n in names} == folders
+    page = zipfile.ZipFile(out / "moodle_feedback.zip").read(
+        "Ann Roe_12_assignsubmission_file_/feedback.html"
+    )
+    assert b"<h1>" in page and b"late" in page.lower()

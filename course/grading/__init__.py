@@ -63,7 +63,8 @@ cli
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), reports (feedback, grades, results log), marks (short answers), marking (the
     marking view of ``course mark``), intake (the files handed in: folders and LMS zips),
-    lmsnames (each LMS's name grammar), identity (whose submission is whose), roster (the class,
+    lmsnames (each LMS's name grammar), identity (whose submission is whose), lmsfeedback
+    (the feedback zips of ``course feedback``), roster (the class,
     LMS grade files), late (due dates and late penalties), cluster (Dask: the driver's side),
     clusterworker (a Dask worker's side), gradebook (several assignments in one file),
     classreport (``report.html``).

@@ -1,5 +1,5 @@
-"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``mark``,
-``export`` and ``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``feedback``,
+``mark``, ``export`` and ``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -213,6 +213,23 @@ def _gradebook(args) -> int:
             + ", ".join(f"{name}: {n}" for name, n in unmarked.items())
             + "); mark them (course mark OUT_DIR), merge them (course grade … --short-answers), "
             "then build the gradebook again"
+        )
+    return 0
+
+
+def _feedback(args) -> int:
+    from course.grading.batch.lmsfeedback import write_feedback_zip
+
+    try:
+        written = write_feedback_zip(Path(args.out_dir), args.lms)
+    except (ValueError, OSError) as exc:
+        print(f"course feedback: {exc}", file=sys.stderr)
+        return 2
+    print(f"Wrote {written.path}: feedback for {len(written.names)} student(s)")
+    if written.left_out:
+        print(
+            f"Not in it ({len(written.left_out)}): "
+            + "; ".join(f"{sid}: {why}" for sid, why in sorted(written.left_out.items()))
         )
     return 0
 
@@ -617,5 +634,16 @@ def add_commands(subparsers) -> None:
         help="0 for an assignment a student did not submit (default: blank)",
     )
     p_gb.set_defaults(func=_instructor_only(_gradebook))
+
+    p_fb = subparsers.add_parser(
+        "feedback",
+        help="the zip of feedback files an LMS's bulk feedback upload takes",
+        description="Write OUT_DIR/<lms>_feedback.zip from a `course grade` output folder: one "
+        "HTML page per graded student, named after the file the LMS handed out (Canvas: "
+        "Re-Upload Submissions; Moodle: Upload multiple feedback files in a zip).",
+    )
+    p_fb.add_argument("out_dir", metavar="OUT_DIR", help="the --out of a course grade run")
+    p_fb.add_argument("--lms", required=True, choices=["canvas", "moodle"])
+    p_fb.set_defaults(func=_instructor_only(_feedback))
     _add_mark_command(subparsers)
     _add_class_commands(subparsers)
