@@ -93,12 +93,20 @@ def feedback_html(markdown: str, title: str) -> str:
     )
 
 
-def _why_left_out(row: StudentResult) -> str | None:
+def _place(row: StudentResult, out: Path, lms: str) -> tuple[str, Path] | str:
+    """Where a student's feedback goes in the zip and the file it comes from, or why it is
+    left out."""
     if row.status in _NOT_GRADES:
         return f"not graded ({row.status})"
     if not row.has_file or not row.file or not row.file.get("name"):
         return "no graded file (quarantined or nothing handed in)"
-    return None
+    name = feedback_name(str(row.file["name"]), lms)
+    if name is None:
+        return f"its file was not named by {lms.capitalize()}"
+    source = out / "feedback" / f"{row.student}.md"
+    if not source.is_file():
+        return "no feedback file"
+    return name, source
 
 
 def write_feedback_zip(out: Path, lms: str) -> FeedbackZip:
@@ -113,19 +121,13 @@ def write_feedback_zip(out: Path, lms: str) -> FeedbackZip:
     result = FeedbackZip(out / f"{lms}_feedback.zip")
     with zipfile.ZipFile(result.path, "w", zipfile.ZIP_DEFLATED) as zf:
         for sid in sorted(rows):
-            row = rows[sid]
-            why = _why_left_out(row)
-            name = None if why else feedback_name(row.file["name"], lms)  # type: ignore[index]
-            source = out / "feedback" / f"{sid}.md"
-            if why is None and name is None:
-                why = f"its file was not named by {lms.capitalize()}"
-            if why is None and not source.is_file():
-                why = "no feedback file"
-            if why is not None:
-                result.left_out[sid] = why
+            place = _place(rows[sid], out, lms)
+            if isinstance(place, str):
+                result.left_out[sid] = place
                 continue
+            name, source = place
             with open(source, "rb") as f:
                 text = f.read(_MAX_FEEDBACK_BYTES).decode("utf-8", errors="replace")
-            zf.writestr(name, feedback_html(text, f"Feedback: {row.assignment}"))
-            result.names.append(name)  # type: ignore[arg-type]
+            zf.writestr(name, feedback_html(text, f"Feedback: {rows[sid].assignment}"))
+            result.names.append(name)
     return result
