@@ -19,8 +19,9 @@ from course.grading import Assignment
 from course.grading.authoring.checks import load_checks, load_data_module, student_rng
 from course.grading.authoring.personal import PERSONAL_FILE, PersonalData, build_personal_data
 from course.grading.authoring.secret import Secret
-from course.grading.batch.driver import Submission, grade
+from course.grading.batch.driver import grade
 from course.grading.batch.identity import resolve_identities
+from course.grading.batch.intake import Submission
 from course.grading.batch.options import GradeOptions
 from course.grading.batch.roster import RosterError, read_roster
 from course.grading.student.submit import make_submission
@@ -152,9 +153,10 @@ def graded(tmp_path_factory):
     # renamed by an LMS after check.submit(): the ID comes from the metadata
     path, _, _ = make_submission(_notebook(tmp, "s002"), None, NAME, None, issued)
     shutil.copyfile(path, subs / f"doejane_102_5551_{path.name}")
-    # a bare <ID>.ipynb whose notebook says another ID: quarantined (graded for nobody)
+    # a bare <ID>.ipynb whose notebook says another ID: the name decides, and it is reported
     shutil.copyfile(_notebook(tmp, "s004"), subs / "s003.ipynb")
-    # a name holding a roster ID other than the notebook's: the name decides, so quarantined
+    # a name no LMS wrote, holding a roster ID as a word: it identifies nobody; graded under
+    # the notebook's ID, flagged
     shutil.copyfile(_notebook(tmp, "s006"), subs / "Smith_Bob_s005_attempt2.ipynb")
     # someone not on the roster
     shutil.copyfile(_notebook(tmp, "zz9"), subs / "zz9.ipynb")
@@ -180,10 +182,10 @@ def _row(summary, sid):
 
 def test_grader_uses_the_secret_data_and_the_metadata_id(graded):
     summary, _ = graded
-    assert sorted(r.student for r in summary.rows) == ["s002", "s003", "s005", "s007", "zz9"]
-    for sid in ("s003", "s005"):  # the name's student gets a row saying why, and no points
-        assert "quarantined" in " ".join(_row(summary, sid)["notes"])
-        assert _row(summary, sid)["total"] == 0
+    assert sorted(r.student for r in summary.rows) == ["s002", "s003", "s006", "s007", "zz9"]
+    # s003.ipynb declares s004: graded as s003's (its name), with s003's data, and s003 is told
+    assert "graded as 's003''s" in " ".join(_row(summary, "s003")["notes"])
+    assert _row(summary, "s003")["total"] == _row(summary, "s003")["max"]
     row = _row(summary, "s002")
     assert row["total"] == row["max"], {q: r["message"] for q, r in row["questions"].items()}
     assert row["data_key"] == SECRET.key_id and row["file"]["name"].startswith("doejane_102_")
@@ -195,16 +197,18 @@ def test_grader_uses_the_secret_data_and_the_metadata_id(graded):
 def test_console_flags_every_name_mismatch(graded):
     summary, out = graded
     text = summary.text()
-    assert "QUARANTINED s003.ipynb: its name makes it 's003'" in text and "'s004'" in text
-    assert "QUARANTINED Smith_Bob_s005_attempt2.ipynb: its name makes it 's005'" in text
+    assert "s003.ipynb: the notebook declares STUDENT_ID 's004', but its name makes it" in text
+    assert (
+        "Smith_Bob_s005_attempt2.ipynb: the file name is not an LMS's name or an ID; graded as "
+        "'s006', the notebook's STUDENT_ID" in text
+    )
     conflicts = list(csv.reader((out / "identity_conflicts.csv").open(encoding="utf-8")))
-    assert [r[:3] for r in conflicts[1:]] == [
-        ["Smith_Bob_s005_attempt2.ipynb", "s005", "s006"],
-        ["s003.ipynb", "s003", "s004"],
+    assert [r[:3] + r[-1:] for r in conflicts[1:]] == [
+        ["s003.ipynb", "s003", "s004", "graded as s003"]
     ]
     assert "worked on personal data issued with another key" in text and "s007_01" in text
     assert "doejane" not in text  # a renamed file whose name holds the right ID is fine
-    assert "Roster: 4 missing (s001, s004, s006, s008), 1 not on the roster (zz9)" in text
+    assert "Roster: 4 missing (s001, s004, s005, s008), 1 not on the roster (zz9)" in text
 
 
 def test_lms_grade_files(graded):
@@ -308,11 +312,11 @@ def test_names_resolved_without_a_roster(tmp_path):
         "Roe_Ann_33333",
     ]
     flags = "\n".join(identity.flags)
-    # the name makes 44444.ipynb 44444's, the notebook says 44445: quarantined, and 44444 is
-    # graded from the file whose name and notebook agree
-    assert "QUARANTINED 44444.ipynb" in flags and "'44445'" in flags
+    # the name makes 44444.ipynb 44444's, the notebook says 44445: 44444 is graded from the
+    # file whose name and notebook agree, and the other is named; 44445 gets nothing
+    assert "2 submissions claim the ID '44444': 44444.ipynb, late_44444.ipynb" in flags
     assert next(e for e in identity.entries if e.student == "44444").path.name == "late_44444.ipynb"
-    assert identity.conflicts[0][:3] == ("44444.ipynb", "44444", "44445")
+    assert not identity.conflicts
     assert (
         "Roe_Ann_33333_01_least_squares.ipynb: no student ID in the notebook; graded under" in flags
     )

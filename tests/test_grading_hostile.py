@@ -851,8 +851,8 @@ def _roster_file(tmp_path: Path):
 
 
 def _resolve(folder: Path, roster=None):
-    from course.grading.batch.driver import find_submissions
     from course.grading.batch.identity import resolve_identities
+    from course.grading.batch.intake import find_submissions
 
     return resolve_identities(
         find_submissions(folder, NAME), NAME, roster.students if roster else None
@@ -866,47 +866,53 @@ def _graded_file(identity, sid: str) -> str | None:
 
 def test_a_moodle_upload_cannot_take_another_students_grade(tmp_path):
     """Issue 25.1: an extra upload in the attacker's Moodle folder declares the victim's ID and a
-    future time; the victim keeps their own file, the upload is quarantined with both names."""
+    future time; the victim keeps their own file. Issue 34: the upload is its uploader's (graded
+    for m2, reported with both IDs), never the victim's."""
     subs = tmp_path / "subs"
     _id_notebook(subs / "Vic Tim_11_assignsubmission_file_" / f"{NAME}.ipynb", "v1", "2020")
     _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "x.ipynb", "v1", "2999-01-01")
     identity = _resolve(subs, _roster_file(tmp_path))
     assert _graded_file(identity, "v1") == f"Vic Tim_11_assignsubmission_file_/{NAME}.ipynb"
-    assert [(c[0], c[1], c[2]) for c in identity.conflicts] == [
-        ("Mal Lory_12_assignsubmission_file_", "m2", "v1")
+    assert [a[:3] for a in identity.attached] == [
+        ("Mal Lory_12_assignsubmission_file_/x.ipynb", "m2", "v1")
     ]
     m2 = next(e for e in identity.entries if e.student == "m2")
-    assert m2.refused and m2.path is None and "quarantined" in m2.note
-    assert any("QUARANTINED Mal Lory" in f and "'v1'" in f for f in identity.flags)
+    assert not m2.refused and m2.path.name == "x.ipynb" and "graded as 'm2'" in m2.note
+    assert not identity.conflicts
+    assert any("Mal Lory" in f and "'v1'" in f for f in identity.flags)
 
 
 def test_without_a_roster_a_claim_from_another_uploader_is_never_graded(tmp_path):
+    """Issue 34: two uploaders claiming one ID quarantined both, so an extra upload took a
+    classmate out of the batch; now the uploader with an ID of its own keeps only that."""
     subs = tmp_path / "subs"
     _id_notebook(subs / "Vic Tim_11_assignsubmission_file_" / f"{NAME}.ipynb", "v1")
-    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "x.ipynb", "v1", "2999-01-01")
-    _id_notebook(subs / "v1.ipynb", "m2")  # a file named for v1 that declares someone else
+    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / f"{NAME}.ipynb", "m2")
+    _id_notebook(subs / "Mal Lory_12_assignsubmission_file_" / "victim1.ipynb", "v1")
     identity = _resolve(subs)
-    # v1.ipynb names v1 but declares m2: quarantined; the two Moodle uploads come from
-    # different uploaders and neither is named v1: neither replaces v1's work
-    assert _graded_file(identity, "v1") is None
-    assert {c[0] for c in identity.conflicts} == {
-        "v1.ipynb",
-        "Vic Tim_11_assignsubmission_file_",
-        "Mal Lory_12_assignsubmission_file_",
-    }
-    assert all(e.student != "m2" for e in identity.entries)
+    assert _graded_file(identity, "v1") == f"Vic Tim_11_assignsubmission_file_/{NAME}.ipynb"
+    assert _graded_file(identity, "m2") == f"Mal Lory_12_assignsubmission_file_/{NAME}.ipynb"
+    assert [c[0] for c in identity.conflicts] == [
+        "Mal Lory_12_assignsubmission_file_/victim1.ipynb"
+    ]
+    assert identity.flags[0].startswith("WARNING: 3 file(s) are named by an LMS")
+    # two uploaders with nothing but the same ID: nothing tells whose it is, both are held
+    (subs / "Mal Lory_12_assignsubmission_file_" / f"{NAME}.ipynb").unlink()
+    identity = _resolve(subs)
+    assert _graded_file(identity, "v1") is None and len(identity.conflicts) == 2
+    assert "give the LMS's roster export as --roster" in identity.conflicts[0][3]
 
 
 def test_canvas_order_decides_between_one_students_files_not_the_written_time(tmp_path):
     subs = tmp_path / "subs"
     _id_notebook(subs / f"timvic_101_700_{NAME}.ipynb", "v1", "2999-01-01")  # forged time
     _id_notebook(subs / f"timvic_LATE_101_900_{NAME}-1.ipynb", "v1", "2000-01-01")
-    # another Canvas user's upload declaring v1, with an even later file number
+    # another Canvas user's upload declaring v1, with an even later file number: its uploader's
     _id_notebook(subs / f"lorymal_102_950_{NAME}.ipynb", "v1", "2999-12-31")
     identity = _resolve(subs, _roster_file(tmp_path))
     entry = next(e for e in identity.entries if e.student == "v1")
     assert entry.path.name == f"timvic_LATE_101_900_{NAME}-1.ipynb"
-    assert [c[:3] for c in identity.conflicts] == [(f"lorymal_102_950_{NAME}.ipynb", "m2", "v1")]
+    assert [c[:3] for c in identity.attached] == [(f"lorymal_102_950_{NAME}.ipynb", "m2", "v1")]
     assert any("the last in the LMS's order" in f for f in identity.flags)
 
 

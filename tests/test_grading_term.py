@@ -430,8 +430,8 @@ def _id_notebook(path: Path, sid: str) -> Path:
 
 
 def _resolved(subs: Path, roster_text: str, tmp_path: Path):
-    from course.grading.batch.driver import find_submissions
     from course.grading.batch.identity import resolve_identities
+    from course.grading.batch.intake import find_submissions
     from course.grading.batch.roster import read_roster
 
     (tmp_path / "roster.csv").write_text(roster_text, encoding="utf-8")
@@ -504,11 +504,18 @@ def test_a_canvas_user_number_attaches_a_file_whose_notebook_id_is_a_typo(tmp_pa
     s003 = next(e for e in identity.entries if e.student == "s003")
     assert s003.path is not None and s003.path.name.startswith("poeed_103_")
     assert "'s0O3' is not on the class list" in s003.note  # the student is told
-    assert [a[:3] for a in identity.attached] == [(f"poeed_103_503_{NAME}.ipynb", "s003", "s0O3")]
+    assert sorted(a[:3] for a in identity.attached) == [
+        (f"poeed_103_503_{NAME}.ipynb", "s003", "s0O3"),
+        (f"roeann_102_502_{NAME}.ipynb", "s002", "s001"),
+    ]
     flags = "\n".join(identity.flags)
     assert "'s0O3', which is not on the roster; graded as 's003'" in flags
-    # an ID that is another roster student's is still quarantined
-    assert [c[:3] for c in identity.conflicts] == [(f"roeann_102_502_{NAME}.ipynb", "s002", "s001")]
+    # an ID that is another roster student's: graded for its uploader, and said so (issue 34)
+    s002 = next(e for e in identity.entries if e.student == "s002")
+    assert s002.path is not None and s002.path.name.startswith("roeann_102_")
+    assert "graded as 's002'" in s002.note and not identity.conflicts
+    s001 = [e for e in identity.entries if e.student == "s001"]
+    assert s001 == []  # Jane handed nothing in: Ann's file never becomes hers
 
 
 def test_the_name_check_lists_only_real_problems(tmp_path):
@@ -556,7 +563,7 @@ def test_the_duplicate_line_names_the_rule_it_applied(tmp_path):
 def test_a_canvas_user_number_never_takes_the_time_of_the_student_with_that_id(tmp_path):
     """Numeric IDs: Ann's Canvas user number 101 is Jane's student ID; the row "101" of the
     timestamps file is Jane's time, not Ann's."""
-    from course.grading.batch.driver import Submission
+    from course.grading.batch.intake import Submission
     from course.grading.batch.late import late_records, parse_due, parse_policy
 
     subs = tmp_path / "subs"
@@ -574,7 +581,8 @@ def test_a_canvas_user_number_never_takes_the_time_of_the_student_with_that_id(t
 def test_the_due_date_and_policy_of_checks_py_and_the_command_line_wins(tmp_path):
     from types import SimpleNamespace
 
-    from course.grading.batch.driver import Submission, _late_work
+    from course.grading.batch.driver import _late_work
+    from course.grading.batch.intake import Submission
     from course.grading.batch.late import LateError, parse_due, parse_policy
 
     subs = tmp_path / "subs"

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import shutil
+import zipfile
 from pathlib import Path
 
 import nbformat
@@ -247,3 +248,151 @@ def test_a_term_from_the_secret_to_the_gradebook(tmp_path, capsys, monkeypatch):
     moodle = _table(book / "moodle.csv")
     assert moodle[0][4:] == [title1, title3, "Total"]
     assert next(r for r in moodle if r[0] == "s004")[4:] == rows["s004"][1:4]
+
+
+# -- issue 34: graded straight from the LMS's own downloads ---------------------------------------
+CANVAS_CLASS = ROSTER.replace(
+    '"Student, Test",999,,,A\n',
+    '"Lee, Lou",105,s005,llee,A\n"Lory, Mal",106,s006,mlory,A\n"Student, Test",999,,,A\n',
+)
+
+
+def _canvas_zip(tmp_path: Path) -> Path:
+    """Canvas's "Download Submissions" of a class of six, as it comes."""
+    a1, a3 = load_checks(ROOT / "solutions" / A1), ROOT / "solutions" / A3
+
+    def saved(sid, stub=False, assignment=A1):
+        return _saved(tmp_path, assignment, sid, stub).read_bytes()
+
+    assert a1.max_points > 0 and a3.is_dir()
+    entries = {
+        f"doejane_101_5001_{A1}.ipynb": saved("s001"),
+        f"roeann_102_5002_{A1}.ipynb": saved("s002", stub=True),
+        f"roeann_LATE_102_5010_{A1}-1.ipynb": saved("s002"),  # the resubmission, after the due
+        f"poeed_103_5003_{A1}.ipynb": saved("s0O3"),  # a typo'd ID
+        "kaykim_104_5004_report.html": b"<p>my answers, as a web page</p>",
+        f"leelou_105_5005_{A3}.ipynb": saved("s005", assignment=A3),  # another assignment's
+        # Mal uploads her untouched notebook as "s001.ipynb", declaring her classmate's ID
+        "lorymal_106_5006_s001.ipynb": saved("s001", stub=True),
+    }
+    archive = tmp_path / "downloads" / "submissions.zip"
+    archive.parent.mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, data in entries.items():
+            zf.writestr(name, data)
+    return archive
+
+
+def _moodle_zip(tmp_path: Path) -> tuple[Path, Path]:
+    """Moodle's "Download all submissions" (in folders) and its grading worksheet."""
+    archive = tmp_path / "downloads" / "moodle.zip"
+    archive.parent.mkdir(parents=True, exist_ok=True)
+    mallory = "Zed_11_assignsubmission_file__13_assignsubmission_file_"
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr(
+            f"Jane Doe_11_assignsubmission_file_/{A1}.ipynb",
+            _saved(tmp_path, A1, "s001").read_bytes(),
+        )
+        zf.writestr(
+            f"Ann Roe_12_assignsubmission_file_/work/final/{A1}.ipynb",
+            _saved(tmp_path, A1, "s002").read_bytes(),
+        )
+        zf.writestr("Ann Roe_12_assignsubmission_file_/notes.pdf", b"%PDF-1.4")
+        zf.writestr(f"{mallory}/{A1}.ipynb", _saved(tmp_path, A1, "s001", stub=True).read_bytes())
+    sheet = tmp_path / "downloads" / "worksheet.csv"
+    sheet.write_text(
+        "Identifier,Full name,ID number,Email address,Status,Grade,Maximum Grade,"
+        "Last modified (submission),Feedback comments\n"
+        'Participant 11,Jane Doe,s001,jd@x,Submitted,,14,"Tuesday, 20 October 2026, 11:00 PM",\n'
+        'Participant 12,Ann Roe,s002,ar@x,Submitted,,14,"Thursday, 22 October 2026, 9:15 AM",\n'
+        "Participant 13,Zed_11_assignsubmission_file_,s003,z@x,Submitted,,14,"
+        '"Tuesday, 20 October 2026, 10:00 PM",\n',
+        encoding="utf-8",
+    )
+    return archive, sheet
+
+
+@pytest.mark.slow
+def test_a_class_graded_straight_from_the_lms_downloads(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("COURSE_SECRET_FILE", raising=False)
+    roster = tmp_path / "canvas_roster.csv"
+    roster.write_text(CANVAS_CLASS, encoding="utf-8")
+    a1 = str(ROOT / "solutions" / A1)
+    max1 = load_checks(ROOT / "solutions" / A1).max_points
+    title1 = load_checks(ROOT / "solutions" / A1).title
+    late = ["--due", DUE, "--late-policy", "percent-per-day:10"]
+    out = tmp_path / "grades" / "canvas"
+    text = _grade(capsys, a1, str(_canvas_zip(tmp_path)), "--out", str(out), "--roster",
+                  str(roster), "--no-secret", *late)  # fmt: skip
+    grades = {r["student"]: r for r in csv.DictReader((out / "grades.csv").open())}
+    assert sorted(grades) == ["s001", "s002", "s003", "s004", "s005", "s006"]
+    # Jane keeps her own full marks; Mal's upload named after her is Mal's, and said so
+    assert float(grades["s001"]["total"]) == max1
+    assert float(grades["s006"]["total"]) < max1
+    assert "lorymal_106_5006_s001.ipynb: the notebook declares STUDENT_ID 's001'" in text
+    assert "graded as 's006''s" in (out / "feedback" / "s006.md").read_text("utf-8")
+    # the resubmission is graded, late by a time Canvas does not say (charged one day)
+    assert grades["s002"]["late"] == "unknown"
+    assert float(grades["s002"]["total"]) == pytest.approx(0.9 * max1)
+    assert "'s0O3', which is not on the roster; graded as 's003'" in text
+    assert float(grades["s003"]["total"]) == max1
+    # what is not a gradable notebook is said against its student, never dropped
+    assert (
+        "kaykim_104_5004_report.html (s004): handed in kaykim_104_5004_report.html, not a" in text
+    )
+    assert f"leelou_105_5005_{A3}.ipynb (s005): this is assignment 03's notebook" in text
+    assert float(grades["s004"]["total"]) == 0 and float(grades["s005"]["total"]) == 0
+    assert "not a notebook" in (out / "feedback" / "s004.md").read_text("utf-8")
+    assert "Roster: 0 missing" in text or "missing" not in text.split("Roster:")[-1][:12]
+    canvas = _table(out / "canvas.csv")
+    assert canvas[0] == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", title1]
+    assert canvas[1][0].strip() == "Points Possible" and canvas[1][5] == f"{max1:g}"
+    assert (out / "canvas.csv").read_bytes().count(b"\r\n") == 2 + 6  # Canvas's CRLF rows
+    by_sis = {r[2]: r for r in canvas[2:]}
+    assert sorted(by_sis) == ["s001", "s002", "s003", "s004", "s005", "s006"]
+    assert by_sis["s006"][:2] == ["Lory, Mal", "106"]
+    for sid in ("s001", "s002", "s003", "s006"):
+        assert by_sis[sid][5] == grades[sid]["total"]
+    # the feedback back through Canvas's Re-Upload Submissions (issue 35 item 1)
+    downloads = zipfile.ZipFile(tmp_path / "downloads" / "submissions.zip").namelist()
+    assert course_main(["feedback", str(out), "--lms", "canvas"]) == 0
+    printed = capsys.readouterr().out
+    assert "Not in it (2): s004: not graded (invalid notebook); s005: not graded (refused)" in (
+        printed
+    )
+    names = zipfile.ZipFile(out / "canvas_feedback.zip").namelist()
+    graded = {
+        f"doejane_101_5001_{A1}", f"roeann_LATE_102_5010_{A1}-1", f"poeed_103_5003_{A1}",
+        "lorymal_106_5006_s001",
+    }  # fmt: skip
+    assert sorted(names) == sorted(f"{stem}.html" for stem in graded)
+    assert all(f"{n[: -len('.html')]}.ipynb" in downloads for n in names)
+
+    # Moodle: the zip and its grading worksheet (roster, participant numbers and times at once)
+    archive, sheet = _moodle_zip(tmp_path)
+    out = tmp_path / "grades" / "moodle"
+    text = _grade(capsys, a1, str(archive), "--out", str(out), "--roster", str(sheet),
+                  "--no-secret", *late, "--submitted-at", str(sheet))  # fmt: skip
+    grades = {r["student"]: r for r in csv.DictReader((out / "grades.csv").open())}
+    assert sorted(grades) == ["s001", "s002", "s003"]
+    assert float(grades["s001"]["total"]) == max1  # participant 13 never borrows 11's place
+    assert float(grades["s003"]["total"]) < max1 and grades["s003"]["late"] == "0"
+    assert grades["s002"]["late"] == "2"  # Thursday 9:15 against Tuesday 23:59
+    assert float(grades["s002"]["total"]) == pytest.approx(0.8 * max1)
+    assert "Ann Roe_12_assignsubmission_file_ (s002): handed in notes.pdf, not a" in text
+    moodle = _table(out / "moodle.csv")
+    assert moodle[0] == ["ID number", "Email address", "First name", "Last name", title1,
+                         "Feedback"]  # fmt: skip
+    m2 = next(r for r in moodle if r[0] == "s002")
+    assert m2[1:4] == ["ar@x", "Ann", "Roe"] and m2[4] == grades["s002"]["total"]
+    assert "late deduction 20 %" in m2[5]
+    # the feedback back through Moodle's "Upload multiple feedback files in a zip"
+    assert course_main(["feedback", str(out), "--lms", "moodle"]) == 0
+    folders = {n.split("/")[0] for n in zipfile.ZipFile(archive).namelist()}
+    names = zipfile.ZipFile(out / "moodle_feedback.zip").namelist()
+    assert len(names) == 3 and all(n.endswith("/feedback.html") for n in names)
+    assert {n.split("/")[0] for n in names} == folders
+    page = zipfile.ZipFile(out / "moodle_feedback.zip").read(
+        "Ann Roe_12_assignsubmission_file_/feedback.html"
+    )
+    assert b"<h1>" in page and b"late" in page.lower()

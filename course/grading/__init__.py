@@ -18,7 +18,8 @@ The flow
 3. A student runs ``check("q1")`` (:mod:`.student.selfcheck`) against the sealed values and
    hands in with ``check.submit()`` (:mod:`.student.submit`).
 4. ``course grade`` (:mod:`.batch.driver`, options in :mod:`.batch.options`) finds the
-   submissions and whose each is (:mod:`.batch.identity`, :mod:`.batch.roster`), grades each
+   submissions (:mod:`.batch.intake`: a folder or the LMS's zip) and whose each is
+   (:mod:`.batch.lmsnames`, :mod:`.batch.identity`, :mod:`.batch.roster`), grades each
    student in a session (:mod:`.batch.session`) that matches the notebook against the release
    (:mod:`.batch.plan`) and runs it in a sandboxed child (:mod:`.sandbox.parent`,
    :mod:`.sandbox.forkserver`, :mod:`.sandbox.runner`, :mod:`.sandbox.isolation`; forbidden
@@ -62,7 +63,9 @@ cli
     driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), reports (feedback, grades, results log), marks (short answers), marking (the
-    marking view of ``course mark``), identity (whose submission is whose), roster (the class,
+    marking view of ``course mark``), intake (the files handed in: folders and LMS zips),
+    lmsnames (each LMS's name grammar), identity (whose submission is whose), lmsfeedback
+    (the feedback zips of ``course feedback``), roster (the class,
     LMS grade files), late (due dates and late penalties), cluster (Dask: the driver's side),
     clusterworker (a Dask worker's side), gradebook (several assignments in one file),
     termrules (the term's weights, letters, exemptions), classreport (``report.html``),

@@ -1,5 +1,5 @@
-"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``mark``,
-``export`` and ``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
+"""The instructors' subcommands ``course release``, ``grade``, ``gradebook``, ``feedback``,
+``mark``, ``export`` and ``secret``, and the students' ``course submit`` (hooked into :mod:`course.cli`)."""
 
 from __future__ import annotations
 
@@ -80,6 +80,7 @@ def _release(args) -> int:
 def _grade(args) -> int:
     from course.grading.batch.cluster import ClusterError, ConnectionFiles
     from course.grading.batch.driver import SelectionError, grade
+    from course.grading.batch.intake import IntakeError
     from course.grading.batch.late import LateError, parse_due, parse_policy
     from course.grading.batch.marks import MarksError
     from course.grading.batch.options import GradeOptions, available_cpus
@@ -99,8 +100,12 @@ def _grade(args) -> int:
         )
         return 2
     submissions = Path(args.submissions)
-    if not submissions.is_dir():
-        print(f"course grade: {submissions} is not a folder of submissions", file=sys.stderr)
+    if not (submissions.is_dir() or submissions.suffix.lower() == ".zip"):
+        print(
+            f"course grade: {submissions} is neither a folder of submissions nor an LMS's "
+            "download (.zip)",
+            file=sys.stderr,
+        )
         return 2
     try:
         late_options = {
@@ -138,7 +143,7 @@ def _grade(args) -> int:
     except IsolationError as exc:
         print(f"course grade: refusing to run: {exc}", file=sys.stderr)
         return 2
-    except (MarksError, SelectionError, LateError, ClusterError) as exc:
+    except (MarksError, SelectionError, LateError, ClusterError, IntakeError) as exc:
         print(f"course grade: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:
@@ -211,6 +216,23 @@ def _gradebook(args) -> int:
             + ", ".join(f"{name}: {n}" for name, n in unmarked.items())
             + "); mark them (course mark OUT_DIR), merge them (course grade … --short-answers), "
             "then build the gradebook again"
+        )
+    return 0
+
+
+def _feedback(args) -> int:
+    from course.grading.batch.lmsfeedback import write_feedback_zip
+
+    try:
+        written = write_feedback_zip(Path(args.out_dir), args.lms)
+    except (ValueError, OSError) as exc:
+        print(f"course feedback: {exc}", file=sys.stderr)
+        return 2
+    print(f"Wrote {written.path}: feedback for {len(written.names)} student(s)")
+    if written.left_out:
+        print(
+            f"Not in it ({len(written.left_out)}): "
+            + "; ".join(f"{sid}: {why}" for sid, why in sorted(written.left_out.items()))
         )
     return 0
 
@@ -463,7 +485,11 @@ def add_commands(subparsers) -> None:
     p_gr.add_argument(
         "assignment", metavar="NAME", help="assignment name (or path to its solutions folder)"
     )
-    p_gr.add_argument("submissions", metavar="SUBMISSIONS", help="folder of submissions")
+    p_gr.add_argument(
+        "submissions",
+        metavar="SUBMISSIONS",
+        help="folder of submissions, or the LMS's download (Canvas's or Moodle's .zip)",
+    )
     p_gr.add_argument("--out", required=True, help="output folder")
     p_gr.add_argument(
         "--jobs",
@@ -627,5 +653,16 @@ def add_commands(subparsers) -> None:
         "percent and letter columns",
     )
     p_gb.set_defaults(func=_instructor_only(_gradebook))
+
+    p_fb = subparsers.add_parser(
+        "feedback",
+        help="the zip of feedback files an LMS's bulk feedback upload takes",
+        description="Write OUT_DIR/<lms>_feedback.zip from a `course grade` output folder: one "
+        "HTML page per graded student, named after the file the LMS handed out (Canvas: "
+        "Re-Upload Submissions; Moodle: Upload multiple feedback files in a zip).",
+    )
+    p_fb.add_argument("out_dir", metavar="OUT_DIR", help="the --out of a course grade run")
+    p_fb.add_argument("--lms", required=True, choices=["canvas", "moodle"])
+    p_fb.set_defaults(func=_instructor_only(_feedback))
     _add_mark_command(subparsers)
     _add_class_commands(subparsers)

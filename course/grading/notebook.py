@@ -258,7 +258,7 @@ def read_notebook_bytes(path) -> bytes:
     """The bytes of a submitted notebook, refusing a symbolic link (even one swapped in after
     the submissions were listed) and anything larger than :data:`MAX_NOTEBOOK_BYTES` + 1."""
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)  # a FIFO never waits
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise SubmissionError("the notebook is a symbolic link") from None
@@ -308,7 +308,8 @@ def reduce_notebook(nb) -> dict:
     """The part of a decoded submission the grader reads, with bounded size.
 
     Kept: each cell's type, id, source and ``metadata.course`` role and question, and the
-    notebook's ``metadata.course.submission`` fields (scalars, short strings); outputs and every
+    notebook's ``metadata.course`` assignment and submission fields (scalars, short strings);
+    outputs and every
     other field are dropped. The sandboxed child that decodes a submission sends only this to
     the parent (:meth:`course.grading.sandbox.parent.Sandbox.read_notebook`), so what a notebook
     costs the parent is bounded by :data:`MAX_CELLS`, :data:`MAX_SOURCE_CHARS` and
@@ -355,10 +356,11 @@ def reduce_notebook(nb) -> dict:
                 or (isinstance(value, (int, float, bool)) or value is None)
             ):
                 fields[key] = value
-    return {
-        "metadata": {"course": {"submission": fields}} if fields else {},
-        "cells": cells,
-    }
+    kept_course: dict = {"submission": fields} if fields else {}
+    assignment = course.get("assignment") if isinstance(course, dict) else None
+    if _short(assignment) is not None:  # which assignment's notebook it is
+        kept_course["assignment"] = assignment
+    return {"metadata": {"course": kept_course} if kept_course else {}, "cells": cells}
 
 
 def student_id_in(source: str) -> str | None:

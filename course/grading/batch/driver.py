@@ -18,17 +18,16 @@ the same file).
 from __future__ import annotations
 
 import csv
-import hashlib
 import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass
 from pathlib import Path
 
 from course.grading.batch.classreport import write_report
 from course.grading.batch.cluster import check_cluster_options, grade_on_cluster
 from course.grading.batch.identity import resolve_identities
+from course.grading.batch.intake import file_digest, find_submissions, unpack_archive
 from course.grading.batch.late import (
     LateError,
     extensions_for,
@@ -64,99 +63,35 @@ from course.grading.batch.results import StudentResult
 from course.grading.batch.roster import write_canvas_csv, write_moodle_csv
 from course.grading.batch.session import AssignmentGrader
 
-__all__ = [
-    "Submission",
-    "Summary",
-    "find_submissions",
-    "grade",
-]
+__all__ = ["Summary", "grade"]
 
 
-@dataclass(frozen=True)
-class Submission:
-    """One student's submission as found in the folder (``path`` None: nothing to grade)."""
-
-    student: str
-    path: Path | None
-    note: str | None = None  # told to the student and the instructor
-    refused: bool = False  # a symbolic link, or a file from outside the submissions
-
-
-def _inodes(folder: Path | None) -> set[tuple[int, int]]:
-    if folder is None or not Path(folder).is_dir():
-        return set()
-    out = set()
-    for p in Path(folder).rglob("*"):
-        try:
-            st = p.lstat()
-        except OSError:
-            continue
-        out.add((st.st_dev, st.st_ino))
-    return out
+def _intake(submissions: Path, out: Path) -> tuple[Path, list, list[str]]:
+    """The folder to grade: ``submissions`` itself, or an LMS's download archive unpacked into
+    ``OUT/unpacked`` (:mod:`course.grading.batch.intake`); the archive's entries that are no
+    notebook, each against its student, and its lines about entries that belong to nobody."""
+    if submissions.is_dir():
+        return submissions, [], []
+    folder = out / "unpacked"
+    listed, escaped = unpack_archive(submissions, folder)
+    return folder.resolve(), listed, escaped
 
 
-def _outside(path: Path, root: Path, private: set) -> str | None:
-    """Why ``path`` (inside the submissions folder ``root``) must not be graded, or None."""
-    if path.is_symlink():
-        return "it is a symbolic link; submit the notebook file itself"
-    real = path.resolve()
-    if not real.is_relative_to(root):
-        return "it lies outside the submissions folder"
-    st = path.lstat()
-    if (st.st_dev, st.st_ino) in private:
-        return "it is a hard link to one of the course's own files"
-    return None
-
-
-def find_submissions(folder: Path, assignment: str, private_dir: Path | None = None) -> list:
-    """A :class:`Submission` for every submission in ``folder``: a file ``<id>.ipynb`` or a
-    folder ``<id>/`` holding ``<assignment>.ipynb`` (or a single notebook).
-
-    Symbolic links (a notebook, a student's folder, anything on the way) and hard links to
-    files of ``private_dir`` (the assignment's solution folder) are refused with a note: a
-    "submission" that is a link to the solution notebook must not be graded as the student's.
-    """
-    root = Path(folder).resolve()
-    private = _inodes(private_dir)
-    found: dict[str, Submission] = {}
-    for entry in sorted(root.iterdir()):
-        if entry.name.startswith((".", "_")):
-            continue
-        is_notebook = entry.suffix == ".ipynb" and (entry.is_file() or entry.is_symlink())
-        if not (is_notebook or entry.is_dir()):
-            continue
-        sid = entry.stem if is_notebook else entry.name
-        if sid in found and not is_notebook:
-            continue
-        why = _outside(entry, root, private)
-        if why is not None:
-            found[sid] = Submission(sid, None, f"the submission was refused: {why}", True)
-            continue
-        if is_notebook:
-            found[sid] = Submission(sid, entry)
-            continue
-        notebooks = sorted(
-            p
-            for p in entry.rglob("*.ipynb")
-            if ".ipynb_checkpoints" not in p.parts
-            and not any(q.is_symlink() for q in p.relative_to(entry).parents if q != Path("."))
-        )
-        refused = [(p, _outside(p, root, private)) for p in notebooks]
-        refused = [(p, why) for p, why in refused if why is not None]
-        if refused:
-            p, why = refused[0]
-            note = f"the submission was refused: {p.relative_to(entry)} in the folder: {why}"
-            found[sid] = Submission(sid, None, note, True)
-            continue
-        preferred = entry / f"{assignment}.ipynb"
-        if preferred.is_file():
-            found[sid] = Submission(sid, preferred)
-        elif notebooks:
-            several = f"several notebooks in the folder; graded {notebooks[0].name}"
-            found[sid] = Submission(sid, notebooks[0], several if len(notebooks) > 1 else None)
-        else:
-            found[sid] = Submission(sid, None, "no notebook (.ipynb) in the submission folder")
-    return [found[k] for k in sorted(found)]
+def _identify(grader, submissions: Path, listed: list, solution_dir: Path, options):
+    """Every file handed in, attributed to its student (:mod:`course.grading.batch.identity`);
+    a warning at the start when nothing tells who uploaded the LMS's files."""
+    found = find_submissions(submissions, grader.name, private_dir=solution_dir) + listed
+    declared = _read_declared(grader, found, options)
+    identity = resolve_identities(
+        found,
+        grader.name,
+        options.roster.students if options.roster is not None else None,
+        grader.data_key,
+        read_declared=lambda path: declared.get(path, (None, {})),
+    )
+    if identity.warning and options.announce is not None:
+        options.announce(identity.warning)
+    return identity
 
 
 def _read_declared(grader: AssignmentGrader, found: list, options: GradeOptions) -> dict:
@@ -198,25 +133,20 @@ def grade(
     )
     out.mkdir(parents=True, exist_ok=True)
     (out / "feedback").mkdir(exist_ok=True)
+    archive = submissions  # the folder, or the LMS's download: the sandbox reads neither
+    submissions, listed, unpacked = _intake(submissions, out)
     results_path = out / "results.jsonl"
     if options.regrade and options.students is None and results_path.exists():
         results_path.unlink()
     lock = threading.Lock()
-    with AssignmentGrader(solution_dir, options, deny_read=[submissions, out]) as grader:
+    with AssignmentGrader(solution_dir, options, deny_read=[archive, submissions, out]) as grader:
         marks_in = None  # a filled marking file: checked before anyone is graded
         if options.short_answers is not None:
             if not short_questions(grader.checks):
                 raise MarksError(f"{grader.name} has no short-answer questions to mark")
             marks_in = parse_marks_csv(Path(options.short_answers), grader.checks)
-        found = find_submissions(submissions, grader.name, private_dir=solution_dir)
-        declared = _read_declared(grader, found, options)
-        identity = resolve_identities(
-            found,
-            grader.name,
-            options.roster.students if options.roster is not None else None,
-            grader.data_key,
-            read_declared=lambda path: declared.get(path, (None, {})),
-        )
+        identity = _identify(grader, submissions, listed, solution_dir, options)
+        identity.flags[:0] = unpacked
         todo = identity.entries
         _write_conflicts(identity.conflicts, identity.attached, out / "identity_conflicts.csv")
         late, late_notes = _late_work(grader.checks, todo, submissions, options)
@@ -444,14 +374,7 @@ def _file_record(path: Path | None, submissions: Path) -> dict | None:
     """The graded file and its sha256: the receipt ``check.submit()`` printed matches it."""
     if path is None:
         return None
-    sha = hashlib.sha256()
-    try:  # in chunks: a file of any size costs the parent 1 MB
-        with open(path, "rb") as f:
-            while chunk := f.read(1 << 20):
-                sha.update(chunk)
-        digest: str | None = sha.hexdigest()
-    except OSError:
-        digest = None
+    digest = file_digest(path)  # never a link, a FIFO or a file too large to grade
     name = (
         path.relative_to(submissions).as_posix() if path.is_relative_to(submissions) else path.name
     )

@@ -51,6 +51,8 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
+from course.grading.batch.lmsnames import LmsName, lms_name
+
 __all__ = [
     "FILE_TIMES",
     "LateError",
@@ -155,11 +157,6 @@ def _show(when: datetime) -> str:
 
 
 # -- when each submission was handed in -----------------------------------------------------
-# Canvas: "<lastfirst>_LATE_<user number>_<file number>_<uploaded name>"
-_CANVAS_LATE = re.compile(r"^[^_]+(?:_[^_]+)*?_LATE_(\d+)_\d+_")
-_CANVAS = re.compile(r"^[^_]+(?:_[^_]+)*?_(?:LATE_)?(\d+)_\d+_", re.IGNORECASE)
-_MOODLE = re.compile(r"^.+?_(\d+)_assignsubmission_", re.IGNORECASE)
-
 _ID_COLUMNS = ("id", "student", "studentid", "sisuserid", "idnumber", "identifier", "emailaddress",
                "email")  # fmt: skip
 _TIME_COLUMNS = ("submittedat", "submitted", "submissiontime", "lastmodifiedsubmission",
@@ -330,14 +327,18 @@ class Lateness:
         }
 
 
-def _lms_name(path: Path | None, submissions: Path) -> str:
-    """The name the LMS gave the submission: the file, or the student's folder it lies in."""
-    if path is None:
-        return ""
+def _lms_name(sub, submissions: Path) -> LmsName:
+    """What the LMS's name of the submission says (the file's, or its student's folder's),
+    read by that LMS's grammar (:mod:`course.grading.batch.lmsnames`): the uploader's number
+    comes from where the LMS wrote it, never from a part the student chose."""
+    path = sub.path
     try:
-        return path.relative_to(submissions).parts[0]
+        parts = path.relative_to(submissions).parts
     except ValueError:
-        return path.name
+        parts = (path.name,)
+    top = getattr(sub, "lms", "") or parts[0]
+    in_folder = getattr(sub, "in_folder", False) if getattr(sub, "lms", "") else len(parts) > 1
+    return lms_name(top, "", folder=in_folder)
 
 
 def late_records(
@@ -369,14 +370,13 @@ def late_records(
     for sub in entries:
         if sub.path is None:
             continue
-        name = _lms_name(sub.path, submissions)
-        marked = _CANVAS_LATE.match(name) is not None
+        name = _lms_name(sub, submissions)
+        marked = name.kind == "canvas" and name.late
         when, own_due, source = None, None, ""
         if table is not None:
             keys = [sub.student.lower(), emails.get(sub.student, "")]
-            lms = _MOODLE.match(name) or _CANVAS.match(name)
-            if lms and lms.group(1).lower() not in student_ids:
-                keys.append(lms.group(1))
+            if name.kind in ("canvas", "moodle") and name.number not in student_ids:
+                keys.append(name.number)
             hit = next((table[k] for k in keys if k and k in table), None)
             if hit is not None:
                 when, own_due = hit

@@ -55,6 +55,7 @@ class Student:
     canvas_id: str = ""  # Canvas's own user number (column "ID" of its gradebook export)
     login: str = ""  # Canvas's "SIS Login ID"
     section: str = ""
+    participant: str = ""  # Moodle's participant number ("Participant 12" of its worksheet)
 
     @property
     def sortable_name(self) -> str:
@@ -101,6 +102,7 @@ _ALIASES = {
     "email": ["email", "emailaddress", "mail"],
     "login": ["sisloginid", "loginid", "username"],
     "section": ["section", "group"],
+    "participant": ["identifier", "participant", "participantnumber"],
 }
 _SKIPPED_NAMES = {"", "points possible", "test student", "student, test"}
 
@@ -173,6 +175,7 @@ def read_roster(path: str | Path) -> Roster:
                 canvas_id=cell("canvas_id"),
                 login=cell("login"),
                 section=cell("section"),
+                participant="".join(re.findall(r"\d+", cell("participant"))),
             )
         )
     if duplicates:

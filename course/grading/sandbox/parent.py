@@ -199,7 +199,7 @@ def _copy_notebook(source, target: str) -> None:
             out.write(source)
         return
     try:
-        fd = os.open(source, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        fd = os.open(source, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)  # a FIFO never waits
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise SubmissionError("the notebook is a symbolic link") from None
