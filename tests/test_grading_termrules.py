@@ -174,7 +174,7 @@ def test_rules_that_cannot_be_used_are_refused_with_the_fix(tmp_path, capsys, ch
 
 def test_grade_extensions_move_one_students_due_date(tmp_path):
     """``course grade --extensions``: s2's own due date makes the same hand-in time on time."""
-    from course.grading.batch.driver import Submission
+    from course.grading.batch.intake import Submission
     from course.grading.batch.late import (
         extensions_for,
         late_records,
@@ -211,7 +211,8 @@ def test_grade_extensions_move_one_students_due_date(tmp_path):
 def test_course_grade_extensions_reach_late_work_by_folder_name_or_title(tmp_path):
     from types import SimpleNamespace
 
-    from course.grading.batch.driver import Submission, _late_work
+    from course.grading.batch.driver import _late_work
+    from course.grading.batch.intake import Submission
     from course.grading.batch.options import GradeOptions
 
     subs = tmp_path / "subs"
