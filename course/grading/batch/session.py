@@ -41,6 +41,7 @@ from course.grading.vocabulary import (
     PLACEHOLDER_ID,
     CellOrigin,
     GradeStatus,
+    MistakeKind,
     Op,
     QuestionKind,
     ReplyStatus,
@@ -573,11 +574,11 @@ class StudentSession:
         except (EncodingError, TypeError, ValueError, KeyError):
             got = None
         expected = q.expected(data=self.data[q.data] if q.data is not None else None)
-        ok, message = choice_verdict(q.id, q.options, expected, got)
-        case = CaseResult(q.target, ok, message)
-        if ok:
+        verdict = choice_verdict(q.id, q.options, expected, got)
+        case = CaseResult.of(q.target, verdict)
+        if verdict.ok:
             return _question_result(q, GradeStatus.PASS, "", q.points, [case])
-        return _question_result(q, GradeStatus.FAIL, message, 0.0, [case])
+        return _question_result(q, GradeStatus.FAIL, verdict.message, 0.0, [case])
 
     def _missing(self, q, what: str) -> QuestionResult:
         err = self._answer_cell_error(q.id)
@@ -612,7 +613,7 @@ class StudentSession:
             mistakes = g.value_mistakes[q.id]
         # message: for the student, never an expected value; detail: the instructor's records
         verdict = compare(expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes)
-        case = CaseResult(q.target, verdict.ok, verdict.message)
+        case = CaseResult.of(q.target, verdict)
         if not verdict.ok:
             case.detail = verdict.detail  # instructor only (results.jsonl)
         if verdict.ok:
@@ -696,22 +697,29 @@ class StudentSession:
             if err.get("type") == "MemoryError":
                 run.status = GradeStatus.MEMORY  # stops the run; the message stays the first
             text = self._hidden_error(q, err) if case.hidden else self._err_text(err)
-            run.fail(CaseResult(label, False, f"raised {text}", raised=True))
+            run.fail(
+                CaseResult(label, False, f"raised {text}", raised=True, kind=MistakeKind.RAISED)
+            )
         elif status != ReplyStatus.OK:
             why = "" if case.hidden else f" ({self._err_text(reply.get('error') or {})})"
-            run.fail(CaseResult(label, False, f"returned something that is not plain data{why}"))
+            message = f"returned something that is not plain data{why}"
+            run.fail(CaseResult(label, False, message, kind=MistakeKind.NOT_PLAIN_DATA))
         else:
             try:
                 got = decode(reply.get("value"), allow_band=False)
             except (EncodingError, TypeError, ValueError, KeyError):
                 run.results.append(CaseResult(label, False, "unreadable result"))
                 return None
-            verdict = compare(expected, got, q.rtol, q.atol, mistakes=mistakes)
+            verdict = compare(
+                expected, got, q.rtol, q.atol, mistakes=mistakes, hidden=case.hidden
+            )
             message = _KEYS.sub("", verdict.message) if case.hidden else verdict.message
+            result = CaseResult.of(label, verdict, message)
             if verdict.ok:
-                run.results.append(CaseResult(label, True, message))
+                run.results.append(result)
             else:  # detail: the instructor's records only (results.jsonl)
-                run.fail(CaseResult(label, False, message, detail=verdict.detail))
+                result.detail = verdict.detail
+                run.fail(result)
         return None
 
 
