@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from course.grading.codec import Band, _named_type
-from course.grading.vocabulary import MistakeKind
+from course.grading.vocabulary import SPECIFIC_KINDS, MistakeKind
 
 __all__ = [
     "SINGLE_PRECISION",
@@ -811,6 +811,7 @@ def compare(
     path: str = "",
     mistakes=(),
     hidden: bool = False,
+    others=(),
 ) -> Verdict:
     """Compare ``got`` with ``expected``.
 
@@ -829,7 +830,11 @@ def compare(
     (:func:`fieldwise_mistake`). ``detail`` (expected and got, with enough digits to differ) is for instructors only;
     ``reveal=False`` leaves it without expected values too. ``hidden``: ``expected`` is a
     hidden case's, whose input the student does not see: the message then names no factor's
-    value (which could tell that input). ``kind`` (and ``mistake``) say the diagnosis as data.
+    value (which could tell that input). ``others``: right answers of OTHER data (the
+    question's other cases, the demo ID's data, the notebook's practice cases): a wrong answer
+    that matches one, and that no more specific diagnosis names, was hard-coded or computed
+    from the wrong data, and is told so (never for integers or decisions, which match another
+    case's by chance). ``kind`` (and ``mistake``) say the diagnosis as data.
 
     Examples
     --------
@@ -843,7 +848,36 @@ def compare(
     detail = verdict.detail if reveal else verdict.message
     if named:
         return Verdict(False, f"{_label(path)}: {named}", detail, MistakeKind.NAMED, named)
+    if (
+        others
+        and verdict.kind not in SPECIFIC_KINDS
+        and _other_data(expected, got, others, rtol, atol)
+    ):
+        return Verdict(False, f"{_label(path)}: {OTHER_DATA}", detail, MistakeKind.OTHER_DATA)
     return Verdict(False, verdict.message, detail, verdict.kind)
+
+
+#: The diagnosis of a right answer for other data than the question's.
+OTHER_DATA = (
+    "this is the right answer for OTHER data (another case, the demo ID's or the notebook's "
+    "practice data): compute it from the data you are given (the function's arguments, or "
+    "your own data), not from numbers typed in or the notebook's other variables"
+)
+
+
+def _other_data(expected, got, others, rtol, atol) -> bool:
+    """Whether ``got`` is one of ``others`` (see :func:`compare`); integers and decisions
+    never are (a count or an index equals another case's by chance)."""
+    arr = _numeric(expected)
+    if arr is not None and arr.dtype.kind in "biu":
+        return False
+    for other in others:
+        try:
+            if compare(other, got, rtol, atol).ok:
+                return True
+        except (TypeError, ValueError):
+            continue
+    return False
 
 
 def _is_permutation(walk: _Clear, expected, got) -> bool:

@@ -266,6 +266,7 @@ class MistakeKind(_Word):
     STRING_CASE = "upper/lower case or spaces"
     NOT_AN_OPTION = "not an option"
     WRONG_OPTION = "another option"
+    OTHER_DATA = "the answer of other data"  # hard-coded, or a global in place of an argument
     WRONG_VALUE = "another wrong value"  # nothing more specific recognised
 
 

@@ -172,16 +172,22 @@ q2.case(T_UNEVEN, Y_UNEVEN, hidden=True)
             lambda A, y, Qyy, alpha: _omt(
                 A, y, np.eye(len(y)), alpha, np.shape(A)[0] - np.shape(A)[1]
             ),
+            hint="Each residual must be weighed by the precision of its observation: fit and "
+            "form T = e^T Qyy^{-1} e with Qyy (whiten with its Cholesky factor).",
         ),
         Mistake(
             "the critical value looks like chi2 with m degrees of freedom: n parameters were "
             "estimated",
             lambda A, y, Qyy, alpha: _omt(A, y, Qyy, alpha, np.shape(A)[0]),
+            hint="Estimating n parameters from m observations leaves m - n degrees of freedom "
+            "in the residuals: chi2.isf(alpha, m - n).",
         ),
         Mistake(
             "the critical value looks two-sided (alpha/2): the overall model test rejects in the "
             "upper tail only",
             lambda A, y, Qyy, alpha: _omt(A, y, Qyy, alpha / 2, np.shape(A)[0] - np.shape(A)[1]),
+            hint="Only a LARGE T speaks against the model: all of alpha goes in the upper "
+            "tail, chi2.isf(alpha, m - n).",
         ),
     ],
 )
@@ -272,6 +278,19 @@ q4.case(A6, Y6, Q6, hidden=True)
             "Qyy looks ignored: Qxx = (A^T A)^{-1} holds only for Qyy = I; weigh with Qyy^{-1}",
             lambda A, Qyy, a: _band(A, np.eye(np.shape(A)[0]), a, float(stats.norm.isf(0.025))),
         ),
+        Mistake(
+            "the unknowns look swapped: a weighs x_hat in the order of A's columns, (position "
+            "at t0, velocity), so a^T Qxx a with a as given, not reversed",
+            lambda A, Qyy, a: _band(A, Qyy, np.asarray(a)[::-1], float(stats.norm.isf(0.025))),
+            hint="x_hat = (x1, x2) in the order of A's columns: a = (1, t) picks x1 + t x2.",
+        ),
+        Mistake(
+            "a Student t quantile: Qyy is known, so the estimate is normal and the half-width "
+            "uses norm.isf(0.025)",
+            lambda A, Qyy, a: _band(
+                A, Qyy, a, float(stats.t.isf(0.025, np.shape(A)[0] - np.shape(A)[1]))
+            ),
+        ),
     ],
 )
 def q5(A, Qyy, a):
@@ -326,6 +345,15 @@ def _drawn_survey(seed):
         Mistake(
             "T looks unweighted: the survey's Qyy was ignored",
             lambda survey: lsq.fit(survey["A"], survey["y"]).squared_norm,
+        ),
+        Mistake(
+            "fitted with diag(sigma) as Qyy: Qyy holds the VARIANCES sigma^2 (the survey's "
+            "Qyy as given, not the square roots of its diagonal)",
+            lambda survey: lsq.fit(
+                survey["A"], survey["y"], np.diag(np.sqrt(np.diag(survey["Qyy"])))
+            ).squared_norm,
+            hint="Pass the survey's Qyy itself: it is already the covariance matrix, sigma^2 on "
+            "its diagonal.",
         ),
         Mistake(
             "each squared residual looks divided by sigma instead of sigma^2 (the variance)",

@@ -523,10 +523,11 @@ def q8b(d):
     atol=0.1 / 20000,  # the same count of detections: a fraction k / n_runs, exactly
     rtol=0.0,
     hint=(
-        "Follow the recipe exactly: rng = np.random.default_rng(seed) and ONE call "
-        "rng.standard_normal((n_runs, N)), row r the noise of record r.",
-        "Then T1 of every record (theta1 free) and the fraction above the threshold of q6 at "
-        "this alpha and sigma.",
+        "The power is a rate of detections: for every simulated record, T1 (theta1 free, as in "
+        "q4) above the threshold of q6 at this alpha and sigma; return the fraction of records.",
+        "The grader repeats your draws, so draw them as the question says: "
+        "rng = np.random.default_rng(seed) and ONE call rng.standard_normal((n_runs, N)), row "
+        "r the noise of record r.",
     ),
     mistakes=[
         Mistake(

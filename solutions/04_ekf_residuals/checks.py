@@ -291,6 +291,12 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
             "a lower-tail quantile: the alarm is for large sums (isf, not ppf)",
             lambda L, alpha: float(stats.chi2.ppf(alpha, L)),
         ),
+        Mistake(
+            "looks like the threshold at alpha/100: alpha is already a probability "
+            "(0.01 is 1 %), not a percentage",
+            lambda L, alpha: float(stats.chi2.isf(alpha / 100, L)),
+            hint="Pass alpha to chi2.isf as it is given: a probability between 0 and 1.",
+        ),
     ],
     hint=[
         "Which law does a sum of L squared independent N(0, 1) values follow under H0, "
@@ -439,8 +445,10 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
     rtol=0.0,
     atol=0.1 / 20000,  # the same counts of runs: fractions k / n_runs, exactly
     hint=[
-        "Follow the recipe exactly: the same seed and the same draws in the same order give "
-        "the same runs, so a right simulation counts exactly the same alarms.",
+        "Two rates over the runs: filter each run with the correct model, sum the squared "
+        "normalised innovations over full windows of L, and compare each sum with "
+        "chi2.isf(alpha, L); the grader repeats your draws, so a right simulation counts "
+        "exactly the same alarms.",
         "rng = np.random.default_rng(seed); x0 = rng.standard_normal(n_runs); then "
         "W = rng.standard_normal((N, n_runs)) and V = rng.standard_normal((N, n_runs)); "
         "y_t = x_t + sqrt(r) V[t], x_(t+1) = a x_t + sqrt(q) W[t]. Filter with the correct "

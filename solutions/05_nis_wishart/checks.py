@@ -248,6 +248,36 @@ q3.case(1, 8, 0.1, hidden=True)
             lambda m, K, alpha: tuple(
                 float(v) for v in nis.nis_matrix_critical_values(m, K, 2 * alpha)
             ),
+            hint="Two thresholds share alpha: each tail gets half of it.",
+        ),
+        Mistake(
+            "the laws look swapped: the lower threshold bounds lambda_min (a quantile of ITS "
+            "law), the upper one lambda_max",
+            lambda m, K, alpha: _thresholds(m, K, alpha, low="max", high="min"),
+            hint="Too small a NIS matrix shows in its SMALLEST eigenvalue: the lower threshold "
+            "is nis.extreme_eigenvalue(m, K, 'min').ppf(alpha/2), the upper one "
+            "nis.extreme_eigenvalue(m, K, 'max').isf(alpha/2).",
+        ),
+        Mistake(
+            "both thresholds come from the law of lambda_max: the lower one bounds lambda_min, "
+            "a quantile of its own law",
+            lambda m, K, alpha: _thresholds(m, K, alpha, low="max", high="max"),
+        ),
+        Mistake(
+            "these are the NIS test's chi2(m K)/K thresholds: the matrix test bounds the "
+            "extreme eigenvalues, whose laws are wider",
+            lambda m, K, alpha: (
+                float(stats.chi2(m * K).ppf(alpha / 2) / K),
+                float(stats.chi2(m * K).isf(alpha / 2) / K),
+            ),
+        ),
+        Mistake(
+            "the lower threshold is an upper-tail quantile: lambda_min alarms when SMALL "
+            "(ppf(alpha/2) of its law)",
+            lambda m, K, alpha: (
+                float(nis.extreme_eigenvalue(m, K, "min").isf(alpha / 2)),
+                float(nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2)),
+            ),
         ),
     ],
     hint=[
@@ -258,6 +288,14 @@ q3.case(1, 8, 0.1, hidden=True)
 )
 def q4(m, K, alpha):
     return nis.nis_matrix_critical_values(m, K, alpha)
+
+
+def _thresholds(m, K, alpha, low="min", high="max"):
+    """(ppf(alpha/2) of the law of lambda_low, isf(alpha/2) of the law of lambda_high)."""
+    return (
+        float(nis.extreme_eigenvalue(m, K, low).ppf(alpha / 2)),
+        float(nis.extreme_eigenvalue(m, K, high).isf(alpha / 2)),
+    )
 
 
 q4.case(2, 30, 0.05, label="m = 2, K = 30, alpha = 0.05")

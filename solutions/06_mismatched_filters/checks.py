@@ -203,6 +203,18 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
             "subtracted here",
             lambda P, M: float(np.trace(P)),
         ),
+        Mistake(
+            "the factor looks inverted: M/(M - 1) tr(P_j) instead of (M - 1)/M tr(P_j): "
+            "subtracting the sample mean makes the sum of squares SMALLER",
+            lambda P, M: M / (M - 1.0) * float(np.trace(P)),
+            hint="The sample mean is fitted to the very records it is subtracted from: the "
+            "expected squared deviation shrinks, by (M - 1)/M.",
+        ),
+        Mistake(
+            "divided by M once too often: (M - 1)/M² tr(P_j); c_j already averages over the "
+            "M records once",
+            lambda P, M: (M - 1.0) / M**2 * float(np.trace(P)),
+        ),
     ],
     hint=[
         "The sample mean is subtracted before squaring: how many independent deviations are "

@@ -38,6 +38,7 @@ from course.grading.sandbox.parent import (
 )
 from course.grading.vocabulary import (
     ABNORMAL,
+    DEMO_STUDENT_ID,
     PLACEHOLDER_ID,
     CellOrigin,
     GradeStatus,
@@ -115,6 +116,20 @@ class AssignmentGrader:
         }
         self.value_mistakes = {
             q.id: q.mistaken() for q in self.questions if q.kind == "value" and q.data is None
+        }
+        # right answers of other data, which a wrong answer may be (hard-coded, or computed
+        # from the notebook's practice data): a personal value against the demo ID's answer and
+        # the public cases', a case against the question's other cases (compare's ``others``)
+        public = [
+            e
+            for q in self.questions
+            if q.kind == "function"
+            for e in self.case_expected[q.id][: len(q.public_cases)]
+        ]
+        self.other_answers = {
+            q.id: [*self._demo_answers(q), *public]
+            for q in self.questions
+            if q.kind == "value" and q.data is not None
         }
         solutions_root = (
             self.solution_dir.parent
@@ -204,6 +219,16 @@ class AssignmentGrader:
         self.close()
 
     # -- limits ---------------------------------------------------------------------------
+    def _demo_answers(self, q) -> list:
+        """The answers of ``q`` for the demo ID's data, with and without the class key."""
+        out = []
+        for secret in dict.fromkeys([None, self.secret]):
+            try:
+                out.append(q.expected(data=self.checks.data_for(q.data, DEMO_STUDENT_ID, secret)))
+            except Exception:  # a diagnosis never stops grading
+                continue
+        return out
+
     def timeout_for(self, qid: str | None) -> float:
         if self.options.timeout is not None:
             return float(self.options.timeout)
@@ -612,7 +637,10 @@ class StudentSession:
             expected = g.value_expected[q.id]
             mistakes = g.value_mistakes[q.id]
         # message: for the student, never an expected value; detail: the instructor's records
-        verdict = compare(expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes)
+        others = g.other_answers.get(q.id, ())
+        verdict = compare(
+            expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes, others=others
+        )
         case = CaseResult.of(q.target, verdict)
         if not verdict.ok:
             case.detail = verdict.detail  # instructor only (results.jsonl)
@@ -630,16 +658,18 @@ class StudentSession:
         g = self.g
         cases = q.public_cases + q.hidden_cases
         run = _CaseRun()
-        for case, label, expected, mistakes in zip(
-            cases, _case_labels(cases), g.case_expected[q.id], g.case_mistakes[q.id]
+        answers = g.case_expected[q.id]
+        for k, (case, label, expected, mistakes) in enumerate(
+            zip(cases, _case_labels(cases), answers, g.case_mistakes[q.id])
         ):
+            others = answers[:k] + answers[k + 1 :]  # a result hard-coded from another case
             if run.stopped:
                 run.results.append(CaseResult(label, False, "not run"))
             elif self.child is None and not self.ensure_child():
                 run.stop(GradeStatus.SKIPPED, "the time budget for this submission ran out", True)
                 run.results.append(CaseResult(label, False, "not run"))
             else:
-                early = self._call_case(q, run, case, label, expected, mistakes)
+                early = self._call_case(q, run, case, label, expected, mistakes, others)
                 if early is not None:
                     return early
         if self.hits.get(q.id):
@@ -654,7 +684,7 @@ class StudentSession:
         return run.result(q)
 
     def _call_case(
-        self, q, run: _CaseRun, case, label: str, expected, mistakes
+        self, q, run: _CaseRun, case, label: str, expected, mistakes, others=()
     ) -> QuestionResult | None:
         """Run one case into ``run``; a finished question result when the function is missing
         or not a function."""
@@ -711,7 +741,13 @@ class StudentSession:
                 run.results.append(CaseResult(label, False, "unreadable result"))
                 return None
             verdict = compare(
-                expected, got, q.rtol, q.atol, mistakes=mistakes, hidden=case.hidden
+                expected,
+                got,
+                q.rtol,
+                q.atol,
+                mistakes=mistakes,
+                hidden=case.hidden,
+                others=others,
             )
             message = _KEYS.sub("", verdict.message) if case.hidden else verdict.message
             result = CaseResult.of(label, verdict, message)
