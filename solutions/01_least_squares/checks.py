@@ -189,6 +189,13 @@ q2.case(T_UNEVEN, Y_UNEVEN, hidden=True)
             hint="Only a LARGE T speaks against the model: all of alpha goes in the upper "
             "tail, chi2.isf(alpha, m - n).",
         ),
+        Mistake(
+            "T looks divided by m - n (the variance factor): the test statistic is the weighted "
+            "sum of squared residuals itself, compared with chi2(m - n)",
+            lambda A, y, Qyy, alpha: _omt(
+                A, y, Qyy, alpha, np.shape(A)[0] - np.shape(A)[1], scale=True
+            ),
+        ),
     ],
 )
 def q3(A, y, Qyy, alpha):
@@ -196,9 +203,12 @@ def q3(A, y, Qyy, alpha):
     return OverallModelTest(result.statistic, result.critical_value, bool(result.reject))
 
 
-def _omt(A, y, Qyy, alpha, dof):
-    """(T, critical value, reject) with the given weights, level and degrees of freedom."""
+def _omt(A, y, Qyy, alpha, dof, scale=False):
+    """(T, critical value, reject) with the given weights, level and degrees of freedom (T
+    divided by m - n when ``scale``)."""
     stat = lsq.fit(A, y, Qyy).squared_norm
+    if scale:
+        stat /= np.shape(A)[0] - np.shape(A)[1]
     c = float(stats.chi2.isf(alpha, dof))
     return (stat, c, bool(stat > c))
 
@@ -239,6 +249,11 @@ q3.case(A_SEA, Y_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), 0.10, hidden=True)
             "looks like e_i / sigma_yi: divide by the residual's standard deviation (from Qee), "
             "not the observation's",
             lambda A, y, Qyy: lsq.fit(A, y, Qyy).e_hat / np.sqrt(np.diag(Qyy)),
+        ),
+        Mistake(
+            "e_i / sigma_ei is w_i only for uncorrelated observations: with a full Qyy, "
+            "w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii)",
+            lambda A, y, Qyy: lsq.fit(A, y, Qyy).e_hat / np.sqrt(np.diag(lsq.fit(A, y, Qyy).Qee)),
         ),
     ],
 )
@@ -356,6 +371,12 @@ def _drawn_survey(seed):
             "its diagonal.",
         ),
         Mistake(
+            "the practice survey's Qyy was used, not the Qyy of the survey passed in",
+            lambda survey: lsq.fit(
+                survey["A"], survey["y"], np.diag(SIGMA_PRACTICE**2)
+            ).squared_norm,
+        ),
+        Mistake(
             "each squared residual looks divided by sigma instead of sigma^2 (the variance)",
             lambda survey: float(
                 np.sum(
@@ -441,7 +462,19 @@ for _q in (q6_practice, q7_practice):
         Mistake(
             "T looks unweighted: mine['Qyy'] was ignored",
             lambda d: lsq.fit(d["A"], d["y"]).squared_norm,
-        )
+        ),
+        Mistake(
+            "each squared residual looks divided by sigma instead of sigma^2 (the variance)",
+            lambda d: float(
+                np.sum(lsq.fit(d["A"], d["y"], d["Qyy"]).e_hat ** 2 / np.sqrt(np.diag(d["Qyy"])))
+            ),
+        ),
+        Mistake(
+            "T looks divided by m - n (the variance factor): the test statistic is the weighted "
+            "sum of squared residuals itself",
+            lambda d: lsq.fit(d["A"], d["y"], d["Qyy"]).squared_norm
+            / (np.shape(d["A"])[0] - np.shape(d["A"])[1]),
+        ),
     ],
 )
 def q6(d):

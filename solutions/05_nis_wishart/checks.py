@@ -215,6 +215,20 @@ q2.case(EPS_C, S_C, hidden=True)
                 float(stats.chi2(m * K).isf(alpha)) / K,
             ),
         ),
+        Mistake(
+            "divided by m K: K eps_bar is chi2(m K), so the quantiles are divided by K only "
+            "(eps_bar's mean is m, not 1)",
+            lambda m, K, alpha: _interval(m * K, m * K, alpha),
+        ),
+        Mistake(
+            "chi2(m K - 1): nothing is estimated from the innovations, so all m K degrees of "
+            "freedom stay",
+            lambda m, K, alpha: _interval(m * K - 1, K, alpha),
+        ),
+        Mistake(
+            "the quantiles of one step's chi2(m), divided by K: the SUM of K steps is chi2(m K)",
+            lambda m, K, alpha: _interval(m, K, alpha),
+        ),
     ],
     hint=[
         "The poster's 1/K hides a factor: is eps_bar itself chi-square, or a multiple of it?",
@@ -226,6 +240,14 @@ q2.case(EPS_C, S_C, hidden=True)
 def q3(m, K, alpha):
     law = stats.chi2(m * K)
     return Interval(float(law.ppf(alpha / 2)) / K, float(law.isf(alpha / 2)) / K)
+
+
+def _interval(dof, divisor, alpha, tail=None):
+    """The quantiles of chi2(dof) at ``tail`` (alpha/2) and 1 - tail, divided by ``divisor``
+    (the declared mistakes of q3 and q8)."""
+    tail = alpha / 2 if tail is None else tail
+    law = stats.chi2(dof)
+    return (float(law.ppf(tail)) / divisor, float(law.isf(tail)) / divisor)
 
 
 q3.case(3, 20, 0.05, label="m = 3, K = 20, 95 %")
@@ -544,6 +566,30 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
                 float(stats.chi2(n * N).ppf(alpha / 2)),
                 float(stats.chi2(n * N).isf(alpha / 2)),
             ),
+        ),
+        Mistake(
+            "looks like the normal approximation n +- 1.96 sqrt(2n/N): the question asks for "
+            "the exact chi2(n N) quantiles of the sum, divided by N",
+            lambda n, N, alpha: (n - 1.96 * np.sqrt(2.0 * n / N), n + 1.96 * np.sqrt(2.0 * n / N)),
+        ),
+        Mistake(
+            "the quantiles of ONE run's chi2(n): the average of N runs is chi2(n N) / N, "
+            "much narrower",
+            lambda n, N, alpha: _interval(n, 1, alpha),
+        ),
+        Mistake(
+            "divided by n N: N times the average NEES is chi2(n N), so divide by N only (the "
+            "average NEES has mean n)",
+            lambda n, N, alpha: _interval(n * N, n * N, alpha),
+        ),
+        Mistake(
+            "alpha not split: a two-sided interval leaves alpha/2 in each tail",
+            lambda n, N, alpha: _interval(n * N, N, alpha, tail=alpha),
+        ),
+        Mistake(
+            "chi2(n N - 1): nothing is estimated from the runs, so all n N degrees of freedom "
+            "stay",
+            lambda n, N, alpha: _interval(n * N - 1, N, alpha),
         ),
     ],
     hint=[
