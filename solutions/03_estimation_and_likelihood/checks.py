@@ -127,6 +127,18 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
             "u2 sees the data minus u1 - u3",
             lambda U_, theta1: _leak(U_, theta1) + _ratio(U_),
         ),
+        Mistake(
+            "the leak alone, without the 1: the estimate is 1 (the true theta2) plus the leak "
+            "(theta1 - 1) u2'u1 / u2'u2",
+            lambda U_, theta1: _leak(U_, theta1) - 1.0,
+        ),
+        Mistake(
+            "divided by u1'u1: the regression is on u2, so the leak is divided by u2'u2",
+            lambda U_, theta1: 1.0
+            + (theta1 - 1.0)
+            * float(np.asarray(U_)[:, 1] @ np.asarray(U_)[:, 0])
+            / float(np.asarray(U_)[:, 0] @ np.asarray(U_)[:, 0]),
+        ),
     ],
 )
 def q2(U_, theta1):
@@ -323,6 +335,13 @@ q6.case(U, _record([1.3, 1.0, 1.0], 13), SIGMA, hidden=True)
 q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
 
 
+def _np_power(n, theta0, theta1, sigma, alpha, scale=None):
+    """Phi(d - z_alpha) with d = scale |theta1 - theta0| / sigma (scale: sqrt(n), or a
+    declared mistake's)."""
+    d = (np.sqrt(n) if scale is None else scale) * abs(theta1 - theta0) / sigma
+    return float(stats.norm.sf(stats.norm.isf(alpha) - d))
+
+
 @CHECKS.function(
     "q7",
     forbid=[
@@ -351,6 +370,29 @@ q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
             lambda n, theta0, theta1, sigma, alpha: float(
                 stats.norm.sf(stats.norm.isf(alpha) - np.sqrt(n) * abs(theta1 - theta0) / sigma**2)
             ),
+        ),
+        Mistake(
+            "sqrt(n) looks forgotten: the mean of n observations is sqrt(n) times more precise, "
+            "d = sqrt(n) |theta1 - theta0| / sigma",
+            lambda n, theta0, theta1, sigma, alpha: _np_power(n, theta0, theta1, sigma, alpha, 1),
+        ),
+        Mistake(
+            "looks like n / sigma where sqrt(n) / sigma belongs: the standard deviation of the "
+            "mean is sigma / sqrt(n)",
+            lambda n, theta0, theta1, sigma, alpha: _np_power(
+                n, theta0, theta1, sigma, alpha, float(n)
+            ),
+        ),
+        Mistake(
+            "sigma looks left out: d measures |theta1 - theta0| in standard deviations of the "
+            "mean, sqrt(n) |theta1 - theta0| / sigma",
+            lambda n, theta0, theta1, sigma, alpha: _np_power(n, theta0, theta1, 1.0, alpha),
+        ),
+        Mistake(
+            "the probability of NOT detecting (cdf): the power is the upper tail, "
+            "Phi(d - z_alpha) = sf(z_alpha - d)",
+            lambda n, theta0, theta1, sigma, alpha: 1.0
+            - _np_power(n, theta0, theta1, sigma, alpha),
         ),
     ],
 )
@@ -413,6 +455,16 @@ Y_MODES = _record([1.0, 1.25, 1.0], 31)
 PRIORS = np.array([0.7, 0.1, 0.1, 0.1])
 
 
+_NO_PRIORS = (
+    "the priors look forgotten (every mode equally likely): Bayes' rule multiplies each "
+    "likelihood by its mode's prior"
+)
+_TAU = (
+    "tau looks used as a variance: the faulty gain's prior standard deviation is tau, so its "
+    "covariance adds tau^2 u_i u_i^T"
+)
+
+
 def _posterior(y, U_, sigma, tau, priors):
     logl = dg.mode_log_likelihoods(y, U_, NOMINAL, MODES, sigma=sigma, prior_std=tau)
     post = dg.bayes_ranking(logl, dict(zip(MODES, priors))).as_dict()
@@ -436,6 +488,10 @@ def _posterior(y, U_, sigma, tau, priors):
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
             lambda y, U_, sigma, tau, priors: _maximised(y, U_, sigma, priors),
         ),
+        Mistake(_NO_PRIORS, lambda y, U_, sigma, tau, priors: _posterior(
+            y, U_, sigma, tau, np.full(len(MODES), 1.0 / len(MODES)))),  # fmt: skip
+        Mistake(_TAU, lambda y, U_, sigma, tau, priors: _posterior(
+            y, U_, sigma, np.sqrt(tau), priors)),  # fmt: skip
     ],
 )
 def q9_practice(y, U_, sigma, tau, priors):
@@ -476,6 +532,10 @@ for _seed in (61, 62, 63, 64):
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
             lambda d: _maximised(d["y"], d["U"], d["sigma"], d["priors"]),
         ),
+        Mistake(_NO_PRIORS, lambda d: _posterior(
+            d["y"], d["U"], d["sigma"], d["tau"], np.full(len(MODES), 1.0 / len(MODES)))),  # fmt: skip
+        Mistake(_TAU, lambda d: _posterior(
+            d["y"], d["U"], d["sigma"], np.sqrt(d["tau"]), d["priors"])),  # fmt: skip
     ],
 )
 def q9(d):
