@@ -249,6 +249,18 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     rtol=1e-9,
     atol=1e-12,
     forbid=["course.nis.windowed_sum", "course.nis.windowed_nis"],
+    mistakes=[
+        Mistake(
+            "sums of z, not of z^2: the windowed statistic adds the SQUARED normalised "
+            "innovations",
+            lambda z, L: _window_sums(np.asarray(z, dtype=float), int(L)),
+        ),
+        Mistake(
+            "window means (divided by L): the statistic is the SUM of the squares, chi2(L) "
+            "under H0",
+            lambda z, L: _window_sums(np.asarray(z, dtype=float) ** 2, int(L)) / int(L),
+        ),
+    ],
     hint=[
         "Squares, summed (not averaged), over full windows only: how many full windows of "
         "length L fit in N samples?",
@@ -257,7 +269,12 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     ],
 )
 def q3(z, L):
-    return nis.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1 :]
+    return _window_sums(np.asarray(z, dtype=float) ** 2, int(L))
+
+
+def _window_sums(x, L):
+    """The sums of ``x`` over the full windows of length ``L``."""
+    return nis.windowed_sum(x, L)[L - 1 :]
 
 
 q3.case(np.arange(6.0), 3, label="z = 0..5, L = 3")
@@ -296,6 +313,15 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
             "(0.01 is 1 %), not a percentage",
             lambda L, alpha: float(stats.chi2.isf(alpha / 100, L)),
             hint="Pass alpha to chi2.isf as it is given: a probability between 0 and 1.",
+        ),
+        Mistake(
+            "looks like the normal approximation L + z_alpha sqrt(2L): the sum of L squares is "
+            "exactly chi2(L), whose upper quantile the question asks for",
+            lambda L, alpha: float(L + stats.norm.isf(alpha) * np.sqrt(2.0 * L)),
+        ),
+        Mistake(
+            "divided by L: the statistic is the SUM of the L squares (q3), not their mean",
+            lambda L, alpha: float(stats.chi2.isf(alpha, L)) / L,
         ),
     ],
     hint=[
@@ -586,6 +612,16 @@ def q7_why(d):
     return "noise" if random_walk >= 5 else "model"
 
 
+def _rls(theta, P, phi, y, r, p_sign=-1.0, divide=True, with_r=True, innovation=1.0):
+    """One RLS step with a declared mistake (the sign of P's update, no division by S, S
+    without r, the innovation's sign)."""
+    theta, P, phi = (np.asarray(v, dtype=float) for v in (theta, P, phi))
+    Pphi = P @ phi
+    S = phi @ Pphi + (float(r) if with_r else 0.0)
+    K = Pphi / S if divide else Pphi
+    return (theta + innovation * K * (float(y) - phi @ theta), P + p_sign * np.outer(K, Pphi))
+
+
 @CHECKS.function(
     "q8",
     func="rls_update",
@@ -593,6 +629,30 @@ def q7_why(d):
     rtol=1e-9,
     atol=1e-12,
     forbid=_NO_FILTERS,
+    mistakes=[
+        Mistake(
+            "P_new looks updated with a plus sign: a measurement REDUCES the uncertainty, "
+            "P <- P - K phi^T P",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, p_sign=1.0),
+        ),
+        Mistake(
+            "the gain looks not divided by S: K = P phi / S with S = phi^T P phi + r",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, divide=False),
+        ),
+        Mistake(
+            "S looks computed without r: the innovation's variance is phi^T P phi + r, the "
+            "measurement noise included",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, with_r=False),
+        ),
+        Mistake(
+            "P_new is the old covariance: the measurement update reduces it, P - K phi^T P",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, p_sign=0.0),
+        ),
+        Mistake(
+            "the innovation's sign looks flipped: theta + K (y - phi^T theta)",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, innovation=-1.0),
+        ),
+    ],
     hint=[
         "RLS is the Kalman measurement update with H = phi^T and no time update (the "
         "parameter is constant): no F, no Q.",
