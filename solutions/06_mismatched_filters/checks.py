@@ -216,6 +216,11 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
             "M records once",
             lambda P, M: (M - 1.0) / M**2 * float(np.trace(P)),
         ),
+        Mistake(
+            "only the first output (P[0, 0]): the squared NORM of a residual sums every output, "
+            "so its expectation has the trace of P_j",
+            lambda P, M: (M - 1.0) / M * float(np.asarray(P, float)[0, 0]),
+        ),
     ],
     hint=[
         "The sample mean is subtracted before squaring: how many independent deviations are "
@@ -234,6 +239,20 @@ q3.case(np.array([[2.4]]), 2, hidden=True)
 ### END HIDDEN TESTS
 
 
+def _section_statistics(residuals, j, k, divisor=0, centred=True):
+    """q4's statistics with a declared mistake: divided by M + divisor, or not centred."""
+    r = np.asarray(residuals, float)
+    M = r.shape[0]
+    rbar_j = r[:, j].mean(axis=0)
+    dj = r[:, j] - rbar_j if centred else r[:, j]
+    dk = r[:, k] - r[:, k].mean(axis=0) if centred else r[:, k]
+    return (
+        float(rbar_j @ rbar_j),
+        float(np.sum(dj * dj) / (M + divisor)),
+        float(np.sum(dj * dk) / (M + divisor)),
+    )
+
+
 _rng = np.random.default_rng(20250606)
 R_A = _rng.normal(size=(6, 5, 1)) + 0.4
 R_B = _rng.normal(size=(9, 4, 2)) @ np.array([[1.0, 0.4], [0.0, 0.8]])
@@ -250,6 +269,18 @@ R_C = _rng.normal(size=(3, 7, 3))
         "course.mismatched.mean_statistic",
         "course.mismatched.covariance_statistic",
         "course.mismatched.correlation_statistic",
+    ],
+    mistakes=[
+        Mistake(
+            "the covariance and correlation statistics look divided by M - 1: the question's "
+            "statistics are means over the M records (divide by M)",
+            lambda residuals, j, k: _section_statistics(residuals, j, k, divisor=-1),
+        ),
+        Mistake(
+            "the sample means look not subtracted: the covariance and correlation statistics "
+            "use r_ij - rbar_j",
+            lambda residuals, j, k: _section_statistics(residuals, j, k, centred=False),
+        ),
     ],
     hint=[
         "Averages run over the RECORDS (axis 0), at fixed times j and k; the mean statistic "
