@@ -32,9 +32,9 @@ from course.grading.compare import (
     compare,
     single_precision,
 )
-from course.grading.vocabulary import MistakeKind
 from course.grading.notebook import _STUDENT_ID_LINE
 from course.grading.student.selfcheck import Assignment
+from course.grading.vocabulary import MistakeKind
 
 ROOT = Path(__file__).resolve().parents[1]
 F04 = "04_ekf_residuals"

@@ -96,7 +96,9 @@ def _rows(cases_by_student: dict[str, list[CaseResult]]) -> list[StudentResult]:
 
 class _Checks:
     title = "t"
-    questions: dict = {}
+
+    def __init__(self):
+        self.questions: dict = {}
 
 
 def _counts(rows):
@@ -111,10 +113,17 @@ def test_the_report_counts_kinds_not_words():
         "c": [compare(1.0, 2.7), compare(1.0, 1.0)],
         "d": [compare(RIGHT, -RIGHT)],
     }
-    rows = _rows({s: [CaseResult.of(f"c{k}", v) for k, v in enumerate(vs)] for s, vs in verdicts.items()})
+    rows = _rows(
+        {s: [CaseResult.of(f"c{k}", v) for k, v in enumerate(vs)] for s, vs in verdicts.items()}
+    )
     named, kinds = _counts(rows)
     assert named == {"doubled": 1}
-    assert kinds == {"transposed": 1, "a constant factor": 1, "another wrong value": 1, "the sign": 1}
+    assert kinds == {
+        "transposed": 1,
+        "a constant factor": 1,
+        "another wrong value": 1,
+        "the sign": 1,
+    }
     # every message reworded, words of other kinds included: the counts do not move
     for row in rows:
         for case in row.questions["q1"].cases:

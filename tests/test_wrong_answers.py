@@ -434,9 +434,7 @@ def test_wrong_answers_name_their_mistake(graded):
     unnamed = [
         f"{key} {qid} {label!r}: {rows_by[key, qid, label]['cases']}"
         for key, qid, label in MUST_BE_NAMED
-        if not any(
-            c.get("kind") == "named mistake" for c in rows_by[key, qid, label]["cases"]
-        )
+        if not any(c.get("kind") == "named mistake" for c in rows_by[key, qid, label]["cases"])
     ]
     assert not unnamed, "listed wrong answers without their named mistake:\n" + "\n".join(unnamed)
     assert share >= NAMED_SHARE, f"{share:.1%} of the wrong answers named"

@@ -251,8 +251,9 @@ def _simple_ratio(r: float) -> Fraction | None:
 
 
 def _factor_text(r: float, frac: Fraction | None, hidden: bool = False) -> str:
-    """"too large by a factor ≈ 1.5 (= 3/2)"; on a hidden case (``hidden``) without the factor,
-    which could tell the case's input (M/(M-1) = 3/2 says M = 3)."""
+    """The words of a factor, "too large by a factor ≈ 1.5 (= 3/2)"; on a hidden case
+    (``hidden``) without the factor, which could tell the case's input (M/(M-1) = 3/2 says
+    M = 3)."""
     big = r >= 1
     if hidden:
         return f"too {'large' if big else 'small'} by a constant factor"

@@ -364,17 +364,19 @@ def _drawn_survey(seed):
         Mistake(
             "fitted with diag(sigma) as Qyy: Qyy holds the VARIANCES sigma^2 (the survey's "
             "Qyy as given, not the square roots of its diagonal)",
-            lambda survey: lsq.fit(
-                survey["A"], survey["y"], np.diag(np.sqrt(np.diag(survey["Qyy"])))
-            ).squared_norm,
+            lambda survey: (
+                lsq.fit(
+                    survey["A"], survey["y"], np.diag(np.sqrt(np.diag(survey["Qyy"])))
+                ).squared_norm
+            ),
             hint="Pass the survey's Qyy itself: it is already the covariance matrix, sigma^2 on "
             "its diagonal.",
         ),
         Mistake(
             "the practice survey's Qyy was used, not the Qyy of the survey passed in",
-            lambda survey: lsq.fit(
-                survey["A"], survey["y"], np.diag(SIGMA_PRACTICE**2)
-            ).squared_norm,
+            lambda survey: (
+                lsq.fit(survey["A"], survey["y"], np.diag(SIGMA_PRACTICE**2)).squared_norm
+            ),
         ),
         Mistake(
             "each squared residual looks divided by sigma instead of sigma^2 (the variance)",
@@ -472,8 +474,10 @@ for _q in (q6_practice, q7_practice):
         Mistake(
             "T looks divided by m - n (the variance factor): the test statistic is the weighted "
             "sum of squared residuals itself",
-            lambda d: lsq.fit(d["A"], d["y"], d["Qyy"]).squared_norm
-            / (np.shape(d["A"])[0] - np.shape(d["A"])[1]),
+            lambda d: (
+                lsq.fit(d["A"], d["y"], d["Qyy"]).squared_norm
+                / (np.shape(d["A"])[0] - np.shape(d["A"])[1])
+            ),
         ),
     ],
 )

@@ -513,8 +513,9 @@ def q7(d):
         Mistake(
             "looks scaled by sigma, not sigma^2: T_k / sigma^2 is chi2, so J = sigma^2 times "
             "the quantile",
-            lambda d: float(d["sigma"])
-            * float(chi2.residual_threshold(d["y"].size - 1, d["alpha"])),
+            lambda d: (
+                float(d["sigma"]) * float(chi2.residual_threshold(d["y"].size - 1, d["alpha"]))
+            ),
         ),
     ],
 )

@@ -134,10 +134,12 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
         ),
         Mistake(
             "divided by u1'u1: the regression is on u2, so the leak is divided by u2'u2",
-            lambda U_, theta1: 1.0
-            + (theta1 - 1.0)
-            * float(np.asarray(U_)[:, 1] @ np.asarray(U_)[:, 0])
-            / float(np.asarray(U_)[:, 0] @ np.asarray(U_)[:, 0]),
+            lambda U_, theta1: (
+                1.0
+                + (theta1 - 1.0)
+                * float(np.asarray(U_)[:, 1] @ np.asarray(U_)[:, 0])
+                / float(np.asarray(U_)[:, 0] @ np.asarray(U_)[:, 0])
+            ),
         ),
     ],
 )
@@ -391,8 +393,9 @@ def _np_power(n, theta0, theta1, sigma, alpha, scale=None):
         Mistake(
             "the probability of NOT detecting (cdf): the power is the upper tail, "
             "Phi(d - z_alpha) = sf(z_alpha - d)",
-            lambda n, theta0, theta1, sigma, alpha: 1.0
-            - _np_power(n, theta0, theta1, sigma, alpha),
+            lambda n, theta0, theta1, sigma, alpha: (
+                1.0 - _np_power(n, theta0, theta1, sigma, alpha)
+            ),
         ),
     ],
 )
@@ -488,10 +491,15 @@ def _posterior(y, U_, sigma, tau, priors):
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
             lambda y, U_, sigma, tau, priors: _maximised(y, U_, sigma, priors),
         ),
-        Mistake(_NO_PRIORS, lambda y, U_, sigma, tau, priors: _posterior(
-            y, U_, sigma, tau, np.full(len(MODES), 1.0 / len(MODES)))),  # fmt: skip
-        Mistake(_TAU, lambda y, U_, sigma, tau, priors: _posterior(
-            y, U_, sigma, np.sqrt(tau), priors)),  # fmt: skip
+        Mistake(
+            _NO_PRIORS,
+            lambda y, U_, sigma, tau, priors: _posterior(
+                y, U_, sigma, tau, np.full(len(MODES), 1.0 / len(MODES))
+            ),
+        ),
+        Mistake(
+            _TAU, lambda y, U_, sigma, tau, priors: _posterior(y, U_, sigma, np.sqrt(tau), priors)
+        ),
     ],
 )
 def q9_practice(y, U_, sigma, tau, priors):
@@ -532,10 +540,15 @@ for _seed in (61, 62, 63, 64):
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
             lambda d: _maximised(d["y"], d["U"], d["sigma"], d["priors"]),
         ),
-        Mistake(_NO_PRIORS, lambda d: _posterior(
-            d["y"], d["U"], d["sigma"], d["tau"], np.full(len(MODES), 1.0 / len(MODES)))),  # fmt: skip
-        Mistake(_TAU, lambda d: _posterior(
-            d["y"], d["U"], d["sigma"], np.sqrt(d["tau"]), d["priors"])),  # fmt: skip
+        Mistake(
+            _NO_PRIORS,
+            lambda d: _posterior(
+                d["y"], d["U"], d["sigma"], d["tau"], np.full(len(MODES), 1.0 / len(MODES))
+            ),
+        ),
+        Mistake(
+            _TAU, lambda d: _posterior(d["y"], d["U"], d["sigma"], np.sqrt(d["tau"]), d["priors"])
+        ),
     ],
 )
 def q9(d):

@@ -251,8 +251,7 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     forbid=["course.nis.windowed_sum", "course.nis.windowed_nis"],
     mistakes=[
         Mistake(
-            "sums of z, not of z^2: the windowed statistic adds the SQUARED normalised "
-            "innovations",
+            "sums of z, not of z^2: the windowed statistic adds the SQUARED normalised innovations",
             lambda z, L: _window_sums(np.asarray(z, dtype=float), int(L)),
         ),
         Mistake(

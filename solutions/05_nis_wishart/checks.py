@@ -587,8 +587,7 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
             lambda n, N, alpha: _interval(n * N, N, alpha, tail=alpha),
         ),
         Mistake(
-            "chi2(n N - 1): nothing is estimated from the runs, so all n N degrees of freedom "
-            "stay",
+            "chi2(n N - 1): nothing is estimated from the runs, so all n N degrees of freedom stay",
             lambda n, N, alpha: _interval(n * N - 1, N, alpha),
         ),
     ],

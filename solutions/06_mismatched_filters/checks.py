@@ -410,8 +410,9 @@ _HINT_PVALUES = [
 ]
 
 
-def _mistaken_pvalues(r, mean, cov, cross_cov, j, k, *, one_sided=False, over_m=True,
-                      dof_m=False, central=False):  # fmt: skip
+def _mistaken_pvalues(
+    r, mean, cov, cross_cov, j, k, *, one_sided=False, over_m=True, dof_m=False, central=False
+):
     """(p_mean, p_corr) computed as a student would, with one declared mistake: the mean's
     p-value one-sided, its covariance P_j not divided by M, M degrees of freedom for the
     correlation's weights, or the mean m_j left out of the mean's law."""
@@ -464,13 +465,21 @@ _PVALUE_MISTAKES = [
 
 
 def _pvalue_mistake(message, how):
-    return Mistake(message, lambda r, mean, cov, cross_cov, j, k: _mistaken_pvalues(
-        r, mean, cov, cross_cov, j, k, **how))  # fmt: skip
+    return Mistake(
+        message,
+        lambda r, mean, cov, cross_cov, j, k: _mistaken_pvalues(
+            r, mean, cov, cross_cov, j, k, **how
+        ),
+    )
 
 
 def _pvalue_mistake_mine(message, how):
-    return Mistake(message, lambda d: _mistaken_pvalues(
-        d["residuals"], d["mean"], d["cov"], d["cross_cov"], d["j"], d["k"], **how))  # fmt: skip
+    return Mistake(
+        message,
+        lambda d: _mistaken_pvalues(
+            d["residuals"], d["mean"], d["cov"], d["cross_cov"], d["j"], d["k"], **how
+        ),
+    )
 
 
 @CHECKS.function(
