@@ -543,23 +543,50 @@ def q7(d):
             "returns alpha: that is what the test promises, not what the simulation measures",
             lambda A, Qyy, alpha, n_runs, seed, bias: float(alpha),
         ),
+        Mistake(
+            "the critical value looks like chi2 with m degrees of freedom: n parameters are "
+            "estimated, so T has m - n",
+            lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
+                A, Qyy, alpha, n_runs, seed, bias, dof=np.shape(A)[0]
+            ),
+        ),
+        Mistake(
+            "the bias looks forgotten: data set r is bias + L z_r",
+            lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
+                A, Qyy, alpha, n_runs, seed, np.zeros(np.shape(A)[0])
+            ),
+        ),
+        Mistake(
+            "the rate of the right test, but the noise drawn in another order (as (m, n_runs)?): "
+            "ONE call rng.standard_normal((n_runs, m)), row r for data set r",
+            lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
+                A, Qyy, alpha, n_runs, seed, bias, columns=True
+            ),
+        ),
     ],
 )
 def q8(A, Qyy, alpha, n_runs, seed, bias):
+    return _rejection_rate(A, Qyy, alpha, n_runs, seed, bias)
+
+
+def _rejection_rate(A, Qyy, alpha, n_runs, seed, bias, dof=None, columns=False):
+    """q8's simulation (``dof``, ``columns``: the declared mistakes of another dof, the noise
+    drawn as (m, n_runs))."""
     # The simulation the question prescribes, run with the case's seed: a correct answer counts
     # exactly the same rejections however it computes T, while the exact probability (ncx2),
     # alpha, a wrong dof, ignoring Qyy or the bias, or another random sample all differ from it.
     A = np.asarray(A, dtype=float)
     m, n = A.shape
     L = np.linalg.cholesky(Qyy)
-    Z = np.random.default_rng(seed).standard_normal((n_runs, m))
+    rng = np.random.default_rng(seed)
+    Z = rng.standard_normal((m, n_runs)).T if columns else rng.standard_normal((n_runs, m))
     Y = np.asarray(bias, dtype=float) + Z @ L.T  # row r: data set r
     A_w = linalg.solve_triangular(L, A, lower=True)
     Y_w = linalg.solve_triangular(L, Y.T, lower=True)  # whitened data sets as columns
     Q, _ = np.linalg.qr(A_w)
     R = Y_w - Q @ (Q.T @ Y_w)
     stats_ = np.sum(R * R, axis=0)
-    return float(np.mean(stats_ > stats.chi2.isf(alpha, m - n)))
+    return float(np.mean(stats_ > stats.chi2.isf(alpha, m - n if dof is None else dof)))
 
 
 def _exact_rate(A, Qyy, alpha, bias):

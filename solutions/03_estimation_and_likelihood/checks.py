@@ -413,6 +413,20 @@ q7.case(10, 1.0, 0.8, 0.5, 0.01, hidden=True)
 q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
 
 
+def _boundary_rate(n, alpha, n_runs, seed, columns=False, clip=True, one=False):
+    """q8's simulation with a declared mistake: samples in columns, no boundary, or one sample
+    per run."""
+    rng = np.random.default_rng(seed)
+    if one:
+        zbar, n = rng.standard_normal(n_runs), 1
+    elif columns:
+        zbar = rng.standard_normal((n, n_runs)).mean(axis=0)
+    else:
+        zbar = rng.standard_normal((n_runs, n)).mean(axis=1)
+    z = np.maximum(zbar, 0.0) if clip else zbar
+    return float(np.mean(n * z**2 > stats.chi2.isf(alpha, 1)))
+
+
 @CHECKS.function(
     "q8",
     func="boundary_false_alarm",
@@ -437,6 +451,22 @@ q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
         Mistake(
             "returns alpha: that is what Wilks promises, not what the simulation measures",
             lambda n, alpha, n_runs, seed: float(alpha),
+        ),
+        Mistake(
+            "the rate of the right statistic, but the samples drawn in another order (samples "
+            "in columns?): ONE call rng.standard_normal((n_runs, n)), row r the sample r",
+            lambda n, alpha, n_runs, seed: _boundary_rate(n, alpha, n_runs, seed, columns=True),
+            hint="The grader repeats your draws: rng = np.random.default_rng(seed), then "
+            "rng.standard_normal((n_runs, n)) with row r the sample r.",
+        ),
+        Mistake(
+            "no boundary: n zbar^2 is the unconstrained (two-sided) statistic; on the boundary "
+            "the estimate is max(0, zbar), so -2 log Lambda = n max(0, zbar)^2",
+            lambda n, alpha, n_runs, seed: _boundary_rate(n, alpha, n_runs, seed, clip=False),
+        ),
+        Mistake(
+            "one sample per run: each run has n samples, and the statistic uses their mean",
+            lambda n, alpha, n_runs, seed: _boundary_rate(n, alpha, n_runs, seed, one=True),
         ),
     ],
 )
