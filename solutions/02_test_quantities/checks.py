@@ -597,6 +597,13 @@ def q8b(d):
                 U_, theta, sigma, alpha, n_runs, seed, records_in_columns=True
             ),
         ),
+        Mistake(
+            "the threshold looks like chi2 with N degrees of freedom: T1 estimates one gain, "
+            "so N - 1",
+            lambda U_, theta, sigma, alpha, n_runs, seed: _detection_rate(
+                U_, theta, sigma, alpha, n_runs, seed, dof=np.shape(U_)[0]
+            ),
+        ),
     ],
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):
@@ -606,15 +613,17 @@ def q9(U_, theta, sigma, alpha, n_runs, seed):
     return _detection_rate(U_, theta, sigma, alpha, n_runs, seed)
 
 
-def _detection_rate(U_, theta, sigma, alpha, n_runs, seed, records_in_columns=False):
-    """q9's simulation; ``records_in_columns`` draws the noise (N, n_runs) (a mistake)."""
+def _detection_rate(U_, theta, sigma, alpha, n_runs, seed, records_in_columns=False, dof=None):
+    """q9's simulation; ``records_in_columns`` draws the noise (N, n_runs), ``dof`` another
+    threshold's degrees of freedom (the declared mistakes)."""
     U_ = np.asarray(U_, dtype=float)
     rng = np.random.default_rng(seed)
     shape = (U_.shape[0], n_runs) if records_in_columns else (n_runs, U_.shape[0])
     noise = rng.standard_normal(shape)
     Y = U_ @ np.asarray(theta, dtype=float) + sigma * (noise.T if records_in_columns else noise)
     t1 = _t1_many(U_, Y)
-    return float(np.mean(t1 > chi2.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
+    dof = U_.shape[0] - 1 if dof is None else dof
+    return float(np.mean(t1 > chi2.residual_threshold(dof, alpha, sigma=sigma)))
 
 
 def _t1_many(U_, Y):
