@@ -230,6 +230,17 @@ CHECKS.short_answer(
 )
 
 
+_SIGMA2_SCALE = (
+    "looks computed with sigma^2 as the scale: scipy's norm takes the standard deviation, "
+    "scale=sigma"
+)
+
+
+def _likelihood(theta, z, sigma):
+    """The normal likelihood of each theta."""
+    return np.asarray(dg.normal_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma))
+
+
 @CHECKS.function(
     "q4",
     func="likelihood",
@@ -245,6 +256,22 @@ CHECKS.short_answer(
             lambda theta, z, sigma: np.asarray(
                 dg.normal_log_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma)
             ),
+        ),
+        Mistake(
+            _SIGMA2_SCALE,
+            lambda theta, z, sigma: _likelihood(theta, z, sigma**2),
+        ),
+        Mistake(
+            "looks like a SUM of densities: the likelihood of independent observations is "
+            "their product",
+            lambda theta, z, sigma: np.array(
+                [float(np.sum(stats.norm.pdf(z, t, sigma))) for t in np.ravel(theta)]
+            ).reshape(np.shape(theta)),
+        ),
+        Mistake(
+            "only the first observation counts here: the likelihood is the product over EVERY "
+            "observation",
+            lambda theta, z, sigma: _likelihood(theta, np.asarray(z, dtype=float)[:1], sigma),
         ),
     ],
 )
@@ -280,6 +307,20 @@ q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
             lambda z, sigma: (
                 float(np.mean(z)),
                 float(np.sum(stats.norm.logpdf(z, np.mean(z), sigma))),
+            ),
+        ),
+        Mistake(
+            _SIGMA2_SCALE,
+            lambda z, sigma: (
+                float(np.mean(z)),
+                float(np.prod(stats.norm.pdf(z, np.mean(z), sigma**2))),
+            ),
+        ),
+        Mistake(
+            "theta_ml looks like the first observation: the maximiser is the mean of all of them",
+            lambda z, sigma: (
+                float(np.asarray(z)[0]),
+                float(np.prod(stats.norm.pdf(z, np.asarray(z)[0], sigma))),
             ),
         ),
     ],
@@ -319,11 +360,33 @@ q5.case(np.array([-1.0, 4.0, 2.5]), 0.5, hidden=True)
             "the p-value looks like the cdf: a p-value is the upper tail, sf",
             lambda U_, y, sigma: _glr_cdf(U_, y, sigma),
         ),
+        Mistake(
+            "the statistic looks not divided by sigma^2: -2 log Lambda = (T0 - T1) / sigma^2",
+            lambda U_, y, sigma: _glr_scaled(U_, y, sigma, sigma**2),
+        ),
+        Mistake(
+            "the p-value looks computed with chi2(N - 1): one parameter is freed under F2, so "
+            "-2 log Lambda is chi2(1)",
+            lambda U_, y, sigma: _glr_scaled(U_, y, sigma, 1.0, dof=np.shape(U_)[0] - 1),
+        ),
+        Mistake(
+            "theta1 looks freed instead of theta2: the alternative F2 is a fault of the second "
+            "gain",
+            lambda U_, y, sigma: _glr_scaled(U_, y, sigma, 1.0, free=0),
+        ),
     ],
 )
 def q6(U_, y, sigma):
     r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[1], sigma=sigma)
     return GLR(r.statistic, r.pvalue)
+
+
+def _glr_scaled(U_, y, sigma, scale, dof=1, free=1):
+    """(statistic * scale, its chi2(dof) p-value) with gain ``free`` freed (declared
+    mistakes)."""
+    r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[free], sigma=sigma)
+    statistic = float(r.statistic) * scale
+    return (statistic, float(stats.chi2.sf(statistic, dof)))
 
 
 def _glr_cdf(U_, y, sigma):
