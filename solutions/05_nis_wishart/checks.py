@@ -102,6 +102,33 @@ CHECKS = Checks(
     hint="For each step solve with the Cholesky factor: z = solve(B_k, eps_k) with "
     "S_k = B_k B_k^T, then NIS_k = z @ z. S is one (m, m) matrix or a (K, m, m) "
     "stack: np.broadcast_to(S, (K, m, m)) handles both.",
+    mistakes=[
+        Mistake(
+            "looks like eps^T S eps: the NIS weighs each innovation by S^{-1}, eps^T S^{-1} eps",
+            lambda eps, S: np.einsum("ki,kij,kj->k", *_with_stack(eps, S, S_of=lambda s: s)),
+        ),
+        Mistake(
+            "whitened with the transposed factor: with S_k = B_k B_k^T (B_k lower), z_k = "
+            "B_k^{-1} eps_k; B_k^{-T} eps_k does not whiten",
+            lambda eps, S: np.sum(_whitened_upper(eps, S) ** 2, axis=1),
+        ),
+        Mistake(
+            "looks divided by m: the NIS of one step is the whole quadratic form, chi2(m)",
+            lambda eps, S: nis.nis(eps, S) / np.shape(eps)[1],
+        ),
+        Mistake(
+            "only the diagonal of S looks used: with correlated innovations the NIS needs the "
+            "whole S (its Cholesky factor)",
+            lambda eps, S: np.einsum(
+                "ki,kij,kj->k",
+                *_with_stack(eps, S, S_of=lambda s: np.diag(1.0 / np.diag(s))),
+            ),
+        ),
+        Mistake(
+            "one S for every step: with a stack, step k uses its own S_k",
+            lambda eps, S: nis.nis(eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]),
+        ),
+    ],
 )
 def q1(eps, S):
     return nis.nis(eps, S)
@@ -132,6 +159,15 @@ q1.case(EPS_C, S_C, hidden=True)
             lambda eps, S: q2.reference(eps, S) * np.shape(eps)[0],
         ),
         Mistake(
+            "looks divided by K - 1: Pi is the mean of the K outer products (nothing is "
+            "estimated from the innovations), divide by K",
+            lambda eps, S: q2.reference(eps, S) * np.shape(eps)[0] / (np.shape(eps)[0] - 1),
+        ),
+        Mistake(
+            "one S for every step: with a stack, step k is whitened with its own S_k",
+            lambda eps, S: nis.nis_matrix(eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]),
+        ),
+        Mistake(
             "looks like the outer products of eps itself: whiten first, z_k = B_k^{-1} eps_k "
             "with S_k = B_k B_k^T",
             lambda eps, S: np.einsum("ki,kj->ij", eps, eps) / np.shape(eps)[0],
@@ -156,6 +192,19 @@ q1.case(EPS_C, S_C, hidden=True)
 )
 def q2(eps, S):
     return nis.nis_matrix(eps, S)
+
+
+def _with_stack(eps, S, S_of):
+    """(eps, the stack of S_of(S_k)) for an einsum over the steps (q1's mistakes)."""
+    eps, stack = _stack(eps, S)
+    return eps, np.stack([S_of(s) for s in stack]), eps
+
+
+def _whitened_upper(eps, S):
+    """z_k = B_k^{-T} eps_k (a mistake of q1)."""
+    eps, S = _stack(eps, S)
+    B = np.linalg.cholesky(S)
+    return np.linalg.solve(np.swapaxes(B, -1, -2), eps[:, :, None])[:, :, 0]
 
 
 def _stack(eps, S):
