@@ -446,8 +446,10 @@ def q5(d):
 FalseAlarmRates = namedtuple("FalseAlarmRates", "rate_last rate_any")
 
 
-def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
-    """(rate_last, rate_any) of the prescribed simulation: x0, W, V drawn in this order."""
+def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed, dof=None, raw=False):
+    """(rate_last, rate_any) of the prescribed simulation: x0, W, V drawn in this order
+    (``dof``: another threshold's degrees of freedom; ``raw``: window sums of the innovations
+    not normalised; the declared mistakes)."""
     rng = np.random.default_rng(seed)
     x = rng.standard_normal(n_runs)
     W = rng.standard_normal((N, n_runs))
@@ -457,8 +459,14 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
         y[:, t, 0] = x + np.sqrt(r) * V[t]
         x = a * x + np.sqrt(q) * W[t]
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
-    sums = nis.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1 :]  # full windows only
-    alarm = sums > stats.chi2.isf(alpha, L)
+    result = kf.kalman_filter(model, y)
+    if raw:
+        c = np.cumsum(np.asarray(result.innovations)[..., 0] ** 2, axis=1)
+        c = np.concatenate([np.zeros((n_runs, 1)), c], axis=1)
+        sums = c[:, L:] - c[:, :-L]
+    else:
+        sums = nis.windowed_nis(result, L)[:, L - 1 :]  # full windows only
+    alarm = sums > stats.chi2.isf(alpha, L if dof is None else dof)
     return FalseAlarmRates(float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1))))
 
 
@@ -493,6 +501,27 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
             lambda a, q, r, N, L, alpha, n_runs, seed: (
                 Band(0.0, 1.0),
                 float(1.0 - (1.0 - alpha) ** (N - L + 1)),
+            ),
+        ),
+        Mistake(
+            "the threshold looks like chi2 with L - 1 degrees of freedom: a window sums L "
+            "squared normalised innovations, chi2(L)",
+            lambda a, q, r, N, L, alpha, n_runs, seed: _false_alarm_rates(
+                a, q, r, int(N), int(L), alpha, int(n_runs), seed, dof=int(L) - 1
+            ),
+        ),
+        Mistake(
+            "the innovations look not normalised: each is divided by its standard deviation "
+            "sqrt(S_t) before squaring",
+            lambda a, q, r, N, L, alpha, n_runs, seed: _false_alarm_rates(
+                a, q, r, int(N), int(L), alpha, int(n_runs), seed, raw=True
+            ),
+        ),
+        Mistake(
+            "these look like counts of runs: return the fractions of the n_runs runs",
+            lambda a, q, r, N, L, alpha, n_runs, seed: tuple(
+                float(v) * int(n_runs)
+                for v in _false_alarm_rates(a, q, r, int(N), int(L), alpha, int(n_runs), seed)
             ),
         ),
     ],
