@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import nis
-from course.grading.authoring.checks import Checks, Mistake, binomial_band
+from course.grading.authoring.checks import Band, Checks, Mistake, binomial_band
 
 from . import data
 
@@ -563,6 +563,24 @@ CHECKS.short_answer(
             "the nominal alpha: for small K the test's size is below alpha -- simulate it",
             lambda m, K, alpha, n_runs, seed: float(alpha),
         ),
+        Mistake(
+            "the rate of thresholds at alpha each (one-sided): the test's two thresholds share "
+            "alpha, alpha/2 in each tail",
+            lambda m, K, alpha, n_runs, seed: _size_band(m, K, 2 * alpha, n_runs),
+        ),
+        Mistake(
+            "the rate of a SUM of outer products (K times Pi): the NIS matrix is their mean",
+            lambda m, K, alpha, n_runs, seed: _size_band(m, K, alpha, n_runs, scale=K),
+        ),
+        Mistake(
+            "only lambda_max looks tested: the test also alarms when lambda_min falls below "
+            "the lower threshold",
+            lambda m, K, alpha, n_runs, seed: binomial_band(n_runs, alpha / 2, miss=1e-4),
+        ),
+        Mistake(
+            "looks like a count of runs: return the fraction of the n_runs runs",
+            lambda m, K, alpha, n_runs, seed: _size_band(m, K, alpha, n_runs, count=True),
+        ),
     ],
     hint=[
         "Simulate, do not predict: with small K the rate is not alpha (both extreme "
@@ -574,10 +592,17 @@ CHECKS.short_answer(
     ],
 )
 def q7(m, K, alpha, n_runs, seed):
+    return _size_band(m, K, alpha, n_runs)
+
+
+def _size_band(m, K, alpha, n_runs, scale=1, count=False):
+    """The band of the simulated false-alarm rate (``scale``: eigenvalues of ``scale`` Pi;
+    ``count``: the number of runs, not the fraction; the declared mistakes)."""
     # The exact false-alarm rate is 1 - P(all eigenvalues inside the thresholds).
     lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
-    size = 1.0 - nis.prob_eigenvalues_within(m, K, lower, upper)
-    return binomial_band(n_runs, size, miss=1e-4)
+    size = 1.0 - nis.prob_eigenvalues_within(m, K, lower / scale, upper / scale)
+    band = binomial_band(n_runs, size, miss=1e-4)
+    return Band(band.lo * n_runs, band.hi * n_runs) if count else band
 
 
 q7.case(2, 30, 0.05, 20000, 2024, label="m = 2, K = 30, alpha = 0.05, 20000 runs")
