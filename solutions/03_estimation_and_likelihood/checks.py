@@ -72,15 +72,32 @@ CHECKS = Checks(
             "the decision looks one-sided: z_alpha instead of z_alpha/2",
             lambda U_, y, sigma, alpha: _joint(U_, y, sigma, 2 * alpha),
         ),
+        Mistake(
+            "theta2 looks estimated alone (theta1 fixed at 1): estimate theta1 and theta2 "
+            "together, which decouples F1",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, free=(1,)),
+        ),
+        Mistake(
+            "std looks like that of theta1 (the (1, 1) element): the test of theta2 needs the "
+            "std of theta2_hat",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, std_at=0),
+        ),
+        Mistake(
+            "all three gains look estimated: theta3 is fixed at 1, only theta1 and theta2 are "
+            "free",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, free=(0, 1, 2)),
+        ),
     ],
 )
 def q1(U_, y, sigma, alpha):
     return _joint(U_, y, sigma, alpha)
 
 
-def _joint(U_, y, sigma, alpha):
-    est = dg.estimate_parameters(y, U_, NOMINAL, [0, 1], sigma=sigma)
-    std = float(est.std[1])
+def _joint(U_, y, sigma, alpha, free=(0, 1), std_at=None):
+    """(theta2_hat, std, reject) with the gains ``free`` estimated (the std of the free gain
+    ``std_at``, theta2's by default; other choices are declared mistakes)."""
+    est = dg.estimate_parameters(y, U_, NOMINAL, list(free), sigma=sigma)
+    std = float(est.std[list(free).index(1 if std_at is None else std_at)])
     theta2 = float(est.theta[1])
     return JointParameterTest(
         theta2, std, bool(abs(theta2 - 1.0) > std * stats.norm.isf(alpha / 2))
@@ -191,6 +208,16 @@ q2.case(_modes_U(51), 1.2, hidden=True)
             "the parameter test's power looks like one tail only: it rejects in both",
             lambda U_, sigma, theta2, alpha: (
                 _one_tail_power(U_, sigma, theta2, alpha),
+                _pe_power(U_, sigma, theta2, alpha),
+            ),
+        ),
+        Mistake(
+            "the parameter test's power looks computed with z_alpha: the test is two-sided, "
+            "z = norm.isf(alpha/2)",
+            lambda U_, sigma, theta2, alpha: (
+                dg.parameter_estimate_power(
+                    U_, NOMINAL, [0, 1], 1, [1.0, theta2, 1.0], sigma=sigma, alpha=2 * alpha
+                ),
                 _pe_power(U_, sigma, theta2, alpha),
             ),
         ),
