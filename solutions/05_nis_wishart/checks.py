@@ -459,6 +459,32 @@ def _pvalues(eps, S, alpha):
     return PValues(float(p_nis), float(p_matrix))
 
 
+def _mistaken_pvalues(eps, S, average=False, one_sided=False, no_two=False):
+    """(p_nis, p_matrix) with a declared mistake: chi2(m K) at the average NIS, p_nis
+    one-sided (sf), or p_matrix without its factor 2."""
+    K, m = np.shape(eps)
+    total = float(np.sum(nis.nis(eps, S)))
+    law = stats.chi2(m * K)
+    at = total / K if average else total
+    p_nis = float(law.sf(at)) if one_sided else min(1.0, 2 * min(law.cdf(at), law.sf(at)))
+    values = np.linalg.eigvalsh(nis.nis_matrix(eps, S))
+    tail = min(
+        float(nis.extreme_eigenvalue(m, K, "min").cdf(values[0])),
+        float(nis.extreme_eigenvalue(m, K, "max").sf(values[-1])),
+    )
+    return (float(p_nis), min(1.0, (1 if no_two else 2) * tail))
+
+
+_PVALUE_MISTAKES = [
+    (
+        "p_nis looks computed at the AVERAGE NIS: chi2(m K) is the law of the SUM K eps_bar",
+        {"average": True},
+    ),
+    ("p_matrix looks like one tail: the matrix test is two-sided, 2 min(...)", {"no_two": True}),
+]
+_ONE_SIDED_NIS = "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)"
+
+
 @CHECKS.function(
     "q6_practice",
     func="nis_pvalues",
@@ -471,12 +497,16 @@ def _pvalues(eps, S, alpha):
     atol=1e-9,
     mistakes=[
         Mistake(
-            "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)",
+            _ONE_SIDED_NIS,
             lambda eps, S: (
                 float(stats.chi2(np.size(eps)).sf(np.sum(nis.nis(eps, S)))),
                 _pvalues(eps, S, 0.05)[1],
             ),
         ),
+        *[
+            Mistake(message, lambda eps, S, how=how: _mistaken_pvalues(eps, S, **how))
+            for message, how in _PVALUE_MISTAKES
+        ],
     ],
     hint=[
         "Both p-values are two-sided: 2 min(F, 1 - F), capped at 1 for the matrix test.",
@@ -512,6 +542,19 @@ for _seed in (40, 41, 46, 54):  # a wrong correlation, a wrong scale, consistent
     atol=1e-9,
     data="record",
     properties="record_properties",
+    mistakes=[
+        Mistake(
+            _ONE_SIDED_NIS,
+            lambda d: (
+                float(stats.chi2(np.size(d["eps"])).sf(np.sum(nis.nis(d["eps"], d["S"])))),
+                _pvalues(d["eps"], d["S"], 0.05)[1],
+            ),
+        ),
+        *[
+            Mistake(message, lambda d, how=how: _mistaken_pvalues(d["eps"], d["S"], **how))
+            for message, how in _PVALUE_MISTAKES
+        ],
+    ],
     hint=[
         "Do q6_practice first: the same code must pass its public check there.",
         "p_nis = 2 min(F, 1 - F) of chi2(m K) at the NIS sum K * eps_bar; "
