@@ -83,8 +83,7 @@ CHECKS = Checks(
             lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, std_at=0),
         ),
         Mistake(
-            "all three gains look estimated: theta3 is fixed at 1, only theta1 and theta2 are "
-            "free",
+            "all three gains look estimated: theta3 is fixed at 1, only theta1 and theta2 are free",
             lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, free=(0, 1, 2)),
         ),
     ],

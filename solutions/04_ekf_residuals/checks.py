@@ -132,7 +132,26 @@ _Q1_MISTAKES = [
         "recursion is update (P(t|t)) then predict (P(t|t) + q), and P(t|t-1) is its fixed "
         "point; K = P(t|t-1)/(P(t|t-1) + r).",
     ),
+    Mistake(
+        "P looks like the NEGATIVE root of P^2 - q P - q r = 0: a variance is positive",
+        lambda q, r: _steady(q, r, (q - np.sqrt(q * q + 4.0 * q * r)) / 2.0),
+    ),
+    Mistake(
+        "P looks like ONE step of the recursion from P = 1: the steady state is its fixed "
+        "point (solve P^2 - q P - q r = 0, or iterate until P stops changing)",
+        lambda q, r: _steady(q, r, 1.0 - 1.0 / (1.0 + r) + q),
+    ),
+    Mistake(
+        "K looks like P / r: the gain divides by the innovation's variance P + r",
+        lambda q, r: (_steady(q, r)[0], _steady(q, r)[0] / r),
+    ),
 ]
+
+
+def _steady(q, r, P=None):
+    """(P, P / (P + r)) with the positive root, or another ``P`` (declared mistakes)."""
+    P = (q + np.sqrt(q * q + 4.0 * q * r)) / 2.0 if P is None else P
+    return (float(P), float(P / (P + r)))
 
 
 @CHECKS.function(

@@ -126,7 +126,9 @@ CHECKS = Checks(
         ),
         Mistake(
             "one S for every step: with a stack, step k uses its own S_k",
-            lambda eps, S: nis.nis(eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]),
+            lambda eps, S: nis.nis(
+                eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]
+            ),
         ),
     ],
 )
@@ -165,7 +167,9 @@ q1.case(EPS_C, S_C, hidden=True)
         ),
         Mistake(
             "one S for every step: with a stack, step k is whitened with its own S_k",
-            lambda eps, S: nis.nis_matrix(eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]),
+            lambda eps, S: nis.nis_matrix(
+                eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]
+            ),
         ),
         Mistake(
             "looks like the outer products of eps itself: whiten first, z_k = B_k^{-1} eps_k "
