@@ -551,12 +551,6 @@ def q7(d):
             ),
         ),
         Mistake(
-            "the bias looks forgotten: data set r is bias + L z_r",
-            lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
-                A, Qyy, alpha, n_runs, seed, np.zeros(np.shape(A)[0])
-            ),
-        ),
-        Mistake(
             "the rate of the right test, but the noise drawn in another order (as (m, n_runs)?): "
             "ONE call rng.standard_normal((n_runs, m)), row r for data set r",
             lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
