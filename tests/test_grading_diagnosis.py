@@ -24,9 +24,17 @@ from course import diagnosis as dg
 from course.grading.authoring.checks import load_checks
 from course.grading.authoring.seal import make_salt, seal, sealed_compare
 from course.grading.batch.classreport import diagnosis
-from course.grading.compare import SINGLE_PRECISION, chosen_hint, compare, single_precision
+from course.grading.batch.results import CaseResult
+from course.grading.compare import (
+    SINGLE_PRECISION,
+    Verdict,
+    chosen_hint,
+    compare,
+    single_precision,
+)
 from course.grading.notebook import _STUDENT_ID_LINE
 from course.grading.student.selfcheck import Assignment
+from course.grading.vocabulary import MistakeKind
 
 ROOT = Path(__file__).resolve().parents[1]
 F04 = "04_ekf_residuals"
@@ -122,8 +130,9 @@ def test_a_float32_answer_is_told_so_at_grading_and_at_self_check_alike():
             assert "reverse order" not in v.message
     # a float64 near miss keeps its own diagnosis
     assert "close: it agrees" in compare(e, e * (1 + 3e-8), 1e-8, 1e-14).message
-    # and the class report counts float32 answers as such
-    assert diagnosis(clear.message) == ("kind", "computed in float32")
+    # and the class report counts float32 answers as such, by the verdict's kind
+    assert clear.kind == by_seal.kind == MistakeKind.SINGLE_PRECISION
+    assert diagnosis(CaseResult.of("c", clear)) == ("kind", "computed in float32")
 
 
 def test_a_symmetric_answer_off_by_round_off_is_not_in_reverse_order():
@@ -157,9 +166,17 @@ def test_a_mistake_in_one_field_is_named_at_grading_and_at_self_check():
 
 def test_the_hint_follows_the_diagnosis():
     hints = {"looks divided by S": "the square root of S"}
-    assert chosen_hint(["value: looks divided by S_t"], hints) == "the square root of S"
-    assert chosen_hint([f"value: 3 of 9 wrong; {SINGLE_PRECISION}; tolerance"], hints) == ""
-    assert chosen_hint(["value: not within the tolerance"], hints) is None
+    named = Verdict(False, "value: looks divided by S", kind=MistakeKind.NAMED,
+                    mistake="looks divided by S")  # fmt: skip
+    float32 = Verdict(False, f"value: {SINGLE_PRECISION}", kind=MistakeKind.SINGLE_PRECISION)
+    assert chosen_hint([named], hints) == "the square root of S"
+    assert chosen_hint([float32], hints) == ""
+    assert chosen_hint([Verdict(False, "value: not within the tolerance")], hints) is None
+    # a named mistake without its own hint: no staged hint, which could contradict it
+    other = Verdict(False, "value: dof m", kind=MistakeKind.NAMED, mistake="dof m")
+    assert chosen_hint([other, None], hints) == ""
+    # the words of a message choose nothing: only the diagnosis does
+    assert chosen_hint([Verdict(False, "value: looks divided by S")], hints) is None
     q2 = load_checks(ROOT / "solutions" / "04_ekf_residuals").questions["q2"]
     assert set(q2.mistake_hints) == {m.message for m in q2.mistakes}
     by_s = next(h for m, h in q2.mistake_hints.items() if "divided by S_t" in m)

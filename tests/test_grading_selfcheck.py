@@ -421,7 +421,11 @@ def test_declared_mistakes_ship_for_public_cases_and_are_named(mistakes_demo, ca
     check("q1", norm.isf(0.05))
     out = capsys.readouterr().out
     assert "z: looks one-sided: z_alpha instead of z_alpha/2" in out
-    assert "Hint 1 of 2" in out and "1.95996" not in out and "1.64485" not in out
+    # the named mistake chooses the hint: it has none, so no staged hint (about another step
+    # of the method) follows its message
+    assert "Hint" not in out and "1.95996" not in out and "1.64485" not in out
+    check("q1", 0.5)  # nothing diagnosed: the stages, in order
+    assert "Hint 1 of 2" in capsys.readouterr().out
     check("q2", lambda alpha: float(norm.isf(alpha)))
     assert "value: looks one-sided" in capsys.readouterr().out
     check("q1", norm.isf(0.025))

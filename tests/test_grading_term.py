@@ -210,16 +210,18 @@ def test_report_of_rows_separates_public_and_hidden_cases():
         r.add_total()
         return r
 
-    def case(label, ok, message=""):
-        return CaseResult(label, ok, message)
+    def case(label, ok, message="", kind=None):
+        return CaseResult(label, ok, message, kind=kind)
 
     rows = [
         row("a", [case("small", True), case("hidden case 1", True)]),
-        row("b", [case("small", True), case("hidden case 1", False, "T: got NaN at [0]")]),
+        row("b", [case("small", True),
+                  case("hidden case 1", False, "T: got NaN at [0]", "NaN or inf")]),
         row("c", [case("small", False, "timeout"), case("hidden case 1", False, "not run")],
             status="timeout", seconds=30.0),
-        row("d", [case("small", False, "T: too large by a factor ≈ 2.0"),
-                  case("hidden case 1", False, "T: too large by a factor ≈ 2.0")]),
+        row("d", [case("small", False, "T: too large by a factor ≈ 2.0", "a constant factor"),
+                  case("hidden case 1", False, "T: too large by a factor ≈ 2.0",
+                       "a constant factor")]),
     ]  # fmt: skip
     text = report_html(rows, load_checks(SOLUTION), ["q3"])
     # full marks 1 of 4; public cases 2 of 4 passed; hidden 1 of 4

@@ -379,6 +379,67 @@ def test_right_answers_keep_full_marks(graded, key):
     assert not lost, "right answers that lost points:\n" + "\n".join(lost)
 
 
+#: The share of the tables' wrong answers whose feedback names the mistake (issue 37 item 6)
+#: at least: the named ones' share is printed by the test below.
+NAMED_SHARE = 0.80
+#: Wrong answers that must get their declared mistake (issue 37 item 6 lists them).
+MUST_BE_NAMED = [
+    ("01", "q5", "unknowns swapped (a reversed)"),
+    ("01", "q6_practice", "diag(sigma) passed as Qyy"),
+    ("01", "q3", "dof m instead of m - n"),
+    ("04", "q4", "alpha / 100 (a percentage)"),
+    ("05", "q4", "laws swapped (lambda_max's for the lower, lambda_min's for the upper)"),
+    ("06", "q3", "M/(M - 1) instead of (M - 1)/M"),
+    ("07", "q3", "sigma² from the null model"),
+    ("07", "q3", "F's denominator dof m - n"),
+    ("07", "q5", "alpha_1 / 2 for lambda_0 (two-sided w)"),
+]
+
+
+def names_its_mistake(row: dict) -> bool:
+    """Whether a wrong answer's graded question names its mistake: a forbidden call named, or
+    the first failed case (the one its message quotes) diagnosed with a kind that says what
+    went wrong (:data:`~course.grading.vocabulary.SPECIFIC_KINDS`: not "not within the
+    tolerance", a bare factor, outside the band, another option)."""
+    from course.grading.vocabulary import SPECIFIC_KINDS, GradeStatus
+
+    if row["status"] == GradeStatus.FORBIDDEN:
+        return True
+    failed = [c for c in row["cases"] if not c["ok"]]
+    return bool(failed) and failed[0].get("kind") in SPECIFIC_KINDS
+
+
+def test_wrong_answers_name_their_mistake(graded):
+    """Issue 37 item 6: the tables' wrong answers get a message that names the mistake, at
+    least :data:`NAMED_SHARE` of them (printed, per assignment), and every one the issue lists
+    its declared mistake."""
+    named = total = 0
+    lines = []
+    rows_by = {}
+    for key in sorted(SPECS):
+        spec = load_spec(SPECS[key])
+        rows = [
+            (v, r)
+            for v, r in graded(key)
+            if not v.right
+            and r["points"] < r["max"]
+            and not _right_by_chance(spec, v, r["student"])
+        ]
+        k = sum(names_its_mistake(r) for _, r in rows)
+        named, total = named + k, total + len(rows)
+        lines.append(f"{key}: {k} of {len(rows)} wrong answers named ({k / len(rows):.0%})")
+        rows_by.update({(key, v.qid, v.label): r for v, r in rows})
+    share = named / total
+    print("\n".join([*lines, f"all: {named} of {total} named ({share:.1%})"]))
+    unnamed = [
+        f"{key} {qid} {label!r}: {rows_by[key, qid, label]['cases']}"
+        for key, qid, label in MUST_BE_NAMED
+        if not any(c.get("kind") == "named mistake" for c in rows_by[key, qid, label]["cases"])
+    ]
+    assert not unnamed, "listed wrong answers without their named mistake:\n" + "\n".join(unnamed)
+    assert share >= NAMED_SHARE, f"{share:.1%} of the wrong answers named"
+
+
 def _running_cell(ns: dict, cell_id: str | None) -> None:
     """Tell the self-check which cell runs, as JupyterLab does (its forbidden-call records
     are per cell)."""

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from course.grading.codec import Band, _named_type
+from course.grading.vocabulary import SPECIFIC_KINDS, MistakeKind
 
 __all__ = [
     "SINGLE_PRECISION",
@@ -38,11 +39,23 @@ class Verdict:
     ``message`` is for the student: what is wrong in kind (shape, NaN, sign, a factor, order,
     off by one, a declared mistake) and the tolerance, never an expected value. ``detail`` is
     for the instructor's records only: expected and got, with enough digits to differ.
+    ``kind`` is the diagnosis as data (a :class:`~course.grading.vocabulary.MistakeKind`, set
+    where it is made; a failed verdict without one is :attr:`~MistakeKind.WRONG_VALUE`, any
+    other value is refused), and ``mistake`` the declared mistake's message when ``kind`` is
+    :attr:`~MistakeKind.NAMED`: what the reports count, never the message's words.
     """
 
     ok: bool
     message: str = ""
     detail: str = ""
+    kind: MistakeKind | None = None
+    mistake: str = ""
+
+    def __post_init__(self):
+        if self.ok:
+            object.__setattr__(self, "kind", None)
+        else:  # MistakeKind(...) refuses a kind that is not in the one list
+            object.__setattr__(self, "kind", MistakeKind(self.kind or MistakeKind.WRONG_VALUE))
 
 
 def binomial_band(n: int, p: float, miss: float = 1e-4) -> Band:
@@ -136,10 +149,10 @@ def sequence_items(expected, got):
 def length_mismatch(label: str, expected: int, got: int) -> Verdict:
     """A sequence of the wrong length, saying "one item too many/few" when it is one off."""
     text = f"{label}: expected length {expected}, got length {got}"
-    more = (
-        f": one item too {'many' if got > expected else 'few'}" if abs(got - expected) == 1 else ""
-    )
-    return Verdict(False, text + more, text)
+    one_off = abs(got - expected) == 1
+    more = f": one item too {'many' if got > expected else 'few'}" if one_off else ""
+    kind = MistakeKind.ONE_TOO_MANY_OR_FEW if one_off else MistakeKind.SHAPE
+    return Verdict(False, text + more, text, kind)
 
 
 def sequence_text(expected) -> str:
@@ -237,8 +250,13 @@ def _simple_ratio(r: float) -> Fraction | None:
     return None
 
 
-def _factor_text(r: float, frac: Fraction | None) -> str:
+def _factor_text(r: float, frac: Fraction | None, hidden: bool = False) -> str:
+    """The words of a factor, "too large by a factor ≈ 1.5 (= 3/2)"; on a hidden case
+    (``hidden``) without the factor, which could tell the case's input (M/(M-1) = 3/2 says
+    M = 3)."""
     big = r >= 1
+    if hidden:
+        return f"too {'large' if big else 'small'} by a constant factor"
     x = r if big else 1.0 / r
     shown = f"{x:.3g}"
     if shown.isdigit():
@@ -262,20 +280,26 @@ SINGLE_PRECISION = (
 _HALF_BITS = 11
 
 
-def chosen_hint(messages, mistake_hints) -> str | None:
+def chosen_hint(failures, mistake_hints) -> str | None:
     """The hint the diagnosis of a failed answer chooses, or None for the question's staged
     hints (the same rule in the self-check and in the grading feedback).
 
-    ``messages`` are the failure messages (one per failed case); ``mistake_hints`` maps a
-    declared mistake's message to its own hint. A named mistake shows its hint (dividing by S
-    where sqrt(S) is meant is not helped by "update before predicting"); an answer computed in
-    single precision shows none ('') -- its method may well be right.
+    ``failures`` are the failed cases' diagnoses: objects with ``kind`` and ``mistake`` (the
+    :class:`Verdict` of a comparison, or a case of the results; None and kind-less ones are
+    skipped); ``mistake_hints`` maps a declared mistake's message to its own hint. The
+    diagnosis chooses, never the order of the stages: a named mistake shows its own hint, or
+    none when it has none -- its message says what to fix, and a stage about another step of
+    the method would contradict it (a dof mistake is not helped by "weigh with Qyy"); an
+    answer computed in single precision shows none either -- its method may well be right.
     """
-    messages = [str(m) for m in messages if m]
-    for mistake, hint in mistake_hints.items():
-        if hint and any(mistake in m for m in messages):
-            return str(hint)
-    if messages and all(SINGLE_PRECISION in m for m in messages):
+    found = [f for f in failures if f is not None and getattr(f, "kind", None)]
+    named = [f.mistake for f in found if f.kind == MistakeKind.NAMED and f.mistake]
+    for mistake in named:
+        if mistake_hints.get(mistake):
+            return str(mistake_hints[mistake])
+    if named:
+        return ""
+    if found and all(f.kind == MistakeKind.SINGLE_PRECISION for f in found):
         return ""
     return None
 
@@ -301,16 +325,27 @@ def single_precision(value: np.ndarray) -> bool:
     return bool(np.any(np.mod(mantissa * 2.0**_HALF_BITS, 1.0) != 0))
 
 
-def _diagnose(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
-    """:func:`_kind_of_wrong`, or '' should it fail: a diagnosis must never break a verdict."""
+#: A diagnosis: its kind and the words that say it (``(None, "")``: nothing recognised).
+Diagnosis = tuple[MistakeKind | None, str]
+_UNKNOWN: Diagnosis = (None, "")
+
+
+def _diagnose(
+    e: np.ndarray, g: np.ndarray, rtol: float, atol: float, hidden: bool = False
+) -> Diagnosis:
+    """:func:`_kind_of_wrong`, or nothing should it fail: a diagnosis must never break a
+    verdict."""
     try:
-        return _kind_of_wrong(e, g, rtol, atol)
+        return _kind_of_wrong(e, g, rtol, atol, hidden)
     except Exception:
-        return ""
+        return _UNKNOWN
 
 
-def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> str:
-    """What kind of wrong ``g`` is against ``e`` (same shape, not close); '' when unknown.
+def _kind_of_wrong(
+    e: np.ndarray, g: np.ndarray, rtol: float, atol: float, hidden: bool = False
+) -> Diagnosis:
+    """What kind of wrong ``g`` is against ``e`` (same shape, not close), and its words
+    (``hidden``: a hidden case's, which say no factor, see :func:`_factor_text`).
 
     Never names a value of ``e``: only relations (sign, factor, order, transpose, the number of
     matching digits), and none for integers, where any relation gives the answer away."""
@@ -327,20 +362,20 @@ def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> st
         and e.shape[0] == e.shape[1] > 1
         and _close(ef, gf.T, lo_rtol, atol)
     ):
-        return "transposed: rows and columns are swapped"
+        return MistakeKind.TRANSPOSED, "transposed: rows and columns are swapped"
     if not near and _close(ef, -gf, lo_rtol, atol):
-        return "the sign is flipped"
+        return MistakeKind.SIGN, "the sign is flipped"
     if not near and e.ndim == 1 and e.size > 1 and e.dtype.kind != "c":
         if _close(ef, gf[::-1], lo_rtol, atol):
-            return "the right values in reverse order"
+            return MistakeKind.ORDER, "the right values in reverse order"
         if _close(np.sort(ef), np.sort(gf), lo_rtol, atol):
-            return "the right values in another order (a permutation)"
+            return MistakeKind.ORDER, "the right values in another order (a permutation)"
     if e.dtype.kind in "iu":
         # no relation for integers: "one too large" or a factor would name the answer (an index
         # or a count is found in one or two guesses); the question's hint says what counts from 0
-        return ""
+        return _UNKNOWN
     if e.dtype.kind == "c":
-        return ""
+        return _UNKNOWN
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.abs(gf - ef) / np.abs(ef)
     # a near miss: the elements outside the tolerance agree to a few digits
@@ -348,13 +383,13 @@ def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> st
     worst = float(np.max(rel[outside])) if np.any(outside) else math.inf
     if math.isfinite(worst) and 0 < worst < 1e-3:
         digits = max(1, math.floor(-math.log10(worst)))
-        return (
+        return MistakeKind.NEAR_MISS, (
             f"close: it agrees to about {digits} significant digits, but not within the "
             "tolerance (rounded, or a printed number typed in?)"
         )
     nonzero = np.abs(ef) > atol
     if bool(np.any(nonzero)) and bool(np.all(gf == 0)):
-        return "all zeros (a result never filled in?)"
+        return MistakeKind.ZEROS, "all zeros (a result never filled in?)"
     if bool(np.any(nonzero)) and bool(np.all(np.abs(gf[~nonzero]) <= atol)):
         with np.errstate(divide="ignore", invalid="ignore"):
             ratios = gf[nonzero] / ef[nonzero]
@@ -367,22 +402,35 @@ def _kind_of_wrong(e: np.ndarray, g: np.ndarray, rtol: float, atol: float) -> st
         ):
             frac = _simple_ratio(abs(r))
             if frac is not None or np.count_nonzero(nonzero) > 1:
-                text = _factor_text(abs(r), frac)
-                return ("the sign is flipped and " if r < 0 else "") + text
+                text = _factor_text(abs(r), frac, hidden)
+                return MistakeKind.FACTOR, ("the sign is flipped and " if r < 0 else "") + text
         if (
             bool(np.all(ef >= 0))
             and _close(ef**2, gf, lo_rtol, atol)
             and not _close(ef, gf, lo_rtol, atol)
         ):
-            return "looks like the square of the answer (a variance where a standard deviation is asked?)"
+            return MistakeKind.SQUARE, SQUARED_TEXT
         if bool(np.all(gf >= 0)) and _close(ef, gf**2, lo_rtol, atol):
-            return "looks like the square root of the answer (a standard deviation where a variance is asked?)"
-    return ""
+            return MistakeKind.SQUARE, SQUARE_ROOT_TEXT
+    return _UNKNOWN
+
+
+SQUARED_TEXT = (
+    "looks like the square of the answer (a variance where a standard deviation is asked?)"
+)
+SQUARE_ROOT_TEXT = (
+    "looks like the square root of the answer (a standard deviation where a variance is asked?)"
+)
 
 
 # -- the messages both comparisons give about wrong elements ---------------------------------
 def _first_at(index, shape) -> str:
     return _where(index, shape).strip()[3:]
+
+
+def decisions_kind(wrong: int, size: int, shape) -> MistakeKind:
+    """The kind of :func:`decisions_wrong`: the opposite decision(s), or some of them wrong."""
+    return MistakeKind.OPPOSITE if not shape or wrong == size else MistakeKind.DECISIONS
 
 
 def decisions_wrong(label: str, wrong: int, size: int, first, shape) -> str:
@@ -438,7 +486,7 @@ def band_shape_wrong(label: str, shape: tuple, arr: np.ndarray) -> Verdict | Non
     ``()``) holds every element of an array. The refusal, or None when the shape is right."""
     if shape and arr.shape != shape:
         text = f"{label}: expected shape {shape}, got {tuple(arr.shape)}"
-        return Verdict(False, text, text)
+        return Verdict(False, text, text, MistakeKind.SHAPE)
     return None
 
 
@@ -478,11 +526,11 @@ class StructuralWalk:
             arr = _numeric(got)
             if arr is None or arr.dtype.kind == "c":
                 text = f"{label}: expected a real number, got {describe(got)}"
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.TYPE)
             return self.band(expected, arr, label)
         if like is None:
             text = "" if got is None else f"{label}: expected None, got {describe(got)}"
-            return Verdict(got is None, text, text)
+            return Verdict(got is None, text, text, MistakeKind.TYPE)
         if isinstance(like, str):
             if not isinstance(got, str):
                 return self.not_a_string(expected, got, label)
@@ -492,10 +540,10 @@ class StructuralWalk:
         if isinstance(like, dict):
             if not isinstance(got, dict):
                 text = f"{label}: expected a dict with keys {sorted(like)}, got {describe(got)}"
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.TYPE)
             if set(got) != set(like):
                 text = f"{label}: expected keys {sorted(like)}, got {sorted(map(str, got))[:10]}"
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.TYPE)
             for k in sorted(like):
                 v = self.walk(self.value_at(expected, k), got[k], _key_path(path, k))
                 if not v.ok:
@@ -507,7 +555,7 @@ class StructuralWalk:
         arr = _numeric(got)
         if arr is None:
             text = f"{label}: expected {describe(like)}, got {describe(got)}"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.TYPE)
         if arr.shape != exp.shape:
             return self._shape_mismatch(expected, exp, arr, label)
         s = "s" if exp.ndim else ""
@@ -516,21 +564,21 @@ class StructuralWalk:
                 arr.dtype.kind in "iu" and np.any((arr != 0) & (arr != 1))
             ):
                 text = f"{label}: expected bool{s}, got {describe(got)}"
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.TYPE)
         elif _is_intish(like):
             if arr.dtype.kind == "c" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
                 text = f"{label}: expected integer{s}, got {describe(got)}"
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.TYPE)
         elif arr.dtype.kind == "c" and exp.dtype.kind != "c":
             text = f"{label}: expected real numbers, got complex"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.TYPE)
         return self.numbers(expected, exp, arr, label)
 
     def _sequence(self, expected, like, got, path: str, label: str) -> Verdict:
         items = sequence_items(like, got)
         if items is None:
             text = f"{label}: expected {sequence_text(like)}, got {describe(got)}"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.TYPE)
         if len(items) != len(like):
             return length_mismatch(label, len(like), len(items))
         for k, g in enumerate(items):
@@ -538,15 +586,16 @@ class StructuralWalk:
             if not first.ok:
                 if self.in_another_order(expected, items):
                     text = f"{label}: the right items in another order"
-                    return Verdict(False, text, first.detail if self.order_detail else text)
+                    detail = first.detail if self.order_detail else text
+                    return Verdict(False, text, detail, MistakeKind.ORDER)
                 return first
         return Verdict(True)
 
     def _shape_mismatch(self, expected, exp: np.ndarray, arr: np.ndarray, label: str) -> Verdict:
-        hint = ""
+        hint, kind = "", MistakeKind.SHAPE
         if arr.size == exp.size and arr.size > 0:
             if exp.ndim == 2 and arr.shape == exp.shape[::-1] and self.transposed(expected, arr):
-                hint = ": transposed, rows and columns are swapped"
+                hint, kind = ": transposed, rows and columns are swapped", MistakeKind.TRANSPOSED
             else:
                 hint = " (the right number of elements: reshape, ravel or a missing [:, 0]?)"
         elif exp.ndim == arr.ndim == 1 and abs(arr.shape[0] - exp.shape[0]) == 1:
@@ -554,8 +603,9 @@ class StructuralWalk:
                 f": one element too {'many' if arr.shape[0] > exp.shape[0] else 'few'}"
                 " (off by one in a range or slice?)"
             )
+            kind = MistakeKind.ONE_TOO_MANY_OR_FEW
         detail = f"{label}: expected shape {tuple(exp.shape)}, got shape {tuple(arr.shape)}"
-        return Verdict(False, detail + hint, detail)
+        return Verdict(False, detail + hint, detail, kind)
 
     # -- the leaves: a subclass's ------------------------------------------------------------
     def band(self, expected, arr: np.ndarray, label: str) -> Verdict:
@@ -564,7 +614,7 @@ class StructuralWalk:
 
     def not_a_string(self, expected, got, label: str) -> Verdict:
         text = f"{label}: expected a string, got {describe(got)}"
-        return Verdict(False, text, text)
+        return Verdict(False, text, text, MistakeKind.TYPE)
 
     def string(self, expected, got: str, label: str) -> Verdict:
         raise NotImplementedError
@@ -584,10 +634,11 @@ class StructuralWalk:
 
 
 class _Clear(StructuralWalk):
-    """The comparison with the expected value in the clear, with the exact tolerance."""
+    """The comparison with the expected value in the clear, with the exact tolerance
+    (``hidden``: of a hidden case, whose messages name no factor)."""
 
-    def __init__(self, rtol: float, atol: float):
-        self.rtol, self.atol = rtol, atol
+    def __init__(self, rtol: float, atol: float, hidden: bool = False):
+        self.rtol, self.atol, self.hidden = rtol, atol, hidden
 
     def band(self, expected: Band, arr: np.ndarray, label: str) -> Verdict:
         lo, hi = np.asarray(expected.lo, float), np.asarray(expected.hi, float)
@@ -595,10 +646,10 @@ class _Clear(StructuralWalk):
             arr_b, lo_b, hi_b = np.broadcast_arrays(arr.astype(float), lo, hi)
         except ValueError:
             text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.SHAPE)
         if arr.shape != np.broadcast_shapes(arr.shape, lo.shape):
             text = f"{label}: expected shape {lo.shape}, got {arr.shape}"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.SHAPE)
         inside = (arr_b >= lo_b) & (arr_b <= hi_b)
         if bool(np.all(inside)):
             return Verdict(True)
@@ -609,24 +660,27 @@ class _Clear(StructuralWalk):
         high = float(hi_b[at] if hi_b.ndim else hi_b[()])
         where = _where(at, arr_b.shape)
         if np.isnan(g):
-            return Verdict(False, f"{label}: got NaN{where}", f"{label}: got NaN{where}")
+            text = f"{label}: got NaN{where}"
+            return Verdict(False, text, text, MistakeKind.NOT_FINITE)
         return Verdict(
             False,
             outside_band(label, where),
             f"{label}: got {_fmt(float(g))}{where}, outside the accepted [{_fmt(low)}, {_fmt(high)}]",
+            MistakeKind.OUTSIDE_BAND,
         )
 
     def not_a_string(self, expected: str, got, label: str) -> Verdict:
         message = super().not_a_string(expected, got, label).message
-        return Verdict(False, message, _string_detail(expected, got, label))
+        return Verdict(False, message, _string_detail(expected, got, label), MistakeKind.TYPE)
 
     def string(self, expected: str, got: str, label: str) -> Verdict:
         if got == expected:
             return Verdict(True)
         detail = _string_detail(expected, got, label)
         if got.strip().casefold() == expected.strip().casefold():
-            return Verdict(False, f"{label}: differs only in upper/lower case or spaces", detail)
-        return Verdict(False, f"{label}: not the right string", detail)
+            text = f"{label}: differs only in upper/lower case or spaces"
+            return Verdict(False, text, detail, MistakeKind.STRING_CASE)
+        return Verdict(False, f"{label}: not the right string", detail, MistakeKind.WRONG_VALUE)
 
     def transposed(self, expected, arr: np.ndarray) -> bool:
         exp = _numeric(expected)
@@ -643,11 +697,13 @@ class _Clear(StructuralWalk):
                 return Verdict(True)
             i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
             g_bool = bool(arr[i]) if arr.ndim else bool(arr[()])
-            message = decisions_wrong(label, int(np.sum(diff)), diff.size, i, diff.shape)
+            wrong = int(np.sum(diff))
+            message = decisions_wrong(label, wrong, diff.size, i, diff.shape)
             return Verdict(
                 False,
                 message,
                 f"{label}{_where(i, diff.shape)}: expected {not g_bool}, got {g_bool}",
+                decisions_kind(wrong, diff.size, diff.shape),
             )
         if _is_intish(expected):
             diff = arr != exp
@@ -655,12 +711,13 @@ class _Clear(StructuralWalk):
                 return Verdict(True)
             i = tuple(np.argwhere(diff)[0]) if diff.ndim else ()
             e_i, g_i = (exp[i], arr[i]) if exp.ndim else (exp[()], arr[()])
-            kind = _diagnose(exp, arr, 0.0, 0.0)
-            message = integers_wrong(label, int(np.sum(diff)), diff.size, i, diff.shape, kind)
+            kind, text = _diagnose(exp, arr, 0.0, 0.0)
+            message = integers_wrong(label, int(np.sum(diff)), diff.size, i, diff.shape, text)
             return Verdict(
                 False,
                 message,
                 f"{label}{_where(i, diff.shape)}: expected {int(e_i)}, got {_fmt(float(g_i))}",
+                kind,
             )
         # floats / complex
         e = exp.astype(complex if exp.dtype.kind == "c" else float)
@@ -684,15 +741,18 @@ class _Clear(StructuralWalk):
         detail = f"{label}{_where(i, e.shape)}: expected {a}, got {b} (largest error {_fmt(float(err[i] if err.ndim else err[()]))})"
         unfinished = not_finite(label, g, bad)
         if unfinished:
-            return Verdict(False, unfinished, detail)
-        kind = SINGLE_PRECISION if single_precision(arr) else _diagnose(e, g, rtol, atol)
-        if not kind and bad.size > 1 and 0 < int(np.sum(bad)) < bad.size:
-            sub = _diagnose(e[bad], g[bad], rtol, atol)
-            kind = f"on the wrong elements {sub}" if sub else ""
+            return Verdict(False, unfinished, detail, MistakeKind.NOT_FINITE)
+        if single_precision(arr):
+            kind, text = MistakeKind.SINGLE_PRECISION, SINGLE_PRECISION
+        else:
+            kind, text = _diagnose(e, g, rtol, atol, self.hidden)
+        if kind is None and bad.size > 1 and 0 < int(np.sum(bad)) < bad.size:
+            kind, sub = _diagnose(e[bad], g[bad], rtol, atol, self.hidden)
+            text = f"on the wrong elements {sub}" if sub else ""
         message = numbers_wrong(
-            label, int(np.sum(bad)), bad.size, "worst", i, e.shape, kind, rtol, atol
+            label, int(np.sum(bad)), bad.size, "worst", i, e.shape, text, rtol, atol
         )
-        return Verdict(False, message, detail)
+        return Verdict(False, message, detail, kind)
 
 
 def _string_detail(expected: str, got, label: str) -> str:
@@ -751,6 +811,8 @@ def compare(
     reveal: bool = True,
     path: str = "",
     mistakes=(),
+    hidden: bool = False,
+    others=(),
 ) -> Verdict:
     """Compare ``got`` with ``expected``.
 
@@ -767,19 +829,56 @@ def compare(
     value)``: when ``got`` matches a wrong value (and not ``expected``) its message is shown;
     so it is when a tuple is right in some fields and makes the mistake in the others
     (:func:`fieldwise_mistake`). ``detail`` (expected and got, with enough digits to differ) is for instructors only;
-    ``reveal=False`` leaves it without expected values too.
+    ``reveal=False`` leaves it without expected values too. ``hidden``: ``expected`` is a
+    hidden case's, whose input the student does not see: the message then names no factor's
+    value (which could tell that input). ``others``: right answers of OTHER data (the
+    question's other cases, the demo ID's data, the notebook's practice cases): a wrong answer
+    that matches one, and that no more specific diagnosis names, was hard-coded or computed
+    from the wrong data, and is told so (never for integers or decisions, which match another
+    case's by chance). ``kind`` (and ``mistake``) say the diagnosis as data.
 
     Examples
     --------
     >>> compare(2.0, 4.0).message
     'value: too large by a factor ≈ 2.0; tolerance |got - expected| <= atol 1e-09 + rtol 1e-07·|expected|'
     """
-    verdict = _Clear(rtol, atol).walk(expected, got, path)
+    verdict = _Clear(rtol, atol, hidden).walk(expected, got, path)
     if verdict.ok:
         return verdict
     named = _match_mistake(mistakes, expected, got, rtol, atol) if mistakes else None
-    message = f"{_label(path)}: {named}" if named else verdict.message
-    return Verdict(False, message, verdict.detail if reveal else verdict.message)
+    detail = verdict.detail if reveal else verdict.message
+    if named:
+        return Verdict(False, f"{_label(path)}: {named}", detail, MistakeKind.NAMED, named)
+    if (
+        others
+        and verdict.kind not in SPECIFIC_KINDS
+        and _other_data(expected, got, others, rtol, atol)
+    ):
+        return Verdict(False, f"{_label(path)}: {OTHER_DATA}", detail, MistakeKind.OTHER_DATA)
+    return Verdict(False, verdict.message, detail, verdict.kind)
+
+
+#: The diagnosis of a right answer for other data than the question's.
+OTHER_DATA = (
+    "this is the right answer for OTHER data (another case, the demo ID's or the notebook's "
+    "practice data): compute it from the data you are given (the function's arguments, or "
+    "your own data), not from numbers typed in or the notebook's other variables"
+)
+
+
+def _other_data(expected, got, others, rtol, atol) -> bool:
+    """Whether ``got`` is one of ``others`` (see :func:`compare`); integers and decisions
+    never are (a count or an index equals another case's by chance)."""
+    arr = _numeric(expected)
+    if arr is not None and arr.dtype.kind in "biu":
+        return False
+    for other in others:
+        try:
+            if compare(other, got, rtol, atol).ok:
+                return True
+        except (TypeError, ValueError):
+            continue
+    return False
 
 
 def _is_permutation(walk: _Clear, expected, got) -> bool:
@@ -871,7 +970,7 @@ class _Signature(StructuralWalk):
         # a list of names of any length: the length of a diagnosis is part of the answer
         if not isinstance(got, (tuple, list)):
             text = f"{_label(path)}: expected a list of strings, got {describe(got)}"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.TYPE)
         for k, name in enumerate(got):
             if not isinstance(name, str):
                 return self.not_a_string(expected, name, _item_path(path, got, got, k))
@@ -888,8 +987,11 @@ class _Signature(StructuralWalk):
         first = tuple(np.argwhere(bad)[0]) if g.ndim else ()
         where = _where(first, g.shape)
         # as at grading: NaN is told as such, inf is outside any band
-        text = f"{label}: got NaN{where}" if np.isnan(g[first]) else outside_band(label, where)
-        return Verdict(False, text, text)
+        if np.isnan(g[first]):
+            text, kind = f"{label}: got NaN{where}", MistakeKind.NOT_FINITE
+        else:
+            text, kind = outside_band(label, where), MistakeKind.OUTSIDE_BAND
+        return Verdict(False, text, text, kind)
 
     def string(self, expected, got: str, label: str) -> Verdict:
         return Verdict(True)
@@ -900,9 +1002,9 @@ class _Signature(StructuralWalk):
         if expected["kind"] == "int" and not np.all(arr == np.floor(arr)):
             got = arr.item() if arr.ndim == 0 else arr
             text = f"{label}: expected integer{'s' if arr.ndim else ''}, got {describe(got)}"
-            return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.TYPE)
         text = not_finite(label, arr, ~np.isfinite(arr))
-        return Verdict(not text, text, text)
+        return Verdict(not text, text, text, MistakeKind.NOT_FINITE)
 
     def transposed(self, expected, arr: np.ndarray) -> bool:
         return False  # no value to tell

@@ -16,7 +16,8 @@ import contextlib
 import math
 from typing import Any
 
-from course.grading.vocabulary import QuestionKind, answer_cell_id
+from course.grading.compare import Verdict
+from course.grading.vocabulary import MistakeKind, QuestionKind, answer_cell_id
 
 __all__ = [
     "ITEM_KINDS",
@@ -112,14 +113,17 @@ def option_text(options) -> str:
     return ", ".join(repr(o) for o in options)
 
 
-def choice_verdict(qid: str, options, reference_value, answer) -> tuple[bool, str]:
-    """(right, message) for a student's ``answer``; the message never names the right option."""
+def choice_verdict(qid: str, options, reference_value, answer) -> Verdict:
+    """The verdict on a student's ``answer`` (its kind: not an option, or another option); the
+    message never names the right option."""
     i = match_option(options, answer)
     if i is None:
-        return False, f"{answer!r} is not one of the options ({option_text(options)})"
+        text = f"{answer!r} is not one of the options ({option_text(options)})"
+        return Verdict(False, text, text, MistakeKind.NOT_AN_OPTION)
     if i in right_options(qid, options, reference_value):
-        return True, ""
-    return False, f"{options[i]!r} is not the right option"
+        return Verdict(True)
+    text = f"{options[i]!r} is not the right option"
+    return Verdict(False, text, text, MistakeKind.WRONG_OPTION)
 
 
 def is_unanswered_text(text: str | None) -> bool:

@@ -24,10 +24,12 @@ __all__ = [
     "DEMO_STUDENT_ID",
     "PLACEHOLDER_ID",
     "PUBLIC_FORMAT",
+    "SPECIFIC_KINDS",
     "STUDENT_ID_RULE",
     "CellOrigin",
     "CellRole",
     "GradeStatus",
+    "MistakeKind",
     "Op",
     "PublicCase",
     "PublicQuestion",
@@ -233,6 +235,50 @@ class GradeStatus(_Word):
     SKIPPED = "skipped"
     TO_MARK = "to mark"  # a short answer the instructor has not marked yet
     MARKED = "marked"  # a short answer marked by the instructor (course grade --short-answers)
+
+
+class MistakeKind(_Word):
+    """The kind of wrong answer a failed case shows, set where the diagnosis is made
+    (:mod:`course.grading.compare`, :mod:`course.grading.authoring.seal`, the grader's session)
+    and written with the case to ``results.jsonl`` (``"kind"``): the class report counts by it,
+    never by reading a message, so rewording a message moves no count.
+
+    The one list: :class:`~course.grading.compare.Verdict` refuses any other kind."""
+
+    NAMED = "named mistake"  # a declared Mistake of checks.py (its message: ``mistake``)
+    RAISED = "raised an exception"
+    NOT_PLAIN_DATA = "not plain data"
+    SINGLE_PRECISION = "computed in float32"
+    TRANSPOSED = "transposed"
+    SIGN = "the sign"
+    FACTOR = "a constant factor"
+    SQUARE = "squared or square root"
+    ORDER = "another order"
+    ONE_TOO_MANY_OR_FEW = "one too many or few"
+    SHAPE = "the shape or length"
+    NOT_FINITE = "NaN or inf"
+    NEAR_MISS = "a near miss"
+    ZEROS = "all zeros"
+    OPPOSITE = "the opposite decision"
+    DECISIONS = "some decisions wrong"
+    OUTSIDE_BAND = "outside the band"
+    TYPE = "the type"
+    STRING_CASE = "upper/lower case or spaces"
+    NOT_AN_OPTION = "not an option"
+    WRONG_OPTION = "another option"
+    OTHER_DATA = "the answer of other data"  # hard-coded, or a global in place of an argument
+    WRONG_VALUE = "another wrong value"  # nothing more specific recognised
+
+
+#: Kinds that name what went wrong; the others (a bare factor, a value outside the tolerance
+#: or the band, another option or string) say only that it is wrong.
+SPECIFIC_KINDS = frozenset(MistakeKind) - {
+    MistakeKind.FACTOR,
+    MistakeKind.DECISIONS,
+    MistakeKind.OUTSIDE_BAND,
+    MistakeKind.WRONG_OPTION,
+    MistakeKind.WRONG_VALUE,
+}
 
 
 #: Question statuses that the submission's status lists (``"q1: timeout; q3: forbidden"``).

@@ -172,16 +172,29 @@ q2.case(T_UNEVEN, Y_UNEVEN, hidden=True)
             lambda A, y, Qyy, alpha: _omt(
                 A, y, np.eye(len(y)), alpha, np.shape(A)[0] - np.shape(A)[1]
             ),
+            hint="Each residual must be weighed by the precision of its observation: fit and "
+            "form T = e^T Qyy^{-1} e with Qyy (whiten with its Cholesky factor).",
         ),
         Mistake(
             "the critical value looks like chi2 with m degrees of freedom: n parameters were "
             "estimated",
             lambda A, y, Qyy, alpha: _omt(A, y, Qyy, alpha, np.shape(A)[0]),
+            hint="Estimating n parameters from m observations leaves m - n degrees of freedom "
+            "in the residuals: chi2.isf(alpha, m - n).",
         ),
         Mistake(
             "the critical value looks two-sided (alpha/2): the overall model test rejects in the "
             "upper tail only",
             lambda A, y, Qyy, alpha: _omt(A, y, Qyy, alpha / 2, np.shape(A)[0] - np.shape(A)[1]),
+            hint="Only a LARGE T speaks against the model: all of alpha goes in the upper "
+            "tail, chi2.isf(alpha, m - n).",
+        ),
+        Mistake(
+            "T looks divided by m - n (the variance factor): the test statistic is the weighted "
+            "sum of squared residuals itself, compared with chi2(m - n)",
+            lambda A, y, Qyy, alpha: _omt(
+                A, y, Qyy, alpha, np.shape(A)[0] - np.shape(A)[1], scale=True
+            ),
         ),
     ],
 )
@@ -190,9 +203,12 @@ def q3(A, y, Qyy, alpha):
     return OverallModelTest(result.statistic, result.critical_value, bool(result.reject))
 
 
-def _omt(A, y, Qyy, alpha, dof):
-    """(T, critical value, reject) with the given weights, level and degrees of freedom."""
+def _omt(A, y, Qyy, alpha, dof, scale=False):
+    """(T, critical value, reject) with the given weights, level and degrees of freedom (T
+    divided by m - n when ``scale``)."""
     stat = lsq.fit(A, y, Qyy).squared_norm
+    if scale:
+        stat /= np.shape(A)[0] - np.shape(A)[1]
     c = float(stats.chi2.isf(alpha, dof))
     return (stat, c, bool(stat > c))
 
@@ -234,6 +250,11 @@ q3.case(A_SEA, Y_SEA, np.diag([1.0, 1.0, 4.0, 1.0, 1.0]), 0.10, hidden=True)
             "not the observation's",
             lambda A, y, Qyy: lsq.fit(A, y, Qyy).e_hat / np.sqrt(np.diag(Qyy)),
         ),
+        Mistake(
+            "e_i / sigma_ei is w_i only for uncorrelated observations: with a full Qyy, "
+            "w_i = (Qyy^{-1} e)_i / sqrt((Qyy^{-1} Qee Qyy^{-1})_ii)",
+            lambda A, y, Qyy: lsq.fit(A, y, Qyy).e_hat / np.sqrt(np.diag(lsq.fit(A, y, Qyy).Qee)),
+        ),
     ],
 )
 def q4(A, y, Qyy):
@@ -271,6 +292,19 @@ q4.case(A6, Y6, Q6, hidden=True)
         Mistake(
             "Qyy looks ignored: Qxx = (A^T A)^{-1} holds only for Qyy = I; weigh with Qyy^{-1}",
             lambda A, Qyy, a: _band(A, np.eye(np.shape(A)[0]), a, float(stats.norm.isf(0.025))),
+        ),
+        Mistake(
+            "the unknowns look swapped: a weighs x_hat in the order of A's columns, (position "
+            "at t0, velocity), so a^T Qxx a with a as given, not reversed",
+            lambda A, Qyy, a: _band(A, Qyy, np.asarray(a)[::-1], float(stats.norm.isf(0.025))),
+            hint="x_hat = (x1, x2) in the order of A's columns: a = (1, t) picks x1 + t x2.",
+        ),
+        Mistake(
+            "a Student t quantile: Qyy is known, so the estimate is normal and the half-width "
+            "uses norm.isf(0.025)",
+            lambda A, Qyy, a: _band(
+                A, Qyy, a, float(stats.t.isf(0.025, np.shape(A)[0] - np.shape(A)[1]))
+            ),
         ),
     ],
 )
@@ -326,6 +360,23 @@ def _drawn_survey(seed):
         Mistake(
             "T looks unweighted: the survey's Qyy was ignored",
             lambda survey: lsq.fit(survey["A"], survey["y"]).squared_norm,
+        ),
+        Mistake(
+            "fitted with diag(sigma) as Qyy: Qyy holds the VARIANCES sigma^2 (the survey's "
+            "Qyy as given, not the square roots of its diagonal)",
+            lambda survey: (
+                lsq.fit(
+                    survey["A"], survey["y"], np.diag(np.sqrt(np.diag(survey["Qyy"])))
+                ).squared_norm
+            ),
+            hint="Pass the survey's Qyy itself: it is already the covariance matrix, sigma^2 on "
+            "its diagonal.",
+        ),
+        Mistake(
+            "the practice survey's Qyy was used, not the Qyy of the survey passed in",
+            lambda survey: (
+                lsq.fit(survey["A"], survey["y"], np.diag(SIGMA_PRACTICE**2)).squared_norm
+            ),
         ),
         Mistake(
             "each squared residual looks divided by sigma instead of sigma^2 (the variance)",
@@ -413,7 +464,21 @@ for _q in (q6_practice, q7_practice):
         Mistake(
             "T looks unweighted: mine['Qyy'] was ignored",
             lambda d: lsq.fit(d["A"], d["y"]).squared_norm,
-        )
+        ),
+        Mistake(
+            "each squared residual looks divided by sigma instead of sigma^2 (the variance)",
+            lambda d: float(
+                np.sum(lsq.fit(d["A"], d["y"], d["Qyy"]).e_hat ** 2 / np.sqrt(np.diag(d["Qyy"])))
+            ),
+        ),
+        Mistake(
+            "T looks divided by m - n (the variance factor): the test statistic is the weighted "
+            "sum of squared residuals itself",
+            lambda d: (
+                lsq.fit(d["A"], d["y"], d["Qyy"]).squared_norm
+                / (np.shape(d["A"])[0] - np.shape(d["A"])[1])
+            ),
+        ),
     ],
 )
 def q6(d):
@@ -478,23 +543,44 @@ def q7(d):
             "returns alpha: that is what the test promises, not what the simulation measures",
             lambda A, Qyy, alpha, n_runs, seed, bias: float(alpha),
         ),
+        Mistake(
+            "the critical value looks like chi2 with m degrees of freedom: n parameters are "
+            "estimated, so T has m - n",
+            lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
+                A, Qyy, alpha, n_runs, seed, bias, dof=np.shape(A)[0]
+            ),
+        ),
+        Mistake(
+            "the rate of the right test, but the noise drawn in another order (as (m, n_runs)?): "
+            "ONE call rng.standard_normal((n_runs, m)), row r for data set r",
+            lambda A, Qyy, alpha, n_runs, seed, bias: _rejection_rate(
+                A, Qyy, alpha, n_runs, seed, bias, columns=True
+            ),
+        ),
     ],
 )
 def q8(A, Qyy, alpha, n_runs, seed, bias):
+    return _rejection_rate(A, Qyy, alpha, n_runs, seed, bias)
+
+
+def _rejection_rate(A, Qyy, alpha, n_runs, seed, bias, dof=None, columns=False):
+    """q8's simulation (``dof``, ``columns``: the declared mistakes of another dof, the noise
+    drawn as (m, n_runs))."""
     # The simulation the question prescribes, run with the case's seed: a correct answer counts
     # exactly the same rejections however it computes T, while the exact probability (ncx2),
     # alpha, a wrong dof, ignoring Qyy or the bias, or another random sample all differ from it.
     A = np.asarray(A, dtype=float)
     m, n = A.shape
     L = np.linalg.cholesky(Qyy)
-    Z = np.random.default_rng(seed).standard_normal((n_runs, m))
+    rng = np.random.default_rng(seed)
+    Z = rng.standard_normal((m, n_runs)).T if columns else rng.standard_normal((n_runs, m))
     Y = np.asarray(bias, dtype=float) + Z @ L.T  # row r: data set r
     A_w = linalg.solve_triangular(L, A, lower=True)
     Y_w = linalg.solve_triangular(L, Y.T, lower=True)  # whitened data sets as columns
     Q, _ = np.linalg.qr(A_w)
     R = Y_w - Q @ (Q.T @ Y_w)
     stats_ = np.sum(R * R, axis=0)
-    return float(np.mean(stats_ > stats.chi2.isf(alpha, m - n)))
+    return float(np.mean(stats_ > stats.chi2.isf(alpha, m - n if dof is None else dof)))
 
 
 def _exact_rate(A, Qyy, alpha, bias):

@@ -133,6 +133,14 @@ q2.case(STRUCTURE5, MODES5, 3, hidden=True)
 ### END HIDDEN TESTS
 
 
+def _t1_with(y, u1, u2, u3, theta1):
+    """The sum of squared residuals with theta1 = theta1(target, u1) (declared mistakes)."""
+    y, u1, u2, u3 = (np.asarray(v, dtype=float) for v in (y, u1, u2, u3))
+    target = y - u2 - u3
+    r = target - theta1(target, u1) * u1
+    return float(r @ r)
+
+
 @CHECKS.function(
     "q3",
     func="T1_statistic",
@@ -150,6 +158,20 @@ q2.case(STRUCTURE5, MODES5, 3, hidden=True)
             "looks divided by sigma^2: T1 is the plain sum of squared residuals (the threshold "
             "of q6 carries the sigma^2)",
             lambda y, u1, u2, u3: q3.reference(y, u1, u2, u3) / SIGMA**2,
+        ),
+        Mistake(
+            "looks like the MEAN of the squared residuals: T1 is their sum",
+            lambda y, u1, u2, u3: q3.reference(y, u1, u2, u3) / np.size(y),
+        ),
+        Mistake(
+            "theta1 looks fixed at 1: T1 leaves theta1 free, minimising the sum over it",
+            lambda y, u1, u2, u3: _t1_with(y, u1, u2, u3, lambda t, u: 1.0),
+        ),
+        Mistake(
+            "the ratio looks upside down: the minimiser is sum(target u1) / sum(u1^2)",
+            lambda y, u1, u2, u3: _t1_with(
+                y, u1, u2, u3, lambda t, u: (u @ u) / (t @ u) if t @ u != 0 else 0.0
+            ),
         ),
     ],
     hint=(
@@ -319,6 +341,13 @@ q6.case(U_60, 0.25, 1.2, 0.01, hidden=True)
 ### END HIDDEN TESTS
 
 
+def _all_free(U_, y):
+    """The sum of squared residuals with all three gains estimated."""
+    U_, y = np.asarray(U_, dtype=float), np.asarray(y, dtype=float)
+    r = y - U_ @ np.linalg.lstsq(U_, y, rcond=None)[0]
+    return float(r @ r)
+
+
 def _three_statistics(d):
     return dg.linear_test_statistics(d["y"], d["U"], NOMINAL, [(0,), (1,), (2,)])[0]
 
@@ -373,6 +402,15 @@ def q5b():
         Mistake(
             "looks like a mean of squared residuals: T_k is their sum",
             lambda U_, y: _three_statistics({"y": y, "U": U_}) / np.shape(U_)[0],
+        ),
+        Mistake(
+            "no gain looks estimated (all three fixed at 1): T_k leaves theta_k free",
+            lambda U_, y: np.full(3, float(np.sum((np.asarray(y) - np.sum(U_, axis=1)) ** 2))),
+        ),
+        Mistake(
+            "all three gains look estimated at once: T_k leaves only theta_k free and fixes "
+            "the other two at 1",
+            lambda U_, y: np.full(3, _all_free(U_, y)),
         ),
     ],
 )
@@ -467,6 +505,18 @@ def q7(d):
                 chi2.residual_threshold(d["y"].size - 1, d["alpha"] / 2, sigma=d["sigma"])
             ),
         ),
+        Mistake(
+            "looks like the quantile of chi2(N - 1) itself: T_k / sigma^2 is chi2, so the "
+            "threshold on T_k is sigma^2 times that quantile",
+            lambda d: float(chi2.residual_threshold(d["y"].size - 1, d["alpha"])),
+        ),
+        Mistake(
+            "looks scaled by sigma, not sigma^2: T_k / sigma^2 is chi2, so J = sigma^2 times "
+            "the quantile",
+            lambda d: (
+                float(d["sigma"]) * float(chi2.residual_threshold(d["y"].size - 1, d["alpha"]))
+            ),
+        ),
     ],
 )
 def q8a(d):
@@ -523,10 +573,11 @@ def q8b(d):
     atol=0.1 / 20000,  # the same count of detections: a fraction k / n_runs, exactly
     rtol=0.0,
     hint=(
-        "Follow the recipe exactly: rng = np.random.default_rng(seed) and ONE call "
-        "rng.standard_normal((n_runs, N)), row r the noise of record r.",
-        "Then T1 of every record (theta1 free) and the fraction above the threshold of q6 at "
-        "this alpha and sigma.",
+        "The power is a rate of detections: for every simulated record, T1 (theta1 free, as in "
+        "q4) above the threshold of q6 at this alpha and sigma; return the fraction of records.",
+        "The grader repeats your draws, so draw them as the question says: "
+        "rng = np.random.default_rng(seed) and ONE call rng.standard_normal((n_runs, N)), row "
+        "r the noise of record r.",
     ),
     mistakes=[
         Mistake(
@@ -546,6 +597,13 @@ def q8b(d):
                 U_, theta, sigma, alpha, n_runs, seed, records_in_columns=True
             ),
         ),
+        Mistake(
+            "the threshold looks like chi2 with N degrees of freedom: T1 estimates one gain, "
+            "so N - 1",
+            lambda U_, theta, sigma, alpha, n_runs, seed: _detection_rate(
+                U_, theta, sigma, alpha, n_runs, seed, dof=np.shape(U_)[0]
+            ),
+        ),
     ],
 )
 def q9(U_, theta, sigma, alpha, n_runs, seed):
@@ -555,15 +613,17 @@ def q9(U_, theta, sigma, alpha, n_runs, seed):
     return _detection_rate(U_, theta, sigma, alpha, n_runs, seed)
 
 
-def _detection_rate(U_, theta, sigma, alpha, n_runs, seed, records_in_columns=False):
-    """q9's simulation; ``records_in_columns`` draws the noise (N, n_runs) (a mistake)."""
+def _detection_rate(U_, theta, sigma, alpha, n_runs, seed, records_in_columns=False, dof=None):
+    """q9's simulation; ``records_in_columns`` draws the noise (N, n_runs), ``dof`` another
+    threshold's degrees of freedom (the declared mistakes)."""
     U_ = np.asarray(U_, dtype=float)
     rng = np.random.default_rng(seed)
     shape = (U_.shape[0], n_runs) if records_in_columns else (n_runs, U_.shape[0])
     noise = rng.standard_normal(shape)
     Y = U_ @ np.asarray(theta, dtype=float) + sigma * (noise.T if records_in_columns else noise)
     t1 = _t1_many(U_, Y)
-    return float(np.mean(t1 > chi2.residual_threshold(U_.shape[0] - 1, alpha, sigma=sigma)))
+    dof = U_.shape[0] - 1 if dof is None else dof
+    return float(np.mean(t1 > chi2.residual_threshold(dof, alpha, sigma=sigma)))
 
 
 def _t1_many(U_, Y):

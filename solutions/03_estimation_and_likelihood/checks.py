@@ -72,15 +72,31 @@ CHECKS = Checks(
             "the decision looks one-sided: z_alpha instead of z_alpha/2",
             lambda U_, y, sigma, alpha: _joint(U_, y, sigma, 2 * alpha),
         ),
+        Mistake(
+            "theta2 looks estimated alone (theta1 fixed at 1): estimate theta1 and theta2 "
+            "together, which decouples F1",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, free=(1,)),
+        ),
+        Mistake(
+            "std looks like that of theta1 (the (1, 1) element): the test of theta2 needs the "
+            "std of theta2_hat",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, std_at=0),
+        ),
+        Mistake(
+            "all three gains look estimated: theta3 is fixed at 1, only theta1 and theta2 are free",
+            lambda U_, y, sigma, alpha: _joint(U_, y, sigma, alpha, free=(0, 1, 2)),
+        ),
     ],
 )
 def q1(U_, y, sigma, alpha):
     return _joint(U_, y, sigma, alpha)
 
 
-def _joint(U_, y, sigma, alpha):
-    est = dg.estimate_parameters(y, U_, NOMINAL, [0, 1], sigma=sigma)
-    std = float(est.std[1])
+def _joint(U_, y, sigma, alpha, free=(0, 1), std_at=None):
+    """(theta2_hat, std, reject) with the gains ``free`` estimated (the std of the free gain
+    ``std_at``, theta2's by default; other choices are declared mistakes)."""
+    est = dg.estimate_parameters(y, U_, NOMINAL, list(free), sigma=sigma)
+    std = float(est.std[list(free).index(1 if std_at is None else std_at)])
     theta2 = float(est.theta[1])
     return JointParameterTest(
         theta2, std, bool(abs(theta2 - 1.0) > std * stats.norm.isf(alpha / 2))
@@ -126,6 +142,20 @@ q1.case(U, _record([0.7, 1.05, 1.0], 5, 0.05), 0.05, 0.10, hidden=True)
             "u1 looks not subtracted: theta1 is fixed at 1 in the model, so the regression on "
             "u2 sees the data minus u1 - u3",
             lambda U_, theta1: _leak(U_, theta1) + _ratio(U_),
+        ),
+        Mistake(
+            "the leak alone, without the 1: the estimate is 1 (the true theta2) plus the leak "
+            "(theta1 - 1) u2'u1 / u2'u2",
+            lambda U_, theta1: _leak(U_, theta1) - 1.0,
+        ),
+        Mistake(
+            "divided by u1'u1: the regression is on u2, so the leak is divided by u2'u2",
+            lambda U_, theta1: (
+                1.0
+                + (theta1 - 1.0)
+                * float(np.asarray(U_)[:, 1] @ np.asarray(U_)[:, 0])
+                / float(np.asarray(U_)[:, 0] @ np.asarray(U_)[:, 0])
+            ),
         ),
     ],
 )
@@ -180,6 +210,16 @@ q2.case(_modes_U(51), 1.2, hidden=True)
                 _pe_power(U_, sigma, theta2, alpha),
             ),
         ),
+        Mistake(
+            "the parameter test's power looks computed with z_alpha: the test is two-sided, "
+            "z = norm.isf(alpha/2)",
+            lambda U_, sigma, theta2, alpha: (
+                dg.parameter_estimate_power(
+                    U_, NOMINAL, [0, 1], 1, [1.0, theta2, 1.0], sigma=sigma, alpha=2 * alpha
+                ),
+                _pe_power(U_, sigma, theta2, alpha),
+            ),
+        ),
     ],
 )
 def q3(U_, sigma, theta2, alpha):
@@ -216,6 +256,17 @@ CHECKS.short_answer(
 )
 
 
+_SIGMA2_SCALE = (
+    "looks computed with sigma^2 as the scale: scipy's norm takes the standard deviation, "
+    "scale=sigma"
+)
+
+
+def _likelihood(theta, z, sigma):
+    """The normal likelihood of each theta."""
+    return np.asarray(dg.normal_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma))
+
+
 @CHECKS.function(
     "q4",
     func="likelihood",
@@ -231,6 +282,22 @@ CHECKS.short_answer(
             lambda theta, z, sigma: np.asarray(
                 dg.normal_log_likelihood(np.asarray(theta, dtype=float), z, sigma=sigma)
             ),
+        ),
+        Mistake(
+            _SIGMA2_SCALE,
+            lambda theta, z, sigma: _likelihood(theta, z, sigma**2),
+        ),
+        Mistake(
+            "looks like a SUM of densities: the likelihood of independent observations is "
+            "their product",
+            lambda theta, z, sigma: np.array(
+                [float(np.sum(stats.norm.pdf(z, t, sigma))) for t in np.ravel(theta)]
+            ).reshape(np.shape(theta)),
+        ),
+        Mistake(
+            "only the first observation counts here: the likelihood is the product over EVERY "
+            "observation",
+            lambda theta, z, sigma: _likelihood(theta, np.asarray(z, dtype=float)[:1], sigma),
         ),
     ],
 )
@@ -266,6 +333,20 @@ q4.case(np.array([-1.0, 10.0]), np.array([3.0, 5.0]), 0.5, hidden=True)
             lambda z, sigma: (
                 float(np.mean(z)),
                 float(np.sum(stats.norm.logpdf(z, np.mean(z), sigma))),
+            ),
+        ),
+        Mistake(
+            _SIGMA2_SCALE,
+            lambda z, sigma: (
+                float(np.mean(z)),
+                float(np.prod(stats.norm.pdf(z, np.mean(z), sigma**2))),
+            ),
+        ),
+        Mistake(
+            "theta_ml looks like the first observation: the maximiser is the mean of all of them",
+            lambda z, sigma: (
+                float(np.asarray(z)[0]),
+                float(np.prod(stats.norm.pdf(z, np.asarray(z)[0], sigma))),
             ),
         ),
     ],
@@ -305,11 +386,33 @@ q5.case(np.array([-1.0, 4.0, 2.5]), 0.5, hidden=True)
             "the p-value looks like the cdf: a p-value is the upper tail, sf",
             lambda U_, y, sigma: _glr_cdf(U_, y, sigma),
         ),
+        Mistake(
+            "the statistic looks not divided by sigma^2: -2 log Lambda = (T0 - T1) / sigma^2",
+            lambda U_, y, sigma: _glr_scaled(U_, y, sigma, sigma**2),
+        ),
+        Mistake(
+            "the p-value looks computed with chi2(N - 1): one parameter is freed under F2, so "
+            "-2 log Lambda is chi2(1)",
+            lambda U_, y, sigma: _glr_scaled(U_, y, sigma, 1.0, dof=np.shape(U_)[0] - 1),
+        ),
+        Mistake(
+            "theta1 looks freed instead of theta2: the alternative F2 is a fault of the second "
+            "gain",
+            lambda U_, y, sigma: _glr_scaled(U_, y, sigma, 1.0, free=0),
+        ),
     ],
 )
 def q6(U_, y, sigma):
     r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[1], sigma=sigma)
     return GLR(r.statistic, r.pvalue)
+
+
+def _glr_scaled(U_, y, sigma, scale, dof=1, free=1):
+    """(statistic * scale, its chi2(dof) p-value) with gain ``free`` freed (declared
+    mistakes)."""
+    r = dg.linear_glr_test(y, U_, NOMINAL, free0=[], free1=[free], sigma=sigma)
+    statistic = float(r.statistic) * scale
+    return (statistic, float(stats.chi2.sf(statistic, dof)))
 
 
 def _glr_cdf(U_, y, sigma):
@@ -321,6 +424,13 @@ q6.case(U, _record([1.0, 1.0, 1.0], 11), SIGMA, label="no fault")
 q6.case(U, _record([1.0, 1.15, 1.0], 12), SIGMA, label="F2: theta2 = 1.15")
 q6.case(U, _record([1.3, 1.0, 1.0], 13), SIGMA, hidden=True)
 q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
+
+
+def _np_power(n, theta0, theta1, sigma, alpha, scale=None):
+    """Phi(d - z_alpha) with d = scale |theta1 - theta0| / sigma (scale: sqrt(n), or a
+    declared mistake's)."""
+    d = (np.sqrt(n) if scale is None else scale) * abs(theta1 - theta0) / sigma
+    return float(stats.norm.sf(stats.norm.isf(alpha) - d))
 
 
 @CHECKS.function(
@@ -352,6 +462,30 @@ q6.case(U, _record([1.0, 1.0, 0.9], 14, 0.1), 0.1, hidden=True)
                 stats.norm.sf(stats.norm.isf(alpha) - np.sqrt(n) * abs(theta1 - theta0) / sigma**2)
             ),
         ),
+        Mistake(
+            "sqrt(n) looks forgotten: the mean of n observations is sqrt(n) times more precise, "
+            "d = sqrt(n) |theta1 - theta0| / sigma",
+            lambda n, theta0, theta1, sigma, alpha: _np_power(n, theta0, theta1, sigma, alpha, 1),
+        ),
+        Mistake(
+            "looks like n / sigma where sqrt(n) / sigma belongs: the standard deviation of the "
+            "mean is sigma / sqrt(n)",
+            lambda n, theta0, theta1, sigma, alpha: _np_power(
+                n, theta0, theta1, sigma, alpha, float(n)
+            ),
+        ),
+        Mistake(
+            "sigma looks left out: d measures |theta1 - theta0| in standard deviations of the "
+            "mean, sqrt(n) |theta1 - theta0| / sigma",
+            lambda n, theta0, theta1, sigma, alpha: _np_power(n, theta0, theta1, 1.0, alpha),
+        ),
+        Mistake(
+            "the probability of NOT detecting (cdf): the power is the upper tail, "
+            "Phi(d - z_alpha) = sf(z_alpha - d)",
+            lambda n, theta0, theta1, sigma, alpha: (
+                1.0 - _np_power(n, theta0, theta1, sigma, alpha)
+            ),
+        ),
     ],
 )
 def q7(n, theta0, theta1, sigma, alpha):
@@ -366,6 +500,20 @@ q7.case(4, 0.0, 1.0, 1.0, 0.05, label="four observations")
 q7.case(5, 0.0, 0.6, 0.5, 0.05, label="five observations, sigma = 0.5")
 q7.case(10, 1.0, 0.8, 0.5, 0.01, hidden=True)
 q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
+
+
+def _boundary_rate(n, alpha, n_runs, seed, columns=False, clip=True, one=False):
+    """q8's simulation with a declared mistake: samples in columns, no boundary, or one sample
+    per run."""
+    rng = np.random.default_rng(seed)
+    if one:
+        zbar, n = rng.standard_normal(n_runs), 1
+    elif columns:
+        zbar = rng.standard_normal((n, n_runs)).mean(axis=0)
+    else:
+        zbar = rng.standard_normal((n_runs, n)).mean(axis=1)
+    z = np.maximum(zbar, 0.0) if clip else zbar
+    return float(np.mean(n * z**2 > stats.chi2.isf(alpha, 1)))
 
 
 @CHECKS.function(
@@ -393,6 +541,22 @@ q7.case(1, -2.0, 3.0, 2.0, 0.1, hidden=True)
             "returns alpha: that is what Wilks promises, not what the simulation measures",
             lambda n, alpha, n_runs, seed: float(alpha),
         ),
+        Mistake(
+            "the rate of the right statistic, but the samples drawn in another order (samples "
+            "in columns?): ONE call rng.standard_normal((n_runs, n)), row r the sample r",
+            lambda n, alpha, n_runs, seed: _boundary_rate(n, alpha, n_runs, seed, columns=True),
+            hint="The grader repeats your draws: rng = np.random.default_rng(seed), then "
+            "rng.standard_normal((n_runs, n)) with row r the sample r.",
+        ),
+        Mistake(
+            "no boundary: n zbar^2 is the unconstrained (two-sided) statistic; on the boundary "
+            "the estimate is max(0, zbar), so -2 log Lambda = n max(0, zbar)^2",
+            lambda n, alpha, n_runs, seed: _boundary_rate(n, alpha, n_runs, seed, clip=False),
+        ),
+        Mistake(
+            "one sample per run: each run has n samples, and the statistic uses their mean",
+            lambda n, alpha, n_runs, seed: _boundary_rate(n, alpha, n_runs, seed, one=True),
+        ),
     ],
 )
 def q8(n, alpha, n_runs, seed):
@@ -411,6 +575,16 @@ q8.case(40, 0.01, 20000, 11, hidden=True)
 # The public practice record of q9_practice: the notebook's signals, a fault F2 of 0.25.
 Y_MODES = _record([1.0, 1.25, 1.0], 31)
 PRIORS = np.array([0.7, 0.1, 0.1, 0.1])
+
+
+_NO_PRIORS = (
+    "the priors look forgotten (every mode equally likely): Bayes' rule multiplies each "
+    "likelihood by its mode's prior"
+)
+_TAU = (
+    "tau looks used as a variance: the faulty gain's prior standard deviation is tau, so its "
+    "covariance adds tau^2 u_i u_i^T"
+)
 
 
 def _posterior(y, U_, sigma, tau, priors):
@@ -435,6 +609,15 @@ def _posterior(y, U_, sigma, tau, priors):
         Mistake(
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
             lambda y, U_, sigma, tau, priors: _maximised(y, U_, sigma, priors),
+        ),
+        Mistake(
+            _NO_PRIORS,
+            lambda y, U_, sigma, tau, priors: _posterior(
+                y, U_, sigma, tau, np.full(len(MODES), 1.0 / len(MODES))
+            ),
+        ),
+        Mistake(
+            _TAU, lambda y, U_, sigma, tau, priors: _posterior(y, U_, sigma, np.sqrt(tau), priors)
         ),
     ],
 )
@@ -475,6 +658,15 @@ for _seed in (61, 62, 63, 64):
         Mistake(
             "looks like the MAXIMISED likelihood (the best gain plugged in): use the marginal one",
             lambda d: _maximised(d["y"], d["U"], d["sigma"], d["priors"]),
+        ),
+        Mistake(
+            _NO_PRIORS,
+            lambda d: _posterior(
+                d["y"], d["U"], d["sigma"], d["tau"], np.full(len(MODES), 1.0 / len(MODES))
+            ),
+        ),
+        Mistake(
+            _TAU, lambda d: _posterior(d["y"], d["U"], d["sigma"], np.sqrt(d["tau"]), d["priors"])
         ),
     ],
 )

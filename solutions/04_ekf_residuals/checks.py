@@ -132,7 +132,26 @@ _Q1_MISTAKES = [
         "recursion is update (P(t|t)) then predict (P(t|t) + q), and P(t|t-1) is its fixed "
         "point; K = P(t|t-1)/(P(t|t-1) + r).",
     ),
+    Mistake(
+        "P looks like the NEGATIVE root of P^2 - q P - q r = 0: a variance is positive",
+        lambda q, r: _steady(q, r, (q - np.sqrt(q * q + 4.0 * q * r)) / 2.0),
+    ),
+    Mistake(
+        "P looks like ONE step of the recursion from P = 1: the steady state is its fixed "
+        "point (solve P^2 - q P - q r = 0, or iterate until P stops changing)",
+        lambda q, r: _steady(q, r, 1.0 - 1.0 / (1.0 + r) + q),
+    ),
+    Mistake(
+        "K looks like P / r: the gain divides by the innovation's variance P + r",
+        lambda q, r: (_steady(q, r)[0], _steady(q, r)[0] / r),
+    ),
 ]
+
+
+def _steady(q, r, P=None):
+    """(P, P / (P + r)) with the positive root, or another ``P`` (declared mistakes)."""
+    P = (q + np.sqrt(q * q + 4.0 * q * r)) / 2.0 if P is None else P
+    return (float(P), float(P / (P + r)))
 
 
 @CHECKS.function(
@@ -249,6 +268,17 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     rtol=1e-9,
     atol=1e-12,
     forbid=["course.nis.windowed_sum", "course.nis.windowed_nis"],
+    mistakes=[
+        Mistake(
+            "sums of z, not of z^2: the windowed statistic adds the SQUARED normalised innovations",
+            lambda z, L: _window_sums(np.asarray(z, dtype=float), int(L)),
+        ),
+        Mistake(
+            "window means (divided by L): the statistic is the SUM of the squares, chi2(L) "
+            "under H0",
+            lambda z, L: _window_sums(np.asarray(z, dtype=float) ** 2, int(L)) / int(L),
+        ),
+    ],
     hint=[
         "Squares, summed (not averaged), over full windows only: how many full windows of "
         "length L fit in N samples?",
@@ -257,7 +287,12 @@ q2.case(Y_C, -0.5, 2.0, 0.1, -1.0, 0.2, hidden=True)
     ],
 )
 def q3(z, L):
-    return nis.windowed_sum(np.asarray(z, dtype=float) ** 2, int(L))[int(L) - 1 :]
+    return _window_sums(np.asarray(z, dtype=float) ** 2, int(L))
+
+
+def _window_sums(x, L):
+    """The sums of ``x`` over the full windows of length ``L``."""
+    return nis.windowed_sum(x, L)[L - 1 :]
 
 
 q3.case(np.arange(6.0), 3, label="z = 0..5, L = 3")
@@ -290,6 +325,21 @@ q3.case(np.array([0.5, -1.5, 2.0]), 3, hidden=True)
         Mistake(
             "a lower-tail quantile: the alarm is for large sums (isf, not ppf)",
             lambda L, alpha: float(stats.chi2.ppf(alpha, L)),
+        ),
+        Mistake(
+            "looks like the threshold at alpha/100: alpha is already a probability "
+            "(0.01 is 1 %), not a percentage",
+            lambda L, alpha: float(stats.chi2.isf(alpha / 100, L)),
+            hint="Pass alpha to chi2.isf as it is given: a probability between 0 and 1.",
+        ),
+        Mistake(
+            "looks like the normal approximation L + z_alpha sqrt(2L): the sum of L squares is "
+            "exactly chi2(L), whose upper quantile the question asks for",
+            lambda L, alpha: float(L + stats.norm.isf(alpha) * np.sqrt(2.0 * L)),
+        ),
+        Mistake(
+            "divided by L: the statistic is the SUM of the L squares (q3), not their mean",
+            lambda L, alpha: float(stats.chi2.isf(alpha, L)) / L,
         ),
     ],
     hint=[
@@ -415,8 +465,10 @@ def q5(d):
 FalseAlarmRates = namedtuple("FalseAlarmRates", "rate_last rate_any")
 
 
-def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
-    """(rate_last, rate_any) of the prescribed simulation: x0, W, V drawn in this order."""
+def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed, dof=None, raw=False):
+    """(rate_last, rate_any) of the prescribed simulation: x0, W, V drawn in this order
+    (``dof``: another threshold's degrees of freedom; ``raw``: window sums of the innovations
+    not normalised; the declared mistakes)."""
     rng = np.random.default_rng(seed)
     x = rng.standard_normal(n_runs)
     W = rng.standard_normal((N, n_runs))
@@ -426,8 +478,14 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
         y[:, t, 0] = x + np.sqrt(r) * V[t]
         x = a * x + np.sqrt(q) * W[t]
     model = kf.LinearModel(F=[[a]], H=[[1.0]], Q=[[q]], R=[[r]], x0_mean=[0.0], x0_cov=[[1.0]])
-    sums = nis.windowed_nis(kf.kalman_filter(model, y), L)[:, L - 1 :]  # full windows only
-    alarm = sums > stats.chi2.isf(alpha, L)
+    result = kf.kalman_filter(model, y)
+    if raw:
+        c = np.cumsum(np.asarray(result.innovations)[..., 0] ** 2, axis=1)
+        c = np.concatenate([np.zeros((n_runs, 1)), c], axis=1)
+        sums = c[:, L:] - c[:, :-L]
+    else:
+        sums = nis.windowed_nis(result, L)[:, L - 1 :]  # full windows only
+    alarm = sums > stats.chi2.isf(alpha, L if dof is None else dof)
     return FalseAlarmRates(float(np.mean(alarm[:, -1])), float(np.mean(alarm.any(axis=1))))
 
 
@@ -439,8 +497,10 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
     rtol=0.0,
     atol=0.1 / 20000,  # the same counts of runs: fractions k / n_runs, exactly
     hint=[
-        "Follow the recipe exactly: the same seed and the same draws in the same order give "
-        "the same runs, so a right simulation counts exactly the same alarms.",
+        "Two rates over the runs: filter each run with the correct model, sum the squared "
+        "normalised innovations over full windows of L, and compare each sum with "
+        "chi2.isf(alpha, L); the grader repeats your draws, so a right simulation counts "
+        "exactly the same alarms.",
         "rng = np.random.default_rng(seed); x0 = rng.standard_normal(n_runs); then "
         "W = rng.standard_normal((N, n_runs)) and V = rng.standard_normal((N, n_runs)); "
         "y_t = x_t + sqrt(r) V[t], x_(t+1) = a x_t + sqrt(q) W[t]. Filter with the correct "
@@ -460,6 +520,27 @@ def _false_alarm_rates(a, q, r, N, L, alpha, n_runs, seed):
             lambda a, q, r, N, L, alpha, n_runs, seed: (
                 Band(0.0, 1.0),
                 float(1.0 - (1.0 - alpha) ** (N - L + 1)),
+            ),
+        ),
+        Mistake(
+            "the threshold looks like chi2 with L - 1 degrees of freedom: a window sums L "
+            "squared normalised innovations, chi2(L)",
+            lambda a, q, r, N, L, alpha, n_runs, seed: _false_alarm_rates(
+                a, q, r, int(N), int(L), alpha, int(n_runs), seed, dof=int(L) - 1
+            ),
+        ),
+        Mistake(
+            "the innovations look not normalised: each is divided by its standard deviation "
+            "sqrt(S_t) before squaring",
+            lambda a, q, r, N, L, alpha, n_runs, seed: _false_alarm_rates(
+                a, q, r, int(N), int(L), alpha, int(n_runs), seed, raw=True
+            ),
+        ),
+        Mistake(
+            "these look like counts of runs: return the fractions of the n_runs runs",
+            lambda a, q, r, N, L, alpha, n_runs, seed: tuple(
+                float(v) * int(n_runs)
+                for v in _false_alarm_rates(a, q, r, int(N), int(L), alpha, int(n_runs), seed)
             ),
         ),
     ],
@@ -578,6 +659,16 @@ def q7_why(d):
     return "noise" if random_walk >= 5 else "model"
 
 
+def _rls(theta, P, phi, y, r, p_sign=-1.0, divide=True, with_r=True, innovation=1.0):
+    """One RLS step with a declared mistake (the sign of P's update, no division by S, S
+    without r, the innovation's sign)."""
+    theta, P, phi = (np.asarray(v, dtype=float) for v in (theta, P, phi))
+    Pphi = P @ phi
+    S = phi @ Pphi + (float(r) if with_r else 0.0)
+    K = Pphi / S if divide else Pphi
+    return (theta + innovation * K * (float(y) - phi @ theta), P + p_sign * np.outer(K, Pphi))
+
+
 @CHECKS.function(
     "q8",
     func="rls_update",
@@ -585,6 +676,30 @@ def q7_why(d):
     rtol=1e-9,
     atol=1e-12,
     forbid=_NO_FILTERS,
+    mistakes=[
+        Mistake(
+            "P_new looks updated with a plus sign: a measurement REDUCES the uncertainty, "
+            "P <- P - K phi^T P",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, p_sign=1.0),
+        ),
+        Mistake(
+            "the gain looks not divided by S: K = P phi / S with S = phi^T P phi + r",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, divide=False),
+        ),
+        Mistake(
+            "S looks computed without r: the innovation's variance is phi^T P phi + r, the "
+            "measurement noise included",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, with_r=False),
+        ),
+        Mistake(
+            "P_new is the old covariance: the measurement update reduces it, P - K phi^T P",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, p_sign=0.0),
+        ),
+        Mistake(
+            "the innovation's sign looks flipped: theta + K (y - phi^T theta)",
+            lambda theta, P, phi, y, r: _rls(theta, P, phi, y, r, innovation=-1.0),
+        ),
+    ],
     hint=[
         "RLS is the Kalman measurement update with H = phi^T and no time update (the "
         "parameter is constant): no F, no Q.",

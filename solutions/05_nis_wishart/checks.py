@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 from course import nis
-from course.grading.authoring.checks import Checks, Mistake, binomial_band
+from course.grading.authoring.checks import Band, Checks, Mistake, binomial_band
 
 from . import data
 
@@ -102,6 +102,35 @@ CHECKS = Checks(
     hint="For each step solve with the Cholesky factor: z = solve(B_k, eps_k) with "
     "S_k = B_k B_k^T, then NIS_k = z @ z. S is one (m, m) matrix or a (K, m, m) "
     "stack: np.broadcast_to(S, (K, m, m)) handles both.",
+    mistakes=[
+        Mistake(
+            "looks like eps^T S eps: the NIS weighs each innovation by S^{-1}, eps^T S^{-1} eps",
+            lambda eps, S: np.einsum("ki,kij,kj->k", *_with_stack(eps, S, S_of=lambda s: s)),
+        ),
+        Mistake(
+            "whitened with the transposed factor: with S_k = B_k B_k^T (B_k lower), z_k = "
+            "B_k^{-1} eps_k; B_k^{-T} eps_k does not whiten",
+            lambda eps, S: np.sum(_whitened_upper(eps, S) ** 2, axis=1),
+        ),
+        Mistake(
+            "looks divided by m: the NIS of one step is the whole quadratic form, chi2(m)",
+            lambda eps, S: nis.nis(eps, S) / np.shape(eps)[1],
+        ),
+        Mistake(
+            "only the diagonal of S looks used: with correlated innovations the NIS needs the "
+            "whole S (its Cholesky factor)",
+            lambda eps, S: np.einsum(
+                "ki,kij,kj->k",
+                *_with_stack(eps, S, S_of=lambda s: np.diag(1.0 / np.diag(s))),
+            ),
+        ),
+        Mistake(
+            "one S for every step: with a stack, step k uses its own S_k",
+            lambda eps, S: nis.nis(
+                eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]
+            ),
+        ),
+    ],
 )
 def q1(eps, S):
     return nis.nis(eps, S)
@@ -132,6 +161,17 @@ q1.case(EPS_C, S_C, hidden=True)
             lambda eps, S: q2.reference(eps, S) * np.shape(eps)[0],
         ),
         Mistake(
+            "looks divided by K - 1: Pi is the mean of the K outer products (nothing is "
+            "estimated from the innovations), divide by K",
+            lambda eps, S: q2.reference(eps, S) * np.shape(eps)[0] / (np.shape(eps)[0] - 1),
+        ),
+        Mistake(
+            "one S for every step: with a stack, step k is whitened with its own S_k",
+            lambda eps, S: nis.nis_matrix(
+                eps, np.asarray(S, float) if np.ndim(S) == 2 else np.asarray(S, float)[0]
+            ),
+        ),
+        Mistake(
             "looks like the outer products of eps itself: whiten first, z_k = B_k^{-1} eps_k "
             "with S_k = B_k B_k^T",
             lambda eps, S: np.einsum("ki,kj->ij", eps, eps) / np.shape(eps)[0],
@@ -156,6 +196,19 @@ q1.case(EPS_C, S_C, hidden=True)
 )
 def q2(eps, S):
     return nis.nis_matrix(eps, S)
+
+
+def _with_stack(eps, S, S_of):
+    """(eps, the stack of S_of(S_k)) for an einsum over the steps (q1's mistakes)."""
+    eps, stack = _stack(eps, S)
+    return eps, np.stack([S_of(s) for s in stack]), eps
+
+
+def _whitened_upper(eps, S):
+    """z_k = B_k^{-T} eps_k (a mistake of q1)."""
+    eps, S = _stack(eps, S)
+    B = np.linalg.cholesky(S)
+    return np.linalg.solve(np.swapaxes(B, -1, -2), eps[:, :, None])[:, :, 0]
 
 
 def _stack(eps, S):
@@ -215,6 +268,20 @@ q2.case(EPS_C, S_C, hidden=True)
                 float(stats.chi2(m * K).isf(alpha)) / K,
             ),
         ),
+        Mistake(
+            "divided by m K: K eps_bar is chi2(m K), so the quantiles are divided by K only "
+            "(eps_bar's mean is m, not 1)",
+            lambda m, K, alpha: _interval(m * K, m * K, alpha),
+        ),
+        Mistake(
+            "chi2(m K - 1): nothing is estimated from the innovations, so all m K degrees of "
+            "freedom stay",
+            lambda m, K, alpha: _interval(m * K - 1, K, alpha),
+        ),
+        Mistake(
+            "the quantiles of one step's chi2(m), divided by K: the SUM of K steps is chi2(m K)",
+            lambda m, K, alpha: _interval(m, K, alpha),
+        ),
     ],
     hint=[
         "The poster's 1/K hides a factor: is eps_bar itself chi-square, or a multiple of it?",
@@ -226,6 +293,14 @@ q2.case(EPS_C, S_C, hidden=True)
 def q3(m, K, alpha):
     law = stats.chi2(m * K)
     return Interval(float(law.ppf(alpha / 2)) / K, float(law.isf(alpha / 2)) / K)
+
+
+def _interval(dof, divisor, alpha, tail=None):
+    """The quantiles of chi2(dof) at ``tail`` (alpha/2) and 1 - tail, divided by ``divisor``
+    (the declared mistakes of q3 and q8)."""
+    tail = alpha / 2 if tail is None else tail
+    law = stats.chi2(dof)
+    return (float(law.ppf(tail)) / divisor, float(law.isf(tail)) / divisor)
 
 
 q3.case(3, 20, 0.05, label="m = 3, K = 20, 95 %")
@@ -248,6 +323,36 @@ q3.case(1, 8, 0.1, hidden=True)
             lambda m, K, alpha: tuple(
                 float(v) for v in nis.nis_matrix_critical_values(m, K, 2 * alpha)
             ),
+            hint="Two thresholds share alpha: each tail gets half of it.",
+        ),
+        Mistake(
+            "the laws look swapped: the lower threshold bounds lambda_min (a quantile of ITS "
+            "law), the upper one lambda_max",
+            lambda m, K, alpha: _thresholds(m, K, alpha, low="max", high="min"),
+            hint="Too small a NIS matrix shows in its SMALLEST eigenvalue: the lower threshold "
+            "is nis.extreme_eigenvalue(m, K, 'min').ppf(alpha/2), the upper one "
+            "nis.extreme_eigenvalue(m, K, 'max').isf(alpha/2).",
+        ),
+        Mistake(
+            "both thresholds come from the law of lambda_max: the lower one bounds lambda_min, "
+            "a quantile of its own law",
+            lambda m, K, alpha: _thresholds(m, K, alpha, low="max", high="max"),
+        ),
+        Mistake(
+            "these are the NIS test's chi2(m K)/K thresholds: the matrix test bounds the "
+            "extreme eigenvalues, whose laws are wider",
+            lambda m, K, alpha: (
+                float(stats.chi2(m * K).ppf(alpha / 2) / K),
+                float(stats.chi2(m * K).isf(alpha / 2) / K),
+            ),
+        ),
+        Mistake(
+            "the lower threshold is an upper-tail quantile: lambda_min alarms when SMALL "
+            "(ppf(alpha/2) of its law)",
+            lambda m, K, alpha: (
+                float(nis.extreme_eigenvalue(m, K, "min").isf(alpha / 2)),
+                float(nis.extreme_eigenvalue(m, K, "max").isf(alpha / 2)),
+            ),
         ),
     ],
     hint=[
@@ -258,6 +363,14 @@ q3.case(1, 8, 0.1, hidden=True)
 )
 def q4(m, K, alpha):
     return nis.nis_matrix_critical_values(m, K, alpha)
+
+
+def _thresholds(m, K, alpha, low="min", high="max"):
+    """(ppf(alpha/2) of the law of lambda_low, isf(alpha/2) of the law of lambda_high)."""
+    return (
+        float(nis.extreme_eigenvalue(m, K, low).ppf(alpha / 2)),
+        float(nis.extreme_eigenvalue(m, K, high).isf(alpha / 2)),
+    )
 
 
 q4.case(2, 30, 0.05, label="m = 2, K = 30, alpha = 0.05")
@@ -350,6 +463,32 @@ def _pvalues(eps, S, alpha):
     return PValues(float(p_nis), float(p_matrix))
 
 
+def _mistaken_pvalues(eps, S, average=False, one_sided=False, no_two=False):
+    """(p_nis, p_matrix) with a declared mistake: chi2(m K) at the average NIS, p_nis
+    one-sided (sf), or p_matrix without its factor 2."""
+    K, m = np.shape(eps)
+    total = float(np.sum(nis.nis(eps, S)))
+    law = stats.chi2(m * K)
+    at = total / K if average else total
+    p_nis = float(law.sf(at)) if one_sided else min(1.0, 2 * min(law.cdf(at), law.sf(at)))
+    values = np.linalg.eigvalsh(nis.nis_matrix(eps, S))
+    tail = min(
+        float(nis.extreme_eigenvalue(m, K, "min").cdf(values[0])),
+        float(nis.extreme_eigenvalue(m, K, "max").sf(values[-1])),
+    )
+    return (float(p_nis), min(1.0, (1 if no_two else 2) * tail))
+
+
+_PVALUE_MISTAKES = [
+    (
+        "p_nis looks computed at the AVERAGE NIS: chi2(m K) is the law of the SUM K eps_bar",
+        {"average": True},
+    ),
+    ("p_matrix looks like one tail: the matrix test is two-sided, 2 min(...)", {"no_two": True}),
+]
+_ONE_SIDED_NIS = "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)"
+
+
 @CHECKS.function(
     "q6_practice",
     func="nis_pvalues",
@@ -362,12 +501,16 @@ def _pvalues(eps, S, alpha):
     atol=1e-9,
     mistakes=[
         Mistake(
-            "p_nis looks one-sided: the NIS test is two-sided, p = 2 min(F, 1 - F)",
+            _ONE_SIDED_NIS,
             lambda eps, S: (
                 float(stats.chi2(np.size(eps)).sf(np.sum(nis.nis(eps, S)))),
                 _pvalues(eps, S, 0.05)[1],
             ),
         ),
+        *[
+            Mistake(message, lambda eps, S, how=how: _mistaken_pvalues(eps, S, **how))
+            for message, how in _PVALUE_MISTAKES
+        ],
     ],
     hint=[
         "Both p-values are two-sided: 2 min(F, 1 - F), capped at 1 for the matrix test.",
@@ -403,6 +546,19 @@ for _seed in (40, 41, 46, 54):  # a wrong correlation, a wrong scale, consistent
     atol=1e-9,
     data="record",
     properties="record_properties",
+    mistakes=[
+        Mistake(
+            _ONE_SIDED_NIS,
+            lambda d: (
+                float(stats.chi2(np.size(d["eps"])).sf(np.sum(nis.nis(d["eps"], d["S"])))),
+                _pvalues(d["eps"], d["S"], 0.05)[1],
+            ),
+        ),
+        *[
+            Mistake(message, lambda d, how=how: _mistaken_pvalues(d["eps"], d["S"], **how))
+            for message, how in _PVALUE_MISTAKES
+        ],
+    ],
     hint=[
         "Do q6_practice first: the same code must pass its public check there.",
         "p_nis = 2 min(F, 1 - F) of chi2(m K) at the NIS sum K * eps_bar; "
@@ -454,6 +610,24 @@ CHECKS.short_answer(
             "the nominal alpha: for small K the test's size is below alpha -- simulate it",
             lambda m, K, alpha, n_runs, seed: float(alpha),
         ),
+        Mistake(
+            "the rate of thresholds at alpha each (one-sided): the test's two thresholds share "
+            "alpha, alpha/2 in each tail",
+            lambda m, K, alpha, n_runs, seed: _size_band(m, K, 2 * alpha, n_runs),
+        ),
+        Mistake(
+            "the rate of a SUM of outer products (K times Pi): the NIS matrix is their mean",
+            lambda m, K, alpha, n_runs, seed: _size_band(m, K, alpha, n_runs, scale=K),
+        ),
+        Mistake(
+            "only lambda_max looks tested: the test also alarms when lambda_min falls below "
+            "the lower threshold",
+            lambda m, K, alpha, n_runs, seed: binomial_band(n_runs, alpha / 2, miss=1e-4),
+        ),
+        Mistake(
+            "looks like a count of runs: return the fraction of the n_runs runs",
+            lambda m, K, alpha, n_runs, seed: _size_band(m, K, alpha, n_runs, count=True),
+        ),
     ],
     hint=[
         "Simulate, do not predict: with small K the rate is not alpha (both extreme "
@@ -465,10 +639,17 @@ CHECKS.short_answer(
     ],
 )
 def q7(m, K, alpha, n_runs, seed):
+    return _size_band(m, K, alpha, n_runs)
+
+
+def _size_band(m, K, alpha, n_runs, scale=1, count=False):
+    """The band of the simulated false-alarm rate (``scale``: eigenvalues of ``scale`` Pi;
+    ``count``: the number of runs, not the fraction; the declared mistakes)."""
     # The exact false-alarm rate is 1 - P(all eigenvalues inside the thresholds).
     lower, upper = nis.nis_matrix_critical_values(m, K, alpha)
-    size = 1.0 - nis.prob_eigenvalues_within(m, K, lower, upper)
-    return binomial_band(n_runs, size, miss=1e-4)
+    size = 1.0 - nis.prob_eigenvalues_within(m, K, lower / scale, upper / scale)
+    band = binomial_band(n_runs, size, miss=1e-4)
+    return Band(band.lo * n_runs, band.hi * n_runs) if count else band
 
 
 q7.case(2, 30, 0.05, 20000, 2024, label="m = 2, K = 30, alpha = 0.05, 20000 runs")
@@ -506,6 +687,29 @@ q7.case(4, 4, 0.4, 20000, 5, hidden=True)
                 float(stats.chi2(n * N).ppf(alpha / 2)),
                 float(stats.chi2(n * N).isf(alpha / 2)),
             ),
+        ),
+        Mistake(
+            "looks like the normal approximation n +- 1.96 sqrt(2n/N): the question asks for "
+            "the exact chi2(n N) quantiles of the sum, divided by N",
+            lambda n, N, alpha: (n - 1.96 * np.sqrt(2.0 * n / N), n + 1.96 * np.sqrt(2.0 * n / N)),
+        ),
+        Mistake(
+            "the quantiles of ONE run's chi2(n): the average of N runs is chi2(n N) / N, "
+            "much narrower",
+            lambda n, N, alpha: _interval(n, 1, alpha),
+        ),
+        Mistake(
+            "divided by n N: N times the average NEES is chi2(n N), so divide by N only (the "
+            "average NEES has mean n)",
+            lambda n, N, alpha: _interval(n * N, n * N, alpha),
+        ),
+        Mistake(
+            "alpha not split: a two-sided interval leaves alpha/2 in each tail",
+            lambda n, N, alpha: _interval(n * N, N, alpha, tail=alpha),
+        ),
+        Mistake(
+            "chi2(n N - 1): nothing is estimated from the runs, so all n N degrees of freedom stay",
+            lambda n, N, alpha: _interval(n * N - 1, N, alpha),
         ),
     ],
     hint=[

@@ -7,10 +7,11 @@ are sent to the student's function only at grading time.
 from collections import namedtuple
 
 import numpy as np
+from scipy import stats
 
 from course import filters, mismatched
 from course.grading.authoring.checks import Checks, Mistake
-from course.quadform import WeightedChiSquare
+from course.quadform import QuadraticForm, WeightedChiSquare
 
 from . import data
 
@@ -203,6 +204,23 @@ P_Q3 = np.array([[2.0, 0.5], [0.5, 1.0]])
             "subtracted here",
             lambda P, M: float(np.trace(P)),
         ),
+        Mistake(
+            "the factor looks inverted: M/(M - 1) tr(P_j) instead of (M - 1)/M tr(P_j): "
+            "subtracting the sample mean makes the sum of squares SMALLER",
+            lambda P, M: M / (M - 1.0) * float(np.trace(P)),
+            hint="The sample mean is fitted to the very records it is subtracted from: the "
+            "expected squared deviation shrinks, by (M - 1)/M.",
+        ),
+        Mistake(
+            "divided by M once too often: (M - 1)/M² tr(P_j); c_j already averages over the "
+            "M records once",
+            lambda P, M: (M - 1.0) / M**2 * float(np.trace(P)),
+        ),
+        Mistake(
+            "only the first output (P[0, 0]): the squared NORM of a residual sums every output, "
+            "so its expectation has the trace of P_j",
+            lambda P, M: (M - 1.0) / M * float(np.asarray(P, float)[0, 0]),
+        ),
     ],
     hint=[
         "The sample mean is subtracted before squaring: how many independent deviations are "
@@ -221,6 +239,20 @@ q3.case(np.array([[2.4]]), 2, hidden=True)
 ### END HIDDEN TESTS
 
 
+def _section_statistics(residuals, j, k, divisor=0, centred=True):
+    """q4's statistics with a declared mistake: divided by M + divisor, or not centred."""
+    r = np.asarray(residuals, float)
+    M = r.shape[0]
+    rbar_j = r[:, j].mean(axis=0)
+    dj = r[:, j] - rbar_j if centred else r[:, j]
+    dk = r[:, k] - r[:, k].mean(axis=0) if centred else r[:, k]
+    return (
+        float(rbar_j @ rbar_j),
+        float(np.sum(dj * dj) / (M + divisor)),
+        float(np.sum(dj * dk) / (M + divisor)),
+    )
+
+
 _rng = np.random.default_rng(20250606)
 R_A = _rng.normal(size=(6, 5, 1)) + 0.4
 R_B = _rng.normal(size=(9, 4, 2)) @ np.array([[1.0, 0.4], [0.0, 0.8]])
@@ -237,6 +269,18 @@ R_C = _rng.normal(size=(3, 7, 3))
         "course.mismatched.mean_statistic",
         "course.mismatched.covariance_statistic",
         "course.mismatched.correlation_statistic",
+    ],
+    mistakes=[
+        Mistake(
+            "the covariance and correlation statistics look divided by M - 1: the question's "
+            "statistics are means over the M records (divide by M)",
+            lambda residuals, j, k: _section_statistics(residuals, j, k, divisor=-1),
+        ),
+        Mistake(
+            "the sample means look not subtracted: the covariance and correlation statistics "
+            "use r_ij - rbar_j",
+            lambda residuals, j, k: _section_statistics(residuals, j, k, centred=False),
+        ),
     ],
     hint=[
         "Averages run over the RECORDS (axis 0), at fixed times j and k; the mean statistic "
@@ -300,6 +344,24 @@ _Q5_HINTS = [
             lambda P, M, alpha: _covariance_critical_values(P, M, 2 * alpha),
             hint=_Q5_HINTS[0],
         ),
+        Mistake(
+            "the weights look like the eigenvalues of P themselves: c_j averages over the M "
+            "records, so each weight is an eigenvalue divided by M",
+            lambda P, M, alpha: _covariance_critical_values(P, M, alpha, over=1.0),
+            hint=_Q5_HINTS[1],
+        ),
+        Mistake(
+            "the weights look like the diagonal of P: the quadratic form's weights are the "
+            "EIGENVALUES of P (divided by M), which differ for a P with correlations",
+            lambda P, M, alpha: _covariance_critical_values(P, M, alpha, weights=np.diag),
+            hint=_Q5_HINTS[2],
+        ),
+        Mistake(
+            "a scaled chi2 with the trace of P: it ignores how the weights differ; the law is "
+            "a weighted chi-square sum with the eigenvalues of P / M",
+            lambda P, M, alpha: _scaled_chi2_values(P, M, alpha),
+            hint=_Q5_HINTS[2],
+        ),
     ],
     hint=_Q5_HINTS,
 )
@@ -307,9 +369,19 @@ def q5(P, M, alpha):
     return _covariance_critical_values(P, M, alpha)
 
 
-def _covariance_critical_values(P, M, alpha):
-    law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P, float)) / M, dof=M - 1.0)
+def _covariance_critical_values(P, M, alpha, over=None, weights=np.linalg.eigvalsh, dof=None):
+    """(lower, upper) of the law of c_j (the declared mistakes: weights not divided by M, the
+    diagonal of P for the weights, another dof)."""
+    P = np.asarray(P, float)
+    law = WeightedChiSquare(weights(P) / (M if over is None else over), dof=dof or M - 1.0)
     return CriticalValues(float(law.ppf(alpha / 2)), float(law.isf(alpha / 2)))
+
+
+def _scaled_chi2_values(P, M, alpha):
+    """(lower, upper) of the scaled chi2 with the trace: a mistake of q5."""
+    P = np.asarray(P, float)
+    law = stats.chi2(len(P) * (M - 1), scale=np.trace(P) / (len(P) * M))
+    return (float(law.ppf(alpha / 2)), float(law.isf(alpha / 2)))
 
 
 q5.case(P_Q3, 10, 0.05, label="P = [[2, .5], [.5, 1]], M = 10, alpha = 0.05")
@@ -338,6 +410,78 @@ _HINT_PVALUES = [
 ]
 
 
+def _mistaken_pvalues(
+    r, mean, cov, cross_cov, j, k, *, one_sided=False, over_m=True, dof_m=False, central=False
+):
+    """(p_mean, p_corr) computed as a student would, with one declared mistake: the mean's
+    p-value one-sided, its covariance P_j not divided by M, M degrees of freedom for the
+    correlation's weights, or the mean m_j left out of the mean's law."""
+    r = np.asarray(r, float)
+    mean, cov, cross_cov = (np.asarray(a, float) for a in (mean, cov, cross_cov))
+    M = r.shape[0]
+    rbar = r[:, j].mean(axis=0)
+    law_mean = QuadraticForm(
+        np.eye(len(rbar)), None if central else mean[j], cov[j] / (M if over_m else 1)
+    )
+    stat = float(rbar @ rbar)
+    if one_sided:
+        p_mean = float(law_mean.sf(stat))
+    else:
+        p_mean = min(1.0, 2 * min(float(law_mean.cdf(stat)), float(law_mean.sf(stat))))
+    S = np.block([[cov[j], cross_cov[j, k]], [cross_cov[j, k].T, cov[k]]])
+    p = cov[j].shape[0]
+    A = np.block([[np.zeros((p, p)), np.eye(p)], [np.eye(p), np.zeros((p, p))]]) / (2 * M)
+    shape = QuadraticForm(A, cov=S)
+    law_corr = WeightedChiSquare(shape.weights, dof=shape.dof * (M if dof_m else M - 1))
+    dj = r[:, j] - r[:, j].mean(axis=0)
+    dk = r[:, k] - r[:, k].mean(axis=0)
+    stat = float(np.mean(np.sum(dj * dk, axis=1)))
+    p_corr = min(1.0, 2 * min(float(law_corr.cdf(stat)), float(law_corr.sf(stat))))
+    return (p_mean, p_corr)
+
+
+#: The declared mistakes of the p-values: (message, the keyword that makes it), for q6_practice
+#: (the case's arguments) and q6 (the student's data).
+_PVALUE_MISTAKES = [
+    (
+        "p_mean looks one-sided (sf alone): both tails count, 2 min(cdf, sf), capped at 1",
+        {"one_sided": True},
+    ),
+    (
+        "p_mean's law looks built with covariance P_j: the mean of M records has P_j / M",
+        {"over_m": False},
+    ),
+    (
+        "p_corr's law looks built with M degrees of freedom per weight: subtracting the sample "
+        "means leaves M - 1",
+        {"dof_m": True},
+    ),
+    (
+        "p_mean's law looks central: under H0 rbar_j has the mean m_j of the null moments, so "
+        "its squared norm is a non-central quadratic form",
+        {"central": True},
+    ),
+]
+
+
+def _pvalue_mistake(message, how):
+    return Mistake(
+        message,
+        lambda r, mean, cov, cross_cov, j, k: _mistaken_pvalues(
+            r, mean, cov, cross_cov, j, k, **how
+        ),
+    )
+
+
+def _pvalue_mistake_mine(message, how):
+    return Mistake(
+        message,
+        lambda d: _mistaken_pvalues(
+            d["residuals"], d["mean"], d["cov"], d["cross_cov"], d["j"], d["k"], **how
+        ),
+    )
+
+
 @CHECKS.function(
     "q6_practice",
     func="two_sided_pvalues",
@@ -346,6 +490,7 @@ _HINT_PVALUES = [
     atol=1e-9,
     forbid=_FORBID_TESTS,
     hint=_HINT_PVALUES,
+    mistakes=[_pvalue_mistake(m, how) for m, how in _PVALUE_MISTAKES],
 )
 def q6_practice(r, mean, cov, cross_cov, j, k):
     null = mismatched.ResidualMoments(mean, cov, cross_cov)
@@ -409,6 +554,7 @@ q6_practice.case(*_experiment_case(93, (0.55, 0.02), 1.3), hidden=True)
     properties="experiment_properties",
     forbid=_FORBID_TESTS,
     hint=["Do q6_practice first: the same code must pass its public check there.", *_HINT_PVALUES],
+    mistakes=[_pvalue_mistake_mine(m, how) for m, how in _PVALUE_MISTAKES],
 )
 def q6(d):
     null = mismatched.ResidualMoments(d["mean"], d["cov"], d["cross_cov"])
@@ -461,6 +607,28 @@ P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
             "looks like 1 - power: the probability that the test does NOT reject",
             lambda P0, P2, M, alpha: 1.0 - q7.reference(P0, P2, M, alpha),
         ),
+        Mistake(
+            "the critical values look computed from the ALTERNATIVE's law (P2): they are the "
+            "null's (P0), whose level is alpha; P2 gives only the probability of crossing them",
+            lambda P0, P2, M, alpha: _power(P2, P2, M, alpha),
+            hint="Thresholds from the NULL law (your q5 with P0); only the probability of "
+            "crossing them from the alternative's law (P2).",
+        ),
+        Mistake(
+            "the alternative's law has M degrees of freedom here: subtracting the sample mean "
+            "leaves M - 1 under the alternative too",
+            lambda P0, P2, M, alpha: _power(P0, P2, M, alpha, dof2=float(M)),
+        ),
+        Mistake(
+            "only the upper tail counts here: the two-sided test also rejects below the lower "
+            "critical value, power = F2(lower) + 1 - F2(upper)",
+            lambda P0, P2, M, alpha: _power(P0, P2, M, alpha, lower_tail=False),
+        ),
+        Mistake(
+            "one-sided: the upper critical value at alpha alone; the covariance test is "
+            "two-sided, alpha/2 in each tail",
+            lambda P0, P2, M, alpha: _power(P0, P2, M, 2 * alpha, lower_tail=False),
+        ),
     ],
     hint=[
         "Thresholds come from the NULL law (P0); the probability of crossing them from the "
@@ -470,9 +638,15 @@ P2_Q7 = np.array([[2.2, 0.4], [0.4, 1.1]])
     ],
 )
 def q7(P0, P2, M, alpha):
+    return _power(P0, P2, M, alpha)
+
+
+def _power(P0, P2, M, alpha, dof2=None, lower_tail=True):
+    """The covariance test's power (the declared mistakes: another dof under P2, the upper
+    tail only)."""
     lower, upper = _covariance_critical_values(P0, M, alpha)
-    law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P2, float)) / M, dof=M - 1.0)
-    return float(law.cdf(lower) + law.sf(upper))
+    law = WeightedChiSquare(np.linalg.eigvalsh(np.asarray(P2, float)) / M, dof=dof2 or M - 1.0)
+    return float((law.cdf(lower) if lower_tail else 0.0) + law.sf(upper))
 
 
 q7.case(

@@ -413,6 +413,13 @@ def _b_level_with(alpha_1, power, q, *, lambda_dof=1, quantile=None):
     ),
     mistakes=[
         Mistake(
+            "lambda_0 looks computed at alpha_1/2: the one-dimensional w-test of the B-method "
+            "is two-sided, and chi2(1) > k at level alpha_1 already holds both tails of w",
+            lambda alpha_1, power, q: _b_level_with(alpha_1 / 2, power, q),
+            hint="w² ~ chi2(1): its upper tail at alpha_1 is the two tails of w at alpha_1/2 "
+            "each, so lambda_0 = chi2.noncentrality(alpha_1, power, 1), with alpha_1 itself.",
+        ),
+        Mistake(
             "returns alpha_1 (or lambda_0 was computed with q degrees of freedom): the "
             "B-method keeps lambda_0 of the one-dimensional test fixed, not the level",
             lambda alpha_1, power, q: float(alpha_1),

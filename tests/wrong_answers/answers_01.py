@@ -175,6 +175,11 @@ WRONG = {
             "def band_95(A, Qyy, a):\n    return 1.0, float(stats.norm.isf(0.025))\n",
         ),
         (
+            "unknowns swapped (a reversed)",
+            _Q5_HEAD.replace("a @ np", "a[::-1] @ np").replace("@ a))", "@ a[::-1]))")
+            + "    return s, float(stats.norm.isf(0.025)) * s\n",
+        ),
+        (
             "Student t with m - n dof instead of the normal",
             _Q5_HEAD + "    return s, float(stats.t.isf(0.025, A.shape[0] - A.shape[1])) * s\n",
         ),
@@ -300,6 +305,13 @@ WRONG["q6_practice"] = [
         """def survey_T(survey):
     f = lsq.fit(survey["A"], survey["y"], survey["Qyy"])
     return float(np.sum(f.e_hat**2 / np.sqrt(np.diag(survey["Qyy"]))))
+""",
+    ),
+    (
+        "diag(sigma) passed as Qyy",
+        """def survey_T(survey):
+    sigma = np.sqrt(np.diag(survey["Qyy"]))
+    return float(lsq.fit(survey["A"], survey["y"], np.diag(sigma)).squared_norm)
 """,
     ),
     (

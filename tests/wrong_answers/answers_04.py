@@ -209,6 +209,7 @@ WRONG = {
         ("lower tail chi2.ppf(alpha)", _Q4.format("stats.chi2.ppf(alpha, L)")),
         ("two-sided alpha/2", _Q4.format("stats.chi2.isf(alpha / 2, L)")),
         ("L - 1 degrees of freedom", _Q4.format("stats.chi2.isf(alpha, L - 1)")),
+        ("alpha / 100 (a percentage)", _Q4.format("stats.chi2.isf(alpha / 100, L)")),
         ("normal approximation", _Q4.format("L + stats.norm.isf(alpha) * np.sqrt(2 * L)")),
         ("divided by L (mean scale)", _Q4.format("stats.chi2.isf(alpha, L) / L")),
         ("the public case hard-wired", _Q4.format("stats.chi2.isf(0.001, 10)")),

@@ -202,6 +202,13 @@ WRONG = {
             ),
         ),
         (
+            "laws swapped (lambda_max's for the lower, lambda_min's for the upper)",
+            _MT.format(
+                lo='nis.extreme_eigenvalue(m, K, "max").ppf(alpha / 2)',
+                hi='nis.extreme_eigenvalue(m, K, "min").isf(alpha / 2)',
+            ),
+        ),
+        (
             "chi2(m K)/K thresholds of the NIS test",
             _MT.format(
                 lo="stats.chi2(m * K).ppf(alpha / 2) / K", hi="stats.chi2(m * K).isf(alpha / 2) / K"

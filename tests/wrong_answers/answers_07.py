@@ -319,6 +319,14 @@ def glr_statistic(A, y, Qyy, C):
         ),
         ("alpha_1 returned", "def b_method_level(alpha_1, power, q):\n    return alpha_1\n"),
         (
+            "alpha_1 / 2 for lambda_0 (two-sided w)",
+            """def b_method_level(alpha_1, power, q):
+    lambda_0 = chi2.noncentrality(alpha_1 / 2, power, 1)
+    critical = stats.ncx2.ppf(1.0 - power, q, lambda_0)
+    return float(stats.chi2.sf(critical, q))
+""",
+        ),
+        (
             "lambda_0 with q degrees of freedom",
             """def b_method_level(alpha_1, power, q):
     lambda_0 = chi2.noncentrality(alpha_1, power, q)

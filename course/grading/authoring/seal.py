@@ -98,6 +98,9 @@ import numpy as np
 from course.grading.codec import Band, _named_type
 from course.grading.compare import (
     SINGLE_PRECISION,
+    SQUARE_ROOT_TEXT,
+    SQUARED_TEXT,
+    Diagnosis,
     StructuralWalk,
     Verdict,
     _factor_text,
@@ -106,6 +109,7 @@ from course.grading.compare import (
     _numeric,
     _where,
     band_shape_wrong,
+    decisions_kind,
     decisions_wrong,
     fieldwise_mistake,
     integers_wrong,
@@ -114,6 +118,7 @@ from course.grading.compare import (
     outside_band,
     single_precision,
 )
+from course.grading.vocabulary import MistakeKind
 
 __all__ = [
     "BAND_CELLS",
@@ -514,9 +519,10 @@ def _is_permuted(node: dict, g: np.ndarray, ctx: _Ctx, where: str) -> bool:
     return True
 
 
-def _kind_of_wrong(node: dict, g: np.ndarray, ctx: _Ctx, where: str) -> str:
-    """What kind of wrong ``g`` is (same shape, not a match); '' when unknown. Tries
-    transforms of ``g`` against the seal, never an expected value."""
+def _kind_of_wrong(node: dict, g: np.ndarray, ctx: _Ctx, where: str) -> Diagnosis:
+    """What kind of wrong ``g`` is (same shape, not a match) and its words, as
+    :func:`course.grading.compare._kind_of_wrong` says them; ``(None, "")`` when unknown.
+    Tries transforms of ``g`` against the seal, never an expected value."""
     shape, kind = tuple(node["shape"]), node["num"]
     gf = g.astype(complex if kind == "c" or g.dtype.kind == "c" else float)
     integral = kind == "i"
@@ -531,41 +537,41 @@ def _kind_of_wrong(node: dict, g: np.ndarray, ctx: _Ctx, where: str) -> str:
         return _all_match(node, np.asarray(x), ctx, where)
 
     if len(shape) == 2 and shape[0] == shape[1] > 1 and same(gf.T):
-        return "transposed: rows and columns are swapped"
+        return MistakeKind.TRANSPOSED, "transposed: rows and columns are swapped"
     if same(-gf):
-        return "the sign is flipped"
+        return MistakeKind.SIGN, "the sign is flipped"
     if len(shape) == 1 and gf.size > 1 and kind != "c":
         if same(gf[::-1]):
-            return "the right values in reverse order"
+            return MistakeKind.ORDER, "the right values in reverse order"
         if gf.size <= _MAX_PERMUTATION and _is_permuted(node, gf, ctx, where):
-            return "the right values in another order (a permutation)"
+            return MistakeKind.ORDER, "the right values in another order (a permutation)"
     if integral:  # as in compare: a relation to an integer answer would name it
-        return ""
+        return None, ""
     if kind == "c":
-        return ""
+        return None, ""
     if bool(np.all(gf == 0)):
-        return "all zeros (a result never filled in?)"
+        return MistakeKind.ZEROS, "all zeros (a result never filled in?)"
     for f in FACTORS:
         for sign in (1, -1):
             if sign < 0 and f not in (2, Fraction(1, 2)):
                 continue
             if same(gf / (sign * float(f))):
                 text = _factor_text(float(f), f)
-                return ("the sign is flipped and " if sign < 0 else "") + text
+                return MistakeKind.FACTOR, ("the sign is flipped and " if sign < 0 else "") + text
     if bool(np.all(gf >= 0)):
         if same(np.sqrt(gf)):
-            return "looks like the square of the answer (a variance where a standard deviation is asked?)"
+            return MistakeKind.SQUARE, SQUARED_TEXT
         if same(gf**2):
-            return "looks like the square root of the answer (a standard deviation where a variance is asked?)"
-    return ""
+            return MistakeKind.SQUARE, SQUARE_ROOT_TEXT
+    return None, ""
 
 
-def _diagnose(node, g, ctx, where) -> str:
+def _diagnose(node, g, ctx, where) -> Diagnosis:
     try:
         with np.errstate(all="ignore"):
             return _kind_of_wrong(node, g, ctx, where)
     except Exception:  # a diagnosis must never break a verdict
-        return ""
+        return None, ""
 
 
 class _Sealed(StructuralWalk):
@@ -601,14 +607,14 @@ class _Sealed(StructuralWalk):
             at = _where(np.unravel_index(i, arr.shape) if arr.ndim else (), arr.shape)
             if math.isnan(x):
                 text = f"{label}: got NaN{at}"
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.NOT_FINITE)
             h = node["step"][j]
             inside = math.isfinite(x) and abs(x / h) < 2.0**62
             if not inside or self.ctx.hash(f"{where}#{j}", f"k|{math.floor(x / h)}") not in set(
                 node["cells"][j]
             ):
                 text = outside_band(label, at)
-                return Verdict(False, text, text)
+                return Verdict(False, text, text, MistakeKind.OUTSIDE_BAND)
         return Verdict(True)
 
     def string(self, expected, got: str, label: str) -> Verdict:
@@ -622,9 +628,9 @@ class _Sealed(StructuralWalk):
         )
         if any(self.ctx.hash(where, f"s|{v}") == node["str"] for v in variants if v != got):
             text = f"{label}: differs only in upper/lower case or spaces"
-        else:
-            text = f"{label}: not the right string"
-        return Verdict(False, text, text)
+            return Verdict(False, text, text, MistakeKind.STRING_CASE)
+        text = f"{label}: not the right string"
+        return Verdict(False, text, text, MistakeKind.WRONG_VALUE)
 
     def transposed(self, expected, arr: np.ndarray) -> bool:
         node, where = expected
@@ -653,26 +659,33 @@ class _Sealed(StructuralWalk):
         first = np.unravel_index(bad[0], shape) if shape else ()
         if kind == "b":
             message = decisions_wrong(label, len(bad), len(flat), first, shape)
-        elif kind == "i":
-            message = integers_wrong(
-                label, len(bad), len(flat), first, shape, _diagnose(node, arr, ctx, where)
-            )
+            return Verdict(False, message, message, decisions_kind(len(bad), len(flat), shape))
+        if kind == "i":
+            found, text = _diagnose(node, arr, ctx, where)
+            message = integers_wrong(label, len(bad), len(flat), first, shape, text)
+            return Verdict(False, message, message, found)
+        g = arr.astype(complex if kind == "c" else float)
+        wrong = np.zeros(g.size, dtype=bool)
+        wrong[bad] = True
+        message = not_finite(label, g, wrong.reshape(g.shape))
+        if message:
+            return Verdict(False, message, message, MistakeKind.NOT_FINITE)
+        if single_precision(arr):
+            found, text = MistakeKind.SINGLE_PRECISION, SINGLE_PRECISION
         else:
-            g = arr.astype(complex if kind == "c" else float)
-            wrong = np.zeros(g.size, dtype=bool)
-            wrong[bad] = True
-            message = not_finite(label, g, wrong.reshape(g.shape)) or numbers_wrong(
-                label,
-                len(bad),
-                len(flat),
-                "worst" if len(bad) == 1 else "first",  # the seal cannot tell the worst
-                first,
-                shape,
-                SINGLE_PRECISION if single_precision(arr) else _diagnose(node, g, ctx, where),
-                ctx.rtol,
-                ctx.atol,
-            )
-        return Verdict(False, message, message)
+            found, text = _diagnose(node, g, ctx, where)
+        message = numbers_wrong(
+            label,
+            len(bad),
+            len(flat),
+            "worst" if len(bad) == 1 else "first",  # the seal cannot tell the worst
+            first,
+            shape,
+            text,
+            ctx.rtol,
+            ctx.atol,
+        )
+        return Verdict(False, message, message, found)
 
 
 def _is_item_permutation(items, got, ctx, where) -> bool:
@@ -719,7 +732,7 @@ def sealed_compare(sealed: dict, got: Any, path: str = "", mistakes=()) -> Verdi
         named = next((m for m, wrong in mistakes if _fieldwise(sealed, wrong, got)), None)
     if named is not None:
         text = f"{_label(path)}: {named}"
-        return Verdict(False, text, text)
+        return Verdict(False, text, text, MistakeKind.NAMED, named)
     return verdict
 
 

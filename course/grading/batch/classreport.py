@@ -36,7 +36,7 @@ from course.grading.batch.itemanalysis import FLAG_BELOW, MIN_STUDENTS, item_ana
 from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
 from course.grading.batch.similarity import similar_groups
-from course.grading.vocabulary import GradeStatus
+from course.grading.vocabulary import GradeStatus, MistakeKind
 
 __all__ = ["TABLES", "diagnosis", "report_html", "report_tables", "write_report"]
 
@@ -45,33 +45,6 @@ REPORT_FILE = "report.html"
 TABLES = ("unmarked", "questions", "items", "kinds", "wrong", "abnormal", "late", "slowest",
           "similar")  # fmt: skip
 
-#: (text in a failed case's message, the kind of wrong answer it shows), first match wins.
-_KINDS = (
-    ("raised ", "raised an exception"),
-    ("computed in single precision", "computed in float32"),
-    ("transposed", "transposed"),
-    ("sign is flipped", "the sign"),
-    ("factor", "a constant factor"),
-    ("off by one", "off by one"),
-    ("another order", "another order"),
-    ("one element too", "one element too many or few"),
-    ("one item too", "one item too many or few"),
-    ("expected shape", "the shape or length"),
-    ("expected length", "the shape or length"),
-    ("got NaN", "NaN or inf"),
-    ("got inf", "NaN or inf"),
-    ("close: it agrees", "a near miss"),
-    ("opposite", "the opposite decision"),
-    ("outside the accepted band", "outside the band"),
-    ("expected a", "the type"),
-    ("expected real", "the type"),
-    ("expected integer", "the type"),
-    ("expected bool", "the type"),
-    ("expected None", "the type"),
-    ("expected keys", "the type"),
-)
-#: Case messages that are not a diagnosis of a wrong answer (the question's status says it).
-_NOT_A_DIAGNOSIS = ("timeout", "not run", "not answered", "unreadable result")
 _ABNORMAL = (
     GradeStatus.TIMEOUT,
     GradeStatus.FORBIDDEN,
@@ -82,27 +55,27 @@ _ABNORMAL = (
 )
 
 
-def diagnosis(message: str, named: list[str] | tuple[str, ...] = ()) -> tuple[str, str] | None:
-    """``("named", mistake)`` or ``("kind", kind of wrong)`` for a failed case's message, or
-    None when the message diagnoses nothing (a timeout, a case not run).
+def diagnosis(case) -> tuple[str, str] | None:
+    """``("named", mistake)`` or ``("kind", kind of wrong)`` for a failed case, from the
+    diagnosis the comparison recorded with it (``case.kind``, ``case.mistake``), or None when
+    it diagnosed nothing (a timeout, a case not run, a row of a version that recorded none).
+    Never from the message's words: rewording a message moves no count, and a student's text
+    in a message ("factor") is not a diagnosis.
 
     Examples
     --------
-    >>> diagnosis("T: too large by a factor ≈ 2.0; tolerance ...")
+    >>> from course.grading.batch.results import CaseResult
+    >>> diagnosis(CaseResult("c", False, "T: too large by a factor ≈ 2.0", kind="a constant factor"))
     ('kind', 'a constant factor')
-    >>> diagnosis("z: looks one-sided", named=["looks one-sided"])
+    >>> diagnosis(CaseResult("c", False, "z: looks one-sided", kind="named mistake",
+    ...                      mistake="looks one-sided"))
     ('named', 'looks one-sided')
     """
-    text = str(message)
-    if not text or text in _NOT_A_DIAGNOSIS:
+    if case.ok or not case.kind:
         return None
-    for mistake in named:
-        if text.endswith(f": {mistake}") or text == mistake:
-            return ("named", mistake)
-    for needle, kind in _KINDS:
-        if needle in text:
-            return ("kind", kind)
-    return ("kind", "another wrong value")
+    if case.kind == MistakeKind.NAMED and case.mistake:
+        return ("named", str(case.mistake))
+    return ("kind", str(case.kind))
 
 
 def _rate(passed: int, run: int) -> float | None:
@@ -123,8 +96,6 @@ class _Class:
         self.kinds: dict[str, Counter] = {}
         self.abnormal: dict[str, dict[str, list[str]]] = {}
         for qid in question_ids:
-            q = checks.questions.get(qid)
-            names = [m.message for m in getattr(q, "mistakes", ())] if q is not None else []
             answered = [r for r in self.rows if qid in r.questions]
             full = sum(r.questions[qid].full_marks for r in answered)
             self.full[qid] = _rate(full, len(answered))
@@ -142,10 +113,9 @@ class _Class:
                     if res.status not in (GradeStatus.NOT_ANSWERED, GradeStatus.TO_MARK):
                         counts[side][0] += bool(case.ok)
                         counts[side][1] += 1
-                    if not case.ok:
-                        found = diagnosis(case.message, names)
-                        if found is not None:
-                            seen.add(found)
+                    found = diagnosis(case)
+                    if found is not None:
+                        seen.add(found)
                 for how, what in seen:
                     (named if how == "named" else kinds)[what] += 1
             self.public[qid] = _rate(*counts["public"])

@@ -134,8 +134,7 @@ def _feedback_hint(q, r) -> str:
     """The hint of a question's feedback: the one a diagnosed mistake chooses (its own, or
     none for an answer computed in float32), else the first stage only -- the later ones
     (the formula) stay in the self-check."""
-    messages = [c.message for c in r.cases if not c.ok] or [r.message]
-    chosen = chosen_hint(messages, getattr(q, "mistake_hints", {}))
+    chosen = chosen_hint([c for c in r.cases if not c.ok], getattr(q, "mistake_hints", {}))
     if chosen is not None:
         return chosen
     return q.hints[0] if q.hints else ""

@@ -23,23 +23,54 @@ class CaseResult:
     ``detail`` (expected and got) is for the instructor's records only (``results.jsonl``),
     never the feedback; ``None``: not written. ``raised``: the student's code raised on this
     case (not written; the question's status is :attr:`~GradeStatus.ERROR` when every failed
-    case raised and none passed)."""
+    case raised and none passed).
+
+    ``kind``: the diagnosis of a failed case as data, a
+    :class:`~course.grading.vocabulary.MistakeKind` value set where the diagnosis was made
+    (written as its string; ``None``: nothing diagnosed -- a timeout, a case not run -- and not
+    written); ``mistake``: the declared mistake's message when ``kind`` is ``"named mistake"``
+    (``None``: not written). The reports count these, never the message's words."""
 
     label: str
     ok: bool
     message: str = ""
     detail: str | None = None
     raised: bool = False
+    kind: str | None = None
+    mistake: str | None = None
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"label": self.label, "ok": self.ok, "message": self.message}
         if self.detail is not None:
             out["detail"] = self.detail
+        if self.kind is not None:
+            out["kind"] = str(self.kind)
+        if self.mistake is not None:
+            out["mistake"] = self.mistake
         return out
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> CaseResult:
-        return cls(d["label"], d["ok"], d["message"], d.get("detail"))
+        return cls(
+            d["label"],
+            d["ok"],
+            d["message"],
+            d.get("detail"),
+            kind=d.get("kind"),
+            mistake=d.get("mistake"),
+        )
+
+    @classmethod
+    def of(cls, label: str, verdict, message: str | None = None) -> CaseResult:
+        """The case ``label`` as the comparison's ``verdict`` judged it (its message, or
+        ``message`` in its place), with the diagnosis's kind and named mistake."""
+        return cls(
+            label,
+            verdict.ok,
+            verdict.message if message is None else message,
+            kind=None if verdict.ok or verdict.kind is None else str(verdict.kind),
+            mistake=verdict.mistake or None,
+        )
 
 
 @dataclass

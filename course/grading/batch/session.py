@@ -39,10 +39,12 @@ from course.grading.sandbox.parent import (
 )
 from course.grading.vocabulary import (
     ABNORMAL,
+    DEMO_STUDENT_ID,
     PLACEHOLDER_ID,
     CellOrigin,
     CellRole,
     GradeStatus,
+    MistakeKind,
     Op,
     QuestionKind,
     ReplyStatus,
@@ -116,6 +118,20 @@ class AssignmentGrader:
         }
         self.value_mistakes = {
             q.id: q.mistaken() for q in self.questions if q.kind == "value" and q.data is None
+        }
+        # right answers of other data, which a wrong answer may be (hard-coded, or computed
+        # from the notebook's practice data): a personal value against the demo ID's answer and
+        # the public cases', a case against the question's other cases (compare's ``others``)
+        public = [
+            e
+            for q in self.questions
+            if q.kind == "function"
+            for e in self.case_expected[q.id][: len(q.public_cases)]
+        ]
+        self.other_answers = {
+            q.id: [*self._demo_answers(q), *public]
+            for q in self.questions
+            if q.kind == "value" and q.data is not None
         }
         solutions_root = (
             self.solution_dir.parent
@@ -211,6 +227,16 @@ class AssignmentGrader:
         self.close()
 
     # -- limits ---------------------------------------------------------------------------
+    def _demo_answers(self, q) -> list:
+        """The answers of ``q`` for the demo ID's data, with and without the class key."""
+        out = []
+        for secret in dict.fromkeys([None, self.secret]):
+            try:
+                out.append(q.expected(data=self.checks.data_for(q.data, DEMO_STUDENT_ID, secret)))
+            except Exception:  # a diagnosis never stops grading
+                continue
+        return out
+
     def timeout_for(self, qid: str | None) -> float:
         if self.options.timeout is not None:
             return float(self.options.timeout)
@@ -595,11 +621,11 @@ class StudentSession:
         except (EncodingError, TypeError, ValueError, KeyError):
             got = None
         expected = q.expected(data=self.data[q.data] if q.data is not None else None)
-        ok, message = choice_verdict(q.id, q.options, expected, got)
-        case = CaseResult(q.target, ok, message)
-        if ok:
+        verdict = choice_verdict(q.id, q.options, expected, got)
+        case = CaseResult.of(q.target, verdict)
+        if verdict.ok:
             return _question_result(q, GradeStatus.PASS, "", q.points, [case])
-        return _question_result(q, GradeStatus.FAIL, message, 0.0, [case])
+        return _question_result(q, GradeStatus.FAIL, verdict.message, 0.0, [case])
 
     def _missing(self, q, what: str) -> QuestionResult:
         err = self._answer_cell_error(q.id)
@@ -633,8 +659,11 @@ class StudentSession:
             expected = g.value_expected[q.id]
             mistakes = g.value_mistakes[q.id]
         # message: for the student, never an expected value; detail: the instructor's records
-        verdict = compare(expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes)
-        case = CaseResult(q.target, verdict.ok, verdict.message)
+        others = g.other_answers.get(q.id, ())
+        verdict = compare(
+            expected, got, q.rtol, q.atol, path=q.target, mistakes=mistakes, others=others
+        )
+        case = CaseResult.of(q.target, verdict)
         if not verdict.ok:
             case.detail = verdict.detail  # instructor only (results.jsonl)
         if verdict.ok:
@@ -651,16 +680,18 @@ class StudentSession:
         g = self.g
         cases = q.public_cases + q.hidden_cases
         run = _CaseRun()
-        for case, label, expected, mistakes in zip(
-            cases, _case_labels(cases), g.case_expected[q.id], g.case_mistakes[q.id]
+        answers = g.case_expected[q.id]
+        for k, (case, label, expected, mistakes) in enumerate(
+            zip(cases, _case_labels(cases), answers, g.case_mistakes[q.id])
         ):
+            others = answers[:k] + answers[k + 1 :]  # a result hard-coded from another case
             if run.stopped:
                 run.results.append(CaseResult(label, False, "not run"))
             elif self.child is None and not self.ensure_child():
                 run.stop(GradeStatus.SKIPPED, "the time budget for this submission ran out", True)
                 run.results.append(CaseResult(label, False, "not run"))
             else:
-                early = self._call_case(q, run, case, label, expected, mistakes)
+                early = self._call_case(q, run, case, label, expected, mistakes, others)
                 if early is not None:
                     return early
         if self.hits.get(q.id):
@@ -675,7 +706,7 @@ class StudentSession:
         return run.result(q)
 
     def _call_case(
-        self, q, run: _CaseRun, case, label: str, expected, mistakes
+        self, q, run: _CaseRun, case, label: str, expected, mistakes, others=()
     ) -> QuestionResult | None:
         """Run one case into ``run``; a finished question result when the function is missing
         or not a function."""
@@ -718,22 +749,35 @@ class StudentSession:
             if err.get("type") == "MemoryError":
                 run.status = GradeStatus.MEMORY  # stops the run; the message stays the first
             text = self._hidden_error(q, err) if case.hidden else self._err_text(err)
-            run.fail(CaseResult(label, False, f"raised {text}", raised=True))
+            run.fail(
+                CaseResult(label, False, f"raised {text}", raised=True, kind=MistakeKind.RAISED)
+            )
         elif status != ReplyStatus.OK:
             why = "" if case.hidden else f" ({self._err_text(reply.get('error') or {})})"
-            run.fail(CaseResult(label, False, f"returned something that is not plain data{why}"))
+            message = f"returned something that is not plain data{why}"
+            run.fail(CaseResult(label, False, message, kind=MistakeKind.NOT_PLAIN_DATA))
         else:
             try:
                 got = decode(reply.get("value"), allow_band=False)
             except (EncodingError, TypeError, ValueError, KeyError):
                 run.results.append(CaseResult(label, False, "unreadable result"))
                 return None
-            verdict = compare(expected, got, q.rtol, q.atol, mistakes=mistakes)
+            verdict = compare(
+                expected,
+                got,
+                q.rtol,
+                q.atol,
+                mistakes=mistakes,
+                hidden=case.hidden,
+                others=others,
+            )
             message = _KEYS.sub("", verdict.message) if case.hidden else verdict.message
+            result = CaseResult.of(label, verdict, message)
             if verdict.ok:
-                run.results.append(CaseResult(label, True, message))
+                run.results.append(result)
             else:  # detail: the instructor's records only (results.jsonl)
-                run.fail(CaseResult(label, False, message, detail=verdict.detail))
+                result.detail = verdict.detail
+                run.fail(result)
         return None
 
 

@@ -266,16 +266,17 @@ class Assignment:
         return q.points * float(fraction or 0.0)
 
     # -- hints --------------------------------------------------------------------------
-    def _failed(self, q, messages=()) -> str:
+    def _failed(self, q, verdicts=()) -> str:
         """Count one failed self-check of ``q`` and return the hint line it earns ('' if none).
 
         The diagnosis chooses first (:func:`~course.grading.compare.chosen_hint`): a declared
-        mistake named in ``messages`` shows its own hint, an answer computed in float32 none.
+        mistake one of the failed ``verdicts`` names shows its own hint (or none), an answer
+        computed in float32 none.
         Otherwise, after the k-th failure the student sees stage ``min(k, n) - 1`` of the n
         stages: a nudge first, the formula only after repeated failures. The count lives in
         this object, i.e. in the kernel's memory, and starts again with a fresh kernel.
         """
-        chosen = chosen_hint(messages, q.mistake_hints)
+        chosen = chosen_hint(verdicts, q.mistake_hints)
         if chosen is not None:
             return f"Hint (for this mistake): {chosen}" if chosen else ""
         self._failures[q.id] = self._failures.get(q.id, 0) + 1
@@ -393,7 +394,7 @@ class Assignment:
                 print("  PASS")
                 return 1.0
             print("  FAIL")
-            hint = self._failed(q, [verdict.message])
+            hint = self._failed(q, [verdict])
             if hint:
                 print(f"      {hint}")
             print(f"      {verdict.message}")
@@ -436,7 +437,7 @@ class Assignment:
         forbidden: set[str] = self._forbidden_calls(q)
         passed = 0
         lines: list[str] = []
-        failures: list[str] = []  # the failed cases' messages: a diagnosis may choose the hint
+        failures: list = []  # the failed cases' verdicts: their diagnosis may choose the hint
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
@@ -464,7 +465,7 @@ class Assignment:
                 lines.append(f"  PASS: {case.label}")
             else:
                 lines.append(f"  FAIL: {case.label}\n      {message}")
-                failures.append(message)
+                failures.append(verdict)
         n = len(q.cases)
         hidden = q.hidden_cases
         more = (
