@@ -368,7 +368,7 @@ _LARGEST_E = (
         "Data snooping on a survey given as a dict like mine: the observation with the largest "
         "|w| (each residual of the WEIGHTED fit divided by ITS OWN standard deviation), as a "
         "0-based index.",
-        "lsq.data_snooping(survey['A'], survey['y'], survey['Qyy'], alpha=survey['alpha']) "
+        "lsq.data_snooping(lsq.fit(survey['A'], survey['y'], survey['Qyy']), alpha=survey['alpha']) "
         "lists the removed observations in their original numbering; return the first as an int.",
     ),
     mistakes=[
@@ -382,7 +382,7 @@ _LARGEST_E = (
     ],
 )
 def q7_practice(survey):
-    snooping = lsq.data_snooping(survey["A"], survey["y"], survey["Qyy"], alpha=survey["alpha"])
+    snooping = lsq.data_snooping(lsq.fit(survey["A"], survey["y"], survey["Qyy"]), alpha=survey["alpha"])
     return int(snooping.removed[0])
 
 
@@ -450,7 +450,7 @@ def q6b(d):
     ],
 )
 def q7(d):
-    return int(lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).removed[0])
+    return int(lsq.data_snooping(lsq.fit(d["A"], d["y"], d["Qyy"]), alpha=d["alpha"]).removed[0])
 
 
 @CHECKS.function(

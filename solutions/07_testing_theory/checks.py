@@ -577,7 +577,7 @@ _DIA_MISTAKES = [
             "several observations were removed (data snooping repeats the w-tests until none "
             "rejects): the DIA procedure adapts once, to the one identified alternative",
             lambda d: np.asarray(
-                lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).fit.x_hat
+                lsq.data_snooping(lsq.fit(d["A"], d["y"], d["Qyy"]), alpha=d["alpha"]).fit.x_hat
             ),
         ),
     ],

@@ -408,8 +408,8 @@ def glr_statistic(A, y, Qyy, C):
         ),
         (
             "data snooping (several removals)",
-            "x_dia_practice = lsq.data_snooping(practice['A'], practice['y'], practice['Qyy'], "
-            "alpha=practice['alpha']).fit.x_hat",
+            "x_dia_practice = lsq.data_snooping(lsq.fit(practice['A'], practice['y'], "
+            "practice['Qyy']), alpha=practice['alpha']).fit.x_hat",
         ),
         (
             "(slope, height) order",
