@@ -29,14 +29,14 @@ from course.lsq._fit import (
     _standard_normal,
     fit,
 )
-
-_refit = fit  # data_snooping's argument is named fit, like every test's; it refits by this name
 from course.results import TestResult, decide, format_number
 from course.validation import (
     as_count,
     as_index,
     as_probability,
 )
+
+_refit = fit  # data_snooping's argument is named fit, like every test's; it refits by this name
 
 
 # ---------------------------------------------------------------------------

@@ -382,7 +382,9 @@ _LARGEST_E = (
     ],
 )
 def q7_practice(survey):
-    snooping = lsq.data_snooping(lsq.fit(survey["A"], survey["y"], survey["Qyy"]), alpha=survey["alpha"])
+    snooping = lsq.data_snooping(
+        lsq.fit(survey["A"], survey["y"], survey["Qyy"]), alpha=survey["alpha"]
+    )
     return int(snooping.removed[0])
 
 
