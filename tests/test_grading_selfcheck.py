@@ -654,3 +654,19 @@ def test_the_short_answer_self_check_says_whether_the_saved_cell_is_answered(tmp
         saved_short_answer({"__session__": str(tmp_path / "gone.ipynb")}, "nowhere", "q6_why")
         is None
     )
+
+
+def test_a_float32_line_estimate_fails_at_the_self_check_as_at_grading(check, capsys):
+    """Issue 37 item 7: 01 q1's only public case had a round answer, exact in float32, so a
+    float32 answer passed the self-check and lost its point at grading; a non-round public
+    case tells it at the self-check."""
+
+    def in_float32(t, y):
+        A = np.column_stack([np.ones(len(t)), t]).astype(np.float32)
+        return np.linalg.lstsq(A, np.asarray(y, dtype=np.float32), rcond=None)[0]
+
+    check("q1", in_float32)
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "single precision (float32)" in out, out
+    check("q1", lambda t, y: np.polyfit(t, y, 1)[::-1])
+    assert "FAIL" not in capsys.readouterr().out
