@@ -68,6 +68,7 @@ def test_the_worked_example_scores_its_own_solution_full_marks(tmp_path, monkeyp
                 source = "".join(cell["source"])
                 exec(compile(source, cell.get("id", "cell"), "exec"), ns)
         for qid, q in graded.items():
+            assert q.reference is not None
             d = checks.data_for(q.data, student, None) if q.data else None
             if q.kind == "function":
                 for case in q.cases:

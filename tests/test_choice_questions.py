@@ -40,6 +40,7 @@ def _data_module(name: str):
     spec = importlib.util.spec_from_file_location(
         f"data_{name}", ROOT / "solutions" / name / "data.py"
     )
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
