@@ -108,13 +108,11 @@ TABLE = {
     "WTestResult.summary": case(W.summary),
     "data_snooping": case(
         lsq.data_snooping,
-        A=matrix(A),
-        y=array(Y),
-        Qyy=covariance(QYY, none_ok=True),
+        fit=fit_arg(),
         alpha=probability(0.01),
         max_removals=count(2, minimum=0, none_ok=True),
     ),
-    "SnoopingResult.summary": case(lsq.data_snooping(A, Y, QYY).summary),
+    "SnoopingResult.summary": case(lsq.data_snooping(lsq.fit(A, Y, QYY)).summary),
     "mdb": case(lsq.mdb, fit=fit_arg(), alpha=probability(0.001), power=probability(0.8)),
     "confidence_band": case(
         lsq.confidence_band,

@@ -204,10 +204,10 @@ def test_tripwire_reports_calls_that_do_not_come_from_the_library():
                 data = b""
             return ",".join(n.rsplit(".", 1)[1] for n in tripwire.parse_events(data)[0]) or "-"
         A = np.array([[1.0, 1], [1, 2], [1, 3], [1, 4], [1, 5]])
-        y, Q = np.array([1.0, 2.1, 2.9, 4.2, 4.9]), np.eye(5)
+        y, Q = np.array([1.0, 2.1, 9.0, 4.2, 4.9]), np.eye(5)  # an outlier: snooping refits
         f = lsq.fit(A, y, Q)
         print(calls())                                       # fit
-        lsq.data_snooping(A, y, Q, 0.05, 1)
+        lsq.data_snooping(f, 0.05, 1)
         print(calls())                                       # - (library-internal)
         from course.lsq import w_tests
         w_tests(f, 0.05)
@@ -218,12 +218,13 @@ def test_tripwire_reports_calls_that_do_not_come_from_the_library():
         print(calls())                                       # w_tests (names do not count)
         home = vars(sys.modules[lsq.data_snooping.__module__])  # course.lsq._tests
         F = types.FunctionType(lsq.data_snooping.__code__, dict(home))
-        F(A, y, Q, 0.05, 1)
-        print(calls())                                       # fit,w_tests (foreign globals)
+        F(f, 0.05, 1)
+        print(calls())                                       # w_tests, fit (foreign globals)
         print(lsq.w_tests.__kwdefaults__, lsq.w_tests.__name__)
         """
     )
-    assert out[:5] == ["fit", "-", "w_tests", "w_tests", "fit,w_tests"], out
+    assert out[:4] == ["fit", "-", "w_tests", "w_tests"], out
+    assert set(out[4].split(",")) == {"fit", "w_tests"}, out  # the copy's own calls, reported
     assert out[5:] == ["None", "w_tests"]
 
 

@@ -624,3 +624,53 @@ def test_compare_never_shows_an_expected_number(expected, how, seed):
         if len(digits) >= 4:  # a number with some digits: its printed forms must not show
             for text in (f"{x:.6g}", repr(float(x))):
                 assert text not in v.message, (text, v.message)
+
+
+def test_the_short_answer_self_check_says_whether_the_saved_cell_is_answered(tmp_path, capsys):
+    """Issue 37 item 7: the self-check of a short answer told a student who had answered to
+    "replace its placeholder line"; it reads the saved cell and says which it is."""
+    from course.grading.items import SHORT_ANSWER_STUB
+    from course.grading.student.submit import saved_short_answer
+
+    name = "05_nis_wishart"
+    folder = ROOT / "exercises" / name
+    check = Assignment.load(name, student_id="s123", path=folder)
+    nb = json.loads((folder / f"{name}.ipynb").read_text(encoding="utf-8"))
+    (cell,) = [
+        c
+        for c in nb["cells"]
+        if c.get("metadata", {}).get("course", {}).get("question") == "q6_why"
+    ]
+    assert "".join(cell["source"]).strip() == SHORT_ANSWER_STUB
+    path = tmp_path / f"{name}.ipynb"
+    ns = {"__session__": str(path)}
+    for text, words, absent in (
+        (SHORT_ANSWER_STUB, "not answered yet", "Answered"),
+        ("The matrix test sees the cross-correlation.", "Answered", "placeholder"),
+    ):
+        cell["source"] = [text]
+        path.write_text(json.dumps(nb), encoding="utf-8")
+        assert saved_short_answer(ns, name, "q6_why") == text
+        exec("check('q6_why')", {**ns, "check": check})
+        out = capsys.readouterr().out
+        assert words in out and absent not in out and "replacing" not in out, out
+    assert (
+        saved_short_answer({"__session__": str(tmp_path / "gone.ipynb")}, "nowhere", "q6_why")
+        is None
+    )
+
+
+def test_a_float32_line_estimate_fails_at_the_self_check_as_at_grading(check, capsys):
+    """Issue 37 item 7: 01 q1's only public case had a round answer, exact in float32, so a
+    float32 answer passed the self-check and lost its point at grading; a non-round public
+    case tells it at the self-check."""
+
+    def in_float32(t, y):
+        A = np.column_stack([np.ones(len(t)), t]).astype(np.float32)
+        return np.linalg.lstsq(A, np.asarray(y, dtype=np.float32), rcond=None)[0]
+
+    check("q1", in_float32)
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "single precision (float32)" in out, out
+    check("q1", lambda t, y: np.polyfit(t, y, 1)[::-1])
+    assert "FAIL" not in capsys.readouterr().out

@@ -373,7 +373,7 @@ def test_data_snooping_finds_planted_outlier_with_original_numbering():
     sigma = 0.5
     y = A @ [3.0, 0.4] + sigma * rng.standard_normal(m)
     y[9] += 12 * sigma
-    res = lsq.data_snooping(A, y, sigma**2 * np.eye(m), alpha=0.001)
+    res = lsq.data_snooping(lsq.fit(A, y, sigma**2 * np.eye(m)), alpha=0.001)
     assert res.removed == (9,)
     assert res.kept == tuple(i for i in range(m) if i != 9)
     assert res.stop_reason == "no observation rejected"
@@ -392,7 +392,7 @@ def test_data_snooping_two_outliers_correlated_original_indices():
     y = y.copy()
     y[3] += 40.0
     y[11] -= 60.0
-    res = lsq.data_snooping(A, y, Qyy, alpha=0.001)
+    res = lsq.data_snooping(lsq.fit(A, y, Qyy), alpha=0.001)
     assert sorted(res.removed) == [3, 11]
     assert res.removed[0] == res.round_indices[0][res.rounds[0].largest]
     # the second round's positions are shifted; its largest maps back to the original index
@@ -403,21 +403,21 @@ def test_data_snooping_two_outliers_correlated_original_indices():
 
 def test_data_snooping_stops_when_no_redundancy_left_and_at_max_removals():
     A = np.column_stack([np.ones(3), np.arange(3.0)])
-    res = lsq.data_snooping(A, [0.0, 0.0, 100.0], alpha=0.05)
+    res = lsq.data_snooping(lsq.fit(A, [0.0, 0.0, 100.0]), alpha=0.05)
     assert res.stop_reason == "no redundancy left"
     assert len(res.removed) == 1 and res.fit.redundancy == 0
     m = 10
     A = np.column_stack([np.ones(m), np.arange(m, dtype=float)])
     y = np.zeros(m)
     y[[2, 7]] = [50.0, -80.0]
-    res = lsq.data_snooping(A, y, alpha=0.01, max_removals=1)
+    res = lsq.data_snooping(lsq.fit(A, y), alpha=0.01, max_removals=1)
     assert res.removed == (7,) and res.stop_reason == "max_removals reached"
     assert "removed [7]" in res.summary() and "np." not in repr(res) + res._repr_html_()
     for bad in (-1, 1.5, "a", True):
         with pytest.raises(
             ValueError, match=r"max_removals must be (a non-negative integer|an integer)"
         ):
-            lsq.data_snooping(A, y, max_removals=bad)
+            lsq.data_snooping(lsq.fit(A, y), max_removals=bad)
 
 
 def test_sea_level_data_cases():
@@ -429,7 +429,7 @@ def test_sea_level_data_cases():
     assert not lsq.overall_model_test(lsq.fit(A, y0, Q), 0.05).reject
     _, y1 = lsq.load_sea_level(1)
     assert lsq.overall_model_test(lsq.fit(A, y1, Q), 0.05).reject
-    assert lsq.data_snooping(A, y1, Q, alpha=0.05).removed == (4,)
+    assert lsq.data_snooping(lsq.fit(A, y1, Q), alpha=0.05).removed == (4,)
     _, y2 = lsq.load_sea_level(2)
     assert lsq.overall_model_test(lsq.fit(A, y2, Q), 0.05).reject
     A2 = np.column_stack([A, t**2])
@@ -685,7 +685,7 @@ def test_sparse_covariances_equal_their_dense_form():
         np.testing.assert_array_equal(f.Qyy, dense)
         ref = dense_reference(A, y, dense)
         np.testing.assert_allclose(lsq.w_tests(f).statistic, ref["w"], rtol=1e-9)
-        snoop = lsq.data_snooping(A, y + 30 * (np.arange(m) == 7), Q, alpha=0.001)
+        snoop = lsq.data_snooping(lsq.fit(A, y + 30 * (np.arange(m) == 7), Q), alpha=0.001)
         assert snoop.removed[0] == 7
 
 
@@ -850,7 +850,7 @@ def test_fit_and_tests_at_m_3000_use_no_m_by_m_memory(form):
         f = lsq.fit(A, y, Q)
         lsq.overall_model_test(f)
         lsq.w_tests(f)
-        lsq.data_snooping(A, y, Q, alpha=0.001, max_removals=2)
+        lsq.data_snooping(lsq.fit(A, y, Q), alpha=0.001, max_removals=2)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -881,7 +881,7 @@ def test_snooping_downdate_equals_a_fresh_fit_every_round(kind):
     )
     y = A @ [1.0, -1.0, 2.0] + np.linalg.cholesky(dense) @ rng.standard_normal(m)
     y[[4, 11, 19]] += [25.0, -30.0, 40.0]
-    res = lsq.data_snooping(A, y, Q, alpha=0.001)
+    res = lsq.data_snooping(lsq.fit(A, y, Q), alpha=0.001)
     assert {4, 11, 19} <= set(res.removed)
     fresh_fits = []
     for wt, idx in zip(res.rounds, res.round_indices):
@@ -908,14 +908,14 @@ def test_snooping_with_redundancy_one_removes_the_first_of_equal_w():
     wt = lsq.w_tests(lsq.fit(A, DAY2), 0.01)
     np.testing.assert_allclose(np.abs(wt.statistic), np.abs(wt.statistic[0]), rtol=1e-12)
     assert wt.largest == 0
-    assert lsq.data_snooping(A, DAY2, alpha=0.01).removed == (0,)
+    assert lsq.data_snooping(lsq.fit(A, DAY2), alpha=0.01).removed == (0,)
 
 
 def test_snooping_keeps_untestable_observations_untested():
     # observation 3 alone determines x2; observation 5 becomes untestable once 4 is removed
     A = np.array([[1, 0, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1]], float)
     y = np.array([1.0, 1.1, 0.9, 7.0, 2.0, 40.0])
-    res = lsq.data_snooping(A, y, alpha=0.01)
+    res = lsq.data_snooping(lsq.fit(A, y), alpha=0.01)
     assert not res.rounds[0].testable[3]
     for wt, idx in zip(res.rounds, res.round_indices):
         idx = np.array(idx)

@@ -115,7 +115,7 @@ GOOD = {
     ),
     "lsq.plot_data_snooping_loop": (
         pl.plot_data_snooping_loop,
-        lambda: (lsq.data_snooping(A_LINE, [28.0, 20.0, 16.0, 36.0], alpha=0.01),),
+        lambda: (lsq.data_snooping(lsq.fit(A_LINE, [28.0, 20.0, 16.0, 36.0]), alpha=0.01),),
         {},
     ),
     "diagnosis.plot_residual_geometry": (

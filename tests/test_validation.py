@@ -14,7 +14,7 @@ U = np.column_stack([np.ones(6), np.arange(6.0)])
 #: Functions that take a count, called with the count ``n`` (10 is valid for all).
 COUNT_TAKERS = {
     "lsq.data_snooping(max_removals)": lambda n: lsq.data_snooping(
-        U, np.arange(6.0), max_removals=n
+        lsq.fit(U, np.arange(6.0)), max_removals=n
     ),
     "chi2 residual_threshold(dof)": lambda n: chi2.residual_threshold(n, 0.05),
     "diagnosis simulate_regression_records(n_records)": lambda n: dg.simulate_regression_records(
@@ -58,7 +58,7 @@ def test_counts_below_their_minimum_name_the_argument():
     with pytest.raises(ValueError, match=r"M .* integer of at least 2, got 1"):
         mismatched.mean_matrix(1, 1)
     with pytest.raises(ValueError, match="max_removals must be a non-negative integer"):
-        lsq.data_snooping(U, np.arange(6.0), max_removals=-1)
+        lsq.data_snooping(lsq.fit(U, np.arange(6.0)), max_removals=-1)
 
 
 def test_indices_follow_the_same_rule():

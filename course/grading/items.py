@@ -134,22 +134,30 @@ def is_unanswered_text(text: str | None) -> bool:
     return not stripped or stripped == SHORT_ANSWER_STUB
 
 
-def self_check_item(q, got, missing) -> None:
+def self_check_item(q, got, missing, saved_text: str | None = None) -> None:
     """The self-check of a choice or short-answer question (prints; never says right/wrong).
 
     ``q`` is a :class:`~course.grading.vocabulary.PublicQuestion`, ``got`` the student's value
-    of ``q.target`` or ``missing`` when the notebook has none.
+    of ``q.target`` or ``missing`` when the notebook has none. ``saved_text`` is a short
+    answer's cell as the saved notebook holds it (None when the notebook was not found): the
+    message says whether it is still the placeholder, not "replace it" to a student who did.
     """
     from course.grading.codec import decode
 
     points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
     if q.kind == QuestionKind.SHORT_ANSWER:
+        cell = f"the markdown cell below the question (cell id {answer_cell_id(q.id)!r})"
         print(f"{q.id} ({points}): short answer")
-        print(
-            f"  Write your answer in the markdown cell below the question (cell id "
-            f"{answer_cell_id(q.id)!r}), replacing its placeholder line. Your instructor marks "
-            "it after grading; there is nothing to check here."
-        )
+        if saved_text is None:
+            where = f"  Your answer goes in {cell}."
+        elif is_unanswered_text(saved_text):
+            where = (
+                f"  not answered yet: {cell} still holds its placeholder line in the saved "
+                "notebook; write your answer there (and save)."
+            )
+        else:
+            where = f"  Answered: {cell} holds your text in the saved notebook."
+        print(f"{where} Your instructor marks it after grading; there is nothing to check here.")
         return
     options = decode(q.options or [])
     print(f"{q.id} ({points}): choice {q.target}, one of {option_text(options)}")

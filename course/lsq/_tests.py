@@ -36,6 +36,8 @@ from course.validation import (
     as_probability,
 )
 
+_refit = fit  # data_snooping's argument is named fit, like every test's; it refits by this name
+
 
 # ---------------------------------------------------------------------------
 # overall model test
@@ -545,14 +547,15 @@ class SnoopingResult:
 
 
 def data_snooping(
-    A, y, Qyy=None, alpha: float = 0.01, max_removals: int | None = None
+    fit: LeastSquaresFit, alpha: float = 0.01, max_removals: int | None = None
 ) -> SnoopingResult:
     r"""Iterated w-tests: remove the worst rejected observation and refit.
 
     Parameters
     ----------
-    A, y, Qyy
-        The model, as for :func:`fit`.
+    fit : LeastSquaresFit
+        The fit of the full model, from :func:`fit` (its A, y and Qyy are the
+        model; like every other test, data snooping starts from a fit).
     alpha : float
         Level of significance of every w-test.
     max_removals : int, optional
@@ -600,14 +603,14 @@ def data_snooping(
     >>> import numpy as np
     >>> A = np.column_stack([np.ones(10), np.arange(10.0)])
     >>> y = [2.03, 2.58, 3.03, 3.37, 4.09, 4.54, 5.55, 5.56, 6.04, 6.53]
-    >>> result = data_snooping(A, y, 0.01 * np.eye(10), alpha=0.01)
+    >>> result = data_snooping(fit(A, y, 0.01 * np.eye(10)), alpha=0.01)
     >>> result.removed, result.stop_reason
     ((6,), 'no observation rejected')
     """
     alpha = as_probability(alpha)
     if max_removals is not None:
         max_removals = as_count(max_removals, "max_removals", minimum=0)
-    first = fit(A, y, Qyy)
+    first = _check_fit(fit)
     model = _OutlierModel(first)
     kept = np.arange(first.m)
     removed: list[int] = []
@@ -633,7 +636,7 @@ def data_snooping(
         model.remove(worst)
     current = first
     if removed:
-        current = fit(first.A[kept], first.y[kept], first._covariance.take(kept))
+        current = _refit(first.A[kept], first.y[kept], first._covariance.take(kept))
     return SnoopingResult(
         removed=tuple(removed),
         kept=tuple(kept.tolist()),

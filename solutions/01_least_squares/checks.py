@@ -27,6 +27,10 @@ Y_DAY1 = np.array([14.0, 20.0, 20.0, 24.0])
 Y_DAY2 = np.array([28.0, 20.0, 16.0, 36.0])
 I4 = np.eye(4)
 
+# A public line of q1 whose estimate is not round (2.4, 0.8333...).
+T_NONROUND = np.array([0.0, 1.5, 3.0, 4.5, 6.0])
+Y_NONROUND = np.array([2.3, 3.9, 4.4, 6.8, 7.1])
+
 # A falling line at uneven times (a hidden case of q1 and q2).
 T_UNEVEN = np.array([0.5, 1.0, 2.5, 4.0, 7.0])
 Y_UNEVEN = np.array([3.1, 2.2, 0.4, -1.9, -6.3])
@@ -102,6 +106,9 @@ def _line_fit(t, y):
 # Public: the chapter's worked examples (the self-check reproduces its numbers); hidden: other
 # lines, other lengths, uneven times and a falling line, on which the grade rests.
 q1.case(T_LINE, Y_DAY1, label="day 1 of the chapter's line fit")
+# a non-round answer: one computed in float32 misses the tolerance here, at the self-check
+# (day 1's round answer is exact in float32, so it passed there and failed only at grading)
+q1.case(T_NONROUND, Y_NONROUND, label="five heights at uneven times (a non-round estimate)")
 ### BEGIN HIDDEN TESTS
 q1.case(np.arange(-2.0, 3.0), Y_SEA, hidden=True)
 q1.case(np.linspace(0.0, 5.0, 6), Y6, hidden=True)
@@ -419,7 +426,7 @@ _LARGEST_E = (
         "Data snooping on a survey given as a dict like mine: the observation with the largest "
         "|w| (each residual of the WEIGHTED fit divided by ITS OWN standard deviation), as a "
         "0-based index.",
-        "lsq.data_snooping(survey['A'], survey['y'], survey['Qyy'], alpha=survey['alpha']) "
+        "lsq.data_snooping(lsq.fit(survey['A'], survey['y'], survey['Qyy']), alpha=survey['alpha']) "
         "lists the removed observations in their original numbering; return the first as an int.",
     ),
     mistakes=[
@@ -433,7 +440,9 @@ _LARGEST_E = (
     ],
 )
 def q7_practice(survey):
-    snooping = lsq.data_snooping(survey["A"], survey["y"], survey["Qyy"], alpha=survey["alpha"])
+    snooping = lsq.data_snooping(
+        lsq.fit(survey["A"], survey["y"], survey["Qyy"]), alpha=survey["alpha"]
+    )
     return int(snooping.removed[0])
 
 
@@ -515,7 +524,7 @@ def q6b(d):
     ],
 )
 def q7(d):
-    return int(lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).removed[0])
+    return int(lsq.data_snooping(lsq.fit(d["A"], d["y"], d["Qyy"]), alpha=d["alpha"]).removed[0])
 
 
 @CHECKS.function(

@@ -595,6 +595,11 @@ _COUNT_MISTAKES = [
         "innovations is chi2 with L degrees of freedom",
         lambda d: _false_alarms(d, dof=d["window"] - 1),
     ),
+    Mistake(
+        "one window too many looks counted: the window that ends at t_fault holds the fault's "
+        "first sample, so only those that end before t_fault are false alarms",
+        lambda d: _false_alarms(d, before=d["t_fault"] + 1),
+    ),
 ]
 
 
@@ -656,7 +661,7 @@ def q7_why(d):
     random_walk = data._windowed_alarms(
         d["y"], d["u"], d["Ts"], 1e-4, d["q_x"], d["r"], d["window"], d["alpha"], d["t_fault"]
     )
-    return "noise" if random_walk >= 5 else "model"
+    return "noise" if random_walk > 0 else "model"
 
 
 def _rls(theta, P, phi, y, r, p_sign=-1.0, divide=True, with_r=True, innovation=1.0):

@@ -17,6 +17,7 @@ from . import data
 # Results with several parts are named tuples: feedback names the part that is wrong.
 GLRDecision = namedtuple("GLRDecision", "T critical_value reject")
 FTest = namedtuple("FTest", "F critical_value reject")
+DIAResult = namedtuple("DIAResult", "T reject identified x_hat")
 
 # The notebook's line with an outlier: ten heights, sigma = 0.1, a blunder in observation 6.
 T10 = np.arange(10.0)
@@ -525,45 +526,43 @@ def q6(d):
     return _pair_T(d)
 
 
-def _dia_estimate(d, remove=None, Qyy=..., weighted_refit=True):
-    """The DIA estimate: the refit without the identified (or the given) observation."""
+def _dia(d, remove=..., Qyy=..., weighted_refit=True):
+    """The DIA result (T, reject, identified, x_hat): detection by the overall model test,
+    identification by the largest |w|, adaptation by the refit without it. ``remove`` names
+    another observation to remove (a mistake), ``Qyy=None`` drops the weights everywhere."""
     Qyy = d["Qyy"] if Qyy is ... else Qyy
     A, y = d["A"], d["y"]
     f = _fit(A, y, Qyy)
-    if remove is None:
-        if not lsq.overall_model_test(f, d["alpha"]).reject:
-            return np.asarray(f.x_hat)
-        remove = int(lsq.w_tests(f, d["alpha"]).largest)
-    keep = np.delete(np.arange(len(y)), remove)
+    reject = bool(lsq.overall_model_test(f, d["alpha"]).reject)
+    if not reject:
+        return DIAResult(float(f.squared_norm), reject, None, np.asarray(f.x_hat))
+    identified = int(lsq.w_tests(f, d["alpha"]).largest) if remove is ... else int(remove)
+    keep = np.delete(np.arange(len(y)), identified)
     sub = None if Qyy is None or not weighted_refit else np.asarray(Qyy)[np.ix_(keep, keep)]
-    return np.asarray(_fit(A[keep], y[keep], sub).x_hat)
+    x_hat = np.asarray(_fit(A[keep], y[keep], sub).x_hat)
+    return DIAResult(float(f.squared_norm), reject, identified, x_hat)
+
+
+def _largest_e(d):
+    return int(np.argmax(np.abs(_fit(d["A"], d["y"], d["Qyy"]).e_hat)))
 
 
 _DIA_MISTAKES = [
     Mistake(
-        "this is x_hat of the null model: after detection and identification, adapt (re-fit "
+        "x_hat is the null model's estimate: after detection and identification, adapt (re-fit "
         "without the identified observation)",
-        lambda d: np.asarray(_fit(d["A"], d["y"], d["Qyy"]).x_hat),
+        lambda d: _dia(d)._replace(x_hat=np.asarray(_fit(d["A"], d["y"], d["Qyy"]).x_hat)),
     ),
     Mistake(
-        "the observation with the largest |e| was removed: identification uses the largest "
+        "the observation with the largest |e| was identified: identification uses the largest "
         "|w|, each residual weighed by its own standard deviation",
-        lambda d: _dia_estimate(
-            d, remove=int(np.argmax(np.abs(_fit(d["A"], d["y"], d["Qyy"]).e_hat)))
-        ),
+        lambda d: _dia(d, remove=_largest_e(d)),
     ),
-    Mistake(
-        "looks unweighted: the Qyy of the data was ignored", lambda d: _dia_estimate(d, Qyy=None)
-    ),
+    Mistake("looks unweighted: the Qyy of the data was ignored", lambda d: _dia(d, Qyy=None)),
     Mistake(
         "the right observation was removed, but the refit without it is unweighted: keep "
         "the weights of the other observations",
-        lambda d: _dia_estimate(d, weighted_refit=False),
-    ),
-    Mistake(
-        "the line was refitted without the second observation of the pair: remove the "
-        "observation that the w-tests identify, not a suspect named in the data",
-        lambda d: _dia_estimate(d, remove=d["pair"][1]),
+        lambda d: _dia(d, weighted_refit=False),
     ),
 ]
 
@@ -574,8 +573,9 @@ _DIA_MISTAKES = [
     points=1,
     rtol=1e-6,
     atol=1e-8,
-    hint="Detect with the overall model test at d['alpha'], identify the largest |w|, adapt by "
-    "fitting the line without it; return (height at t = 0, slope).",
+    hint="Detect: T = e^T Qyy^{-1} e of the overall model test at d['alpha'] and its decision; "
+    "identify: the index of the largest |w| (None if nothing is rejected); adapt: fit the line "
+    "without it. Return (T, reject, identified, x_hat), x_hat = (height at t = 0, slope).",
     # data snooping removes observations until no w-test rejects: on the practice line three
     # (on almost every personal line more than one, but not on all: so only here)
     mistakes=[
@@ -583,14 +583,16 @@ _DIA_MISTAKES = [
         Mistake(
             "several observations were removed (data snooping repeats the w-tests until none "
             "rejects): the DIA procedure adapts once, to the one identified alternative",
-            lambda d: np.asarray(
-                lsq.data_snooping(d["A"], d["y"], d["Qyy"], alpha=d["alpha"]).fit.x_hat
+            lambda d: _dia(d)._replace(
+                x_hat=np.asarray(
+                    lsq.data_snooping(_fit(d["A"], d["y"], d["Qyy"]), alpha=d["alpha"]).fit.x_hat
+                )
             ),
         ),
     ],
 )
 def q7_practice(d):
-    return _dia_estimate(d)
+    return _dia(d)
 
 
 def _line(d):
@@ -610,23 +612,23 @@ for _q in (q6_practice, q7_practice):
 
 @CHECKS.value(
     "q7",
-    var="x_dia_mine",
+    var="dia_mine",
     points=2,
     data="levelling",
-    properties="estimate_properties",
+    properties="dia_properties",
     rtol=1e-6,
     atol=1e-8,
-    hint="The same procedure as q7_practice on your own line mine.",
+    hint="The same procedure as q7_practice on your own line mine: (T, reject, identified, x_hat).",
     mistakes=_DIA_MISTAKES
     + [
         Mistake(
-            "this is the DIA estimate of the public practice line: run it on your own line mine",
-            lambda d: _dia_estimate(PRACTICE),
+            "this is the DIA result of the public practice line: run it on your own line mine",
+            lambda d: _dia(PRACTICE),
         )
     ],
 )
 def q7(d):
-    return _dia_estimate(d)
+    return _dia(d)
 
 
 # ---------------------------------------------------------------------------

@@ -304,7 +304,7 @@ def main(argv=None) -> int:
         y = y.copy()
         y[outliers] += 40.0 * sigma[outliers]
         t0 = time.perf_counter()
-        snoop = lsq.data_snooping(A, y, Q, alpha=0.001)
+        snoop = lsq.data_snooping(lsq.fit(A, y, Q), alpha=0.001)
         t1 = time.perf_counter()
         refit = snooping_by_refitting(A, y, Q, 0.001)
         t2 = time.perf_counter()

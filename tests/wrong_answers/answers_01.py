@@ -212,7 +212,7 @@ T_mine = T_mine / 10
     "q7": [
         (
             "1-based index",
-            """snooping = lsq.data_snooping(mine["A"], mine["y"], mine["Qyy"], alpha=mine["alpha"])
+            """snooping = lsq.data_snooping(lsq.fit(mine["A"], mine["y"], mine["Qyy"]), alpha=mine["alpha"])
 suspect_mine = int(snooping.removed[0]) + 1
 """,
         ),
@@ -224,7 +224,7 @@ suspect_mine = int(np.argmax(np.abs(fit_mine.e_hat)))
         ),
         (
             "snooping without the weights",
-            """snooping = lsq.data_snooping(mine["A"], mine["y"], np.eye(len(mine["y"])), alpha=mine["alpha"])
+            """snooping = lsq.data_snooping(lsq.fit(mine["A"], mine["y"], np.eye(len(mine["y"]))), alpha=mine["alpha"])
 suspect_mine = int(snooping.removed[0])
 """,
         ),
@@ -333,7 +333,7 @@ WRONG["q7_practice"] = [
     (
         "1-based index",
         """def first_suspect(survey):
-    s = lsq.data_snooping(survey["A"], survey["y"], survey["Qyy"], alpha=survey["alpha"])
+    s = lsq.data_snooping(lsq.fit(survey["A"], survey["y"], survey["Qyy"]), alpha=survey["alpha"])
     return int(s.removed[0]) + 1
 """,
     ),
@@ -346,7 +346,7 @@ WRONG["q7_practice"] = [
     (
         "snooping without the weights",
         """def first_suspect(survey):
-    s = lsq.data_snooping(survey["A"], survey["y"], np.eye(len(survey["y"])), alpha=survey["alpha"])
+    s = lsq.data_snooping(lsq.fit(survey["A"], survey["y"], np.eye(len(survey["y"]))), alpha=survey["alpha"])
     return int(s.removed[0])
 """,
     ),

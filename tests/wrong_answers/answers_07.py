@@ -63,12 +63,16 @@ _Q9_HEAD = """def mdb_along(A, Qyy, C, alpha, power, direction):
 
 _DIA_BY = """def dia_estimate(d):
     fit = lsq.fit(d["A"], d["y"], d["Qyy"])
-    if not lsq.overall_model_test(fit, d["alpha"]).reject:
-        return fit.x_hat
-    suspect = {suspect}
+    T, reject = float(fit.squared_norm), bool(lsq.overall_model_test(fit, d["alpha"]).reject)
+    if not reject:
+        return T, reject, None, fit.x_hat
+    suspect = int({suspect})
     keep = np.delete(np.arange(len(d["y"])), suspect)
-    return lsq.fit(d["A"][keep], d["y"][keep], {weights}).x_hat
+    return T, reject, suspect, lsq.fit(d["A"][keep], d["y"][keep], {weights}).x_hat
 """
+_RIGHT_DIA = _DIA_BY.format(
+    suspect="lsq.w_tests(fit, d['alpha']).largest", weights='d["Qyy"][np.ix_(keep, keep)]'
+)
 
 WRONG = {
     "q1": [
@@ -401,7 +405,21 @@ def glr_statistic(A, y, Qyy, C):
     "q7_practice": [
         (
             "no adaptation (x_hat of H0)",
-            "def dia_estimate(d):\n    return lsq.fit(d['A'], d['y'], d['Qyy']).x_hat\n",
+            _RIGHT_DIA.replace(
+                'lsq.fit(d["A"][keep], d["y"][keep], d["Qyy"][np.ix_(keep, keep)]).x_hat',
+                "fit.x_hat",
+            ),
+        ),
+        (
+            "x_hat alone, as the question used to ask",
+            "def dia_estimate(d):\n"
+            "    fit = lsq.fit(d['A'], d['y'], d['Qyy'])\n"
+            "    keep = np.delete(np.arange(14), lsq.w_tests(fit, d['alpha']).largest)\n"
+            "    return lsq.fit(d['A'][keep], d['y'][keep], d['Qyy'][np.ix_(keep, keep)]).x_hat\n",
+        ),
+        (
+            "the pair's first observation removed, no detection or identification",
+            _DIA_BY.format(suspect="d['pair'][0]", weights='d["Qyy"][np.ix_(keep, keep)]'),
         ),
         (
             "largest |e| removed",
@@ -416,35 +434,41 @@ def glr_statistic(A, y, Qyy, C):
         ),
         (
             "data snooping (several removals)",
-            "x_dia_practice = lsq.data_snooping(practice['A'], practice['y'], practice['Qyy'], "
-            "alpha=practice['alpha']).fit.x_hat",
+            _RIGHT_DIA.replace(
+                'lsq.fit(d["A"][keep], d["y"][keep], d["Qyy"][np.ix_(keep, keep)]).x_hat',
+                'lsq.data_snooping(fit, alpha=d["alpha"]).fit.x_hat',
+            ),
         ),
         (
             "(slope, height) order",
-            _DIA_BY.format(
-                suspect="lsq.w_tests(fit, d['alpha']).largest",
-                weights='d["Qyy"][np.ix_(keep, keep)]',
-            ).replace(").x_hat", ").x_hat[::-1]"),
+            _RIGHT_DIA.replace("[np.ix_(keep, keep)]).x_hat", "[np.ix_(keep, keep)]).x_hat[::-1]"),
         ),
     ],
     "q7": [
-        ("the practice answer", "x_dia_mine = dia_estimate(practice)"),
+        ("the practice answer", "dia_mine = dia_estimate(practice)"),
         (
             "largest |e| removed",
             "fit = lsq.fit(mine['A'], mine['y'], mine['Qyy'])\n"
-            "keep = np.delete(np.arange(14), np.argmax(np.abs(fit.e_hat)))\n"
-            "x_dia_mine = lsq.fit(mine['A'][keep], mine['y'][keep], "
-            "mine['Qyy'][np.ix_(keep, keep)]).x_hat",
+            "suspect = int(np.argmax(np.abs(fit.e_hat)))\n"
+            "keep = np.delete(np.arange(14), suspect)\n"
+            "dia_mine = (fit.squared_norm, True, suspect, lsq.fit(mine['A'][keep], "
+            "mine['y'][keep], mine['Qyy'][np.ix_(keep, keep)]).x_hat)",
         ),
         (
             "no adaptation (x_hat of H0)",
-            "x_dia_mine = lsq.fit(mine['A'], mine['y'], mine['Qyy']).x_hat",
+            "fit = lsq.fit(mine['A'], mine['y'], mine['Qyy'])\n"
+            "dia_mine = (fit.squared_norm, True, lsq.w_tests(fit).largest, fit.x_hat)",
         ),
         (
-            "the pair's second observation removed",
+            "the pair's second observation removed, no detection or identification",
+            "fit = lsq.fit(mine['A'], mine['y'], mine['Qyy'])\n"
             "keep = np.delete(np.arange(14), mine['pair'][1])\n"
-            "x_dia_mine = lsq.fit(mine['A'][keep], mine['y'][keep], "
-            "mine['Qyy'][np.ix_(keep, keep)]).x_hat",
+            "dia_mine = (fit.squared_norm, True, mine['pair'][1], lsq.fit(mine['A'][keep], "
+            "mine['y'][keep], mine['Qyy'][np.ix_(keep, keep)]).x_hat)",
+        ),
+        (
+            "x_hat alone, as the question used to ask",
+            "dia_mine = dia_estimate(mine)[3]",
         ),
     ],
     "q8": [
@@ -577,11 +601,14 @@ def glr_decision(A, y, Qyy, C, alpha):
     "q7": [
         (
             "a list from the practice function",
-            "x_dia_mine = [float(v) for v in dia_estimate(mine)]",
+            "dia_mine = list(dia_estimate(mine))",
         ),
         (
             "lsq.dia (allowed here)",
-            "x_dia_mine = lsq.dia(lsq.fit(mine['A'], mine['y'], mine['Qyy']), alpha=mine['alpha']).x_hat",
+            "fit = lsq.fit(mine['A'], mine['y'], mine['Qyy'])\n"
+            "result = lsq.dia(fit, alpha=mine['alpha'])\n"
+            "dia_mine = (fit.squared_norm, lsq.overall_model_test(fit, mine['alpha']).reject, "
+            "result.identified, result.x_hat)",
         ),
     ],
     "q4": [
@@ -641,10 +668,12 @@ def glr_decision(A, y, Qyy, C, alpha):
             """def dia_estimate(d):
     fit = lsq.fit(d["A"], d["y"], d["Qyy"])
     if not lsq.overall_model_test(fit, d["alpha"]).reject:
-        return fit.x_hat
-    keep = np.delete(np.arange(len(d["y"])), lsq.w_tests(fit, d["alpha"]).largest)
+        return fit.squared_norm, False, None, fit.x_hat
+    suspect = int(np.argmax(np.abs(lsq.w_tests(fit).statistic)))
+    keep = np.delete(np.arange(len(d["y"])), suspect)
     s = np.sqrt(np.diag(d["Qyy"]))[keep]
-    return np.linalg.lstsq(d["A"][keep] / s[:, None], d["y"][keep] / s, rcond=None)[0]
+    x = np.linalg.lstsq(d["A"][keep] / s[:, None], d["y"][keep] / s, rcond=None)[0]
+    return [fit.squared_norm, True, suspect, x]
 """,
         )
     ],

@@ -38,6 +38,7 @@ from course.grading.vocabulary import (
     PLACEHOLDER_ID,
     PublicQuestion,
     PublicSpec,
+    QuestionKind,
     answer_cell_id,
     id_off_pattern,
     id_pattern_in,
@@ -255,7 +256,13 @@ class Assignment:
             return 0.0
         q = self._questions[qid]
         if q.kind in ITEM_KINDS:  # choice, short answer: never right/wrong here
-            self_check_item(q, value if explicit else ns.get(q.target, _MISSING), _MISSING)
+            saved = None
+            if q.kind == QuestionKind.SHORT_ANSWER:
+                from course.grading.student.submit import saved_short_answer
+
+                saved = saved_short_answer(ns, self.name, qid)
+            got = value if explicit else ns.get(q.target, _MISSING)
+            self_check_item(q, got, _MISSING, saved)
             return 0.0
         points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
         print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")

@@ -191,6 +191,23 @@ def _notebook_path(namespace: dict, assignment: str) -> Path | None:
     return path if path.is_file() else None
 
 
+def saved_short_answer(namespace: dict, assignment: str, qid: str) -> str | None:
+    """The text of ``qid``'s short-answer cell in the saved notebook of this kernel (None when
+    the notebook or the cell is not found): the self-check says whether it is answered."""
+    path = _notebook_path(namespace, assignment)
+    if path is None:
+        return None
+    try:
+        nb = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    for cell in _cells(nb):
+        meta = _role(cell)
+        if meta.get("role") == CellRole.ANSWER and meta.get("question") == qid:
+            return _source(cell)
+    return None
+
+
 def _stale_answers(nb: dict, namespace: dict) -> list[str]:
     """Questions whose SAVED code answer was never run in this kernel (edited and not saved,
     or not run since the kernel started).
