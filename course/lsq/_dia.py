@@ -10,6 +10,7 @@ course bibliography, :doc:`/docs/bibliography`.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,6 +30,34 @@ from course.validation import as_count, as_float_array, as_generator, as_probabi
 _CHUNK_BYTES = 16 * 2**20
 
 
+class _ObservationNames(Sequence):
+    """``("observation i", ...)`` for the default candidates, each name made when read.
+
+    At m = 10⁵ a tuple of the names costs more than the whole DIA step; this reads alike
+    (indexing, iteration, ``len``, equality with a tuple).
+    """
+
+    def __init__(self, indices: np.ndarray):
+        self._indices = indices
+
+    def __len__(self) -> int:
+        return int(self._indices.size)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return tuple(f"observation {i}" for i in self._indices[k].tolist())
+        return f"observation {int(self._indices[k])}"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sequence) and tuple(self) == tuple(other)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        return repr(tuple(self)) if len(self) <= 6 else f"<{len(self)} observations>"
+
+
 @dataclass(frozen=True)
 class _Candidates:
     """The alternatives: one outlier per testable observation, or the given bias spaces.
@@ -40,7 +69,7 @@ class _Candidates:
     ``T_i = w_i²``, ``∇̂_i = (L^{-T} ẽ)_i / Rc_i²`` and ``x̂_i = x̂_0 - R^{-1} p_i ∇̂_i``.
     """
 
-    names: tuple[str, ...]
+    names: Sequence[str]
     dims: np.ndarray  # q_k
     singles: np.ndarray | None = None  # indices of the tested observations (default)
     denom2: np.ndarray | None = None  # Rc_i² of the singles
@@ -77,7 +106,7 @@ def _candidates(fit: LeastSquaresFit, candidates: Any) -> _Candidates:
         if singles.size == 0:
             raise ValueError("no observation can be tested (no redundancy anywhere)")
         return _Candidates(
-            names=tuple(f"observation {i}" for i in singles),
+            names=_ObservationNames(singles),
             dims=np.ones(singles.size, dtype=int),
             singles=singles,
             denom2=denom2[singles],
@@ -170,8 +199,9 @@ class DIAResult:
         nothing was detected).
     statistics : ndarray, shape (k,)
         ``T_q`` of every candidate (``w_i²`` for single observations).
-    candidate_names : tuple of str
-        What each candidate is (``"observation 6"``, ``"candidate 2"``).
+    candidate_names : sequence of str
+        What each candidate is (``"observation 6"``, ``"candidate 2"``); a tuple, or for
+        the default candidates a sequence that makes each name when read.
     x_hat : ndarray, shape (n,)
         The DIA estimate: x̂ of H0 when nothing is detected, else x̂ of the
         identified alternative.
@@ -184,7 +214,7 @@ class DIAResult:
     detection: TestResult
     identified: int | None
     statistics: np.ndarray
-    candidate_names: tuple
+    candidate_names: Sequence[str]
     x_hat: np.ndarray
     x_hat_null: np.ndarray
     bias: np.ndarray | None
@@ -294,14 +324,14 @@ class DIAMonteCarlo:
         ``x̂_0 - x`` of the plain least-squares estimator in the same runs.
     identified : ndarray of int, shape (size,)
         Identified candidate per run, ``-1`` where nothing was detected.
-    candidate_names : tuple of str
-        What each candidate is.
+    candidate_names : sequence of str
+        What each candidate is (as in :class:`DIAResult`).
     """
 
     errors: np.ndarray
     errors_null: np.ndarray
     identified: np.ndarray
-    candidate_names: tuple
+    candidate_names: Sequence[str]
 
     @property
     def size(self) -> int:
