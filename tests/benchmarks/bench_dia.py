@@ -98,7 +98,7 @@ def child(m: int) -> None:
     A, y, variances, outlier = problem(m)
     seconds, index = cpu(ours, A, y, variances)
     f = lsq.fit(A, y, variances)
-    dia_seconds, result = cpu(lsq.dia, f)
+    dia_seconds, _ = cpu(lsq.dia, f)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(
         json.dumps(
