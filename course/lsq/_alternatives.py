@@ -18,6 +18,7 @@ from numpy.linalg import LinAlgError
 from scipy import linalg as sla
 from scipy import stats
 
+from course._noncentral import lower_quantile
 from course.chi2 import noncentrality, residual_norm_law
 from course.distributions import FrozenDistribution
 from course.linalg import readonly
@@ -471,8 +472,11 @@ def b_method(alpha_1: float = 0.001, power: float = 0.80, q: Any = 1) -> BMethod
     dims = np.array([as_count(v, "q") for v in np.atleast_1d(q_array).ravel()], dtype=int)
     if dims.size == 0:
         raise ValueError("q is empty; pass at least one dimension")
-    lam0 = noncentrality(alpha_1, power, 1)
-    threshold = stats.ncx2.ppf(1.0 - power, dims, lam0)
+    lam0 = noncentrality(alpha_1, power, 1)  # (refuses power beyond 1 - 1e-15)
+    # The q-dimensional threshold where the miss probability is 1 - power, searched in
+    # logarithms on the Poisson mixture (scipy's ncx2.ppf loses digits near power 1 and is
+    # NaN beyond about 1e11 dof); q = 1 gives back alpha_1.
+    threshold = np.array([lower_quantile(1.0 - power, float(d), lam0) for d in dims])
     alpha_q = stats.chi2.sf(threshold, dims)
     critical_1 = float(stats.norm.isf(alpha_1 / 2.0))
     if scalar:
