@@ -175,7 +175,7 @@ def _bias_space(fit: LeastSquaresFit, C: np.ndarray, name: str = "C") -> _BiasSp
         "columns that A cannot explain"
     )
     # The test is the same for C D (D diagonal): each column is scaled by a power of two
-    # (exactly) to a largest entry in [1/2, 1), so that neither the QR nor the rank check
+    # (exactly) to a largest entry in [1, 2), so that neither the QR nor the rank check
     # squares a 1e160 or a 1e-200 into overflow or underflow.
     peak = np.max(np.abs(C_w), axis=0)
     if not np.all(np.isfinite(peak)):
@@ -185,14 +185,14 @@ def _bias_space(fit: LeastSquaresFit, C: np.ndarray, name: str = "C") -> _BiasSp
         )
     if np.any(peak == 0.0):
         raise absorbed
-    scale = np.ldexp(1.0, np.frexp(peak)[1])
+    scale = np.ldexp(0.5, np.frexp(peak)[1])  # (2^(e-1) <= peak: never overflows)
     projected = np.asfortranarray(C_w / scale)
     Q1 = fit._Q1
     for _ in range(2):  # classical Gram-Schmidt twice: orthogonal to working precision
         projected -= Q1 @ (Q1.T @ projected)
     Qc, Rc_scaled = sla.qr(projected, mode="economic", check_finite=False)
     diagonal = np.abs(np.diag(Rc_scaled))
-    size = float(np.max(np.linalg.norm(C_w / scale, axis=0)))  # each column's in [1/2, sqrt(m))
+    size = float(np.max(np.linalg.norm(C_w / scale, axis=0)))  # each column's in [1, 2 sqrt(m))
     if float(np.min(diagonal)) <= _ABSORBED_RTOL * size:
         raise absorbed
     with np.errstate(over="ignore"):
@@ -607,8 +607,11 @@ def minimal_detectable_bias(
     order = np.argsort(singular)[::-1]  # largest singular value = smallest semi-axis
     lengths = np.sqrt(lam0) / singular[order]
     axes = Vt[order].T
-    Rc_inv_t = sla.solve_triangular(space.Rc, np.eye(space.q), trans="T", lower=False)
-    covariance = Rc_inv_t.T @ Rc_inv_t
+    with np.errstate(over="ignore", under="ignore"):
+        # (Q_∇̂∇̂ scales like 1/C²: inf or 0 when C is scaled beyond 1e±154, while the
+        # lengths, like 1/C, stay exact)
+        Rc_inv_t = sla.solve_triangular(space.Rc, np.eye(space.q), trans="T", lower=False)
+        covariance = Rc_inv_t.T @ Rc_inv_t
     return MinimalDetectableBias(
         lambda0=float(lam0),
         covariance=readonly((covariance + covariance.T) / 2.0),
