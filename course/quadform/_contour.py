@@ -249,7 +249,13 @@ class _Side:
             hi = self.s_max + lo
             w, h, d = self.top
             # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-            t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * np.maximum(x, 1e-300))
+            hw = np.float64(h * w)
+            with np.errstate(over="ignore", invalid="ignore"):
+                root_top = np.sqrt(hw**2 + 4.0 * d * w * x)
+            if not _every(np.isfinite(root_top)):
+                # (h w)² and d w x overflow at dof beyond 1e154: hypot of the split root
+                root_top = np.hypot(hw, 2.0 * math.sqrt(d) * np.sqrt(w * x))
+            t = (hw + root_top) / (2.0 * np.maximum(x, 1e-300))
             guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
         else:
             # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
@@ -835,19 +841,30 @@ def _normalised(sides, w, h, d, sigma):
 def _normal_limit(w, h, d, sigma):
     """``(H, mean/H, its low part, sd)`` where the law is normal to double precision, else None.
 
-    Beyond ``_NORMAL_DOF`` degrees of freedom in a term the skewness, about
-    ``sqrt(8/k)``, is below 1e-100, and the cumulants' sums approach the largest
-    double: they are taken on ``h/H`` and ``d/H`` (``H`` a power of two, so
-    exactly), the mean as an unevaluated sum of exact products.
+    The law is taken as normal when its skewness and excess kurtosis are both below
+    1e-20 (the Edgeworth corrections then stay below 1e-15 of the tails down to the
+    smallest double); that needs more than ``_NORMAL_DOF`` degrees of freedom in some
+    term (a chi-square's skewness is ``sqrt(8/k)``). Near there the cumulants' sums
+    approach the largest double: they are taken on ``h/H`` and ``d/H`` (``H`` a power
+    of two, so exactly), the mean as an unevaluated sum of exact products.
     """
     largest = float(np.max(h + d))
     if largest <= _NORMAL_DOF:
         return None
     H = 2.0 ** (math.frexp(largest)[1] - 1)
     hs, ds = h / H, d / H
+    var = float(2.0 * (w * w) @ (hs + 2.0 * ds)) + sigma * sigma / H  # κ2 / H
+    k3 = float(8.0 * (w**3) @ (hs + 3.0 * ds))  # κ3 / H
+    k4 = float(48.0 * (w**4) @ (hs + 4.0 * ds))  # κ4 / H
+    if not var > 0.0:
+        return None
+    kappa2 = var * H  # (the ratios in this order: var² may underflow)
+    skewness = abs(k3) / var / math.sqrt(kappa2)
+    kurtosis = abs(k4) / var / kappa2
+    if not (skewness <= 1e-20 and kurtosis <= 1e-20):
+        return None
     parts = np.concatenate([*_two_product(w, hs), *_two_product(w, ds)]).tolist()
     mean = math.fsum(parts)
-    var = float(2.0 * (w * w) @ (hs + 2.0 * ds)) + sigma * sigma / H
     return H, mean, math.fsum([*parts, -mean]), math.sqrt(H) * math.sqrt(var)
 
 
