@@ -11,7 +11,7 @@ course bibliography, :doc:`/docs/bibliography`.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -72,7 +72,7 @@ class _Candidates:
     names: Sequence[str]
     dims: np.ndarray  # q_k
     singles: np.ndarray | None = None  # indices of the tested observations (default)
-    denom2: np.ndarray | None = None  # Rc_i² of the singles
+    denom2: np.ndarray = field(default_factory=lambda: np.empty(0))  # Rc_i² of the singles
     bases: tuple[np.ndarray, ...] = ()  # Qc_k, m x q_k (given candidates)
     bias_maps: tuple[np.ndarray, ...] = ()  # Rc_k (∇̂_k = Rc_k^{-1} Qc_k^T ẽ)
     whitened: tuple[np.ndarray, ...] = ()  # L^{-1} C_k, m x q_k
