@@ -155,6 +155,19 @@ def compare(ours_call, base_call, repeats):
 # ---------------------------------------------------------------------------
 # memory and time against m, one fresh process per size
 # ---------------------------------------------------------------------------
+def peak_resident_kib() -> int:
+    """This process's peak resident set: VmHWM, of its own address space (new at exec). Linux
+    keeps ru_maxrss across execve, so there it would show the parent's size at fork."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+
+
 def child(m: int, repeats: int) -> None:
     A, y, variances = diagonal_problem(m)
     times = []
@@ -162,12 +175,12 @@ def child(m: int, repeats: int) -> None:
         t0 = time.process_time()
         ours(A, y, variances)
         times.append(time.process_time() - t0)
-    rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    rss_before = peak_resident_kib()
     tracemalloc.start()
     ours(A, y, variances)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+    rss = peak_resident_kib()
     data_bytes = A.nbytes + y.nbytes + variances.nbytes
     print(
         json.dumps(
