@@ -595,6 +595,16 @@ class TestResult:
         The critical region is this result's; under ``null`` the answer is
         ``alpha`` (for a continuous law).
 
+        Raises
+        ------
+        ValueError
+            When both laws are scipy's and ``alternative_law`` is not a law of this
+            test's statistic: another family (an F law for a chi-square test; the
+            non-central twin ``ncx2``, ``ncf``, ``nct`` counts as the same family) or
+            other degrees of freedom (a q = 2 law for a q = 1 test). Location and scale
+            may differ (a shifted normal, a scaled chi-square). Laws the course defines
+            are taken as given.
+
         Examples
         --------
         >>> from scipy import stats
@@ -605,6 +615,7 @@ class TestResult:
         from course.validation import as_law
 
         law = as_law(alternative_law, "alternative_law")
+        _check_same_statistic(self.null, law)
         return rejection_probability(law, self.critical_value, self.alternative)
 
     # -- presentation -----------------------------------------------------
@@ -651,6 +662,40 @@ class TestResult:
         )
         caption = html.escape(self.name)
         return f"<table><caption>{caption}</caption>{body}</table>"
+
+
+#: scipy's non-central families and their central twins: one statistic, two laws.
+_CENTRAL_TWIN = {"ncx2": "chi2", "ncf": "f", "nct": "t"}
+
+
+def _family_and_shapes(law: Any) -> tuple[str, dict[str, float]] | None:
+    """A scipy frozen law's family (non-central named by its central twin) and shape
+    parameters other than the non-centrality; None for any other law."""
+    dist, args = getattr(law, "dist", None), getattr(law, "args", None)
+    name = getattr(dist, "name", None)
+    if not isinstance(name, str) or not isinstance(args, tuple):
+        return None
+    names = [part.strip() for part in (getattr(dist, "shapes", None) or "").split(",")]
+    names = [part for part in names if part]
+    values = dict(zip(names, args))
+    values.update({k: v for k, v in (getattr(law, "kwds", None) or {}).items() if k in names})
+    shapes = {k: float(np.asarray(v)) for k, v in values.items() if k != "nc"}
+    return _CENTRAL_TWIN.get(name, name), shapes
+
+
+def _check_same_statistic(null: Any, law: Any) -> None:
+    """Refuse an alternative law that cannot be the law of this test's statistic."""
+    mine, theirs = _family_and_shapes(null), _family_and_shapes(law)
+    if mine is None or theirs is None or (mine == theirs):
+        return
+    differs = "family" if mine[0] != theirs[0] else "degrees of freedom"
+    raise ValueError(
+        f"alternative_law {describe_distribution(law)} is not a law of this test's statistic "
+        f"(its {differs} differ from the null law {describe_distribution(null)}): the family "
+        "and the degrees of freedom must be the test's (a non-central twin such as ncx2 for chi2 may add the "
+        "non-centrality, loc and scale may differ); build the law for this test, e.g. with "
+        "the same q and the same variance assumption"
+    )
 
 
 def _plain_number(value):

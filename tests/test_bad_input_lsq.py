@@ -4,6 +4,7 @@
 """
 
 import numpy as np
+import pytest
 from bad_input import (
     Arg,
     array,
@@ -147,3 +148,86 @@ XFAIL: dict[str, str] = {}  # every case passes since least squares was rewritte
     test_bad_input_is_refused,
     test_extreme_input,
 ) = module_tests("course.lsq", TABLE, EXEMPT, XFAIL)
+
+
+# ---------------------------------------------------------------------------
+# scaled and overflowing input (issue 38): right where the answer is representable,
+# else refused with a message that says what to rescale
+# ---------------------------------------------------------------------------
+E3 = np.eye(8)[:, 3]
+
+
+def _power(C, bias, variance="known"):
+    law = lsq.alternative_law(FIT, C, bias, variance)
+    return lsq.glr_test(FIT, C, variance=variance).power(law)
+
+
+SCALED = {
+    "glr_test, C x 1e160": (
+        lambda: lsq.glr_test(FIT, C2 * 1e160).statistic,
+        lsq.glr_test(FIT, C2).statistic,
+    ),
+    "glr_test, C x 1e-200": (
+        lambda: lsq.glr_test(FIT, C2 * 1e-200).statistic,
+        lsq.glr_test(FIT, C2).statistic,
+    ),
+    "minimal_detectable_bias, C x 1e160": (
+        lambda: lsq.minimal_detectable_bias(FIT, C2 * 1e160).lengths * 1e160,
+        MDB2.lengths,
+    ),
+    "minimal_detectable_bias, C x 1e-200": (
+        lambda: lsq.minimal_detectable_bias(FIT, C2 * 1e-200).lengths * 1e-200,
+        MDB2.lengths,
+    ),
+    "dia, candidates x 1e160 and x 1e-200": (
+        lambda: lsq.dia(FIT, [C2 * 1e160, E3 * 1e-200]).statistics,
+        lsq.dia(FIT, [C2, E3]).statistics,
+    ),
+    "alternative_law, bias 1e200: power": (lambda: _power(E3, 1e200), 1.0),
+    "alternative_law, bias 1e200, F: power": (lambda: _power(E3, 1e200, "estimated"), 1.0),
+    "alternative_law, bias 1e10 (λ beyond scipy's ncx2): power": (
+        lambda: _power(C2, [1e10, 0]),
+        1.0,
+    ),
+    "MinimalDetectableBias.along([1e300, 1e300])": (
+        lambda: MDB2.along([1e300, 1e300]),
+        MDB2.along([1.0, 1.0]),
+    ),
+    "external_reliability, C x 1e300: overall": (
+        lambda: lsq.external_reliability(FIT, C2 * 1e300, [0.5, 0.2]).overall / 1e300,
+        lsq.external_reliability(FIT, C2, [0.5, 0.2]).overall,
+    ),
+    "b_method(q=10**12): alpha_q": (
+        # ncx2(q, λ0) against chi2(q) at q = 1e12 shifts by λ0/sqrt(2q) standard deviations
+        lambda: lsq.b_method(0.001, 0.8, q=10**12).alpha_q,
+        0.7999966198,
+    ),
+}
+
+
+@pytest.mark.parametrize("name", SCALED)
+def test_scaled_input_gives_the_unscaled_answer(name):
+    call, expected = SCALED[name]
+    with np.errstate(over="raise", invalid="raise", divide="raise"):
+        got = call()
+    np.testing.assert_allclose(got, expected, rtol=1e-9)
+
+
+OVERFLOWING = {
+    "glr_test, C x 1.79e308 (whitened C overflows)": (
+        lambda: lsq.glr_test(FIT, C2 * 1.79e308),
+        "rescale the columns of C",
+    ),
+    "b_method, power beyond 1 - 1e-15": (lambda: lsq.b_method(0.001, 1 - 2**-53), "power"),
+    "minimal_detectable_bias, power beyond 1 - 1e-15": (
+        lambda: lsq.minimal_detectable_bias(FIT, C2, power=1 - 2**-53),
+        "power",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", OVERFLOWING)
+def test_unrepresentable_input_is_refused_with_a_message(name):
+    call, argument = OVERFLOWING[name]
+    with pytest.raises(ValueError, match=argument):
+        call()

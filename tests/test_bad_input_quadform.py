@@ -158,3 +158,24 @@ TABLE = {
     test_bad_input_is_refused,
     test_extreme_input,
 ) = module_tests("course.quadform", TABLE, exempt={})
+
+
+# ---------------------------------------------------------------------------
+# overflowing degrees of freedom (issue 38): no OverflowError, the normal limit where the
+# law is normal to double precision, and no normal limit where it is not
+# ---------------------------------------------------------------------------
+def test_imhof_at_1e200_degrees_of_freedom_just_above_the_mean():
+    """``imhof_cdf`` raised OverflowError at dof 1e200 and c just above the mean, and gave
+    0.0 (with a warning) at the mean itself; the law is normal to double precision."""
+    import warnings
+
+    from course import quadform
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for dof in (1e41, 1e200, 1e300):
+            assert quadform.imhof_cdf(dof * (1 + 1e-9), [1.0], [dof]) == 1.0
+            assert quadform.imhof_cdf(dof, [1.0], [dof]) == 0.5
+            assert quadform.imhof_sf(dof * (1 - 1e-9), [1.0], [dof]) == 1.0
+        # and a noncentral term of huge non-centrality beside a small one
+        assert quadform.imhof_cdf(1.0, [1.0, 0.5], [1e200, 3.0], [0.0, 1e199]) == 0.0

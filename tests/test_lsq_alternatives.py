@@ -454,3 +454,61 @@ def test_estimated_variance_refuses_data_that_fit_exactly(scale):
     # small but real noise is not round-off
     noisy = scale * (1.0 + 2.0 * np.arange(6.0) + 1e-9 * np.array([1, -2, 1, 3, -1, 0.5]))
     assert np.all(np.isfinite(lsq.w_tests(lsq.fit(A, noisy), variance="estimated").statistic))
+
+
+# ---------------------------------------------------------------------------
+# issue 38: a law of another test refused; the B-method near power 1
+# ---------------------------------------------------------------------------
+def test_power_refuses_a_law_of_another_dimension_or_family():
+    """The mistakes assignment 7 declares: a q = 2 law for a q = 1 test (0.975 before), an
+    F law for the chi-square test (0.792 before); the message names both laws."""
+    y = A_LINE @ [1.0, 0.5] + 0.1 * np.random.default_rng(3).standard_normal(10)
+    f = lsq.fit(A_LINE, y, 0.01 * np.eye(10))
+    e4, pair = np.eye(10)[:, 4], np.eye(10)[:, [4, 5]]
+    single = lsq.glr_test(f, e4, alpha=0.05)
+    with pytest.raises(ValueError, match=r"ncx2\(2, .*chi2\(1\)"):
+        single.power(lsq.alternative_law(f, pair, [0.3, 0.3]))
+    with pytest.raises(ValueError, match=r"family .*ncf\(1, 7|ncf\(1, 7.*family"):
+        single.power(lsq.alternative_law(f, e4, 0.3, variance="estimated"))
+    with pytest.raises(ValueError, match="degrees of freedom"):
+        lsq.glr_test(f, e4, variance="estimated").power(stats.ncf(1, 6, 3.0))
+    # the test's own laws, and location-scale changes, are taken
+    assert single.power(lsq.alternative_law(f, e4, 0.0)) == pytest.approx(0.05)
+    assert 0.05 < single.power(stats.ncx2(1, 4.0, scale=1.2)) < 1.0
+
+
+def _lambda0_w_test(alpha, power):
+    """λ0 of the two-sided w-test from its closed-form miss probability, with mpmath."""
+    import mpmath as mp
+
+    mp.mp.dps = 40
+    z = mp.sqrt(2) * mp.erfinv(1 - mp.mpf(alpha))
+    miss = 1 - mp.mpf(power)
+    start = z + mp.sqrt(2) * mp.erfinv(2 * mp.mpf(power) - 1)
+    root = mp.findroot(lambda s: mp.ncdf(z - s) - mp.ncdf(-z - s) - miss, start)
+    return float(root**2)
+
+
+@pytest.mark.parametrize("power", [0.8, 1 - 1e-9, 1 - 1e-12, 1 - 1e-14, 1 - 1e-15])
+def test_b_method_stays_accurate_up_to_power_one_minus_1e15(power):
+    """λ0 to 1e-12 relative and alpha_q(q = 1) = alpha_1 (0.000999925 at 1 - 1e-12 and λ0
+    3 % off at 1 - 1e-16 before); beyond 1 - 1e-15 refused."""
+    b = lsq.b_method(0.001, power, q=[1, 3])
+    assert b.lambda0 == pytest.approx(_lambda0_w_test(0.001, power), rel=1e-12)
+    assert b.alpha_q[0] == pytest.approx(0.001, rel=1e-12)
+    # the q = 3 test at alpha_q misses ncx2(3, λ0) with probability 1 - power
+    miss = stats.ncx2.cdf(b.critical_value_q[1], 3, b.lambda0)
+    assert miss == pytest.approx(1 - power, rel=1e-6)
+
+
+def test_b_method_refuses_power_nearer_one_than_1e15():
+    with pytest.raises(ValueError, match="1 - 1e-15"):
+        lsq.b_method(0.001, 1 - 1e-16)
+
+
+def test_w_tests_docstring_names_the_t_law_for_an_estimated_variance():
+    """The Returns section said ``null`` (``norm()``) and ``norm.isf`` whatever the variance."""
+    returns = lsq.w_tests.__doc__.split("Returns")[1].split("Raises")[0]
+    assert "t(m - n - 1)" in returns and "(``norm()``)" not in returns
+    attributes = lsq.WTestResult.__doc__
+    assert "2 norm.sf" not in attributes and "t(m - n - 1).isf" in attributes

@@ -18,7 +18,9 @@ from numpy.linalg import LinAlgError
 from scipy import linalg as sla
 from scipy import stats
 
+from course._noncentral import lower_quantile
 from course.chi2 import noncentrality, residual_norm_law
+from course.distributions import FrozenDistribution
 from course.linalg import readonly
 from course.lsq._fit import (
     LeastSquaresFit,
@@ -41,6 +43,77 @@ from course.validation import (
 _ABSORBED_RTOL = 1e-10
 
 _VARIANCES = ("known", "estimated")
+
+#: Above this non-centrality scipy's ncx2 and ncf lose accuracy and then return NaN (from
+#: about 1e19); :class:`_FarAlternative` takes over, where the power is 1 to double precision.
+_SCIPY_NONCENTRALITY = 1e15
+
+
+class _FarAlternative(FrozenDistribution):
+    """``ncx2(q, λ)`` or ``ncf(q, r, λ)`` for a λ beyond scipy's (``λ > 1e15``, ``inf`` included).
+
+    ``X = (Z + sqrt(λ))² + chi2(q - 1)`` (over ``chi2(r)/r``, times ``1/q``, for F).
+    Its cdf is computed where it underflows to 0 in double precision, i.e. wherever a
+    test's critical value can be: ``P(X <= x) <= P((Z + sqrt(λ))² <= λ/4) +
+    P(chi2(r)/r >= λ/(4 q x))`` (the second term for F only), and ``P(|Z + sqrt(λ)| <=
+    sqrt(λ)/2) <= exp(-λ/8)`` is 0 below 1e-300 for λ > 1e15. Nearer the centre of the
+    law it refuses rather than approximate. It is dressed as scipy's frozen law (``dist``,
+    ``args``) so that :meth:`~course.results.TestResult.power` can check it.
+    """
+
+    def __init__(self, q: int, lam: float, remaining: int | None = None):
+        self.q, self.lam, self.remaining = q, lam, remaining
+        name, shapes = ("ncx2", "df, nc") if remaining is None else ("ncf", "dfn, dfd, nc")
+        self.dist = _Family(name, shapes)
+        self.args = (q, lam) if remaining is None else (q, remaining, lam)
+        self.kwds: dict = {}
+
+    def _log_bound(self, x: np.ndarray) -> np.ndarray:
+        """log of an upper bound of ``P(X <= x)`` valid for ``x <= λ/4`` (chi2 scale)."""
+        log_normal = -self.lam / 8.0
+        if self.remaining is None:
+            return np.where(x <= self.lam / 4.0, log_normal, 0.0)
+        r = self.remaining
+        with np.errstate(divide="ignore", over="ignore"):
+            level = r * self.lam / (4.0 * self.q * np.maximum(x, 1e-300))
+        return np.logaddexp(log_normal, stats.chi2.logsf(level, r))
+
+    def _cdf(self, x):
+        bound = self._log_bound(np.asarray(x, dtype=float))
+        if np.any(bound > -745.0):  # (exp underflows to 0 below about -745)
+            raise ValueError(
+                f"the non-centrality λ = {self.lam:.3g} is beyond what scipy's non-central "
+                "laws compute; only the far lower tail (P = 0 to double precision, where "
+                "any test's critical value lies, so the power is 1) is available here"
+            )
+        return np.zeros_like(bound)
+
+    def _rvs(self, size, rng):
+        if not np.isfinite(self.lam):
+            raise ValueError("λ is infinite: the statistic has no finite draws")
+        value = (rng.standard_normal(size) + np.sqrt(self.lam)) ** 2
+        if self.q > 1:
+            value = value + rng.chisquare(self.q - 1, size)
+        if self.remaining is None:
+            return value
+        return (value / self.q) / (rng.chisquare(self.remaining, size) / self.remaining)
+
+    def __repr__(self) -> str:
+        return f"{self.dist.name}({', '.join(format_number(a) for a in self.args)})"
+
+
+class _Family(NamedTuple):
+    name: str
+    shapes: str
+
+
+def _noncentral_law(q: int, lam: float, remaining: int | None = None) -> Any:
+    """The law of T_q (``remaining`` None) or F under the alternative, central when λ = 0."""
+    if lam > _SCIPY_NONCENTRALITY:
+        return _FarAlternative(q, lam, remaining)
+    if remaining is None:
+        return stats.ncx2(q, lam) if lam > 0 else residual_norm_law(q)
+    return stats.ncf(q, remaining, lam) if lam > 0 else stats.f(q, remaining)
 
 
 def _check_variance(variance: Any) -> str:
@@ -95,19 +168,40 @@ def _bias_columns(fit: LeastSquaresFit, C: Any, name: str = "C") -> np.ndarray:
 
 def _bias_space(fit: LeastSquaresFit, C: np.ndarray, name: str = "C") -> _BiasSpace:
     C_w = np.asfortranarray(fit._covariance.whiten(C))
+    absorbed = LinAlgError(
+        f"[A {name}] is not of full column rank: a column of {name} (or a combination "
+        "of its columns) lies in the range of A, so that bias is absorbed by the "
+        "estimate x̂ and leaves no trace in the residuals; drop it, or choose bias "
+        "columns that A cannot explain"
+    )
+    # The test is the same for C D (D diagonal): each column is scaled by a power of two
+    # (exactly) to a largest entry in [1, 2), so that neither the QR nor the rank check
+    # squares a 1e160 or a 1e-200 into overflow or underflow.
+    peak = np.max(np.abs(C_w), axis=0)
+    if not np.all(np.isfinite(peak)):
+        raise ValueError(
+            f"{name} whitened by Qyy overflows double precision (largest |{name}| = "
+            f"{float(np.max(np.abs(C))):.3g}); rescale the columns of {name}"
+        )
+    if np.any(peak == 0.0):
+        raise absorbed
+    scale = np.ldexp(0.5, np.frexp(peak)[1])  # (2^(e-1) <= peak: never overflows)
+    projected = np.asfortranarray(C_w / scale)
     Q1 = fit._Q1
-    projected = C_w.copy(order="F")
     for _ in range(2):  # classical Gram-Schmidt twice: orthogonal to working precision
         projected -= Q1 @ (Q1.T @ projected)
-    Qc, Rc = sla.qr(projected, mode="economic", check_finite=False)
-    diagonal = np.abs(np.diag(Rc))
-    scale = float(np.max(np.linalg.norm(C_w, axis=0)))
-    if scale == 0.0 or float(np.min(diagonal)) <= _ABSORBED_RTOL * scale:
-        raise LinAlgError(
-            f"[A {name}] is not of full column rank: a column of {name} (or a combination "
-            "of its columns) lies in the range of A, so that bias is absorbed by the "
-            "estimate x̂ and leaves no trace in the residuals; drop it, or choose bias "
-            "columns that A cannot explain"
+    Qc, Rc_scaled = sla.qr(projected, mode="economic", check_finite=False)
+    diagonal = np.abs(np.diag(Rc_scaled))
+    size = float(np.max(np.linalg.norm(C_w / scale, axis=0)))  # each column's in [1, 2 sqrt(m))
+    if float(np.min(diagonal)) <= _ABSORBED_RTOL * size:
+        raise absorbed
+    with np.errstate(over="ignore"):
+        Rc = Rc_scaled * scale
+    if not np.all(np.isfinite(Rc)):
+        raise ValueError(
+            f"{name} is scaled so far from 1 that its whitened columns overflow double "
+            f"precision (largest |{name}| = {float(np.max(np.abs(C))):.3g}); rescale the "
+            f"columns of {name} (the bias's units) and scale the bias back"
         )
     return _BiasSpace(Qc=Qc, Rc=Rc, C_w=C_w)
 
@@ -259,7 +353,10 @@ def alternative_law(fit: LeastSquaresFit, C: Any, bias: Any, variance: str = "kn
     -------
     scipy.stats frozen distribution
         ``ncx2(q, λ)`` or ``ncf(q, m - n - q, λ)`` (central when λ = 0), to pass
-        to :meth:`~course.results.TestResult.power`.
+        to :meth:`~course.results.TestResult.power`. Beyond ``λ = 1e15``, where
+        scipy's non-central laws fail, a law of the same name whose cdf is computed
+        in the far lower tail only (0 there: the power of any test is 1); λ may be
+        ``inf`` when it overflows.
 
     See Also
     --------
@@ -288,16 +385,20 @@ def alternative_law(fit: LeastSquaresFit, C: Any, bias: Any, variance: str = "kn
     C = _bias_columns(fit, C)
     space = _bias_space(fit, C)
     bias = as_vector(np.atleast_1d(as_float_array(bias, "bias")), "bias", space.q)
-    lam = float(np.sum((space.Rc @ bias) ** 2))
+    # λ = |Rc ∇|², scaled: Rc ∇ of a 1e200 bias overflows before λ is known to be huge
+    peak = float(np.max(np.abs(bias)))
+    with np.errstate(over="ignore"):
+        size = float(sla.norm(space.Rc @ (bias / peak))) * peak if peak > 0 else 0.0
+        lam = size * size
     q = space.q
     if variance == "known":
-        return stats.ncx2(q, lam) if lam > 0 else residual_norm_law(q)
+        return _noncentral_law(q, lam)
     remaining = fit.redundancy - q
     if remaining < 1:
         raise ValueError(
             f"variance='estimated' needs q < m - n (q = {q}, m - n = {fit.redundancy})"
         )
-    return stats.ncf(q, remaining, lam) if lam > 0 else stats.f(q, remaining)
+    return _noncentral_law(q, lam, remaining)
 
 
 class BMethod(NamedTuple):
@@ -371,8 +472,11 @@ def b_method(alpha_1: float = 0.001, power: float = 0.80, q: Any = 1) -> BMethod
     dims = np.array([as_count(v, "q") for v in np.atleast_1d(q_array).ravel()], dtype=int)
     if dims.size == 0:
         raise ValueError("q is empty; pass at least one dimension")
-    lam0 = noncentrality(alpha_1, power, 1)
-    threshold = stats.ncx2.ppf(1.0 - power, dims, lam0)
+    lam0 = noncentrality(alpha_1, power, 1)  # (refuses power beyond 1 - 1e-15)
+    # The q-dimensional threshold where the miss probability is 1 - power, searched in
+    # logarithms on the Poisson mixture (scipy's ncx2.ppf loses digits near power 1 and is
+    # NaN beyond about 1e11 dof); q = 1 gives back alpha_1.
+    threshold = np.array([lower_quantile(1.0 - power, float(d), lam0) for d in dims])
     alpha_q = stats.chi2.sf(threshold, dims)
     critical_1 = float(stats.norm.isf(alpha_1 / 2.0))
     if scalar:
@@ -422,11 +526,12 @@ class MinimalDetectableBias:
         """
         q = self._Rc.shape[0]
         d = as_vector(np.atleast_1d(as_float_array(direction, "direction")), "direction", q)
-        norm = float(np.linalg.norm(d))
-        if norm == 0.0:
+        peak = float(np.max(np.abs(d)))
+        if peak == 0.0:
             raise ValueError("direction is the zero vector; pass a direction in the bias space")
-        d = d / norm
-        size = np.sqrt(self.lambda0) / float(np.linalg.norm(self._Rc @ d))
+        d = d / peak  # (first to a largest entry of 1: |d|² of [1e300, 1e300] overflows)
+        d = d / sla.norm(d)
+        size = np.sqrt(self.lambda0) / float(sla.norm(self._Rc @ d))
         return size * d
 
     def __repr__(self) -> str:
@@ -502,8 +607,11 @@ def minimal_detectable_bias(
     order = np.argsort(singular)[::-1]  # largest singular value = smallest semi-axis
     lengths = np.sqrt(lam0) / singular[order]
     axes = Vt[order].T
-    Rc_inv_t = sla.solve_triangular(space.Rc, np.eye(space.q), trans="T", lower=False)
-    covariance = Rc_inv_t.T @ Rc_inv_t
+    with np.errstate(over="ignore", under="ignore"):
+        # (Q_∇̂∇̂ scales like 1/C²: inf or 0 when C is scaled beyond 1e±154, while the
+        # lengths, like 1/C, stay exact)
+        Rc_inv_t = sla.solve_triangular(space.Rc, np.eye(space.q), trans="T", lower=False)
+        covariance = Rc_inv_t.T @ Rc_inv_t
     return MinimalDetectableBias(
         lambda0=float(lam0),
         covariance=readonly((covariance + covariance.T) / 2.0),
@@ -582,5 +690,5 @@ def external_reliability(fit: LeastSquaresFit, C: Any, bias: Any) -> ExternalRel
     return ExternalReliability(
         effect=readonly(effect),
         bias_to_noise=readonly(effect / fit.sigma_x_hat),
-        overall=float(np.linalg.norm(coordinates)),
+        overall=float(sla.norm(coordinates)),  # (BLAS nrm2: no overflow in the squares)
     )

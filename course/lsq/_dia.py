@@ -10,7 +10,8 @@ course bibliography, :doc:`/docs/bibliography`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -25,48 +26,118 @@ from course.lsq._tests import _w_quantities, overall_model_test
 from course.results import TestResult, format_number
 from course.validation import as_count, as_float_array, as_generator, as_probability, as_vector
 
+#: Working memory of one chunk of :func:`dia_monte_carlo` (its largest arrays, in bytes).
+_CHUNK_BYTES = 16 * 2**20
+
+
+class _ObservationNames(Sequence):
+    """``("observation i", ...)`` for the default candidates, each name made when read.
+
+    At m = 10⁵ a tuple of the names costs more than the whole DIA step; this reads alike
+    (indexing, iteration, ``len``, equality with a tuple).
+    """
+
+    def __init__(self, indices: np.ndarray):
+        self._indices = indices
+
+    def __len__(self) -> int:
+        return int(self._indices.size)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return tuple(f"observation {i}" for i in self._indices[k].tolist())
+        return f"observation {int(self._indices[k])}"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sequence) and tuple(self) == tuple(other)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        return repr(tuple(self)) if len(self) <= 6 else f"<{len(self)} observations>"
+
 
 @dataclass(frozen=True)
 class _Candidates:
-    """The alternatives' whitened bias spaces and the adaptation maps of x̂."""
+    """The alternatives: one outlier per testable observation, or the given bias spaces.
 
-    names: tuple[str, ...]
-    bases: tuple[np.ndarray, ...]  # Qc_k, m x q_k
+    ``singles`` (the default candidates, ``C_i = c_i``) holds the testable observations'
+    indices and needs nothing m x m: with ``p_i = Q1^T L^{-1} c_i`` (row i of
+    ``L^{-T} Q1``) the whitened bias space of ``c_i`` has ``Rc_i² = (Q_yy^{-1})_ii -
+    |p_i|²`` (the w-test's squared denominator) and ``Qc_i^T ẽ = (L^{-T} ẽ)_i / Rc_i``, so
+    ``T_i = w_i²``, ``∇̂_i = (L^{-T} ẽ)_i / Rc_i²`` and ``x̂_i = x̂_0 - R^{-1} p_i ∇̂_i``.
+    """
+
+    names: Sequence[str]
     dims: np.ndarray  # q_k
-    adapt: tuple[np.ndarray, ...]  # M_k = R^{-1} Q1^T C_w,k Rc_k^{-1}, n x q_k
-    bias_maps: tuple[np.ndarray, ...]  # Rc_k (∇̂_k = Rc_k^{-1} Qc_k^T ẽ)
+    singles: np.ndarray | None = None  # indices of the tested observations (default)
+    denom2: np.ndarray = field(default_factory=lambda: np.empty(0))  # Rc_i² of the singles
+    bases: tuple[np.ndarray, ...] = ()  # Qc_k, m x q_k (given candidates)
+    bias_maps: tuple[np.ndarray, ...] = ()  # Rc_k (∇̂_k = Rc_k^{-1} Qc_k^T ẽ)
+    whitened: tuple[np.ndarray, ...] = ()  # L^{-1} C_k, m x q_k
+
+
+def _check_candidate_list(candidates: Any, m: int) -> list:
+    """The candidates as a list of bias matrices, refusing a layout that would be misread."""
+    if isinstance(candidates, (str, bytes)) or not hasattr(candidates, "__len__"):
+        raise ValueError(
+            "candidates must be a list of bias matrices C_k (each (m, q_k) or (m,)), "
+            f"got {type(candidates).__name__}"
+        )
+    if isinstance(candidates, np.ndarray) and candidates.ndim != 3:
+        # A list is read element by element: a matrix would be read row by row.
+        raise ValueError(
+            f"candidates must be a list of bias matrices C_k, got one array of shape "
+            f"{candidates.shape} (m = {m}); pass list(C.T) to test each column of C as its "
+            "own one-dimensional candidate, or [C] for one candidate spanned by all its columns"
+        )
+    columns = list(candidates)
+    if not columns:
+        raise ValueError("candidates is empty; pass at least one alternative's C")
+    return columns
 
 
 def _candidates(fit: LeastSquaresFit, candidates: Any) -> _Candidates:
     if candidates is None:
         # Every observation that can be tested: its own outlier (the w-tests' alternatives).
-        testable = np.flatnonzero(_w_quantities(fit)[2])
-        if testable.size == 0:
+        _, denom2, testable = _w_quantities(fit)
+        singles = np.flatnonzero(testable)
+        if singles.size == 0:
             raise ValueError("no observation can be tested (no redundancy anywhere)")
-        columns = [np.eye(fit.m)[:, i] for i in testable]
-        names = tuple(f"observation {i}" for i in testable)
-    else:
-        if isinstance(candidates, (str, bytes)) or not hasattr(candidates, "__len__"):
-            raise ValueError(
-                "candidates must be a list of bias matrices C_k (each (m, q_k) or (m,)), "
-                f"got {type(candidates).__name__}"
-            )
-        columns = list(candidates)
-        if not columns:
-            raise ValueError("candidates is empty; pass at least one alternative's C")
-        names = tuple(f"candidate {k}" for k in range(len(columns)))
-    bases, dims, adapt, maps = [], [], [], []
+        return _Candidates(
+            names=_ObservationNames(singles),
+            dims=np.ones(singles.size, dtype=int),
+            singles=singles,
+            denom2=denom2[singles],
+        )
+    columns = _check_candidate_list(candidates, fit.m)
+    bases, dims, maps, whitened = [], [], [], []
     for k, C in enumerate(columns):
         C = _bias_columns(fit, C, f"candidates[{k}]")
         space = _bias_space(fit, C, f"candidates[{k}]")
-        # x̂_k = x̂_0 - R^{-1} Q1^T C_w ∇̂_k with ∇̂_k = Rc^{-1} (Qc^T ẽ)
-        Rc_inv = sla.solve_triangular(space.Rc, np.eye(space.q), lower=False)  # q x q
-        M = sla.solve_triangular(fit._R, fit._Q1.T @ space.C_w, lower=False) @ Rc_inv
         bases.append(space.Qc)
         dims.append(space.q)
-        adapt.append(M)
         maps.append(space.Rc)
-    return _Candidates(names, tuple(bases), np.array(dims), tuple(adapt), tuple(maps))
+        whitened.append(space.C_w)
+    return _Candidates(
+        names=tuple(f"candidate {k}" for k in range(len(columns))),
+        dims=np.array(dims),
+        bases=tuple(bases),
+        bias_maps=tuple(maps),
+        whitened=tuple(whitened),
+    )
+
+
+def _adaptation(fit: LeastSquaresFit, whitened_columns: np.ndarray) -> np.ndarray:
+    """``R^{-1} Q1^T L^{-1} C`` (n x q): how the bias ``∇`` moves x̂ (``x̂_k = x̂_0 - it @ ∇̂``)."""
+    return sla.solve_triangular(fit._R, fit._Q1.T @ whitened_columns, lower=False)
+
+
+def _single_adaptations(fit: LeastSquaresFit, singles: np.ndarray) -> np.ndarray:
+    """:func:`_adaptation` of every single-observation candidate: ``R^{-1} p_i`` as columns."""
+    P = fit._covariance.whiten_transpose(fit._Q1)[singles]  # rows p_i = Q1^T L^{-1} c_i
+    return sla.solve_triangular(fit._R, P.T, lower=False)
 
 
 def _chi2_log_sf(x: np.ndarray, dof: np.ndarray) -> np.ndarray:
@@ -128,8 +199,9 @@ class DIAResult:
         nothing was detected).
     statistics : ndarray, shape (k,)
         ``T_q`` of every candidate (``w_i²`` for single observations).
-    candidate_names : tuple of str
-        What each candidate is (``"observation 6"``, ``"candidate 2"``).
+    candidate_names : sequence of str
+        What each candidate is (``"observation 6"``, ``"candidate 2"``); a tuple, or for
+        the default candidates a sequence that makes each name when read.
     x_hat : ndarray, shape (n,)
         The DIA estimate: x̂ of H0 when nothing is detected, else x̂ of the
         identified alternative.
@@ -142,7 +214,7 @@ class DIAResult:
     detection: TestResult
     identified: int | None
     statistics: np.ndarray
-    candidate_names: tuple
+    candidate_names: Sequence[str]
     x_hat: np.ndarray
     x_hat_null: np.ndarray
     bias: np.ndarray | None
@@ -219,14 +291,22 @@ def dia(fit: LeastSquaresFit, candidates: Any = None, alpha: float = 0.05) -> DI
     _require_redundancy(fit, "DIA procedure")
     cands = _candidates(fit, candidates)
     detection = overall_model_test(fit, alpha)
-    coordinates = [Qc.T @ fit._e_w for Qc in cands.bases]
-    statistics = np.array([float(c @ c) for c in coordinates])
     x0 = fit.x_hat
+    if cands.singles is not None:
+        numerator = fit._w_parts[0][cands.singles]  # c_i^T Qyy^{-1} ê
+        statistics = numerator**2 / cands.denom2
+    else:
+        coordinates = [Qc.T @ fit._e_w for Qc in cands.bases]
+        statistics = np.array([float(c @ c) for c in coordinates])
     if not detection.reject:
         return DIAResult(detection, None, readonly(statistics), cands.names, x0, x0, None)
     k = int(_identify(statistics, cands.dims))
-    bias = sla.solve_triangular(cands.bias_maps[k], coordinates[k], lower=False)
-    x_hat = x0 - cands.adapt[k] @ coordinates[k]
+    if cands.singles is not None:
+        bias = np.array([numerator[k] / cands.denom2[k]])
+        x_hat = x0 - _single_adaptations(fit, cands.singles[k : k + 1])[:, 0] * bias[0]
+    else:
+        bias = sla.solve_triangular(cands.bias_maps[k], coordinates[k], lower=False)
+        x_hat = x0 - _adaptation(fit, cands.whitened[k]) @ bias
     return DIAResult(
         detection, k, readonly(statistics), cands.names, readonly(x_hat), x0, readonly(bias)
     )
@@ -244,14 +324,14 @@ class DIAMonteCarlo:
         ``x̂_0 - x`` of the plain least-squares estimator in the same runs.
     identified : ndarray of int, shape (size,)
         Identified candidate per run, ``-1`` where nothing was detected.
-    candidate_names : tuple of str
-        What each candidate is.
+    candidate_names : sequence of str
+        What each candidate is (as in :class:`DIAResult`).
     """
 
     errors: np.ndarray
     errors_null: np.ndarray
     identified: np.ndarray
-    candidate_names: tuple
+    candidate_names: Sequence[str]
 
     @property
     def size(self) -> int:
@@ -346,22 +426,63 @@ def dia_monte_carlo(
     rng = as_generator(rng)
     _require_redundancy(fit, "DIA procedure")
     cands = _candidates(fit, candidates)
-    m = fit.m
+    m, n = fit.m, fit.n
     b = np.zeros(m) if bias is None else as_vector(as_float_array(bias, "bias"), "bias", m)
     critical = residual_threshold(fit.redundancy, alpha)  # the overall model test's
+    shift = fit._covariance.whiten(b)
+    if cands.singles is not None:
+        adapt = _single_adaptations(fit, cands.singles)  # n x k, column i: R^{-1} p_i
+        width = m
+    else:
+        adapt_k = [_adaptation(fit, C_w) for C_w in cands.whitened]
+        width = m + int(cands.dims.sum())
+    try:
+        errors = np.empty((size, n))
+        errors_null = np.empty((size, n))
+        identified = np.full(size, -1)
+    except MemoryError as exc:
+        raise MemoryError(
+            f"the results of {size} runs ({size * (2 * n + 1) * 8 / 1e9:.3g} GB) do not fit in "
+            "memory; run fewer at a time, each with its own stream (rng.spawn), and combine"
+        ) from exc
+    # The draws in chunks of bounded memory: one Generator fills rows in order, so the chunks
+    # see the same numbers as one (size, m) draw would.
+    chunk = max(1, _CHUNK_BYTES // (8 * 4 * width))
+    for start in range(0, size, chunk):
+        rows = slice(start, min(start + chunk, size))
+        noise = rng.standard_normal((rows.stop - rows.start, m)) + shift
+        e_null, detected, choice, moves = _dia_chunk(
+            fit, cands, noise, critical, adapt_k if cands.singles is None else adapt
+        )
+        errors_null[rows] = e_null
+        errors[rows] = e_null - moves
+        identified[rows] = np.where(detected, choice, -1)
+    return DIAMonteCarlo(readonly(errors), readonly(errors_null), readonly(identified), cands.names)
+
+
+def _dia_chunk(fit: LeastSquaresFit, cands: _Candidates, noise: np.ndarray, critical: float, adapt):
+    """One chunk of :func:`dia_monte_carlo`: x̂_0's errors, detections, choices, adaptations."""
     Q1 = fit._Q1
-    noise = rng.standard_normal((size, m)) + fit._covariance.whiten(b)
     coefficients = noise @ Q1
     residuals = noise - coefficients @ Q1.T
     errors_null = sla.solve_triangular(fit._R, coefficients.T, lower=False).T
     detected = np.einsum("ij,ij->i", residuals, residuals) > critical
+    moves = np.zeros_like(errors_null)
+    if cands.singles is not None:
+        # c_i^T Qyy^{-1} ẽ of every run at once (L^{-T} of the residuals, in observation order)
+        numerators = fit._covariance.whiten_transpose(residuals.T).T[:, cands.singles]
+        statistics = numerators**2 / cands.denom2
+        choice = np.argmax(statistics, axis=1)
+        runs = np.flatnonzero(detected)
+        bias = numerators[runs, choice[runs]] / cands.denom2[choice[runs]]
+        moves[runs] = adapt[:, choice[runs]].T * bias[:, None]
+        return errors_null, detected, choice, moves
     coordinates = [residuals @ Qc for Qc in cands.bases]
     statistics = np.column_stack([np.einsum("ij,ij->i", c, c) for c in coordinates])
     choice = _identify(statistics, cands.dims)
-    errors = errors_null.copy()
-    identified = np.full(size, -1)
-    for k, (c, M) in enumerate(zip(coordinates, cands.adapt)):
+    for k, (c, Rc, M) in enumerate(zip(coordinates, cands.bias_maps, adapt)):
         runs = detected & (choice == k)
-        errors[runs] -= c[runs] @ M.T
-        identified[runs] = k
-    return DIAMonteCarlo(readonly(errors), readonly(errors_null), readonly(identified), cands.names)
+        if np.any(runs):
+            bias = sla.solve_triangular(Rc, c[runs].T, lower=False)
+            moves[runs] = (M @ bias).T
+    return errors_null, detected, choice, moves

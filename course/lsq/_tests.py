@@ -200,13 +200,16 @@ class WTestResult:
     ----------
     statistic : ndarray, shape (m,)
         Baarda's ``w_i``, one per observation (NaN where an observation cannot
-        be tested); the textbook writes ``w``.
+        be tested); the textbook writes ``w``. With an estimated variance, the
+        Student statistics ``t_i``.
     critical_value : float
-        ``norm.isf(alpha / 2)``: reject observation i when ``|w_i|`` exceeds it.
+        ``null.isf(alpha / 2)``: reject observation i when ``|w_i|`` exceeds it
+        (``norm.isf(alpha / 2)``, or ``t(m - n - 1).isf(alpha / 2)`` with an
+        estimated variance).
     reject : ndarray of bool, shape (m,)
         Decision per observation.
     pvalue : ndarray, shape (m,)
-        Two-sided p-values ``2 norm.sf(|w_i|)`` (NaN where untestable).
+        Two-sided p-values ``2 null.sf(|w_i|)`` (NaN where untestable).
     largest : int
         Index (0-based) of the largest ``|w_i|``: the most suspicious observation.
     testable : ndarray of bool, shape (m,)
@@ -384,9 +387,11 @@ def w_tests(fit: LeastSquaresFit, alpha: float = 0.05, variance: str = "known") 
     Returns
     -------
     WTestResult
-        ``statistic`` (the ``w_i``), ``critical_value`` (``norm.isf(alpha/2)``),
-        ``reject``, ``pvalue``, ``largest`` (index of max ``|w|``), ``testable``,
-        ``alpha`` and ``null`` (``norm()``); ``.tests()`` gives one
+        ``statistic`` (the ``w_i``; the ``t_i`` with an estimated variance),
+        ``critical_value`` (``null.isf(alpha/2)``), ``reject``, ``pvalue``,
+        ``largest`` (index of max ``|w|``), ``testable``, ``alpha`` and ``null``:
+        the normal law ``norm()`` for a known variance, Student's
+        ``t(m - n - 1)`` for an estimated one; ``.tests()`` gives one
         :class:`~course.results.TestResult` per observation.
 
     Raises

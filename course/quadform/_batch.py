@@ -4,8 +4,8 @@
 are one row per point (each point with its own law, every law with the same
 number of terms): its constants are arrays over the points, and the three
 places where the engine sums over the terms (the derivatives and the value of
-``K`` for the saddle point, the exponent of the integrand) take each point's
-own row.  Everything else (saddle point, path, truncation, trapezoid levels,
+``K`` for the saddle point, in :class:`_Side`'s one implementation through
+:meth:`_BatchSide._dot`; the exponent of the integrand) take each point's own row.  Everything else (saddle point, path, truncation, trapezoid levels,
 step halvings) is the vectorised code of one law, so a point of a batch costs
 what a point of a many-point call costs.
 
@@ -77,33 +77,10 @@ class _BatchSide(_Side):
             setattr(part, name, value)
         return part
 
-    def derivatives(self, s, x, pole):
-        """``phi'``, ``phi''``, ``phi'''`` at each point's ``s`` for its own law."""
-        _, hw, dw, c2, c3, n2, n3 = self.factors
-        t = 1.0 / (1.0 - s[:, None] * self.w2)
-        t2 = t * t
-        t3 = t2 * t
-        g1 = (t * hw).sum(axis=1) - x
-        g2 = (t2 * c2).sum(axis=1)
-        g3 = (t3 * c3).sum(axis=1)
-        if self.noncentral:
-            g1 = g1 + (t2 * dw).sum(axis=1)
-            g2 = g2 + (t3 * n2).sum(axis=1)
-            g3 = g3 + (t2 * t2 * n3).sum(axis=1)
-        if pole:
-            inv = 1.0 / s
-            g1 = g1 - inv
-            g2 = g2 + inv * inv
-            g3 = g3 - 2.0 * inv * inv * inv
-        return g1, g2, g3
-
-    def cgf(self, s):
-        """``K(s)`` at each point's ``s`` for its own law."""
-        z = 1.0 - s[:, None] * self.w2
-        value = (np.log(z) * self.minus_half_h).sum(axis=1)
-        if self.noncentral:
-            value = value + ((1.0 / z - 1.0) * (0.5 * self.d)).sum(axis=1)
-        return value
+    @staticmethod
+    def _dot(a, v):
+        """Each point's sum over its own terms (row i of ``a`` with row i of ``v``)."""
+        return (a * v).sum(axis=1)
 
     def bracket(self, x, upper):
         """As :meth:`_Side.bracket`, with each point's own constants (``upper`` one flag per point)."""

@@ -152,31 +152,41 @@ class _Side:
         return (x - self.mean) - self.mean_low
 
     # -- the cumulant generating function K(s) = log M(s) ---------------------
+    @staticmethod
+    def _dot(a, v):
+        """``sum_r a[:, r] v[r]``: the sum over the terms (a batch sums each point's row)."""
+        return a @ v
+
     def derivatives(self, s, x, pole):
-        """``phi'``, ``phi''``, ``phi'''`` of ``phi(s) = K(s) - s x [- log|s|]``, s of shape (n,)."""
+        """``phi'``, ``phi''``, ``phi'''`` of ``phi(s) = K(s) - s x [- log|s|]``, s of shape (n,).
+
+        The one implementation for one law and for a batch (``_batch._BatchSide``,
+        whose constants have one row per point and whose ``_dot`` sums each row).
+        """
+        dot = self._dot
         _, hw, dw, c2, c3, n2, n3 = self.factors
-        ws = np.multiply.outer(s, self.w2)
+        ws = s[:, None] * self.w2
         t = 1.0 / (1.0 - ws)
         t2 = t * t
         if self.centred:
             # K' - x as sum h w (t - 1) + d w (t^2 - 1) - (x - mean), t - 1 = 2 w s t:
             # no large terms cancel
             t_minus_1 = ws * t
-            g1 = t_minus_1 @ hw + (self.sigma2 * s - self.linear(x))
+            g1 = dot(t_minus_1, hw) + (self.sigma2 * s - self.linear(x))
             if self.noncentral:
-                g1 = g1 + (t_minus_1 * (t + 1.0)) @ dw
+                g1 = g1 + dot(t_minus_1 * (t + 1.0), dw)
         elif self.sigma2:
-            g1 = t @ hw + (self.sigma2 * s - x)
+            g1 = dot(t, hw) + (self.sigma2 * s - x)
         else:
-            g1 = t @ hw - x
-        g2 = t2 @ c2 + self.sigma2 if self.sigma2 else t2 @ c2
+            g1 = dot(t, hw) - x
+        g2 = dot(t2, c2) + self.sigma2 if self.sigma2 else dot(t2, c2)
         t3 = t2 * t
-        g3 = t3 @ c3
+        g3 = dot(t3, c3)
         if self.noncentral:
             if not self.centred:
-                g1 = g1 + t2 @ dw
-            g2 = g2 + t3 @ n2
-            g3 = g3 + (t2 * t2) @ n3
+                g1 = g1 + dot(t2, dw)
+            g2 = g2 + dot(t3, n2)
+            g3 = g3 + dot(t2 * t2, n3)
         if pole:
             inv = 1.0 / s
             g1 = g1 - inv
@@ -190,18 +200,19 @@ class _Side:
         Centred (huge dof): ``K(s) - s mean`` as ``sum -h/2 L(u) + d/2
         u^2/(1 + u)`` with ``u = -2 w s`` and ``L(u) = log(1 + u) - u``.
         """
+        dot = self._dot
         if self.centred:
-            u = np.multiply.outer(s, -self.w2)
-            value = _log1p_minus(u) @ (-0.5 * self.h) + 0.5 * self.sigma2 * s * s
+            u = s[:, None] * -self.w2
+            value = dot(_log1p_minus(u), -0.5 * self.h) + 0.5 * self.sigma2 * s * s
             if self.noncentral:
-                value = value + (u * u / (1.0 + u)) @ (0.5 * self.d)
+                value = value + dot(u * u / (1.0 + u), 0.5 * self.d)
             return value
-        z = 1.0 - np.multiply.outer(s, self.w2)
-        value = np.log(z) @ self.minus_half_h
+        z = 1.0 - s[:, None] * self.w2
+        value = dot(np.log(z), self.minus_half_h)
         if self.sigma2:
             value = value + 0.5 * self.sigma2 * s * s
         if self.noncentral:
-            value = value + (1.0 / z - 1.0) @ (0.5 * self.d)
+            value = value + dot(1.0 / z - 1.0, 0.5 * self.d)
         return value
 
     # -- where the saddle point lies ------------------------------------------
@@ -249,7 +260,13 @@ class _Side:
             hi = self.s_max + lo
             w, h, d = self.top
             # h w / t + d w / t^2 = x with t = 1 - 2 s w (the top term alone)
-            t = (h * w + np.sqrt((h * w) ** 2 + 4.0 * d * w * x)) / (2.0 * np.maximum(x, 1e-300))
+            hw = np.float64(h * w)
+            with np.errstate(over="ignore", invalid="ignore"):
+                root_top = np.sqrt(hw**2 + 4.0 * d * w * x)
+            if not _every(np.isfinite(root_top)):
+                # (h w)² and d w x overflow at dof beyond 1e154: hypot of the split root
+                root_top = np.hypot(hw, 2.0 * math.sqrt(d) * np.sqrt(w * x))
+            t = (hw + root_top) / (2.0 * np.maximum(x, 1e-300))
             guess = np.where(t < 1.0, np.minimum(guess, self.s_max * (1.0 - t)), guess)
         else:
             # no positive weight, a normal term: K'(s) >= mean, so phi' > 0
@@ -835,19 +852,30 @@ def _normalised(sides, w, h, d, sigma):
 def _normal_limit(w, h, d, sigma):
     """``(H, mean/H, its low part, sd)`` where the law is normal to double precision, else None.
 
-    Beyond ``_NORMAL_DOF`` degrees of freedom in a term the skewness, about
-    ``sqrt(8/k)``, is below 1e-100, and the cumulants' sums approach the largest
-    double: they are taken on ``h/H`` and ``d/H`` (``H`` a power of two, so
-    exactly), the mean as an unevaluated sum of exact products.
+    The law is taken as normal when its skewness and excess kurtosis are both below
+    1e-20 (the Edgeworth corrections then stay below 1e-15 of the tails down to the
+    smallest double); that needs more than ``_NORMAL_DOF`` degrees of freedom in some
+    term (a chi-square's skewness is ``sqrt(8/k)``). Near there the cumulants' sums
+    approach the largest double: they are taken on ``h/H`` and ``d/H`` (``H`` a power
+    of two, so exactly), the mean as an unevaluated sum of exact products.
     """
     largest = float(np.max(h + d))
     if largest <= _NORMAL_DOF:
         return None
     H = 2.0 ** (math.frexp(largest)[1] - 1)
     hs, ds = h / H, d / H
+    var = float(2.0 * (w * w) @ (hs + 2.0 * ds)) + sigma * sigma / H  # κ2 / H
+    k3 = float(8.0 * (w**3) @ (hs + 3.0 * ds))  # κ3 / H
+    k4 = float(48.0 * (w**4) @ (hs + 4.0 * ds))  # κ4 / H
+    if not var > 0.0:
+        return None
+    kappa2 = var * H  # (the ratios in this order: var² may underflow)
+    skewness = abs(k3) / var / math.sqrt(kappa2)
+    kurtosis = abs(k4) / var / kappa2
+    if not (skewness <= 1e-20 and kurtosis <= 1e-20):
+        return None
     parts = np.concatenate([*_two_product(w, hs), *_two_product(w, ds)]).tolist()
     mean = math.fsum(parts)
-    var = float(2.0 * (w * w) @ (hs + 2.0 * ds)) + sigma * sigma / H
     return H, mean, math.fsum([*parts, -mean]), math.sqrt(H) * math.sqrt(var)
 
 

@@ -50,9 +50,10 @@ _LOG_UNDERFLOW = -760.0
 # integrals are centred at the mean (see _Side.linear): the factors' logarithms
 # otherwise lose ~eps h of the exponent (errors of 1e-8 at dof 1e8).
 _CENTRED_DOF = 1e4
-# Beyond this the law is normal to double precision (skewness below 1e-100) and the
-# sums of its cumulants approach the largest double: the normal limit is used.
-_NORMAL_DOF = 1e200
+# Below this many degrees of freedom in every term the law is never normal to double
+# precision (a chi-square's skewness sqrt(8/k) is above 1e-20); beyond it the normal limit
+# is used where the skewness and kurtosis of the whole law are below 1e-20.
+_NORMAL_DOF = 8e40
 # Chi-square terms this small beside a normal term are dropped (see _normalised).
 _NEGLIGIBLE = 1e-17
 # Below x sum((h + d)/(4w)) = _NEAR_ZERO (k + 1) a positive form's CDF is

@@ -23,7 +23,9 @@ model), ``w_i = ẽ_i / sqrt(1 - h_ii)`` for diagonal Qyy, and from its
 whitening matrix for a full one. Data snooping by rank-one downdates is
 timed against a fresh fit per removal for information (no target).
 
-Each comparison is repeated ``--repeats`` times, alternating ours and the
+Times are CPU times of this process (``time.process_time``, every BLAS thread
+counted), so that other work on a shared machine does not move them. Each
+comparison is repeated ``--repeats`` times, alternating ours and the
 baseline; the ratio of the best times decides, and the range of the
 per-repeat ratios is printed to show how much a shared machine moves it.
 Exits 1 when a target is missed.
@@ -139,11 +141,11 @@ def compare(ours_call, base_call, repeats):
     ours_call(), base_call()  # warm-up: imports, caches, first-touch of memory
     t_ours, t_base = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         ours_out = ours_call()
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         base_out = base_call()
-        t2 = time.perf_counter()
+        t2 = time.process_time()
         t_ours.append(t1 - t0)
         t_base.append(t2 - t1)
     ratios = np.array(t_ours) / np.array(t_base)
@@ -153,19 +155,32 @@ def compare(ours_call, base_call, repeats):
 # ---------------------------------------------------------------------------
 # memory and time against m, one fresh process per size
 # ---------------------------------------------------------------------------
+def peak_resident_kib() -> int:
+    """This process's peak resident set: VmHWM, of its own address space (new at exec). Linux
+    keeps ru_maxrss across execve, so there it would show the parent's size at fork."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+
+
 def child(m: int, repeats: int) -> None:
     A, y, variances = diagonal_problem(m)
     times = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         ours(A, y, variances)
-        times.append(time.perf_counter() - t0)
-    rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        times.append(time.process_time() - t0)
+    rss_before = peak_resident_kib()
     tracemalloc.start()
     ours(A, y, variances)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+    rss = peak_resident_kib()
     data_bytes = A.nbytes + y.nbytes + variances.nbytes
     print(
         json.dumps(
@@ -221,7 +236,10 @@ def main(argv=None) -> int:
         return 0
 
     failures = []
-    print(f"least squares, n = {N}, OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
+    print(
+        f"least squares, n = {N}, OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; "
+        "CPU seconds"
+    )
     print("\n1. diagonal Qyy: course.lsq fit + overall model test + w-tests vs statsmodels WLS fit")
     print(f"   {'m':>8} {'ours':>10} {'WLS':>10} {'ours/WLS':>9} {'range':>13} {'agree':>8}")
     ratio_diag = None
@@ -303,11 +321,11 @@ def main(argv=None) -> int:
         outliers = np.random.default_rng(5).choice(m, 8, replace=False)
         y = y.copy()
         y[outliers] += 40.0 * sigma[outliers]
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         snoop = lsq.data_snooping(lsq.fit(A, y, Q), alpha=0.001)
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         refit = snooping_by_refitting(A, y, Q, 0.001)
-        t2 = time.perf_counter()
+        t2 = time.process_time()
         if list(snoop.removed) != refit:
             raise SystemExit(f"snooping disagrees: {snoop.removed} vs {refit}")
         print(
