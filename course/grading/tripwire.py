@@ -25,8 +25,17 @@ Whether a caller is library code does not depend on anything a submission can se
 frame must run a code object that belonged to the library before student code ran (compared by
 identity; every such object is kept alive, so its identity cannot be reused) or one of the
 instrumented code objects, and its globals must be a library module's own namespace (also by
-identity). ``__name__``, a module's globals, the frame's file name: none of them counts. The
-decision data sit in the instrumented code objects' constants (immutable), not in variables.
+identity). ``__name__``, a module's globals, the frame's file name, a constant a submission
+can copy into its own code object: none of them counts. The decision data sit in the
+instrumented code objects' constants (immutable frozensets of ids), not in variables; a
+submission may read those ids, but no object it makes can have one of them, since every object
+named there is kept alive (``_KEEP``).
+
+The report cannot be skipped by a trace function: the body of an instrumented function runs
+inside a one-pass loop whose header makes the report, and the interpreter's ``frame.f_lineno``
+setter refuses a jump into a loop's body ("can't jump into the body of a for loop"); a profile
+function or ``sys.monitoring`` cannot jump at all. So tracing stays allowed (debuggers work
+in the student's Jupyter) and changes nothing.
 
 What remains possible (see ``docs/instructors/authoring.md``): rewriting compiled library code
 (``types.CodeType``, ``code.replace``) or copying the library's source into the notebook
@@ -71,12 +80,19 @@ _NOT_LIBRARY = ("course.grading", "course.cli", "course.__main__")
 
 # placeholders in the prologue's source, replaced by objects in the compiled code's constants
 _P_FRAME, _P_ID, _P_WRITE = "__tw_getframe__", "__tw_id__", "__tw_write__"
-_P_GLOBALS, _P_CODES, _P_MARK = "__tw_globals__", "__tw_codes__", "__tw_mark__"
+_P_GLOBALS, _P_CODES = "__tw_globals__", "__tw_codes__"
+# The report sits in the header of a one-pass ``for`` loop that holds the whole body: a trace
+# function may set ``frame.f_lineno`` only to a line outside any loop it is not already in
+# ("can't jump into the body of a for loop"), so no line jump reaches the body without the
+# header having run. The loop unpacks ``()`` into no name, so the function gets no new local.
+# The caller is trusted by identity only: its code object is one of the library's or of the
+# tripwires' own (ids, of objects kept alive), or it is this very code (recursion), and its
+# globals are a library module's namespace.
 _PROLOGUE = (
-    f"if not ({_P_ID!r}({_P_FRAME!r}(1).f_globals) in {_P_GLOBALS!r} and "
+    f"for [] in (((),) if ({_P_ID!r}({_P_FRAME!r}(1).f_globals) in {_P_GLOBALS!r} and "
     f"({_P_ID!r}({_P_FRAME!r}(1).f_code) in {_P_CODES!r} or "
-    f"{_P_MARK!r} in {_P_FRAME!r}(1).f_code.co_consts)): "
-    f"{_P_WRITE!r}(__TW_FD__, __TW_EVENT__)"
+    f"{_P_FRAME!r}(1).f_code is {_P_FRAME!r}(0).f_code)) "
+    f"else ({_P_WRITE!r}(__TW_FD__, __TW_EVENT__), ())[1:]):\n    pass\n"
 )
 
 
@@ -175,7 +191,12 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
         anchor = body[at].lineno if len(body) > at else fdef.lineno
         stmt = ast.parse(prologue).body[0]
         ast.increment_lineno(stmt, anchor - 1)
-        body.insert(at, stmt)
+        assert isinstance(stmt, ast.For)
+        if len(body) > at:  # the body runs inside the loop (its lines unchanged)
+            stmt.body = body[at:]
+            stmt.end_lineno = body[-1].end_lineno
+            stmt.end_col_offset = body[-1].end_col_offset
+        fdef.body = [*body[:at], stmt]
     if owner is not None:
         owner.body = [n for n in owner.body if n is fdef or not isinstance(n, ast.FunctionDef)]
         owner.decorator_list = []
@@ -206,23 +227,24 @@ def _future_flags() -> int:
 _FUTURE_FLAGS = _future_flags()
 
 
-def _replace_consts(code: types.CodeType, mapping: dict, mark) -> types.CodeType:
+def _replace_consts(code: types.CodeType, mapping: dict) -> types.CodeType:
     consts = []
     for c in code.co_consts:
         if isinstance(c, types.CodeType):
-            consts.append(_replace_consts(c, mapping, mark))
+            consts.append(_replace_consts(c, mapping))
         elif isinstance(c, str) and c in mapping:
             consts.append(mapping[c])
         else:
             consts.append(c)
-    return code.replace(co_consts=(*consts, mark))  # every nested code object carries the mark
+    return code.replace(co_consts=tuple(consts))
 
 
 def _same_code(a: types.CodeType, b: types.CodeType) -> bool:
     return a.co_code == b.co_code and a.co_names == b.co_names and a.co_varnames == b.co_varnames
 
 
-#: Library code objects trusted as callers; kept alive so that their ids stay theirs.
+#: Library code objects trusted as callers (and the instrumented ones, and the library's
+#: namespaces); kept alive so that their ids stay theirs.
 _KEEP: list = []
 
 
@@ -367,11 +389,41 @@ def _events(names) -> bytes:
     return b"".join(EVENT % n.encode("ascii") for n in sorted(names))
 
 
+def _callers_first(jobs: list) -> list:
+    """``jobs`` ordered so that a function comes after every other job function whose source
+    calls it (a cycle, beyond a function calling itself, keeps its members' given order)."""
+    funcs = [job[1] for job in jobs]
+    index = {id(f): i for i, f in enumerate(funcs) if f is not None}
+    calls = {
+        i: {index[id(c)] for c in _callees(f) if id(c) in index and index[id(c)] != i}
+        if isinstance(f, types.FunctionType)
+        else set()
+        for i, f in enumerate(funcs)
+    }
+    waiting = {i: sum(i in callees for callees in calls.values()) for i in range(len(jobs))}
+    order: list[int] = []
+    ready = [i for i in range(len(jobs)) if waiting[i] == 0]
+    while ready:
+        i = ready.pop(0)
+        order.append(i)
+        for j in sorted(calls[i]):
+            waiting[j] -= 1
+            if waiting[j] == 0:
+                ready.append(j)
+    order += [i for i in range(len(jobs)) if i not in order]
+    return [jobs[i] for i in order]
+
+
 def _rewrite(names, event_fd: int, write):
     """Rewrite the forbidden functions ``names`` and their private implementation to call
     ``write(event_fd, events)`` when called from outside the library. Returns the report
     ``{name: how}`` and what undoes it: ``(function, original code)`` pairs and
-    ``(module, attr, original)`` triples of wrapped attributes."""
+    ``(module, attr, original)`` triples of wrapped attributes.
+
+    A caller counts as the library when its code object is, by identity, one the library had
+    before (kept alive in ``_KEEP``, so no other object can take its id) or one rewritten here
+    earlier. The rewritten functions are made callers first (a function after those that call
+    it), so each one's set of trusted ids, fixed in its constants, holds its rewritten callers."""
     named, private = _targets(names)
     functions = list(_library_functions())
     rewritten_ids = {id(f) for f in named.values() if isinstance(f, types.FunctionType)}
@@ -382,14 +434,12 @@ def _rewrite(names, event_fd: int, write):
         vars(m) for n, m in list(sys.modules.items()) if m is not None and _is_library(n)
     ]
     _KEEP.extend(module_dicts)
-    mark = object()  # only the instrumented code objects hold it (identity, no equality)
+    trusted_ids = {id(c) for c in trusted}
     mapping = {
         _P_FRAME: sys._getframe,
         _P_ID: id,
         _P_WRITE: write,
         _P_GLOBALS: frozenset(id(d) for d in module_dicts),
-        _P_CODES: frozenset(id(c) for c in trusted),
-        _P_MARK: mark,
     }
     report: dict[str, str] = {}
     codes: list[tuple[types.FunctionType, types.CodeType]] = []
@@ -398,7 +448,7 @@ def _rewrite(names, event_fd: int, write):
     jobs += [
         (f"{f.__module__}.{f.__qualname__}", f, implements) for f, implements in private.items()
     ]
-    for dotted, func, implements in jobs:
+    for dotted, func, implements in _callers_first(jobs):
         if func is None:
             report[dotted] = "missing"
             continue
@@ -416,7 +466,12 @@ def _rewrite(names, event_fd: int, write):
             and _same_code(original, func.__code__)
         ):
             codes.append((func, func.__code__))
-            func.__code__ = _replace_consts(new, mapping, mark)
+            func.__code__ = _replace_consts(
+                new, {**mapping, _P_CODES: frozenset(trusted_ids)}
+            )
+            made = list(_codes_of(func.__code__))
+            _KEEP.extend(made)  # alive, whatever happens to the function, so its id stays its
+            trusted_ids.update(id(c) for c in made)
             report[dotted] = "instrumented"
         elif dotted in named and isinstance(
             sys.modules.get(dotted.rpartition(".")[0]), types.ModuleType
