@@ -11,6 +11,7 @@ costs only the question it happened in: the child is killed, a fresh one re-runs
 from __future__ import annotations
 
 import builtins
+import errno
 import re
 import threading
 import time
@@ -415,7 +416,7 @@ class StudentSession:
             if reply.get("status") == ReplyStatus.ERROR:
                 err = reply.get("error") or {}
                 self.cell_errors[i] = err
-                if cell.question and err.get("type") == "MemoryError":
+                if cell.question and _out_of_memory(err):
                     self.hard.setdefault(
                         cell.question,
                         (GradeStatus.MEMORY, f"{cell.label} ran out of memory (MemoryError)"),
@@ -693,7 +694,7 @@ class StudentSession:
             run.results.append(CaseResult(label, False, "not answered"))
         elif status == ReplyStatus.ERROR:
             err = reply.get("error") or {}
-            if err.get("type") == "MemoryError":
+            if _out_of_memory(err):
                 run.status = GradeStatus.MEMORY  # stops the run; the message stays the first
             text = self._hidden_error(q, err) if case.hidden else self._err_text(err)
             run.fail(CaseResult(label, False, f"raised {text}", raised=True))
@@ -713,6 +714,15 @@ class StudentSession:
             else:  # detail: the instructor's records only (results.jsonl)
                 run.fail(CaseResult(label, False, message, detail=verdict.detail))
         return None
+
+
+def _out_of_memory(err: dict) -> bool:
+    """Whether a child's error is its memory running out: a MemoryError, or an OSError with
+    ENOMEM (the sandbox answers so where memory would escape its limit, e.g. memfd_create)."""
+    kind, message = err.get("type"), str(err.get("message", ""))
+    return kind == "MemoryError" or (
+        kind in ("OSError", "MemoryError") and message.startswith(f"[Errno {errno.ENOMEM}]")
+    )
 
 
 def _question_result(q, status, message="", points=0.0, cases=None) -> QuestionResult:

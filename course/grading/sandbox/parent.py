@@ -79,6 +79,64 @@ MAX_REPLY_ITEMS = 200_000
 #: 12 bytes each at worst as JSON escapes), from a child that ran no student code.
 MAX_READ_REPLY_BYTES = 16_000_000
 _READ_FILE = "submission.ipynb"  # runner.READ_FILE (the runner is not imported by the parent)
+#: How often (seconds) the parent measures a working child's files, and the most entries of
+#: its folder it counts (more count as over the limit).
+FILES_POLL = 0.25
+MAX_FOLDER_ENTRIES = 10_000
+
+
+def _host_pid(pidfd: int | None) -> int | None:
+    """The pid, in the grader's PID namespace, of the process ``pidfd`` refers to."""
+    if pidfd is None:
+        return None
+    try:
+        with open(f"/proc/self/fdinfo/{pidfd}") as f:
+            for line in f:
+                if line.startswith("Pid:"):
+                    pid = int(line.split()[1])
+                    return pid if pid > 0 else None
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def files_bytes(folder: str, pid: int | None = None) -> int:
+    """The bytes a child's files take: every file beneath ``folder`` (allocated blocks, links
+    not followed) and, for the process ``pid``, the regular files it keeps open that no folder
+    names any more (deleted, or made with ``O_TMPFILE``). A folder of more than
+    :data:`MAX_FOLDER_ENTRIES` entries counts as without bound."""
+    total, seen = 0, 0
+    todo = [folder]
+    while todo:
+        try:
+            entries = list(os.scandir(todo.pop()))
+        except OSError:
+            continue
+        for entry in entries:
+            seen += 1
+            if seen > MAX_FOLDER_ENTRIES:
+                return sys.maxsize
+            try:
+                st = entry.stat(follow_symlinks=False)
+            except OSError:
+                continue
+            if stat.S_ISDIR(st.st_mode):
+                todo.append(entry.path)
+            else:
+                total += st.st_blocks * 512
+    if pid is not None:
+        try:
+            fds = os.listdir(f"/proc/{pid}/fd")
+        except OSError:
+            fds = []
+        for fd in fds[:MAX_FOLDER_ENTRIES]:
+            try:
+                st = os.stat(f"/proc/{pid}/fd/{fd}")
+            except OSError:
+                continue
+            if stat.S_ISREG(st.st_mode) and st.st_nlink == 0:
+                total += st.st_blocks * 512
+    return total
 
 
 @dataclass
@@ -90,6 +148,10 @@ class Limits:
     file_mb: int = 64
     output_chars: int = 1_000_000
     seccomp: bool = True
+    #: every file the child holds (its folder, and files it deleted but keeps open), in total:
+    #: on a tmpfs they are memory, which the address-space limit does not count
+    files_mb: int = 256
+    open_files: int = 256
 
     def as_dict(self) -> dict:
         return dict(
@@ -98,6 +160,7 @@ class Limits:
             file_mb=self.file_mb,
             output_chars=self.output_chars,
             seccomp=self.seccomp,
+            open_files=self.open_files,
         )
 
 
@@ -249,6 +312,8 @@ class ChildHandle:
         self._max_bytes = MAX_REPLY_BYTES
         self.cleanup_failed: list[str] = []  # what close() could not remove
         self.info: dict = {}
+        self.host_pid = _host_pid(pidfd)
+        self._files_limit = sandbox.limits.files_mb * 1024 * 1024
 
     # -- protocol -------------------------------------------------------------------------
     def _send(self, obj: dict, deadline: float) -> None:
@@ -286,15 +351,25 @@ class ChildHandle:
                 elif name in self.sandbox.forbid_set:
                     self._events[name] = 1
 
+    def _check_files(self) -> None:
+        """Stop the child when its files exceed their limit (``Limits.files_mb``)."""
+        if self._files_limit > 0 and files_bytes(self.tmpdir, self.host_pid) > self._files_limit:
+            self.kill()
+            raise ChildDied(
+                f"its files took more than {self._files_limit >> 20} MB (memory limit)"
+            )
+
     def _readline(self, deadline: float) -> bytes:
         while b"\n" not in self._buffer:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 raise ChildTimeout()
             watched = [self.resp_r] + ([self.event_r] if self.event_r >= 0 else [])
-            ready, _, _ = select.select(watched, [], [], remaining)
+            ready, _, _ = select.select(watched, [], [], min(remaining, FILES_POLL))
             if self.event_r in ready:
                 self._read_events()
+            if not ready:
+                self._check_files()
             if self.resp_r not in ready:
                 continue
             chunk = os.read(self.resp_r, 1 << 20)
@@ -356,6 +431,7 @@ class ChildHandle:
                     and reply.get("id") == self._next_id
                 ):
                     self._read_events()  # written before the reply, so already in the pipe
+                    self._check_files()
                     return reply
         except (ChildTimeout, ChildDied):
             self._read_events()
