@@ -1922,7 +1922,12 @@ _Q4_RIGHT = "    return _honest(A, y, Qyy)\n"
 def _q4_after(fill: str) -> str:
     honest = _cell(_solution(), "q4-answer")["source"].replace("def w_statistics(", "def _honest(")
     body = "".join("    " + line + "\n" for line in fill.strip("\n").split("\n"))
-    return honest + "\n\ndef w_statistics(A, y, Qyy):\n    import os\n    held = []\n" + body + _Q4_RIGHT
+    return (
+        honest
+        + "\n\ndef w_statistics(A, y, Qyy):\n    import os\n    held = []\n"
+        + body
+        + _Q4_RIGHT
+    )
 
 
 _MEMFD_FILL = """
@@ -1969,9 +1974,7 @@ def test_forbidden_calls_cannot_be_hidden_and_memory_cannot_leave_its_limit(tmp_
     }
     for sid, nb in files.items():
         (subs / f"{sid}.ipynb").write_text(json.dumps(nb))
-    options = GradeOptions(
-        jobs=2, timeout=20, memory_mb=512, progress=False, namespaces=namespaces
-    )
+    options = GradeOptions(jobs=2, timeout=20, memory_mb=512, progress=False, namespaces=namespaces)
     summary = grade(SOLUTION_DIR, subs, tmp_path / "out", options)
     rows = {r.student: r.to_json() for r in summary.rows}
     _expect(rows["honest"], {})

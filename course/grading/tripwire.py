@@ -58,29 +58,37 @@ import re
 import sys
 import textwrap
 import types
+import typing
 import warnings
 from builtins import getattr, setattr, str  # bound before student code runs (see runner)
 from typing import Any
 
 __all__ = [
     "EVENT",
+    "Call",
     "course_modules",
     "implementation",
     "instrument",
+    "label_callers",
     "parse_events",
     "resolve",
     "watch",
 ]
 
-#: The record written for one forbidden call (the name is a dotted Python name).
-EVENT = b"\x1ecourse-forbidden-call:%s\x1f"
-_EVENT_RE = re.compile(rb"\x1ecourse-forbidden-call:([A-Za-z0-9_.]{1,200})\x1f")
+#: The record written for one forbidden call: the function called (dotted), the public
+#: functions it implements (itself for a public one; the nearest first), and where the call
+#: came from (``callers``' label of the calling code, empty when it has none).
+EVENT = b"\x1ecourse-forbidden-call:%s=%s@%s\x1f"
+_EVENT_RE = re.compile(
+    rb"\x1ecourse-forbidden-call:([A-Za-z0-9_.]{1,200})=([A-Za-z0-9_.,]{1,4000})"
+    rb"@([A-Za-z0-9_]{0,40})\x1f"
+)
 _LIBRARY_PREFIX = "course."
 _NOT_LIBRARY = ("course.grading", "course.cli", "course.__main__")
 
 # placeholders in the prologue's source, replaced by objects in the compiled code's constants
 _P_FRAME, _P_ID, _P_WRITE = "__tw_getframe__", "__tw_id__", "__tw_write__"
-_P_GLOBALS, _P_CODES = "__tw_globals__", "__tw_codes__"
+_P_GLOBALS, _P_CODES, _P_CALLERS = "__tw_globals__", "__tw_codes__", "__tw_callers__"
 # The report sits in the header of a one-pass ``for`` loop that holds the whole body: a trace
 # function may set ``frame.f_lineno`` only to a line outside any loop it is not already in
 # ("can't jump into the body of a for loop"), so no line jump reaches the body without the
@@ -92,20 +100,64 @@ _PROLOGUE = (
     f"for [] in (((),) if ({_P_ID!r}({_P_FRAME!r}(1).f_globals) in {_P_GLOBALS!r} and "
     f"({_P_ID!r}({_P_FRAME!r}(1).f_code) in {_P_CODES!r} or "
     f"{_P_FRAME!r}(1).f_code is {_P_FRAME!r}(0).f_code)) "
-    f"else ({_P_WRITE!r}(__TW_FD__, __TW_EVENT__), ())[1:]):\n    pass\n"
+    f"else ({_P_WRITE!r}(__TW_FD__, __TW_EVENT__ + "
+    f"{_P_CALLERS!r}.get({_P_ID!r}({_P_FRAME!r}(1).f_code), b'') + b'\\x1f'), ())[1:]):"
+    "\n    pass\n"
 )
 
 
-def parse_events(buffer: bytes) -> tuple[list[str], bytes]:
+class Call(typing.NamedTuple):
+    """One forbidden call reported: ``called`` as the submission called it (a public function,
+    or a private helper), the public functions it implements (``implements``, the nearest
+    first) and the label of the calling code (``where``; '' when unlabelled)."""
+
+    called: str
+    implements: tuple[str, ...]
+    where: str
+
+    def describe(self, forbidden=None) -> str:
+        """``course.lsq.fit``, or ``course.filters._steps._update_core (a private helper of
+        course.filters.kf_update)``: the nearest public function it implements among
+        ``forbidden`` (default: all)."""
+        if self.implements == (self.called,):
+            return self.called
+        nearest = [n for n in self.implements if forbidden is None or n in forbidden]
+        return f"{self.called} (a private helper of {(nearest or self.implements)[0]})"
+
+
+def parse_events(buffer: bytes) -> tuple[list[Call], bytes]:
     """Forbidden calls reported in ``buffer``, and the tail to keep for the next read.
 
     Records are found anywhere in the stream, so bytes a submission writes in between can add
     reports (against itself) but never hide one.
     """
-    names = [m.group(1).decode("ascii") for m in _EVENT_RE.finditer(buffer)]
+    calls = [
+        Call(
+            m.group(1).decode("ascii"),
+            tuple(n for n in m.group(2).decode("ascii").split(",") if n),
+            m.group(3).decode("ascii"),
+        )
+        for m in _EVENT_RE.finditer(buffer)
+    ]
     cut = buffer.rfind(b"\x1e")
     tail = buffer[cut:] if cut >= 0 and not _EVENT_RE.search(buffer, cut) else b""
-    return names, tail[-300:]
+    return calls, tail[-4300:]
+
+
+#: Code objects labelled in a ``callers`` mapping, kept alive so that their ids stay theirs.
+_LABELLED: list = []
+
+
+def label_callers(callers: dict, func, label: str) -> None:
+    """Label ``func``'s code (and every code object nested in it) as ``label`` in ``callers``
+    (``id(code) -> label``), the mapping a tripwire reads to say where a call came from: the
+    grader labels each answer function with its question, right after its answer cell."""
+    code = getattr(func, "__code__", None)
+    if not isinstance(code, types.CodeType) or not re.fullmatch(r"[A-Za-z0-9_]{1,40}", label):
+        return
+    for c in _codes_of(code):
+        callers[id(c)] = label.encode("ascii")
+        _LABELLED.append(c)
 
 
 def _is_library(module_name: str) -> bool:
@@ -326,25 +378,41 @@ def implementation(func, public_ids: set[int] | None = None) -> list[types.Funct
     public = _public_ids() if public_ids is None else public_ids
     topic = _topic(str(func.__module__ or ""))
 
+    return list(_implementation_depths(func, _private_of(topic, public)))
+
+
+def _private_of(topic: str, public: set[int]):
+    """Whether a function is private library code of ``topic`` or of a shared module."""
+
     def private_here(f: types.FunctionType) -> bool:
         module_name = str(getattr(f, "__module__", "") or "")
         if not _is_library(module_name) or id(f) in public:
             return False
         return _topic(module_name) == topic or module_name.split(".")[1][:1] == "_"
 
-    found: list[types.FunctionType] = []
-    todo = [func]
+    return private_here
+
+
+def _implementation_depths(func, private_here) -> dict:
+    """:func:`implementation` breadth first: each private function with the number of calls
+    between ``func`` and it (1: ``func`` calls it)."""
+    found: dict = {}
+    todo = [(func, 0)]
     while todo:
-        for callee in _callees(todo.pop()):
+        caller, depth = todo.pop(0)
+        for callee in _callees(caller):
             if callee is not func and callee not in found and private_here(callee):
-                found.append(callee)
-                todo.append(callee)
+                found[callee] = depth + 1
+                todo.append((callee, depth + 1))
     return found
 
 
-def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str]]]:
+def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, list[str]]]:
     """The forbidden objects by dotted name (None when missing), and every private function
-    that implements one of them with the public names it implements."""
+    that implements one of them with the public names it implements, the nearest first
+    (fewest calls away, then of its own module, then first in the source), so that a report
+    names ``_update_core`` a helper of ``kf_update``, not of the seven other filters it
+    also serves."""
     named: dict[str, object] = {}
     for dotted in sorted(set(names)):
         named[dotted] = resolve(dotted)
@@ -354,11 +422,16 @@ def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str
             named[dotted] = init  # a class: its constructor reports
     public = _public_ids()
     forbidden_ids = {id(f) for f in named.values()}
-    private: dict[types.FunctionType, set[str]] = {}
+    ranked: dict[types.FunctionType, list[tuple]] = {}
     for dotted, func in named.items():
-        for f in implementation(func, public):
+        if not isinstance(func, types.FunctionType):
+            continue
+        private_here = _private_of(_topic(str(func.__module__ or "")), public)
+        for f, depth in _implementation_depths(func, private_here).items():
             if id(f) not in forbidden_ids:
-                private.setdefault(f, set()).add(dotted)
+                where = (depth, f.__module__ != func.__module__, func.__code__.co_firstlineno)
+                ranked.setdefault(f, []).append((*where, dotted))
+    private = {f: [rank[-1] for rank in sorted(ranks)] for f, ranks in ranked.items()}
     return named, private
 
 
@@ -385,8 +458,9 @@ def resolve(dotted: str):
     return None
 
 
-def _events(names) -> bytes:
-    return b"".join(EVENT % n.encode("ascii") for n in sorted(names))
+def _event_head(called: str, implements) -> bytes:
+    """A record up to the caller's label (the prologue adds the label and the end byte)."""
+    return (EVENT % (called.encode("ascii"), ",".join(implements).encode("ascii"), b""))[:-1]
 
 
 def _callers_first(jobs: list) -> list:
@@ -414,9 +488,10 @@ def _callers_first(jobs: list) -> list:
     return [jobs[i] for i in order]
 
 
-def _rewrite(names, event_fd: int, write):
+def _rewrite(names, event_fd: int, write, callers: dict):
     """Rewrite the forbidden functions ``names`` and their private implementation to call
-    ``write(event_fd, events)`` when called from outside the library. Returns the report
+    ``write(event_fd, record)`` when called from outside the library (the record ends with
+    ``callers``' label of the calling code, see :func:`label_callers`). Returns the report
     ``{name: how}`` and what undoes it: ``(function, original code)`` pairs and
     ``(module, attr, original)`` triples of wrapped attributes.
 
@@ -440,11 +515,12 @@ def _rewrite(names, event_fd: int, write):
         _P_ID: id,
         _P_WRITE: write,
         _P_GLOBALS: frozenset(id(d) for d in module_dicts),
+        _P_CALLERS: callers,
     }
     report: dict[str, str] = {}
     codes: list[tuple[types.FunctionType, types.CodeType]] = []
     wrapped: list[tuple] = []
-    jobs = [(dotted, func, {dotted}) for dotted, func in named.items()]
+    jobs = [(dotted, func, [dotted]) for dotted, func in named.items()]
     jobs += [
         (f"{f.__module__}.{f.__qualname__}", f, implements) for f, implements in private.items()
     ]
@@ -452,7 +528,7 @@ def _rewrite(names, event_fd: int, write):
         if func is None:
             report[dotted] = "missing"
             continue
-        event = _events(implements)
+        event = _event_head(dotted, implements)
         prologue = _PROLOGUE.replace("__TW_FD__", str(int(event_fd))).replace(
             "__TW_EVENT__", repr(event)
         )
@@ -466,9 +542,7 @@ def _rewrite(names, event_fd: int, write):
             and _same_code(original, func.__code__)
         ):
             codes.append((func, func.__code__))
-            func.__code__ = _replace_consts(
-                new, {**mapping, _P_CODES: frozenset(trusted_ids)}
-            )
+            func.__code__ = _replace_consts(new, {**mapping, _P_CODES: frozenset(trusted_ids)})
             made = list(_codes_of(func.__code__))
             _KEEP.extend(made)  # alive, whatever happens to the function, so its id stays its
             trusted_ids.update(id(c) for c in made)
@@ -476,7 +550,7 @@ def _rewrite(names, event_fd: int, write):
         elif dotted in named and isinstance(
             sys.modules.get(dotted.rpartition(".")[0]), types.ModuleType
         ):
-            wrapped.append(_wrap_reporting(dotted, func, event_fd, event, write))
+            wrapped.append(_wrap_reporting(dotted, func, event_fd, event + b"\x1f", write))
             report[dotted] = "wrapped"
         elif dotted in named:
             report[dotted] = "missing"  # a method that cannot be rewritten: nothing to wrap
@@ -484,7 +558,7 @@ def _rewrite(names, event_fd: int, write):
     return report, codes, wrapped
 
 
-def instrument(names, event_fd: int) -> dict[str, str]:
+def instrument(names, event_fd: int, callers: dict | None = None) -> dict[str, str]:
     """Instrument the forbidden functions ``names`` (dotted), and their private implementation
     (:func:`implementation`), to report to ``event_fd``.
 
@@ -492,19 +566,20 @@ def instrument(names, event_fd: int) -> dict[str, str]:
     code exists. Returns ``{name: how}`` with ``how`` one of ``"instrumented"``, ``"wrapped"``
     (not a plain function with source: a reporting wrapper replaces the module attribute, a
     weaker guard) or ``"missing"``; the private functions rewritten are listed too, by their
-    own dotted names.
+    own dotted names. ``callers``: the mapping :func:`label_callers` fills (the label of
+    the calling code is part of each report).
     """
-    report, _, _ = _rewrite(names, event_fd, os.write)
+    report, _, _ = _rewrite(names, event_fd, os.write, {} if callers is None else callers)
     linecache.clearcache()  # no library source left in memory for a child to read
     return report
 
 
-def watch(names, record):
+def watch(names, record, callers: dict | None = None):
     """The self-check's tripwires: :func:`instrument`'s rewriting, reporting to ``record``.
 
     Every call of a forbidden function in ``names`` (or of its private implementation) from
     outside the library, by any path (an alias, ``getattr``, ``functools.partial``, a private
-    twin), calls ``record(dotted)`` with the public name, before the function runs. Import the
+    twin), calls ``record(call)`` with the :class:`Call`, before the function runs. Import the
     library first (:func:`course_modules`): the modules imported later do not count as the
     library.
 
@@ -515,10 +590,10 @@ def watch(names, record):
     """
 
     def write(_fd, event: bytes) -> None:
-        for name in parse_events(event)[0]:
-            record(name)
+        for call in parse_events(event)[0]:
+            record(call)
 
-    _, codes, wrapped = _rewrite(names, 0, write)
+    _, codes, wrapped = _rewrite(names, 0, write, {} if callers is None else callers)
 
     def restore() -> None:
         for func, code in reversed(codes):

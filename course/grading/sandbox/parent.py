@@ -54,7 +54,7 @@ from pathlib import Path
 from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError
 from course.grading.sandbox.forkserver import TAMPERED
 from course.grading.sandbox.isolation import Isolation, detect
-from course.grading.tripwire import parse_events
+from course.grading.tripwire import Call, parse_events
 from course.grading.vocabulary import Op, ReplyStatus
 
 __all__ = [
@@ -304,9 +304,10 @@ class ChildHandle:
         self.killed_by_us = False
         self._buffer = b""
         self._events_tail = b""
-        # forbidden calls reported: only instrumented names, each once (in order) with a count,
-        # so a flood of reports costs the parent no memory
-        self._events: dict[str, int] = {}
+        # forbidden calls reported: only instrumented functions and known labels, each
+        # (function, label) once (in order) with the names it implements and a count, so a
+        # flood of reports costs the parent no memory
+        self._events: dict[tuple[str, str], tuple[dict[str, None], int]] = {}
         self.events_reported = 0
         self._next_id = 0
         self._max_bytes = MAX_REPLY_BYTES
@@ -343,21 +344,24 @@ class ChildHandle:
                 return
             if not chunk:
                 return
-            names, self._events_tail = parse_events(self._events_tail + chunk)
-            self.events_reported += len(names)
-            for name in names:
-                if name in self._events:
-                    self._events[name] += 1
-                elif name in self.sandbox.forbid_set:
-                    self._events[name] = 1
+            calls, self._events_tail = parse_events(self._events_tail + chunk)
+            self.events_reported += len(calls)
+            for call in calls:
+                if call.called not in self.sandbox.instrumented:
+                    continue
+                where = call.where if call.where in self.sandbox.labels else ""
+                implements, count = self._events.get((call.called, where), ({}, 0))
+                for name in call.implements:
+                    if name in self.sandbox.forbid_set:
+                        implements[name] = None
+                if implements:
+                    self._events[(call.called, where)] = (implements, count + 1)
 
     def _check_files(self) -> None:
         """Stop the child when its files exceed their limit (``Limits.files_mb``)."""
         if self._files_limit > 0 and files_bytes(self.tmpdir, self.host_pid) > self._files_limit:
             self.kill()
-            raise ChildDied(
-                f"its files took more than {self._files_limit >> 20} MB (memory limit)"
-            )
+            raise ChildDied(f"its files took more than {self._files_limit >> 20} MB (memory limit)")
 
     def _readline(self, deadline: float) -> bytes:
         while b"\n" not in self._buffer:
@@ -382,11 +386,12 @@ class ChildHandle:
         line, self._buffer = self._buffer.split(b"\n", 1)
         return line
 
-    def take_events(self) -> list[str]:
-        """Forbidden library calls reported since the last call (in the order they happened)."""
+    def take_events(self) -> list[Call]:
+        """Forbidden library calls reported since the last call (in the order they happened),
+        each function called once per label of the calling code."""
         self._read_events()
-        events, self._events = list(self._events), {}
-        return events
+        events, self._events = self._events, {}
+        return [Call(called, tuple(names), where) for (called, where), (names, _) in events.items()]
 
     def request(
         self,
@@ -502,6 +507,9 @@ class Sandbox:
         Dotted names of forbidden library functions to instrument (:mod:`~course.grading.tripwire`).
     isolation : Isolation, optional
         The layers to use (default: :func:`~course.grading.sandbox.isolation.detect`).
+    labels : sequence of str
+        The labels a child may give the code that made a forbidden call (the question ids:
+        a child labels each answer function with its question).
     """
 
     def __init__(
@@ -511,6 +519,7 @@ class Sandbox:
         deny_read=(),
         forbid=(),
         isolation: Isolation | None = None,
+        labels=(),
     ):
         if not sys.platform.startswith("linux"):
             raise SandboxError(
@@ -524,6 +533,8 @@ class Sandbox:
         self.preload = tuple(dict.fromkeys(PRELOAD + tuple(preload)))
         self.forbid = tuple(sorted(set(forbid)))
         self.forbid_set = frozenset(self.forbid)
+        #: the labels a report may give its calling code (the questions), see runner.op_run
+        self.labels = frozenset(labels)
         self.deny_read = [str(Path(p).resolve()) for p in deny_read]  # named by the audit hook
         # never mounted nor allowed, should a Python folder contain one of them
         self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]
@@ -541,6 +552,7 @@ class Sandbox:
             for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
                 os.chown(folder, *self.isolation.drop_to)
         self.server_info: dict = {}
+        self.instrumented: frozenset[str] = frozenset()
         self.server_restarts = 0  # fork servers replaced because a child changed scheduling
         self._retired: list[tuple[subprocess.Popen | None, socket.socket | None]] = []
         self._start_server()
@@ -606,6 +618,8 @@ class Sandbox:
             self.close()
             raise SandboxError(f"the fork server did not start: {log_text[-1500:]}")
         self.server_info = reply
+        #: the functions instrumented (public and private): the only ones a report may name
+        self.instrumented = frozenset(reply.get("tripwires") or ())
         self.isolation = self.isolation.with_(unprivileged=bool(reply.get("unprivileged")))
         if self.isolation.drop_to is not None and not self.isolation.unprivileged:
             # children stay root without capabilities: a folder of nobody's on the way to

@@ -294,11 +294,12 @@ def rules(pid: int, pinned_fd: int | None = None) -> list[Rule]:
         (deny, "setpriority", ((1, _NE, 0, 0),)),
         (deny, "setpriority", ((2, _MASKED_EQ, _SIGN, _SIGN),)),  # no negative nice (root)
         (deny, "ioprio_set", ((1, _NE, 0, 0),)),
-        *((deny, name, ()) for name in (*METADATA, *IF_KNOWN) if name not in OUT_OF_MEMORY_IF_KNOWN),
         *(
-            (_errno(errno.ENOMEM), name, ())
-            for name in (*OUT_OF_MEMORY, *OUT_OF_MEMORY_IF_KNOWN)
+            (deny, name, ())
+            for name in (*METADATA, *IF_KNOWN)
+            if name not in OUT_OF_MEMORY_IF_KNOWN
         ),
+        *((_errno(errno.ENOMEM), name, ()) for name in (*OUT_OF_MEMORY, *OUT_OF_MEMORY_IF_KNOWN)),
         *(
             (deny, name, ((1, _MASKED_EQ, _LOW_WORD, _F_SETPIPE_SZ),))
             for name in ("fcntl", "fcntl64")
