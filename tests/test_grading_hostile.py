@@ -964,7 +964,13 @@ def test_a_huge_cell_is_not_parsed_by_the_parent():
 def _handle(forbid=("numpy.linalg.inv",)):
     from course.grading.sandbox.parent import ChildHandle
 
-    sandbox = types.SimpleNamespace(forbid=tuple(forbid), forbid_set=frozenset(forbid))
+    sandbox = types.SimpleNamespace(
+        forbid=tuple(forbid),
+        forbid_set=frozenset(forbid),
+        instrumented=frozenset(forbid),
+        labels=frozenset({"q1"}),
+        limits=types.SimpleNamespace(files_mb=0),
+    )
     req_r, req_w = os.pipe()
     resp_r, resp_w = os.pipe()
     ev_r, ev_w = os.pipe()
@@ -980,12 +986,22 @@ def test_forbidden_call_reports_keep_one_entry_per_name():
     child, _, ev_w, fds = _handle()
     try:
         os.set_blocking(ev_w, False)
-        record, fake = EVENT % b"numpy.linalg.inv", EVENT % b"made.up.name"
-        for _ in range(2_000):
-            os.write(ev_w, fake * 20 + record)
+        inv = b"numpy.linalg.inv"
+        record = EVENT % (inv, inv, b"q1")
+        for i in range(2_000):
+            fakes = [
+                EVENT % (b"made.up.name", inv, b""),  # not instrumented
+                EVENT % (inv, b"made.up.name", b""),  # implements nothing forbidden
+                EVENT % (inv, inv, b"label%d" % i),  # an unknown label: none
+            ]
+            os.write(ev_w, b"".join(fakes) * 7 + record)
             child._read_events()
-        assert len(child._events) == 1 and child.events_reported == 2_000 * 21
-        assert child.take_events() == ["numpy.linalg.inv"] and child.take_events() == []
+        assert len(child._events) == 2 and child.events_reported == 2_000 * 22
+        assert child.take_events() == [
+            (inv.decode(), (inv.decode(),), ""),
+            (inv.decode(), (inv.decode(),), "q1"),
+        ]
+        assert child.take_events() == []
     finally:
         for fd in fds:
             os.close(fd)

@@ -315,6 +315,7 @@ class ChildHandle:
         self.info: dict = {}
         self.host_pid = _host_pid(pidfd)
         self._files_limit = sandbox.limits.files_mb * 1024 * 1024
+        self._files_checked = time.monotonic()
 
     # -- protocol -------------------------------------------------------------------------
     def _send(self, obj: dict, deadline: float) -> None:
@@ -359,6 +360,7 @@ class ChildHandle:
 
     def _check_files(self) -> None:
         """Stop the child when its files exceed their limit (``Limits.files_mb``)."""
+        self._files_checked = time.monotonic()
         if self._files_limit > 0 and files_bytes(self.tmpdir, self.host_pid) > self._files_limit:
             self.kill()
             raise ChildDied(f"its files took more than {self._files_limit >> 20} MB (memory limit)")
@@ -372,7 +374,7 @@ class ChildHandle:
             ready, _, _ = select.select(watched, [], [], min(remaining, FILES_POLL))
             if self.event_r in ready:
                 self._read_events()
-            if not ready:
+            if time.monotonic() >= self._files_checked + FILES_POLL:  # whatever else arrives
                 self._check_files()
             if self.resp_r not in ready:
                 continue
