@@ -533,8 +533,8 @@ def _rewrite(names, event_fd: int, write, callers: dict):
             "__TW_EVENT__", repr(event)
         )
         plain = isinstance(func, types.FunctionType) and not func.__code__.co_freevars
-        original = _recompile(func, None) if plain else None  # type: ignore[arg-type]
-        new = _recompile(func, prologue) if original is not None else None  # type: ignore[arg-type]
+        original = _recompile(func, None) if plain else None
+        new = _recompile(func, prologue) if original is not None else None
         if (
             isinstance(func, types.FunctionType)
             and new is not None

@@ -431,10 +431,11 @@ class StudentSession:
                     )
         return True
 
-    def _captured_by(self, cell) -> list[str]:
-        """The answer function a cell of a function question defines: the child keeps it as
-        that cell left it, and grading calls that one (issue 37 item 5: the answer graded is
-        the one its answer cell defined, as the self-check right after it sees it)."""
+    def _captured_by(self, cell) -> list[list[str]]:
+        """``[[name, question]]`` of the answer function a cell of a function question
+        defines: the child keeps it as that cell left it, grading calls that one (issue 37
+        item 5: the answer graded is the one its answer cell defined, as the self-check right
+        after it sees it), and its forbidden calls are its question's (item 3)."""
         q = self.g.checks.questions.get(cell.question) if cell.question else None
         if q is None or q.kind != QuestionKind.FUNCTION or not q.target:
             return []
