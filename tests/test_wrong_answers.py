@@ -540,3 +540,40 @@ def main(keys) -> None:
 
 if __name__ == "__main__":
     main(sys.argv[1:])
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_forbidden_calls_are_found_alike_at_the_self_check_and_at_grading(graded, key):
+    """Issue 36: the self-check and the grader find the same forbidden calls. Every variant of
+    the suite, wrong or right, self-checked as in ``test_right_answers_pass_the_public_self_check``
+    (answer cell, added cells, then ``check(q)`` on the notebook's names): the self-check
+    fails it for a forbidden call exactly when grading scores it ``forbidden``."""
+    spec = load_spec(SPECS[key])
+    ns = _solution_namespace(spec.assignment, f"{spec.student}-self")
+    check = ns["check"]
+    differ = []
+    for v, row in graded(key):
+        q = check.spec.question(v.qid)
+        if q.kind in ("choice", "short_answer"):
+            continue
+        mine = dict(ns)
+        buf = io.StringIO()
+        source, _, end = v.source.partition(f"\n{ADDED_AT_END}\n")
+        answer, _, below = source.partition(f"\n{ADDED_CELL}\n")
+        with contextlib.redirect_stdout(buf):
+            for cell_id, text in (
+                (answer_cell_id(v.qid), answer),
+                ("added-1", below),
+                ("added-2", end),
+            ):
+                _running_cell(ns, cell_id)
+                with contextlib.suppress(
+                    Exception
+                ):  # a wrong answer may raise: grading sees it too
+                    exec(compile(text, f"<{v.qid} {v.label}>", "exec"), mine)
+            check._check(v.qid, mine, None, False)
+        at_self_check = "which this question forbids" in buf.getvalue()
+        at_grading = row["status"] == "forbidden"
+        if at_self_check != at_grading:
+            differ.append(f"{_describe(v, row)}\n  self-check: {buf.getvalue()[:600]}")
+    assert not differ, "forbidden calls found differently:\n" + "\n".join(differ)

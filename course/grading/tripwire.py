@@ -16,9 +16,14 @@ source to get a function without the report.
 
 A forbidden function's private implementation is forbidden with it: :func:`implementation`
 follows the calls in its source to the private functions of its own package (and of the shared
-``course._*`` modules), transitively, and each of those reports the public name(s) it implements,
-so ``course.filters._steps._kf_update`` counts as ``course.filters.kf_update``. What is forbidden
-is the code that computes, not the name.
+``course._*`` modules), transitively, and each of those reports itself with the public names it
+implements (the nearest first), so ``course.filters._steps._kf_update`` counts as
+``course.filters.kf_update`` and is named as what the student called. What is forbidden is the
+code that computes, not the name.
+
+A report also carries the label of the calling code when it has one (:func:`label_callers`):
+the grader labels each answer function with its question, so that a call is charged on the
+question whose function made it, however another question reached that function.
 
 Calls made by the library itself (``data_snooping`` calling ``w_tests``) are not reported.
 Whether a caller is library code does not depend on anything a submission can set: the caller
