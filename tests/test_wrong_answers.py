@@ -33,8 +33,8 @@ dependent question is graded.
 To stay cheap, the suite packs the variants of different questions into few notebooks
 (questions are graded independently; a notebook holds at most one variant per question, every
 other answer cell keeps the solution, and no variant there rebinds a name another question's answer
-binds: the grader reads the notebook's final names, so a q6 cell that redefines q6_practice's
-function would be graded in its place) and grades them with the real grader,
+binds: the grader reads the notebook's final variables, and a later redefinition of a function
+is reported in the feedback, so such a pair would not be graded as each variant alone) and grades them with the real grader,
 ``course.grading.batch.driver.grade``, in the assignment's graded class that the whole-class tests
 share (``graded_class`` in ``tests/conftest.py``).
 
