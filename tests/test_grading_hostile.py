@@ -1993,9 +1993,19 @@ def test_forbidden_calls_cannot_be_hidden_and_memory_cannot_leave_its_limit(tmp_
     options = GradeOptions(jobs=2, timeout=20, memory_mb=512, progress=False, namespaces=namespaces)
     summary = grade(SOLUTION_DIR, subs, tmp_path / "out", options)
     rows = {r.student: r.to_json() for r in summary.rows}
-    _expect(rows["honest"], {})
+    expected = {
+        "honest": {},
+        "trace_jump": {"q3": "forbidden"},
+        "copied_marker": {"q3": "forbidden"},
+        "memfd_fill": {"q4": "memory"},
+        "deleted_files_fill": {"q4": "memory"},
+    }
+    failed = []  # every attack checked, so that a failure names each one that got through
+    for sid, zero in expected.items():
+        try:
+            _expect(rows[sid], zero)
+        except AssertionError as exc:
+            failed.append(f"{sid}: {exc}")
+    assert not failed, "\n".join(failed)
     for sid in ("trace_jump", "copied_marker"):
-        _expect(rows[sid], {"q3": "forbidden"})
         assert "course.lsq.fit" in rows[sid]["questions"]["q3"]["message"], rows[sid]
-    for sid in ("memfd_fill", "deleted_files_fill"):
-        _expect(rows[sid], {"q4": "memory"})
