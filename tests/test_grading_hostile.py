@@ -973,7 +973,13 @@ def test_a_huge_cell_is_not_parsed_by_the_parent():
 def _handle(forbid=("numpy.linalg.inv",)):
     from course.grading.sandbox.parent import ChildHandle
 
-    sandbox = types.SimpleNamespace(forbid=tuple(forbid), forbid_set=frozenset(forbid))
+    sandbox = types.SimpleNamespace(
+        forbid=tuple(forbid),
+        forbid_set=frozenset(forbid),
+        instrumented=frozenset(forbid),
+        labels=frozenset({"q1"}),
+        limits=types.SimpleNamespace(files_mb=0),
+    )
     req_r, req_w = os.pipe()
     resp_r, resp_w = os.pipe()
     ev_r, ev_w = os.pipe()
@@ -989,12 +995,22 @@ def test_forbidden_call_reports_keep_one_entry_per_name():
     child, _, ev_w, fds = _handle()
     try:
         os.set_blocking(ev_w, False)
-        record, fake = EVENT % b"numpy.linalg.inv", EVENT % b"made.up.name"
-        for _ in range(2_000):
-            os.write(ev_w, fake * 20 + record)
+        inv = b"numpy.linalg.inv"
+        record = EVENT % (inv, inv, b"q1")
+        for i in range(2_000):
+            fakes = [
+                EVENT % (b"made.up.name", inv, b""),  # not instrumented
+                EVENT % (inv, b"made.up.name", b""),  # implements nothing forbidden
+                EVENT % (inv, inv, b"label%d" % i),  # an unknown label: none
+            ]
+            os.write(ev_w, b"".join(fakes) * 7 + record)
             child._read_events()
-        assert len(child._events) == 1 and child.events_reported == 2_000 * 21
-        assert child.take_events() == ["numpy.linalg.inv"] and child.take_events() == []
+        assert len(child._events) == 2 and child.events_reported == 2_000 * 22
+        assert child.take_events() == [
+            (inv.decode(), (inv.decode(),), ""),
+            (inv.decode(), (inv.decode(),), "q1"),
+        ]
+        assert child.take_events() == []
     finally:
         for fd in fds:
             os.close(fd)
@@ -1879,3 +1895,126 @@ def test_a_server_that_cannot_reset_itself_is_replaced_and_its_children_live_on(
         finally:
             first.close()
             second.close()
+
+
+# ---------------------------------------------------------------------------------------
+# issue 36: forbidden calls that cannot be hidden, memory that cannot leave its limit
+# ---------------------------------------------------------------------------------------
+# q3 forbids course.lsq.fit and course.lsq.overall_model_test: both attacks compute q3 with
+# exactly those calls. The first jumps over the report with a trace function's f_lineno.
+_TRACE_JUMP = """
+import sys
+def overall_model_test_stat(A, y, Qyy, alpha):
+    def tracer(frame, event, arg):
+        if event == "call" and frame.f_code.co_name in ("fit", "overall_model_test"):
+            first = [True]
+            def local(frame, event, arg):
+                if event == "line" and first[0]:
+                    first[0] = False
+                    try:
+                        frame.f_lineno = frame.f_lineno + 1
+                    except ValueError:
+                        pass
+                return local
+            return local
+        return None
+    sys.settrace(tracer)
+    try:
+        r = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)
+    finally:
+        sys.settrace(None)
+    return r.statistic, r.critical_value, r.reject
+"""
+# The second copies the constant that marked library code into its own two-line function,
+# built with the library module's namespace as globals.
+_COPIED_MARKER = """
+import types
+import course.lsq as _L
+_marks = [c for c in _L.fit.__code__.co_consts if type(c) is object]
+def _mine(A, y, Qyy, alpha):
+    r = overall_model_test(fit(A, y, Qyy), alpha)
+    return r.statistic, r.critical_value, r.reject
+overall_model_test_stat = types.FunctionType(
+    _mine.__code__.replace(co_consts=_mine.__code__.co_consts + tuple(_marks)), vars(_L)
+)
+"""
+# memory the address-space limit does not count: memfd pages written with write(), and files
+# of the child's folder deleted but kept open (on a tmpfs they are memory too); 640 MB and
+# 384 MB against a 512 MB limit (files: 256 MB), and then the right answer
+_Q4_RIGHT = "    return _honest(A, y, Qyy)\n"
+
+
+def _q4_after(fill: str) -> str:
+    honest = _cell(_solution(), "q4-answer")["source"].replace("def w_statistics(", "def _honest(")
+    body = "".join("    " + line + "\n" for line in fill.strip("\n").split("\n"))
+    return (
+        honest
+        + "\n\ndef w_statistics(A, y, Qyy):\n    import os\n    held = []\n"
+        + body
+        + _Q4_RIGHT
+    )
+
+
+_MEMFD_FILL = """
+for i in range(10):
+    fd = os.memfd_create(f"hoard{i}")
+    for _ in range(64):
+        os.write(fd, b"x" * (1 << 20))
+    held.append(fd)
+"""
+_DELETED_FILES_FILL = """
+for i in range(8):
+    fd = os.open(f"hoard{i}", os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        os.posix_fallocate(fd, 0, 48 << 20)
+    except OSError:
+        for _ in range(48):
+            os.write(fd, b"x" * (1 << 20))
+    os.unlink(f"hoard{i}")
+    held.append(fd)
+"""
+
+
+@pytest.mark.parametrize("namespaces", [True, False], ids=["all-layers", "landlock-alone"])
+def test_forbidden_calls_cannot_be_hidden_and_memory_cannot_leave_its_limit(tmp_path, namespaces):
+    """Issue 36: a trace function's line jump over the report and a copied library marker
+    scored q3 3/3; 640 MB of memfds and 384 MB of deleted files passed a 512 MB limit. They
+    score 0 ``forbidden`` and 0 ``memory``, and an honest student of the batch keeps 17/17."""
+    from course.grading.sandbox.isolation import IsolationError, detect
+
+    try:
+        isolation = detect(namespaces=namespaces)
+    except IsolationError:
+        pytest.skip("no file-system isolation here")
+    if not namespaces and isolation.landlock == 0:
+        pytest.skip("no Landlock on this kernel")
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    files = {
+        "trace_jump": _with_answer("q3", _TRACE_JUMP),
+        "copied_marker": _with_answer("q3", _COPIED_MARKER),
+        "memfd_fill": _with_answer("q4", _q4_after(_MEMFD_FILL)),
+        "deleted_files_fill": _with_answer("q4", _q4_after(_DELETED_FILES_FILL)),
+        "honest": _solution(),
+    }
+    for sid, nb in files.items():
+        (subs / f"{sid}.ipynb").write_text(json.dumps(nb))
+    options = GradeOptions(jobs=2, timeout=20, memory_mb=512, progress=False, namespaces=namespaces)
+    summary = grade(SOLUTION_DIR, subs, tmp_path / "out", options)
+    rows = {r.student: r.to_json() for r in summary.rows}
+    expected = {
+        "honest": {},
+        "trace_jump": {"q3": "forbidden"},
+        "copied_marker": {"q3": "forbidden"},
+        "memfd_fill": {"q4": "memory"},
+        "deleted_files_fill": {"q4": "memory"},
+    }
+    failed = []  # every attack checked, so that a failure names each one that got through
+    for sid, zero in expected.items():
+        try:
+            _expect(rows[sid], zero)
+        except AssertionError as exc:
+            failed.append(f"{sid}: {exc}")
+    assert not failed, "\n".join(failed)
+    for sid in ("trace_jump", "copied_marker"):
+        assert "course.lsq.fit" in rows[sid]["questions"]["q3"]["message"], rows[sid]

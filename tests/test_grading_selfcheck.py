@@ -501,7 +501,10 @@ def test_a_forbidden_call_by_any_path_fails_a_value_question(mistakes_demo, caps
         check._check("q1", ns, None, False)
         out = capsys.readouterr().out
         assert "FAIL: your answer cell or a cell you added" in out, (cell, out)
-        assert "calls course.lsq.fit" in out
+        if how == "private twin":  # named as called (issue 37 item 3)
+            assert "calls course.lsq._fit._rcond_upper (a private helper of course.lsq.fit)" in out
+        else:
+            assert "calls course.lsq.fit" in out
         assert "PASS" not in out
 
 
@@ -674,3 +677,46 @@ def test_a_float32_line_estimate_fails_at_the_self_check_as_at_grading(check, ca
     assert "FAIL" in out and "single precision (float32)" in out, out
     check("q1", lambda t, y: np.polyfit(t, y, 1)[::-1])
     assert "FAIL" not in capsys.readouterr().out
+
+
+def test_a_call_through_another_answer_is_charged_there_as_at_grading(capsys):
+    """Issue 37 item 3, the self-check's side: q4's function calls the student's q3
+    function, which calls lsq.fit (both questions forbid it). q3 fails for the call; q4 is
+    checked on its own values with a note that the call is charged on q3, as grading does
+    (tests/test_grading_session.py)."""
+    import scipy.linalg
+    import scipy.stats
+
+    import course.lsq
+    from course.grading.vocabulary import PublicSpec
+
+    folder = ROOT / "exercises" / "01_least_squares"
+    check = Assignment(PublicSpec.read(folder), folder, "s1")
+    solution = json.loads(
+        (ROOT / "solutions" / "01_least_squares" / "01_least_squares.ipynb").read_text()
+    )
+    q4 = next("".join(c["source"]) for c in solution["cells"] if c.get("id") == "q4-answer")
+    ns = {"np": np, "lsq": course.lsq, "linalg": scipy.linalg, "stats": scipy.stats}
+    exec(
+        "def overall_model_test_stat(A, y, Qyy, alpha):\n"
+        "    r = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)\n"
+        "    return r.statistic, r.critical_value, r.reject\n",
+        ns,
+    )
+    exec(
+        q4.replace(
+            "    return numerator / denominator",
+            "    overall_model_test_stat(A, y, Qyy, 0.05)\n    return numerator / denominator",
+        ),
+        ns,
+    )
+    check._check("q3", ns, None, False)
+    out = capsys.readouterr().out
+    assert "FAIL: your answer calls course.lsq.fit, course.lsq.overall_model_test" in out, out
+    check._check("q4", ns, None, False)
+    out = capsys.readouterr().out
+    assert (
+        "note: your w_statistics calls overall_model_test_stat (your answer to q3), which "
+        "calls course.lsq.fit: charged on q3, not here"
+    ) in out, out
+    assert "FAIL" not in out and "PASS" in out, out

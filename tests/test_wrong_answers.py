@@ -33,8 +33,8 @@ dependent question is graded.
 To stay cheap, the suite packs the variants of different questions into few notebooks
 (questions are graded independently; a notebook holds at most one variant per question, every
 other answer cell keeps the solution, and no variant there rebinds a name another question's answer
-binds: the grader reads the notebook's final names, so a q6 cell that redefines q6_practice's
-function would be graded in its place) and grades them with the real grader,
+binds: the grader reads the notebook's final variables, and a later redefinition of a function
+is reported in the feedback, so such a pair would not be graded as each variant alone) and grades them with the real grader,
 ``course.grading.batch.driver.grade``, in the assignment's graded class that the whole-class tests
 share (``graded_class`` in ``tests/conftest.py``).
 
@@ -601,3 +601,48 @@ def main(keys) -> None:
 
 if __name__ == "__main__":
     main(sys.argv[1:])
+
+
+#: Assignments where this suite's self-check still fails value questions for forbidden calls
+#: that grading does not count (found on 2026-12-08, cause not yet found: every case is a
+#: value question that the self-check, run in this test's order, charges with library calls
+#: its answer does not make; run alone, in the tables' order, they agree).
+_NOT_YET_ALIKE = {"02", "03", "05", "06"}
+
+
+@pytest.mark.parametrize("key", sorted(SPECS))
+def test_forbidden_calls_are_found_alike_at_the_self_check_and_at_grading(graded, key, request):
+    """Issue 36: the self-check and the grader find the same forbidden calls. Every variant of
+    the suite, wrong or right, self-checked as in ``test_right_answers_pass_the_public_self_check``
+    (answer cell, added cells, then ``check(q)`` on the notebook's names): the self-check
+    fails it for a forbidden call exactly when grading scores it ``forbidden``."""
+    if key in _NOT_YET_ALIKE:
+        request.applymarker(pytest.mark.xfail(strict=True, reason="see _NOT_YET_ALIKE"))
+    spec = load_spec(SPECS[key])
+    ns = _solution_namespace(spec.assignment, f"{spec.student}-self")
+    check = ns["check"]
+    differ = []
+    for v, row in graded(key):
+        q = check.spec.question(v.qid)
+        if q.kind in ("choice", "short_answer"):
+            continue
+        mine = dict(ns)
+        buf = io.StringIO()
+        source, _, end = v.source.partition(f"\n{ADDED_AT_END}\n")
+        answer, _, below = source.partition(f"\n{ADDED_CELL}\n")
+        with contextlib.redirect_stdout(buf):
+            for cell_id, text in (
+                (answer_cell_id(v.qid), answer),
+                ("added-1", below),
+                ("added-2", end),
+            ):
+                _running_cell(ns, cell_id)
+                with contextlib.suppress(Exception):  # grading sees a raise too
+                    exec(compile(text, f"<{v.qid} {v.label}>", "exec"), mine)
+            _running_cell(ns, f"{v.qid}-check")  # as in the notebook: its check cell
+            check._check(v.qid, mine, None, False)
+        at_self_check = "which this question forbids" in buf.getvalue()
+        at_grading = row["status"] == "forbidden"
+        if at_self_check != at_grading:
+            differ.append(f"{_describe(v, row)}\n  self-check: {buf.getvalue()[:600]}")
+    assert not differ, "forbidden calls found differently:\n" + "\n".join(differ)

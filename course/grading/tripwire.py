@@ -16,17 +16,31 @@ source to get a function without the report.
 
 A forbidden function's private implementation is forbidden with it: :func:`implementation`
 follows the calls in its source to the private functions of its own package (and of the shared
-``course._*`` modules), transitively, and each of those reports the public name(s) it implements,
-so ``course.filters._steps._kf_update`` counts as ``course.filters.kf_update``. What is forbidden
-is the code that computes, not the name.
+``course._*`` modules), transitively, and each of those reports itself with the public names it
+implements (the nearest first), so ``course.filters._steps._kf_update`` counts as
+``course.filters.kf_update`` and is named as what the student called. What is forbidden is the
+code that computes, not the name.
+
+A report also carries the label of the calling code when it has one (:func:`label_callers`):
+the grader labels each answer function with its question, so that a call is charged on the
+question whose function made it, however another question reached that function.
 
 Calls made by the library itself (``data_snooping`` calling ``w_tests``) are not reported.
 Whether a caller is library code does not depend on anything a submission can set: the caller
 frame must run a code object that belonged to the library before student code ran (compared by
 identity; every such object is kept alive, so its identity cannot be reused) or one of the
 instrumented code objects, and its globals must be a library module's own namespace (also by
-identity). ``__name__``, a module's globals, the frame's file name: none of them counts. The
-decision data sit in the instrumented code objects' constants (immutable), not in variables.
+identity). ``__name__``, a module's globals, the frame's file name, a constant a submission
+can copy into its own code object: none of them counts. The decision data sit in the
+instrumented code objects' constants (immutable frozensets of ids), not in variables; a
+submission may read those ids, but no object it makes can have one of them, since every object
+named there is kept alive (``_KEEP``).
+
+The report cannot be skipped by a trace function: the body of an instrumented function runs
+inside a one-pass loop whose header makes the report, and the interpreter's ``frame.f_lineno``
+setter refuses a jump into a loop's body ("can't jump into the body of a for loop"); a profile
+function or ``sys.monitoring`` cannot jump at all. So tracing stays allowed (debuggers work
+in the student's Jupyter) and changes nothing.
 
 What remains possible (see ``docs/instructors/authoring.md``): rewriting compiled library code
 (``types.CodeType``, ``code.replace``) or copying the library's source into the notebook
@@ -49,47 +63,106 @@ import re
 import sys
 import textwrap
 import types
+import typing
 import warnings
 from builtins import getattr, setattr, str  # bound before student code runs (see runner)
 from typing import Any
 
 __all__ = [
     "EVENT",
+    "Call",
     "course_modules",
     "implementation",
     "instrument",
+    "label_callers",
     "parse_events",
     "resolve",
     "watch",
 ]
 
-#: The record written for one forbidden call (the name is a dotted Python name).
-EVENT = b"\x1ecourse-forbidden-call:%s\x1f"
-_EVENT_RE = re.compile(rb"\x1ecourse-forbidden-call:([A-Za-z0-9_.]{1,200})\x1f")
+#: The record written for one forbidden call: the function called (dotted), the public
+#: functions it implements (itself for a public one; the nearest first), and where the call
+#: came from (``callers``' label of the calling code, empty when it has none).
+EVENT = b"\x1ecourse-forbidden-call:%s=%s@%s\x1f"
+_EVENT_RE = re.compile(
+    rb"\x1ecourse-forbidden-call:([A-Za-z0-9_.]{1,200})=([A-Za-z0-9_.,]{1,4000})"
+    rb"@([A-Za-z0-9_]{0,40})\x1f"
+)
 _LIBRARY_PREFIX = "course."
 _NOT_LIBRARY = ("course.grading", "course.cli", "course.__main__")
 
 # placeholders in the prologue's source, replaced by objects in the compiled code's constants
 _P_FRAME, _P_ID, _P_WRITE = "__tw_getframe__", "__tw_id__", "__tw_write__"
-_P_GLOBALS, _P_CODES, _P_MARK = "__tw_globals__", "__tw_codes__", "__tw_mark__"
+_P_GLOBALS, _P_CODES, _P_CALLERS = "__tw_globals__", "__tw_codes__", "__tw_callers__"
+# The report sits in the header of a one-pass ``for`` loop that holds the whole body: a trace
+# function may set ``frame.f_lineno`` only to a line outside any loop it is not already in
+# ("can't jump into the body of a for loop"), so no line jump reaches the body without the
+# header having run. The loop unpacks ``()`` into no name, so the function gets no new local.
+# The caller is trusted by identity only: its code object is one of the library's or of the
+# tripwires' own (ids, of objects kept alive), or it is this very code (recursion), and its
+# globals are a library module's namespace.
 _PROLOGUE = (
-    f"if not ({_P_ID!r}({_P_FRAME!r}(1).f_globals) in {_P_GLOBALS!r} and "
+    f"for [] in (((),) if ({_P_ID!r}({_P_FRAME!r}(1).f_globals) in {_P_GLOBALS!r} and "
     f"({_P_ID!r}({_P_FRAME!r}(1).f_code) in {_P_CODES!r} or "
-    f"{_P_MARK!r} in {_P_FRAME!r}(1).f_code.co_consts)): "
-    f"{_P_WRITE!r}(__TW_FD__, __TW_EVENT__)"
+    f"{_P_FRAME!r}(1).f_code is {_P_FRAME!r}(0).f_code)) "
+    f"else ({_P_WRITE!r}(__TW_FD__, __TW_EVENT__ + "
+    f"{_P_CALLERS!r}.get({_P_ID!r}({_P_FRAME!r}(1).f_code), b'') + b'\\x1f'), ())[1:]):"
+    "\n    pass\n"
 )
 
 
-def parse_events(buffer: bytes) -> tuple[list[str], bytes]:
+class Call(typing.NamedTuple):
+    """One forbidden call reported: ``called`` as the submission called it (a public function,
+    or a private helper), the public functions it implements (``implements``, the nearest
+    first) and the label of the calling code (``where``; '' when unlabelled)."""
+
+    called: str
+    implements: tuple[str, ...]
+    where: str
+
+    def describe(self, forbidden=None) -> str:
+        """``course.lsq.fit``, or ``course.filters._steps._update_core (a private helper of
+        course.filters.kf_update)``: the nearest public function it implements among
+        ``forbidden`` (default: all)."""
+        if self.implements == (self.called,):
+            return self.called
+        nearest = [n for n in self.implements if forbidden is None or n in forbidden]
+        return f"{self.called} (a private helper of {(nearest or self.implements)[0]})"
+
+
+def parse_events(buffer: bytes) -> tuple[list[Call], bytes]:
     """Forbidden calls reported in ``buffer``, and the tail to keep for the next read.
 
     Records are found anywhere in the stream, so bytes a submission writes in between can add
     reports (against itself) but never hide one.
     """
-    names = [m.group(1).decode("ascii") for m in _EVENT_RE.finditer(buffer)]
+    calls = [
+        Call(
+            m.group(1).decode("ascii"),
+            tuple(n for n in m.group(2).decode("ascii").split(",") if n),
+            m.group(3).decode("ascii"),
+        )
+        for m in _EVENT_RE.finditer(buffer)
+    ]
     cut = buffer.rfind(b"\x1e")
     tail = buffer[cut:] if cut >= 0 and not _EVENT_RE.search(buffer, cut) else b""
-    return names, tail[-300:]
+    return calls, tail[-4300:]
+
+
+#: Code objects labelled in a ``callers`` mapping, kept alive so that their ids stay theirs.
+_LABELLED: list = []
+
+
+def label_callers(callers: dict, func, label: str) -> None:
+    """Label ``func``'s code (and every code object nested in it) as ``label`` in ``callers``
+    (``id(code) -> label``), the mapping a tripwire reads to say where a call came from: the
+    grader labels each answer function with its question, right after its answer cell."""
+    code = getattr(func, "__code__", None)
+    if not isinstance(code, types.CodeType) or not re.fullmatch(r"[A-Za-z0-9_]{1,40}", label):
+        return
+    for c in _codes_of(code):
+        callers[id(c)] = label.encode("ascii")
+        _LABELLED.append(c)
 
 
 def _is_library(module_name: str) -> bool:
@@ -175,7 +248,12 @@ def _recompile(func: types.FunctionType, prologue: str | None) -> types.CodeType
         anchor = body[at].lineno if len(body) > at else fdef.lineno
         stmt = ast.parse(prologue).body[0]
         ast.increment_lineno(stmt, anchor - 1)
-        body.insert(at, stmt)
+        assert isinstance(stmt, ast.For)
+        if len(body) > at:  # the body runs inside the loop (its lines unchanged)
+            stmt.body = body[at:]
+            stmt.end_lineno = body[-1].end_lineno
+            stmt.end_col_offset = body[-1].end_col_offset
+        fdef.body = [*body[:at], stmt]
     if owner is not None:
         owner.body = [n for n in owner.body if n is fdef or not isinstance(n, ast.FunctionDef)]
         owner.decorator_list = []
@@ -206,23 +284,24 @@ def _future_flags() -> int:
 _FUTURE_FLAGS = _future_flags()
 
 
-def _replace_consts(code: types.CodeType, mapping: dict, mark) -> types.CodeType:
+def _replace_consts(code: types.CodeType, mapping: dict) -> types.CodeType:
     consts = []
     for c in code.co_consts:
         if isinstance(c, types.CodeType):
-            consts.append(_replace_consts(c, mapping, mark))
+            consts.append(_replace_consts(c, mapping))
         elif isinstance(c, str) and c in mapping:
             consts.append(mapping[c])
         else:
             consts.append(c)
-    return code.replace(co_consts=(*consts, mark))  # every nested code object carries the mark
+    return code.replace(co_consts=tuple(consts))
 
 
 def _same_code(a: types.CodeType, b: types.CodeType) -> bool:
     return a.co_code == b.co_code and a.co_names == b.co_names and a.co_varnames == b.co_varnames
 
 
-#: Library code objects trusted as callers; kept alive so that their ids stay theirs.
+#: Library code objects trusted as callers (and the instrumented ones, and the library's
+#: namespaces); kept alive so that their ids stay theirs.
 _KEEP: list = []
 
 
@@ -304,25 +383,41 @@ def implementation(func, public_ids: set[int] | None = None) -> list[types.Funct
     public = _public_ids() if public_ids is None else public_ids
     topic = _topic(str(func.__module__ or ""))
 
+    return list(_implementation_depths(func, _private_of(topic, public)))
+
+
+def _private_of(topic: str, public: set[int]):
+    """Whether a function is private library code of ``topic`` or of a shared module."""
+
     def private_here(f: types.FunctionType) -> bool:
         module_name = str(getattr(f, "__module__", "") or "")
         if not _is_library(module_name) or id(f) in public:
             return False
         return _topic(module_name) == topic or module_name.split(".")[1][:1] == "_"
 
-    found: list[types.FunctionType] = []
-    todo = [func]
+    return private_here
+
+
+def _implementation_depths(func, private_here) -> dict:
+    """:func:`implementation` breadth first: each private function with the number of calls
+    between ``func`` and it (1: ``func`` calls it)."""
+    found: dict = {}
+    todo = [(func, 0)]
     while todo:
-        for callee in _callees(todo.pop()):
+        caller, depth = todo.pop(0)
+        for callee in _callees(caller):
             if callee is not func and callee not in found and private_here(callee):
-                found.append(callee)
-                todo.append(callee)
+                found[callee] = depth + 1
+                todo.append((callee, depth + 1))
     return found
 
 
-def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str]]]:
+def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, list[str]]]:
     """The forbidden objects by dotted name (None when missing), and every private function
-    that implements one of them with the public names it implements."""
+    that implements one of them with the public names it implements, the nearest first
+    (fewest calls away, then of its own module, then first in the source), so that a report
+    names ``_update_core`` a helper of ``kf_update``, not of the seven other filters it
+    also serves."""
     named: dict[str, object] = {}
     for dotted in sorted(set(names)):
         named[dotted] = resolve(dotted)
@@ -332,11 +427,16 @@ def _targets(names) -> tuple[dict[str, object], dict[types.FunctionType, set[str
             named[dotted] = init  # a class: its constructor reports
     public = _public_ids()
     forbidden_ids = {id(f) for f in named.values()}
-    private: dict[types.FunctionType, set[str]] = {}
+    ranked: dict[types.FunctionType, list[tuple]] = {}
     for dotted, func in named.items():
-        for f in implementation(func, public):
+        if not isinstance(func, types.FunctionType):
+            continue
+        private_here = _private_of(_topic(str(func.__module__ or "")), public)
+        for f, depth in _implementation_depths(func, private_here).items():
             if id(f) not in forbidden_ids:
-                private.setdefault(f, set()).add(dotted)
+                where = (depth, f.__module__ != func.__module__, func.__code__.co_firstlineno)
+                ranked.setdefault(f, []).append((*where, dotted))
+    private = {f: [rank[-1] for rank in sorted(ranks)] for f, ranks in ranked.items()}
     return named, private
 
 
@@ -363,15 +463,47 @@ def resolve(dotted: str):
     return None
 
 
-def _events(names) -> bytes:
-    return b"".join(EVENT % n.encode("ascii") for n in sorted(names))
+def _event_head(called: str, implements) -> bytes:
+    """A record up to the caller's label (the prologue adds the label and the end byte)."""
+    return (EVENT % (called.encode("ascii"), ",".join(implements).encode("ascii"), b""))[:-1]
 
 
-def _rewrite(names, event_fd: int, write):
+def _callers_first(jobs: list) -> list:
+    """``jobs`` ordered so that a function comes after every other job function whose source
+    calls it (a cycle, beyond a function calling itself, keeps its members' given order)."""
+    funcs = [job[1] for job in jobs]
+    index = {id(f): i for i, f in enumerate(funcs) if f is not None}
+    calls = {
+        i: {index[id(c)] for c in _callees(f) if id(c) in index and index[id(c)] != i}
+        if isinstance(f, types.FunctionType)
+        else set()
+        for i, f in enumerate(funcs)
+    }
+    waiting = {i: sum(i in callees for callees in calls.values()) for i in range(len(jobs))}
+    order: list[int] = []
+    ready = [i for i in range(len(jobs)) if waiting[i] == 0]
+    while ready:
+        i = ready.pop(0)
+        order.append(i)
+        for j in sorted(calls[i]):
+            waiting[j] -= 1
+            if waiting[j] == 0:
+                ready.append(j)
+    order += [i for i in range(len(jobs)) if i not in order]
+    return [jobs[i] for i in order]
+
+
+def _rewrite(names, event_fd: int, write, callers: dict):
     """Rewrite the forbidden functions ``names`` and their private implementation to call
-    ``write(event_fd, events)`` when called from outside the library. Returns the report
+    ``write(event_fd, record)`` when called from outside the library (the record ends with
+    ``callers``' label of the calling code, see :func:`label_callers`). Returns the report
     ``{name: how}`` and what undoes it: ``(function, original code)`` pairs and
-    ``(module, attr, original)`` triples of wrapped attributes."""
+    ``(module, attr, original)`` triples of wrapped attributes.
+
+    A caller counts as the library when its code object is, by identity, one the library had
+    before (kept alive in ``_KEEP``, so no other object can take its id) or one rewritten here
+    earlier. The rewritten functions are made callers first (a function after those that call
+    it), so each one's set of trusted ids, fixed in its constants, holds its rewritten callers."""
     named, private = _targets(names)
     functions = list(_library_functions())
     rewritten_ids = {id(f) for f in named.values() if isinstance(f, types.FunctionType)}
@@ -382,33 +514,32 @@ def _rewrite(names, event_fd: int, write):
         vars(m) for n, m in list(sys.modules.items()) if m is not None and _is_library(n)
     ]
     _KEEP.extend(module_dicts)
-    mark = object()  # only the instrumented code objects hold it (identity, no equality)
+    trusted_ids = {id(c) for c in trusted}
     mapping = {
         _P_FRAME: sys._getframe,
         _P_ID: id,
         _P_WRITE: write,
         _P_GLOBALS: frozenset(id(d) for d in module_dicts),
-        _P_CODES: frozenset(id(c) for c in trusted),
-        _P_MARK: mark,
+        _P_CALLERS: callers,
     }
     report: dict[str, str] = {}
     codes: list[tuple[types.FunctionType, types.CodeType]] = []
     wrapped: list[tuple] = []
-    jobs = [(dotted, func, {dotted}) for dotted, func in named.items()]
+    jobs = [(dotted, func, [dotted]) for dotted, func in named.items()]
     jobs += [
         (f"{f.__module__}.{f.__qualname__}", f, implements) for f, implements in private.items()
     ]
-    for dotted, func, implements in jobs:
+    for dotted, func, implements in _callers_first(jobs):
         if func is None:
             report[dotted] = "missing"
             continue
-        event = _events(implements)
+        event = _event_head(dotted, implements)
         prologue = _PROLOGUE.replace("__TW_FD__", str(int(event_fd))).replace(
             "__TW_EVENT__", repr(event)
         )
         plain = isinstance(func, types.FunctionType) and not func.__code__.co_freevars
-        original = _recompile(func, None) if plain else None  # type: ignore[arg-type]
-        new = _recompile(func, prologue) if original is not None else None  # type: ignore[arg-type]
+        original = _recompile(func, None) if plain else None
+        new = _recompile(func, prologue) if original is not None else None
         if (
             isinstance(func, types.FunctionType)
             and new is not None
@@ -416,12 +547,15 @@ def _rewrite(names, event_fd: int, write):
             and _same_code(original, func.__code__)
         ):
             codes.append((func, func.__code__))
-            func.__code__ = _replace_consts(new, mapping, mark)
+            func.__code__ = _replace_consts(new, {**mapping, _P_CODES: frozenset(trusted_ids)})
+            made = list(_codes_of(func.__code__))
+            _KEEP.extend(made)  # alive, whatever happens to the function, so its id stays its
+            trusted_ids.update(id(c) for c in made)
             report[dotted] = "instrumented"
         elif dotted in named and isinstance(
             sys.modules.get(dotted.rpartition(".")[0]), types.ModuleType
         ):
-            wrapped.append(_wrap_reporting(dotted, func, event_fd, event, write))
+            wrapped.append(_wrap_reporting(dotted, func, event_fd, event + b"\x1f", write))
             report[dotted] = "wrapped"
         elif dotted in named:
             report[dotted] = "missing"  # a method that cannot be rewritten: nothing to wrap
@@ -429,7 +563,7 @@ def _rewrite(names, event_fd: int, write):
     return report, codes, wrapped
 
 
-def instrument(names, event_fd: int) -> dict[str, str]:
+def instrument(names, event_fd: int, callers: dict | None = None) -> dict[str, str]:
     """Instrument the forbidden functions ``names`` (dotted), and their private implementation
     (:func:`implementation`), to report to ``event_fd``.
 
@@ -437,19 +571,20 @@ def instrument(names, event_fd: int) -> dict[str, str]:
     code exists. Returns ``{name: how}`` with ``how`` one of ``"instrumented"``, ``"wrapped"``
     (not a plain function with source: a reporting wrapper replaces the module attribute, a
     weaker guard) or ``"missing"``; the private functions rewritten are listed too, by their
-    own dotted names.
+    own dotted names. ``callers``: the mapping :func:`label_callers` fills (the label of
+    the calling code is part of each report).
     """
-    report, _, _ = _rewrite(names, event_fd, os.write)
+    report, _, _ = _rewrite(names, event_fd, os.write, {} if callers is None else callers)
     linecache.clearcache()  # no library source left in memory for a child to read
     return report
 
 
-def watch(names, record):
+def watch(names, record, callers: dict | None = None):
     """The self-check's tripwires: :func:`instrument`'s rewriting, reporting to ``record``.
 
     Every call of a forbidden function in ``names`` (or of its private implementation) from
     outside the library, by any path (an alias, ``getattr``, ``functools.partial``, a private
-    twin), calls ``record(dotted)`` with the public name, before the function runs. Import the
+    twin), calls ``record(call)`` with the :class:`Call`, before the function runs. Import the
     library first (:func:`course_modules`): the modules imported later do not count as the
     library.
 
@@ -460,10 +595,10 @@ def watch(names, record):
     """
 
     def write(_fd, event: bytes) -> None:
-        for name in parse_events(event)[0]:
-            record(name)
+        for call in parse_events(event)[0]:
+            record(call)
 
-    _, codes, wrapped = _rewrite(names, 0, write)
+    _, codes, wrapped = _rewrite(names, 0, write, {} if callers is None else callers)
 
     def restore() -> None:
         for func, code in reversed(codes):

@@ -11,6 +11,7 @@ costs only the question it happened in: the child is killed, a fresh one re-runs
 from __future__ import annotations
 
 import builtins
+import errno
 import re
 import threading
 import time
@@ -173,6 +174,7 @@ class AssignmentGrader:
                     deny_read=self._deny_read,
                     forbid=[name for names in self.forbid.values() for name in names],
                     isolation=self.isolation,
+                    labels=[q.id for q in self.questions],
                 )
             return self._sandbox
 
@@ -394,7 +396,12 @@ class StudentSession:
             str, tuple[GradeStatus, str]
         ] = {}  # question -> (status, message) from its cells
         self.cell_errors: dict[int, dict] = {}
-        self.hits: dict[str, set] = {}
+        # question -> {where: {what was called: None}}: the forbidden calls charged on it
+        self.hits: dict[str, dict[str, dict[str, None]]] = {}
+        # question -> notes on calls its function made through another question's function,
+        # charged there
+        self.via: dict[str, dict[str, None]] = {}
+        self.redefined: set[str] = set()  # questions whose function a later cell redefined
         self.child: ChildHandle | None = None
         self.deadline = time.monotonic() + grader.budget()
         if seeds is None:
@@ -444,7 +451,9 @@ class StudentSession:
                     min(limit, max(0.1, self.deadline - time.monotonic())),
                     added=cell.origin == CellOrigin.EXTRA
                     and self.plan.deleted.get(cell.question or "") != "adopted",
+                    where=cell.label if cell.origin == CellOrigin.EXTRA else "your answer cell",
                     source=cell.source,
+                    capture=self._captured_by(cell),
                 )
             except ChildTimeout:
                 self._cell_failed(
@@ -463,12 +472,22 @@ class StudentSession:
             if reply.get("status") == ReplyStatus.ERROR:
                 err = reply.get("error") or {}
                 self.cell_errors[i] = err
-                if cell.question and err.get("type") == "MemoryError":
+                if cell.question and _out_of_memory(err):
                     self.hard.setdefault(
                         cell.question,
                         (GradeStatus.MEMORY, f"{cell.label} ran out of memory (MemoryError)"),
                     )
         return True
+
+    def _captured_by(self, cell) -> list[list[str]]:
+        """``[[name, question]]`` of the answer function a cell of a function question
+        defines: the child keeps it as that cell left it, grading calls that one (issue 37
+        item 5: the answer graded is the one its answer cell defined, as the self-check right
+        after it sees it), and its forbidden calls are its question's (item 3)."""
+        q = self.g.checks.questions.get(cell.question) if cell.question else None
+        if q is None or q.kind != QuestionKind.FUNCTION or not q.target:
+            return []
+        return [[q.target, q.id]]
 
     def _cell_failed(self, i: int, status: GradeStatus, message: str) -> None:
         self.skipped.add(i)
@@ -480,29 +499,77 @@ class StudentSession:
         self._drop_child()
 
     def _request(
-        self, question: str | None, op: Op, timeout: float, *, added: bool = False, **fields
+        self,
+        question: str | None,
+        op: Op,
+        timeout: float,
+        *,
+        added: bool = False,
+        where: str = "your answer",
+        **fields,
     ) -> dict:
-        """One request to the child; forbidden calls it reported meanwhile count against
-        ``question`` (they reached the parent as they happened, see course.grading.tripwire).
+        """One request to the child; forbidden calls it reported meanwhile are charged (they
+        reached the parent as they happened, see course.grading.tripwire) once each, on the
+        question whose code made them (issue 37 item 3):
 
-        A cell the student ``added`` (not one adopted as a deleted answer cell) is a scratch
-        cell, wherever it stands: a forbidden call there counts against every value question
-        that forbids the function, since its numbers could be pasted into the answer, and
-        against no function question (graded on hidden inputs, so trying the library in a
-        scratch cell costs it nothing)."""
+        - a call made by an answer function of another question that forbids it (the child
+          labels each answer function with its question right after its answer cell) is
+          charged there, and ``question`` gets a note instead;
+        - any other call counts against ``question``, named as coming from ``where``;
+        - a cell the student ``added`` (not one adopted as a deleted answer cell) is a
+          scratch cell, wherever it stands: its call counts against every value question that
+          forbids the function, since its numbers could be pasted into the answer, and against
+          no function question (graded on hidden inputs, so trying the library in a scratch
+          cell costs it nothing).
+
+        A label names only what the child says of itself: at worst it moves a charge to
+        another question that forbids the same function, as calling that question's function
+        would."""
         child = self.child
         assert child is not None, "ensure_child() first"
         try:
             return child.request(op, timeout, **fields)
         finally:
-            called = set(child.take_events())
-            for qid in self.g.forbid_by_value if added else [question] if question else []:
-                self._hit(qid, called)
+            for call in child.take_events():
+                self._charge(question, call, added, where)
 
-    def _hit(self, question: str, called: set) -> None:
-        hits = called & self.g.forbid.get(question, frozenset())
-        if hits:
-            self.hits.setdefault(question, set()).update(hits)
+    def _charge(self, question: str | None, call, added: bool, where: str) -> None:
+        if added:
+            for qid in self.g.forbid_by_value:
+                self._hit(qid, call, where)
+            return
+        if question is None:
+            return
+        owner = call.where
+        if (
+            owner
+            and owner != question
+            and self.g.forbid.get(owner, frozenset()) & set(call.implements)
+        ):
+            self._hit(owner, call, "your answer")
+            if self.g.forbid.get(question, frozenset()) & set(call.implements):
+                q, o = self.g.checks.questions[question], self.g.checks.questions[owner]
+                note = (
+                    f"your {q.target} calls {o.target} (your answer to {owner}), which calls "
+                    f"{call.describe(self.g.forbid[owner])}: charged on {owner}"
+                )
+                self.via.setdefault(question, {})[note] = None
+            return
+        self._hit(question, call, where)
+
+    def _hit(self, question: str, call, where: str) -> None:
+        forbidden = self.g.forbid.get(question, frozenset())
+        if forbidden & set(call.implements):
+            text = call.describe(forbidden)
+            self.hits.setdefault(question, {}).setdefault(where, {})[text] = None
+
+    def _forbidden_message(self, qid: str) -> str:
+        """ "your answer calls course.lsq.fit; your added cell at position 9 calls ...,
+        which this question forbids"."""
+        parts = [
+            f"{where} calls {', '.join(sorted(what))}" for where, what in self.hits[qid].items()
+        ]
+        return "; ".join(parts) + ", which this question forbids"
 
     def _drop_child(self) -> None:
         if self.child is not None:
@@ -539,9 +606,32 @@ class StudentSession:
                         f"graded from your added cell (the answer cell of {q.id} was deleted)"
                         + (f"; {result.message}" if result.message else "")
                     )
+                for note in self.via.get(q.id, ()):
+                    result.message = note + (f"; {result.message}" if result.message else "")
+                if q.id in self.redefined:
+                    result.message = (
+                        f"{q.target} is defined again after its answer cell: the answer "
+                        "cell's version was graded, as the self-check sees it"
+                        + (f"; {result.message}" if result.message else "")
+                    )
                 self.row.questions[q.id] = result
+            self._late_charges()
         finally:
             self._drop_child()
+
+    def _late_charges(self) -> None:
+        """A question charged after it was graded (its function made a forbidden call while a
+        later question ran it, on inputs its own cases never gave): it scores 0 now."""
+        for qid in self.hits:
+            result = self.row.questions.get(qid)
+            if result is not None and result.status not in (
+                GradeStatus.FORBIDDEN,
+                GradeStatus.NOT_ANSWERED,
+            ):
+                q = self.g.checks.questions[qid]
+                self.row.questions[qid] = _question_result(
+                    q, GradeStatus.FORBIDDEN, self._forbidden_message(qid), 0.0, result.cases
+                )
 
     def _answer_cell_error(self, qid: str):
         errors = [
@@ -570,11 +660,7 @@ class StudentSession:
             status, message = self.hard[q.id]
             return _question_result(q, status, message)
         if self.hits.get(q.id):
-            return _question_result(
-                q,
-                GradeStatus.FORBIDDEN,
-                f"the answer calls {', '.join(sorted(self.hits[q.id]))}, which this question forbids",
-            )
+            return _question_result(q, GradeStatus.FORBIDDEN, self._forbidden_message(q.id))
         if q.kind == QuestionKind.CHOICE:
             return self._grade_choice(q)
         if q.kind == "value":
@@ -696,12 +782,7 @@ class StudentSession:
                     return early
         if self.hits.get(q.id):
             return _question_result(
-                q,
-                GradeStatus.FORBIDDEN,
-                f"the answer calls {', '.join(sorted(self.hits[q.id]))}, "
-                "which this question forbids",
-                0.0,
-                run.results,
+                q, GradeStatus.FORBIDDEN, self._forbidden_message(q.id), 0.0, run.results
             )
         return run.result(q)
 
@@ -737,6 +818,8 @@ class StudentSession:
             run.results.append(CaseResult(label, False, exc.cause))
             return None
         status = reply.get("status")
+        if reply.get("redefined") is True:
+            self.redefined.add(q.id)
         if status == ReplyStatus.UNDEFINED:
             return self._missing(q, f"no function {q.target}")
         if status == ReplyStatus.NOT_CALLABLE:
@@ -746,7 +829,7 @@ class StudentSession:
             run.results.append(CaseResult(label, False, "not answered"))
         elif status == ReplyStatus.ERROR:
             err = reply.get("error") or {}
-            if err.get("type") == "MemoryError":
+            if _out_of_memory(err):
                 run.status = GradeStatus.MEMORY  # stops the run; the message stays the first
             text = self._hidden_error(q, err) if case.hidden else self._err_text(err)
             run.fail(
@@ -779,6 +862,15 @@ class StudentSession:
                 result.detail = verdict.detail
                 run.fail(result)
         return None
+
+
+def _out_of_memory(err: dict) -> bool:
+    """Whether a child's error is its memory running out: a MemoryError, or an OSError with
+    ENOMEM (the sandbox answers so where memory would escape its limit, e.g. memfd_create)."""
+    kind, message = err.get("type"), str(err.get("message", ""))
+    return kind == "MemoryError" or (
+        kind in ("OSError", "MemoryError") and message.startswith(f"[Errno {errno.ENOMEM}]")
+    )
 
 
 def _question_result(q, status, message="", points=0.0, cases=None) -> QuestionResult:

@@ -54,7 +54,7 @@ from pathlib import Path
 from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError
 from course.grading.sandbox.forkserver import TAMPERED
 from course.grading.sandbox.isolation import Isolation, detect
-from course.grading.tripwire import parse_events
+from course.grading.tripwire import Call, parse_events
 from course.grading.vocabulary import Op, ReplyStatus
 
 __all__ = [
@@ -79,6 +79,64 @@ MAX_REPLY_ITEMS = 200_000
 #: 12 bytes each at worst as JSON escapes), from a child that ran no student code.
 MAX_READ_REPLY_BYTES = 16_000_000
 _READ_FILE = "submission.ipynb"  # runner.READ_FILE (the runner is not imported by the parent)
+#: How often (seconds) the parent measures a working child's files, and the most entries of
+#: its folder it counts (more count as over the limit).
+FILES_POLL = 0.25
+MAX_FOLDER_ENTRIES = 10_000
+
+
+def _host_pid(pidfd: int | None) -> int | None:
+    """The pid, in the grader's PID namespace, of the process ``pidfd`` refers to."""
+    if pidfd is None:
+        return None
+    try:
+        with open(f"/proc/self/fdinfo/{pidfd}") as f:
+            for line in f:
+                if line.startswith("Pid:"):
+                    pid = int(line.split()[1])
+                    return pid if pid > 0 else None
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def files_bytes(folder: str, pid: int | None = None) -> int:
+    """The bytes a child's files take: every file beneath ``folder`` (allocated blocks, links
+    not followed) and, for the process ``pid``, the regular files it keeps open that no folder
+    names any more (deleted, or made with ``O_TMPFILE``). A folder of more than
+    :data:`MAX_FOLDER_ENTRIES` entries counts as without bound."""
+    total, seen = 0, 0
+    todo = [folder]
+    while todo:
+        try:
+            entries = list(os.scandir(todo.pop()))
+        except OSError:
+            continue
+        for entry in entries:
+            seen += 1
+            if seen > MAX_FOLDER_ENTRIES:
+                return sys.maxsize
+            try:
+                st = entry.stat(follow_symlinks=False)
+            except OSError:
+                continue
+            if stat.S_ISDIR(st.st_mode):
+                todo.append(entry.path)
+            else:
+                total += st.st_blocks * 512
+    if pid is not None:
+        try:
+            fds = os.listdir(f"/proc/{pid}/fd")
+        except OSError:
+            fds = []
+        for fd in fds[:MAX_FOLDER_ENTRIES]:
+            try:
+                st = os.stat(f"/proc/{pid}/fd/{fd}")
+            except OSError:
+                continue
+            if stat.S_ISREG(st.st_mode) and st.st_nlink == 0:
+                total += st.st_blocks * 512
+    return total
 
 
 @dataclass
@@ -90,6 +148,10 @@ class Limits:
     file_mb: int = 64
     output_chars: int = 1_000_000
     seccomp: bool = True
+    #: every file the child holds (its folder, and files it deleted but keeps open), in total:
+    #: on a tmpfs they are memory, which the address-space limit does not count
+    files_mb: int = 256
+    open_files: int = 256
 
     def as_dict(self) -> dict:
         return dict(
@@ -98,6 +160,7 @@ class Limits:
             file_mb=self.file_mb,
             output_chars=self.output_chars,
             seccomp=self.seccomp,
+            open_files=self.open_files,
         )
 
 
@@ -241,14 +304,18 @@ class ChildHandle:
         self.killed_by_us = False
         self._buffer = b""
         self._events_tail = b""
-        # forbidden calls reported: only instrumented names, each once (in order) with a count,
-        # so a flood of reports costs the parent no memory
-        self._events: dict[str, int] = {}
+        # forbidden calls reported: only instrumented functions and known labels, each
+        # (function, label) once (in order) with the names it implements and a count, so a
+        # flood of reports costs the parent no memory
+        self._events: dict[tuple[str, str], tuple[dict[str, None], int]] = {}
         self.events_reported = 0
         self._next_id = 0
         self._max_bytes = MAX_REPLY_BYTES
         self.cleanup_failed: list[str] = []  # what close() could not remove
         self.info: dict = {}
+        self.host_pid = _host_pid(pidfd)
+        self._files_limit = sandbox.limits.files_mb * 1024 * 1024
+        self._files_checked = time.monotonic()
 
     # -- protocol -------------------------------------------------------------------------
     def _send(self, obj: dict, deadline: float) -> None:
@@ -278,13 +345,25 @@ class ChildHandle:
                 return
             if not chunk:
                 return
-            names, self._events_tail = parse_events(self._events_tail + chunk)
-            self.events_reported += len(names)
-            for name in names:
-                if name in self._events:
-                    self._events[name] += 1
-                elif name in self.sandbox.forbid_set:
-                    self._events[name] = 1
+            calls, self._events_tail = parse_events(self._events_tail + chunk)
+            self.events_reported += len(calls)
+            for call in calls:
+                if call.called not in self.sandbox.instrumented:
+                    continue
+                where = call.where if call.where in self.sandbox.labels else ""
+                implements, count = self._events.get((call.called, where), ({}, 0))
+                for name in call.implements:
+                    if name in self.sandbox.forbid_set:
+                        implements[name] = None
+                if implements:
+                    self._events[(call.called, where)] = (implements, count + 1)
+
+    def _check_files(self) -> None:
+        """Stop the child when its files exceed their limit (``Limits.files_mb``)."""
+        self._files_checked = time.monotonic()
+        if self._files_limit > 0 and files_bytes(self.tmpdir, self.host_pid) > self._files_limit:
+            self.kill()
+            raise ChildDied(f"its files took more than {self._files_limit >> 20} MB (memory limit)")
 
     def _readline(self, deadline: float) -> bytes:
         while b"\n" not in self._buffer:
@@ -292,9 +371,11 @@ class ChildHandle:
             if remaining <= 0:
                 raise ChildTimeout()
             watched = [self.resp_r] + ([self.event_r] if self.event_r >= 0 else [])
-            ready, _, _ = select.select(watched, [], [], remaining)
+            ready, _, _ = select.select(watched, [], [], min(remaining, FILES_POLL))
             if self.event_r in ready:
                 self._read_events()
+            if time.monotonic() >= self._files_checked + FILES_POLL:  # whatever else arrives
+                self._check_files()
             if self.resp_r not in ready:
                 continue
             chunk = os.read(self.resp_r, 1 << 20)
@@ -307,11 +388,12 @@ class ChildHandle:
         line, self._buffer = self._buffer.split(b"\n", 1)
         return line
 
-    def take_events(self) -> list[str]:
-        """Forbidden library calls reported since the last call (in the order they happened)."""
+    def take_events(self) -> list[Call]:
+        """Forbidden library calls reported since the last call (in the order they happened),
+        each function called once per label of the calling code."""
         self._read_events()
-        events, self._events = list(self._events), {}
-        return events
+        events, self._events = self._events, {}
+        return [Call(called, tuple(names), where) for (called, where), (names, _) in events.items()]
 
     def request(
         self,
@@ -356,6 +438,7 @@ class ChildHandle:
                     and reply.get("id") == self._next_id
                 ):
                     self._read_events()  # written before the reply, so already in the pipe
+                    self._check_files()
                     return reply
         except (ChildTimeout, ChildDied):
             self._read_events()
@@ -426,6 +509,9 @@ class Sandbox:
         Dotted names of forbidden library functions to instrument (:mod:`~course.grading.tripwire`).
     isolation : Isolation, optional
         The layers to use (default: :func:`~course.grading.sandbox.isolation.detect`).
+    labels : sequence of str
+        The labels a child may give the code that made a forbidden call (the question ids:
+        a child labels each answer function with its question).
     """
 
     def __init__(
@@ -435,6 +521,7 @@ class Sandbox:
         deny_read=(),
         forbid=(),
         isolation: Isolation | None = None,
+        labels=(),
     ):
         if not sys.platform.startswith("linux"):
             raise SandboxError(
@@ -448,6 +535,8 @@ class Sandbox:
         self.preload = tuple(dict.fromkeys(PRELOAD + tuple(preload)))
         self.forbid = tuple(sorted(set(forbid)))
         self.forbid_set = frozenset(self.forbid)
+        #: the labels a report may give its calling code (the questions), see runner.op_run
+        self.labels = frozenset(labels)
         self.deny_read = [str(Path(p).resolve()) for p in deny_read]  # named by the audit hook
         # never mounted nor allowed, should a Python folder contain one of them
         self.protected = [*self.deny_read, os.path.expanduser("~"), os.getcwd()]
@@ -465,6 +554,7 @@ class Sandbox:
             for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
                 os.chown(folder, *self.isolation.drop_to)
         self.server_info: dict = {}
+        self.instrumented: frozenset[str] = frozenset()
         self.server_restarts = 0  # fork servers replaced because a child changed scheduling
         self._retired: list[tuple[subprocess.Popen | None, socket.socket | None]] = []
         self._start_server()
@@ -530,6 +620,8 @@ class Sandbox:
             self.close()
             raise SandboxError(f"the fork server did not start: {log_text[-1500:]}")
         self.server_info = reply
+        #: the functions instrumented (public and private): the only ones a report may name
+        self.instrumented = frozenset(reply.get("tripwires") or ())
         self.isolation = self.isolation.with_(unprivileged=bool(reply.get("unprivileged")))
         if self.isolation.drop_to is not None and not self.isolation.unprivileged:
             # children stay root without capabilities: a folder of nobody's on the way to

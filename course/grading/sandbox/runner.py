@@ -47,7 +47,7 @@ from course.grading import codec
 from course.grading.notebook import MAX_NOTEBOOK_BYTES, SubmissionError, reduce_notebook
 from course.grading.sandbox.isolation.audit import close_leaked, make_audit_hook, open_fds
 from course.grading.sandbox.isolation.limits import set_limits
-from course.grading.tripwire import course_modules
+from course.grading.tripwire import course_modules, label_callers
 from course.grading.vocabulary import Op, ReplyStatus
 
 _dumps = json.dumps
@@ -336,6 +336,9 @@ class RequestLoop:
         self.resp_fd = resp_fd
         self.shell: typing.Any = None  # the IPython shell, made before student code
         self.refused = False  # set by the audit hook when it refuses an event
+        # answer functions as their answer cells left them (the graded ones), by name
+        self.captured: dict = {}
+        self.callers: dict = {}  # the tripwires' labels of calling code (its question)
 
     def note_refusal(self) -> None:
         self.refused = True
@@ -363,6 +366,11 @@ class RequestLoop:
         except BaseException as exc:  # run_cell normally catches everything itself
             error = exc
         sys.stdout.flush()
+        ns = self.shell.user_ns
+        for name, question in req.get("capture") or ():  # what an answer cell defined
+            if isinstance(name, str) and callable(ns.get(name)):
+                self.captured[name] = ns[name]  # graded, and its calls are its question's
+                label_callers(self.callers, ns[name], str(question))
         reply: dict = {"status": _OK if error is None else _ERROR}
         if error is not None:
             reply["error"] = _error_info(error)
@@ -419,10 +427,24 @@ class RequestLoop:
         return _value_reply(ns[name])
 
     def op_call(self, req):
+        """Call the answer function ``name``: the one its answer cell defined when the parent
+        asked to capture it there (a later redefinition is reported, ``redefined``, not
+        called), else the notebook's current one."""
         ns = self.shell.user_ns
-        func = ns.get(req["name"])
-        if func is None and req["name"] not in ns:
+        name = req["name"]
+        if name in self.captured:
+            func = self.captured[name]
+            redefined = ns.get(name, _MISSING) is not func
+            reply = self._call(func, req)
+            if redefined:
+                reply["redefined"] = True
+            return reply
+        func = ns.get(name)
+        if func is None and name not in ns:
             return {"status": _UNDEFINED}
+        return self._call(func, req)
+
+    def _call(self, func, req) -> dict:
         if not callable(func):
             return {"status": _NOT_CALLABLE, "error": {"type": type(func).__name__, "message": ""}}
         try:
@@ -489,6 +511,7 @@ class Setup:
     drop_child: tuple[int, int] | None = None  # each child switches to this (uid, gid)
     unprivileged: bool = False
     tripwires: dict = field(default_factory=dict)
+    callers: dict = field(default_factory=dict)  # read by the tripwires (label_callers)
 
     def policy_fds(self) -> list[int]:
         return self.policy.fds() if self.policy is not None else []
@@ -510,7 +533,8 @@ def prepare(config: dict) -> Setup:
         unprivileged = True
     event_fd = os.open(os.devnull, os.O_WRONLY)  # reserves the number; a child dup2s onto it
     preload(tuple(config.get("preload", PRELOAD)) + tuple(course_modules()))
-    tripwires = tripwire.instrument(config.get("forbid", ()), event_fd)
+    callers: dict = {}
+    tripwires = tripwire.instrument(config.get("forbid", ()), event_fd, callers)
     policy = None
     if config.get("landlock"):
         policy = landlock.Policy()
@@ -533,6 +557,7 @@ def prepare(config: dict) -> Setup:
         drop_child=drop_child,
         unprivileged=unprivileged,
         tripwires=tripwires,
+        callers=callers,
     )
 
 
@@ -542,6 +567,7 @@ def child_main(req_fd: int, resp_fd: int, tmpdir: str, setup: Setup, shell=None)
     try:
         enter_sandbox_dir(tmpdir)
         child = RequestLoop(req_fd, resp_fd)
+        child.callers = setup.callers
         init = child.receive()
         if not init or init.get("op") != Op.INIT.value:
             os._exit(3)

@@ -32,7 +32,7 @@ from course.grading.authoring.seal import sealed_compare
 from course.grading.codec import decode, encode
 from course.grading.compare import check_signature, chosen_hint, describe
 from course.grading.items import ITEM_KINDS, AnswerCells, self_check_item
-from course.grading.tripwire import course_modules, watch
+from course.grading.tripwire import course_modules, label_callers, watch
 from course.grading.vocabulary import (
     CHECKS_FILE,
     PLACEHOLDER_ID,
@@ -126,10 +126,12 @@ class Assignment:
         self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
         # the class's student ID pattern (``course export --id-pattern``), None without one
         self.id_pattern = id_pattern_in(folder)
-        # forbidden calls from the notebook: (cell, name) pairs, and the names called while a
-        # question's public cases run (the question's id -> names)
+        # forbidden calls from the notebook: (cell, call) pairs, and the calls made while a
+        # question's public cases run
         self.calls: set[tuple] = set()
-        self._running: set[str] | None = None
+        self._running: set | None = None
+        # the tripwires' labels of calling code: each function answer, by its question
+        self._callers: dict = {}
         _watch_forbidden(self)
 
     @classmethod
@@ -267,7 +269,9 @@ class Assignment:
         points = f"{q.points:g} point{'s' if q.points != 1 else ''}"
         print(f"{qid} ({points}): {'function' if q.kind == 'function' else 'variable'} {q.target}")
         if q.kind == "function":
-            fraction = self._check_function(q, value if explicit else ns.get(q.target, _MISSING))
+            fraction = self._check_function(
+                q, value if explicit else ns.get(q.target, _MISSING), ns
+            )
         else:
             fraction = self._check_value(q, value if explicit else ns.get(q.target, _MISSING))
         return q.points * float(fraction or 0.0)
@@ -300,6 +304,7 @@ class Assignment:
         print(f"  not answered yet: {why}")
 
     def _forbidden_fail(self, q, names) -> None:
+        """``names``: what the notebook called, as :meth:`tripwire.Call.describe` says it."""
         where = (
             "your answer"
             if q.kind == "function"
@@ -312,19 +317,19 @@ class Assignment:
         )
 
     # -- forbidden calls ----------------------------------------------------------------
-    def _record(self, name: str) -> None:
-        """A forbidden function was called from the notebook (by the tripwires)."""
+    def _record(self, call) -> None:
+        """A forbidden function was called from the notebook (a :class:`tripwire.Call`)."""
         if self._running is not None:
-            self._running.add(name)  # while the self-check runs the student's function
+            self._running.add(call)  # while the self-check runs the student's function
             return
-        self.calls.add((self._cell_now(), name))
+        self.calls.add((self._cell_now(), call))
 
     def _forget_cell(self, info=None) -> None:
         """A cell is run again: the calls its previous run made no longer stand (IPython's
         ``pre_run_cell``; a deleted cell's calls stay until the kernel restarts)."""
         cell = getattr(info, "cell_id", None)
         if cell:
-            self.calls = {(c, name) for c, name in self.calls if c != cell}
+            self.calls = {(c, call) for c, call in self.calls if c != cell}
 
     def _cell_now(self):
         """The running cell: its id when the front end says it, else its input number."""
@@ -354,16 +359,44 @@ class Assignment:
         return None
 
     def _forbidden_calls(self, q) -> set[str]:
-        """The forbidden functions of ``q`` that the notebook called where grading counts them
-        (:meth:`_record`): its answer cell, and for a value question also the added cells."""
+        """What the notebook called, of the forbidden functions of ``q`` (their private
+        helpers named as such), where grading counts it (:meth:`_record`): its answer cell,
+        and for a value question also the added cells."""
         if not q.forbid:
             return set()
         mine = {q.id, ""} if q.kind != "function" else {q.id}
         return {
-            name
-            for cell, name in self.calls
-            if name in q.forbid and self._cell_question(cell) in mine
+            call.describe(q.forbid)
+            for cell, call in self.calls
+            if set(call.implements) & set(q.forbid) and self._cell_question(cell) in mine
         }
+
+    def _label_answers(self, ns: dict) -> None:
+        """Label every function answer in ``ns`` with its question, so that a forbidden call
+        its code makes is charged there, as the grader does (:func:`tripwire.label_callers`)."""
+        self._callers.clear()
+        for other in self._questions.values():
+            func = ns.get(other.target) if other.kind == "function" and other.target else None
+            if callable(func):
+                label_callers(self._callers, func, other.id)
+
+    def _charged_here(self, q, calls: set) -> set[str]:
+        """Of the forbidden calls made while ``q``'s function ran, those charged on ``q``:
+        one made by another question's function, which forbids it too, is charged there (the
+        student is told), as the grader does."""
+        charged = set()
+        for call in calls:
+            if not set(call.implements) & set(q.forbid):
+                continue
+            owner = self._questions.get(call.where) if call.where != q.id else None
+            if owner is not None and set(call.implements) & set(owner.forbid):
+                print(
+                    f"  note: your {q.target} calls {owner.target} (your answer to {owner.id}), "
+                    f"which calls {call.describe(owner.forbid)}: charged on {owner.id}, not here"
+                )
+                continue
+            charged.add(call.describe(q.forbid))
+        return charged
 
     @contextlib.contextmanager
     def _running_cases(self, into: set):
@@ -432,7 +465,7 @@ class Assignment:
             f"  The value itself{who} is not shipped with the notebook: it is checked at grading."
         )
 
-    def _check_function(self, q, func):  # -> the fraction of public cases that count
+    def _check_function(self, q, func, ns=None):  # -> the fraction of public cases that count
         if func is _MISSING:
             return self._not_answered(q, f"no function {q.target} (run your answer cell first)")
         if not callable(func):
@@ -442,13 +475,15 @@ class Assignment:
                 print(f"      {hint}")
             return
         forbidden: set[str] = self._forbidden_calls(q)
+        self._label_answers(ns if ns is not None else {})
+        running: set = set()
         passed = 0
         lines: list[str] = []
         failures: list = []  # the failed cases' verdicts: their diagnosis may choose the hint
         for case in q.cases:
             args, kwargs = decode(case.args), decode(case.kwargs)
             try:
-                with self._running_cases(forbidden):
+                with self._running_cases(running):
                     got = func(*args, **kwargs)
             except NotImplementedError:
                 return self._not_answered(q, f"{q.target} raises NotImplementedError")
@@ -466,13 +501,13 @@ class Assignment:
                         None,
                         f"returned {describe(got)}, which is not plain data ({exc})",
                     )
-            forbidden &= set(q.forbid)
             if verdict is not None and verdict.ok:
                 passed += 1
                 lines.append(f"  PASS: {case.label}")
             else:
                 lines.append(f"  FAIL: {case.label}\n      {message}")
                 failures.append(verdict)
+        forbidden |= self._charged_here(q, running)
         n = len(q.cases)
         hidden = q.hidden_cases
         more = (
@@ -592,7 +627,7 @@ def _watch_forbidden(assignment: Assignment) -> None:
         if target is not None:
             target._forget_cell(info)
 
-    untrip = watch(names, record)
+    untrip = watch(names, record, assignment._callers)
     shell = getattr(assignment._cells, "_shell", None)
     if shell is not None:
         shell.events.register("pre_run_cell", forget)

@@ -22,9 +22,12 @@ Installed in the child right before student code runs, it makes the KERNEL refus
 - closing or replacing one pinned descriptor (``close``, ``dup2``/``dup3``, ``close_range``):
   the pipe on which forbidden library calls are reported to the grader
   (:mod:`course.grading.tripwire`),
-- system calls of another architecture (i386 calls on x86-64, x32 calls).
+- system calls of another architecture (i386 calls on x86-64, x32 calls),
+- memory that the address-space limit would not count: ``memfd_create`` and ``memfd_secret``
+  (answered ENOMEM, "out of memory") and growing a pipe's buffer (``fcntl`` F_SETPIPE_SZ).
 
-Every refusal is the error EPERM (ENOSYS for ``clone3``); nothing is killed.
+Every refusal is the error EPERM (ENOSYS for ``clone3``, ENOMEM for anonymous files); nothing
+is killed.
 
 This is the layer that still holds when the Python audit hook is bypassed (for instance through
 ``_posixsubprocess`` or ctypes) and when the grader runs as root, where ``RLIMIT_NPROC`` is not
@@ -58,6 +61,7 @@ __all__ = [
     "DENIED",
     "IF_KNOWN",
     "METADATA",
+    "OUT_OF_MEMORY",
     "available",
     "die_with_parent",
     "export_pfc",
@@ -126,6 +130,15 @@ DENIED = (
     "sethostname",
     "setdomainname",
 )
+#: Answered "out of memory" (ENOMEM): an anonymous file's pages are written, not mapped, so the
+#: address-space limit does not count them (issue 36: 1,280 MB held in 20 memfds under a
+#: 1,024 MB limit). Nothing numpy, scipy, matplotlib or IPython does in a child uses them.
+OUT_OF_MEMORY = ("memfd_create",)
+#: As :data:`OUT_OF_MEMORY` where this libseccomp knows the name.
+OUT_OF_MEMORY_IF_KNOWN = ("memfd_secret",)
+#: ``fcntl``'s F_SETPIPE_SZ: a pipe keeps its default buffer (16 pages), so the pipes a child
+#: can open (its descriptor limit) hold a few megabytes at most, outside its address space.
+_F_SETPIPE_SZ = 1031
 #: File metadata, refused outright with EPERM for every child (also in its own folder): Landlock
 #: has no right for it, and the owner of a file (root for root's files, when a child has to stay
 #: root) may change it without any capability.
@@ -155,7 +168,13 @@ METADATA = (
 #: Refused like :data:`METADATA` where this libseccomp knows the name (calls newer than its
 #: release; one it does not know stays open: libseccomp 2.5.4 knows ``fchmodat2`` but not
 #: the ``*xattrat`` calls of Linux 6.13 nor ``file_setattr`` of 6.17).
-IF_KNOWN = ("fchmodat2", "setxattrat", "removexattrat", "file_setattr")
+IF_KNOWN = (
+    "fchmodat2",
+    "setxattrat",
+    "removexattrat",
+    "file_setattr",
+    *OUT_OF_MEMORY_IF_KNOWN,
+)
 #: Refused depending on their arguments (see :func:`rules`).
 _CONDITIONAL = (
     "clone",
@@ -174,6 +193,7 @@ _CONDITIONAL = (
     "setpriority",
     "ioprio_set",
     "ioctl",
+    "fcntl",
 )
 
 # libseccomp's ABI (seccomp.h of libseccomp 2.x)
@@ -274,7 +294,16 @@ def rules(pid: int, pinned_fd: int | None = None) -> list[Rule]:
         (deny, "setpriority", ((1, _NE, 0, 0),)),
         (deny, "setpriority", ((2, _MASKED_EQ, _SIGN, _SIGN),)),  # no negative nice (root)
         (deny, "ioprio_set", ((1, _NE, 0, 0),)),
-        *((deny, name, ()) for name in (*METADATA, *IF_KNOWN)),
+        *(
+            (deny, name, ())
+            for name in (*METADATA, *IF_KNOWN)
+            if name not in OUT_OF_MEMORY_IF_KNOWN
+        ),
+        *((_errno(errno.ENOMEM), name, ()) for name in (*OUT_OF_MEMORY, *OUT_OF_MEMORY_IF_KNOWN)),
+        *(
+            (deny, name, ((1, _MASKED_EQ, _LOW_WORD, _F_SETPIPE_SZ),))
+            for name in ("fcntl", "fcntl64")
+        ),
         # the kernel reads the request as an unsigned int: its low 32 bits decide
         *((deny, "ioctl", ((1, _MASKED_EQ, _LOW_WORD, request),)) for request in _SET_INODE_FLAGS),
     ]
@@ -300,7 +329,7 @@ def _unknown_names() -> tuple[str, ...]:
         return ()
     return tuple(
         name
-        for name in (*DENIED, *METADATA, *_CONDITIONAL)
+        for name in (*DENIED, *METADATA, *OUT_OF_MEMORY, *_CONDITIONAL)
         if lib.seccomp_syscall_resolve_name(name.encode()) == _NR_SCMP_ERROR
     )
 
