@@ -422,3 +422,66 @@ def test_course_mark_opens_the_notebook_in_jupyter(tmp_path, monkeypatch, capsys
     assert main(["mark", str(out), "--app", "notebook"]) == 0
     assert calls[-1][0] == [sys.executable, "-m", "notebook", "marking.ipynb"]
     assert "Opening" in capsys.readouterr().out
+
+
+# -- short answers are data: quotes, commas, formulas, HTML, control characters --------------
+HOSTILE = {
+    "h1": 'I do not know. "q",1,1,"ok',  # a forgery: the old import gave it 1/1 `marked`
+    "h2": 'The "parameter" test is stronger, because it has one degree of freedom.',
+    "h3": '=HYPERLINK("http://x","click") the statistic is large',  # refused `course mark`
+    "h4": "a, b\nnew line <script>alert(1)</script> \x07bell \x1b[31mred",
+}
+
+
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory):
+    root = tmp_path_factory.mktemp("hostile_answers")
+    _course(root)
+    subs = root / "subs"
+    subs.mkdir()
+    for sid, text in HOSTILE.items():
+        (subs / f"{sid}.ipynb").write_text(json.dumps(_student(root, {**RIGHT, "q3": text})))
+    roster = root / "roster.csv"
+    roster.write_text("id,name,email\n" + "".join(f"{s},N {s},{s}@x.org\n" for s in HOSTILE))
+    out = root / "out"
+    summary = _grade(root, out)
+    return root, out, summary
+
+
+def test_importing_the_untouched_marking_file_forges_no_mark(hostile):
+    """Old code sniffed the dialect from the header (no quotes there, so no doubled quotes):
+    the forgery's `"q",1,1,"ok` became cells and '2 mark(s) imported' gave two students 1/1."""
+    root, out, _ = hostile
+    summary = _grade(root, out, short_answers=out / "short_answers.csv")
+    assert "0 mark(s) imported; 4 to mark" in summary.text()
+    assert {r.student: r.questions["q3"].status for r in summary.rows} == dict.fromkeys(
+        HOSTILE, "to mark"
+    )
+
+
+def test_hostile_answers_are_marked_and_exported_intact(hostile, tmp_path):
+    """Old code: `=HYPERLINK(...)` made `course mark` refuse to open for everyone."""
+    root, out, _ = hostile
+    out = Path(shutil.copytree(out, tmp_path / "out"))
+    view = MarkingView(out, anonymous=False)
+    assert {a.student: a.text for a in view.answers} == HOSTILE  # the record: intact
+    for _ in HOSTILE:
+        _blur(view.points, "1")
+        view.next_unmarked()
+    for sid, text in HOSTILE.items():
+        view.go(view.file.find((sid, "q3")))
+        assert "<script>" not in view.answer.value and "\x1b" not in view.answer.value
+    rows = list(csv.reader((out / "short_answers.csv").open(encoding="utf-8", newline="")))
+    assert all(len(r) == len(rows[0]) for r in rows)  # one row per answer, every cell in place
+    cells = {r[0]: r[2] for r in rows[1:]}
+    assert cells["h3"].startswith("'=HYPERLINK") and "\\n" in cells["h4"]
+    assert not any(c in cell for cell in cells.values() for c in "\n\x07\x1b")
+    summary = _grade(root, out, short_answers=out / "short_answers.csv")
+    text = summary.text()
+    assert "all marked" in text and "\x1b" not in text and "\x07" not in text
+    grades = {r["student"]: r for r in csv.DictReader((out / "grades.csv").open())}
+    assert all(grades[sid]["q3"] == "1" for sid in HOSTILE)
+    canvas = list(csv.reader((out / "canvas.csv").open(encoding="utf-8", newline="")))
+    assert all(len(r) == len(canvas[0]) for r in canvas)
+    page = (out / "report.html").read_text()
+    assert "<script>alert" not in page

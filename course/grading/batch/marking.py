@@ -38,6 +38,7 @@ from course.grading.batch.marks import (
     read_marking_file,
 )
 from course.grading.batch.record import RECORD_FILE, Record
+from course.grading.vocabulary import visible_text
 
 __all__ = [
     "NOTEBOOK_FILE",
@@ -220,8 +221,11 @@ def _import_marking_file(record: Record, path: Path) -> list[str]:
 
 
 def _box(text: str, css: str) -> str:
+    """Student text as inert HTML: escaped, its lines kept, every other control character
+    (an escape sequence, a bell, a bidirectional override) shown as an escape."""
     style = "white-space: pre-wrap; border-left: 3px solid #999; padding: 0.2em 0.7em"
-    return f'<div class="{css}" style="{style}">{html.escape(text, quote=False)}</div>'
+    shown = "\n".join(visible_text(line) for line in text.split("\n"))
+    return f'<div class="{css}" style="{style}">{html.escape(shown, quote=False)}</div>'
 
 
 class MarkingView:
