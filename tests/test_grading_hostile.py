@@ -635,7 +635,7 @@ def test_nothing_outside_out_changed(graded):
         assert _sha_tree(folder) == graded["before"][name], name
     assert _sha_tree(ROOT / "solutions") == graded["before_repo"]
     names = {p.name for p in graded["out"].iterdir()}
-    assert names == {"grades.csv", "results.jsonl", "feedback", "report.html"}
+    assert names == {"grades.csv", "results.jsonl", "feedback", "report.html", "record.sqlite"}
 
 
 def test_solutions_folder_is_unreadable(graded):

@@ -468,7 +468,7 @@ def test_hostile_answers_are_marked_and_exported_intact(hostile, tmp_path):
     for _ in HOSTILE:
         _blur(view.points, "1")
         view.next_unmarked()
-    for sid, text in HOSTILE.items():
+    for sid in HOSTILE:
         view.go(view.file.find((sid, "q3")))
         assert "<script>" not in view.answer.value and "\x1b" not in view.answer.value
     rows = list(csv.reader((out / "short_answers.csv").open(encoding="utf-8", newline="")))

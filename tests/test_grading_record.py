@@ -115,7 +115,9 @@ def test_an_older_folder_is_imported_once_with_a_message(tmp_path):
         json.dumps({"s1": {"q3": {"points": 1.5, "comment": "ok", "answer_id": "abc"}}})
     )
     with Record(tmp_path) as record:
-        message = record.import_old(tmp_path / "results.jsonl", tmp_path / "short_answer_marks.json")
+        message = record.import_old(
+            tmp_path / "results.jsonl", tmp_path / "short_answer_marks.json"
+        )
         assert "Imported 2 row(s) of results.jsonl and 1 mark(s)" in message
         assert set(record.results()) == {"s1", "s2"}
         assert record.marks()["s1"]["q3"]["points"] == 1.5

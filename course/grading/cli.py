@@ -285,10 +285,11 @@ def _add_mark_command(subparsers) -> None:
         "mark",
         help="mark the short answers of a graded assignment in Jupyter",
         description="Write OUT_DIR/marking.ipynb (unless it exists) and open it in JupyterLab: "
-        "a view of OUT_DIR/short_answers.csv that shows one answer at a time, anonymous by "
-        "default, with the rubric, a points box and a comment box. Every mark is saved into "
-        "short_answers.csv at once; merge them with `course grade NAME SUBMISSIONS --out "
-        "OUT_DIR --short-answers OUT_DIR/short_answers.csv`.",
+        "a view of the short answers in OUT_DIR's record that shows one answer at a time, "
+        "anonymous by default, with the rubric, a points box and a comment box. Every mark is "
+        "saved into the record (OUT_DIR/record.sqlite, with the marker and the time) and "
+        "OUT_DIR/short_answers.csv at once; the next `course grade NAME SUBMISSIONS --out "
+        "OUT_DIR` merges them into the grades.",
     )
     p_mark.add_argument("out_dir", metavar="OUT_DIR", help="the --out folder of `course grade`")
     p_mark.add_argument(

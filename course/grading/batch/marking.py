@@ -563,13 +563,13 @@ def write_marking_notebook(out_dir: str | Path) -> Path:
     nb.cells = [
         nbformat.v4.new_markdown_cell(
             "# Marking the short answers\n\n"
-            "Run the cell below. Each mark is saved into `short_answers.csv` of this folder as "
-            "soon as you leave the points or comment box; close the notebook at any time and "
-            "the view starts where you stopped. `anonymous=False` shows the students' IDs, "
+            "Run the cell below. Each mark is saved into this folder's record (`record.sqlite`, "
+            "with your name and the time) and `short_answers.csv` as soon as you leave the "
+            "points or comment box; close the notebook at any time and the view starts where "
+            "you stopped. `anonymous=False` shows the students' IDs, "
             '`question="q3"` starts at that question.\n\n'
             "Then merge the marks into the grades, the feedback and the LMS files:\n\n"
-            "```bash\ncourse grade NAME SUBMISSIONS --out THIS_FOLDER "
-            "--short-answers THIS_FOLDER/short_answers.csv\n```"
+            "```bash\ncourse grade NAME SUBMISSIONS --out THIS_FOLDER\n```"
         ),
         nbformat.v4.new_code_cell(
             'from course.grading.batch.marking import MarkingView\n\nMarkingView(".")'
