@@ -158,6 +158,13 @@ def _rows(folder: Path) -> dict:
     return {(r["student"], r["question"]): r for r in rows}
 
 
+def _at(file, key: tuple[str, str]):
+    """The answer of ``key`` (it must be there)."""
+    answer = file.find(key)
+    assert answer is not None, key
+    return answer
+
+
 def _blur(box, value: str) -> None:
     """What the front end does when the marker types into a box and leaves it."""
     box.value = value
@@ -321,7 +328,7 @@ def test_one_bad_row_of_a_marking_file_never_stops_the_view(tmp_path):
     view = MarkingView(folder)
     assert "line 2: 9 points: give between 0 and 2" in view.status.value
     assert len(view.file.answers) == len(ANSWERS)  # every answer can be marked
-    assert view.file.find(("s3", "q1")).points == 1  # the other rows' marks were imported
+    assert _at(view.file, ("s3", "q1")).points == 1  # the other rows' marks were imported
 
 
 def test_two_markers_at_once_lose_no_mark(tmp_path):
@@ -333,9 +340,9 @@ def test_two_markers_at_once_lose_no_mark(tmp_path):
     folder = _marking_file(tmp_path)
     ann, bob = MarkingView(folder, marker="ann"), MarkingView(folder, marker="bob")
     given = {}
-    for i, answer in enumerate(a for a in ann.answers):
+    for i, answer in enumerate(ann.answers):
         view = (ann, bob)[i % 2]
-        view.go(view.file.find(answer.key))
+        view.go(_at(view.file, answer.key))
         _blur(view.points, "1")
         given[answer.key] = ("ann", "bob")[i % 2]
     with Record(folder) as record:
@@ -469,7 +476,7 @@ def test_hostile_answers_are_marked_and_exported_intact(hostile, tmp_path):
         _blur(view.points, "1")
         view.next_unmarked()
     for sid in HOSTILE:
-        view.go(view.file.find((sid, "q3")))
+        view.go(_at(view.file, (sid, "q3")))
         assert "<script>" not in view.answer.value and "\x1b" not in view.answer.value
     rows = list(csv.reader((out / "short_answers.csv").open(encoding="utf-8", newline="")))
     assert all(len(r) == len(rows[0]) for r in rows)  # one row per answer, every cell in place
