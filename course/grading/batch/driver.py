@@ -1,18 +1,20 @@
 """``course grade``: the batch driver that grades a folder of submitted notebooks.
 
 It finds the submissions, skips students already graded with the same checks, library
-version and key from the same file (``results.jsonl`` records the file's sha256 and makes a run
-resumable; a resubmission is graded again), grades the others in parallel (or only the
-students ``--student`` names), one
-:class:`~course.grading.batch.session.StudentSession` each, and writes the reports
-(:mod:`course.grading.batch.reports`) as students finish.
+version and key from the same file (the term's record, :mod:`course.grading.batch.record`,
+keeps the file's sha256 and makes a run resumable; a resubmission is graded again), grades the
+others in parallel (or only the students ``--student`` names), one
+:class:`~course.grading.batch.session.StudentSession` each, and stores each row in the record
+as the student finishes. A submission the grader fails on (a fault of the grader, never of the
+student) is graded again up to :data:`FAULT_RETRIES` times, then stored as *not graded*: blank
+in every LMS file, named in the summary, and graded again by the next run.
 
-Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status;
-``late`` and ``penalty`` when a due date is known, :mod:`course.grading.batch.late`),
-``report.html`` (the class report, :mod:`course.grading.batch.classreport`),
-``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
-finish; a rerun skips students already graded with the same checks and library version from
-the same file).
+Outputs in ``OUT``, all exports of the record, rewritten by every run: ``grades.csv`` (student,
+one column per question, total, max, status; ``late`` and ``penalty`` when a due date is known,
+:mod:`course.grading.batch.late`), ``report.html`` (the class report,
+:mod:`course.grading.batch.classreport`), ``feedback/<student>.md``, ``results.jsonl`` (one
+line per student), ``short_answers.csv`` (:mod:`course.grading.batch.marks`) and, with a
+roster, ``canvas.csv`` and ``moodle.csv``.
 """
 
 from __future__ import annotations
