@@ -222,6 +222,9 @@ def test_a_fault_that_persists_is_not_graded_blank_and_regraded_next_run(
     assert grades["s3"]["total"] == "" and grades["s3"]["status"] == "not graded"
     with Record(out) as record:
         assert record.not_graded() == ["s3"] and "s3" not in record.results()
+    page = (out / "report.html").read_text()
+    assert "No grade: 1 student(s)" in page and "<td>s3</td><td>not graded</td>" in page
+    assert "3 student(s); total out of" in page  # s3 is not a 0 in the numbers
     # the next plain run grades s3 (and only s3)
     monkeypatch.setattr(Sandbox, "start", real)
     assert main(argv) == 0

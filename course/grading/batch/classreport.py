@@ -24,7 +24,7 @@ from pathlib import Path
 
 from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
-from course.grading.vocabulary import GradeStatus
+from course.grading.vocabulary import GradeStatus, visible_text
 
 __all__ = ["diagnosis", "report_html", "write_report"]
 
@@ -337,8 +337,11 @@ svg { max-width: 100%; height: auto; display: block; }
 
 
 def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> str:
-    """The class report of ``rows`` as one self-contained HTML page."""
-    data = _Class(rows, checks, question_ids)
+    """The class report of ``rows`` as one self-contained HTML page. Rows that are no grade
+    (not graded, refused, quarantined: blank in the LMS files) are listed with their reason
+    and left out of the numbers."""
+    blank = [r for r in rows if not r.counts]
+    data = _Class([r for r in rows if r.counts], checks, question_ids)
     title = f"{checks.title}: class report"
     parts = [
         "<!DOCTYPE html>",
@@ -347,6 +350,14 @@ def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> s
         f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head><body>",
         f"<h1>{html.escape(title)}</h1>",
     ]
+    if blank:
+        parts.append(
+            f"<h2>No grade: {len(blank)} student(s), blank in the LMS files</h2>"
+            + _table(
+                ["student", "status", "why"],
+                [[r.student, r.status, visible_text("; ".join(r.notes))] for r in blank],
+            )
+        )
     n = len(data.rows)
     if not n:
         parts.append("<p>No submission was graded.</p></body></html>")

@@ -362,8 +362,7 @@ def _regrade_command(name: str, submissions: Path, out: Path) -> str:
 def _export_rows(record: Record, rows: list[StudentResult], checks, qids: list, out: Path) -> None:
     """grades.csv, report.html, the feedback and results.jsonl, from the rows of the record."""
     write_csv(rows, qids, out / "grades.csv")
-    graded = [r for r in rows if r.status != SubmissionStatus.NOT_GRADED]
-    write_report(graded, checks, qids, out)
+    write_report(rows, checks, qids, out)  # rows that are no grade: listed, not counted
     for row in rows:
         _write_if_changed(out / "feedback" / f"{row.student}.md", feedback_markdown(row, checks))
     current = record.results(graded=None)
