@@ -232,7 +232,7 @@ def grade(
         if options.students is not None:
             _check_selection(options.students, todo)
         files = {sub.student: _file_record(sub.path, submissions) for sub in todo}
-        record.set_submissions(_submission_rows(todo, files, submissions))
+        record.set_submissions(_submission_rows(todo, files))
         record.set_late(late)
         previous = record.results()
         failed_before = set(record.not_graded())
@@ -384,14 +384,17 @@ def _write_if_changed(path: Path, text: str) -> None:
     tmp.replace(path)
 
 
-def _submission_rows(entries: list, files: dict, submissions: Path) -> list[tuple]:
-    """The record's rows of this run's files: (student, name, sha256, origin, reason)."""
+def _submission_rows(entries: list, files: dict) -> list[tuple]:
+    """The record's rows of this run's files: (student, name, sha256, origin, reason); the
+    origin is the entry of the submissions folder the file came from (the name the LMS gave
+    it), never an absolute path of the instructor's machine."""
     out = []
     for sub in entries:
         file = files.get(sub.student) or {}
         name = file.get("name") or ""
+        origin = name.split("/", 1)[0] if name else ""
         reason = sub.note or ("refused" if sub.refused else f"the file's name gives {sub.student}")
-        out.append((sub.student, name, file.get("sha256"), str(submissions), reason))
+        out.append((sub.student, name, file.get("sha256"), origin, reason))
     return out
 
 
