@@ -638,7 +638,13 @@ def test_nothing_outside_out_changed(graded):
 
     names = {p.name for p in graded["out"].iterdir()}
     tables = {f"report-{name}.csv" for name in TABLES}  # the report's tables, beside it
-    assert names - tables == {"grades.csv", "results.jsonl", "feedback", "report.html"}
+    assert names - tables == {
+        "grades.csv",
+        "results.jsonl",
+        "feedback",
+        "report.html",
+        "record.sqlite",
+    }
 
 
 def test_solutions_folder_is_unreadable(graded):

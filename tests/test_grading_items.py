@@ -232,7 +232,7 @@ def test_marking_file_round_trip(graded, course):
     by_student = {r["student"]: r for r in rows}
     by_student["right"].update(points="1,5", comment="=good; name the dof")  # decimal comma
     by_student["moved"].update(points="2")
-    filled = _write(course / "filled.csv", rows, delimiter=";")  # a European spreadsheet
+    filled = _write(course / "filled.csv", rows)
     opts = GradeOptions(jobs=1, progress=False, short_answers=filled)
     summary = grade(course / "solutions" / NAME, course / "subs", out, opts)
     assert "2 mark(s) imported; 2 to mark" in summary.text()
@@ -254,6 +254,21 @@ def test_marking_file_round_trip(graded, course):
     assert {r["student"]: r["points"] for r in _marking_rows(out)}["right"] == "1.5"
 
 
+def test_a_marking_file_is_read_with_one_dialect_never_guessed(graded, course):
+    """A semicolon file (a spreadsheet's locale) is refused as a whole, with what to do:
+    guessing the dialect from the file is how a student's quote and comma forged marks."""
+    _, _, out = graded
+    rows = _marking_rows(out)
+    bad = _write(course / "semicolons.csv", rows, delimiter=";")
+    with pytest.raises(MarksError, match="comma-separated"):
+        grade(
+            course / "solutions" / NAME,
+            course / "subs",
+            out,
+            GradeOptions(jobs=1, progress=False, short_answers=bad),
+        )
+
+
 @pytest.mark.parametrize(
     "change, message",
     [
@@ -265,24 +280,32 @@ def test_marking_file_round_trip(graded, course):
         ({"points": "lots"}, "is not a number"),
         ({"comment": "see me"}, "a comment but no points for invalid q3"),
         ({"answer_id": "0123456789ab", "points": "1"}, "changed since this file was written"),
+        ({"answer_id": "", "points": "1"}, "no answer_id for invalid q3"),
+        ({"answer": "another text", "points": "1"}, "is not the answer its answer_id names"),
     ],
 )
-def test_marking_file_refuses_bad_rows_and_changes_nothing(graded, course, change, message):
+def test_a_bad_row_is_refused_with_its_line_and_the_others_imported(
+    graded, course, change, message
+):
+    """Old code: one bad row refused the whole file (nothing imported)."""
     _, _, out = graded
     rows = _marking_rows(out)
-    row = next(r for r in rows if r["student"] == "invalid")
-    row.update(change)
+    line = next(i for i, r in enumerate(rows, start=2) if r["student"] == "invalid")
+    rows[line - 2].update(change)
+    good = next(r for r in rows if r["student"] == "retyped")
+    good.update(points="0.5")
     bad = _write(course / "bad.csv", rows)
-    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
-    with pytest.raises(MarksError, match=message):
-        grade(
-            course / "solutions" / NAME,
-            course / "subs",
-            out,
-            GradeOptions(jobs=1, progress=False, short_answers=bad),
-        )
-    after = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
-    assert after == before
+    summary = grade(
+        course / "solutions" / NAME,
+        course / "subs",
+        out,
+        GradeOptions(jobs=1, progress=False, short_answers=bad),
+    )
+    text = summary.text()
+    assert "1 row(s) of the marking file refused" in text
+    assert any(x.strip().startswith(f"line {line}: ") and message in x for x in text.splitlines())
+    marks = {r.student: r.questions["q3"] for r in summary.rows}
+    assert marks["retyped"].points == 0.5 and marks["invalid"].status == "to mark"
 
 
 def test_marking_file_twice_the_same_row(graded, course):
@@ -290,16 +313,17 @@ def test_marking_file_twice_the_same_row(graded, course):
     rows = _marking_rows(out)
     rows[0]["points"] = "1"
     bad = _write(course / "twice.csv", [*rows, dict(rows[0])])
-    with pytest.raises(MarksError, match="marked twice"):
-        grade(
-            course / "solutions" / NAME,
-            course / "subs",
-            out,
-            GradeOptions(jobs=1, progress=False, short_answers=bad),
-        )
+    summary = grade(
+        course / "solutions" / NAME,
+        course / "subs",
+        out,
+        GradeOptions(jobs=1, progress=False, short_answers=bad),
+    )
+    assert f"line {len(rows) + 2}: {rows[0]['student']} q3 is marked twice (also line 2)" in (
+        summary.text()
+    )
 
 
-# -- item 5: locked cells, answers by cell id, deleted answer cells -----------------------
 def test_release_locks_cells_and_names_answer_cells(course):
     nb = nbformat.read(course / "exercises" / NAME / f"{NAME}.ipynb", as_version=4)
     for cell in nb.cells:

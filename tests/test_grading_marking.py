@@ -122,7 +122,6 @@ widgets = pytest.importorskip("ipywidgets", reason="the marking view needs ipywi
 
 from course.grading.batch.marking import (  # noqa: E402
     PROGRESS_FILE,
-    MarkingFile,
     MarkingView,
     write_marking_notebook,
 )
@@ -157,6 +156,13 @@ def _marking_file(folder: Path, marked: dict | None = None) -> Path:
 def _rows(folder: Path) -> dict:
     rows = csv.DictReader((folder / "short_answers.csv").open(encoding="utf-8"))
     return {(r["student"], r["question"]): r for r in rows}
+
+
+def _at(file, key: tuple[str, str]):
+    """The answer of ``key`` (it must be there)."""
+    answer = file.find(key)
+    assert answer is not None, key
+    return answer
 
 
 def _blur(box, value: str) -> None:
@@ -288,14 +294,21 @@ def test_answers_are_shown_as_text_never_as_html(tmp_path):
 
 
 def test_an_answer_changed_by_a_regrade_is_not_marked_blindly(tmp_path):
+    from course.grading.batch.record import Record
+
     folder = _marking_file(tmp_path)
     view = MarkingView(folder)
     current = view.current
-    path = folder / "short_answers.csv"
-    path.write_text(path.read_text().replace(current.answer_id, "0123456789ab"))
+    with Record(folder) as record:  # `course grade` graded a changed answer meanwhile
+        answers = record.answers()
+        for a in answers:
+            if (a["student"], a["question"]) == current.key:
+                a.update(answer_id="0123456789ab", text="a new answer")
+        record.set_answers(answers)
     _blur(view.points, "1")
     assert "no longer in" in view.status.value and "reload the view" in view.status.value
-    assert "0123456789ab" in path.read_text()
+    with Record(folder) as record:
+        assert current.student not in record.marks()
 
 
 def test_bad_folders_and_questions_are_refused(tmp_path):
@@ -304,24 +317,57 @@ def test_bad_folders_and_questions_are_refused(tmp_path):
     folder = _marking_file(tmp_path / "out")
     with pytest.raises(ValueError, match=r"question='q9': no answers to mark"):
         MarkingView(folder, question="q9")
+
+
+def test_one_bad_row_of_a_marking_file_never_stops_the_view(tmp_path):
+    """Old code: MarksError for the whole file, so nobody could mark (a row that is not one,
+    e.g. a hand-edited mark out of range, blocked the class)."""
+    folder = _marking_file(tmp_path / "out", {("s3", "q1"): 1})
     path = folder / "short_answers.csv"
     path.write_text(path.read_text().replace(",2,,names", ",2,9,names", 1))
-    with pytest.raises(MarksError, match="line 2: 9 points: give between 0 and 2"):
-        MarkingFile(folder)
+    view = MarkingView(folder)
+    assert "line 2: 9 points: give between 0 and 2" in view.status.value
+    assert len(view.file.answers) == len(ANSWERS)  # every answer can be marked
+    assert _at(view.file, ("s3", "q1")).points == 1  # the other rows' marks were imported
 
 
-def test_marks_from_the_view_are_merged_by_short_answers(course, graded, tmp_path):
-    """The view's file is what --short-answers merges: grades, feedback and LMS files."""
+def test_two_markers_at_once_lose_no_mark(tmp_path):
+    """Two views of one folder (two markers, two kernels) marking in turns: every mark lands,
+    with its marker. Old code: each view rewrote the whole file from what it had read, so the
+    later save dropped the other's marks."""
+    from course.grading.batch.record import Record
+
+    folder = _marking_file(tmp_path)
+    ann, bob = MarkingView(folder, marker="ann"), MarkingView(folder, marker="bob")
+    given = {}
+    for i, answer in enumerate(ann.answers):
+        view = (ann, bob)[i % 2]
+        view.go(_at(view.file, answer.key))
+        _blur(view.points, "1")
+        given[answer.key] = ("ann", "bob")[i % 2]
+    with Record(folder) as record:
+        marks = record.marks()
+    assert {(s, q): m["who"] for s, by_q in marks.items() for q, m in by_q.items()} == given
+    assert all(r["points"] == "1" for k, r in _rows(folder).items() if k in given)
+    bob.go(bob.answers[0])  # each view shows the other's marks as it moves on
+    assert all(a.marked for a in bob.answers)
+
+
+def test_marks_from_the_view_reach_the_grades_on_the_next_run(course, graded, tmp_path, capsys):
+    """The view's marks are in the record: the next plain run merges them into the grades,
+    feedback and LMS files, and `course history` answers a regrade request."""
+    from course.cli import main
+
     out = _copy(graded, tmp_path)
-    view = MarkingView(out)
+    view = MarkingView(out, marker="ann")
     marked = {}
     for points, comment in (("1.5", "name the dof"), ("2", "")):
         _blur(view.points, points)
         _blur(view.comment, comment)
         marked[view.current.student] = (points, comment)
         view.next_unmarked()
-    summary = _grade(course, out, short_answers=out / "short_answers.csv")
-    assert "2 mark(s) imported; 2 to mark" in summary.text()
+    summary = _grade(course, out)
+    assert "short answers: 2 to mark" in summary.text()
     assert "(q3: 2 of 4 answers)" in summary.text()
     grades = {r["student"]: r for r in csv.DictReader((out / "grades.csv").open())}
     moodle = _moodle(out)
@@ -330,6 +376,16 @@ def test_marks_from_the_view_are_merged_by_short_answers(course, graded, tmp_pat
         assert f"q3 {points}/2;" in moodle[sid][-1] or moodle[sid][-1].endswith(f"q3 {points}/2).")
         if comment:
             assert comment in (out / "feedback" / f"{sid}.md").read_text()
+    # importing the view's own export changes nothing
+    again = _grade(course, out, short_answers=out / "short_answers.csv")
+    assert "0 mark(s) imported; 2 to mark" in again.text()
+    sid, (points, _) = next(iter(marked.items()))
+    capsys.readouterr()
+    assert main(["history", str(out), sid]) == 0
+    history = capsys.readouterr().out
+    assert "ann" in history and f"{float(points):g} points" in history
+    assert f"{3 + float(points):g}/5 " in history  # the grade before and after the mark
+    assert history.index("mark q3") < history.rindex("grade")
 
 
 def test_course_mark_writes_the_marking_notebook(tmp_path, capsys):
@@ -373,3 +429,66 @@ def test_course_mark_opens_the_notebook_in_jupyter(tmp_path, monkeypatch, capsys
     assert main(["mark", str(out), "--app", "notebook"]) == 0
     assert calls[-1][0] == [sys.executable, "-m", "notebook", "marking.ipynb"]
     assert "Opening" in capsys.readouterr().out
+
+
+# -- short answers are data: quotes, commas, formulas, HTML, control characters --------------
+HOSTILE = {
+    "h1": 'I do not know. "q",1,1,"ok',  # a forgery: the old import gave it 1/1 `marked`
+    "h2": 'The "parameter" test is stronger, because it has one degree of freedom.',
+    "h3": '=HYPERLINK("http://x","click") the statistic is large',  # refused `course mark`
+    "h4": "a, b\nnew line <script>alert(1)</script> \x07bell \x1b[31mred",
+}
+
+
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory):
+    root = tmp_path_factory.mktemp("hostile_answers")
+    _course(root)
+    subs = root / "subs"
+    subs.mkdir()
+    for sid, text in HOSTILE.items():
+        (subs / f"{sid}.ipynb").write_text(json.dumps(_student(root, {**RIGHT, "q3": text})))
+    roster = root / "roster.csv"
+    roster.write_text("id,name,email\n" + "".join(f"{s},N {s},{s}@x.org\n" for s in HOSTILE))
+    out = root / "out"
+    summary = _grade(root, out)
+    return root, out, summary
+
+
+def test_importing_the_untouched_marking_file_forges_no_mark(hostile):
+    """Old code sniffed the dialect from the header (no quotes there, so no doubled quotes):
+    the forgery's `"q",1,1,"ok` became cells and '2 mark(s) imported' gave two students 1/1."""
+    root, out, _ = hostile
+    summary = _grade(root, out, short_answers=out / "short_answers.csv")
+    assert "0 mark(s) imported; 4 to mark" in summary.text()
+    assert {r.student: r.questions["q3"].status for r in summary.rows} == dict.fromkeys(
+        HOSTILE, "to mark"
+    )
+
+
+def test_hostile_answers_are_marked_and_exported_intact(hostile, tmp_path):
+    """Old code: `=HYPERLINK(...)` made `course mark` refuse to open for everyone."""
+    root, out, _ = hostile
+    out = Path(shutil.copytree(out, tmp_path / "out"))
+    view = MarkingView(out, anonymous=False)
+    assert {a.student: a.text for a in view.answers} == HOSTILE  # the record: intact
+    for _ in HOSTILE:
+        _blur(view.points, "1")
+        view.next_unmarked()
+    for sid in HOSTILE:
+        view.go(_at(view.file, (sid, "q3")))
+        assert "<script>" not in view.answer.value and "\x1b" not in view.answer.value
+    rows = list(csv.reader((out / "short_answers.csv").open(encoding="utf-8", newline="")))
+    assert all(len(r) == len(rows[0]) for r in rows)  # one row per answer, every cell in place
+    cells = {r[0]: r[2] for r in rows[1:]}
+    assert cells["h3"].startswith("'=HYPERLINK") and "\\n" in cells["h4"]
+    assert not any(c in cell for cell in cells.values() for c in "\n\x07\x1b")
+    summary = _grade(root, out, short_answers=out / "short_answers.csv")
+    text = summary.text()
+    assert "all marked" in text and "\x1b" not in text and "\x07" not in text
+    grades = {r["student"]: r for r in csv.DictReader((out / "grades.csv").open())}
+    assert all(grades[sid]["q3"] == "1" for sid in HOSTILE)
+    canvas = list(csv.reader((out / "canvas.csv").open(encoding="utf-8", newline="")))
+    assert all(len(r) == len(canvas[0]) for r in canvas)
+    page = (out / "report.html").read_text()
+    assert "<script>alert" not in page

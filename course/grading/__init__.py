@@ -25,11 +25,12 @@ The flow
    :mod:`.sandbox.forkserver`, :mod:`.sandbox.runner`, :mod:`.sandbox.isolation`; forbidden
    calls reported by :mod:`.tripwire`), compares in the trusted parent (:mod:`.compare`), and
    records a
-   :class:`~.batch.results.StudentResult`; the reports (:mod:`.batch.reports`, the class
+   :class:`~.batch.results.StudentResult`, kept in the term's record (:mod:`.batch.record`,
+   one SQLite database per class); the reports (:mod:`.batch.reports`, the class
    report ``report.html`` of :mod:`.batch.classreport`, with its item analysis,
    :mod:`.batch.itemanalysis`, and similarity hints, :mod:`.batch.similarity`), the short
    answers' marking file (:mod:`.batch.marks`) and the LMS files (:mod:`.batch.roster`) are
-   written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers
+   exports of the record; :mod:`.batch.cluster` runs the sessions on Dask workers
    (their side: :mod:`.batch.clusterworker`), which never receive the class key.
    ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
    one gradebook, under the term's rules (:mod:`.batch.termrules`); ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter.
@@ -62,7 +63,8 @@ cli
 ``batch/`` ``course grade`` in the trusted parent
     driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
     student), plan (which of a submission's cells run, in which order), results (the typed
-    results), reports (feedback, grades, results log), marks (short answers), marking (the
+    results), record (the term's record: rows, marks, files, history), reports (feedback,
+    grades, results log), marks (short answers), marking (the
     marking view of ``course mark``), intake (the files handed in: folders and LMS zips),
     lmsnames (each LMS's name grammar), identity (whose submission is whose), lmsfeedback
     (the feedback zips of ``course feedback``), roster (the class,

@@ -7,6 +7,8 @@ import os
 import sys
 from pathlib import Path
 
+from course.grading.vocabulary import visible_text
+
 #: Where `course release` and `course grade` look for solutions/ and exercises/.
 COURSE_DIR_HELP = (
     "the course folder holding solutions/ and exercises/ (default: $COURSE_DIR, else the "
@@ -78,6 +80,7 @@ def _release(args) -> int:
 
 
 def _grade(args) -> int:
+    _limit_blas_threads()
     from course.grading.batch.cluster import ClusterError, ConnectionFiles
     from course.grading.batch.driver import SelectionError, grade
     from course.grading.batch.intake import IntakeError
@@ -152,6 +155,42 @@ def _grade(args) -> int:
             return 2
         raise
     print(summary.text())
+    return 1 if summary.not_graded else 0  # a fault of the grader is no finished run
+
+
+def _limit_blas_threads() -> None:
+    """One BLAS thread for the grading parent, set before numpy is first imported: its own
+    linear algebra is the references' and named mistakes' tiny calls, around which an
+    OpenBLAS worker pool only spins (a quarter of a class's CPU). The sandbox's children get
+    their own environment (one thread too)."""
+    if "numpy" in sys.modules:
+        return
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[name] = "1"
+
+
+def _history(args) -> int:
+    from course.grading.batch.record import RECORD_FILE, Record
+
+    out = Path(args.out_dir)
+    if not (out / RECORD_FILE).is_file():
+        print(
+            f"course history: {out} holds no {RECORD_FILE} (the --out folder of `course grade`)",
+            file=sys.stderr,
+        )
+        return 2
+    with Record(out) as record:
+        events = record.history(args.student)
+        files = record.submissions(args.student)
+    if not events and not files:
+        print(f"course history: nothing recorded for {args.student!r} in {out}", file=sys.stderr)
+        return 2
+    print(f"History of {visible_text(args.student)} in {out}:")
+    for _sid, name, sha, _origin, reason in files:
+        print(f"  file {visible_text(name)} sha256 {(sha or '?')[:12]}: {visible_text(reason)}")
+    for at, who, kind, question, change in events:
+        what = f"{kind} {question}".strip()
+        print(f"  {at}  {visible_text(who):<20} {what:<10} {visible_text(change)}")
     return 0
 
 
@@ -271,10 +310,11 @@ def _add_mark_command(subparsers) -> None:
         "mark",
         help="mark the short answers of a graded assignment in Jupyter",
         description="Write OUT_DIR/marking.ipynb (unless it exists) and open it in JupyterLab: "
-        "a view of OUT_DIR/short_answers.csv that shows one answer at a time, anonymous by "
-        "default, with the rubric, a points box and a comment box. Every mark is saved into "
-        "short_answers.csv at once; merge them with `course grade NAME SUBMISSIONS --out "
-        "OUT_DIR --short-answers OUT_DIR/short_answers.csv`.",
+        "a view of the short answers in OUT_DIR's record that shows one answer at a time, "
+        "anonymous by default, with the rubric, a points box and a comment box. Every mark is "
+        "saved into the record (OUT_DIR/record.sqlite, with the marker and the time) and "
+        "OUT_DIR/short_answers.csv at once; the next `course grade NAME SUBMISSIONS --out "
+        "OUT_DIR` merges them into the grades.",
     )
     p_mark.add_argument("out_dir", metavar="OUT_DIR", help="the --out folder of `course grade`")
     p_mark.add_argument(
@@ -665,4 +705,14 @@ def add_commands(subparsers) -> None:
     p_fb.add_argument("--lms", required=True, choices=["canvas", "moodle"])
     p_fb.set_defaults(func=_instructor_only(_feedback))
     _add_mark_command(subparsers)
+    p_hist = subparsers.add_parser(
+        "history",
+        help="every change of a student's grade and marks, with who and when",
+        description="Print what the term's record of OUT_DIR (record.sqlite) holds about "
+        "STUDENT: the files graded, then every grade, mark, late record and quarantine, oldest "
+        "first, with who made the change and when (to answer a regrade request).",
+    )
+    p_hist.add_argument("out_dir", metavar="OUT_DIR", help="the --out folder of `course grade`")
+    p_hist.add_argument("student", metavar="STUDENT", help="the student's ID (as grades.csv)")
+    p_hist.set_defaults(func=_instructor_only(_history))
     _add_class_commands(subparsers)

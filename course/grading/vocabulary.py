@@ -300,7 +300,8 @@ class SubmissionStatus(_Word):
     OK = "ok"
     INVALID_NOTEBOOK = "invalid notebook"
     REFUSED = "refused"  # e.g. a symbolic link among the submissions
-    GRADER_ERROR = "grader error"
+    GRADER_ERROR = "grader error"  # a fault of the grader, retried
+    NOT_GRADED = "not graded"  # still a fault after the retries: no grade, blank in LMS files
 
 
 # --------------------------------------------------------------------------------------

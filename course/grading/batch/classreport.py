@@ -36,13 +36,13 @@ from course.grading.batch.itemanalysis import FLAG_BELOW, MIN_STUDENTS, item_ana
 from course.grading.batch.marks import unmarked_counts, unmarked_warning
 from course.grading.batch.results import StudentResult
 from course.grading.batch.similarity import similar_groups
-from course.grading.vocabulary import GradeStatus, MistakeKind
+from course.grading.vocabulary import GradeStatus, MistakeKind, visible_text
 
 __all__ = ["TABLES", "diagnosis", "report_html", "report_tables", "write_report"]
 
 REPORT_FILE = "report.html"
 #: The report's tables, each also written as ``report-<name>.csv`` when the page has it.
-TABLES = ("unmarked", "questions", "items", "kinds", "wrong", "abnormal", "late", "slowest",
+TABLES = ("no_grade", "unmarked", "questions", "items", "kinds", "wrong", "abnormal", "late", "slowest",
           "similar")  # fmt: skip
 
 _ABNORMAL = (
@@ -325,7 +325,9 @@ svg { max-width: 100%; height: auto; display: block; }
 
 
 def report_html(rows: list[StudentResult], checks, question_ids: list[str]) -> str:
-    """The class report of ``rows`` as one self-contained HTML page."""
+    """The class report of ``rows`` as one self-contained HTML page. Rows that are no grade
+    (not graded, refused, quarantined: blank in the LMS files) are listed with their reason
+    and left out of the numbers."""
     return _report(rows, checks, question_ids)[0]
 
 
@@ -337,6 +339,8 @@ def report_tables(
 
 
 def _report(rows: list[StudentResult], checks, question_ids: list[str]) -> tuple[str, dict]:
+    blank = [r for r in rows if not r.counts]  # no grade: listed with the reason, not counted
+    rows = [r for r in rows if r.counts]
     data = _Class(rows, checks, question_ids)
     tables: dict[str, tuple[list[str], list[list[str]]]] = {}
     title = f"{checks.title}: class report"
@@ -347,6 +351,16 @@ def _report(rows: list[StudentResult], checks, question_ids: list[str]) -> tuple
         f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head><body>",
         f"<h1>{html.escape(title)}</h1>",
     ]
+    if blank:
+        parts.append(
+            f"<h2>No grade: {len(blank)} student(s), blank in the LMS files</h2>"
+            + _table(
+                ["student", "status", "why"],
+                [[r.student, r.status, visible_text("; ".join(r.notes))] for r in blank],
+                "no_grade",
+                tables,
+            )
+        )
     n = len(data.rows)
     if not n:
         parts.append("<p>No submission was graded.</p></body></html>")

@@ -237,7 +237,14 @@ def grade_on_cluster(address, grader, pending: list, options):
                 count = sum(1 for t in described if t == text)
                 options.announce(f"{count} worker(s) at {client.scheduler.address}: {text}")
 
+        students: dict = {}  # future -> its student
+
         def submit(sub):
+            future = _submit(sub)
+            students[future] = sub.student
+            return future
+
+        def _submit(sub):
             raw, note, refused = None, sub.note, sub.refused
             if sub.path is not None:
                 try:
@@ -264,7 +271,11 @@ def grade_on_cluster(address, grader, pending: list, options):
         waiting = iter(pending)
         running = as_completed([submit(sub) for sub in islice(waiting, 2 * max(threads, 1))])
         for future in running:
-            yield future.result()
+            try:
+                yield future.result()
+            except Exception as exc:  # a lost worker, a failed task: a fault, never a grade
+                yield grader.fault_row(students[future], exc)
+            students.pop(future, None)
             following = next(waiting, None)
             if following is not None:
                 running.add(submit(following))

@@ -1,27 +1,31 @@
 """``course grade``: the batch driver that grades a folder of submitted notebooks.
 
 It finds the submissions, skips students already graded with the same checks, library
-version and key from the same file (``results.jsonl`` records the file's sha256 and makes a run
-resumable; a resubmission is graded again), grades the others in parallel (or only the
-students ``--student`` names), one
-:class:`~course.grading.batch.session.StudentSession` each, and writes the reports
-(:mod:`course.grading.batch.reports`) as students finish.
+version and key from the same file (the term's record, :mod:`course.grading.batch.record`,
+keeps the file's sha256 and makes a run resumable; a resubmission is graded again), grades the
+others in parallel (or only the students ``--student`` names), one
+:class:`~course.grading.batch.session.StudentSession` each, and stores each row in the record
+as the student finishes. A submission the grader fails on (a fault of the grader, never of the
+student) is graded again up to :data:`FAULT_RETRIES` times, then stored as *not graded*: blank
+in every LMS file, named in the summary, and graded again by the next run.
 
-Outputs in ``OUT``: ``grades.csv`` (student, one column per question, total, max, status;
-``late`` and ``penalty`` when a due date is known, :mod:`course.grading.batch.late`),
-``report.html`` (the class report, :mod:`course.grading.batch.classreport`),
-``feedback/<student>.md`` and ``results.jsonl`` (one line per student, appended as students
-finish; a rerun skips students already graded with the same checks and library version from
-the same file).
+Outputs in ``OUT``, all exports of the record, rewritten by every run: ``grades.csv`` (student,
+one column per question, total, max, status; ``late`` and ``penalty`` when a due date is known,
+:mod:`course.grading.batch.late`), ``report.html`` (the class report,
+:mod:`course.grading.batch.classreport`), ``feedback/<student>.md``, ``results.jsonl`` (one
+line per student), ``short_answers.csv`` (:mod:`course.grading.batch.marks`) and, with a
+roster, ``canvas.csv`` and ``moodle.csv``.
 """
 
 from __future__ import annotations
 
 import csv
+import json
+import shlex
 import sys
-import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from course.grading.batch.classreport import write_report
@@ -37,31 +41,31 @@ from course.grading.batch.late import (
     read_extensions,
 )
 from course.grading.batch.marks import (
+    MARKS_FILE,
     SHORT_ANSWERS_FILE,
     MarksError,
+    answer_entries,
     apply_marks,
-    load_marks,
+    export_short_answers,
     parse_marks_csv,
-    save_marks,
+    refused_text,
     short_questions,
-    unimported_edits,
     unmarked_counts,
     unmarked_warning,
     validate_marks,
-    write_short_answers,
 )
 from course.grading.batch.options import GradeOptions
+from course.grading.batch.record import Record
 from course.grading.batch.reports import (
     Summary,
-    append_result,
     csv_text,
     feedback_markdown,
-    read_results,
     write_csv,
 )
 from course.grading.batch.results import StudentResult
 from course.grading.batch.roster import write_canvas_csv, write_moodle_csv
 from course.grading.batch.session import AssignmentGrader
+from course.grading.vocabulary import SubmissionStatus
 
 __all__ = ["Summary", "grade"]
 
@@ -119,6 +123,11 @@ def _grade_locally(grader: AssignmentGrader, pending: list, jobs: int):
             yield fut.result()
 
 
+#: How many more times a submission the grader failed on (its run folder gone, its worker
+#: lost, the grader's own exception) is graded before it is stored as *not graded*.
+FAULT_RETRIES = 2
+
+
 def grade(
     solution_dir: Path, submissions: Path, out: Path, options: GradeOptions | None = None
 ) -> Summary:
@@ -135,25 +144,37 @@ def grade(
     (out / "feedback").mkdir(exist_ok=True)
     archive = submissions  # the folder, or the LMS's download: the sandbox reads neither
     submissions, listed, unpacked = _intake(submissions, out)
-    results_path = out / "results.jsonl"
-    if options.regrade and options.students is None and results_path.exists():
-        results_path.unlink()
-    lock = threading.Lock()
-    with AssignmentGrader(solution_dir, options, deny_read=[archive, submissions, out]) as grader:
-        marks_in = None  # a filled marking file: checked before anyone is graded
+    with (
+        Record(out) as record,
+        AssignmentGrader(solution_dir, options, deny_read=[archive, submissions, out]) as grader,
+    ):
+        marks_in, marks_refused = (
+            None,
+            list[str](),
+        )  # a filled marking file: read before anyone is graded
         if options.short_answers is not None:
             if not short_questions(grader.checks):
                 raise MarksError(f"{grader.name} has no short-answer questions to mark")
-            marks_in = parse_marks_csv(Path(options.short_answers), grader.checks)
+            marks_in, marks_refused = parse_marks_csv(Path(options.short_answers), grader.checks)
+        imported = record.import_old(out / "results.jsonl", out / MARKS_FILE)
+        if options.regrade and options.students is None:
+            record.forget_results()
+        # -- who handed in what (the identity step) ---------------------------------------
         identity = _identify(grader, submissions, listed, solution_dir, options)
         identity.flags[:0] = unpacked
         todo = identity.entries
+        # -- the end of the identity step ---------------------------------------------------
         _write_conflicts(identity.conflicts, identity.attached, out / "identity_conflicts.csv")
+        record.set_quarantines(identity.conflicts)
         late, late_notes = _late_work(grader.checks, todo, submissions, options)
         if options.students is not None:
             _check_selection(options.students, todo)
-        previous = read_results(results_path)
         files = {sub.student: _file_record(sub.path, submissions) for sub in todo}
+        record.set_submissions(_submission_rows(todo, files))
+        record.set_late(late)
+        previous = record.results()
+        failed_before = set(record.not_graded())
+        qids = [q.id for q in grader.questions]
         rows: dict[str, StudentResult] = {}
         pending = []
         regraded: dict[str, int] = {}  # why students graded before were graded again
@@ -163,17 +184,17 @@ def grade(
             old = previous.get(sub.student)
             chosen = options.students is None or sub.student in options.students
             why = _regrade_reason(old, grader, files[sub.student])
+            if old is None and sub.student in failed_before:
+                why = "not graded last time (a fault of the grader)"
             if chosen and options.regrade and old is not None:
                 why = "--regrade"
             if old is not None and (why is None or not chosen):
+                old.order_questions(qids)
                 rows[sub.student] = old
                 if why is not None:
                     stale.append(sub.student)
                 elif old.set_late(late.get(sub.student)):  # a new due date, policy or time
-                    append_result(old, results_path)
-                    (out / "feedback" / f"{old.student}.md").write_text(
-                        feedback_markdown(old, grader.checks), encoding="utf-8"
-                    )
+                    record.put_result(old)
             elif chosen:
                 pending.append(sub)
                 if why is not None:
@@ -181,56 +202,35 @@ def grade(
             else:
                 skipped += 1
         resumed = len(rows)
+        not_graded: dict[str, StudentResult] = {}
 
         def finish(row: StudentResult) -> None:
-            with lock:
-                row.record_file(files.get(row.student))
-                row.set_late(late.get(row.student))
-                append_result(row, results_path)
-                (out / "feedback" / f"{row.student}.md").write_text(
-                    feedback_markdown(row, grader.checks), encoding="utf-8"
-                )
+            row.order_questions(qids)
+            row.record_file(files.get(row.student))
+            row.set_late(late.get(row.student))
+            if row.status == SubmissionStatus.GRADER_ERROR:
+                row.status = SubmissionStatus.NOT_GRADED
+                record.put_result(row, graded=False)
+                not_graded[row.student] = row
+            else:
+                record.put_result(row)
                 rows[row.student] = row
 
         if options.announce is not None and not options.cluster:
             # before the progress bar, whose line has no end until it closes
             iso = grader.sandbox.isolation if pending else grader.isolation
             options.announce(iso.describe())
-        try:
-            from tqdm import tqdm
-        except ImportError:  # pragma: no cover
-            tqdm = None
-        bar = (
-            tqdm(
-                total=len(pending),
-                desc=f"grading {grader.name}",
-                unit="student",
-                file=sys.stderr,
-                disable=not options.progress or tqdm is None,
-            )
-            if tqdm
-            else None
-        )
-        if options.cluster:
-            results = grade_on_cluster(options.cluster, grader, pending, options)
-        else:
-            results = _grade_locally(grader, pending, options.jobs)
-        for row in results:
-            finish(row)
-            if bar is not None:
-                bar.update(1)
-        if bar is not None:
-            bar.close()
+        _grade_with_retries(grader, pending, options, finish)
         grader.close()  # now: what its cleanup could not remove goes into the summary
-        for row in rows.values():  # feedback of resumed students too (cheap, keeps OUT complete)
-            fb = out / "feedback" / f"{row.student}.md"
-            if not fb.exists():
-                fb.write_text(feedback_markdown(row, grader.checks), encoding="utf-8")
-        qids = [q.id for q in grader.questions]
         final = [rows[sub.student] for sub in todo if sub.student in rows]
-        marking = _merge_marks(grader.checks, final, out, options, marks_in, results_path)
-        write_csv(final, qids, out / "grades.csv")
-        write_report(final, grader.checks, qids, out)
+        marking = _merge_marks(grader.checks, final, out, options, marks_in, record)
+        if marks_refused or marking.refused:
+            marking.text = "\n".join(
+                t for t in (marking.text, refused_text(marks_refused + marking.refused)) if t
+            )
+        # -- the exports: written from the record, never read back ---------------------------
+        exported = [*final, *not_graded.values()]
+        _export_rows(record, exported, grader.checks, qids, out)
         summary = Summary(
             final,
             qids,
@@ -244,12 +244,96 @@ def grade(
         summary.regraded = regraded
         summary.stale = stale
         summary.unselected = skipped
-        summary.marking = marking
+        summary.marking = marking.text
         summary.late_notes = late_notes
         summary.cleanup_failed = list(grader.cleanup_failures)
+        summary.not_graded = sorted(not_graded)
+        summary.regrade_command = _regrade_command(grader.name, submissions, out)
+        summary.imported = imported
         if options.roster is not None:
-            _class_files(summary, grader, options, out)
+            _class_files(summary, exported, grader, options, out)
         return summary
+
+
+def _grade_with_retries(grader: AssignmentGrader, pending: list, options, finish) -> None:
+    """Grade ``pending`` and hand each row to ``finish``; a submission the grader failed on
+    is graded again, up to :data:`FAULT_RETRIES` more times, before its fault is final."""
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover
+        tqdm = None
+    bar = (
+        tqdm(
+            total=len(pending),
+            desc=f"grading {grader.name}",
+            unit="student",
+            file=sys.stderr,
+            disable=not options.progress,
+        )
+        if tqdm
+        else None
+    )
+    batch, attempt = list(pending), 0
+    by_id = {sub.student: sub for sub in pending}
+    while batch:
+        retry = []
+        if options.cluster:
+            results = grade_on_cluster(options.cluster, grader, batch, options)
+        else:
+            results = _grade_locally(grader, batch, options.jobs)
+        for row in results:
+            if row.status == SubmissionStatus.GRADER_ERROR and attempt < FAULT_RETRIES:
+                retry.append(by_id[row.student])
+                continue
+            finish(row)
+            if bar is not None:
+                bar.update(1)
+        batch, attempt = retry, attempt + 1
+    if bar is not None:
+        bar.close()
+
+
+def _regrade_command(name: str, submissions: Path, out: Path) -> str:
+    return f"course grade {shlex.quote(name)} {shlex.quote(str(submissions))} --out {shlex.quote(str(out))}"
+
+
+def _export_rows(record: Record, rows: list[StudentResult], checks, qids: list, out: Path) -> None:
+    """grades.csv, report.html, the feedback and results.jsonl, from the rows of the record."""
+    write_csv(rows, qids, out / "grades.csv")
+    write_report(rows, checks, qids, out)  # rows that are no grade: listed, not counted
+    for row in rows:
+        _write_if_changed(out / "feedback" / f"{row.student}.md", feedback_markdown(row, checks))
+    current = record.results(graded=None)
+    text = "".join(
+        json.dumps(current[sid].to_json(), sort_keys=True, ensure_ascii=False) + "\n"
+        for sid in sorted(current)
+    )
+    _write_if_changed(out / "results.jsonl", text)
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    try:
+        if path.read_text(encoding="utf-8") == text:
+            return
+    except OSError:
+        pass
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
+
+
+def _submission_rows(entries: list, files: dict) -> list[tuple]:
+    """The record's rows of this run's files: (student, name, sha256, origin, reason); the
+    origin is the entry of the submissions folder the file came from (the name the LMS gave
+    it), never an absolute path of the instructor's machine."""
+    out = []
+    for sub in entries:
+        file = files.get(sub.student) or {}
+        name = file.get("name") or ""
+        origin = name.split("/", 1)[0] if name else ""
+        reason = sub.note or ("refused" if sub.refused else f"the file's name gives {sub.student}")
+        out.append((sub.student, name, file.get("sha256"), origin, reason))
+    return out
 
 
 class SelectionError(ValueError):
@@ -308,25 +392,31 @@ def _regrade_reason(old: StudentResult | None, grader, file: dict | None) -> str
     return None
 
 
-def _merge_marks(checks, final: list, out: Path, options, entries, results_path: Path) -> str:
-    """Merge the instructor's short-answer marks into the rows (and their results and
-    feedback) and write the marking file; returns the console summary's line about it."""
+@dataclass
+class _Marking:
+    text: str = ""  # the console summary's line about the short answers
+    refused: list = field(default_factory=list)  # rows of the marking file refused
+
+
+def _merge_marks(checks, final: list, out: Path, options, entries, record: Record) -> _Marking:
+    """Merge the imported marks into the record, the record's marks into the rows, and write
+    the marking file (an export of the record)."""
     if not short_questions(checks):
-        return ""
-    marks = load_marks(out)
-    imported = 0
+        return _Marking()
+    imported, refused = 0, list[str]()
     if entries is not None:
-        new = validate_marks(Path(options.short_answers), entries, {r.student: r for r in final})
+        new, refused = validate_marks(entries, {r.student: r for r in final})
+        who = f"{record.who} (--short-answers {Path(options.short_answers).name})"
         for sid, by_q in new.items():
-            marks.setdefault(sid, {}).update(by_q)
-            imported += len(by_q)
-        save_marks(out, marks)
+            for qid, mark in by_q.items():
+                imported += record.set_mark(
+                    sid, qid, mark["answer_id"], mark["points"], mark["comment"], who, False
+                )
+    record.set_answers(answer_entries(final, checks))
+    marks = record.marks()
     for row in final:
         if apply_marks(row, checks, marks):
-            append_result(row, results_path)
-        (out / "feedback" / f"{row.student}.md").write_text(
-            feedback_markdown(row, checks), encoding="utf-8"
-        )
+            record.put_result(row)
     path = out / SHORT_ANSWERS_FILE
     just_read = (
         options.short_answers is not None
@@ -339,20 +429,21 @@ def _merge_marks(checks, final: list, out: Path, options, entries, results_path:
     if warning:
         warning = (
             f"\nWARNING: {warning} in grades.csv, report.html and the LMS files; mark them "
-            f"with `course mark {out}` (or fill `points` in {path}), then rerun with "
-            f"--short-answers {path}"
+            f"with `course mark {out}` and run `course grade` again (or fill `points` in "
+            f"{path} and rerun with --short-answers {path})"
         )
-    edits = 0 if just_read or not path.exists() else unimported_edits(path, marks)
-    if edits:
-        return (
+    to_mark, edits = export_short_answers(record, path, just_read)
+    if to_mark is None:
+        return _Marking(
             f"{head}{path} was NOT rewritten: {edits} row(s) hold marks never imported "
-            f"(import them with --short-answers {path}){warning}"
+            f"(import them with --short-answers {path}){warning}",
+            refused,
         )
-    to_mark = write_short_answers(final, checks, path, marks)
-    return (
+    return _Marking(
         f"{head or 'short answers: '}{to_mark} to mark in {path}{warning}"
         if to_mark
-        else f"{head or 'short answers: '}all marked ({path})"
+        else f"{head or 'short answers: '}all marked ({path})",
+        refused,
     )
 
 
@@ -381,11 +472,12 @@ def _file_record(path: Path | None, submissions: Path) -> dict | None:
     return {"name": name, "sha256": digest}
 
 
-def _class_files(summary: Summary, grader, options: GradeOptions, out: Path) -> None:
-    """Missing and unknown submissions against the roster, and the LMS grade files."""
+def _class_files(summary: Summary, rows: list, grader, options: GradeOptions, out: Path) -> None:
+    """Missing and unknown submissions against the roster, and the LMS grade files (a
+    student not graded, refused or quarantined: blank, with the reason in the feedback)."""
     roster = options.roster
     assert roster is not None
-    by_id = {row.student: row for row in summary.rows}
+    by_id = {row.student: row for row in rows}
     summary.missing = [s.id for s in roster.students if s.id not in by_id]
     known = set(roster.ids)
     summary.unknown = sorted(sid for sid in by_id if sid not in known)

@@ -400,20 +400,28 @@ def late_records(
             disagree.append(sub.student)
     notes = []
     if unknown:
+        charged = any(records[sid]["percent"] for sid in unknown)
         notes.append(
             f"{len(unknown)} file(s) Canvas marked _LATE_ without a known time: "
             + ", ".join(unknown)
-            + "; charged as 1 day late (give their times with --submitted-at FILE)"
+            + (
+                "; charged as 1 day late"
+                if charged
+                else "; no deduction (" + ("no due date" if due is None else "the policy") + ")"
+            )
+            + " (give their times with --submitted-at FILE)"
         )
     if disagree:
         notes.append(
             f"{len(disagree)} file(s) Canvas marked _LATE_ were handed in before the due date "
             "(an extension, or another due date in Canvas?): " + ", ".join(disagree)
         )
-    if untimed:
+    # a file that lists only the late students is the usual case: the others are on time,
+    # and are counted, never listed as if something were wrong with them (the files the LMS
+    # marked late without a time are named above)
+    on_time = [sid for sid in untimed if sid not in unknown]
+    if on_time:
         notes.append(
-            f"{len(untimed)} submission(s) have no row in {submitted_at}: "
-            + ", ".join(untimed)
-            + " (on time unless the LMS marked them late)"
+            f"{len(on_time)} submission(s) not in {submitted_at}: taken as handed in on time"
         )
     return records, notes

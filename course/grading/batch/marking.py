@@ -1,13 +1,15 @@
 """``course mark``: marking the short answers in Jupyter, one answer at a time.
 
-:class:`MarkingView` is an ipywidgets view of a grading output folder's marking file
-(``OUT/short_answers.csv``, written by ``course grade``; :mod:`course.grading.batch.marks`). It
-shows one answer of one short-answer question at a time, with the question's rubric and points,
-a points box (a number between 0 and the question's points; ``1.5`` or ``1,5``) and a comment
-box for the student. Every mark is written into the marking file at once, so the file is always
-what ``course grade … --short-answers OUT/short_answers.csv`` merges, a spreadsheet can still
-be used for the same file, and a restarted view starts from the marks so far. Where the
-instructor stopped is kept in ``OUT/marking_progress.json``.
+:class:`MarkingView` is an ipywidgets view of the short answers of a grading output folder, as
+the term's record holds them (``OUT/record.sqlite``, :mod:`course.grading.batch.record`; written
+by ``course grade``). It shows one answer of one short-answer question at a time, with the
+question's rubric and points, a points box (a number between 0 and the question's points;
+``1.5`` or ``1,5``) and a comment box for the student. Every mark is written into the record at
+once, with the marker and the time, and the marking file ``OUT/short_answers.csv`` (its export,
+:mod:`course.grading.batch.marks`) is rewritten from it; the next ``course grade`` run merges
+the marks into the grades, feedback and LMS files. Two views of one folder (two markers at
+once) lose no mark: each writes only its own mark, in a transaction, and each shows the other's
+marks as it moves on. Where the instructor stopped is kept in ``OUT/marking_progress.json``.
 
 The view is anonymous by default: it shows *answer 3 of 12*, not the student's ID (a check box
 shows the IDs). Answers come in the order of a digest of their text, not of the roster, so the
@@ -17,7 +19,7 @@ run in the instructor's browser).
 
 ``course mark OUT`` writes ``OUT/marking.ipynb``, a notebook whose one cell shows the view, and
 opens it in JupyterLab (:func:`write_marking_notebook`). The view needs ipywidgets (the
-``notebooks`` extra); the marking file and :class:`MarkingFile` do not.
+``notebooks`` extra); the record and :class:`MarkingFile` do not.
 """
 
 from __future__ import annotations
@@ -31,11 +33,12 @@ from course.grading.batch.marks import (
     COLUMNS,
     SHORT_ANSWERS_FILE,
     MarksError,
+    export_short_answers,
     parse_points,
     read_marking_file,
-    write_marking_file,
 )
-from course.grading.batch.reports import csv_text
+from course.grading.batch.record import RECORD_FILE, Record
+from course.grading.vocabulary import visible_text
 
 __all__ = [
     "NOTEBOOK_FILE",
@@ -84,54 +87,51 @@ class Answer:
 
 
 class MarkingFile:
-    """The marking file of the grading output folder ``out_dir``, read and filled in place.
+    """The answers to mark of the grading output folder ``out_dir`` and their marks, in the
+    term's record (:mod:`course.grading.batch.record`); :meth:`mark` writes one mark into the
+    record (and the marking file, its export) at once.
 
     ``answers`` are ordered by question (as in the file), then by a digest of the answer's text
-    (``answer_id``), then by student. :meth:`mark` writes one mark into the file at once.
+    (``answer_id``), then by student. Two marking views of one folder (two markers) each write
+    only the mark given, in a transaction: neither loses the other's. ``marker`` names who
+    marks (default: ``COURSE_MARKER``, else the login name), kept with every mark.
+
+    A folder with a marking file and no record (written by an older version, or by hand) is
+    imported into the record once; a row that cannot be imported is listed in
+    :attr:`refused` with its line number, and every other row is.
     """
 
-    def __init__(self, out_dir: str | Path):
+    def __init__(self, out_dir: str | Path, marker: str | None = None):
         self.out = Path(out_dir).resolve()  # the messages name it: "." would say nothing
         self.path = self.out / SHORT_ANSWERS_FILE
-        if not self.path.is_file():
+        if not (self.out / RECORD_FILE).is_file() and not self.path.is_file():
             raise MarksError(
                 f"{self.path} does not exist: `course grade NAME SUBMISSIONS --out {self.out}` "
                 "writes it for an assignment with short-answer questions"
             )
+        self.record = Record(self.out, who=marker)
+        #: rows of a marking file imported without a record that could not be ("line 3: ...")
+        self.refused: list[str] = []
+        if not self.record.has_answers() and self.path.is_file():
+            self.refused = _import_marking_file(self.record, self.path)
         self.answers: list[Answer] = []
         self.reload()
 
     def reload(self) -> None:
-        """Read the file again (after a rerun of ``course grade`` or an edit elsewhere)."""
-        header, rows = read_marking_file(self.path)
-        missing = [c for c in COLUMNS if c not in header]
-        if missing:
-            raise MarksError(
-                f"{self.path}: no column {', '.join(missing)}; rerun `course grade` for a fresh "
-                "marking file"
+        """Read the record again (marks given in another view, a rerun of ``course grade``)."""
+        answers = [
+            Answer(
+                student=a["student"],
+                question=a["question"],
+                text=a["text"],
+                points_possible=float(a["points_possible"]),
+                rubric=a["rubric"],
+                answer_id=a["answer_id"],
+                points=None if a["points"] is None else float(a["points"]),
+                comment=a["comment"],
             )
-        answers, errors = [], []
-        for line, r in enumerate(rows, start=2):
-            try:
-                top = float(r["points_possible"])
-                points = parse_points(r.get("points") or "", top)
-            except (ValueError, MarksError) as exc:
-                errors.append(f"line {line}: {exc}")
-                continue
-            answers.append(
-                Answer(
-                    student=_unquote(r["student"]),
-                    question=_unquote(r["question"]),
-                    text=_unquote(r["answer"]),
-                    points_possible=top,
-                    rubric=_unquote(r["rubric"]),
-                    answer_id=(r["answer_id"] or "").strip(),
-                    points=points,
-                    comment=_unquote(r.get("comment")),
-                )
-            )
-        if errors:
-            raise MarksError(f"{self.path}: fix these rows first:\n  " + "\n  ".join(errors))
+            for a in self.record.answers()
+        ]
         order = {q: i for i, q in enumerate(dict.fromkeys(a.question for a in answers))}
         self.answers = sorted(answers, key=lambda a: (order[a.question], a.answer_id, a.student))
 
@@ -149,42 +149,83 @@ class MarkingFile:
 
     def mark(self, answer: Answer, points: str, comment: str = "") -> Answer:
         """Give ``answer`` the ``points`` typed (blank: not marked) and ``comment``, and write
-        them into the file; returns the answer as marked.
+        them into the record (then the marking file); returns the answer as marked.
 
         :class:`MarksError` (and nothing written) for points that are not a number between 0
         and the question's points, a comment without points (the import would refuse it), or
-        an answer that is no longer in the file (``course grade`` rewrote it for a changed
-        answer).
+        an answer that is no longer the one to mark (``course grade`` graded a changed
+        answer since).
         """
         value = parse_points(points, answer.points_possible)
         comment = comment.strip()
         if value is None and comment:
             raise MarksError("a comment needs points (0 is fine): give the points to save it")
-        header, rows = read_marking_file(self.path)
-        row = next(
-            (
-                r
-                for r in rows
-                if (_unquote(r["student"]), _unquote(r["question"])) == answer.key
-                and (r["answer_id"] or "").strip() == answer.answer_id
-            ),
-            None,
-        )
-        if row is None:
+        try:
+            self.record.set_mark(answer.student, answer.question, answer.answer_id, value, comment)
+        except ValueError:
             raise MarksError(
-                f"this answer is no longer in {self.path} (the student's answer changed and "
-                "`course grade` wrote a new file): reload the view"
-            )
-        row["points"] = "" if value is None else _fmt(value)
-        row["comment"] = csv_text(comment)
-        write_marking_file(self.path, header, rows)
+                f"this answer is no longer in {self.record.path} (the student's answer changed "
+                "and `course grade` graded it again): reload the view"
+            ) from None
+        self._export()
         self.reload()
         return self.find(answer.key) or replace(answer, points=value, comment=comment)
 
+    def _export(self) -> None:
+        """The marking file, rewritten from the record unless it holds a spreadsheet's marks
+        never imported (``course grade --short-answers`` imports them; the record has the
+        view's marks either way)."""
+        export_short_answers(self.record, self.path)
+
+
+def _import_marking_file(record: Record, path: Path) -> list[str]:
+    """Put the answers and marks of a marking file into a record that has none; returns the
+    rows refused ("line N: why"), every other row imported."""
+    header, rows = read_marking_file(path)
+    missing = [c for c in COLUMNS if c not in header]
+    if missing:
+        raise MarksError(
+            f"{path}: no column {', '.join(missing)}; rerun `course grade` for a fresh marking file"
+        )
+    answers, marks, refused = [], [], []
+    for line, r in rows:
+        if "__error__" in r:
+            refused.append(f"line {line}: not a row of the marking file ({r['__error__']})")
+            continue
+        try:
+            top = float(r["points_possible"])
+        except ValueError:
+            refused.append(f"line {line}: points_possible {r['points_possible']!r} is no number")
+            continue
+        answer: dict = {
+            "student": _unquote(r["student"]),
+            "question": _unquote(r["question"]),
+            "answer_id": (r["answer_id"] or "").strip(),
+            "text": _unquote(r["answer"]),
+            "points_possible": top,
+            "rubric": _unquote(r["rubric"]),
+        }
+        answers.append(answer)
+        try:
+            points = parse_points(r.get("points") or "", top)
+        except MarksError as exc:
+            refused.append(f"line {line}: {exc}")
+            continue
+        if points is not None:
+            marks.append((answer, points, _unquote(r.get("comment"))))
+    record.set_answers(answers)
+    who = f"{record.who} (imported {path.name})"
+    for a, points, comment in marks:
+        record.set_mark(a["student"], a["question"], a["answer_id"], points, comment, who)
+    return refused
+
 
 def _box(text: str, css: str) -> str:
+    """Student text as inert HTML: escaped, its lines kept, every other control character
+    (an escape sequence, a bell, a bidirectional override) shown as an escape."""
     style = "white-space: pre-wrap; border-left: 3px solid #999; padding: 0.2em 0.7em"
-    return f'<div class="{css}" style="{style}">{html.escape(text, quote=False)}</div>'
+    shown = "\n".join(visible_text(line) for line in text.split("\n"))
+    return f'<div class="{css}" style="{style}">{html.escape(shown, quote=False)}</div>'
 
 
 class MarkingView:
@@ -193,17 +234,19 @@ class MarkingView:
     Parameters
     ----------
     out_dir : str or Path
-        The ``--out`` folder of ``course grade`` (it holds ``short_answers.csv``).
+        The ``--out`` folder of ``course grade`` (it holds ``record.sqlite``).
     question : str, optional
         The question to start with; default: where marking stopped last time, else the first
         answer not marked yet.
     anonymous : bool, default True
         Hide the students' IDs (the *show IDs* check box shows them).
+    marker : str, optional
+        Who marks, kept with every mark (default: ``COURSE_MARKER``, else the login name).
 
     Notes
     -----
     A mark is saved when the points or the comment box is left (Enter, Tab or a click
-    elsewhere): into ``short_answers.csv`` at once. Leaving an answer whose boxes hold
+    elsewhere): into the record (and ``short_answers.csv``) at once. Leaving an answer whose boxes hold
     something that cannot be saved (points out of range, a comment without points) is refused
     with the reason, so nothing typed is lost or silently changed. *Next unmarked* goes to the
     next answer without points, in this question first, then in the others.
@@ -234,11 +277,15 @@ class MarkingView:
     """
 
     def __init__(
-        self, out_dir: str | Path, question: str | None = None, anonymous: bool = True
+        self,
+        out_dir: str | Path,
+        question: str | None = None,
+        anonymous: bool = True,
+        marker: str | None = None,
     ) -> None:
         import ipywidgets as widgets
 
-        self.file = MarkingFile(out_dir)
+        self.file = MarkingFile(out_dir, marker)
         self.progress_path = self.file.out / PROGRESS_FILE
         if question is not None and question not in self.file.questions:
             raise ValueError(
@@ -359,6 +406,7 @@ class MarkingView:
         shown cannot be saved (the status says why)."""
         if not self._leave():
             return False
+        self.file.reload()  # the marks another view (another marker) gave meanwhile
         self.current = self.file.find(answer.key) or answer
         self._loading = True
         try:
@@ -385,6 +433,12 @@ class MarkingView:
             pool = self.file.of(question) if question else self.file.answers
             start = next((a for a in pool if not a.marked), pool[0])
         self.go(start)
+        if self.file.refused:
+            self._say(
+                f"{len(self.file.refused)} row(s) of {self.file.path} not imported: "
+                + "; ".join(self.file.refused[:5]),
+                error=True,
+            )
 
     def _question_chosen(self, change) -> None:
         if self._loading or self.current is None or change["new"] == self.current.question:
@@ -465,9 +519,10 @@ class MarkingView:
             for q in self.file.questions
         ]
         self.counts.value = (
-            "; ".join(per)
-            + f'. <span class="course-marking-file">Marks are saved in {html.escape(str(self.file.path))}'
-            "; merge them with <code>course grade … --short-answers</code> that file.</span>"
+            "; ".join(per) + f'. <span class="course-marking-file">Marks are saved in '
+            f"{html.escape(str(self.file.record.path))} (exported to "
+            f"{html.escape(str(self.file.path))}); the next <code>course grade</code> run "
+            "merges them into the grades.</span>"
         )
 
     # -- where marking stopped -------------------------------------------------------------
@@ -508,13 +563,13 @@ def write_marking_notebook(out_dir: str | Path) -> Path:
     nb.cells = [
         nbformat.v4.new_markdown_cell(
             "# Marking the short answers\n\n"
-            "Run the cell below. Each mark is saved into `short_answers.csv` of this folder as "
-            "soon as you leave the points or comment box; close the notebook at any time and "
-            "the view starts where you stopped. `anonymous=False` shows the students' IDs, "
+            "Run the cell below. Each mark is saved into this folder's record (`record.sqlite`, "
+            "with your name and the time) and `short_answers.csv` as soon as you leave the "
+            "points or comment box; close the notebook at any time and the view starts where "
+            "you stopped. `anonymous=False` shows the students' IDs, "
             '`question="q3"` starts at that question.\n\n'
             "Then merge the marks into the grades, the feedback and the LMS files:\n\n"
-            "```bash\ncourse grade NAME SUBMISSIONS --out THIS_FOLDER "
-            "--short-answers THIS_FOLDER/short_answers.csv\n```"
+            "```bash\ncourse grade NAME SUBMISSIONS --out THIS_FOLDER\n```"
         ),
         nbformat.v4.new_code_cell(
             'from course.grading.batch.marking import MarkingView\n\nMarkingView(".")'

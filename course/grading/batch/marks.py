@@ -4,15 +4,19 @@
 
 ``student, question, answer, points_possible, points, rubric, comment, answer_id``
 
-The instructor fills ``points`` (blank: not marked yet) and optionally ``comment`` (shown to
-the student) in the marking view (``course mark OUT``, :mod:`course.grading.batch.marking`) or
-any spreadsheet, then runs ``course grade NAME SUBMISSIONS --out
-OUT --short-answers FILE``. The file is checked as a whole first: an unknown student or
-question, points that are not a number between 0 and ``points_possible``, a row given twice or
-an answer changed since the file was written refuses the import, line by line, and changes
-nothing. Accepted marks are kept in ``OUT/short_answer_marks.json`` (so a regrade keeps them,
-as long as the answer is the same: ``answer_id`` is a digest of its text) and merged into
-``grades.csv``, ``results.jsonl`` and the feedback. Text cells are written spreadsheet-safe
+It is an export of the term's record (:mod:`course.grading.batch.record`), where the marks
+live: the marking view (``course mark OUT``, :mod:`course.grading.batch.marking`) writes each
+mark into the record and the file at once. A marker who prefers a spreadsheet fills ``points``
+(blank: not marked yet) and optionally ``comment`` (shown to the student), saves the file as
+comma-separated CSV and runs ``course grade NAME SUBMISSIONS --out OUT --short-answers FILE``.
+
+The file is read with one fixed dialect, RFC 4180's (comma, ``"`` quoting, a ``"`` inside a
+cell doubled), never guessed from its content: its cells are the students' text. Each row is
+matched to its answer by the answer's ID (``answer_id``, a digest of the answer's text) and by
+the answer's text itself; a row that does not match (an unknown student or question, points
+that are not a number between 0 and ``points_possible``, a row given twice, an answer changed
+since the file was written, a row that is not one) is refused with its line number, and every
+other row is imported. Text cells are written spreadsheet-safe
 (:func:`course.grading.batch.reports.csv_text`). Answers not marked yet count as 0 until they
 are, and :func:`unmarked_warning` says so in the console summary and ``report.html``.
 """
@@ -28,30 +32,30 @@ from pathlib import Path
 
 from course.grading.batch.reports import csv_text
 from course.grading.batch.results import StudentResult
-from course.grading.vocabulary import GradeStatus, QuestionKind
+from course.grading.vocabulary import GradeStatus, QuestionKind, visible_text
 
 __all__ = [
     "MARKS_FILE",
     "SHORT_ANSWERS_FILE",
     "MarksError",
+    "answer_entries",
     "answer_id",
     "apply_marks",
-    "load_marks",
+    "export_short_answers",
     "parse_marks_csv",
     "parse_points",
     "read_marking_file",
-    "save_marks",
+    "refused_text",
     "short_questions",
     "unimported_edits",
     "unmarked_counts",
     "unmarked_warning",
     "validate_marks",
-    "write_marking_file",
     "write_short_answers",
 ]
 
 SHORT_ANSWERS_FILE = "short_answers.csv"
-MARKS_FILE = "short_answer_marks.json"
+MARKS_FILE = "short_answer_marks.json"  # an older version's marks, imported once
 COLUMNS = [
     "student",
     "question",
@@ -62,6 +66,8 @@ COLUMNS = [
     "comment",
     "answer_id",
 ]
+#: the columns a marking file must have (the others are the marker's reading)
+_REQUIRED = ("student", "question", "points", "answer_id")
 _MAX_ERRORS = 20
 
 
@@ -83,36 +89,75 @@ def _fmt(x: float) -> str:
     return f"{round(float(x), 4):g}"
 
 
-def write_short_answers(rows: list[StudentResult], checks, path: Path, marks: dict) -> int:
-    """Write the marking file of ``rows``; returns how many answers are still to mark."""
+def answer_entries(rows: list[StudentResult], checks) -> list[dict]:
+    """The short answers of ``rows`` to mark, in the marking file's order (by student, then
+    question): dicts of student, question, answer_id, text, points_possible, rubric."""
     shorts = short_questions(checks)
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    to_mark = 0
+    out = []
     for row in sorted(rows, key=lambda r: r.student):
         for qid, q in shorts.items():
             result = row.questions.get(qid)
             if result is None or result.answer is None:
                 continue  # not answered: nothing to mark
-            aid = answer_id(result.answer)
-            mark = marks.get(row.student, {}).get(qid)
-            if mark is None or mark.get("answer_id") != aid:
-                mark, to_mark = {}, to_mark + 1
-            writer.writerow(
-                [
-                    csv_text(row.student),
-                    csv_text(qid),
-                    csv_text(result.answer),
-                    _fmt(q.points),
-                    _fmt(mark["points"]) if "points" in mark else "",
-                    csv_text(q.rubric),
-                    csv_text(mark.get("comment", "")),
-                    aid,
-                ]
+            out.append(
+                {
+                    "student": row.student,
+                    "question": qid,
+                    "answer_id": answer_id(result.answer),
+                    "text": result.answer,
+                    "points_possible": float(q.points),
+                    "rubric": q.rubric or "",
+                }
             )
-    path.write_text(buf.getvalue(), encoding="utf-8")
+    return out
+
+
+def write_short_answers(path: Path, answers: list[dict]) -> int:
+    """Write the marking file (an export of the record: ``answers`` as
+    :meth:`~course.grading.batch.record.Record.answers` gives them, each with its mark so
+    far), replaced in one step; returns how many answers are still to mark."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")  # RFC 4180: comma, '"' doubled
+    writer.writerow(COLUMNS)
+    to_mark = 0
+    for a in answers:
+        marked = a.get("points") is not None
+        to_mark += not marked
+        writer.writerow(
+            [
+                csv_text(a["student"]),
+                csv_text(a["question"]),
+                csv_text(a["text"]),
+                _fmt(a["points_possible"]),
+                _fmt(a["points"]) if marked else "",
+                csv_text(a["rubric"]),
+                csv_text(a.get("comment") or "") if marked else "",
+                a["answer_id"],
+            ]
+        )
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(buf.getvalue(), encoding="utf-8")
+    tmp.replace(path)
     return to_mark
+
+
+def export_short_answers(record, path: Path, just_read: bool = False) -> tuple[int | None, int]:
+    """Rewrite the marking file from ``record`` (a
+    :class:`~course.grading.batch.record.Record`): ``(answers still to mark, 0)``; or, when
+    the file was changed since the record last wrote it and holds marks never imported (a
+    spreadsheet's), leave it as it is: ``(None, rows with such marks)``. ``just_read``: the
+    file was just imported, so nothing in it can be lost."""
+    path = Path(path)
+    if path.exists() and not just_read:
+        sha = hashlib.sha256(path.read_bytes()).hexdigest()
+        if sha != record.meta("short_answers_sha256"):
+            edits = unimported_edits(path, record.marks())
+            if edits:
+                return None, edits
+    to_mark = write_short_answers(path, record.answers())
+    record.set_meta("short_answers_sha256", hashlib.sha256(path.read_bytes()).hexdigest())
+    return to_mark, 0
 
 
 def _unquote(text: str) -> str:
@@ -126,46 +171,49 @@ def _read_rows(path: Path) -> list[tuple[int, dict]]:
 
 
 def _read_table(path: Path) -> tuple[list[str], list[tuple[int, dict]]]:
+    """The header and the rows (with their line numbers) of a marking file, read with one
+    fixed dialect, RFC 4180's (comma, ``"`` quoting, a ``"`` in a cell doubled): never guessed
+    from the file, whose cells are the students' text."""
     try:
-        raw = Path(path).read_text(encoding="utf-8-sig")
+        raw = Path(path).read_bytes().decode("utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise MarksError(f"cannot read {path}: {exc}") from None
-    try:  # spreadsheets save with ',' ';' or a tab, depending on the locale
-        dialect: type[csv.Dialect] | csv.Dialect = csv.Sniffer().sniff(
-            raw.split("\n", 1)[0], delimiters=",;\t"
-        )
-    except csv.Error:
-        dialect = csv.excel
-    reader = csv.DictReader(io.StringIO(raw), dialect=dialect)
-    header = [(h or "").strip() for h in reader.fieldnames or []]
-    missing = [c for c in ("student", "question", "points") if c not in header]
+    reader = csv.reader(io.StringIO(raw, newline=""), dialect=csv.excel, strict=False)
+    try:
+        header = [(h or "").strip() for h in next(reader, [])]
+    except csv.Error as exc:
+        raise MarksError(f"{path}: line 1 is not CSV ({exc})") from None
+    missing = [c for c in _REQUIRED if c not in header]
     if missing:
         raise MarksError(
             f"{path}: no column {', '.join(missing)}; use the file `course grade` wrote "
-            f"({SHORT_ANSWERS_FILE}: {', '.join(COLUMNS)})"
+            f"({SHORT_ANSWERS_FILE}: {', '.join(COLUMNS)}), saved as comma-separated CSV "
+            "(a spreadsheet's 'CSV UTF-8 (comma delimited)')"
         )
-    reader.fieldnames = header
-    return header, [(n, r) for n, r in enumerate(reader, start=2)]
+    rows: list[tuple[int, dict]] = []
+    line = reader.line_num + 1
+    while True:
+        try:
+            cells = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            rows.append((line, {"__error__": str(exc)}))
+            line = reader.line_num + 1
+            continue
+        cells += [""] * (len(header) - len(cells))
+        row = dict(zip(header, cells))
+        if len(cells) > len(header):
+            row["__error__"] = f"{len(cells)} cells where the header has {len(header)}"
+        rows.append((line, row))
+        line = reader.line_num + 1
+    return header, rows
 
 
-def read_marking_file(path: Path) -> tuple[list[str], list[dict]]:
-    """The header and the rows of a marking file, each cell as written (a tool that fills the
-    file in place, :mod:`course.grading.batch.marking`, writes them back unchanged)."""
-    header, rows = _read_table(path)
-    return header, [r for _, r in rows]
-
-
-def write_marking_file(path: Path, header: list[str], rows: list[dict]) -> None:
-    """Write ``rows`` (cells as :func:`read_marking_file` gave them) under ``header``; the file
-    is replaced in one step, so a reader never sees half of it."""
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=header, lineterminator="\n", extrasaction="ignore")
-    writer.writeheader()
-    writer.writerows(rows)
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(buf.getvalue(), encoding="utf-8")
-    tmp.replace(path)
+def read_marking_file(path: Path) -> tuple[list[str], list[tuple[int, dict]]]:
+    """The header and the rows of a marking file with their line numbers, each cell as written
+    (a row that is not one holds ``__error__``)."""
+    return _read_table(path)
 
 
 def parse_points(text: str, top: float) -> float | None:
@@ -224,14 +272,22 @@ def _points(text: str) -> float | None:
     return float(text)
 
 
-def parse_marks_csv(path: Path, checks) -> dict:
-    """The marks of a filled marking file: {(student, question): {points, comment, answer_id,
-    line}}. Rows with blank points are not marked yet and skipped. :class:`MarksError` lists
-    unknown questions, bad or out-of-range points and repeated rows."""
+def parse_marks_csv(path: Path, checks) -> tuple[dict, list[str]]:
+    """The marks of a filled marking file and the rows refused:
+    ``({(student, question): {points, comment, answer_id, answer, line}}, ["line 7: ..."])``.
+
+    Rows with blank points are not marked yet and skipped. A row is refused (its line
+    number and why) for an unknown question, points that are not a number between 0 and the
+    question's points, a comment without points, a row given twice, or a row that is not one
+    (more cells than the header); every other row is kept. :class:`MarksError` only for a
+    file that cannot be read as a marking file at all."""
     shorts = short_questions(checks)
     errors: list[str] = []
     out: dict[tuple[str, str], dict] = {}
     for line, r in _read_rows(path):
+        if "__error__" in r:
+            errors.append(f"line {line}: not a row of the marking file ({r['__error__']})")
+            continue
         sid, qid = _unquote(r.get("student", "")), _unquote(r.get("question", ""))
         if not sid and not qid and not any((v or "").strip() for v in r.values() if v):
             continue  # an empty line
@@ -268,15 +324,28 @@ def parse_marks_csv(path: Path, checks) -> dict:
             "points": points,
             "comment": _unquote(r.get("comment") or ""),
             "answer_id": (r.get("answer_id") or "").strip(),
+            "answer": r.get("answer"),
             "line": line,
         }
-    _raise(path, errors)
-    return out
+    return out, errors
 
 
-def validate_marks(path: Path, entries: dict, rows: dict[str, StudentResult]) -> dict:
-    """Check ``entries`` against the graded ``rows`` (student -> row): unknown students, answers
-    not given or changed since the file was written. Returns the marks to keep."""
+def _same_text(cell: str, answer: str) -> bool:
+    """Whether a marking file's answer cell is the export of ``answer`` (compared by digest,
+    line ends as a spreadsheet may have changed them)."""
+
+    def digest(text: str) -> str:
+        return answer_id(text.replace("\r\n", "\n").replace("\r", "\n"))
+
+    return digest(cell or "") == digest(csv_text(answer))
+
+
+def validate_marks(entries: dict, rows: dict[str, StudentResult]) -> tuple[dict, list[str]]:
+    """The marks of ``entries`` that belong to an answer of the graded ``rows`` (student ->
+    row), and the rows refused. A mark is matched to its answer by the answer's ID *and* the
+    answer's text: the row's ``answer_id`` must be the digest of the student's answer as
+    graded, and its ``answer`` cell (when the file has the column) that answer's text, so a
+    row cannot carry a mark to another student's or another version's answer."""
     errors: list[str] = []
     marks: dict[str, dict] = {}
     for (sid, qid), entry in sorted(entries.items(), key=lambda kv: kv[1]["line"]):
@@ -291,10 +360,22 @@ def validate_marks(path: Path, entries: dict, rows: dict[str, StudentResult]) ->
             errors.append(f"line {line}: {sid} gave no answer to {qid}: nothing to mark")
             continue
         current = answer_id(answer)
-        if entry["answer_id"] and entry["answer_id"] != current:
+        if not entry["answer_id"]:
+            errors.append(
+                f"line {line}: no answer_id for {sid} {qid}: mark the rows of the file "
+                "`course grade` wrote (their answer_id ties each mark to its answer)"
+            )
+            continue
+        if entry["answer_id"] != current:
             errors.append(
                 f"line {line}: the answer of {sid} to {qid} changed since this file was written; "
                 "mark the new answer (rerun `course grade` for a fresh file)"
+            )
+            continue
+        if entry.get("answer") is not None and not _same_text(entry["answer"], answer):
+            errors.append(
+                f"line {line}: the answer text of {sid} {qid} is not the answer its answer_id "
+                "names; mark the rows of the file `course grade` wrote"
             )
             continue
         marks.setdefault(sid, {})[qid] = {
@@ -302,36 +383,19 @@ def validate_marks(path: Path, entries: dict, rows: dict[str, StudentResult]) ->
             "comment": entry["comment"],
             "answer_id": current,
         }
-    _raise(path, errors)
-    return marks
+    return marks, errors
 
 
-def _raise(path: Path, errors: list) -> None:
-    if errors:
-        more = f"\n  … and {len(errors) - _MAX_ERRORS} more" if len(errors) > _MAX_ERRORS else ""
-        raise MarksError(
-            f"{path}: {len(errors)} row(s) refused, nothing imported:\n  "
-            + "\n  ".join(errors[:_MAX_ERRORS])
-            + more
-        )
-
-
-def load_marks(out: Path) -> dict:
-    path = Path(out) / MARKS_FILE
-    if not path.is_file():
-        return {}
-    try:
-        data = json.loads(path.read_text("utf-8"))
-    except ValueError as exc:
-        raise MarksError(f"{path} is damaged ({exc}); restore it from a backup") from None
-    return data if isinstance(data, dict) else {}
-
-
-def save_marks(out: Path, marks: dict) -> None:
-    path = Path(out) / MARKS_FILE
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(marks, sort_keys=True, indent=1, ensure_ascii=False), "utf-8")
-    tmp.replace(path)
+def refused_text(errors: list[str]) -> str:
+    """The console's lines about rows of a marking file that were refused ('' for none)."""
+    if not errors:
+        return ""
+    more = f"\n  … and {len(errors) - _MAX_ERRORS} more" if len(errors) > _MAX_ERRORS else ""
+    return (
+        f"{len(errors)} row(s) of the marking file refused (every other row was imported):\n  "
+        + "\n  ".join(visible_text(e) for e in errors[:_MAX_ERRORS])
+        + more
+    )
 
 
 def apply_marks(row: StudentResult, checks, marks: dict) -> bool:
@@ -366,6 +430,8 @@ def unimported_edits(path: Path, marks: dict) -> int:
         return 0
     n = 0
     for _, r in rows:
+        if "__error__" in r:
+            continue  # not a row: nothing a rewrite could lose
         sid, qid = _unquote(r.get("student", "")), _unquote(r.get("question", ""))
         points, comment = (r.get("points") or "").strip(), _unquote(r.get("comment") or "")
         if not points and not comment:

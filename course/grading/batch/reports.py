@@ -94,6 +94,12 @@ def feedback_markdown(row: StudentResult, checks) -> str:
     It never shows an expected value (a case's ``detail`` stays in results.jsonl, for the
     instructor) and only the first stage of staged hints."""
     lines = [f"# {checks.title}: feedback for {md_text(row.student)}", ""]
+    if row.status == "not graded":
+        lines += [
+            "**Not graded yet:** the grader failed on this submission (not your fault); your "
+            "instructor grades it again.",
+            "",
+        ]
     lines.append(
         f"**Total: {_fmt_points(row.total)} / {_fmt_points(row.max)}**"
         + ("" if row.status == "ok" else f"  (status: {row.status})")
@@ -101,10 +107,13 @@ def feedback_markdown(row: StudentResult, checks) -> str:
     late = late_sentence(row)
     if late:
         lines += ["", f"**Late:** {md_text(late)}"]
+    order = [q for q in checks.questions if q in row.questions]
+    questions = {q: row.questions[q] for q in order}
+    questions.update(row.questions)  # questions no longer in the checks: after, as they came
     lines += ["", "| question | points | status |", "|---|---|---|"]
-    for qid, r in row.questions.items():
+    for qid, r in questions.items():
         lines.append(f"| {qid} | {_fmt_points(r.points)} / {_fmt_points(r.max)} | {r.status} |")
-    for qid, r in row.questions.items():
+    for qid, r in questions.items():
         q = checks.questions.get(qid)
         lines += ["", f"## {qid}: {_fmt_points(r.points)} / {_fmt_points(r.max)} ({r.status})"]
         if r.message:
@@ -162,14 +171,17 @@ def write_csv(rows: list[StudentResult], question_ids: list[str], path: Path) ->
         + (["late", "penalty"] if with_late else [])
     )
     for row in sorted(rows, key=lambda r: r.student):
+        graded = row.status != "not graded"  # a fault of the grader: no points at all
         writer.writerow(
             [
                 csv_text(row.student),
                 *(
                     _fmt_points(row.questions[q].points if q in row.questions else 0)
+                    if graded
+                    else ""
                     for q in question_ids
                 ),
-                _fmt_points(row.total),
+                _fmt_points(row.total) if graded else "",
                 _fmt_points(row.max),
                 csv_text(row.status),
             ]
@@ -196,11 +208,22 @@ class Summary:
     unselected: int = 0  # submissions never graded and not chosen by --student
     late_notes: list = field(default_factory=list)  # late files without a time, disagreements
     cleanup_failed: list = field(default_factory=list)  # left behind: "<path> (<reason>)"
+    not_graded: list = field(default_factory=list)  # the grader failed on them, after retries
+    regrade_command: str = ""  # the command that grades them again
+    imported: str = ""  # an older folder imported into the record (once)
 
     def class_text(self) -> str:
-        """The identity flags, deleted answer cells, the roster's missing and unknown
-        submissions and the short answers to mark."""
-        lines = []
+        """The students not graded, the identity flags, deleted answer cells, the roster's
+        missing and unknown submissions and the short answers to mark."""
+        lines = [self.imported] if self.imported else []
+        if self.not_graded:
+            lines.append(
+                f"NOT GRADED: {len(self.not_graded)} submission(s) the grader failed on, "
+                f"after retries (a fault of the grader, not of the student; blank in every LMS "
+                f"file): {', '.join(visible_text(s) for s in self.not_graded[:20])}"
+                f"{' …' if len(self.not_graded) > 20 else ''}; grade them again with "
+                f"`{self.regrade_command}` (a plain run grades them again)"
+            )
         deleted = [
             f"{r.student} ("
             + ", ".join(
@@ -243,7 +266,7 @@ class Summary:
                 + (": " if late else "")
                 + ", ".join(
                     f"{r.student} ({_days((r.late or {}).get('days'))}, "
-                    f"-{_fmt_points(r.penalty)} points)"
+                    + (f"-{_fmt_points(r.penalty)} points)" if r.penalty else "no deduction)")
                     for r in sorted(late, key=lambda r: r.student)
                 )
                 + (f"; {rule}" if rule else "")

@@ -181,6 +181,19 @@ class StudentResult:
             self.add_total()
         return (self.late, self.total) != before
 
+    def order_questions(self, order: list[str]) -> None:
+        """Put the questions in ``order`` (the notebook's), any others after them: a row read
+        back from JSON, or graded on another machine, then writes the same feedback."""
+        ordered = {q: self.questions[q] for q in order if q in self.questions}
+        ordered.update((q, r) for q, r in self.questions.items() if q not in ordered)
+        self.questions = ordered
+
+    @property
+    def counts(self) -> bool:
+        """Whether the row is a grade (not one the grader failed on, nor a refused or
+        quarantined file): only then does it reach an LMS file."""
+        return self.status not in ("not graded", "grader error", "refused")
+
     def record_file(self, file: dict[str, Any] | None) -> None:
         self.file = file
         self.has_file = True

@@ -206,6 +206,8 @@ def _write(rows: list[list[str]], path: Path) -> None:
 def _score(row: StudentResult | None, missing_as_zero: bool) -> str:
     if row is None:
         return "0" if missing_as_zero else ""
+    if not row.counts:  # not graded, refused or quarantined: no grade, never a 0
+        return ""
     return _points(row.total)
 
 
@@ -268,6 +270,8 @@ def write_canvas_csv(
 def _feedback(row: StudentResult | None) -> str:
     if row is None:
         return "No submission received."
+    if not row.counts:  # the score is blank: say why, and no points
+        return f"Not graded: {'; '.join(row.notes) or row.status}"
     parts = [  # an answer not marked yet says so: its 0 is no grade
         f"{qid} {_points(r.points)}/{_points(r.max)}"
         + (" not marked yet" if r.status == GradeStatus.TO_MARK else "")

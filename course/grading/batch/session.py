@@ -292,14 +292,7 @@ class AssignmentGrader:
         try:
             self._grade(row, sid, path, problem, refused, raw, seeds)
         except Exception as exc:  # a bug or sandbox failure must not abort the batch
-            for q in self.questions:
-                row.questions.setdefault(
-                    q.id, _question_result(q, GradeStatus.GRADER_ERROR, "not graded")
-                )
-            row.notes.append(
-                f"The grader failed on this submission ({type(exc).__name__}: {exc}); please tell your instructor."
-            )
-            row.status = SubmissionStatus.GRADER_ERROR
+            self._fault(row, exc)
         row.add_total()
         abnormal = [
             f"{qid}: {r.status}" for qid, r in row.questions.items() if r.status in ABNORMAL
@@ -307,6 +300,26 @@ class AssignmentGrader:
         if row.status == SubmissionStatus.OK and abnormal:
             row.status = "; ".join(abnormal)
         row.wall_seconds = round(time.monotonic() - start, 3)
+        return row
+
+    def _fault(self, row: StudentResult, exc: BaseException) -> None:
+        for q in self.questions:
+            row.questions.setdefault(
+                q.id, _question_result(q, GradeStatus.GRADER_ERROR, "not graded")
+            )
+        row.notes.append(
+            f"The grader failed on this submission ({type(exc).__name__}: {exc}); "
+            "please tell your instructor."
+        )
+        row.status = SubmissionStatus.GRADER_ERROR
+
+    def fault_row(self, sid: str, exc: BaseException) -> StudentResult:
+        """The row of a submission the grader could not grade (its grader or its worker
+        failed): a fault, never a grade (the driver retries it, then stores it as not
+        graded)."""
+        row = self._row(sid)
+        self._fault(row, exc)
+        row.add_total()
         return row
 
     def _grade(

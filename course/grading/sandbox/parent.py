@@ -546,13 +546,9 @@ class Sandbox:
         self.cleanup_failures: list[str] = []
         self._server: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
-        self._rundir = os.path.realpath(tempfile.mkdtemp(prefix="course-grade-run-"))
-        self._children = os.path.join(self._rundir, "children")
-        os.mkdir(self._children)
-        os.mkdir(os.path.join(self._rundir, "matplotlib"))
-        if self.isolation.drop_to is not None:
-            for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
-                os.chown(folder, *self.isolation.drop_to)
+        self._privates: list[str] = []  # every private directory of this run (close removes)
+        self.rundir_lost = 0  # run folders that disappeared (another process cleaned them)
+        self._make_rundir()
         self.server_info: dict = {}
         self.instrumented: frozenset[str] = frozenset()
         self.server_restarts = 0  # fork servers replaced because a child changed scheduling
@@ -560,6 +556,36 @@ class Sandbox:
         self._start_server()
 
     # -- launching ------------------------------------------------------------------------
+    def _make_rundir(self) -> None:
+        """A fresh run folder inside a private directory of this run (``mkdtemp``: a new name
+        no other process chose, mode 0700, or 0711 when children run as another user and must
+        pass through it)."""
+        private = os.path.realpath(tempfile.mkdtemp(prefix="course-grade-"))
+        self._privates.append(private)
+        if self.isolation.drop_to is not None:
+            os.chmod(private, 0o711)
+        self._rundir = os.path.join(private, "run")
+        self._children = os.path.join(self._rundir, "children")
+        for folder in self._run_folders():
+            os.mkdir(folder, 0o700)
+            if self.isolation.drop_to is not None:
+                os.chown(folder, *self.isolation.drop_to)
+
+    def _run_folders(self) -> tuple[str, str, str]:
+        return (self._rundir, self._children, os.path.join(self._rundir, "matplotlib"))
+
+    def _check_rundir(self) -> None:
+        """Recreate the run folder (and its fork server, whose mounts and working folder were
+        in it) when another process removed it: a cleaner of the temporary directory must cost
+        a retry, never a grade. Called under ``_lock``."""
+        if os.path.isdir(self._children):
+            return
+        self.rundir_lost += 1
+        if self._server is not None:  # its children (other students') keep running until close
+            self._retired.append((self._server, self._sock))
+            self._server = self._sock = None
+        self._make_rundir()
+
     def _config(self) -> dict:
         """What the fork server needs before any student code."""
         from course.grading.sandbox.isolation.paths import DEVICES, landlock_paths
@@ -626,7 +652,7 @@ class Sandbox:
         if self.isolation.drop_to is not None and not self.isolation.unprivileged:
             # children stay root without capabilities: a folder of nobody's on the way to
             # theirs would keep them out of it (and out of their Landlock rule)
-            for folder in (self._rundir, self._children, os.path.join(self._rundir, "matplotlib")):
+            for folder in self._run_folders():
                 os.chown(folder, os.getuid(), os.getgid())
 
     def _server_log(self) -> str:
@@ -654,7 +680,11 @@ class Sandbox:
     # -- children -------------------------------------------------------------------------
     def start(self, init: dict, ready_timeout: float = 60.0) -> ChildHandle:
         """Start a child, send it ``init`` and wait until it is ready for student code."""
-        tmpdir = tempfile.mkdtemp(prefix="child-", dir=self._children)
+        with self._lock:
+            self._check_rundir()
+            if self._server is None or self._server.poll() is not None:
+                self._start_server()
+            tmpdir = tempfile.mkdtemp(prefix="child-", dir=self._children)
         if self._children_drop():
             os.chown(tmpdir, *self.isolation.drop_to)  # type: ignore[misc]
         req_r, req_w = os.pipe()
@@ -778,8 +808,9 @@ class Sandbox:
         self._server = self._sock = None
         while self._retired:
             self._stop(*self._retired.pop())
-        if os.path.lexists(self._rundir):
-            self.note_cleanup_failed(remove_tree(self._rundir))
+        for private in self._privates:
+            if os.path.lexists(private):
+                self.note_cleanup_failed(remove_tree(private))
 
     def __enter__(self):
         return self
