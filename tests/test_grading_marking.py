@@ -373,3 +373,25 @@ def test_course_mark_opens_the_notebook_in_jupyter(tmp_path, monkeypatch, capsys
     assert main(["mark", str(out), "--app", "notebook"]) == 0
     assert calls[-1][0] == [sys.executable, "-m", "notebook", "marking.ipynb"]
     assert "Opening" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["--port", "8899", "--ip", "0.0.0.0", "--allow-root"],  # issue 34/39: was refused
+        ["--port=8899", "--ip=0.0.0.0", "--allow-root"],
+    ],
+)
+def test_course_mark_passes_jupyters_options_on_in_both_forms(tmp_path, monkeypatch, words):
+    import subprocess
+    import sys
+
+    from course.cli import main
+
+    out = _marking_file(tmp_path / "out")
+    calls = []
+    monkeypatch.setattr(subprocess, "call", lambda command, cwd: calls.append((command, cwd)))
+    assert main(["mark", *words[:2], str(out), *words[2:], "--no-browser"]) == 0
+    assert calls == [
+        ([sys.executable, "-m", "jupyterlab", "marking.ipynb", "--no-browser", *words], out)
+    ]
