@@ -78,8 +78,9 @@ nb_ipywidgets_js: dict = {}
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "substitution"]
 myst_heading_anchors = 3
 # Figures of a notebook get their caption, alt text and label from the metadata of the cell that
-# draws them ({"mystnb": {"figure": {"caption", "name"}, "image": {"alt"}}}); the prose refers to
-# them with {numref}`fig-...`, numbered per page.
+# draws them ({"mystnb": {"figure": {"caption", "name"}, "image": {"alt"}}}); the prose links them
+# in plain Markdown, [the figure above](#fig-...), which Jupyter shows as written and the site as
+# "Figure 7.3", numbered per notebook (course_site).
 numfig = True
 numfig_format = {"figure": "Figure %s"}
 course_site_notebooks = ["notebooks/*.ipynb"]

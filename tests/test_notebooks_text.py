@@ -594,10 +594,37 @@ def test_the_panel_check_can_fail():
         ]
     )
     found = panel_mismatches(nb)
-    assert [(i, sorted(w)) for i, w, _ in found] == [(0, ["left"]), (1, ["left", "middle", "right"])]
+    assert [(i, sorted(w)) for i, w, _ in found] == [
+        (0, ["left"]),
+        (1, ["left", "middle", "right"]),
+    ]
     side_by_side = stacked.source.replace("(3, 1)", "(1, 2)")
     nb.cells[0].source = side_by_side
     assert [(i, sorted(w)) for i, w, _ in panel_mismatches(nb)] == [
         (1, ["left", "middle", "right"]),
         (2, ["top"]),
     ]
+
+
+# ---------------------------------------------------------------------------
+# markup every front end renders (issue 39): JupyterLab, Notebook 7 and JupyterLite know no MyST
+# ---------------------------------------------------------------------------
+MYST_SOURCE = re.compile(r"\{[a-z:-]+\}`|^\s*(?::::+|```+)\s*\{", re.M)
+
+
+@pytest.mark.parametrize("path", ALL_NOTEBOOKS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_markdown_cells_use_no_myst_roles_or_fences(path):
+    """Cite a figure with a link to its name, ``[the figure above](#fig-...)``, and write a
+    call-out as a block quote, ``> **Note.** ...``; the site numbers and boxes them
+    (docs/_ext/course_site.py). tests/test_lab_markup.py checks the rendered pages."""
+    for index, cell in enumerate(_read(path).cells):
+        if cell.cell_type == "markdown":
+            found = MYST_SOURCE.search(cell.source)
+            assert found is None, f"{path.name}, cell {index}: MyST markup {found.group(0)!r}"
+
+
+def test_the_myst_pattern():
+    for raw in ("See {numref}`fig-1`.", ":::{note}\nx\n:::", "```{figure} a.png", "{py:func}`f`"):
+        assert MYST_SOURCE.search(raw), raw
+    for fine in ("[the figure above](#fig-1)", "> **Note.** x", "```python\nx = 1\n```", "{x}"):
+        assert not MYST_SOURCE.search(fine), fine
