@@ -239,7 +239,9 @@ def test_a26_is_not_a_misprint():
     assert "initial_estimate_random" not in APPENDIX_MISPRINTS
     assert not any(eq == "(A26)" for eq, _, _ in APPENDIX_MISPRINTS.values())
     with pytest.raises(ValueError, match="misprint must be one of"):
-        residual_moments_as_printed(two_state_system(), reduced_filter(), 5, "initial_estimate_random")
+        residual_moments_as_printed(
+            two_state_system(), reduced_filter(), 5, "initial_estimate_random"
+        )
 
 
 # ---------------------------------------------------------------------------
