@@ -72,7 +72,9 @@ nb_execution_show_tb = True
 nb_execution_timeout = 600
 nb_execution_excludepatterns = ["exercises/*/*.ipynb"]  # student versions: stubs raise by design
 nb_merge_streams = True
-nb_output_folder = str(CACHE / "jupyter_execute")  # staging of figures, outside the site
+# Staging of the notebooks' figures, in the cache: myst-nb would write them beside the output
+# folder (course_site.keep_outputs_in_cache), in the repository when the site is built into it.
+course_site_output_folder = str(CACHE / "jupyter_execute")
 # Widgets need a live kernel; their JavaScript would come from a CDN. Pages show the text form.
 nb_ipywidgets_js: dict = {}
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "substitution"]

@@ -77,19 +77,21 @@ def test_no_raw_myst_in_jupyterlab_or_notebook7(lab, ui):
                     cell.cell_type == "markdown"
                     for cell in nbformat.read(folder / name, as_version=4).cells
                 )
-                page.goto(f"{base}/{UIS[ui]}/{name}?token={token}")
-                page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
+                # ?reset: JupyterLab opens this notebook alone, not every one opened before
+                reset = "reset&" if ui == "lab" else ""
+                page.goto(f"{base}/{UIS[ui]}/{name}?{reset}token={token}")
+                panel = ".jp-NotebookPanel:not(.lm-mod-hidden) .jp-Notebook"
+                page.wait_for_selector(f"{panel} .jp-Cell", state="attached", timeout=120_000)
                 # every Markdown cell rendered (an unrendered one would show its source)
                 page.wait_for_function(
-                    "([n]) => document.querySelectorAll("
-                    "'.jp-Notebook .jp-MarkdownCell .jp-MarkdownOutput').length >= n",
-                    arg=[expected],
+                    "([sel, n]) => document.querySelectorAll(sel).length >= n",
+                    arg=[f"{panel} .jp-MarkdownCell .jp-MarkdownOutput", expected],
                     timeout=120_000,
                 )
                 text = page.evaluate(
-                    "() => Array.from(document.querySelectorAll("
-                    "'.jp-Notebook .jp-MarkdownCell .jp-MarkdownOutput'))"
-                    ".map(e => e.textContent).join('\\n')"
+                    "([sel]) => Array.from(document.querySelectorAll(sel))"
+                    ".map(e => e.textContent).join('\\n')",
+                    [f"{panel} .jp-MarkdownCell .jp-MarkdownOutput"],
                 )
                 if raw_markup(text):
                     found[name] = sorted(set(raw_markup(text)))

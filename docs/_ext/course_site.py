@@ -615,6 +615,11 @@ def blockquote_callouts(app, doctree) -> None:
         if not quote.children or not isinstance(quote[0], nodes.paragraph):
             continue
         para = quote[0]
+        for child in list(para.children):  # MyST may open a paragraph with an empty text
+            if isinstance(child, nodes.Text) and not child.astext().strip():
+                para.remove(child)
+            else:
+                break
         if not para.children or not isinstance(para[0], nodes.strong):
             continue
         heading = para[0].astext().strip()
@@ -633,7 +638,8 @@ def blockquote_callouts(app, doctree) -> None:
         para.remove(para[0])
         if para.children and isinstance(para[0], nodes.Text):
             para[0] = nodes.Text(para[0].astext().lstrip())
-        children = [child for child in quote.children if child is not para or para.children]
+        empty = not para.astext().strip() and not list(para.findall(nodes.math))
+        children = [child for child in quote.children if child is not para or not empty]
         quote.children = []
         for child in children:
             box += child
@@ -676,11 +682,32 @@ def figure_link_numbers(app, doctree, docname) -> None:
         ref += nodes.inline("", f"Figure {number}", classes=["std", "std-numref"])
 
 
+def keep_outputs_in_cache(app) -> None:
+    """myst-nb writes a notebook's images to ``<output folder>/../jupyter_execute`` whatever
+    the configuration says (its ``output_folder`` is not a Sphinx setting): next to the site, in
+    the repository when the site is built into it (issue 39). Point it at
+    ``course_site_output_folder`` (in the build cache) instead."""
+    config = getattr(app.env, "mystnb_config", None)
+    folder = app.config.course_site_output_folder
+    if config is not None and folder:
+        app.env.mystnb_config = config.copy(output_folder=str(Path(folder).resolve()))
+
+
+def drop_unrendered_widget_state(app, doctree) -> None:
+    """myst-nb embeds a notebook's saved widget state (tens of KiB per slider page) even when no
+    widget JavaScript is loaded to render it (``nb_ipywidgets_js = {}``): drop it then."""
+    if getattr(app.config, "nb_ipywidgets_js", None):
+        return
+    metadata = getattr(app.env, "nb_metadata", {}).get(app.env.docname, {})
+    metadata.get("js_files", {}).pop("ipywidgets_state", None)
+
+
 def setup(app):
     app.add_config_value("course_site_notebooks", ["notebooks/*.ipynb"], "env")
     app.add_config_value("course_site_assignments", ["exercises/*/*.ipynb"], "env")
     app.add_config_value("course_site_lite", True, "env")
     app.add_config_value("course_site_optional_globs", [], "env")
+    app.add_config_value("course_site_output_folder", "", "env")
     std_logging.getLogger("sphinx.sphinx.directives.other").addFilter(_OptionalGlobFilter(app))
     app.connect("autodoc-process-docstring", escape_shape_stars, priority=400)
     # Before autosummary (priority 500) reads the pages this writes.
@@ -689,6 +716,8 @@ def setup(app):
     app.connect("autodoc-process-docstring", add_notebook_see_also, priority=600)
     app.connect("doctree-read", add_notebook_links)
     app.connect("doctree-read", blockquote_callouts)
+    app.connect("doctree-read", drop_unrendered_widget_state)
+    app.connect("builder-inited", keep_outputs_in_cache, priority=900)  # after myst-nb's
     # after Sphinx's own figure numbering (the toctree collector, priority 500)
     app.connect("env-get-updated", number_figures_per_notebook, priority=900)
     app.connect("doctree-resolved", figure_link_numbers, priority=400)
