@@ -385,9 +385,12 @@ def test_course_open_passes_jupyters_options_on_in_both_forms(
     from course import cli
 
     calls = []
-    monkeypatch.setattr(
-        cli.subprocess, "call", lambda command, cwd: calls.append((command, cwd)) or 0
-    )
+
+    def call(command, cwd):
+        calls.append((command, cwd))
+        return 0
+
+    monkeypatch.setattr(cli.subprocess, "call", call)
     notebook = tmp_path / "x.ipynb"
     notebook.write_text("{}")
     # a Jupyter switch (no value) just before the folder leaves the folder to course
