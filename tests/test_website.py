@@ -333,7 +333,7 @@ def test_notebook_figures_have_alt_text_numbered_captions_and_references(site):
         bad = [alt for alt in alts if not alt.strip() or _HASH_NAME.match(alt.strip())]
         if bad:
             hashed[page.name] = bad
-        numbers = re.findall(r'<span class="caption-number">Figure ([\w.]+?)&#160;', article)
+        numbers = re.findall(r'<span class="caption-number">Figure (\d+[a-z]?\.\d+)', article)
         if len(numbers) < len(alts):  # every figure of the page numbered and captioned
             unnumbered.append(f"{page.name}: {len(numbers)} numbered of {len(alts)}")
         # numbered per notebook, from its own number: 07_... has Figure 7.1, 7.2, ... (issue 39)
