@@ -157,7 +157,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="open the course notebooks in Jupyter",
         description="Start JupyterLab (or the classic Notebook) on the course's notebooks/ folder; "
         "begin with 01_least_squares_validation.ipynb. Stop it with Ctrl-C. Options that "
-        "course does not know (e.g. --port=8890) are passed on to Jupyter.",
+        "course does not know are passed on to Jupyter in either form (--port 8890 or "
+        "--port=8890, --ip 0.0.0.0, --allow-root).",
     )
     p_open.add_argument(
         "path",
@@ -211,13 +212,74 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# Jupyter's own switches that take no value (``jupyter lab --help-all``, jupyter_server, jupyterlab
+# and notebook 7); any other option Jupyter gets in the space form (``--port 8899``) takes the
+# next word as its value, as traitlets parses it.
+JUPYTER_FLAGS = frozenset(
+    {
+        "allow-root", "autoreload", "collaborative", "core-mode", "custom-css", "debug",
+        "dev-mode", "expose-app-in-browser", "extensions-in-dev-mode", "generate-config",
+        "no-browser", "no-mathjax", "no-script", "script", "show-config", "show-config-json",
+        "skip-dev-build", "splice-source", "watch", "y",
+    }
+)  # fmt: skip
+
+# The subcommands that start Jupyter and pass the options they do not know on to it.
+PASSES_ON_TO_JUPYTER = ("open", "mark")
+
+
+def split_jupyter_args(
+    command: argparse.ArgumentParser, words: list[str]
+) -> tuple[list[str], list[str]]:
+    """Split a subcommand's words into its own and Jupyter's, each option with its value.
+
+    An option ``command`` does not define goes to Jupyter with the word after it when it is
+    written ``--port 8899`` (a value that does not look like an option) and is not one of
+    Jupyter's value-less switches, so the value is never taken for the subcommand's folder.
+    """
+    own_options = command._option_string_actions
+    ours: list[str] = []
+    theirs: list[str] = []
+    i = 0
+    while i < len(words):
+        word = words[i]
+        following = words[i + 1] if i + 1 < len(words) else None
+        takes_next = following is not None and not following.startswith("-") and "=" not in word
+        if word == "--":  # everything after belongs to the subcommand
+            ours += words[i:]
+            break
+        if not word.startswith("-") or word == "-":
+            ours.append(word)
+        elif word.split("=", 1)[0] in own_options:
+            action = own_options[word.split("=", 1)[0]]
+            ours.append(word)
+            if action.nargs != 0 and takes_next:
+                ours.append(following)  # type: ignore[arg-type]
+                i += 1
+        else:
+            theirs.append(word)
+            if takes_next and word.lstrip("-") not in JUPYTER_FLAGS:
+                theirs.append(following)  # type: ignore[arg-type]
+                i += 1
+        i += 1
+    return ours, theirs
+
+
 def main(argv=None) -> int:
     parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
-    if extra:
-        if args.command != "open":
-            parser.error(f"unrecognized arguments: {' '.join(extra)}")
-        args.jupyter_args = extra
+    words = list(sys.argv[1:] if argv is None else argv)
+    subcommands = next(
+        action for action in parser._actions if isinstance(action, argparse._SubParsersAction)
+    )
+    jupyter_args: list[str] = []
+    for at, word in enumerate(words):
+        if not word.startswith("-"):  # the subcommand: the first word that is not an option
+            if word in PASSES_ON_TO_JUPYTER and word in subcommands.choices:
+                own, jupyter_args = split_jupyter_args(subcommands.choices[word], words[at + 1 :])
+                words = [*words[: at + 1], *own]
+            break
+    args = parser.parse_args(words)
+    args.jupyter_args = jupyter_args
     return int(args.func(args) or 0)
 
 

@@ -72,14 +72,17 @@ nb_execution_show_tb = True
 nb_execution_timeout = 600
 nb_execution_excludepatterns = ["exercises/*/*.ipynb"]  # student versions: stubs raise by design
 nb_merge_streams = True
-nb_output_folder = str(CACHE / "jupyter_execute")  # staging of figures, outside the site
+# Staging of the notebooks' figures, in the cache: myst-nb would write them beside the output
+# folder (course_site.keep_outputs_in_cache), in the repository when the site is built into it.
+course_site_output_folder = str(CACHE / "jupyter_execute")
 # Widgets need a live kernel; their JavaScript would come from a CDN. Pages show the text form.
 nb_ipywidgets_js: dict = {}
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "substitution"]
 myst_heading_anchors = 3
 # Figures of a notebook get their caption, alt text and label from the metadata of the cell that
-# draws them ({"mystnb": {"figure": {"caption", "name"}, "image": {"alt"}}}); the prose refers to
-# them with {numref}`fig-...`, numbered per page.
+# draws them ({"mystnb": {"figure": {"caption", "name"}, "image": {"alt"}}}); the prose links them
+# in plain Markdown, [the figure above](#fig-...), which Jupyter shows as written and the site as
+# "Figure 7.3", numbered per notebook (course_site).
 numfig = True
 numfig_format = {"figure": "Figure %s"}
 course_site_notebooks = ["notebooks/*.ipynb"]

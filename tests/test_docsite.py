@@ -267,3 +267,47 @@ def test_lite_pages_explain_why_python_cannot_start(tmp_path):
     script = (lite / "course-lite-check.js").read_text()
     assert "file:" in script and "offline" in script and "https://" in script
     assert "course-lite-check.js" in (lite / "lab" / "index.html").read_text()
+
+
+def _quote(*children):
+    from docutils import nodes
+
+    para = nodes.paragraph()
+    for child in children:
+        para += child
+    quote = nodes.block_quote()
+    quote += para
+    return quote
+
+
+def test_blockquote_callouts_become_boxes_and_quotations_stay():
+    """Notebooks write call-outs as block quotes every Jupyter renders; the site boxes them."""
+    from docutils import nodes
+
+    doc = nodes.section()
+    doc += _quote(nodes.Text(""), nodes.strong(text="Note."), nodes.Text(" Read this."))
+    doc += _quote(nodes.strong(text="Answer to 1."), nodes.Text(" It is 2."))
+    doc += _quote(nodes.strong(text="Exercise: two formulas."))
+    doc += _quote(nodes.Text("A quotation, "), nodes.strong(text="not."), nodes.Text(" a box"))
+    course_site.blockquote_callouts(None, doc)
+    kinds = [type(child).__name__ for child in doc.children]
+    assert kinds == ["note", "admonition", "admonition", "block_quote"]
+    assert doc[0].astext() == "Read this."
+    assert doc[1]["classes"] == ["dropdown"] and doc[1][0].astext() == "Answer to 1"
+    assert doc[2]["classes"] == ["tip"] and doc[2].astext() == "Exercise: two formulas"
+
+
+def test_figures_are_numbered_from_their_notebook(monkeypatch):
+    from types import SimpleNamespace
+
+    assert course_site.notebook_number("notebooks/07_testing_theory") == "7"
+    assert course_site.notebook_number("notebooks/05a_wishart") == "5a"
+    env = SimpleNamespace(
+        toc_fignumbers={"notebooks/07_x": {"figure": {"fig-b": (49,), "fig-a": (48,)}}}
+    )
+    monkeypatch.setattr(course_site, "_notebook_docs", lambda app: {"notebooks/07_x": None})
+    course_site.number_figures_per_notebook(None, env)
+    assert env.toc_fignumbers["notebooks/07_x"]["figure"] == {
+        "fig-a": ("7", 1),
+        "fig-b": ("7", 2),
+    }

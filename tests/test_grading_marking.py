@@ -492,3 +492,25 @@ def test_hostile_answers_are_marked_and_exported_intact(hostile, tmp_path):
     assert all(len(r) == len(canvas[0]) for r in canvas)
     page = (out / "report.html").read_text()
     assert "<script>alert" not in page
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["--port", "8899", "--ip", "0.0.0.0", "--allow-root"],  # issue 34/39: was refused
+        ["--port=8899", "--ip=0.0.0.0", "--allow-root"],
+    ],
+)
+def test_course_mark_passes_jupyters_options_on_in_both_forms(tmp_path, monkeypatch, words):
+    import subprocess
+    import sys
+
+    from course.cli import main
+
+    out = _marking_file(tmp_path / "out")
+    calls = []
+    monkeypatch.setattr(subprocess, "call", lambda command, cwd: calls.append((command, cwd)))
+    assert main(["mark", *words[:2], str(out), *words[2:], "--no-browser"]) == 0
+    assert calls == [
+        ([sys.executable, "-m", "jupyterlab", "marking.ipynb", "--no-browser", *words], out)
+    ]

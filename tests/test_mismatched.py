@@ -232,6 +232,18 @@ def test_a15_is_not_a_misprint():
         residual_moments_as_printed(two_state_system(), reduced_filter(), 5, "H_tilde_sign")
 
 
+def test_a26_is_not_a_misprint():
+    """The paper's (A26) prints the zero block of the known initial estimate and is wrong only
+    by a tilde; a "random initial estimate" variant was the reader's, not the paper's (issue 39,
+    the same misquote as (A15))."""
+    assert "initial_estimate_random" not in APPENDIX_MISPRINTS
+    assert not any(eq == "(A26)" for eq, _, _ in APPENDIX_MISPRINTS.values())
+    with pytest.raises(ValueError, match="misprint must be one of"):
+        residual_moments_as_printed(
+            two_state_system(), reduced_filter(), 5, "initial_estimate_random"
+        )
+
+
 # ---------------------------------------------------------------------------
 # statistics, their quadratic-form matrices and laws
 # ---------------------------------------------------------------------------

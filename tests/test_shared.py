@@ -367,6 +367,52 @@ def test_course_open_uses_this_interpreters_jupyter(monkeypatch, tmp_path, capsy
     assert "is not installed" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    "words, jupyter",
+    [
+        (["--port", "8899"], ["--port", "8899"]),  # issue 39: 8899 was taken for the folder
+        (["--port=8899"], ["--port=8899"]),
+        (["--ip", "0.0.0.0", "--port", "8899"], ["--ip", "0.0.0.0", "--port", "8899"]),
+        (["--ip=0.0.0.0"], ["--ip=0.0.0.0"]),
+        (["--allow-root"], ["--allow-root"]),
+        (["--ServerApp.token", ""], ["--ServerApp.token", ""]),
+    ],
+)
+@pytest.mark.parametrize("folder", ["none", "before", "after"])
+def test_course_open_passes_jupyters_options_on_in_both_forms(
+    monkeypatch, tmp_path, words, jupyter, folder
+):
+    from course import cli
+
+    calls = []
+
+    def call(command, cwd):
+        calls.append((command, cwd))
+        return 0
+
+    monkeypatch.setattr(cli.subprocess, "call", call)
+    notebook = tmp_path / "x.ipynb"
+    notebook.write_text("{}")
+    # a Jupyter switch (no value) just before the folder leaves the folder to course
+    args = {
+        "none": words,
+        "before": [str(notebook), *words],
+        "after": [*words, "--allow-root", str(notebook)],
+    }[folder]
+    assert cli.main(["open", "--no-browser", *args, "--app", "notebook"]) == 0
+    ((command, cwd),) = calls
+    opened = {"none": [], "before": ["x.ipynb"], "after": ["--allow-root", "x.ipynb"]}[folder]
+    assert command == [sys.executable, "-m", "notebook", "--no-browser", *jupyter, *opened]
+    assert cwd.name == "notebooks" if folder == "none" else cwd == tmp_path
+
+
+def test_only_open_and_mark_pass_unknown_options_on():
+    from course import cli
+
+    with pytest.raises(SystemExit):
+        cli.main(["docs", "out", "--port", "8899"])
+
+
 # ---------------------------------------------------------------------------
 # the decision path, laws and the linear-algebra home (release 0.2)
 # ---------------------------------------------------------------------------

@@ -301,6 +301,7 @@ def _mark(args) -> int:
         return 2
     command = [sys.executable, "-m", module, notebook.name]
     command += ["--no-browser"] if args.no_browser else []
+    command += list(getattr(args, "jupyter_args", []))
     print(f"Opening {notebook} in Jupyter {args.app} (Ctrl-C to stop)")
     return subprocess.call(command, cwd=notebook.parent)
 
@@ -314,7 +315,8 @@ def _add_mark_command(subparsers) -> None:
         "anonymous by default, with the rubric, a points box and a comment box. Every mark is "
         "saved into the record (OUT_DIR/record.sqlite, with the marker and the time) and "
         "OUT_DIR/short_answers.csv at once; the next `course grade NAME SUBMISSIONS --out "
-        "OUT_DIR` merges them into the grades.",
+        "OUT_DIR` merges them into the grades. Options that course does not know (e.g. --port 8890, "
+        "--ip 0.0.0.0, --allow-root) are passed on to Jupyter.",
     )
     p_mark.add_argument("out_dir", metavar="OUT_DIR", help="the --out folder of `course grade`")
     p_mark.add_argument(

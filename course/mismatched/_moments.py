@@ -26,7 +26,9 @@ _readonly = readonly
 #: The misprints of Baram's appendix that :func:`residual_moments_as_printed`
 #: can put back: name -> (equation, as printed, as corrected). (A15), printed
 #: "[H_j^0 - H_j^1]", is not among them: in the paper's block notation (blocks
-#: separated by spaces, as in (A14)) it reads [H^0, -H^1], which is right.
+#: separated by spaces, as in (A14)) it reads [H^0, -H^1], which is right; nor is
+#: (A26), which prints the zero block of the known initial estimate and is wrong
+#: only by a tilde, a slip no computation can show.
 APPENDIX_MISPRINTS = {
     "gain_of_tested_model": (
         "(A17)-(A18)",
@@ -37,11 +39,6 @@ APPENDIX_MISPRINTS = {
         "(A14), (A20)",
         "a random w^1 with covariance Q^1 drives the estimate",
         "the estimate is driven by the mean of w^1 only: no Q^1 block",
-    ),
-    "initial_estimate_random": (
-        "(A26)",
-        "Psi~_0 with the filter's prior covariance in the estimate block",
-        "Psi~_0 = blockdiag(Psi^0_0, 0): xhat(0|-1) is a known vector",
     ),
     "mean_without_noise_mean": (
         "(A23)",
@@ -311,8 +308,6 @@ def _moments(m0, m1, N, misprint):
     x_mean = np.concatenate([m0.x0_mean, m1.x0_mean])
     Psi = np.zeros((na, na))
     Psi[:n0, :n0] = m0.x0_cov
-    if misprint == "initial_estimate_random":
-        Psi[n0:, n0:] = m1.x0_cov
     dv = m0.v_mean - m1.v_mean
     R0 = m0.R
     mean = np.empty((N, p))

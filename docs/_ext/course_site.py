@@ -19,9 +19,17 @@ What it adds to a plain Sphinx + myst-nb + numpydoc build:
   figure options, so a cell that draws two figures cannot name both. Its metadata may list
   them instead, ``{"course": {"figures": [{"name", "caption", "alt"}, ...]}}``, one entry per
   image output in order; each becomes a numbered, captioned figure with its own alt text.
-* **Hideable answers.** An admonition with the class ``dropdown`` (``:class: dropdown`` under
-  ``:::{admonition} Answer``) becomes an HTML ``<details>`` box, closed until the reader opens
-  it, without JavaScript and without sphinx-togglebutton or sphinx-design.
+* **Hideable answers.** An admonition with the class ``dropdown`` becomes an HTML ``<details>``
+  box, closed until the reader opens it, without JavaScript and without sphinx-togglebutton or
+  sphinx-design.
+* **Markup every front end renders.** The notebooks are read in JupyterLab, Notebook 7 and
+  JupyterLite, which render plain Markdown only, so they hold no MyST roles or fences: a figure is
+  cited by a link to its name (``[the figure above](#fig-07-power)``) and a call-out is a block
+  quote that opens with a bold word (``> **Note.** ...``, ``> **Warning.** ...``,
+  ``> **Exercise: ...**``, ``> **Answer to 1.** ...``). The site turns them into what MyST would
+  have made: "Figure 7.3" for the link, a note, warning, tip or closed answer box for the quote.
+* **Figure numbers per notebook.** A notebook's figures are numbered from its own number
+  ("Figure 7.3" is notebook 7's third), not across the site.
 """
 
 from __future__ import annotations
@@ -33,6 +41,7 @@ import inspect
 import json
 import logging as std_logging
 import pkgutil
+import re
 import shutil
 from pathlib import Path
 
@@ -584,11 +593,121 @@ def dropdown_admonitions(app, doctree, docname) -> None:
         node.replace_self([opening, *body, closing])
 
 
+# --------------------------------------------------------------------------------------------
+# Markup every front end renders: block-quote call-outs, figure links, numbers per notebook
+# --------------------------------------------------------------------------------------------
+
+CALLOUT_NODES = {
+    "note": nodes.note,
+    "warning": nodes.warning,
+    "tip": nodes.tip,
+    "important": nodes.important,
+}
+
+
+def blockquote_callouts(app, doctree) -> None:
+    """``> **Note.** text`` becomes a note (warning, tip, important alike); ``> **Exercise: X.**``
+    a tip titled "Exercise: X"; ``> **Answer to 1.**`` a closed answer box (class dropdown).
+
+    A block quote that does not open with one of these bold words stays a quotation.
+    """
+    for quote in list(doctree.findall(nodes.block_quote)):
+        if not quote.children or not isinstance(quote[0], nodes.paragraph):
+            continue
+        para = quote[0]
+        for child in list(para.children):  # MyST may open a paragraph with an empty text
+            if isinstance(child, nodes.Text) and not child.astext().strip():
+                para.remove(child)
+            else:
+                break
+        if not para.children or not isinstance(para[0], nodes.strong):
+            continue
+        heading = para[0].astext().strip()
+        label = heading.rstrip(".:").strip()
+        key = label.lower()
+        if not heading.endswith((".", ":")) or not label:
+            continue
+        box: nodes.Element
+        if key in CALLOUT_NODES:
+            box = CALLOUT_NODES[key]()
+        elif key.startswith(("answer", "exercise")):
+            box = nodes.admonition(classes=["dropdown" if key.startswith("answer") else "tip"])
+            box += nodes.title(label, label)
+        else:
+            continue
+        para.remove(para[0])
+        if para.children and isinstance(para[0], nodes.Text):
+            para[0] = nodes.Text(para[0].astext().lstrip())
+        empty = not para.astext().strip() and not list(para.findall(nodes.math))
+        children = [child for child in quote.children if child is not para or not empty]
+        quote.children = []
+        for child in children:
+            box += child
+        quote.replace_self(box)
+
+
+def notebook_number(docname: str) -> str:
+    """The number a notebook's file name starts with: ``notebooks/07_x`` -> "7", ``05a_y`` -> "5a"."""
+    match = re.match(r"0*(\d+[a-z]?)_", Path(docname).name)
+    return match.group(1) if match else ""
+
+
+def number_figures_per_notebook(app, env) -> list[str]:
+    """After Sphinx numbers the figures across the site: number each notebook's from its own."""
+    for docname in _notebook_docs(app):
+        prefix = notebook_number(docname)
+        figures = env.toc_fignumbers.get(docname, {}).get("figure", {})
+        order = sorted(figures, key=lambda figure_id: figures[figure_id])
+        for k, figure_id in enumerate(order, start=1):
+            figures[figure_id] = (prefix, k) if prefix else (k,)
+    return []
+
+
+# The words a notebook links a figure with; the site shows its number instead.
+FIGURE_LINK_TEXT = re.compile(
+    r"(?i)^the (?:(?:first|second) )?figure(?: above| below)?$|^the second$"
+)
+
+
+def figure_link_numbers(app, doctree, docname) -> None:
+    """``[the figure above](#fig-x)`` reads "Figure 7.3" on the site, as a numref would."""
+    figures = app.env.toc_fignumbers.get(docname, {}).get("figure", {})
+    for ref in list(doctree.findall(nodes.reference)):
+        uri = ref.get("refuri", "")
+        target = ref.get("refid") or (uri.split("#", 1)[1] if "#" in uri else "")
+        if target not in figures or not FIGURE_LINK_TEXT.match(ref.astext().strip()):
+            continue
+        number = ".".join(map(str, figures[target]))
+        ref.children = []
+        ref += nodes.inline("", f"Figure {number}", classes=["std", "std-numref"])
+
+
+def keep_outputs_in_cache(app) -> None:
+    """myst-nb writes a notebook's images to ``<output folder>/../jupyter_execute`` whatever
+    the configuration says (its ``output_folder`` is not a Sphinx setting): next to the site, in
+    the repository when the site is built into it (issue 39). Point it at
+    ``course_site_output_folder`` (in the build cache) instead."""
+    config = getattr(app.env, "mystnb_config", None)
+    folder = app.config.course_site_output_folder
+    if config is not None and folder:
+        app.env.mystnb_config = config.copy(output_folder=str(Path(folder).resolve()))
+
+
+def drop_unrendered_widget_state(app, doctree) -> None:
+    """myst-nb embeds a notebook's saved widget state (tens of KiB per slider page) even when no
+    widget JavaScript is loaded to render it (``nb_ipywidgets_js = {}``): drop it then."""
+    if getattr(app.config, "nb_ipywidgets_js", None):
+        return
+    metadata = getattr(app.env, "nb_metadata", {}).get(app.env.docname, {})
+    metadata.get("js_files", {}).pop("ipywidgets_state", None)
+
+
 def setup(app):
     app.add_config_value("course_site_notebooks", ["notebooks/*.ipynb"], "env")
     app.add_config_value("course_site_assignments", ["exercises/*/*.ipynb"], "env")
     app.add_config_value("course_site_lite", True, "env")
     app.add_config_value("course_site_optional_globs", [], "env")
+    app.add_config_value("course_site_output_folder", "", "env")
     std_logging.getLogger("sphinx.sphinx.directives.other").addFilter(_OptionalGlobFilter(app))
     app.connect("autodoc-process-docstring", escape_shape_stars, priority=400)
     # Before autosummary (priority 500) reads the pages this writes.
@@ -596,6 +715,12 @@ def setup(app):
     app.connect("env-get-outdated", outdated_by_teaching_map)
     app.connect("autodoc-process-docstring", add_notebook_see_also, priority=600)
     app.connect("doctree-read", add_notebook_links)
+    app.connect("doctree-read", blockquote_callouts)
+    app.connect("doctree-read", drop_unrendered_widget_state)
+    app.connect("builder-inited", keep_outputs_in_cache, priority=900)  # after myst-nb's
+    # after Sphinx's own figure numbering (the toctree collector, priority 500)
+    app.connect("env-get-updated", number_figures_per_notebook, priority=900)
+    app.connect("doctree-resolved", figure_link_numbers, priority=400)
     app.connect("doctree-resolved", dropdown_admonitions)
     app.add_transform(CellFigures)
     app.connect("build-finished", copy_mathjax)
