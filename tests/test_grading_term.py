@@ -332,6 +332,19 @@ def test_late_policy_deducts_per_started_day_with_a_cap_and_a_cutoff():
     assert "at most 25 %" in policy.describe()
 
 
+def test_a_file_stamped_at_the_zero_after_instant_keeps_its_points():
+    """Moodle stamps to the minute, so a hand-in at exactly the cutoff is common: "0 points
+    *after*" the instant means the instant itself is still charged per day."""
+    from course.grading.batch.late import Lateness, parse_due, parse_policy
+
+    policy = parse_policy("percent-per-day:10,cap:25,zero-after:2026-10-27T23:59+02:00")
+    due = parse_due("2026-10-20T23:59+02:00")
+    at_cutoff = Lateness(parse_due("2026-10-27T21:59Z"), due, "test", False).record(policy)
+    assert (at_cutoff["days"], at_cutoff["percent"]) == (7, 25)
+    assert policy.percent(7, parse_due("2026-10-27T23:59+02:00")) == 25
+    assert policy.percent(7, parse_due("2026-10-28T00:00+02:00")) == 100
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
