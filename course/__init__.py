@@ -22,8 +22,6 @@ filters
 nis
     The NIS chain (NIS, windows, thresholds, alarms), the NIS matrix and the
     exact laws of its extreme eigenvalues (modules 4 and 5).
-quadform
-    Quadratic forms in normal variables and their exact laws (Imhof's method).
 mismatched
     Mismatched-filter tests over many records (module 6).
 
@@ -40,6 +38,9 @@ linalg
 chi2
     The chi-square law of a squared residual norm: threshold, power,
     non-centrality.
+quadform
+    Quadratic forms in normal variables and their exact laws (Imhof's
+    method); the law behind module 6's tests.
 distributions
     The base of the course's frozen laws (scipy's interface).
 plotting

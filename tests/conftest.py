@@ -69,7 +69,10 @@ SLOW_FIXTURES = frozenset({"graded_class", "graded", "needles", "class_edition",
 def pytest_collection_modifyitems(config, items):
     """Mark ``slow`` what the fast lane leaves out without each test saying so: the notebook
     cells (nbval), the website (``browser``) and every test that needs a graded class or an
-    exported edition (:data:`SLOW_FIXTURES`). Other slow tests carry ``@pytest.mark.slow``."""
+    exported edition (:data:`SLOW_FIXTURES`). Other slow tests carry ``@pytest.mark.slow``.
+
+    Tests marked ``after_notebooks`` (the notebooks' time budget) move to the end of the run,
+    after nbval has run every notebook of the session."""
     for item in items:
         if (
             item.path.suffix == ".ipynb"
@@ -77,6 +80,30 @@ def pytest_collection_modifyitems(config, items):
             or SLOW_FIXTURES & set(getattr(item, "fixturenames", ()))
         ):
             item.add_marker(pytest.mark.slow)
+    last = [item for item in items if item.get_closest_marker("after_notebooks") is not None]
+    if last:
+        items[:] = [item for item in items if item not in last] + last
+
+
+# -- the notebooks' time budget, measured in the suite's own run ---------------------------------
+#: notebook path -> seconds nbval spent on it in this session (every cell, setup to teardown:
+#: the kernel's start included, as a student's fresh kernel would pay it)
+NOTEBOOK_SECONDS: dict[str, float] = {}
+
+
+class _NotebookClock:
+    """A global plugin: a conftest's own item hooks see only the items below its folder, and
+    the notebooks live in notebooks/."""
+
+    @staticmethod
+    def pytest_runtest_logreport(report):
+        path = report.nodeid.split("::", 1)[0]
+        if path.endswith(".ipynb"):
+            NOTEBOOK_SECONDS[path] = NOTEBOOK_SECONDS.get(path, 0.0) + report.duration
+
+
+def pytest_configure(config):
+    config.pluginmanager.register(_NotebookClock(), "course-notebook-clock")
 
 
 # -- one graded class per assignment, shared by the whole-class tests ---------------------------

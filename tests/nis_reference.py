@@ -14,8 +14,9 @@ precision loses all digits at large K (and at large m), so :func:`prob_within`
 runs with 80 significant digits (enough for the table's m <= 6) and
 :func:`checked_probabilities` raises the precision until two evaluations agree
 to 30 digits (m = 30, K = 1000 needs about 100 digits, K = 10^5 several hundred).
-Run ``python tests/nis_reference.py`` (needs ``mpmath``) to print the table
-pasted into the tests.
+``python tests/nis_reference.py --write`` (needs ``mpmath``, seconds) writes the tables
+``tests/reference/nis_extreme_eigenvalues.json`` and ``nis_eigenvalue_bands.json`` that
+``test_nis.py`` reads, with their provenance.
 """
 
 from __future__ import annotations
@@ -171,18 +172,42 @@ POINTS = [
 BANDS = [(2, 10, 0.3, 2.0), (3, 3, 0.01, 3.0), (5, 40, 0.4, 1.9), (6, 1000, 0.85, 1.2)]
 
 
-if __name__ == "__main__":  # pragma: no cover - generator of the test table
-    import mpmath as mp
+if __name__ == "__main__":  # pragma: no cover - generator of the reference files
+    import sys
 
-    print("EXTREMES = [  # (m, K, x, P(lmax <= x), P(lmax > x), P(lmin <= x), P(lmin > x))")
+    import mpmath as mp
+    from references import write
+
+    extremes = []
     for m, K, x in POINTS:
         with mp.workdps(80):
             cdf_max = prob_within(m, K, 0, x)
             sf_min = prob_within(m, K, x, float("inf"))
             row = [cdf_max, 1 - cdf_max, 1 - sf_min, sf_min]
-        print(f"    ({m}, {K}, {x!r}, " + ", ".join(mp.nstr(v, 17) for v in row) + "),")
-    print("]")
-    print("BAND = [  # (m, K, lower, upper, P(all in [lower, upper]))")
+        extremes.append([m, K, x, *(float(mp.nstr(v, 17)) for v in row)])
+    bands = []
     for m, K, lo, hi in BANDS:
-        print(f"    ({m}, {K}, {lo!r}, {hi!r}, {mp.nstr(prob_within(m, K, lo, hi), 17)}),")
-    print("]")
+        with mp.workdps(80):
+            bands.append([m, K, lo, hi, float(mp.nstr(prob_within(m, K, lo, hi), 17))])
+    if "--write" not in sys.argv:
+        print(extremes, bands, sep="\n")
+        raise SystemExit
+    script = "tests/nis_reference.py"
+    write(
+        "nis_extreme_eigenvalues",
+        script=script,
+        about="Laws of the extreme eigenvalues of the NIS matrix (Wishart, m x m, K dof): "
+        "Chiani's Pfaffian in mpmath at 80 digits, rounded to 17 significant digits.",
+        columns=["m", "K", "x", "P(lmax <= x)", "P(lmax > x)", "P(lmin <= x)", "P(lmin > x)"],
+        values=extremes,
+        tools=["mpmath"],
+    )
+    write(
+        "nis_eigenvalue_bands",
+        script=script,
+        about="P(all eigenvalues of the NIS matrix in [lower, upper]): Chiani's Pfaffian in "
+        "mpmath at 80 digits, rounded to 17 significant digits.",
+        columns=["m", "K", "lower", "upper", "P(all in [lower, upper])"],
+        values=bands,
+        tools=["mpmath"],
+    )

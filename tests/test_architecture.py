@@ -16,10 +16,26 @@ import course
 ROOT = Path(__file__).resolve().parents[1]
 
 
+#: Public modules of ``course`` that are tools around the library, not part of its API, so
+#: they stay out of ``course.__all__``: the command line, the website builder, the workspace
+#: helpers and the notebooks' optional sliders (they need ipywidgets).
+TOOLS = frozenset({"cli", "docsite", "workspace", "interactive"})
+
+
+def discovered_modules() -> list[str]:
+    """Every public module of the package as it is on disk, registered or not.
+
+    The guards start from here, not from ``course.__all__``: a module someone forgot to
+    register would otherwise escape every one of them.
+    """
+    return sorted(
+        info.name for info in pkgutil.iter_modules(course.__path__) if not info.name.startswith("_")
+    )
+
+
 def public_namespaces() -> list[str]:
-    """``course.X`` for every X of ``course.__all__``, and the plotting modules."""
-    names = [f"course.{name}" for name in course.__all__ if not name.startswith("_")]
-    names = [n for n in names if isinstance(importlib.import_module(n), types.ModuleType)]
+    """``course.X`` for every public module of the library (tools aside), and the plotting modules."""
+    names = [f"course.{name}" for name in discovered_modules() if name not in TOOLS]
     plotting = importlib.import_module("course.plotting")
     names += [
         f"course.plotting.{info.name}"
@@ -118,7 +134,7 @@ NOT_TOPICS |= {"plotting", "grading"}
 
 
 def topic_modules() -> list[str]:
-    return [name for name in course.__all__ if not name.startswith("_") and name not in NOT_TOPICS]
+    return [name for name in discovered_modules() if name not in NOT_TOPICS | TOOLS]
 
 
 def _uses(text: str, topic: str) -> bool:
@@ -153,6 +169,100 @@ def _bad_input_tables() -> set[str]:
 
 def test_the_topic_modules_are_found():
     assert {"lsq", "diagnosis", "filters", "nis", "mismatched"} <= set(topic_modules())
+
+
+def test_every_public_module_is_registered_or_a_tool():
+    registered = set(course._SUBMODULES)
+    unknown = [f"course.{n}" for n in discovered_modules() if n not in registered | TOOLS]
+    assert not unknown, (
+        f"public modules neither in course/__init__.py's _SUBMODULES nor named a tool in "
+        f"tests/test_architecture.py's TOOLS: {unknown}; register a library module (and follow "
+        f"ARCHITECTURE.md's checklist), or make it private (_name)"
+    )
+    gone = sorted((registered | TOOLS) - set(discovered_modules()))
+    assert not gone, f"registered or listed as tools but not on disk: {gone}"
+
+
+def _readme_rows() -> str:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    return "\n".join(line for line in text.splitlines() if line.startswith("| "))
+
+
+def _missing_pieces(topic: str) -> list[str]:
+    """What ARCHITECTURE.md's checklist asks of a topic module and ``topic`` lacks."""
+    module = importlib.import_module(f"course.{topic}")
+    checks = {
+        "its name in course/__init__.py's _SUBMODULES": topic in course._SUBMODULES,
+        "its name among the topics of course/__init__.py's docstring": f"\n{topic}\n"
+        in (course.__doc__ or ""),
+        "its place in a layer of ARCHITECTURE.md": f"`course.{topic}`"
+        in (ROOT / "ARCHITECTURE.md").read_text(encoding="utf-8"),
+        f"a unit-test file tests/test_{topic}.py": (ROOT / "tests" / f"test_{topic}.py").exists(),
+        "a bad-input table in tests/test_bad_input_*.py": f"course.{topic}" in _bad_input_tables(),
+        f"a plotting module course/plotting/{topic}.py": (
+            ROOT / "course" / "plotting" / f"{topic}.py"
+        ).exists(),
+        "a notebook that uses it": any(
+            _uses(_code_of(p), topic) for p in sorted((ROOT / "notebooks").glob("*.ipynb"))
+        ),
+        "an assignment that uses it": any(
+            _uses(_code_of(p), topic) for p in sorted((ROOT / "solutions").glob("*/*.py"))
+        ),
+        "a row in the README's learning path": f"`course.{topic}`" in _readme_rows(),
+        "a link to the bibliography in its docstring": ":doc:`/docs/bibliography`"
+        in (module.__doc__ or ""),
+    }
+    return [piece for piece, present in checks.items() if not present]
+
+
+def test_every_topic_module_follows_the_checklist():
+    """One message per module with every missing piece: what a newcomer needs to read."""
+    missing = {t: pieces for t in topic_modules() if (pieces := _missing_pieces(t))}
+    assert not missing, "topic modules short of ARCHITECTURE.md's checklist:\n" + "\n".join(
+        f"course.{t} lacks: {'; '.join(pieces)}" for t, pieces in missing.items()
+    )
+
+
+def test_the_package_docstring_lists_the_topics_the_map_lists():
+    doc = course.__doc__ or ""
+    topics_part = doc.split("Topics", 1)[1].split("Shared pieces", 1)[0]
+    listed = set(re.findall(r"^(\w+)\n", topics_part, flags=re.MULTILINE))
+    assert listed == set(topic_modules()), (
+        f"course/__init__.py's docstring lists as topics {sorted(listed)}; the topic modules "
+        f"are {sorted(topic_modules())} (the laws and the bottom go under 'Shared pieces')"
+    )
+
+
+def _checklist() -> list[str]:
+    """The numbered lines of ARCHITECTURE.md's "Adding a topic module", one string each."""
+    text = (ROOT / "ARCHITECTURE.md").read_text(encoding="utf-8")
+    part = text.split("## Adding a topic module", 1)[1].split("\n## ", 1)[0]
+    return [m.group(0) for m in re.finditer(r"(?ms)^\d+\. .*?(?=^\d+\. |\Z)", part)]
+
+
+def test_every_checklist_line_names_the_guard_that_checks_it():
+    # test_architecture_map_names_only_what_exists checks that every named guard exists.
+    lines = _checklist()
+    assert len(lines) >= 9, "ARCHITECTURE.md's checklist is found"
+    unguarded = [line.split("\n")[0] for line in lines if not re.search(r"`test_\w+`", line)]
+    assert not unguarded, f"checklist lines that name no guard (`test_...`): {unguarded}"
+
+
+#: Public names of the library from before the changelog recorded each one (0.2.0 is the first
+#: release). Every name added since needs its CHANGELOG.md entry.
+_NAMES_BEFORE_THE_CHANGELOG = ROOT / "tests" / "public_names_before_changelog.json"
+
+
+def test_every_new_public_name_has_a_changelog_entry():
+    changelog = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    older = set(json.loads(_NAMES_BEFORE_THE_CHANGELOG.read_text(encoding="utf-8"))["names"])
+    missing = []
+    for namespace in public_namespaces():
+        for name in getattr(importlib.import_module(namespace), "__all__", []):
+            full = f"{namespace}.{name}"
+            if full not in older and not re.search(rf"\b{re.escape(name)}\b", changelog):
+                missing.append(full)
+    assert not missing, f"public names without a CHANGELOG.md entry: {missing}"
 
 
 def test_every_public_module_has_a_bad_input_table():
@@ -320,3 +430,16 @@ def test_layers_import_only_downward():
         if _layer(b) > _layer(a)
     ]
     assert not upward, f"imports that go up a layer (see ARCHITECTURE.md): {upward}"
+
+
+#: The size past which a file is split into single-concept modules (ARCHITECTURE.md, item 1).
+MAX_LINES = 1100
+
+
+def test_no_source_file_is_over_the_size_limit():
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in sorted((ROOT / "course").rglob("*.py"))
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES
+    }
+    assert not long, f"files over {MAX_LINES} lines (split them by concept): {long}"

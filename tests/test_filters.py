@@ -747,6 +747,32 @@ def test_rls_random_walk_equals_kalman_filter():
     np.testing.assert_allclose(res.eps, ref.eps[:, 0], atol=1e-12)
 
 
+def test_rls_diffuse_start_keeps_the_random_walk_noise():
+    """Started without P0, RLS with q > 0 is the Kalman filter of the random walk from the
+    least-squares fit of the first k rows (P = r (Phi_k^T Phi_k)^-1): a dense step-by-step
+    reference. Dropping q after the diffuse start leaves P two orders of magnitude too small."""
+    rng = np.random.default_rng(40)
+    N, k, r, q = 60, 2, 0.05, 0.004
+    Phi = np.column_stack([np.ones(N), np.sin(0.2 * np.arange(N))])
+    theta_true = np.cumsum(np.sqrt(q) * rng.standard_normal((N, k)), axis=0) + [1.0, -0.5]
+    y = np.sum(Phi * theta_true, axis=1) + np.sqrt(r) * rng.standard_normal(N)
+    res = kf.recursive_least_squares(Phi, y, r=r, q=q)
+
+    x = np.linalg.lstsq(Phi[:k], y[:k], rcond=None)[0]
+    P = r * np.linalg.solve(Phi[:k].T @ Phi[:k], np.eye(k))
+    assert res.first == k - 1
+    np.testing.assert_allclose(res.theta[k - 1], x, atol=1e-10)
+    for t in range(k, N):
+        P = P + q * np.eye(k)
+        phi = Phi[t]
+        S = phi @ P @ phi + r
+        gain = P @ phi / S
+        x = x + gain * (y[t] - phi @ x)
+        P = P - np.outer(gain, phi @ P)
+        np.testing.assert_allclose(res.theta[t], x, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(res.P[t], P, rtol=1e-9, atol=1e-14)
+
+
 def regressors_ch2():
     """Three regressors of chapter 2's lecture example (N = 30), as in tests/test_diagnosis.py."""
     rng = np.random.default_rng(20240501)

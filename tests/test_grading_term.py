@@ -337,6 +337,32 @@ def test_late_policy_deducts_per_started_day_with_a_cap_and_a_cutoff():
     assert "at most 25 %" in policy.describe()
 
 
+def test_a_utc_z_time_is_read_on_every_supported_python(tmp_path):
+    """The docs write times as ``...Z``; Python 3.10's fromisoformat does not read it."""
+    from course.grading.batch.late import parse_due, read_timestamps
+
+    assert parse_due("2026-10-20T21:59Z") == parse_due("2026-10-20T23:59+02:00")
+    assert parse_due("2026-10-20T21:59z").utcoffset().total_seconds() == 0
+    stamps = tmp_path / "times.csv"
+    stamps.write_text("id,submitted_at,due\ns001,2026-10-21T08:00Z,2026-10-22T21:59Z\n")
+    handed_in, own_due = read_timestamps(stamps, None)["s001"]
+    assert handed_in == parse_due("2026-10-21T10:00+02:00")
+    assert own_due == parse_due("2026-10-22T23:59+02:00")
+
+
+def test_a_file_stamped_at_the_zero_after_instant_keeps_its_points():
+    """Moodle stamps to the minute, so a hand-in at exactly the cutoff is common: "0 points
+    *after*" the instant means the instant itself is still charged per day."""
+    from course.grading.batch.late import Lateness, parse_due, parse_policy
+
+    policy = parse_policy("percent-per-day:10,cap:25,zero-after:2026-10-27T23:59+02:00")
+    due = parse_due("2026-10-20T23:59+02:00")
+    at_cutoff = Lateness(parse_due("2026-10-27T21:59Z"), due, "test", False).record(policy)
+    assert (at_cutoff["days"], at_cutoff["percent"]) == (7, 25)
+    assert policy.percent(7, parse_due("2026-10-27T23:59+02:00")) == 25
+    assert policy.percent(7, parse_due("2026-10-28T00:00+02:00")) == 100
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [

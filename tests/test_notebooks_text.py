@@ -628,3 +628,23 @@ def test_the_myst_pattern():
         assert MYST_SOURCE.search(raw), raw
     for fine in ("[the figure above](#fig-1)", "> **Note.** x", "```python\nx = 1\n```", "{x}"):
         assert not MYST_SOURCE.search(fine), fine
+
+
+#: What a notebook may cost in a fresh kernel (the course's promise to students).
+NOTEBOOK_BUDGET_SECONDS = 30.0
+
+
+@pytest.mark.after_notebooks
+def test_every_notebook_runs_within_its_budget():
+    """nbval's own run of each notebook in this session, kernel start included, stays within
+    the budget. Skipped when the session ran no notebook (a subset of the tests)."""
+    from conftest import NOTEBOOK_SECONDS
+
+    if not NOTEBOOK_SECONDS:
+        pytest.skip("no notebook ran in this session (the whole suite runs them with nbval)")
+    slow = {
+        path: round(seconds, 1)
+        for path, seconds in sorted(NOTEBOOK_SECONDS.items())
+        if seconds > NOTEBOOK_BUDGET_SECONDS
+    }
+    assert not slow, f"notebooks over {NOTEBOOK_BUDGET_SECONDS:g} s in nbval's run: {slow}"

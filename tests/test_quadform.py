@@ -9,10 +9,10 @@ package CompQuadForm reproduces (``man/davies.Rd``); cases 1, 2 and 5 are
 Imhof's (1961, Biometrika 48, Table 1) forms Q1, Q2 and Q6 with every
 weight multiplied by 10 (CompQuadForm ``man/imhof.Rd``).
 
-``DAVIES_CASES`` holds values computed to 20 digits with mpmath
-(``mp.dps = 30``) by Imhof's original real-axis integral, ``P(Q > x) = 1/2 +
+``DAVIES_CASES`` holds values computed with mpmath (``mp.dps = 30``, stored to
+17 digits in ``tests/reference/quadform_davies_cases.json``) by Imhof's original real-axis integral, ``P(Q > x) = 1/2 +
 (1/pi) int_0^inf sin(theta(u)) / (u rho(u)) du``, evaluated with
-``mpmath.quadosc`` (``python tests/quadform_reference.py``) -- an independent
+``mpmath.quadosc`` (``python tests/quadform_reference.py --write``) -- an independent
 method, not the library's contour integral.  ``DAVIES_PUBLISHED`` holds the
 six-decimal output of Davies' own program for the same 39 points (run with
 his accuracy ``acc = 1e-4``), as listed in the test suite of hail
@@ -29,6 +29,7 @@ from conftest import binomial_band
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.linalg import LinAlgError
+from references import load as load_reference
 from scipy import special, stats
 
 from course import quadform
@@ -45,75 +46,10 @@ from course.quadform import (
 from course.quadform._terms import _terms
 from course.results import rejection_probability
 
-# (weights, dof, noncentrality): [(c, P(Q <= c)), ...]
-DAVIES_CASES = {
-    ((6, 3, 1), (1, 1, 1), (0, 0, 0)): [
-        (1, 0.054213846067046460),
-        (7, 0.49356176653018679),
-        (20, 0.87604092583767370),
-    ],
-    ((6, 3, 1), (2, 2, 2), (0, 0, 0)): [
-        (2, 0.0064528820060658658),
-        (20, 0.60020500321775394),
-        (60, 0.98389702709682925),
-    ],
-    ((6, 3, 1), (6, 4, 2), (0, 0, 0)): [
-        (10, 0.0026807261082040692),
-        (50, 0.56474937337131580),
-        (120, 0.99123099469737302),
-    ],
-    ((7, 3), (6, 2), (6, 2)): [
-        (20, 0.0061179733935401350),
-        (100, 0.59134212407684636),
-        (200, 0.97791835334735092),
-    ],
-    ((7, 3), (1, 1), (6, 2)): [
-        (10, 0.045127189897612644),
-        (60, 0.59243456759899573),
-        (150, 0.97765687119972092),
-    ],
-    ((7, 3, 7, 3), (6, 2, 1, 1), (6, 2, 6, 2)): [
-        (70, 0.043681594919168564),
-        (160, 0.58476101610198757),
-        (260, 0.95376914134198905),
-    ],
-    ((7, 3, -7, -3), (6, 2, 1, 1), (6, 2, 6, 2)): [
-        (-40, 0.078207950958857634),
-        (40, 0.52210669202665986),
-        (140, 0.96036808321521233),
-    ],
-    # the remaining six cases of AS 155's test program
-    ((6, 3, 1), (2, 4, 6), (0, 0, 0)): [
-        (10, 0.033359622074480099),
-        (30, 0.58044537538767301),
-        (80, 0.99128463622955461),
-    ],
-    ((6, 3, 1, 12, 6, 2), (6, 4, 2, 2, 4, 6), (0, 0, 0, 0, 0, 0)): [
-        (45, 0.010941692840338061),
-        (120, 0.65473459050672994),
-        (210, 0.98460036235132800),
-    ],
-    (
-        (6, 3, 1, 6, 3, 1, 7, 3, 7, 3),
-        (6, 4, 2, 2, 4, 6, 6, 2, 1, 1),
-        (0, 0, 0, 0, 0, 0, 6, 2, 6, 2),
-    ): [(120, 0.015840912389514783), (240, 0.57362252665665593), (400, 0.98833738627752401)],
-    ((30, 1), (1, 10), (0, 0)): [
-        (5, 0.015405838122986826),
-        (25, 0.51081580654813257),
-        (100, 0.91633992662003809),
-    ],
-    ((30, 1), (1, 20), (0, 0)): [
-        (10, 0.0049196777224505366),
-        (40, 0.57324900774981562),
-        (100, 0.89649990072394133),
-    ],
-    ((30, 1), (1, 30), (0, 0)): [
-        (20, 0.017099611061764584),
-        (50, 0.56648743546332629),
-        (100, 0.87132212876799137),
-    ],
-}
+# (weights, dof, noncentrality): [(c, P(Q <= c)), ...], from tests/reference/ with its provenance
+DAVIES_CASES: dict[tuple, list[tuple]] = {}
+for *_case, _c, _p in load_reference("quadform_davies_cases")["values"]:
+    DAVIES_CASES.setdefault(tuple(map(tuple, _case)), []).append((_c, _p))
 
 # Davies' program output (acc = 1e-4) for the same points, six decimals
 DAVIES_PUBLISHED = {

@@ -44,6 +44,10 @@ observer live in :mod:`course.diagnosis`.
 Gain convention: ``K_t = P(t|t-1) H^T S_t^{-1}`` is the *measurement-update*
 gain, ``xhat(t|t) = xhat(t|t-1) + K_t eps_t``; the one-step predictor gain is
 ``F K_t``.
+
+Sources: the lecture on test quantities (the extended Kalman filter and RLS as residual
+generators) and the classical Kalman-filter literature its functions cite; full references
+in the course bibliography, :doc:`/docs/bibliography`.
 """
 
 from course.filters._drivers import (

@@ -90,6 +90,18 @@ def _project_metadata(root: Path) -> dict:
     return tomllib.loads((root / "pyproject.toml").read_text("utf-8"))["project"]
 
 
+def _distribution_metadata(project: dict, version: str) -> dict:
+    """The student edition's core metadata, from the project's ``[project]`` table."""
+    return {
+        "name": DIST_NAME,
+        "version": version,
+        "summary": project.get("description", ""),
+        "requires_python": project.get("requires-python", ">=3.10"),
+        "dependencies": list(project.get("dependencies", [])) + _STUDENT_EXTRA_DEPENDENCIES,
+        "license": _license(project.get("license")),
+    }
+
+
 def _check_destination(dest: Path) -> None:
     if dest.exists():
         if not dest.is_dir():
@@ -232,15 +244,7 @@ def _build(staging, dest, root, names, releases, secret, roster, id_pattern=None
     readme = _student_readme(root, secret is not None)
     (folder / "README.md").write_text(readme, encoding="utf-8")
     (materials / "README.md").write_text(readme, encoding="utf-8")
-    dependencies = list(project.get("dependencies", [])) + _STUDENT_EXTRA_DEPENDENCIES
-    meta = {
-        "name": DIST_NAME,
-        "version": version,
-        "summary": project.get("description", ""),
-        "requires_python": project.get("requires-python", ">=3.10"),
-        "dependencies": dependencies,
-        "license": _license(project.get("license")),
-    }
+    meta = _distribution_metadata(project, version)
     if (root / "LICENSE").is_file():
         shutil.copyfile(root / "LICENSE", folder / "LICENSE")
     (folder / "pyproject.toml").write_text(_pyproject(meta), encoding="utf-8")

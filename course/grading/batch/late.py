@@ -74,10 +74,16 @@ class LateError(ValueError):
     to write instead)."""
 
 
+def _iso(text: str) -> datetime:
+    """``datetime.fromisoformat`` that reads a trailing ``Z`` (UTC) on Python 3.10 too."""
+    text = text.strip()
+    return datetime.fromisoformat(text[:-1] + "+00:00" if text[-1:] in "Zz" and text else text)
+
+
 def parse_due(text: str, what: str = "--due") -> datetime:
     """An ISO 8601 date-time with its time zone (``2026-10-20T23:59+02:00`` or ``...Z``)."""
     try:
-        when = datetime.fromisoformat(str(text).strip())
+        when = _iso(str(text))
     except ValueError:
         raise LateError(
             f"{what} {text!r} is not an ISO 8601 date-time: write e.g. 2026-10-20T23:59+02:00"
@@ -176,7 +182,7 @@ def _time(text: str, zone, where: str) -> datetime | None:
     if text in ("", "-"):
         return None
     try:
-        when = datetime.fromisoformat(text)
+        when = _iso(text)
     except ValueError:
         when = None
         for fmt in _MOODLE_TIMES:
