@@ -12,7 +12,8 @@ Shared by :func:`course.chi2.noncentrality` and :func:`course.lsq.b_method`: bot
 a sum of positive terms (no cancellation), summed in logarithms over the Poisson
 weights' bulk (mean ± 12 standard deviations and 40 terms, beyond which they are below
 1e-31 of the sum) (Johnson, Kotz and Balakrishnan 1995, *Continuous univariate
-distributions* 2, ch. 29).
+distributions* 2, ch. 29; full reference in the course bibliography,
+:doc:`/docs/bibliography`).
 """
 
 from __future__ import annotations
