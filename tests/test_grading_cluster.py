@@ -10,9 +10,11 @@ import asyncio
 import base64
 import copy
 import json
+import os
 import secrets
 import shutil
 import subprocess
+import sys
 import threading
 from pathlib import Path
 
@@ -385,6 +387,63 @@ def test_the_grader_is_not_built_on_a_workers_event_loop(tmp_path, monkeypatch):
         )
     assert builds, "the worker built no grader"
     assert builds == [{"on_loop": False, "loop_ran": True}] * len(builds)
+
+
+async def _watch_the_loop(dask_worker, tick: float = 0.02) -> None:
+    """Runs on a worker's event loop (``Client.run``): records the loop's largest stall, the
+    time a ``tick`` sleep overran by, in ``dask_worker.loop_stall``."""
+    import time
+
+    stall = dask_worker.loop_stall = {"largest": 0.0, "modules": sorted(sys.modules)}
+
+    async def watch():
+        last = time.monotonic()
+        while True:
+            await asyncio.sleep(tick)
+            now = time.monotonic()
+            stall["largest"] = max(stall["largest"], now - last - tick)
+            last = now
+
+    dask_worker.loop_watch = asyncio.ensure_future(watch())
+
+
+@pytest.mark.slow  # a cluster of one fresh worker process and a grading run
+def test_a_workers_event_loop_is_never_blocked_for_a_second(tmp_path):
+    """Issue 34 item 6: a worker's event loop, which answers the scheduler's heartbeats, runs
+    within a second all through a run, the grader's build included. The worker is a fresh
+    process that has not imported the course (as a ``dask worker`` started by hand): it
+    unpickles the assignment's plugin on its loop, and importing the grader's modules there
+    (nbformat's schema validator compiles grammars) held it for seconds."""
+    import cloudpickle
+
+    subs = _submissions(tmp_path / "subs", students=("alice", "eve"))
+    module = sys.modules[__name__]
+    cloudpickle.register_pickle_by_value(module)  # the watcher travels as code, not by name
+    try:
+        with (
+            distributed.LocalCluster(
+                n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+            ) as cluster,
+            distributed.Client(cluster) as client,
+        ):
+            client.run(_watch_the_loop)
+            summary = grade(
+                SOLUTION_DIR,
+                subs,
+                tmp_path / "out",
+                GradeOptions(jobs=1, progress=False, cluster=cluster),
+            )
+            (stall,) = client.run(lambda dask_worker: dask_worker.loop_stall).values()
+    finally:
+        cloudpickle.unregister_pickle_by_value(module)
+    assert summary.graded == 2
+    assert not [m for m in stall["modules"] if m.split(".")[0] == "course"], "not a fresh worker"
+    # a property, not a speed: the stall is the longest the loop waited, under this machine's
+    # load (named in the message if it fails)
+    assert stall["largest"] < 1.0, (
+        f"the worker's event loop was blocked {stall['largest']:.2f} s "
+        f"(load average {os.getloadavg()})"
+    )
 
 
 @pytest.mark.slow  # a cluster

@@ -8,7 +8,10 @@ key. Each task brings one student's notebook bytes and that student's data seeds
 the key by the driver. The plugin writes the files to a private temporary folder and builds its
 :class:`~course.grading.batch.session.AssignmentGrader` (checks loaded, references computed, the
 fork server started) on the first task, in the task's thread: a worker's event loop, which
-answers the scheduler's heartbeats, never waits for that build. When the run ends (the driver
+answers the scheduler's heartbeats, never waits for that build. Nor for its imports: the worker
+unpickles the plugin on its event loop, which imports this module, so this module imports only
+what is light at its top and the grader's modules (nbformat's schema validator alone compiles
+grammars for seconds) in the task's thread. When the run ends (the driver
 unregisters the plugin) or the worker closes, :meth:`AssignmentFiles.teardown` stops the fork
 server and deletes the folder with every file it was given.
 """
@@ -21,12 +24,13 @@ import shutil
 import tempfile
 import threading
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from distributed import WorkerPlugin, get_worker
 
-from course.grading.batch.options import GradeOptions
-from course.grading.batch.results import StudentResult
-from course.grading.batch.session import AssignmentGrader
+if TYPE_CHECKING:  # imported in the task's thread, never on the worker's event loop
+    from course.grading.batch.results import StudentResult
+    from course.grading.batch.session import AssignmentGrader
 
 __all__ = ["AssignmentFiles", "describe_task", "grade_task"]
 
@@ -36,7 +40,11 @@ FOLDER_PREFIX = "course-grade-assignment-"
 
 def build_grader(folder: Path, options: dict, data_key: str) -> AssignmentGrader:
     """The worker's grader of the assignment in ``folder`` (its own function so that a test can
-    watch where and when the build happens)."""
+    watch where and when the build happens); imports the grader's modules, in the caller's
+    thread."""
+    from course.grading.batch.options import GradeOptions
+    from course.grading.batch.session import AssignmentGrader
+
     return AssignmentGrader(
         folder, GradeOptions(**options), deny_read=[folder.parent], data_key=data_key
     )
