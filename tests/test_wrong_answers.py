@@ -450,10 +450,26 @@ def _running_cell(ns: dict, cell_id: str | None) -> None:
         cells._cell = cell_id
 
 
-@functools.cache
+#: The self-check whose tripwires are set in this process (one per kernel, as in Jupyter).
+_ARMED: list = [None]
+
+
 def _solution_namespace(assignment: str, student: str) -> dict:
     """The namespace of the solution notebook run in this process as ``student`` (its check
-    cells skipped): what a student's kernel holds when every answer is right."""
+    cells skipped): what a student's kernel holds when every answer is right. Built once; its
+    self-check's tripwires are set again when another assignment's load replaced them (a
+    kernel holds one self-check's: without this, a test of 01 after one of 07 saw no call)."""
+    from course.grading.student.selfcheck import _watch_forbidden
+
+    ns = _built_namespace(assignment, student)
+    if _ARMED[0] is not ns["check"]:
+        _watch_forbidden(ns["check"])
+        _ARMED[0] = ns["check"]
+    return ns
+
+
+@functools.cache
+def _built_namespace(assignment: str, student: str) -> dict:
     import matplotlib
 
     matplotlib.use("Agg")
