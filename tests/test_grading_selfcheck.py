@@ -541,6 +541,41 @@ def test_a_forbidden_import_or_another_answers_call_costs_nothing(mistakes_demo,
     assert "1 of 1 public case passes" in out and "FAIL" not in out, out
 
 
+def test_a_forbidden_call_in_a_protected_cell_costs_nothing_as_at_grading(tmp_path):
+    """A protected cell of the released notebook (setup or context, e.g. ``check.submit()``)
+    is not a cell the student added: its forbidden call counts against no question, as at
+    grading (docs/instructors/authoring.md). It counted against every value question that
+    forbids the function, so running ``check.submit()`` or the class's grader in the kernel
+    after it failed them (issue 36, the self-check and grading disagreed)."""
+    import json
+
+    from course.grading.authoring.release import public_spec
+    from course.grading.vocabulary import PublicSpec
+
+    folder = tmp_path / "mistakes_demo"
+    folder.mkdir()
+    (folder / "checks.py").write_text(_MISTAKE_CHECKS)
+    spec = PublicSpec.loads(public_spec(load_checks(folder)).text())
+
+    def cell(cid, role=None):
+        meta = {"course": {"role": role}} if role else {}
+        return {"cell_type": "code", "id": cid, "metadata": meta, "source": "", "outputs": []}
+
+    nb = {"cells": [cell("setup", "setup"), cell("code-02", "context"), cell("mine")]}
+    (folder / "mistakes_demo.ipynb").write_text(json.dumps(nb))
+    check = Assignment(spec, folder, "s1")
+    q1, q2 = check._questions["q1"], check._questions["q2"]
+    ns = {"np": np}
+    for protected in ("setup", "code-02"):
+        _run_cell(
+            check, protected, "import course.lsq\ncourse.lsq.fit(np.ones((2, 1)), np.ones(2))", ns
+        )
+    assert check._forbidden_calls(q1) == set() and check._forbidden_calls(q2) == set()
+    _run_cell(check, "mine", "course.lsq.fit(np.ones((2, 1)), np.ones(2))", ns)  # added by me
+    assert check._forbidden_calls(q1) == {"course.lsq.fit"}
+    assert check._forbidden_calls(q2) == set()
+
+
 def test_the_self_check_catches_private_twins_and_aliases_of_assignment_04(capsys):
     """04 q8 (kf_update) and q2 (kalman_filter): the private implementation and aliased
     imports failed at grading but passed the self-check (issue 26)."""

@@ -89,6 +89,128 @@ def test_a_private_helper_is_named_as_called():
     )
 
 
+# -- the scratch-cell rule, through a session's cells (fast: a fake child, no sandbox) --------
+_SCRATCH_CHECKS = """
+from course.grading.authoring.checks import Checks
+
+CHECKS = Checks("scratch")
+
+
+@CHECKS.value("q1", var="z", points=1, forbid=["course.lsq.fit"])
+def q1():
+    return 1.0
+
+
+@CHECKS.value("q2", var="w", points=1, forbid=["course.lsq.w_tests"])
+def q2():
+    return 2.0
+
+
+q3 = CHECKS.function("q3", func="crit", points=1, forbid=["course.lsq.fit"])(lambda a: a)
+q3.case(0.05)
+"""
+
+
+@pytest.fixture(scope="module")
+def scratch_grader(tmp_path_factory):
+    """A real grader of a three-question assignment: value questions q1 (forbids lsq.fit) and
+    q2 (forbids lsq.w_tests), function question q3 (forbids lsq.fit). Its sandbox never
+    starts: the tests hand its sessions a fake child."""
+    import nbformat
+
+    from course.grading.batch.session import AssignmentGrader
+
+    folder = tmp_path_factory.mktemp("scratch") / "scratch"
+    folder.mkdir()
+    (folder / "checks.py").write_text(_SCRATCH_CHECKS)
+
+    def code(source, **meta):
+        return nbformat.v4.new_code_cell(source, metadata={"course": meta})
+
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [
+        nbformat.v4.new_markdown_cell("# Scratch"),
+        code(
+            'STUDENT_ID = "demo"   # <- your student ID, exactly as registered\n'
+            "from course.grading import Assignment\n"
+            'check = Assignment.load("scratch", student_id=STUDENT_ID)',
+            role="setup",
+        ),
+    ]
+    for qid, answer in (("q1", "z = 1.0"), ("q2", "w = 2.0"), ("q3", "def crit(a):\n    return a")):
+        nb.cells += [
+            nbformat.v4.new_markdown_cell(f"## {qid}: an answer"),
+            code(f"### BEGIN SOLUTION\n{answer}\n### END SOLUTION", role="answer", question=qid),
+        ]
+    nbformat.write(nb, folder / "scratch.ipynb")
+    return AssignmentGrader(folder)
+
+
+class _FakeChild:
+    """Runs nothing: each cell "makes" the forbidden calls its source names (one per line,
+    ``call <dotted>``), reported as the real child's tripwires report them."""
+
+    tmpdir = "/nonexistent"
+
+    def __init__(self):
+        self.events: list = []
+
+    def request(self, op, timeout, **fields):
+        for line in fields.get("source", "").splitlines():
+            if line.startswith("call "):
+                name = line.split()[1]
+                self.events.append(Call(name, (name,), ""))
+        return {"status": "ok"}
+
+    def take_events(self):
+        events, self.events = self.events, []
+        return events
+
+
+def _run(grader, cells, deleted=None):
+    from course.grading.batch.plan import Plan, PlanCell
+
+    plan = Plan(cells=[PlanCell(*c) for c in cells], deleted=dict(deleted or {}))
+    session = StudentSession(grader, types.SimpleNamespace(notes=[]), "s1", plan)
+    session.child = _FakeChild()
+    assert session._run_cells()
+    return session
+
+
+def test_a_scratch_cell_s_call_counts_against_every_value_question_that_forbids_it(
+    scratch_grader,
+):
+    """Issue 40 item 5 (was pinned only by the slow wrong-answer suite): a forbidden call in a
+    cell the student added counts against every value question that forbids the function,
+    named as that cell, and against no function question, whatever question's slot the cell
+    stands in; in a protected cell against nothing; in an added cell adopted as a deleted
+    answer cell, against that answer's question only."""
+    from course.grading.vocabulary import CellOrigin
+
+    s = _run(
+        scratch_grader,
+        [
+            ("", None, CellOrigin.SETUP, "setup cell"),
+            ("call course.lsq.fit", None, CellOrigin.CONTEXT, "protected cell 'code-02'"),
+            ("z = 1.0", "q1", CellOrigin.ANSWER, "answer cell of q1"),
+            ("w = 2.0", "q2", CellOrigin.ANSWER, "answer cell of q2"),
+            ("def crit(a): ...", "q3", CellOrigin.ANSWER, "answer cell of q3"),
+            ("call course.lsq.fit", None, CellOrigin.EXTRA, "your added cell at position 9"),
+        ],
+    )
+    assert set(s.hits) == {"q1"}  # not q2 (allows fit), not q3 (a function question)
+    assert s._forbidden_message("q1") == (
+        "your added cell at position 9 calls course.lsq.fit, which this question forbids"
+    )
+    s = _run(
+        scratch_grader, [("call course.lsq.w_tests", "q3", CellOrigin.EXTRA, "your added cell")]
+    )
+    assert set(s.hits) == {"q2"}  # in q3's slot, still a scratch cell
+    adopted = [("call course.lsq.fit", "q3", CellOrigin.EXTRA, "your added cell at position 4")]
+    s = _run(scratch_grader, adopted, deleted={"q3": "adopted"})
+    assert set(s.hits) == {"q3"}  # graded as q3's answer cell: its call is q3's, not q1's
+
+
 # -- whole grading --------------------------------------------------------------------------
 _Q3_FORBIDDEN = """def overall_model_test_stat(A, y, Qyy, alpha, *, peek=False):
     r = lsq.overall_model_test(lsq.fit(A, y, Qyy), alpha)

@@ -10,7 +10,7 @@ setup cell on, the forbidden functions report every call from the notebook, what
 (the grader's tripwires, :func:`course.grading.tripwire.watch`); an import alone costs nothing.
 A function question counts the calls of its public cases and of its answer cell; a value
 question those of its answer cell and of cells the student added (not another question's
-answer cell), as the grader does. ``check("q1", value)`` checks an explicit value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
+answer cell, nor a protected cell of the released notebook), as the grader does. ``check("q1", value)`` checks an explicit value; ``check.data("key")`` returns the student's personal data set. Everything works offline.
 
 In the grader's sandbox the same setup cell returns a silent stand-in (no checks run in the
 student's process); see :mod:`course.grading.sandbox.runner`.
@@ -36,6 +36,7 @@ from course.grading.tripwire import course_modules, label_callers, watch
 from course.grading.vocabulary import (
     CHECKS_FILE,
     PLACEHOLDER_ID,
+    CellRole,
     PublicQuestion,
     PublicSpec,
     QuestionKind,
@@ -126,6 +127,9 @@ class Assignment:
         self._cells = AnswerCells.install({q.target: q.id for q in spec.questions if q.target})
         # the class's student ID pattern (``course export --id-pattern``), None without one
         self.id_pattern = id_pattern_in(folder)
+        # the notebook's protected cells (setup and context): a forbidden call there counts
+        # against no question, as at grading
+        self._protected = _protected_cells(folder, spec.assignment, data_module is not None)
         # forbidden calls from the notebook: (cell, call) pairs, and the calls made while a
         # question's public cases run
         self.calls: set[tuple] = set()
@@ -342,12 +346,12 @@ class Assignment:
 
     def _cell_question(self, cell) -> str | None:
         """Whose cell ``cell`` is: a question's id for its answer cell, "" for another cell
-        (added or protected), None when unknown (outside a notebook)."""
+        (added), None for a protected or check cell or when unknown (outside a notebook)."""
         if isinstance(cell, str):
             for qid in self._questions:
                 if cell == answer_cell_id(qid):
                     return qid
-            return None if cell.endswith("-check") else ""
+            return None if cell.endswith("-check") or cell in self._protected else ""
         if isinstance(cell, tuple):
             shell = getattr(self._cells, "_shell", None)
             history = getattr(shell, "user_ns", {}).get("In", [])
@@ -573,6 +577,29 @@ class _Missing:
 
 
 _MISSING = _Missing()
+
+
+def _protected_cells(folder: Path, name: str, solution: bool) -> frozenset[str]:
+    """The ids of the protected cells (setup and context) of notebook ``name`` in ``folder``,
+    as the release marks them (``metadata.course.role``); in a ``solution`` notebook, which
+    marks only what is not protected, every code cell without a role. A copy of a protected
+    cell keeps its role and grading ignores it: here it counts nowhere either. Empty when the
+    notebook cannot be read (every other cell then counts as added, the stricter reading)."""
+    try:
+        cells = json.loads((folder / f"{name}.ipynb").read_text("utf-8")).get("cells", [])
+    except (OSError, ValueError, AttributeError):
+        return frozenset()
+    ids = set()
+    for cell in cells if isinstance(cells, list) else ():
+        if not isinstance(cell, dict) or cell.get("cell_type") != "code":
+            continue
+        meta = cell.get("metadata", {}).get("course", {})
+        role = meta.get("role") if isinstance(meta, dict) else None
+        if isinstance(cell.get("id"), str) and (
+            role in (CellRole.SETUP, CellRole.CONTEXT) or (solution and role is None)
+        ):
+            ids.add(cell["id"])
+    return frozenset(ids)
 
 
 def _defines(source: str, target: str) -> bool:
