@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -61,7 +63,7 @@ def test_members_are_near_their_leader_not_chained():
     other = "a residue tests for one filtr reject that models since these innovation were "
     w, o = (words + "correlated in time").split(), (other + "correlatd over times").split()
     chain = [" ".join(o[:k] + w[k:]) for k in range(0, len(w) + 1, 2)]
-    assert all(similarity(a, b) >= NEAR for a, b in zip(chain, chain[1:]))
+    assert all(similarity(a, b) >= NEAR for a, b in itertools.pairwise(chain))
     groups = group(chain)
     assert len(groups) > 1 and not any(0 in g and 8 in g for g in groups)
     for g in groups:

@@ -406,9 +406,7 @@ def _class_file(folder: Path, marked: dict | None = None) -> Path:
 
 def _marks(folder: Path, question: str = "q1") -> dict:
     return {
-        sid: (r["points"], r["comment"])
-        for (sid, q), r in _rows(folder).items()
-        if q == question
+        sid: (r["points"], r["comment"]) for (sid, q), r in _rows(folder).items() if q == question
     }
 
 

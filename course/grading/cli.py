@@ -250,7 +250,8 @@ def _add_mark_command(subparsers) -> None:
         help="mark the short answers of a graded assignment in Jupyter",
         description="Write OUT_DIR/marking.ipynb (unless it exists) and open it in JupyterLab: "
         "a view of OUT_DIR/short_answers.csv that shows one answer at a time, anonymous by "
-        "default, with the rubric, a points box and a comment box. Every mark is saved into "
+        "default, with the rubric, a points box and a comment box; alike answers come in "
+        "groups that can be marked at once. Every mark is saved into "
         "short_answers.csv at once; merge them with `course grade NAME SUBMISSIONS --out "
         "OUT_DIR --short-answers OUT_DIR/short_answers.csv`.",
     )

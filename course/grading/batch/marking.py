@@ -544,7 +544,9 @@ class MarkingView:
         if errors:
             text += f" Not saved for {len(errors)}: {errors[0]}."
         if not self.next_unmarked():
-            text += " Every answer is marked: merge the marks with `course grade … --short-answers`."
+            text += (
+                " Every answer is marked: merge the marks with `course grade … --short-answers`."
+            )
         self._say(text, error=bool(errors))
         self._show_counts()
         return not errors
@@ -651,7 +653,9 @@ def write_marking_notebook(out_dir: str | Path) -> Path:
         nbformat.v4.new_markdown_cell(
             "# Marking the short answers\n\n"
             "Run the cell below. Each mark is saved into `short_answers.csv` of this folder as "
-            "soon as you leave the points or comment box; close the notebook at any time and "
+            "you type the points and when you leave the comment box; alike answers come in "
+            "groups that *mark the group* marks at once (the keys are listed under the view). "
+            "Close the notebook at any time and "
             "the view starts where you stopped. `anonymous=False` shows the students' IDs, "
             '`question="q3"` starts at that question.\n\n'
             "Then merge the marks into the grades, the feedback and the LMS files:\n\n"
