@@ -31,7 +31,8 @@ The flow
    written from those results; :mod:`.batch.cluster` runs the sessions on Dask workers
    (their side: :mod:`.batch.clusterworker`), which never receive the class key.
    ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
-   one gradebook, under the term's rules (:mod:`.batch.termrules`); ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter.
+   one gradebook, under the term's rules (:mod:`.batch.termrules`); ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter,
+   alike answers in groups (:mod:`.batch.answergroups`).
 
 Modules
 -------
@@ -62,7 +63,7 @@ cli
     driver (the batch), options (:class:`~.batch.options.GradeOptions`), session (one
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), reports (feedback, grades, results log), marks (short answers), marking (the
-    marking view of ``course mark``), identity (whose submission is whose), roster (the class,
+    marking view of ``course mark``), answergroups (its groups of alike answers), identity (whose submission is whose), roster (the class,
     LMS grade files), late (due dates and late penalties), cluster (Dask: the driver's side),
     clusterworker (a Dask worker's side), gradebook (several assignments in one file),
     termrules (the term's weights, letters, exemptions), classreport (``report.html``),
