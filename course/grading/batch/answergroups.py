@@ -133,8 +133,12 @@ def group(texts: Sequence[str], threshold: float = NEAR) -> list[list[int]]:
         grams = _grams(norm)
         best, best_sim = -1, threshold
         for g, lead in enumerate(leaders):
-            union = len(grams | lead)
-            sim = len(grams & lead) / union if union else 1.0
+            small, large = sorted((len(grams), len(lead)))
+            if small < best_sim * large:
+                continue  # |A ∩ B| / |A ∪ B| <= small / large: cannot reach the bar
+            common = len(grams & lead)
+            union = len(grams) + len(lead) - common
+            sim = common / union if union else 1.0
             if sim >= best_sim and (best < 0 or sim > best_sim):
                 best, best_sim = g, sim
         if best < 0:
