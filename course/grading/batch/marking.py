@@ -191,7 +191,7 @@ class MarkingFile:
 KEYS = (
     "Keyboard: type the points, <kbd>Enter</kbd> saves and goes to the next unmarked answer; "
     "<kbd>Tab</kbd> goes on to the comment box and the buttons (<kbd>Shift</kbd>+<kbd>Tab</kbd> "
-    "back), <kbd>Enter</kbd> or <kbd>Space</kbd> presses the button in focus: points, "
+    "back), <kbd>Enter</kbd> presses the button in focus: points, "
     "<kbd>Tab</kbd>, <kbd>Tab</kbd>, <kbd>Enter</kbd> marks the whole group."
 )
 #: how many of a group's other texts the view lists
