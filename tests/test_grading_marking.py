@@ -471,22 +471,29 @@ def test_marking_a_group_needs_points_first(tmp_path):
     assert (folder / "short_answers.csv").read_bytes() == before
 
 
-def _enter(view) -> None:
-    """What the front end sends when the marker presses Enter in the points box."""
+def _enter(view, value: str) -> None:
+    """What the front end sends when the marker types ``value`` into the points box and
+    presses Enter: "submit" first, then the value (which it may also hold back a while)."""
     view.points._handle_custom_msg({"event": "submit"}, [])
+    view.points.value = value
 
 
 def test_enter_in_the_points_box_saves_and_goes_to_the_next_unmarked(tmp_path):
     folder = _class_file(tmp_path)
     view = MarkingView(folder)
     first = view.current
-    view.points.value = "3"  # every key reaches the kernel: refused while typed
-    _enter(view)
+    _enter(view, "3")
     assert view.current == first and "Not saved" in view.status.value
-    view.points.value = "2"
-    _enter(view)
+    _enter(view, "2")  # the value after the Enter is saved for the answer it was typed for
     assert _marks(folder)[first.student] == ("2", "")
     assert view.current.key != first.key and not view.current.marked
     assert view.points.value == ""  # the next answer's box, empty
+    # a value that reached the kernel, then more typed and Enter: the last value arrives
+    # after the "submit" and belongs to this answer, never to the next one
+    second = view.current
+    view.points.value = "1"
+    _enter(view, "1.5")
+    assert _marks(folder)[second.student] == ("1.5", "")
+    assert view.current.key not in (first.key, second.key) and not view.current.marked
     # the keyboard path is written in the view
     assert "<kbd>Enter</kbd> saves and goes to the next unmarked answer" in view.keys.value

@@ -218,9 +218,9 @@ class MarkingView:
 
     Notes
     -----
-    A mark is saved as the points are typed and when the comment box is left (Tab or a click
-    elsewhere): into ``short_answers.csv`` at once. Enter in the points box saves and goes to
-    the next unmarked answer. Leaving an answer whose boxes hold something that cannot be saved
+    A mark is saved when the points or the comment box is left (Enter, Tab or a click
+    elsewhere): into ``short_answers.csv`` at once. Enter after typing points saves and goes
+    to the next unmarked answer. Leaving an answer whose boxes hold something that cannot be saved
     (points out of range, a comment without points) is refused with the reason, so nothing
     typed is lost or silently changed. *Next unmarked* goes to the next answer without points,
     in this question first, then in the others.
@@ -276,8 +276,7 @@ class MarkingView:
         self.heading = widgets.HTML()
         self.answer = widgets.HTML(layout=layout)
         self.rubric = widgets.HTML(layout=layout)
-        # every key syncs the box: its value is in the kernel before the Enter that follows
-        self.points = widgets.Text(description="points", continuous_update=True)
+        self.points = widgets.Text(description="points", continuous_update=False)
         self.comment = widgets.Textarea(
             description="comment",
             placeholder="shown to the student in the feedback (optional)",
@@ -342,12 +341,13 @@ class MarkingView:
         self.unmarked_button.on_click(lambda _: self.next_unmarked())
         self.group_button.on_click(lambda _: self.mark_group())
         self.points.on_msg(self._points_message)
-        self.points.observe(self._edited, names="value")
+        self.points.observe(self._points_edited, names="value")
         self.comment.observe(self._edited, names="value")
         self.show_ids.observe(lambda _: self._show(), names="value")
         self.question.observe(self._question_chosen, names="value")
         self.current: Answer | None = None
         self._arrived: tuple[float, str] | None = None  # the mark of the answer shown, on arrival
+        self._enter: tuple[str, str] | None = None  # Enter pressed in the points box of this answer
         self._groups: dict[str, tuple[tuple, list[list[tuple[str, str]]]]] = {}
         self._start(question)
 
@@ -425,6 +425,7 @@ class MarkingView:
         self.current = self.file.find(answer.key) or answer
         a = self.current
         self._arrived = (a.points, a.comment) if a.points is not None else None
+        self._enter = None
         self._loading = True
         try:
             self.question.value = self.current.question
@@ -505,8 +506,18 @@ class MarkingView:
         return self._save()
 
     def _points_message(self, _widget, content, _buffers) -> None:
-        # Enter in the points box (the front end's "submit"; the value came with each key)
-        if content.get("event") == "submit" and self._save():
+        # Enter in the points box: the front end sends "submit" BEFORE the value it commits
+        # (and may hold a value back while the kernel is busy), so moving on now would give
+        # that value to the next answer; the value's arrival moves on (_points_edited)
+        if content.get("event") == "submit" and self.current is not None:
+            self._enter = self.current.key
+
+    def _points_edited(self, _change) -> None:
+        if self._loading:
+            return
+        enter = self.current is not None and self._enter == self.current.key
+        self._enter = None
+        if self._save() and enter:
             self.next_unmarked()
 
     def mark_group(self) -> bool:
@@ -653,7 +664,7 @@ def write_marking_notebook(out_dir: str | Path) -> Path:
         nbformat.v4.new_markdown_cell(
             "# Marking the short answers\n\n"
             "Run the cell below. Each mark is saved into `short_answers.csv` of this folder as "
-            "you type the points and when you leave the comment box; alike answers come in "
+            "soon as you leave the points or comment box; alike answers come in "
             "groups that *mark the group* marks at once (the keys are listed under the view). "
             "Close the notebook at any time and "
             "the view starts where you stopped. `anonymous=False` shows the students' IDs, "
