@@ -170,10 +170,11 @@ def _blur(box, value: str) -> None:
     box.value = value
 
 
-def test_answers_come_one_question_at_a_time_in_digest_order(tmp_path):
+def test_answers_come_one_question_at_a_time_group_by_group_in_digest_order(tmp_path):
     view = MarkingView(_marking_file(tmp_path))
     q1 = [a for a in ANSWERS if a[1] == "q1"]
-    expected = sorted(q1, key=lambda a: (answer_id(a[2]), a[0]))
+    # the group of two identical answers (s1, s4) first, then the others by digest
+    expected = sorted(q1, key=lambda a: (a[0] not in ("s1", "s4"), answer_id(a[2]), a[0]))
     assert [a.student for a in view.answers] == [a[0] for a in expected]
     assert view.question.options == ("q1", "q2") and view.current == view.answers[0]
     assert view.previous() is False and view.previous_button.disabled
@@ -514,3 +515,126 @@ def test_course_mark_passes_jupyters_options_on_in_both_forms(tmp_path, monkeypa
     assert calls == [
         ([sys.executable, "-m", "jupyterlab", "marking.ipynb", "--no-browser", *words], out)
     ]
+
+
+# -- issue 35 item 2: marking at the speed of a class ---------------------------------------
+#: q1 (2 points): a group of five alike answers (three texts identical up to case and
+#: punctuation, one with a typo, one marked already), two others; q2 one answer
+CLASS = [
+    ("s1", "q1", "The statistic exceeds the critical value."),
+    ("s2", "q1", "the statistic exceeds the critical value"),
+    ("s3", "q1", "No idea <b>at all</b>."),
+    ("s4", "q1", "THE STATISTIC EXCEEDS THE CRITICAL VALUE!"),
+    ("s5", "q1", "The statistic exceeds the critcal value."),
+    ("s6", "q1", "It is chi-square with 3 dof."),
+    ("s7", "q1", "The statistic exceeds the critical value."),
+    ("s1", "q2", "Because the residuals are correlated."),
+]
+GROUP = {"s1", "s2", "s4", "s5", "s7"}
+
+
+def _class_file(folder: Path, marked: dict | None = None) -> Path:
+    marked = marked or {}
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "short_answers.csv", "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(COLUMNS)
+        for sid, qid, text in CLASS:
+            points, comment = marked.get((sid, qid), ("", ""))
+            writer.writerow([sid, qid, text, 2, points, "", comment, answer_id(text)])
+    return folder
+
+
+def _marks(folder: Path, question: str = "q1") -> dict:
+    return {
+        sid: (r["points"], r["comment"]) for (sid, q), r in _rows(folder).items() if q == question
+    }
+
+
+def test_alike_answers_are_one_group_shown_with_its_size_and_texts(tmp_path):
+    view = MarkingView(_class_file(tmp_path))
+    first = view.answers[:5]
+    assert {a.student for a in first} == GROUP  # the largest group first, its members together
+    assert [len(g) for g in view.groups("q1")] == [5, 1, 1]
+    assert view.current.student in GROUP
+    info = view.group_info.value
+    assert "Group of 5 answers" in info and "not marked yet" in info
+    assert "critcal" in info  # the near-identical text is listed for the marker to see
+    assert view.group_button.description == "mark the group (5)"
+    assert not any(f"s{i}" in info + view.heading.value for i in range(1, 8))  # anonymous
+    view.go(next(a for a in view.answers if a.student == "s3"))
+    assert view.group_button.disabled and "No other answer like this one" in view.group_info.value
+    assert "&lt;b&gt;at all&lt;/b&gt;" in view.answer.value  # plain text
+
+
+def test_a_group_is_marked_at_once_and_an_override_sticks(tmp_path):
+    """The rule (docs/instructors/term.md): marking the group gives the mark to members not
+    marked yet and to those that still hold the mark the answer shown had; a member marked
+    otherwise keeps its own mark, then and when the group is marked again."""
+    folder = _class_file(tmp_path, {("s7", "q1"): ("0", "marked before")})
+    view = MarkingView(folder)
+    leader = view.current
+    assert leader.student in GROUP - {"s7"}
+    _blur(view.points, "1,5")
+    _blur(view.comment, "name the dof")
+    assert view.mark_group()
+    marks = _marks(folder)
+    for sid in GROUP - {"s7"}:
+        assert marks[sid] == ("1.5", "name the dof")
+    assert marks["s7"] == ("0", "marked before")  # marked before: an override, kept
+    assert marks["s3"] == marks["s6"] == ("", "")  # not in the group: untouched
+    assert "Marked 3 more answer(s) of this group" in view.status.value
+    assert "1 marked on their own kept their mark" in view.status.value
+    assert not view.current.marked and view.current.student not in GROUP  # next unmarked
+
+    # one member overridden afterwards
+    view.go(next(a for a in view.answers if a.student == "s5"))
+    _blur(view.comment, "")
+    _blur(view.points, "2")
+    # the group marked again from its leader with a changed mark: the override stays
+    view.go(view.file.find(leader.key))
+    _blur(view.points, "1")
+    assert view.mark_group()
+    marks = _marks(folder)
+    assert marks["s5"] == ("2", "") and marks["s7"] == ("0", "marked before")
+    for sid in GROUP - {"s5", "s7"}:
+        assert marks[sid] == ("1", "name the dof")
+    assert "2 marked on their own kept their mark" in view.status.value
+
+
+def test_marking_a_group_needs_points_first(tmp_path):
+    folder = _class_file(tmp_path)
+    before = (folder / "short_answers.csv").read_bytes()
+    view = MarkingView(folder)
+    assert view.mark_group() is False and "give this answer its points first" in view.status.value
+    _blur(view.points, "7")
+    assert view.mark_group() is False and "Not saved" in view.status.value
+    assert (folder / "short_answers.csv").read_bytes() == before
+
+
+def _enter(view, value: str) -> None:
+    """What the front end sends when the marker types ``value`` into the points box and
+    presses Enter: "submit" first, then the value (which it may also hold back a while)."""
+    view.points._handle_custom_msg({"event": "submit"}, [])
+    view.points.value = value
+
+
+def test_enter_in_the_points_box_saves_and_goes_to_the_next_unmarked(tmp_path):
+    folder = _class_file(tmp_path)
+    view = MarkingView(folder)
+    first = view.current
+    _enter(view, "3")
+    assert view.current == first and "Not saved" in view.status.value
+    _enter(view, "2")  # the value after the Enter is saved for the answer it was typed for
+    assert _marks(folder)[first.student] == ("2", "")
+    assert view.current.key != first.key and not view.current.marked
+    assert view.points.value == ""  # the next answer's box, empty
+    # a value that reached the kernel, then more typed and Enter: the last value arrives
+    # after the "submit" and belongs to this answer, never to the next one
+    second = view.current
+    view.points.value = "1"
+    _enter(view, "1.5")
+    assert _marks(folder)[second.student] == ("1.5", "")
+    assert view.current.key not in (first.key, second.key) and not view.current.marked
+    # the keyboard path is written in the view
+    assert "<kbd>Enter</kbd> saves and goes to the next unmarked answer" in view.keys.value

@@ -33,7 +33,8 @@ The flow
    exports of the record; :mod:`.batch.cluster` runs the sessions on Dask workers
    (their side: :mod:`.batch.clusterworker`), which never receive the class key.
    ``course gradebook`` (:mod:`.batch.gradebook`) combines several assignments' outputs into
-   one gradebook, under the term's rules (:mod:`.batch.termrules`); ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter.
+   one gradebook, under the term's rules (:mod:`.batch.termrules`); ``course mark`` (:mod:`.batch.marking`) marks the short answers in Jupyter,
+   alike answers in groups (:mod:`.batch.answergroups`).
 
 Modules
 -------
@@ -65,7 +66,8 @@ cli
     student), plan (which of a submission's cells run, in which order), results (the typed
     results), record (the term's record: rows, marks, files, history), reports (feedback,
     grades, results log), marks (short answers), marking (the
-    marking view of ``course mark``), intake (the files handed in: folders and LMS zips),
+    marking view of ``course mark``), answergroups (its groups of alike
+    answers), intake (the files handed in: folders and LMS zips),
     lmsnames (each LMS's name grammar), identity (whose submission is whose), lmsfeedback
     (the feedback zips of ``course feedback``), roster (the class,
     LMS grade files), late (due dates and late penalties), cluster (Dask: the driver's side),

@@ -312,7 +312,7 @@ def _add_mark_command(subparsers) -> None:
         help="mark the short answers of a graded assignment in Jupyter",
         description="Write OUT_DIR/marking.ipynb (unless it exists) and open it in JupyterLab: "
         "a view of the short answers in OUT_DIR's record that shows one answer at a time, "
-        "anonymous by default, with the rubric, a points box and a comment box. Every mark is "
+        "anonymous by default, with the rubric, a points box and a comment box; alike answers come in groups that can be marked at once. Every mark is "
         "saved into the record (OUT_DIR/record.sqlite, with the marker and the time) and "
         "OUT_DIR/short_answers.csv at once; the next `course grade NAME SUBMISSIONS --out "
         "OUT_DIR` merges them into the grades. Options that course does not know (e.g. --port 8890, "

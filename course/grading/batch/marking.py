@@ -12,10 +12,13 @@ once) lose no mark: each writes only its own mark, in a transaction, and each sh
 marks as it moves on. Where the instructor stopped is kept in ``OUT/marking_progress.json``.
 
 The view is anonymous by default: it shows *answer 3 of 12*, not the student's ID (a check box
-shows the IDs). Answers come in the order of a digest of their text, not of the roster, so the
-position does not give the student away either, and answers with the same text are neighbours
-(the view says how many share it). Answers are shown as plain text (a student's HTML is never
-run in the instructor's browser).
+shows the IDs). Answers come grouped: identical answers (the same text up to case, whitespace
+and punctuation) and near-identical ones form a group (:mod:`course.grading.batch.answergroups`),
+the largest group first; within a group, in the order of a digest of the text, not of the
+roster, so the position does not give the student away either. The view says how large the
+answer's group is, lists its other texts, and *mark the group* gives the answer's mark to the
+group's members (:meth:`MarkingView.mark_group`: members marked on their own keep their mark).
+Answers are shown as plain text (a student's HTML is never run in the instructor's browser).
 
 ``course mark OUT`` writes ``OUT/marking.ipynb``, a notebook whose one cell shows the view, and
 opens it in JupyterLab (:func:`write_marking_notebook`). The view needs ipywidgets (the
@@ -29,6 +32,7 @@ import json
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from course.grading.batch.answergroups import group
 from course.grading.batch.marks import (
     COLUMNS,
     SHORT_ANSWERS_FILE,
@@ -220,6 +224,18 @@ def _import_marking_file(record: Record, path: Path) -> list[str]:
     return refused
 
 
+#: what the view tells the marker about the keyboard (Jupyter's own shortcuts do not reach the
+#: boxes: a widget's input keeps its keys)
+KEYS = (
+    "Keyboard: type the points, <kbd>Enter</kbd> saves and goes to the next unmarked answer; "
+    "<kbd>Tab</kbd> goes on to the comment box and the buttons (<kbd>Shift</kbd>+<kbd>Tab</kbd> "
+    "back), <kbd>Enter</kbd> presses the button in focus: points, "
+    "<kbd>Tab</kbd>, <kbd>Tab</kbd>, <kbd>Enter</kbd> marks the whole group."
+)
+#: how many of a group's other texts the view lists
+_LISTED = 8
+
+
 def _box(text: str, css: str) -> str:
     """Student text as inert HTML: escaped, its lines kept, every other control character
     (an escape sequence, a bell, a bidirectional override) shown as an escape."""
@@ -246,10 +262,18 @@ class MarkingView:
     Notes
     -----
     A mark is saved when the points or the comment box is left (Enter, Tab or a click
-    elsewhere): into the record (and ``short_answers.csv``) at once. Leaving an answer whose boxes hold
-    something that cannot be saved (points out of range, a comment without points) is refused
-    with the reason, so nothing typed is lost or silently changed. *Next unmarked* goes to the
-    next answer without points, in this question first, then in the others.
+    elsewhere): into the record (and ``short_answers.csv``) at once. Enter after typing points
+    saves and goes to the next unmarked answer. Leaving an answer whose boxes hold something
+    that cannot be saved (points out of range, a comment without points) is refused with the
+    reason, so nothing typed is lost or silently changed. *Next unmarked* goes to the next
+    answer without points, in this question first, then in the others.
+
+    *Mark the group* (:meth:`mark_group`) gives the answer's points and comment to the other
+    members of its group (:func:`course.grading.batch.answergroups.group`) that are not marked
+    yet or still hold the mark this answer had when you came to it (they followed it), then
+    goes to the next unmarked answer. A member marked otherwise was marked on its own (an
+    override): it keeps its mark, and the status says how many did. So marking a group again
+    with a changed mark moves the members that had its old mark and never an override.
 
     Examples
     --------
@@ -306,8 +330,11 @@ class MarkingView:
             continuous_update=False,
             layout=widgets.Layout(width="100%", height="5em"),
         )
+        self.group_info = widgets.HTML(layout=layout)
         self.status = widgets.HTML()
         self.counts = widgets.HTML()
+        self.keys = widgets.HTML(KEYS)
+        self.group_button = widgets.Button(description="mark the group")
         self.previous_button = widgets.Button(description="◀ previous")
         self.next_button = widgets.Button(description="next ▶")
         self.unmarked_button = widgets.Button(description="next unmarked", button_style="primary")
@@ -317,13 +344,16 @@ class MarkingView:
             "heading",
             "answer",
             "rubric",
+            "group_info",
             "points",
             "comment",
             "status",
             "counts",
+            "keys",
         ):
             getattr(self, name).add_class(f"course-marking-{name.replace('_', '-')}")
         for name, button in (
+            ("mark-group", self.group_button),
             ("previous", self.previous_button),
             ("next", self.next_button),
             ("next-unmarked", self.unmarked_button),
@@ -334,12 +364,21 @@ class MarkingView:
                 widgets.HBox([self.question, self.show_ids]),
                 self.heading,
                 self.answer,
+                self.group_info,
                 self.rubric,
                 self.points,
                 self.comment,
-                widgets.HBox([self.previous_button, self.next_button, self.unmarked_button]),
+                widgets.HBox(
+                    [
+                        self.group_button,
+                        self.previous_button,
+                        self.next_button,
+                        self.unmarked_button,
+                    ]
+                ),
                 self.status,
                 self.counts,
+                self.keys,
             ],
             layout=layout,
         )
@@ -347,11 +386,16 @@ class MarkingView:
         self.previous_button.on_click(lambda _: self.previous())
         self.next_button.on_click(lambda _: self.next())
         self.unmarked_button.on_click(lambda _: self.next_unmarked())
-        self.points.observe(self._edited, names="value")
+        self.group_button.on_click(lambda _: self.mark_group())
+        self.points.on_msg(self._points_message)
+        self.points.observe(self._points_edited, names="value")
         self.comment.observe(self._edited, names="value")
         self.show_ids.observe(lambda _: self._show(), names="value")
         self.question.observe(self._question_chosen, names="value")
         self.current: Answer | None = None
+        self._arrived: tuple[float, str] | None = None  # the mark of the answer shown, on arrival
+        self._enter: tuple[str, str] | None = None  # Enter pressed in the points box of this answer
+        self._groups: dict[str, tuple[tuple, list[list[tuple[str, str]]]]] = {}
         self._start(question)
 
     # -- what the notebook shows -----------------------------------------------------------
@@ -361,8 +405,27 @@ class MarkingView:
     # -- navigation ------------------------------------------------------------------------
     @property
     def answers(self) -> list[Answer]:
-        """The answers of the question shown, in marking order."""
-        return self.file.of(self.question.value) if self.question.value else []
+        """The answers of the question shown, in marking order (group by group)."""
+        return self._ordered(self.question.value) if self.question.value else []
+
+    def groups(self, question: str) -> list[list[Answer]]:
+        """The groups of identical and near-identical answers to ``question``, largest first
+        (:func:`course.grading.batch.answergroups.group` of its answers in digest order)."""
+        answers = self.file.of(question)
+        stamp = tuple((a.key, a.answer_id) for a in answers)
+        cached = self._groups.get(question)
+        if cached is None or cached[0] != stamp:  # grouped once per set of answers
+            keys = [[answers[i].key for i in g] for g in group([a.text for a in answers])]
+            cached = self._groups[question] = (stamp, keys)
+        by_key = {a.key: a for a in answers}
+        return [[by_key[k] for k in g] for g in cached[1]]
+
+    def group_of(self, answer: Answer) -> list[Answer]:
+        """The group of ``answer`` (itself included)."""
+        return next(g for g in self.groups(answer.question) if answer.key in {b.key for b in g})
+
+    def _ordered(self, question: str) -> list[Answer]:
+        return [a for g in self.groups(question) for a in g]
 
     @property
     def index(self) -> int:
@@ -390,7 +453,7 @@ class MarkingView:
         order = here[i + 1 :] + here[:i]
         for q in self.file.questions:
             if q != self.current.question:
-                order += self.file.of(q)
+                order += self._ordered(q)
         target = next((a for a in order if not a.marked), None)
         if target is None:
             if self._leave():
@@ -408,6 +471,9 @@ class MarkingView:
             return False
         self.file.reload()  # the marks another view (another marker) gave meanwhile
         self.current = self.file.find(answer.key) or answer
+        a = self.current
+        self._arrived = (a.points, a.comment) if a.points is not None else None
+        self._enter = None
         self._loading = True
         try:
             self.question.value = self.current.question
@@ -423,14 +489,21 @@ class MarkingView:
     def _start(self, question: str | None) -> None:
         if not self.file.answers:
             self._say(f"No answers to mark in {self.file.path}.")
-            for button in (self.previous_button, self.next_button, self.unmarked_button):
+            for button in (
+                self.previous_button,
+                self.next_button,
+                self.unmarked_button,
+                self.group_button,
+            ):
                 button.disabled = True
             self.points.disabled = self.comment.disabled = True
             return
         saved = self._load_progress()
         start = saved if saved is not None and question in (None, saved.question) else None
         if start is None:
-            pool = self.file.of(question) if question else self.file.answers
+            pool = self._ordered(question) if question else self._ordered(self.file.questions[0])
+            if question is None:
+                pool += [a for q in self.file.questions[1:] for a in self._ordered(q)]
             start = next((a for a in pool if not a.marked), pool[0])
         self.go(start)
         if self.file.refused:
@@ -443,7 +516,7 @@ class MarkingView:
     def _question_chosen(self, change) -> None:
         if self._loading or self.current is None or change["new"] == self.current.question:
             return
-        pool = self.file.of(change["new"])
+        pool = self._ordered(change["new"])
         if not self.go(next((a for a in pool if not a.marked), pool[0])):
             self._loading = True
             try:
@@ -486,6 +559,63 @@ class MarkingView:
     def _leave(self) -> bool:
         return self._save()
 
+    def _points_message(self, _widget, content, _buffers) -> None:
+        # Enter in the points box: the front end sends "submit" BEFORE the value it commits
+        # (and may hold a value back while the kernel is busy), so moving on now would give
+        # that value to the next answer; the value's arrival moves on (_points_edited)
+        if content.get("event") == "submit" and self.current is not None:
+            self._enter = self.current.key
+
+    def _points_edited(self, _change) -> None:
+        if self._loading:
+            return
+        enter = self.current is not None and self._enter == self.current.key
+        self._enter = None
+        if self._save() and enter:
+            self.next_unmarked()
+
+    def mark_group(self) -> bool:
+        """Give the answer shown's mark (points and comment) to the members of its group that
+        are not marked yet or still hold the mark it had when it was shown, one by one through
+        :meth:`MarkingFile.mark`; then go to the next unmarked answer. Members marked otherwise
+        keep their mark (an override sticks). False, with the reason, when the boxes cannot be
+        saved or the answer has no points yet."""
+        if not self._save():
+            return False
+        a = self.current
+        if a is None or a.points is None:
+            self._say("Not marked: give this answer its points first, then mark the group.", True)
+            return False
+        mark, arrived = (a.points, a.comment), self._arrived
+        done, kept, errors = 0, 0, []
+        for member in self.group_of(a):
+            member = self.file.find(member.key) or member
+            if member.key == a.key or (member.points, member.comment) == mark:
+                continue
+            if member.marked and (member.points, member.comment) != arrived:
+                kept += 1  # marked on its own: an override
+                continue
+            try:
+                self.file.mark(member, _fmt(a.points), a.comment)
+            except MarksError as exc:
+                errors.append(str(exc))
+                continue
+            done += 1
+        self._arrived = mark  # a second press now moves what followed this mark
+        what = f"{_fmt(a.points)} of {_fmt(a.points_possible)} points"
+        text = f"Marked {done} more answer(s) of this group: {what}."
+        if kept:
+            text += f" {kept} marked on their own kept their mark."
+        if errors:
+            text += f" Not saved for {len(errors)}: {errors[0]}."
+        if not self.next_unmarked():
+            text += (
+                " Every answer is marked: merge the marks with `course grade … --short-answers`."
+            )
+        self._say(text, error=bool(errors))
+        self._show_counts()
+        return not errors
+
     # -- display ---------------------------------------------------------------------------
     def _say(self, text: str, error: bool = False) -> None:
         color = "#b3261e" if error else "#1a1a1a"
@@ -504,6 +634,7 @@ class MarkingView:
             f"{self.index + 1} of {len(answers)}{who}{twin}"
         )
         self.answer.value = _box(a.text, "course-marking-text")
+        self._show_group(a)
         self.rubric.value = "<b>Rubric:</b> " + (
             _box(a.rubric, "course-marking-rubric-text") if a.rubric else "<i>none given</i>"
         )
@@ -511,6 +642,30 @@ class MarkingView:
         self.previous_button.disabled = self.index == 0
         self.next_button.disabled = self.index + 1 >= len(answers)
         self._show_counts()
+
+    def _show_group(self, a: Answer) -> None:
+        members = self.group_of(a)
+        self.group_button.disabled = len(members) < 2
+        self.group_button.description = f"mark the group ({len(members)})"
+        if len(members) < 2:
+            self.group_info.value = "<i>No other answer like this one.</i>"
+            return
+        texts: dict[str, int] = {}
+        for b in members:
+            if b.answer_id != a.answer_id:
+                texts[b.text] = texts.get(b.text, 0) + 1
+        todo = sum(not b.marked for b in members)
+        near = sum(texts.values())
+        lines = [
+            f'<span class="course-marking-group-size">Group of {len(members)} answers</span>: '
+            f"{len(members) - near} with this text, {near} with a text alike (below); "
+            f"{todo} not marked yet."
+        ]
+        for text, n in list(texts.items())[:_LISTED]:
+            lines.append(_box(f"×{n}: {text}", "course-marking-group-text"))
+        if len(texts) > _LISTED:
+            lines.append(f"<i>and {len(texts) - _LISTED} more texts</i>")
+        self.group_info.value = "".join(lines)
 
     def _show_counts(self) -> None:
         per = [
@@ -565,8 +720,9 @@ def write_marking_notebook(out_dir: str | Path) -> Path:
             "# Marking the short answers\n\n"
             "Run the cell below. Each mark is saved into this folder's record (`record.sqlite`, "
             "with your name and the time) and `short_answers.csv` as soon as you leave the "
-            "points or comment box; close the notebook at any time and the view starts where "
-            "you stopped. `anonymous=False` shows the students' IDs, "
+            "points or comment box; alike answers come in groups that *mark the group* marks "
+            "at once (the keys are listed under the view). Close the notebook at any time and "
+            "the view starts where you stopped. `anonymous=False` shows the students' IDs, "
             '`question="q3"` starts at that question.\n\n'
             "Then merge the marks into the grades, the feedback and the LMS files:\n\n"
             "```bash\ncourse grade NAME SUBMISSIONS --out THIS_FOLDER\n```"
