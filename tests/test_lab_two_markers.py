@@ -72,7 +72,7 @@ def _go(page, number: int) -> str:
 
 def _mark(page, points: str, saved: str) -> None:
     page.fill(".course-marking-points input", points)
-    page.keyboard.press("Enter")
+    page.keyboard.press("Tab")  # leaving the box saves and stays (Enter saves and moves on)
     page.wait_for_function(
         "([t]) => document.querySelector('.course-marking-status').textContent.includes(t)",
         arg=[f"Saved: {saved} of 2 points"],
