@@ -7,7 +7,8 @@ character 3-grams of their normalised texts (:func:`similarity`) is at least
 :data:`NEAR` (0.8): a changed word, a typo or a reordered clause in a sentence of some
 length, never a different sentence. It is a likeness of letters, not of meaning ("correlated"
 and "uncorrelated" are near): the view lists a group's texts, and a member marked on its own
-keeps its mark.
+keeps its mark. The q-gram similarity follows Ukkonen (1992); full reference in the course
+bibliography, :doc:`/docs/bibliography`.
 
 :func:`group` puts each distinct normalised text into a group in one deterministic pass: the
 texts in order of how many answers share them (most first, ties in the order given), each
