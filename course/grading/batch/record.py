@@ -33,6 +33,7 @@ from contextlib import contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
 
+from course.grading.batch.reports import read_results
 from course.grading.batch.results import StudentResult
 
 __all__ = ["RECORD_FILE", "Record", "whoami"]
@@ -382,15 +383,7 @@ class Record:
         nothing was imported)."""
         if not self.created or self._read("SELECT 1 FROM meta WHERE key = 'imported'"):
             return ""
-        rows: dict[str, StudentResult] = {}
-        if results_jsonl.is_file():
-            with open(results_jsonl, encoding="utf-8") as f:
-                for line in f:
-                    try:
-                        row = StudentResult.from_json(json.loads(line))
-                    except (ValueError, KeyError, TypeError, AttributeError):
-                        continue
-                    rows[row.student] = row
+        rows = read_results(results_jsonl)
         marks: dict = {}
         if marks_json is not None and marks_json.is_file():
             try:
